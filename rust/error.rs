@@ -1,0 +1,59 @@
+//! Errors of the core. Every variant names the argument (or element) at fault, what was
+//! expected and what was given, so the bindings can pass the message through unchanged.
+use thiserror::Error;
+
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum Error {
+    /// A value of the wrong form: shape, range, non-finite number.
+    #[error("{arg}: expected {expected}, got {got}")]
+    InvalidArgument {
+        arg: String,
+        expected: String,
+        got: String,
+    },
+    /// A mass, centre of mass or inertia tensor that no rigid body can have.
+    #[error("{arg}: {reason}")]
+    InvalidInertia { arg: String, reason: String },
+    /// The tree structure is wrong (unknown parent, duplicate name).
+    #[error("{arg}: {reason}")]
+    InvalidModel { arg: String, reason: String },
+    /// The equations cannot be solved at this state (singular mass matrix, Euler singularity).
+    #[error("{0}")]
+    Singular(String),
+}
+
+impl Error {
+    pub fn arg(arg: impl Into<String>, expected: impl Into<String>, got: impl Into<String>) -> Self {
+        Error::InvalidArgument {
+            arg: arg.into(),
+            expected: expected.into(),
+            got: got.into(),
+        }
+    }
+    pub fn inertia(arg: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InvalidInertia {
+            arg: arg.into(),
+            reason: reason.into(),
+        }
+    }
+    pub fn model(arg: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::InvalidModel {
+            arg: arg.into(),
+            reason: reason.into(),
+        }
+    }
+}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Checks that every entry is finite; names the first bad one.
+pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(Error::arg(
+            arg,
+            "finite numbers",
+            format!("{} at index {}", values[k], k),
+        )),
+    }
+}

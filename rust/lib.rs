@@ -1,0 +1,13 @@
+//! pointmass_dyn: multibody dynamics with equimomental point masses and DeNOC matrices.
+//!
+//! The core knows nothing of Python; `python` (behind the `python` feature) converts arrays
+//! and errors and nothing else.
+pub mod body;
+pub mod error;
+pub mod integrator;
+pub mod point_masses;
+pub mod spatial;
+
+pub use body::RigidBody;
+pub use error::{Error, Result};
+pub use point_masses::EquimomentalSet;
