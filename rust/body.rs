@@ -176,9 +176,13 @@ mod tests {
     fn each_rule_has_its_error() {
         let i = Mat3::identity();
         let c = Vec3::zeros();
-        assert!(matches!(RigidBody::new(0.0, c, i), Err(Error::InvalidInertia { ref arg, .. }) if arg == "mass"));
+        assert!(
+            matches!(RigidBody::new(0.0, c, i), Err(Error::InvalidInertia { ref arg, .. }) if arg == "mass")
+        );
         assert!(RigidBody::new(f64::NAN, c, i).is_err());
-        assert!(matches!(RigidBody::new(1.0, Vec3::new(f64::INFINITY, 0.0, 0.0), i), Err(Error::InvalidArgument { ref arg, .. }) if arg == "com"));
+        assert!(
+            matches!(RigidBody::new(1.0, Vec3::new(f64::INFINITY, 0.0, 0.0), i), Err(Error::InvalidArgument { ref arg, .. }) if arg == "com")
+        );
         let mut asym = i;
         asym[(0, 1)] = 0.1;
         let e = RigidBody::new(1.0, c, asym).unwrap_err().to_string();
@@ -209,7 +213,12 @@ mod tests {
         let j = b.second_moments_about_com();
         let exact = m * d * d / 16.0;
         // The naive ½ tr(I) − I_yy loses this completely at d/a = 1e-7.
-        assert!((j[(1, 1)] - exact).abs() < 1e-6 * exact, "{} vs {}", j[(1, 1)], exact);
+        assert!(
+            (j[(1, 1)] - exact).abs() < 1e-6 * exact,
+            "{} vs {}",
+            j[(1, 1)],
+            exact
+        );
         assert!((j[(0, 0)] - m * a * a / 12.0).abs() < 1e-15);
     }
 

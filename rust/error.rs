@@ -23,7 +23,11 @@ pub enum Error {
 }
 
 impl Error {
-    pub fn arg(arg: impl Into<String>, expected: impl Into<String>, got: impl Into<String>) -> Self {
+    pub fn arg(
+        arg: impl Into<String>,
+        expected: impl Into<String>,
+        got: impl Into<String>,
+    ) -> Self {
         Error::InvalidArgument {
             arg: arg.into(),
             expected: expected.into(),

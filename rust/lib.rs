@@ -3,11 +3,18 @@
 //! The core knows nothing of Python; `python` (behind the `python` feature) converts arrays
 //! and errors and nothing else.
 pub mod body;
+pub mod denoc;
 pub mod error;
 pub mod integrator;
+pub mod joint;
+pub mod kinematics;
+pub mod model;
 pub mod point_masses;
+pub mod recursive;
 pub mod spatial;
 
 pub use body::RigidBody;
 pub use error::{Error, Result};
+pub use joint::Joint;
+pub use model::Model;
 pub use point_masses::EquimomentalSet;

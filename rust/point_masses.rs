@@ -190,7 +190,12 @@ mod tests {
                 let back = RigidBody::from_point_masses(&set.masses, &set.positions).unwrap();
                 assert!((back.mass - b.mass).abs() < 1e-14);
                 assert!((back.com - b.com).norm() < 1e-14);
-                assert!((back.inertia - b.inertia).norm() < 1e-13, "{} vs {}", back.inertia, b.inertia);
+                assert!(
+                    (back.inertia - b.inertia).norm() < 1e-13,
+                    "{} vs {}",
+                    back.inertia,
+                    b.inertia
+                );
             }
         }
     }

@@ -125,7 +125,8 @@ impl BodyInertia {
         let h = &self.first_moment;
         let hs = h.dot(s);
         let outer = h * s.transpose() + s * h.transpose();
-        let parallel = Mat3::identity() * (s.norm_squared() * self.mass) - s * s.transpose() * self.mass;
+        let parallel =
+            Mat3::identity() * (s.norm_squared() * self.mass) - s * s.transpose() * self.mass;
         BodyInertia {
             mass: self.mass,
             first_moment: h + s * self.mass,

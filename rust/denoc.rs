@@ -1,0 +1,265 @@
+//! Explicit DeNOC matrices (paper, Sections III–IV) for teaching and verification.
+//!
+//! `t = N_l N_d q̇`, point velocities `V = D t`, `N = D N_l N_d`, `M = diag(m_ij 1₃)`:
+//! GIM `I = Nᵀ M N`, convective matrix `C = Nᵀ M Ṅ`, generalized forces `τ = Nᵀ f`.
+//! Everything here is dense and allocates; the recursive algorithms in `recursive` are the
+//! fast path and are checked against this one.
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{Error, Result};
+use crate::kinematics::{self, LinkState};
+use crate::model::Model;
+use crate::spatial::{angular, linear, skew, Mat3, Vec3};
+
+#[derive(Debug, Clone)]
+pub struct Denoc {
+    /// 21n × 6n, blocks `D_i` with rows `[−d̃_ij, 1]`.
+    pub d: DMatrix<f64>,
+    /// 6n × 6n, block lower triangular, `A_ik` for each ancestor k of i.
+    pub nl: DMatrix<f64>,
+    /// 6n × nv, blocks `P_i`.
+    pub nd: DMatrix<f64>,
+    /// 21n × nv.
+    pub n: DMatrix<f64>,
+    /// The 7n point masses, link by link.
+    pub masses: DVector<f64>,
+    /// World positions of the 7n point masses (7n × 3).
+    pub points: DMatrix<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct DenocRates {
+    pub d: DMatrix<f64>,
+    pub nl: DMatrix<f64>,
+    pub nd: DMatrix<f64>,
+    pub n: DMatrix<f64>,
+}
+
+fn states(model: &Model, q: &[f64], v: Option<&[f64]>) -> Vec<LinkState> {
+    let mut st = vec![LinkState::default(); model.links.len()];
+    kinematics::positions(model, q, &mut st);
+    if let Some(v) = v {
+        kinematics::velocities(model, q, v, &mut st);
+    }
+    st
+}
+
+fn ancestors_and_self(model: &Model, i: usize) -> Vec<usize> {
+    let mut out = vec![i];
+    let mut p = model.links[i].parent;
+    while let Some(k) = p {
+        out.push(k);
+        p = model.links[k].parent;
+    }
+    out
+}
+
+/// `d_ij` (world) of each point of link i, from its origin.
+fn point_offsets(model: &Model, st: &[LinkState], i: usize) -> [Vec3; 7] {
+    let mut d = [Vec3::zeros(); 7];
+    for (j, p) in model.links[i].points.positions.iter().enumerate() {
+        d[j] = st[i].rotation * p;
+    }
+    d
+}
+
+fn assemble(model: &Model, st: &[LinkState], rates: bool) -> (Denoc, Option<DenocRates>) {
+    let n = model.links.len();
+    let nv = model.nv;
+    let mut d = DMatrix::zeros(21 * n, 6 * n);
+    let mut nl = DMatrix::zeros(6 * n, 6 * n);
+    let mut nd = DMatrix::zeros(6 * n, nv);
+    let mut masses = DVector::zeros(7 * n);
+    let mut points = DMatrix::zeros(7 * n, 3);
+    let (mut dd, mut nld, ndd) = if rates {
+        (
+            DMatrix::zeros(21 * n, 6 * n),
+            DMatrix::zeros(6 * n, 6 * n),
+            DMatrix::zeros(6 * n, nv),
+        )
+    } else {
+        (
+            DMatrix::zeros(0, 0),
+            DMatrix::zeros(0, 0),
+            DMatrix::zeros(0, 0),
+        )
+    };
+    for (i, l) in model.links.iter().enumerate() {
+        let offs = point_offsets(model, st, i);
+        let w = angular(&st[i].twist);
+        for (j, dij) in offs.iter().enumerate() {
+            let row = 21 * i + 3 * j;
+            d.view_mut((row, 6 * i), (3, 3)).copy_from(&(-skew(dij)));
+            d.view_mut((row, 6 * i + 3), (3, 3))
+                .copy_from(&Mat3::identity());
+            masses[7 * i + j] = l.points.masses[j];
+            let x = st[i].origin + dij;
+            for c in 0..3 {
+                points[(7 * i + j, c)] = x[c];
+            }
+            if rates {
+                // d_ij is fixed in the body: ḋ = ω × d.
+                dd.view_mut((row, 6 * i), (3, 3))
+                    .copy_from(&(-skew(&w.cross(dij))));
+            }
+        }
+        for k in ancestors_and_self(model, i) {
+            let a = st[k].origin - st[i].origin;
+            nl.view_mut((6 * i, 6 * k), (6, 6)).fill_with_identity();
+            nl.view_mut((6 * i + 3, 6 * k), (3, 3)).copy_from(&skew(&a));
+            if rates {
+                let adot = linear(&st[k].twist) - linear(&st[i].twist);
+                nld.view_mut((6 * i + 3, 6 * k), (3, 3))
+                    .copy_from(&skew(&adot));
+            }
+        }
+        let dof = l.joint.nv();
+        for c in 0..dof {
+            nd.view_mut((6 * i, l.v_index + c), (6, 1))
+                .copy_from(&st[i].s[c]);
+        }
+    }
+    let n_mat = &d * &nl * &nd;
+    let denoc = Denoc {
+        d,
+        nl,
+        nd,
+        n: n_mat,
+        masses,
+        points,
+    };
+    if !rates {
+        return (denoc, None);
+    }
+    (
+        denoc,
+        Some(DenocRates {
+            d: dd,
+            nl: nld,
+            nd: ndd,
+            n: DMatrix::zeros(0, 0),
+        }),
+    )
+}
+
+/// The DeNOC matrices at configuration `q` (checked by the caller).
+pub fn matrices(model: &Model, q: &[f64]) -> Denoc {
+    let st = states(model, q, None);
+    assemble(model, &st, false).0
+}
+
+/// The DeNOC matrices and their time derivatives at `(q, v)`.
+pub fn matrices_and_rates(model: &Model, q: &[f64], v: &[f64]) -> (Denoc, DenocRates) {
+    let st = states(model, q, Some(v));
+    let (den, rates) = assemble(model, &st, true);
+    let mut rates = rates.expect("rates requested");
+    // Ṗ_i for each joint, in the columns of Ṅ_d.
+    for (i, l) in model.links.iter().enumerate() {
+        let w_parent = l
+            .parent
+            .map(|p| angular(&st[p].twist))
+            .unwrap_or_else(Vec3::zeros);
+        let qi = &q[l.q_index..l.q_index + l.joint.nq()];
+        let vi = &v[l.v_index..l.v_index + l.joint.nv()];
+        let sdot = l.joint.subspace_rate(
+            qi,
+            vi,
+            &st[i].s,
+            &st[i].joint_rotation,
+            &w_parent,
+            &angular(&st[i].twist),
+        );
+        for c in 0..l.joint.nv() {
+            rates
+                .nd
+                .view_mut((6 * i, l.v_index + c), (6, 1))
+                .copy_from(&sdot[c]);
+        }
+    }
+    rates.n =
+        &rates.d * &den.nl * &den.nd + &den.d * &rates.nl * &den.nd + &den.d * &den.nl * &rates.nd;
+    (den, rates)
+}
+
+/// `Nᵀ M X` for a 21n-row matrix X, with M the diagonal of point masses.
+fn nt_m(den: &Denoc, x: &DMatrix<f64>) -> DMatrix<f64> {
+    let mut mx = x.clone();
+    for r in 0..mx.nrows() {
+        let m = den.masses[r / 3];
+        mx.row_mut(r).scale_mut(m);
+    }
+    den.n.transpose() * mx
+}
+
+/// Generalized inertia matrix `Nᵀ M N`.
+pub fn mass_matrix(model: &Model, q: &[f64]) -> DMatrix<f64> {
+    let den = matrices(model, q);
+    let gim = nt_m(&den, &den.n);
+    (&gim + gim.transpose()) * 0.5
+}
+
+/// Convective matrix `C = Nᵀ M Ṅ` (so that `İ − 2C` is skew-symmetric).
+pub fn convective_matrix(model: &Model, q: &[f64], v: &[f64]) -> DMatrix<f64> {
+    let (den, rates) = matrices_and_rates(model, q, v);
+    nt_m(&den, &rates.n)
+}
+
+/// `Nᵀ f` for forces `f` on the 7n point masses (world coordinates, one row each).
+pub fn generalized_forces(model: &Model, q: &[f64], point_forces: &[Vec3]) -> Result<DVector<f64>> {
+    if point_forces.len() != model.npoints() {
+        return Err(Error::arg(
+            "forces",
+            format!(
+                "shape ({}, 7, 3) or ({}, 3): one force per point mass",
+                model.links.len(),
+                model.npoints()
+            ),
+            format!("{} forces", point_forces.len()),
+        ));
+    }
+    let den = matrices(model, q);
+    let mut f = DVector::zeros(3 * point_forces.len());
+    for (j, p) in point_forces.iter().enumerate() {
+        f.fixed_rows_mut::<3>(3 * j).copy_from(p);
+    }
+    Ok(den.n.transpose() * f)
+}
+
+/// Generalized gravity force `Nᵀ f^G`, `f^G_ij = m_ij g` (on the right-hand side:
+/// Pinocchio's `computeGeneralizedGravity` is its negative).
+pub fn gravity_forces(model: &Model, q: &[f64], g: &Vec3) -> DVector<f64> {
+    let den = matrices(model, q);
+    let mut f = DVector::zeros(den.n.nrows());
+    for j in 0..den.masses.len() {
+        f.fixed_rows_mut::<3>(3 * j).copy_from(&(g * den.masses[j]));
+    }
+    den.n.transpose() * f
+}
+
+/// `I a + C v − τ_g = τ`.
+pub fn inverse_dynamics(model: &Model, q: &[f64], v: &[f64], a: &[f64], g: &Vec3) -> DVector<f64> {
+    let gim = mass_matrix(model, q);
+    let c = convective_matrix(model, q, v);
+    let tg = gravity_forces(model, q, g);
+    gim * DVector::from_column_slice(a) + c * DVector::from_column_slice(v) - tg
+}
+
+/// Solves `I a = τ + τ_g − C v` by Cholesky.
+pub fn forward_dynamics(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    g: &Vec3,
+) -> Result<DVector<f64>> {
+    let gim = mass_matrix(model, q);
+    let c = convective_matrix(model, q, v);
+    let rhs = DVector::from_column_slice(tau) + gravity_forces(model, q, g)
+        - c * DVector::from_column_slice(v);
+    match gim.cholesky() {
+        Some(ch) => Ok(ch.solve(&rhs)),
+        None => Err(Error::Singular(
+            "the generalized inertia matrix is not positive definite at this configuration (a SphericalZYZ joint at sin θ = 0?)".into(),
+        )),
+    }
+}

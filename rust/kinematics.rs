@@ -1,0 +1,107 @@
+//! Forward kinematics over links: orientations, origins, joint-motion columns `P_i`, twists
+//! `t_i = [ω_i; v_i]` (velocity of the origin `O_i`) and the velocity-dependent part of the
+//! twist rate, `ξ_i = Ȧ_{i,λ} t_λ + Ṗ_i q̇_i` — all in world coordinates as in the paper.
+use crate::joint::Subspace;
+use crate::model::Model;
+use crate::spatial::{angular, linear, stack, BodyInertia, Mat3, Placement, Vec3, Vec6};
+
+#[derive(Debug, Clone)]
+pub struct LinkState {
+    pub rotation: Mat3,
+    pub origin: Vec3,
+    /// Orientation of the joint frame (parent orientation × fixed placement).
+    pub joint_rotation: Mat3,
+    pub s: Subspace,
+    pub twist: Vec6,
+    pub xi: Vec6,
+    /// Link inertia about its origin, world axes.
+    pub inertia: BodyInertia,
+}
+
+impl Default for LinkState {
+    fn default() -> Self {
+        LinkState {
+            rotation: Mat3::identity(),
+            origin: Vec3::zeros(),
+            joint_rotation: Mat3::identity(),
+            s: [Vec6::zeros(); 3],
+            twist: Vec6::zeros(),
+            xi: Vec6::zeros(),
+            inertia: BodyInertia::zero(),
+        }
+    }
+}
+
+/// Positions: orientation, origin, joint columns and world-axes inertia of every link.
+pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    for (i, l) in model.links.iter().enumerate() {
+        let (r_parent, o_parent) = match l.parent {
+            Some(p) => (st[p].rotation, st[p].origin),
+            None => (Mat3::identity(), Vec3::zeros()),
+        };
+        let qi = &q[l.q_index..l.q_index + l.joint.nq()];
+        let r_joint = r_parent * l.placement.rotation;
+        let (r_q, t_q) = l.joint.transform(qi);
+        let s = &mut st[i];
+        s.joint_rotation = r_joint;
+        s.rotation = r_joint * r_q;
+        s.origin = o_parent + r_parent * l.placement.translation + r_joint * t_q;
+        s.s = l.joint.subspace(qi, &r_joint, &s.rotation);
+        s.inertia = l.inertia.rotated(&s.rotation);
+    }
+}
+
+/// Twists and `ξ` from the speeds `v`; needs `positions` first.
+pub fn velocities(model: &Model, q: &[f64], v: &[f64], st: &mut [LinkState]) {
+    for (i, l) in model.links.iter().enumerate() {
+        let (t_parent, o_parent) = match l.parent {
+            Some(p) => (st[p].twist, st[p].origin),
+            None => (Vec6::zeros(), Vec3::zeros()),
+        };
+        let nv = l.joint.nv();
+        let vi = &v[l.v_index..l.v_index + nv];
+        let s = &mut st[i];
+        let w_parent = angular(&t_parent);
+        // Parent twist carried to O_i, plus the joint's own motion.
+        let mut t = stack(
+            &w_parent,
+            &(linear(&t_parent) + w_parent.cross(&(s.origin - o_parent))),
+        );
+        for k in 0..nv {
+            t += s.s[k] * vi[k];
+        }
+        let w_body = angular(&t);
+        let qi = &q[l.q_index..l.q_index + l.joint.nq()];
+        let sdot = l
+            .joint
+            .subspace_rate(qi, vi, &s.s, &s.joint_rotation, &w_parent, &w_body);
+        // Ȧ t_λ = [0; ω_λ × (v_i − v_λ)]
+        let mut xi = stack(
+            &Vec3::zeros(),
+            &w_parent.cross(&(linear(&t) - linear(&t_parent))),
+        );
+        for k in 0..nv {
+            xi += sdot[k] * vi[k];
+        }
+        s.twist = t;
+        s.xi = xi;
+    }
+}
+
+/// World placement of a user body's frame.
+pub fn body_placement(model: &Model, st: &[LinkState], body: usize) -> Placement {
+    let b = &model.bodies[body];
+    match b.link {
+        Some(l) => Placement::new(st[l].rotation, st[l].origin).compose(&b.in_link),
+        None => {
+            // Welded to the world: compose the chain of fixed placements.
+            let mut p = b.placement;
+            let mut parent = b.parent;
+            while let Some(k) = parent {
+                p = model.bodies[k].placement.compose(&p);
+                parent = model.bodies[k].parent;
+            }
+            p
+        }
+    }
+}

@@ -1,0 +1,245 @@
+//! The kinematic tree. Bodies are kept as the user added them; bodies on `Fixed` joints are
+//! welded into their moving ancestor (a "link"), so dynamics runs over links only. Each link
+//! carries its merged rigid body, its seven point masses and the 6×6 mass matrix about its
+//! origin built once from those points, in the link frame.
+use crate::body::RigidBody;
+use crate::error::{check_finite, Error, Result};
+use crate::joint::Joint;
+use crate::point_masses::EquimomentalSet;
+use crate::spatial::{BodyInertia, Mat3, Placement, Vec3};
+
+#[derive(Debug, Clone)]
+pub struct BodyRecord {
+    pub name: String,
+    pub body: RigidBody,
+    pub joint: Joint,
+    pub parent: Option<usize>,
+    /// Joint frame in the parent body's frame.
+    pub placement: Placement,
+    /// Link this body belongs to (`None`: welded to the world).
+    pub link: Option<usize>,
+    /// This body's frame in its link's frame.
+    pub in_link: Placement,
+    pub point_mass_center: Option<Vec3>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Link {
+    /// Index of the moving body that defines the link.
+    pub body: usize,
+    pub parent: Option<usize>,
+    pub joint: Joint,
+    /// Joint frame in the parent link's frame.
+    pub placement: Placement,
+    pub q_index: usize,
+    pub v_index: usize,
+    /// The link's rigid body (with welded children), link frame.
+    pub rigid: RigidBody,
+    pub points: EquimomentalSet,
+    /// Mass, first moment and inertia about the link origin, summed from the seven points.
+    pub inertia: BodyInertia,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct Model {
+    pub bodies: Vec<BodyRecord>,
+    pub links: Vec<Link>,
+    pub nq: usize,
+    pub nv: usize,
+}
+
+/// Checks that `r` is a proper rotation (to 1e-9) and returns it re-orthonormalised.
+pub fn checked_rotation(r: &Mat3, arg: &str) -> Result<Mat3> {
+    check_finite(arg, r.as_slice())?;
+    let err = (r.transpose() * r - Mat3::identity()).abs().max();
+    if err > 1e-9 || r.determinant() <= 0.0 {
+        return Err(Error::arg(
+            arg,
+            "a 3x3 rotation matrix (orthonormal, determinant +1, to 1e-9)",
+            format!(
+                "a matrix with |RᵀR − 1| = {err:.3e} and determinant {:.6}",
+                r.determinant()
+            ),
+        ));
+    }
+    // Polar projection onto SO(3) so that rounding in the input does not accumulate.
+    let svd = r.svd(true, true);
+    match (svd.u, svd.v_t) {
+        (Some(u), Some(vt)) => Ok(u * vt),
+        _ => Ok(*r),
+    }
+}
+
+impl Model {
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    pub fn nbodies(&self) -> usize {
+        self.bodies.len()
+    }
+
+    pub fn body_index(&self, name: &str) -> Option<usize> {
+        self.bodies.iter().position(|b| b.name == name)
+    }
+
+    /// Adds a body on `joint` below `parent` (None: the world). `placement` puts the joint
+    /// frame in the parent body's frame; the body frame equals the joint frame at the neutral
+    /// configuration. `point_mass_center` (body frame) is where the seven-point box is
+    /// centred; the default is the COM. Returns the body's index.
+    pub fn add_body(
+        &mut self,
+        body: RigidBody,
+        joint: Joint,
+        parent: Option<usize>,
+        placement: Placement,
+        name: Option<String>,
+        point_mass_center: Option<Vec3>,
+    ) -> Result<usize> {
+        let index = self.bodies.len();
+        if let Some(p) = parent {
+            if p >= index {
+                return Err(Error::model(
+                    "parent",
+                    format!(
+                        "no body with index {p}: the model has {index} bodies (indices 0..{index}), or -1 for the world"
+                    ),
+                ));
+            }
+        }
+        check_finite("translation", placement.translation.as_slice())?;
+        let rotation = checked_rotation(&placement.rotation, "rotation")?;
+        let placement = Placement::new(rotation, placement.translation);
+        if let Some(c) = &point_mass_center {
+            check_finite("point_mass_center", c.as_slice())?;
+        }
+        let name = name.unwrap_or_else(|| format!("body{index}"));
+        if self.body_index(&name).is_some() {
+            return Err(Error::model(
+                "name",
+                format!("a body named '{name}' already exists"),
+            ));
+        }
+        let (parent_link, parent_in_link) = match parent {
+            Some(p) => (self.bodies[p].link, self.bodies[p].in_link),
+            None => (None, Placement::identity()),
+        };
+        let joint_in_link = parent_in_link.compose(&placement);
+        let (link, in_link) = if let Joint::Fixed = joint {
+            if let Some(l) = parent_link {
+                let link = &mut self.links[l];
+                let welded = body.transformed(&joint_in_link.rotation, &joint_in_link.translation);
+                link.rigid = link.rigid.merged(&welded);
+                let center = self.bodies[link.body].point_mass_center;
+                Self::refresh_points(link, center);
+            }
+            (parent_link, joint_in_link)
+        } else {
+            let mut link = Link {
+                body: index,
+                parent: parent_link,
+                joint,
+                placement: joint_in_link,
+                q_index: self.nq,
+                v_index: self.nv,
+                rigid: body,
+                points: EquimomentalSet::solve(&body, &body.com),
+                inertia: BodyInertia::zero(),
+            };
+            Self::refresh_points(&mut link, point_mass_center);
+            self.nq += joint.nq();
+            self.nv += joint.nv();
+            self.links.push(link);
+            (Some(self.links.len() - 1), Placement::identity())
+        };
+        self.bodies.push(BodyRecord {
+            name,
+            body,
+            joint,
+            parent,
+            placement,
+            link,
+            in_link,
+            point_mass_center,
+        });
+        Ok(index)
+    }
+
+    fn refresh_points(link: &mut Link, center: Option<Vec3>) {
+        let c = center.unwrap_or(link.rigid.com);
+        link.points = EquimomentalSet::solve(&link.rigid, &c);
+        link.inertia = BodyInertia::from_points(&link.points.masses, &link.points.positions);
+    }
+
+    pub fn neutral(&self) -> Vec<f64> {
+        let mut q = vec![0.0; self.nq];
+        for l in &self.links {
+            l.joint.neutral(&mut q[l.q_index..l.q_index + l.joint.nq()]);
+        }
+        q
+    }
+
+    /// Validates a configuration and a velocity (lengths, finite, quaternion norms).
+    pub fn check_state(&self, q: &[f64], v: Option<&[f64]>) -> Result<()> {
+        if q.len() != self.nq {
+            return Err(Error::arg(
+                "q",
+                format!("shape ({},)", self.nq),
+                format!("shape ({},)", q.len()),
+            ));
+        }
+        for l in &self.links {
+            l.joint
+                .check_configuration(&q[l.q_index..l.q_index + l.joint.nq()], "q")?;
+        }
+        if let Some(v) = v {
+            self.check_vector("v", v)?;
+        }
+        Ok(())
+    }
+
+    pub fn check_vector(&self, arg: &str, x: &[f64]) -> Result<()> {
+        if x.len() != self.nv {
+            return Err(Error::arg(
+                arg,
+                format!("shape ({},)", self.nv),
+                format!("shape ({},)", x.len()),
+            ));
+        }
+        check_finite(arg, x)
+    }
+
+    /// `q̇` from `v` for the whole model.
+    pub fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
+        for l in &self.links {
+            let (iq, iv) = (l.q_index, l.v_index);
+            l.joint.velocity_to_qdot(
+                &q[iq..iq + l.joint.nq()],
+                &v[iv..iv + l.joint.nv()],
+                &mut qdot[iq..iq + l.joint.nq()],
+            );
+        }
+    }
+
+    /// Normalises the quaternions of `q` in place.
+    pub fn normalize(&self, q: &mut [f64]) {
+        for l in &self.links {
+            if let Joint::Spherical = l.joint {
+                let s = &mut q[l.q_index..l.q_index + 4];
+                let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > 0.0 {
+                    s.iter_mut().for_each(|x| *x /= n);
+                }
+            }
+        }
+    }
+
+    /// Total number of point masses taking part in the dynamics (7 per link).
+    pub fn npoints(&self) -> usize {
+        7 * self.links.len()
+    }
+
+    pub fn total_mass(&self) -> f64 {
+        self.links.iter().map(|l| l.rigid.mass).sum()
+    }
+}

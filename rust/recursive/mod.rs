@@ -1,0 +1,97 @@
+//! O(n) recursive dynamics over the DeNOC quantities: twists and twist rates outward,
+//! wrenches inward (`τ_i = P_iᵀ w_i`), the articulated-body recursion for forward dynamics
+//! (equivalent to Saha's UDUᵀ of the GIM, never forming it), and the composite-body GIM.
+//! All vectors are world-axes, about each link's origin, angular part first. Nothing here
+//! allocates: `Data` is the workspace, sized once per model.
+pub mod forward;
+pub mod inverse;
+pub mod mass_matrix;
+#[cfg(test)]
+mod tests;
+
+use crate::joint::Joint;
+use crate::kinematics::LinkState;
+use crate::model::Model;
+use crate::spatial::{BodyInertia, Mat3, Mat6, Vec3, Vec6};
+
+pub use forward::forward_dynamics;
+pub use inverse::inverse_dynamics;
+pub use mass_matrix::mass_matrix;
+
+/// Workspace for one model (like Pinocchio's `Data`).
+#[derive(Debug, Clone)]
+pub struct Data {
+    pub links: Vec<LinkState>,
+    /// Twist rates `ṫ_i`.
+    pub accel: Vec<Vec6>,
+    /// Wrenches transmitted by each joint.
+    pub wrench: Vec<Vec6>,
+    pub art_inertia: Vec<Mat6>,
+    pub art_bias: Vec<Vec6>,
+    /// `U = M̂ P` (columns).
+    pub u: Vec<[Vec6; 3]>,
+    /// `D⁻¹ = (Pᵀ M̂ P)⁻¹`, upper-left dof × dof block used.
+    pub d_inv: Vec<Mat3>,
+    /// `τ − Pᵀ b̂`.
+    pub u_tau: Vec<Vec3>,
+    pub composite: Vec<BodyInertia>,
+}
+
+impl Data {
+    pub fn new(model: &Model) -> Self {
+        let n = model.links.len();
+        Data {
+            links: vec![LinkState::default(); n],
+            accel: vec![Vec6::zeros(); n],
+            wrench: vec![Vec6::zeros(); n],
+            art_inertia: vec![Mat6::zeros(); n],
+            art_bias: vec![Vec6::zeros(); n],
+            u: vec![[Vec6::zeros(); 3]; n],
+            d_inv: vec![Mat3::zeros(); n],
+            u_tau: vec![Vec3::zeros(); n],
+            composite: vec![BodyInertia::zero(); n],
+        }
+    }
+
+    pub fn fits(&self, model: &Model) -> bool {
+        self.links.len() == model.links.len()
+    }
+}
+
+/// Base twist rate that puts uniform gravity into every body: `ṫ_0 = [0; −g]`.
+#[inline]
+pub(crate) fn base_accel(g: &Vec3) -> Vec6 {
+    Vec6::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z)
+}
+
+/// Kinetic energy `½ Σ t_iᵀ M_i t_i` (needs velocities in `data`).
+pub fn kinetic_energy(data: &Data) -> f64 {
+    data.links
+        .iter()
+        .map(|s| 0.5 * s.twist.dot(&s.inertia.mul_twist(&s.twist)))
+        .sum()
+}
+
+/// Gravitational potential `−Σ m_ij g·x_ij` (needs positions in `data`).
+pub fn potential_energy(data: &Data, g: &Vec3) -> f64 {
+    -data
+        .links
+        .iter()
+        .map(|s| g.dot(&(s.origin * s.inertia.mass + s.inertia.first_moment)))
+        .sum::<f64>()
+}
+
+/// A message naming the link whose joint makes the recursion singular.
+pub(crate) fn singular_message(model: &Model, link: usize, q: &[f64]) -> String {
+    let l = &model.links[link];
+    let name = &model.bodies[l.body].name;
+    match l.joint {
+        Joint::SphericalZYZ => format!(
+            "SphericalZYZ joint of body '{name}' is at an Euler singularity: sin(theta) = {:.3e} (theta = q[{}] = {}); use the quaternion Spherical joint for motions through theta = 0 or pi",
+            q[l.q_index + 1].sin(),
+            l.q_index + 1,
+            q[l.q_index + 1]
+        ),
+        _ => format!("joint of body '{name}' has a singular articulated inertia (massless subtree?)"),
+    }
+}

@@ -1,0 +1,175 @@
+//! The recursive algorithms against the explicit DeNOC products, and the identities the
+//! equations of motion must satisfy, on random trees mixing every joint type.
+use nalgebra::{DMatrix, DVector};
+use proptest::prelude::*;
+
+use super::*;
+use crate::body::RigidBody;
+use crate::denoc;
+use crate::joint::Joint;
+use crate::model::Model;
+use crate::spatial::{Placement, Vec3};
+
+/// A deterministic pseudo-random stream, so a failure is reproducible from its seed.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((self.0 >> 11) as f64) / ((1u64 << 53) as f64)
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+    fn vec3(&mut self, s: f64) -> Vec3 {
+        Vec3::new(self.range(-s, s), self.range(-s, s), self.range(-s, s))
+    }
+}
+
+pub(crate) fn random_tree(seed: u64, n: usize) -> Model {
+    let mut rng = Lcg(seed);
+    let mut model = Model::new();
+    for k in 0..n {
+        let ext = Vec3::new(
+            rng.range(0.05, 0.5),
+            rng.range(0.05, 0.5),
+            rng.range(0.05, 0.5),
+        );
+        let m = rng.range(0.5, 3.0);
+        let sq = ext.component_mul(&ext);
+        let d = Vec3::new(sq.y + sq.z, sq.x + sq.z, sq.x + sq.y) * (m / 3.0);
+        let r = nalgebra::Rotation3::from_scaled_axis(rng.vec3(2.0));
+        let body = RigidBody::new(
+            m,
+            rng.vec3(0.3),
+            r.matrix() * Mat3::from_diagonal(&d) * r.matrix().transpose(),
+        )
+        .unwrap();
+        let joint = match k % 5 {
+            0 => Joint::revolute(rng.vec3(1.0)).unwrap(),
+            1 => Joint::Spherical,
+            2 => Joint::prismatic(rng.vec3(1.0)).unwrap(),
+            3 => Joint::SphericalZYZ,
+            _ => {
+                if k % 2 == 0 {
+                    Joint::Fixed
+                } else {
+                    Joint::revolute(rng.vec3(1.0)).unwrap()
+                }
+            }
+        };
+        let parent = if k == 0 {
+            None
+        } else {
+            Some((rng.next() * k as f64) as usize)
+        };
+        let rot = nalgebra::Rotation3::from_scaled_axis(rng.vec3(1.5));
+        let place = Placement::new(*rot.matrix(), rng.vec3(0.6));
+        let center = if k % 3 == 0 {
+            Some(rng.vec3(0.5))
+        } else {
+            None
+        };
+        model
+            .add_body(body, joint, parent, place, None, center)
+            .unwrap();
+    }
+    model
+}
+
+pub(crate) fn random_state(model: &Model, seed: u64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let mut rng = Lcg(seed ^ 0x9e3779b97f4a7c15);
+    let mut q: Vec<f64> = (0..model.nq).map(|_| rng.range(-1.0, 1.0)).collect();
+    // Keep ZYZ θ away from the Euler singularity.
+    for l in &model.links {
+        if let Joint::SphericalZYZ = l.joint {
+            q[l.q_index + 1] = rng.range(0.4, 2.7);
+        }
+    }
+    model.normalize(&mut q);
+    let v = (0..model.nv).map(|_| rng.range(-1.5, 1.5)).collect();
+    let a = (0..model.nv).map(|_| rng.range(-2.0, 2.0)).collect();
+    (q, v, a)
+}
+
+fn rel(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
+    (a - b).norm() / b.norm().max(1e-300)
+}
+
+const G: Vec3 = Vec3::new(0.0, 0.0, -9.81);
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    #[test]
+    fn recursive_agrees_with_explicit(seed in 0u64..1_000_000, n in 1usize..16) {
+        let model = random_tree(seed, n);
+        let (q, v, a) = random_state(&model, seed);
+        let mut data = Data::new(&model);
+        let nv = model.nv;
+        let mut gim = DMatrix::zeros(nv, nv);
+        mass_matrix(&model, &mut data, &q, &mut gim);
+        let gim_explicit = denoc::mass_matrix(&model, &q);
+        prop_assert!((&gim - &gim_explicit).norm() <= 1e-12 * gim_explicit.norm());
+
+        let mut tau = vec![0.0; nv];
+        inverse_dynamics(&model, &mut data, &q, &v, &a, &G, None, &mut tau);
+        let tau_explicit = denoc::inverse_dynamics(&model, &q, &v, &a, &G);
+        prop_assert!(rel(&DVector::from_vec(tau.clone()), &tau_explicit) <= 1e-11);
+
+        let mut acc = vec![0.0; nv];
+        forward_dynamics(&model, &mut data, &q, &v, &tau, &G, None, &mut acc).unwrap();
+        prop_assert!(rel(&DVector::from_vec(acc), &DVector::from_vec(a.clone())) <= 1e-9);
+    }
+
+    #[test]
+    fn gim_spd_and_passivity(seed in 0u64..1_000_000, n in 1usize..12) {
+        let model = random_tree(seed, n);
+        let (q, v, _) = random_state(&model, seed);
+        let gim = denoc::mass_matrix(&model, &q);
+        prop_assert!(gim.clone().cholesky().is_some());
+        // İ by central differences along q(t) with q̇ from v; İ − 2C must be skew.
+        let h = 1e-6;
+        let mut qd = vec![0.0; model.nq];
+        model.velocity_to_qdot(&q, &v, &mut qd);
+        let step = |s: f64| { let mut x: Vec<f64> = q.iter().zip(&qd).map(|(a, b)| a + s * b).collect(); model.normalize(&mut x); x };
+        let idot = (denoc::mass_matrix(&model, &step(h)) - denoc::mass_matrix(&model, &step(-h))) / (2.0 * h);
+        let c = denoc::convective_matrix(&model, &q, &v);
+        let n_mat = &idot - &c * 2.0;
+        prop_assert!((&n_mat + n_mat.transpose()).norm() <= 1e-6 * idot.norm().max(1.0));
+        // And İ = C + Cᵀ.
+        prop_assert!((&idot - (&c + c.transpose())).norm() <= 1e-6 * idot.norm().max(1.0));
+    }
+}
+
+#[test]
+fn energy_power_balance() {
+    // d(T + V)/dt = τ·v along the motion, with T, V from the recursion.
+    let model = random_tree(7, 9);
+    let (q, v, _) = random_state(&model, 7);
+    let tau: Vec<f64> = (0..model.nv).map(|k| 0.3 * (k as f64).sin()).collect();
+    let mut data = Data::new(&model);
+    let mut a = vec![0.0; model.nv];
+    forward_dynamics(&model, &mut data, &q, &v, &tau, &G, None, &mut a).unwrap();
+    let energy = |s: f64| {
+        let mut qd = vec![0.0; model.nq];
+        model.velocity_to_qdot(&q, &v, &mut qd);
+        // Second-order Taylor step of the state (enough for a central difference).
+        let vv: Vec<f64> = v.iter().zip(&a).map(|(x, y)| x + s * y).collect();
+        let mut qq: Vec<f64> = q.iter().zip(&qd).map(|(x, y)| x + s * y).collect();
+        model.normalize(&mut qq);
+        let mut d = Data::new(&model);
+        crate::kinematics::positions(&model, &qq, &mut d.links);
+        crate::kinematics::velocities(&model, &qq, &vv, &mut d.links);
+        kinetic_energy(&d) + potential_energy(&d, &G)
+    };
+    let h = 1e-5;
+    let de = (energy(h) - energy(-h)) / (2.0 * h);
+    let power: f64 = tau.iter().zip(&v).map(|(x, y)| x * y).sum();
+    assert!(
+        (de - power).abs() < 1e-6 * (1.0 + power.abs()),
+        "{de} vs {power}"
+    );
+}
