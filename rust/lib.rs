@@ -13,6 +13,9 @@ pub mod point_masses;
 pub mod recursive;
 pub mod spatial;
 
+#[cfg(feature = "python")]
+mod python;
+
 pub use body::RigidBody;
 pub use error::{Error, Result};
 pub use joint::Joint;

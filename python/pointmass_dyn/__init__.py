@@ -1,0 +1,70 @@
+"""pointmass_dyn: multibody dynamics with equimomental point masses and DeNOC matrices.
+
+Every rigid body is represented by seven point masses with the same mass, centre of mass and
+inertia; the equations of motion come from the Decoupled Natural Orthogonal Complement (DeNOC)
+matrices. The core is Rust; this package is its NumPy front.
+"""
+
+from __future__ import annotations
+
+from . import errors
+from ._core import Joint, Model, PointMasses, RigidBody, __version__
+from .errors import (
+    InertiaError,
+    InvalidInputError,
+    ModelStructureError,
+    PointMassDynError,
+    SceneError,
+    SimulationError,
+    SingularityError,
+)
+
+
+def Revolute(axis) -> Joint:  # noqa: N802 - reads like a class at the call site
+    """Revolute joint about ``axis`` (joint frame); q is the angle in radians."""
+    return Joint.revolute(axis)
+
+
+def Prismatic(axis) -> Joint:  # noqa: N802
+    """Prismatic joint along ``axis`` (joint frame); q is the displacement."""
+    return Joint.prismatic(axis)
+
+
+def SphericalZYZ() -> Joint:  # noqa: N802
+    """The paper's spherical joint: ZYZ Euler angles (phi, theta, psi), Euler rates as speeds.
+
+    Singular where sin(theta) = 0; use :func:`Spherical` for motions through it."""
+    return Joint.spherical_zyz()
+
+
+def Spherical() -> Joint:  # noqa: N802
+    """Quaternion spherical joint: q = (x, y, z, w), speeds = angular velocity relative to the
+    parent in the body frame (as Pinocchio's JointModelSpherical)."""
+    return Joint.spherical()
+
+
+def Fixed() -> Joint:  # noqa: N802
+    """Rigid attachment: the body is welded into its parent for dynamics."""
+    return Joint.fixed()
+
+
+__all__ = [
+    "__version__",
+    "RigidBody",
+    "PointMasses",
+    "Joint",
+    "Model",
+    "Revolute",
+    "Prismatic",
+    "SphericalZYZ",
+    "Spherical",
+    "Fixed",
+    "errors",
+    "PointMassDynError",
+    "InvalidInputError",
+    "InertiaError",
+    "ModelStructureError",
+    "SingularityError",
+    "SimulationError",
+    "SceneError",
+]

@@ -1,0 +1,47 @@
+"""The package's exceptions. Every message names the argument (or file and key), what was
+expected and what was given."""
+
+from __future__ import annotations
+
+
+class PointMassDynError(Exception):
+    """Base of every error raised by pointmass_dyn."""
+
+
+class InvalidInputError(PointMassDynError, ValueError):
+    """An argument of the wrong shape, type or range, or a non-finite number."""
+
+
+class InertiaError(InvalidInputError):
+    """A mass, centre of mass or inertia tensor no rigid body can have."""
+
+
+class ModelStructureError(InvalidInputError):
+    """A kinematic tree that cannot be built: unknown parent, duplicate name."""
+
+
+class SingularityError(PointMassDynError, ArithmeticError):
+    """The equations cannot be solved at this state (e.g. a ZYZ joint at sin(theta) = 0)."""
+
+
+class SimulationError(PointMassDynError, RuntimeError):
+    """A simulation that could not finish; ``t`` is the time it reached."""
+
+    def __init__(self, message: str, t: float | None = None):
+        super().__init__(message)
+        self.t = t
+
+
+class SceneError(InvalidInputError):
+    """A scene file or scene description that cannot be loaded; names the file and the key."""
+
+
+__all__ = [
+    "PointMassDynError",
+    "InvalidInputError",
+    "InertiaError",
+    "ModelStructureError",
+    "SingularityError",
+    "SimulationError",
+    "SceneError",
+]

@@ -1,0 +1,126 @@
+//! `RigidBody` and its seven point masses.
+use pyo3::prelude::*;
+
+use super::convert::{mat3, mat3_to_array, points, to_array, to_array1, vec3, vector};
+use super::errors::IntoPyResult;
+use crate::body::RigidBody;
+use crate::point_masses::EquimomentalSet;
+
+#[pyclass(name = "RigidBody", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[derive(Clone)]
+pub struct PyRigidBody {
+    pub inner: RigidBody,
+}
+
+#[pymethods]
+impl PyRigidBody {
+    #[new]
+    #[pyo3(signature = (mass, com, inertia))]
+    fn new(py: Python<'_>, mass: f64, com: &Bound<'_, PyAny>, inertia: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let inner = RigidBody::new(mass, vec3(com, "com")?, mat3(inertia, "inertia")?).py(py)?;
+        Ok(PyRigidBody { inner })
+    }
+
+    /// Mass, COM and inertia about the COM of a set of point masses.
+    #[staticmethod]
+    fn from_point_masses(py: Python<'_>, masses: &Bound<'_, PyAny>, positions: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let m = vector(masses, "masses", None)?;
+        let p = points(positions, "positions")?;
+        Ok(PyRigidBody {
+            inner: RigidBody::from_point_masses(&m, &p).py(py)?,
+        })
+    }
+
+    #[getter]
+    fn mass(&self) -> f64 {
+        self.inner.mass
+    }
+    #[getter]
+    fn com<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, self.inner.com.as_slice()).into_any()
+    }
+    #[getter]
+    fn inertia<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        mat3_to_array(py, &self.inner.inertia)
+    }
+
+    /// Inertia about `point` (body frame), by the parallel-axis theorem.
+    fn inertia_about<'py>(&self, py: Python<'py>, point: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let p = vec3(point, "point")?;
+        crate::error::check_finite("point", p.as_slice()).py(py)?;
+        mat3_to_array(py, &self.inner.inertia_about(&p))
+    }
+
+    /// The equimomental seven point masses, box centred at `center` (default: the COM).
+    #[pyo3(signature = (center=None))]
+    fn point_masses(&self, py: Python<'_>, center: Option<&Bound<'_, PyAny>>) -> PyResult<PyPointMasses> {
+        let c = match center {
+            Some(c) if !c.is_none() => {
+                let c = vec3(c, "center")?;
+                crate::error::check_finite("center", c.as_slice()).py(py)?;
+                c
+            }
+            _ => self.inner.com,
+        };
+        Ok(PyPointMasses {
+            inner: EquimomentalSet::solve(&self.inner, &c),
+        })
+    }
+
+    fn __repr__(&self) -> String {
+        let i = &self.inner.inertia;
+        format!(
+            "RigidBody(mass={}, com=[{}, {}, {}], inertia=[[{}, {}, {}], [{}, {}, {}], [{}, {}, {}]])",
+            self.inner.mass,
+            self.inner.com.x,
+            self.inner.com.y,
+            self.inner.com.z,
+            i[(0, 0)],
+            i[(0, 1)],
+            i[(0, 2)],
+            i[(1, 0)],
+            i[(1, 1)],
+            i[(1, 2)],
+            i[(2, 0)],
+            i[(2, 1)],
+            i[(2, 2)]
+        )
+    }
+}
+
+#[pyclass(name = "PointMasses", module = "pointmass_dyn._core", frozen)]
+pub struct PyPointMasses {
+    pub inner: EquimomentalSet,
+}
+
+#[pymethods]
+impl PyPointMasses {
+    /// The seven masses (kg); some may be negative.
+    #[getter]
+    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, &self.inner.masses).into_any()
+    }
+    /// Positions in the body frame, shape (7, 3).
+    #[getter]
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let flat: Vec<f64> = self.inner.positions.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+        to_array(py, flat, &[7, 3])
+    }
+    #[getter]
+    fn half_sides<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, self.inner.half_sides.as_slice()).into_any()
+    }
+    #[getter]
+    fn center<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, self.inner.center.as_slice()).into_any()
+    }
+    /// The rigid body these points represent (mass, COM, inertia rebuilt from them).
+    fn to_body(&self, py: Python<'_>) -> PyResult<PyRigidBody> {
+        Ok(PyRigidBody {
+            inner: RigidBody::from_point_masses(&self.inner.masses, &self.inner.positions).py(py)?,
+        })
+    }
+    fn __repr__(&self) -> String {
+        format!("PointMasses(masses={:?}, half_sides={:?})", self.inner.masses, self.inner.half_sides.as_slice())
+    }
+}

@@ -1,0 +1,43 @@
+//! Core errors to the package's own exception hierarchy (`pointmass_dyn.errors`, defined in
+//! Python so classes can subclass both our base and `ValueError`/`ArithmeticError`).
+use pyo3::prelude::*;
+use pyo3::types::PyType;
+
+use crate::error::Error;
+
+/// Builds an instance of `pointmass_dyn.errors.<class_name>` with `message`.
+pub fn py_error(py: Python<'_>, class_name: &str, message: String) -> PyErr {
+    let cls = py
+        .import("pointmass_dyn.errors")
+        .and_then(|m| m.getattr(class_name))
+        .and_then(|c| c.cast_into::<PyType>().map_err(PyErr::from));
+    match cls {
+        Ok(cls) => PyErr::from_type(cls, (message,)),
+        // The package is always importable next to its extension; fall back loudly.
+        Err(_) => pyo3::exceptions::PyValueError::new_err(message),
+    }
+}
+
+pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
+    let class = match &err {
+        Error::InvalidArgument { .. } => "InvalidInputError",
+        Error::InvalidInertia { .. } => "InertiaError",
+        Error::InvalidModel { .. } => "ModelStructureError",
+        Error::Singular(_) => "SingularityError",
+    };
+    py_error(py, class, err.to_string())
+}
+
+pub trait IntoPyResult<T> {
+    fn py(self, py: Python<'_>) -> PyResult<T>;
+}
+
+impl<T> IntoPyResult<T> for Result<T, Error> {
+    fn py(self, py: Python<'_>) -> PyResult<T> {
+        self.map_err(|e| to_py(py, e))
+    }
+}
+
+pub fn invalid(py: Python<'_>, arg: &str, expected: impl std::fmt::Display, got: impl std::fmt::Display) -> PyErr {
+    py_error(py, "InvalidInputError", format!("{arg}: expected {expected}, got {got}"))
+}
