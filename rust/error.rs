@@ -20,6 +20,9 @@ pub enum Error {
     /// The equations cannot be solved at this state (singular mass matrix, Euler singularity).
     #[error("{0}")]
     Singular(String),
+    /// An integrator setting out of range (the message names it).
+    #[error("{0}")]
+    InvalidSetting(String),
 }
 
 impl Error {

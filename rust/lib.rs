@@ -4,6 +4,7 @@
 //! and errors and nothing else.
 pub mod body;
 pub mod denoc;
+pub mod effects;
 pub mod error;
 pub mod integrator;
 pub mod joint;
@@ -11,6 +12,8 @@ pub mod kinematics;
 pub mod model;
 pub mod point_masses;
 pub mod recursive;
+pub mod scene;
+pub mod simulate;
 pub mod spatial;
 
 #[cfg(feature = "python")]

@@ -8,7 +8,7 @@ matrices. The core is Rust; this package is its NumPy front.
 from __future__ import annotations
 
 from . import errors
-from ._core import Joint, Model, PointMasses, RigidBody, __version__
+from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from .errors import (
     InertiaError,
     InvalidInputError,
@@ -18,6 +18,8 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .scenes import builtin_scenes, load_scene
+from .simulation import Gravity, OdeResult, SimulationResult, rk45, simulate
 
 
 def Revolute(axis) -> Joint:  # noqa: N802 - reads like a class at the call site
@@ -59,6 +61,16 @@ __all__ = [
     "SphericalZYZ",
     "Spherical",
     "Fixed",
+    "Effect",
+    "Gravity",
+    "Scene",
+    "StateEvent",
+    "load_scene",
+    "builtin_scenes",
+    "simulate",
+    "SimulationResult",
+    "rk45",
+    "OdeResult",
     "errors",
     "PointMassDynError",
     "InvalidInputError",

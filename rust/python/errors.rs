@@ -20,7 +20,7 @@ pub fn py_error(py: Python<'_>, class_name: &str, message: String) -> PyErr {
 
 pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
     let class = match &err {
-        Error::InvalidArgument { .. } => "InvalidInputError",
+        Error::InvalidArgument { .. } | Error::InvalidSetting(_) => "InvalidInputError",
         Error::InvalidInertia { .. } => "InertiaError",
         Error::InvalidModel { .. } => "ModelStructureError",
         Error::Singular(_) => "SingularityError",

@@ -3,6 +3,7 @@ mod body;
 mod convert;
 mod errors;
 mod model;
+mod simulate;
 
 use pyo3::prelude::*;
 
@@ -13,5 +14,11 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<body::PyPointMasses>()?;
     m.add_class::<model::PyJoint>()?;
     m.add_class::<model::PyModel>()?;
+    m.add_class::<simulate::PyEffect>()?;
+    m.add_class::<simulate::PyStateEvent>()?;
+    m.add_class::<simulate::PyScene>()?;
+    m.add_class::<simulate::PyDenseSolution>()?;
+    m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::rk45, m)?)?;
     Ok(())
 }

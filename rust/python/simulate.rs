@@ -1,0 +1,626 @@
+//! Scenes, effects, `simulate` and the generic `rk45`.
+use std::sync::Mutex;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyTuple};
+
+use super::convert::{array, to_array, to_array1, vec3, vector};
+use super::errors::{invalid, py_error, IntoPyResult};
+use super::model::PyModel;
+use crate::effects::Effect;
+use crate::integrator::{self, Controller, DenseOutput, Event, EventDirection, FnSystem, Rk45Options, Tol};
+use crate::scene::{Scene, Settings};
+use crate::simulate::{simulate, StateEvent};
+
+#[pyclass(name = "Effect", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[derive(Clone)]
+pub struct PyEffect {
+    pub inner: Effect,
+}
+
+#[pymethods]
+impl PyEffect {
+    /// Uniform gravity `g` (m/s², world frame).
+    #[staticmethod]
+    #[pyo3(signature = (g=None))]
+    fn gravity(py: Python<'_>, g: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let g = match g {
+            Some(g) if !g.is_none() => vec3(g, "g")?,
+            _ => crate::spatial::Vec3::new(0.0, 0.0, -9.81),
+        };
+        Ok(PyEffect { inner: Effect::gravity(g).py(py)? })
+    }
+    #[getter]
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+    fn __repr__(&self) -> String {
+        match &self.inner {
+            Effect::Gravity { g } => format!("Gravity(g=[{}, {}, {}])", g.x, g.y, g.z),
+        }
+    }
+    fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {
+        self.inner == other.inner
+    }
+}
+
+/// `q[index]` (or `v[index]`) crossing `value`; evaluated in Rust, no GIL needed.
+#[pyclass(name = "StateEvent", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[derive(Clone)]
+pub struct PyStateEvent {
+    pub inner: StateEvent,
+}
+
+fn terminal_count(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<usize> {
+    if let Ok(b) = obj.extract::<bool>() {
+        return Ok(b as usize);
+    }
+    match obj.extract::<i64>() {
+        Ok(n) if n >= 0 => Ok(n as usize),
+        _ => Err(invalid(py, "terminal", "a bool or a count >= 0", obj.repr().map(|r| r.to_string()).unwrap_or_default())),
+    }
+}
+
+#[pymethods]
+impl PyStateEvent {
+    #[new]
+    #[pyo3(signature = (variable, index, value=0.0, direction=0, terminal=None))]
+    fn new(py: Python<'_>, variable: &str, index: usize, value: f64, direction: i32, terminal: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let on_velocity = match variable {
+            "q" => false,
+            "v" => true,
+            other => return Err(invalid(py, "variable", "'q' or 'v'", format!("'{other}'"))),
+        };
+        if !value.is_finite() {
+            return Err(invalid(py, "value", "a finite number", value));
+        }
+        let terminal = match terminal {
+            Some(t) if !t.is_none() => terminal_count(py, t)?,
+            _ => 0,
+        };
+        Ok(PyStateEvent { inner: StateEvent { on_velocity, index, value, direction: direction.signum(), terminal } })
+    }
+    #[getter]
+    fn terminal(&self) -> usize {
+        self.inner.terminal
+    }
+    #[getter]
+    fn direction(&self) -> i32 {
+        self.inner.direction
+    }
+    fn __repr__(&self) -> String {
+        let e = &self.inner;
+        format!(
+            "StateEvent('{}', {}, value={}, direction={}, terminal={})",
+            if e.on_velocity { "v" } else { "q" },
+            e.index,
+            e.value,
+            e.direction,
+            e.terminal
+        )
+    }
+}
+
+#[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
+pub struct PyScene {
+    pub inner: Scene,
+}
+
+fn opt_positive(py: Python<'_>, x: Option<f64>, arg: &str) -> PyResult<Option<f64>> {
+    match x {
+        Some(v) if !(v > 0.0 && v.is_finite()) => Err(invalid(py, arg, "a finite number > 0", v)),
+        other => Ok(other),
+    }
+}
+
+fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    let v = vector(obj, "t_span", Some(2))?;
+    if !(v[0].is_finite() && v[1].is_finite()) || v[0] == v[1] {
+        return Err(invalid(py, "t_span", "two different finite times (t0, t_end)", format!("({}, {})", v[0], v[1])));
+    }
+    Ok((v[0], v[1]))
+}
+
+#[pymethods]
+impl PyScene {
+    #[new]
+    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        model: PyRef<'_, PyModel>,
+        q0: Option<&Bound<'_, PyAny>>,
+        v0: Option<&Bound<'_, PyAny>>,
+        effects: Option<&Bound<'_, PyAny>>,
+        t_span: Option<&Bound<'_, PyAny>>,
+        rtol: Option<f64>,
+        atol: Option<f64>,
+        name: Option<String>,
+        description: Option<String>,
+    ) -> PyResult<Self> {
+        let m = model.model.clone();
+        let mut q = match q0 {
+            Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
+            _ => m.neutral(),
+        };
+        let v = match v0 {
+            Some(v) if !v.is_none() => vector(v, "v0", Some(m.nv))?,
+            _ => vec![0.0; m.nv],
+        };
+        m.check_state(&q, Some(&v)).map_err(|e| super::errors::to_py(py, rename_arg(e)))?;
+        m.normalize(&mut q);
+        let mut list = Vec::new();
+        if let Some(effs) = effects {
+            if !effs.is_none() {
+                for (k, e) in effs.try_iter()?.enumerate() {
+                    let e = e?;
+                    let eff = e.cast::<PyEffect>().map_err(|_| {
+                        invalid(py, &format!("effects[{k}]"), "an effect such as pmd.Gravity(...)", e.repr().map(|r| r.to_string()).unwrap_or_default())
+                    })?;
+                    list.push(eff.get().inner.clone());
+                }
+            }
+        }
+        let settings = Settings {
+            t_span: match t_span {
+                Some(t) if !t.is_none() => Some(t_span_arg(py, t)?),
+                _ => None,
+            },
+            rtol: opt_positive(py, rtol, "rtol")?,
+            atol: opt_positive(py, atol, "atol")?,
+            ..Settings::default()
+        };
+        Ok(PyScene {
+            inner: Scene {
+                name: name.unwrap_or_else(|| "scene".into()),
+                description: description.unwrap_or_default(),
+                model: m,
+                q0: q,
+                v0: v,
+                effects: list,
+                settings,
+            },
+        })
+    }
+
+    /// Parses a scene from TOML text; `file` names it in error messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, file="<string>"))]
+    fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
+        Scene::from_toml(text, file)
+            .map(|inner| PyScene { inner })
+            .map_err(|e| py_error(py, "SceneError", e.to_string()))
+    }
+
+    /// A copy of the scene's model.
+    #[getter]
+    fn model(&self) -> PyModel {
+        PyModel::from_model(self.inner.model.clone())
+    }
+    #[getter]
+    fn q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, &self.inner.q0).into_any()
+    }
+    #[getter]
+    fn v0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, &self.inner.v0).into_any()
+    }
+    #[getter]
+    fn effects(&self) -> Vec<PyEffect> {
+        self.inner.effects.iter().map(|e| PyEffect { inner: e.clone() }).collect()
+    }
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+    #[getter]
+    fn description(&self) -> String {
+        self.inner.description.clone()
+    }
+    #[getter]
+    fn t_span(&self) -> Option<(f64, f64)> {
+        self.inner.settings.t_span
+    }
+    #[getter]
+    fn rtol(&self) -> Option<f64> {
+        self.inner.settings.rtol
+    }
+    #[getter]
+    fn atol(&self) -> Option<f64> {
+        self.inner.settings.atol
+    }
+    #[getter]
+    fn max_step(&self) -> Option<f64> {
+        self.inner.settings.max_step
+    }
+    #[getter]
+    fn max_steps(&self) -> Option<usize> {
+        self.inner.settings.max_steps
+    }
+    #[getter]
+    fn first_step(&self) -> Option<f64> {
+        self.inner.settings.first_step
+    }
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "Scene(name='{}', nbodies={}, nq={}, nv={}, effects=[{}])",
+            s.name,
+            s.model.nbodies(),
+            s.model.nq,
+            s.model.nv,
+            s.effects.iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
+        )
+    }
+}
+
+fn rename_arg(e: crate::error::Error) -> crate::error::Error {
+    match e {
+        crate::error::Error::InvalidArgument { arg, expected, got } => crate::error::Error::InvalidArgument {
+            arg: format!("{arg}0"),
+            expected,
+            got,
+        },
+        other => other,
+    }
+}
+
+fn tol_arg(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Tol> {
+    if let Ok(x) = obj.extract::<f64>() {
+        return Ok(Tol::Scalar(x));
+    }
+    Ok(Tol::PerComponent(vector(obj, arg, Some(dim))?))
+}
+
+fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller> {
+    match name {
+        "standard" | "scipy" => Ok(Controller::Standard),
+        "pi" => Ok(Controller::hairer_pi()),
+        other => Err(invalid(py, "controller", "'standard' (SciPy's) or 'pi' (Hairer's PI)", format!("'{other}'"))),
+    }
+}
+
+/// Options common to `rk45` and `simulate`.
+#[allow(clippy::too_many_arguments)]
+fn options(
+    py: Python<'_>,
+    dim: usize,
+    rtol: Option<&Bound<'_, PyAny>>,
+    atol: Option<&Bound<'_, PyAny>>,
+    t_eval: Option<&Bound<'_, PyAny>>,
+    first_step: Option<f64>,
+    max_step: Option<f64>,
+    max_steps: Option<usize>,
+    dense: bool,
+    controller: &str,
+) -> PyResult<Rk45Options> {
+    let mut o = Rk45Options { dense, controller: controller_arg(py, controller)?, ..Default::default() };
+    if let Some(r) = rtol.filter(|r| !r.is_none()) {
+        o.rtol = tol_arg(r, "rtol", dim)?;
+    }
+    if let Some(a) = atol.filter(|a| !a.is_none()) {
+        o.atol = tol_arg(a, "atol", dim)?;
+    }
+    if let Some(t) = t_eval.filter(|t| !t.is_none()) {
+        o.t_eval = Some(vector(t, "t_eval", None)?);
+    }
+    o.first_step = first_step;
+    if let Some(m) = max_step {
+        o.max_step = m;
+    }
+    if let Some(n) = max_steps {
+        o.max_steps = n;
+    }
+    Ok(o)
+}
+
+/// A Python event callable: `(args...) -> float`, with optional `terminal` and `direction`
+/// attributes (SciPy's convention).
+struct PyEventSpec {
+    func: Py<PyAny>,
+    terminal: usize,
+    direction: f64,
+}
+
+fn event_spec(py: Python<'_>, k: usize, e: &Bound<'_, PyAny>) -> PyResult<PyEventSpec> {
+    if !e.is_callable() {
+        return Err(invalid(py, &format!("events[{k}]"), "a callable or a pmd.StateEvent", e.repr().map(|r| r.to_string()).unwrap_or_default()));
+    }
+    let terminal = match e.getattr("terminal") {
+        Ok(t) if !t.is_none() => terminal_count(py, &t)?,
+        _ => 0,
+    };
+    let direction = match e.getattr("direction") {
+        Ok(d) if !d.is_none() => d.extract::<f64>().map_err(|_| invalid(py, &format!("events[{k}].direction"), "a number", "another type"))?,
+        _ => 0.0,
+    };
+    Ok(PyEventSpec { func: e.clone().unbind(), terminal, direction })
+}
+
+/// Builds an event that calls Python (re-attaching to the interpreter when called from a
+/// detached thread); the first exception is kept in `failure` and re-raised afterwards.
+fn python_event<'a>(spec: &'a PyEventSpec, split: Option<usize>, failure: &'a Mutex<Option<PyErr>>) -> Event<'a> {
+    let f = move |t: f64, y: &[f64]| -> f64 {
+        Python::attach(|py| {
+            let args = match split {
+                Some(nq) => PyTuple::new(py, [t.into_pyobject(py).map(|x| x.into_any()), Ok(PyArray1::from_slice(py, &y[..nq]).into_any()), Ok(PyArray1::from_slice(py, &y[nq..]).into_any())].into_iter().collect::<Result<Vec<_>, _>>().unwrap_or_default()),
+                None => PyTuple::new(py, [t.into_pyobject(py).map(|x| x.into_any()), Ok(PyArray1::from_slice(py, y).into_any())].into_iter().collect::<Result<Vec<_>, _>>().unwrap_or_default()),
+            };
+            let out = args.and_then(|a| spec.func.bind(py).call1(a)).and_then(|r| r.extract::<f64>().map_err(PyErr::from));
+            match out {
+                Ok(x) => x,
+                Err(e) => {
+                    if let Ok(mut slot) = failure.lock() {
+                        slot.get_or_insert(e);
+                    }
+                    f64::NAN
+                }
+            }
+        })
+    };
+    Event::new(f).direction(EventDirection::from_sign(spec.direction)).terminal(spec.terminal)
+}
+
+/// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
+#[pyfunction]
+#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_scene<'py>(
+    py: Python<'py>,
+    scene: PyRef<'_, PyScene>,
+    t_span: Option<&Bound<'_, PyAny>>,
+    rtol: Option<&Bound<'_, PyAny>>,
+    atol: Option<&Bound<'_, PyAny>>,
+    t_eval: Option<&Bound<'_, PyAny>>,
+    events: Option<&Bound<'_, PyAny>>,
+    first_step: Option<f64>,
+    max_step: Option<f64>,
+    max_steps: Option<usize>,
+    energy: bool,
+    controller: &str,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = &scene.inner;
+    let (nq, nv) = (s.model.nq, s.model.nv);
+    let t_span = match t_span.filter(|t| !t.is_none()) {
+        Some(t) => t_span_arg(py, t)?,
+        None => s.settings.t_span.ok_or_else(|| invalid(py, "t_span", "(t0, t_end): the scene sets none", "None"))?,
+    };
+    let mut opts = options(
+        py,
+        nq + nv,
+        rtol,
+        atol,
+        t_eval,
+        first_step.or(s.settings.first_step),
+        max_step.or(s.settings.max_step),
+        max_steps.or(s.settings.max_steps),
+        false,
+        controller,
+    )?;
+    if rtol.is_none_or(|r| r.is_none()) {
+        if let Some(r) = s.settings.rtol {
+            opts.rtol = Tol::Scalar(r);
+        }
+    }
+    if atol.is_none_or(|a| a.is_none()) {
+        if let Some(a) = s.settings.atol {
+            opts.atol = Tol::Scalar(a);
+        }
+    }
+    let mut state_events = Vec::new();
+    let mut py_events = Vec::new();
+    // Keep the caller's order: state events first in the result would surprise; record slots.
+    let mut order = Vec::new();
+    if let Some(evs) = events.filter(|e| !e.is_none()) {
+        for (k, e) in evs.try_iter()?.enumerate() {
+            let e = e?;
+            if let Ok(se) = e.cast::<PyStateEvent>() {
+                order.push((false, state_events.len()));
+                state_events.push(se.get().inner.clone());
+            } else {
+                order.push((true, py_events.len()));
+                py_events.push(event_spec(py, k, &e)?);
+            }
+        }
+    }
+    let failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let model = &s.model;
+    let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
+    let result = py.detach(|| {
+        let extra: Vec<Event<'_>> = py_events.iter().map(|spec| python_event(spec, Some(nq), &failure)).collect();
+        // Every few hundred evaluations: look for Ctrl-C, and report progress if asked.
+        let hook: crate::simulate::Progress<'_> = Box::new(|t: f64| {
+            Python::attach(|py| {
+                let outcome = py.check_signals().and_then(|_| match &progress {
+                    Some(cb) => cb.bind(py).call1((t,)).map(|_| ()),
+                    None => Ok(()),
+                });
+                match outcome {
+                    Ok(()) => true,
+                    Err(e) => {
+                        if let Ok(mut slot) = failure.lock() {
+                            slot.get_or_insert(e);
+                        }
+                        false
+                    }
+                }
+            })
+        });
+        simulate(model, effects, q0, v0, t_span, &opts, &state_events, extra, energy, Some(hook))
+    });
+    if let Some(err) = failure.into_inner().ok().flatten() {
+        return Err(err);
+    }
+    let traj = result.py(py)?;
+    let n = traj.t.len();
+    let d = PyDict::new(py);
+    d.set_item("t", to_array1(py, &traj.t))?;
+    d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
+    d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
+    d.set_item("energy", traj.energy.map(|e| to_array1(py, &e).into_any()))?;
+    // Events back in the caller's order: state events were evaluated first.
+    let ns = state_events.len();
+    let te = PyList::empty(py);
+    let qe = PyList::empty(py);
+    let ve = PyList::empty(py);
+    for (is_py, k) in order {
+        let slot = if is_py { ns + k } else { k };
+        let times = &traj.t_events[slot];
+        let ys = &traj.y_events[slot];
+        te.append(to_array1(py, times))?;
+        let m = times.len();
+        let mut qs = Vec::with_capacity(m * nq);
+        let mut vs = Vec::with_capacity(m * nv);
+        for row in ys.chunks_exact(nq + nv) {
+            qs.extend_from_slice(&row[..nq]);
+            vs.extend_from_slice(&row[nq..]);
+        }
+        qe.append(to_array(py, qs, &[m, nq])?)?;
+        ve.append(to_array(py, vs, &[m, nv])?)?;
+    }
+    d.set_item("t_events", te)?;
+    d.set_item("q_events", qe)?;
+    d.set_item("v_events", ve)?;
+    d.set_item("nfev", traj.nfev)?;
+    d.set_item("n_accepted", traj.n_accepted)?;
+    d.set_item("n_rejected", traj.n_rejected)?;
+    d.set_item("status", traj.status.code())?;
+    d.set_item("message", traj.message)?;
+    d.set_item("success", traj.success)?;
+    d.set_item("t_reached", traj.t_reached)?;
+    Ok(d)
+}
+
+/// The dense output of an `rk45` run: `sol(t)` for a scalar (shape (n,)) or an array of
+/// times (shape (n, len(t))), as SciPy's `OdeSolution`.
+#[pyclass(name = "DenseSolution", module = "pointmass_dyn._core", frozen)]
+pub struct PyDenseSolution {
+    inner: DenseOutput,
+}
+
+#[pymethods]
+impl PyDenseSolution {
+    fn __call__<'py>(&self, py: Python<'py>, t: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let dim = self.inner.dim();
+        if let Ok(x) = t.extract::<f64>() {
+            return Ok(to_array1(py, &self.inner.eval(x)).into_any());
+        }
+        let (shape, ts) = array(t, "t")?;
+        if shape.len() != 1 {
+            return Err(invalid(py, "t", "a scalar or a 1-D array", format!("shape {shape:?}")));
+        }
+        let mut out = vec![0.0; dim * ts.len()];
+        let mut buf = vec![0.0; dim];
+        for (j, x) in ts.iter().enumerate() {
+            self.inner.eval_into(*x, &mut buf);
+            for i in 0..dim {
+                out[i * ts.len() + j] = buf[i];
+            }
+        }
+        to_array(py, out, &[dim, ts.len()])
+    }
+    #[getter]
+    fn ts<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, self.inner.breakpoints()).into_any()
+    }
+}
+
+/// Generic Dormand–Prince 5(4) on a Python right-hand side `fun(t, y) -> array`;
+/// step for step SciPy's `solve_ivp(method="RK45")`.
+#[pyfunction]
+#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard"))]
+#[allow(clippy::too_many_arguments)]
+pub fn rk45<'py>(
+    py: Python<'py>,
+    fun: &Bound<'_, PyAny>,
+    t_span: &Bound<'_, PyAny>,
+    y0: &Bound<'_, PyAny>,
+    rtol: Option<&Bound<'_, PyAny>>,
+    atol: Option<&Bound<'_, PyAny>>,
+    t_eval: Option<&Bound<'_, PyAny>>,
+    events: Option<&Bound<'_, PyAny>>,
+    first_step: Option<f64>,
+    max_step: Option<f64>,
+    max_steps: Option<usize>,
+    dense_output: bool,
+    controller: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !fun.is_callable() {
+        return Err(invalid(py, "fun", "a callable fun(t, y) -> array", fun.repr().map(|r| r.to_string()).unwrap_or_default()));
+    }
+    let t_span = t_span_arg(py, t_span)?;
+    let y0 = vector(y0, "y0", None)?;
+    let dim = y0.len();
+    let opts = options(py, dim, rtol, atol, t_eval, first_step, max_step, max_steps, dense_output, controller)?;
+    let mut specs = Vec::new();
+    if let Some(evs) = events.filter(|e| !e.is_none()) {
+        if evs.is_callable() {
+            specs.push(event_spec(py, 0, evs)?);
+        } else {
+            for (k, e) in evs.try_iter()?.enumerate() {
+                specs.push(event_spec(py, k, &e?)?);
+            }
+        }
+    }
+    let failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let mut evs: Vec<Event<'_>> = specs.iter().map(|s| python_event(s, None, &failure)).collect();
+    let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let sys = FnSystem::new(dim, |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
+        let mut call = || -> PyResult<()> {
+            let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
+            let v = vector(&out, "fun(t, y)", Some(dim))?;
+            dydt.copy_from_slice(&v);
+            Ok(())
+        };
+        call().map_err(|e| {
+            let msg = e.to_string();
+            if let Ok(mut slot) = rhs_failure.lock() {
+                slot.get_or_insert(e);
+            }
+            msg
+        })
+    });
+    let sol = integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
+    drop(evs);
+    if let Some(err) = rhs_failure.into_inner().ok().flatten() {
+        return Err(err);
+    }
+    if let Some(err) = failure.into_inner().ok().flatten() {
+        return Err(err);
+    }
+    let n = sol.t.len();
+    let mut y_t = vec![0.0; dim * n];
+    for i in 0..n {
+        for j in 0..dim {
+            y_t[j * n + i] = sol.y[i * dim + j];
+        }
+    }
+    let d = PyDict::new(py);
+    d.set_item("t", to_array1(py, &sol.t))?;
+    d.set_item("y", to_array(py, y_t, &[dim, n])?)?;
+    let te = PyList::empty(py);
+    let ye = PyList::empty(py);
+    for (times, ys) in sol.t_events.iter().zip(&sol.y_events) {
+        te.append(to_array1(py, times))?;
+        ye.append(to_array(py, ys.clone(), &[times.len(), dim])?)?;
+    }
+    d.set_item("t_events", if specs.is_empty() { py.None().into_bound(py) } else { te.into_any() })?;
+    d.set_item("y_events", if specs.is_empty() { py.None().into_bound(py) } else { ye.into_any() })?;
+    d.set_item("nfev", sol.nfev)?;
+    d.set_item("njev", 0)?;
+    d.set_item("nlu", 0)?;
+    d.set_item("n_accepted", sol.n_accepted)?;
+    d.set_item("n_rejected", sol.n_rejected)?;
+    d.set_item("status", sol.status.code())?;
+    d.set_item("message", sol.message.clone())?;
+    d.set_item("success", sol.success())?;
+    d.set_item("t_reached", sol.t_reached)?;
+    d.set_item("sol", sol.dense.map(|inner| PyDenseSolution { inner }))?;
+    Ok(d)
+}
+
+fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
+    py_error(py, "InvalidInputError", e.to_string())
+}

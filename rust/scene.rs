@@ -1,0 +1,340 @@
+//! Scenes: a model, the effects it calls for, its initial state and integrator settings,
+//! read from TOML. Errors name the file and the key.
+use std::collections::HashMap;
+
+use serde::Deserialize;
+
+use crate::body::RigidBody;
+use crate::effects::Effect;
+use crate::error::Error;
+use crate::joint::{rot_x, rot_y, rot_z, Joint};
+use crate::model::Model;
+use crate::spatial::{Mat3, Placement, Vec3};
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    pub file: String,
+    pub key: String,
+    pub message: String,
+}
+
+impl std::fmt::Display for SceneError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}: {}", self.file, self.message)
+        } else {
+            write!(f, "{}: {}: {}", self.file, self.key, self.message)
+        }
+    }
+}
+impl std::error::Error for SceneError {}
+
+/// Integrator settings a scene may carry; the caller's arguments override them.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Settings {
+    pub t_span: Option<(f64, f64)>,
+    pub rtol: Option<f64>,
+    pub atol: Option<f64>,
+    pub max_step: Option<f64>,
+    pub max_steps: Option<usize>,
+    pub first_step: Option<f64>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Scene {
+    pub name: String,
+    pub description: String,
+    pub model: Model,
+    pub q0: Vec<f64>,
+    pub v0: Vec<f64>,
+    pub effects: Vec<Effect>,
+    pub settings: Settings,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    name: Option<String>,
+    description: Option<String>,
+    /// "radians" (default) or "degrees": units of angular q0 and of `rpy`.
+    angles: Option<String>,
+    /// "radians" or "degrees" (per second): units of angular v0; default: as `angles`.
+    rates: Option<String>,
+    #[serde(default)]
+    body: Vec<BodyFile>,
+    #[serde(default)]
+    effect: Vec<EffectFile>,
+    simulate: Option<SimulateFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BodyFile {
+    name: String,
+    parent: Option<String>,
+    joint: JointFile,
+    translation: Option<[f64; 3]>,
+    rotation: Option<[[f64; 3]; 3]>,
+    /// Roll, pitch, yaw of the joint frame (URDF convention: Rz(y) Ry(p) Rx(r)).
+    rpy: Option<[f64; 3]>,
+    mass: f64,
+    com: Option<[f64; 3]>,
+    inertia: Option<[[f64; 3]; 3]>,
+    inertia_diag: Option<[f64; 3]>,
+    point_mass_center: Option<[f64; 3]>,
+    q0: Option<Vec<f64>>,
+    v0: Option<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", deny_unknown_fields)]
+enum JointFile {
+    Revolute { axis: [f64; 3] },
+    Prismatic { axis: [f64; 3] },
+    SphericalZYZ,
+    Spherical,
+    Fixed,
+}
+
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+enum EffectFile {
+    Gravity { g: [f64; 3] },
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SimulateFile {
+    t_span: Option<[f64; 2]>,
+    t_end: Option<f64>,
+    rtol: Option<f64>,
+    atol: Option<f64>,
+    max_step: Option<f64>,
+    max_steps: Option<usize>,
+    first_step: Option<f64>,
+}
+
+impl Scene {
+    /// Parses a scene from TOML text; `file` names it in errors.
+    pub fn from_toml(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let err = |key: String, message: String| SceneError {
+            file: file.to_string(),
+            key,
+            message,
+        };
+        let sf: SceneFile = toml::from_str(text).map_err(|e| {
+            let (line, col) = e
+                .span()
+                .map(|s| line_col(text, s.start))
+                .unwrap_or((0, 0));
+            SceneError {
+                file: file.to_string(),
+                key: String::new(),
+                message: format!("invalid scene TOML at line {line}, column {col}: {}", e.message()),
+            }
+        })?;
+        let unit_of = |key: &str, value: Option<&str>, default: f64| match value {
+            None => Ok(default),
+            Some("radians") => Ok(1.0),
+            Some("degrees") => Ok(std::f64::consts::PI / 180.0),
+            Some(other) => Err(err(
+                key.into(),
+                format!("expected \"radians\" or \"degrees\", got \"{other}\""),
+            )),
+        };
+        let unit = unit_of("angles", sf.angles.as_deref(), 1.0)?;
+        let rate_unit = unit_of("rates", sf.rates.as_deref(), unit)?;
+        if sf.body.is_empty() {
+            return Err(err("body".into(), "a scene needs at least one [[body]]".into()));
+        }
+        let mut model = Model::new();
+        let mut index: HashMap<String, usize> = HashMap::new();
+        let mut q0 = Vec::new();
+        let mut v0 = Vec::new();
+        for (k, b) in sf.body.iter().enumerate() {
+            let key = |field: &str| format!("body[{k}] ('{}').{field}", b.name);
+            let core = |field: &str, e: Error| err(key(field), e.to_string());
+            let parent = match b.parent.as_deref() {
+                None | Some("world") => None,
+                Some(p) => Some(*index.get(p).ok_or_else(|| {
+                    err(
+                        key("parent"),
+                        format!("no body named '{p}' before this one (bodies must follow their parents; 'world' is the ground)"),
+                    )
+                })?),
+            };
+            let joint = match &b.joint {
+                JointFile::Revolute { axis } => Joint::revolute(Vec3::from(*axis)),
+                JointFile::Prismatic { axis } => Joint::prismatic(Vec3::from(*axis)),
+                JointFile::SphericalZYZ => Ok(Joint::SphericalZYZ),
+                JointFile::Spherical => Ok(Joint::Spherical),
+                JointFile::Fixed => Ok(Joint::Fixed),
+            }
+            .map_err(|e| core("joint.axis", e))?;
+            let rotation = match (b.rotation, b.rpy) {
+                (Some(_), Some(_)) => {
+                    return Err(err(key("rotation"), "give either rotation or rpy, not both".into()))
+                }
+                (Some(r), None) => Mat3::from_row_slice(&r.concat()),
+                (None, Some([r, p, y])) => rot_z(y * unit) * rot_y(p * unit) * rot_x(r * unit),
+                (None, None) => Mat3::identity(),
+            };
+            let inertia = match (b.inertia, b.inertia_diag) {
+                (Some(_), Some(_)) => {
+                    return Err(err(key("inertia"), "give either inertia or inertia_diag, not both".into()))
+                }
+                (Some(i), None) => Mat3::from_row_slice(&i.concat()),
+                (None, Some(d)) => Mat3::from_diagonal(&Vec3::from(d)),
+                (None, None) => {
+                    return Err(err(key("inertia"), "missing: give inertia (3x3, about the COM) or inertia_diag".into()))
+                }
+            };
+            let com = Vec3::from(b.com.unwrap_or([0.0; 3]));
+            let body = RigidBody::new(b.mass, com, inertia).map_err(|e| {
+                let field = match &e {
+                    Error::InvalidInertia { arg, .. } | Error::InvalidArgument { arg, .. } => arg.clone(),
+                    _ => "inertia".into(),
+                };
+                core(&field, e)
+            })?;
+            let placement = Placement::new(rotation, Vec3::from(b.translation.unwrap_or([0.0; 3])));
+            let center = b.point_mass_center.map(Vec3::from);
+            let idx = model
+                .add_body(body, joint, parent, placement, Some(b.name.clone()), center)
+                .map_err(|e| {
+                    let field = match &e {
+                        Error::InvalidArgument { arg, .. } | Error::InvalidModel { arg, .. } => arg.clone(),
+                        _ => String::new(),
+                    };
+                    core(&field, e)
+                })?;
+            index.insert(b.name.clone(), idx);
+            // Initial state of this joint, in file units.
+            let angular = matches!(joint, Joint::Revolute { .. } | Joint::SphericalZYZ | Joint::Spherical);
+            let mut q = vec![0.0; joint.nq()];
+            joint.neutral(&mut q);
+            if let Some(given) = &b.q0 {
+                if given.len() != joint.nq() {
+                    return Err(err(key("q0"), format!("expected {} values for a {} joint, got {}", joint.nq(), joint.kind(), given.len())));
+                }
+                let scale = if matches!(joint, Joint::Revolute { .. } | Joint::SphericalZYZ) { unit } else { 1.0 };
+                q = given.iter().map(|x| x * scale).collect();
+                joint.check_configuration(&q, "q0").map_err(|e| core("q0", e))?;
+            }
+            let mut v = vec![0.0; joint.nv()];
+            if let Some(given) = &b.v0 {
+                if given.len() != joint.nv() {
+                    return Err(err(key("v0"), format!("expected {} values for a {} joint, got {}", joint.nv(), joint.kind(), given.len())));
+                }
+                let scale = if angular { rate_unit } else { 1.0 };
+                v = given.iter().map(|x| x * scale).collect();
+                crate::error::check_finite("v0", &v).map_err(|e| core("v0", e))?;
+            }
+            q0.extend(q);
+            v0.extend(v);
+        }
+        model.normalize(&mut q0);
+        let mut effects = Vec::new();
+        for (k, e) in sf.effect.iter().enumerate() {
+            effects.push(match e {
+                EffectFile::Gravity { g } => Effect::gravity(Vec3::from(*g)).map_err(|x| err(format!("effect[{k}].g"), x.to_string()))?,
+            });
+        }
+        let mut settings = Settings::default();
+        if let Some(s) = sf.simulate {
+            settings.t_span = match (s.t_span, s.t_end) {
+                (Some(_), Some(_)) => {
+                    return Err(err("simulate.t_end".into(), "give either t_span or t_end, not both".into()))
+                }
+                (Some([a, b]), None) => Some((a, b)),
+                (None, Some(b)) => Some((0.0, b)),
+                (None, None) => None,
+            };
+            if let Some((a, b)) = settings.t_span {
+                if !(a.is_finite() && b.is_finite()) || a == b {
+                    return Err(err("simulate.t_span".into(), format!("expected two different finite times, got [{a}, {b}]")));
+                }
+            }
+            for (name, x) in [("rtol", s.rtol), ("atol", s.atol), ("max_step", s.max_step), ("first_step", s.first_step)] {
+                if let Some(x) = x {
+                    if !(x > 0.0) || !x.is_finite() {
+                        return Err(err(format!("simulate.{name}"), format!("expected a finite number > 0, got {x}")));
+                    }
+                }
+            }
+            settings.rtol = s.rtol;
+            settings.atol = s.atol;
+            settings.max_step = s.max_step;
+            settings.max_steps = s.max_steps;
+            settings.first_step = s.first_step;
+        }
+        Ok(Scene {
+            name: sf.name.unwrap_or_else(|| file.to_string()),
+            description: sf.description.unwrap_or_default(),
+            model,
+            q0,
+            v0,
+            effects,
+            settings,
+        })
+    }
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = &text[..offset.min(text.len())];
+    let line = before.matches('\n').count() + 1;
+    let col = before.len() - before.rfind('\n').map(|i| i + 1).unwrap_or(0) + 1;
+    (line, col)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const PENDULUM: &str = r#"
+name = "pendulum"
+angles = "degrees"
+[[body]]
+name = "rod"
+joint = { type = "SphericalZYZ" }
+mass = 2.51
+com = [0.5, 0, 0]
+inertia_diag = [1.255e-4, 0.2092294166666666, 0.2092294166666666]
+q0 = [90, 45, 45]
+v0 = [0, 57.29577951308232, 0]
+[[effect]]
+type = "gravity"
+g = [0, 0, -9.81]
+[simulate]
+t_end = 10
+rtol = 1e-9
+"#;
+
+    #[test]
+    fn parses_units_and_effects() {
+        let s = Scene::from_toml(PENDULUM, "p.toml").unwrap();
+        assert_eq!(s.model.nq, 3);
+        assert!((s.q0[1] - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
+        assert!((s.v0[1] - 1.0).abs() < 1e-14);
+        assert_eq!(s.effects, vec![Effect::Gravity { g: Vec3::new(0.0, 0.0, -9.81) }]);
+        assert_eq!(s.settings.t_span, Some((0.0, 10.0)));
+    }
+
+    #[test]
+    fn errors_name_file_and_key() {
+        let bad_parent = PENDULUM.replace("name = \"rod\"", "name = \"rod\"\nparent = \"nope\"");
+        let e = Scene::from_toml(&bad_parent, "p.toml").unwrap_err().to_string();
+        assert!(e.starts_with("p.toml: body[0] ('rod').parent"), "{e}");
+        let bad_mass = PENDULUM.replace("mass = 2.51", "mass = -1");
+        let e = Scene::from_toml(&bad_mass, "p.toml").unwrap_err().to_string();
+        assert!(e.contains("body[0] ('rod').mass"), "{e}");
+        let typo = PENDULUM.replace("mass = 2.51", "mass = 2.51\nmas = 3");
+        let e = Scene::from_toml(&typo, "p.toml").unwrap_err().to_string();
+        assert!(e.contains("p.toml") && e.contains("mas"), "{e}");
+        let e = Scene::from_toml("[[body]\n", "x.toml").unwrap_err().to_string();
+        assert!(e.contains("x.toml") && e.contains("line 1"), "{e}");
+        let neg = PENDULUM.replace("inertia_diag = [1.255e-4,", "inertia_diag = [-1.255e-4,");
+        let e = Scene::from_toml(&neg, "p.toml").unwrap_err().to_string();
+        assert!(e.contains("inertia") && e.contains("semidefinite"), "{e}");
+    }
+}
