@@ -176,6 +176,7 @@ mod tests {
     use crate::integrator::stepper::B;
     use crate::integrator::{rk45, FnSystem, Rk45Options, Tol};
 
+    #[allow(clippy::type_complexity)]
     fn oscillator() -> FnSystem<impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>> {
         // y1 = sin t, y2 = cos t
         FnSystem::new(2, |_t, y: &[f64], dy: &mut [f64]| {

@@ -27,12 +27,15 @@ impl EventDirection {
     }
 }
 
+/// An event function `g(t, y)`.
+pub type EventFn<'a> = Box<dyn FnMut(f64, &[f64]) -> f64 + 'a>;
+
 /// An event `g(t, y) = 0`.
 ///
 /// A NaN from `func` never counts as a crossing (comparisons with NaN are false); a caller
 /// that must abort (e.g. a Python exception) should record it and return NaN.
 pub struct Event<'a> {
-    pub func: Box<dyn FnMut(f64, &[f64]) -> f64 + 'a>,
+    pub func: EventFn<'a>,
     pub direction: EventDirection,
     /// 0: not terminal. n >= 1: stop at the n-th occurrence (SciPy's int `terminal`; `True` is 1).
     pub terminal: usize,
@@ -213,6 +216,7 @@ mod tests {
     }
 
     /// y1 = cos t, y2 = -sin t.
+    #[allow(clippy::type_complexity)]
     fn oscillator() -> FnSystem<impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>> {
         FnSystem::new(2, |_t, y: &[f64], dy: &mut [f64]| {
             dy[0] = y[1];

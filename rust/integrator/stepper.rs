@@ -227,7 +227,7 @@ impl<S: OdeSystem> Stepper<S> {
         if rtol_clamped {
             rtol.iter_mut().for_each(|r| *r = r.max(rtol_min));
         }
-        if !(opts.max_step > 0.0) {
+        if opts.max_step.is_nan() || opts.max_step <= 0.0 {
             return Err(InputError::MaxStep(opts.max_step));
         }
         if opts.max_steps == 0 {
@@ -606,6 +606,7 @@ mod tests {
     use super::*;
     use crate::integrator::FnSystem;
 
+    #[allow(clippy::type_complexity)]
     fn decay() -> FnSystem<impl FnMut(f64, &[f64], &mut [f64]) -> Result<(), String>> {
         FnSystem::new(1, |_t, y: &[f64], dy: &mut [f64]| {
             dy[0] = -y[0];
@@ -731,7 +732,11 @@ mod tests {
         let mut st = Stepper::new(decay(), 0.0, &[1.0], 3.0, &opts).unwrap();
         while st.step().unwrap() == StepOutcome::Accepted {
             // h = t_new - t is recomputed by subtraction, hence an ulp of t of slack.
-            assert!(st.step_size() <= 0.1 + f64::EPSILON * st.t(), "{}", st.step_size());
+            assert!(
+                st.step_size() <= 0.1 + f64::EPSILON * st.t(),
+                "{}",
+                st.step_size()
+            );
         }
         assert!(st.n_accepted() >= 30);
     }
