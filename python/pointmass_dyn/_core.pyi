@@ -1,0 +1,328 @@
+"""Type stubs for the compiled core (``rust/python``): bodies and their seven equimomental
+point masses, joints, kinematic trees with both dynamics paths (explicit DeNOC products and
+the O(n) recursion), scenes, ``simulate_scene`` and the generic ``rk45``.
+
+Array arguments accept anything NumPy can turn into float64 (lists, integer arrays); a wrong
+shape raises :class:`pointmass_dyn.errors.InvalidInputError` naming the argument. Arrays
+returned are fresh float64 NumPy arrays.
+"""
+
+from typing import Any, Callable, ClassVar, Literal, Optional, Sequence, Union, final
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__version__: str
+
+_Array = NDArray[np.float64]
+#: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).
+_Method = str
+#: ``"standard"`` (SciPy's step-size controller, also ``"scipy"``) or ``"pi"`` (Hairer's PI).
+_Controller = str
+#: A Python event: ``f(t, q, v) -> float`` (``simulate_scene``) or ``f(t, y) -> float``
+#: (``rk45``), with optional ``terminal`` (bool or count) and ``direction`` attributes.
+_EventFunc = Callable[..., float]
+
+@final
+class RigidBody:
+    """A rigid body: mass (kg), centre of mass (body frame) and inertia tensor about the COM
+    (body frame, standard sign convention ``I_xy = -Σ m x y``). Invalid values raise
+    :class:`pointmass_dyn.errors.InertiaError`."""
+
+    def __new__(cls, mass: float, com: ArrayLike, inertia: ArrayLike) -> RigidBody: ...
+    @staticmethod
+    def from_point_masses(masses: ArrayLike, positions: ArrayLike) -> RigidBody:
+        """Mass, COM and inertia about the COM of point masses (``positions`` shape (n, 3))."""
+    @property
+    def mass(self) -> float:
+        """Mass (kg)."""
+    @property
+    def com(self) -> _Array:
+        """Centre of mass in the body frame, shape (3,)."""
+    @property
+    def inertia(self) -> _Array:
+        """Inertia tensor about the COM, body frame, shape (3, 3)."""
+    def inertia_about(self, point: ArrayLike) -> _Array:
+        """Inertia about ``point`` (body frame) by the parallel-axis theorem, shape (3, 3)."""
+    def point_masses(self, center: Optional[ArrayLike] = None) -> PointMasses:
+        """The seven equimomental point masses, box centred at ``center`` (default: the COM)."""
+
+@final
+class PointMasses:
+    """Seven point masses with the mass, COM and inertia of a body (paper Table I layout)."""
+
+    @property
+    def masses(self) -> _Array:
+        """The seven masses (kg), shape (7,); some may be negative."""
+    @property
+    def positions(self) -> _Array:
+        """Positions in the body frame, shape (7, 3)."""
+    @property
+    def half_sides(self) -> _Array:
+        """Half-sides ``(hx, hy, hz)`` of the box, shape (3,)."""
+    @property
+    def center(self) -> _Array:
+        """Centre of the box in the body frame, shape (3,)."""
+    def to_body(self) -> RigidBody:
+        """The rigid body these points represent (mass, COM and inertia rebuilt from them)."""
+
+@final
+class Joint:
+    """A joint; build with the factories (or ``pmd.Revolute(axis)`` etc.)."""
+
+    @staticmethod
+    def revolute(axis: ArrayLike) -> Joint:
+        """Rotation about ``axis`` (joint frame); q is the angle (rad)."""
+    @staticmethod
+    def prismatic(axis: ArrayLike) -> Joint:
+        """Translation along ``axis`` (joint frame); q is the displacement (m)."""
+    @staticmethod
+    def spherical_zyz() -> Joint:
+        """ZYZ Euler angles ``(φ, θ, ψ)`` with Euler rates as speeds; singular at sin θ = 0."""
+    @staticmethod
+    def spherical() -> Joint:
+        """Unit quaternion ``(x, y, z, w)``; speeds: angular velocity in the body frame."""
+    @staticmethod
+    def fixed() -> Joint:
+        """Rigid attachment: the body is welded into its parent."""
+    @property
+    def kind(self) -> str:
+        """``'Revolute'``, ``'Prismatic'``, ``'SphericalZYZ'``, ``'Spherical'`` or ``'Fixed'``."""
+    @property
+    def nq(self) -> int:
+        """Number of configuration coordinates."""
+    @property
+    def nv(self) -> int:
+        """Number of speeds."""
+    @property
+    def axis(self) -> Optional[_Array]:
+        """Unit axis, shape (3,), of a revolute or prismatic joint; ``None`` otherwise."""
+
+@final
+class Model:
+    """A kinematic tree of rigid bodies, each represented by seven point masses.
+
+    ``q`` and ``v`` list the joints in the order the bodies were added; gravity is applied
+    only when given (``gravity=None`` means none)."""
+
+    def __new__(cls) -> Model: ...
+    def add_body(
+        self,
+        body: RigidBody,
+        joint: Joint,
+        parent: int = -1,
+        translation: Optional[ArrayLike] = None,
+        rotation: Optional[ArrayLike] = None,
+        name: Optional[str] = None,
+        point_mass_center: Optional[ArrayLike] = None,
+    ) -> int:
+        """Adds ``body`` on ``joint`` below ``parent`` (-1: the world), the joint frame placed
+        at ``translation``/``rotation`` in the parent's body frame; returns its index."""
+    @property
+    def nq(self) -> int:
+        """Length of ``q``."""
+    @property
+    def nv(self) -> int:
+        """Length of ``v``."""
+    @property
+    def nbodies(self) -> int:
+        """Number of bodies, Fixed ones included."""
+    @property
+    def nlinks(self) -> int:
+        """Moving links (bodies on Fixed joints are welded into their parent's link)."""
+    @property
+    def body_names(self) -> list[str]:
+        """Names of all bodies, in the order added."""
+    @property
+    def link_names(self) -> list[str]:
+        """Names of the bodies that define each moving link, in q/v order."""
+    @property
+    def total_mass(self) -> float:
+        """Sum of the body masses (kg)."""
+    def body_info(self, index: int) -> tuple[str, str, int, int]:
+        """(name, joint kind, parent index or -1, link index or -1) of body ``index``."""
+    def joint_slices(self) -> list[tuple[int, int, int, int]]:
+        """(q index, v index, nq, nv) of each moving link's joint."""
+    def neutral(self) -> _Array:
+        """The neutral configuration (zeros, identity quaternions), shape (nq,)."""
+    def placements(self, q: ArrayLike) -> tuple[_Array, _Array]:
+        """World placements of every body: rotations (nbodies, 3, 3), origins (nbodies, 3)."""
+    def point_masses(self, q: ArrayLike) -> tuple[_Array, _Array]:
+        """Masses (nlinks, 7) and world positions (nlinks, 7, 3) of every link's points."""
+    def denoc(self, q: ArrayLike) -> dict[str, _Array]:
+        """The DeNOC matrices at ``q``: keys ``D``, ``Nl``, ``Nd``, ``N``, ``masses`` (7n,)
+        and ``points`` (7n, 3)."""
+    def denoc_rates(self, q: ArrayLike, v: ArrayLike) -> dict[str, _Array]:
+        """Time derivatives of the DeNOC matrices: keys ``D``, ``Nl``, ``Nd``, ``N``."""
+    def mass_matrix(self, q: ArrayLike, method: _Method = "recursive") -> _Array:
+        """Generalized inertia matrix (GIM) ``Nᵀ M N``, shape (nv, nv)."""
+    def convective_matrix(self, q: ArrayLike, v: ArrayLike) -> _Array:
+        """Convective matrix ``C = Nᵀ M Ṅ``, shape (nv, nv)."""
+    def gravity_forces(self, q: ArrayLike, gravity: ArrayLike) -> _Array:
+        """Generalized gravity force ``Nᵀ f^G`` (right-hand side), shape (nv,)."""
+    def generalized_forces(self, q: ArrayLike, forces: ArrayLike) -> _Array:
+        """``Nᵀ f`` for world forces on the point masses, shape (nlinks, 7, 3) or
+        (7·nlinks, 3); returns shape (nv,)."""
+    def bias_forces(self, q: ArrayLike, v: ArrayLike, gravity: Optional[ArrayLike] = None) -> _Array:
+        """``C v − τ_g`` (Pinocchio's ``nonLinearEffects``), shape (nv,)."""
+    def forward_dynamics(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        tau: ArrayLike,
+        gravity: Optional[ArrayLike] = None,
+        external: Optional[ArrayLike] = None,
+        method: _Method = "recursive",
+    ) -> _Array:
+        """Accelerations from ``I a + C v = τ + τ_g + τ_ext``, shape (nv,). ``external``:
+        one wrench [moment about the link origin; force] per moving link, shape (nlinks, 6)."""
+    def inverse_dynamics(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a: ArrayLike,
+        gravity: Optional[ArrayLike] = None,
+        external: Optional[ArrayLike] = None,
+        method: _Method = "recursive",
+    ) -> _Array:
+        """Joint forces ``τ = I a + C v − τ_g − τ_ext``, shape (nv,)."""
+    def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
+        """Kinetic energy ``½ vᵀ I v`` (J)."""
+    def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
+        """Gravitational potential energy ``−Σ m_ij g·x_ij`` (J), zero at the world origin."""
+    def velocity_to_qdot(self, q: ArrayLike, v: ArrayLike) -> _Array:
+        """``q̇`` from ``v`` (differs from ``v`` only for quaternion joints), shape (nq,)."""
+
+@final
+class Effect:
+    """Something a scene applies to its model (for now: uniform gravity)."""
+
+    __hash__: ClassVar[None]  # type: ignore[assignment]
+    @staticmethod
+    def gravity(g: Optional[ArrayLike] = None) -> Effect:
+        """Uniform gravity ``g`` (m/s², world frame); default ``(0, 0, -9.81)``."""
+    @property
+    def name(self) -> str:
+        """The effect's kind, e.g. ``'gravity'``."""
+    def __eq__(self, other: object, /) -> bool: ...
+
+@final
+class StateEvent:
+    """``q[index]`` (``variable='q'``) or ``v[index]`` (``'v'``) crossing ``value``;
+    ``direction`` +1/-1 keeps only rising/falling crossings; ``terminal`` (bool or count)
+    stops the run at that occurrence. Evaluated in Rust."""
+
+    def __new__(
+        cls,
+        variable: Literal["q", "v"],
+        index: int,
+        value: float = 0.0,
+        direction: int = 0,
+        terminal: Union[bool, int, None] = None,
+    ) -> StateEvent: ...
+    @property
+    def terminal(self) -> int:
+        """Occurrence that stops the run (0: never)."""
+    @property
+    def direction(self) -> int:
+        """-1, 0 or +1."""
+
+@final
+class Scene:
+    """A model, the effects it declares, its initial state and integrator settings."""
+
+    def __new__(
+        cls,
+        model: Model,
+        q0: Optional[ArrayLike] = None,
+        v0: Optional[ArrayLike] = None,
+        effects: Optional[Sequence[Effect]] = None,
+        t_span: Optional[ArrayLike] = None,
+        rtol: Optional[float] = None,
+        atol: Optional[float] = None,
+        name: Optional[str] = None,
+        description: Optional[str] = None,
+    ) -> Scene:
+        """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
+        ``effects`` act (none: no gravity)."""
+    @staticmethod
+    def from_toml(text: str, file: str = "<string>") -> Scene:
+        """Parses a scene from TOML text; raises :class:`pointmass_dyn.errors.SceneError`
+        naming ``file`` and the key."""
+    @property
+    def model(self) -> Model:
+        """A copy of the scene's model."""
+    @property
+    def q0(self) -> _Array:
+        """Initial configuration, shape (nq,), in radians (quaternions normalised)."""
+    @property
+    def v0(self) -> _Array:
+        """Initial speeds, shape (nv,)."""
+    @property
+    def effects(self) -> list[Effect]:
+        """The declared effects."""
+    @property
+    def name(self) -> str: ...
+    @property
+    def description(self) -> str: ...
+    @property
+    def t_span(self) -> Optional[tuple[float, float]]:
+        """Default integration interval, if the scene sets one."""
+    @property
+    def rtol(self) -> Optional[float]: ...
+    @property
+    def atol(self) -> Optional[float]: ...
+    @property
+    def max_step(self) -> Optional[float]: ...
+    @property
+    def max_steps(self) -> Optional[int]: ...
+    @property
+    def first_step(self) -> Optional[float]: ...
+
+@final
+class DenseSolution:
+    """Dense output of an ``rk45`` run, as SciPy's ``OdeSolution``."""
+
+    def __call__(self, t: ArrayLike) -> _Array:
+        """The state at ``t``: shape (n,) for a scalar, (n, len(t)) for a 1-D array."""
+    @property
+    def ts(self) -> _Array:
+        """Step boundaries."""
+
+def simulate_scene(
+    scene: Scene,
+    t_span: Optional[ArrayLike] = None,
+    rtol: Optional[ArrayLike] = None,
+    atol: Optional[ArrayLike] = None,
+    t_eval: Optional[ArrayLike] = None,
+    events: Optional[Sequence[Union[StateEvent, _EventFunc]]] = None,
+    first_step: Optional[float] = None,
+    max_step: Optional[float] = None,
+    max_steps: Optional[int] = None,
+    energy: bool = False,
+    controller: _Controller = "standard",
+    progress: Optional[Callable[[float], Any]] = None,
+) -> dict[str, Any]:
+    """Integrates a scene in Rust (GIL released); returns the fields of
+    ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``t_events``,
+    ``q_events``, ``v_events``, ``nfev``, ``n_accepted``, ``n_rejected``, ``status``,
+    ``message``, ``success``, ``t_reached``)."""
+
+def rk45(
+    fun: Callable[[float, _Array], ArrayLike],
+    t_span: ArrayLike,
+    y0: ArrayLike,
+    rtol: Optional[ArrayLike] = None,
+    atol: Optional[ArrayLike] = None,
+    t_eval: Optional[ArrayLike] = None,
+    events: Union[_EventFunc, Sequence[_EventFunc], None] = None,
+    first_step: Optional[float] = None,
+    max_step: Optional[float] = None,
+    max_steps: Optional[int] = None,
+    dense_output: bool = False,
+    controller: _Controller = "standard",
+) -> dict[str, Any]:
+    """Dormand–Prince 5(4) on ``fun(t, y)``, step for step SciPy's ``solve_ivp(RK45)``;
+    returns ``t``, ``y`` (n, N), ``sol`` (:class:`DenseSolution` or ``None``),
+    ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
+    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``."""
