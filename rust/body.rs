@@ -23,6 +23,13 @@ impl RigidBody {
     /// mass > 0, symmetric tensor, positive semidefinite, triangle inequality of the
     /// principal moments (each ≤ the sum of the other two).
     pub fn new(mass: f64, com: Vec3, inertia: Mat3) -> Result<Self> {
+        Self::new_with_scale(mass, com, inertia, 0.0)
+    }
+
+    /// As `new`, with the tolerances scaled by `max(|I|, scale)`: for a tensor computed from
+    /// quantities of size `scale` (e.g. point masses far from the COM) whose rounding is
+    /// larger than the tensor's own size.
+    pub fn new_with_scale(mass: f64, com: Vec3, inertia: Mat3, scale: f64) -> Result<Self> {
         if !mass.is_finite() || mass <= 0.0 {
             return Err(Error::inertia(
                 "mass",
@@ -31,7 +38,7 @@ impl RigidBody {
         }
         check_finite("com", com.as_slice())?;
         check_finite("inertia", inertia.as_slice())?;
-        let scale = inertia.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let scale = inertia.iter().fold(scale, |a, x| a.max(x.abs()));
         let tol = INERTIA_RTOL * scale;
         let asym = (inertia - inertia.transpose()).abs().max();
         if asym > tol {
@@ -94,7 +101,13 @@ impl RigidBody {
             / mass;
         let rel: Vec<Vec3> = positions.iter().map(|p| p - com).collect();
         let about_com = BodyInertia::from_points(masses, &rel);
-        RigidBody::new(mass, com, about_com.rotational)
+        // Rounding in the masses is relative to Σ|m| (an equimomental set may put rounding-size
+        // masses on far vertices), so the sums' noise scales with Σ|m|·max|d|², not with the
+        // (possibly zero) result.
+        let sum_abs: f64 = masses.iter().map(|m| m.abs()).sum();
+        let reach = rel.iter().fold(0.0f64, |a, d| a.max(d.norm_squared()));
+        let scale = sum_abs * reach;
+        RigidBody::new_with_scale(mass, com, about_com.rotational, 1e-5 * scale)
     }
 
     /// Inertia about `point` (body frame), by the parallel-axis theorem.

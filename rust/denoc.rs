@@ -252,6 +252,7 @@ pub fn forward_dynamics(
     tau: &[f64],
     g: &Vec3,
 ) -> Result<DVector<f64>> {
+    crate::recursive::check_singularities(model, q)?;
     let gim = mass_matrix(model, q);
     let c = convective_matrix(model, q, v);
     let rhs = DVector::from_column_slice(tau) + gravity_forces(model, q, g)
@@ -259,7 +260,7 @@ pub fn forward_dynamics(
     match gim.cholesky() {
         Some(ch) => Ok(ch.solve(&rhs)),
         None => Err(Error::Singular(
-            "the generalized inertia matrix is not positive definite at this configuration (a SphericalZYZ joint at sin θ = 0?)".into(),
+            "the generalized inertia matrix is not positive definite at this configuration".into(),
         )),
     }
 }

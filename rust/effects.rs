@@ -51,7 +51,14 @@ impl EffectSet {
     /// wrenches to `wrenches`; returns whether any wrench was written. Gravity is not here:
     /// it rides on the base acceleration.
     #[inline]
-    pub fn apply(&self, _t: f64, _q: &[f64], _v: &[f64], _tau: &mut [f64], _wrenches: &mut [Vec6]) -> bool {
+    pub fn apply(
+        &self,
+        _t: f64,
+        _q: &[f64],
+        _v: &[f64],
+        _tau: &mut [f64],
+        _wrenches: &mut [Vec6],
+    ) -> bool {
         false
     }
 }

@@ -77,7 +77,24 @@ pub fn zyz_rate_matrix(phi: f64, theta: f64) -> Mat3 {
     Mat3::new(0.0, -sp, cp * st, 0.0, cp, sp * st, 1.0, 0.0, ct)
 }
 
+/// `|sin θ|` below which a `SphericalZYZ` joint is refused as singular: the Euler rates for a
+/// finite angular velocity grow like 1/sin θ and the joint's columns of the GIM lose rank, so
+/// accelerations there would be rounding noise.
+pub const ZYZ_SINGULAR_SIN: f64 = 1e-6;
+
 impl Joint {
+    /// `Some(sin θ)` when this joint is at (or too near) its coordinate singularity.
+    #[inline]
+    pub fn singularity(&self, q: &[f64]) -> Option<f64> {
+        match self {
+            Joint::SphericalZYZ => {
+                let s = q[1].sin();
+                (s.abs() < ZYZ_SINGULAR_SIN).then_some(s)
+            }
+            _ => None,
+        }
+    }
+
     pub fn revolute(axis: Vec3) -> Result<Joint> {
         Ok(Joint::Revolute {
             axis: unit_axis(axis)?,

@@ -62,6 +62,9 @@ pub fn checked_rotation(r: &Mat3, arg: &str) -> Result<Mat3> {
             ),
         ));
     }
+    if err <= 4.0 * f64::EPSILON {
+        return Ok(*r);
+    }
     // Polar projection onto SO(3) so that rounding in the input does not accumulate.
     let svd = r.svd(true, true);
     match (svd.u, svd.v_t) {

@@ -55,7 +55,23 @@ impl EquimomentalSet {
         let m = body.mass;
         let r = body.com - center;
         // Shift second moments, not inertias, to the centre: J_p = J_c + m r rᵀ.
-        let j = body.second_moments_about_com() + r * r.transpose() * m;
+        let mut j = body.second_moments_about_com() + r * r.transpose() * m;
+        // Rounding can leave |J_ik| just above sqrt(J_ii J_kk) for a degenerate body (a rod or
+        // plate turned off the axes). Raise the smaller diagonal to make the pair consistent —
+        // a change of rounding size — rather than clamp the ratio below, which costs √eps.
+        for (i, k) in [(0, 1), (1, 2), (0, 2)] {
+            let need = j[(i, k)] * j[(i, k)];
+            if need > j[(i, i)] * j[(k, k)] {
+                let (small, large) = if j[(i, i)] <= j[(k, k)] {
+                    (i, k)
+                } else {
+                    (k, i)
+                };
+                if j[(large, large)] > 0.0 {
+                    j[(small, small)] = need / j[(large, large)];
+                }
+            }
+        }
         let h = Vec3::new(
             (j[(0, 0)].max(0.0) / m).sqrt(),
             (j[(1, 1)].max(0.0) / m).sqrt(),

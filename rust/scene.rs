@@ -123,14 +123,14 @@ impl Scene {
             message,
         };
         let sf: SceneFile = toml::from_str(text).map_err(|e| {
-            let (line, col) = e
-                .span()
-                .map(|s| line_col(text, s.start))
-                .unwrap_or((0, 0));
+            let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((0, 0));
             SceneError {
                 file: file.to_string(),
                 key: String::new(),
-                message: format!("invalid scene TOML at line {line}, column {col}: {}", e.message()),
+                message: format!(
+                    "invalid scene TOML at line {line}, column {col}: {}",
+                    e.message()
+                ),
             }
         })?;
         let unit_of = |key: &str, value: Option<&str>, default: f64| match value {
@@ -145,7 +145,10 @@ impl Scene {
         let unit = unit_of("angles", sf.angles.as_deref(), 1.0)?;
         let rate_unit = unit_of("rates", sf.rates.as_deref(), unit)?;
         if sf.body.is_empty() {
-            return Err(err("body".into(), "a scene needs at least one [[body]]".into()));
+            return Err(err(
+                "body".into(),
+                "a scene needs at least one [[body]]".into(),
+            ));
         }
         let mut model = Model::new();
         let mut index: HashMap<String, usize> = HashMap::new();
@@ -173,7 +176,10 @@ impl Scene {
             .map_err(|e| core("joint.axis", e))?;
             let rotation = match (b.rotation, b.rpy) {
                 (Some(_), Some(_)) => {
-                    return Err(err(key("rotation"), "give either rotation or rpy, not both".into()))
+                    return Err(err(
+                        key("rotation"),
+                        "give either rotation or rpy, not both".into(),
+                    ))
                 }
                 (Some(r), None) => Mat3::from_row_slice(&r.concat()),
                 (None, Some([r, p, y])) => rot_z(y * unit) * rot_y(p * unit) * rot_x(r * unit),
@@ -181,18 +187,26 @@ impl Scene {
             };
             let inertia = match (b.inertia, b.inertia_diag) {
                 (Some(_), Some(_)) => {
-                    return Err(err(key("inertia"), "give either inertia or inertia_diag, not both".into()))
+                    return Err(err(
+                        key("inertia"),
+                        "give either inertia or inertia_diag, not both".into(),
+                    ))
                 }
                 (Some(i), None) => Mat3::from_row_slice(&i.concat()),
                 (None, Some(d)) => Mat3::from_diagonal(&Vec3::from(d)),
                 (None, None) => {
-                    return Err(err(key("inertia"), "missing: give inertia (3x3, about the COM) or inertia_diag".into()))
+                    return Err(err(
+                        key("inertia"),
+                        "missing: give inertia (3x3, about the COM) or inertia_diag".into(),
+                    ))
                 }
             };
             let com = Vec3::from(b.com.unwrap_or([0.0; 3]));
             let body = RigidBody::new(b.mass, com, inertia).map_err(|e| {
                 let field = match &e {
-                    Error::InvalidInertia { arg, .. } | Error::InvalidArgument { arg, .. } => arg.clone(),
+                    Error::InvalidInertia { arg, .. } | Error::InvalidArgument { arg, .. } => {
+                        arg.clone()
+                    }
                     _ => "inertia".into(),
                 };
                 core(&field, e)
@@ -203,28 +217,55 @@ impl Scene {
                 .add_body(body, joint, parent, placement, Some(b.name.clone()), center)
                 .map_err(|e| {
                     let field = match &e {
-                        Error::InvalidArgument { arg, .. } | Error::InvalidModel { arg, .. } => arg.clone(),
+                        Error::InvalidArgument { arg, .. } | Error::InvalidModel { arg, .. } => {
+                            arg.clone()
+                        }
                         _ => String::new(),
                     };
                     core(&field, e)
                 })?;
             index.insert(b.name.clone(), idx);
             // Initial state of this joint, in file units.
-            let angular = matches!(joint, Joint::Revolute { .. } | Joint::SphericalZYZ | Joint::Spherical);
+            let angular = matches!(
+                joint,
+                Joint::Revolute { .. } | Joint::SphericalZYZ | Joint::Spherical
+            );
             let mut q = vec![0.0; joint.nq()];
             joint.neutral(&mut q);
             if let Some(given) = &b.q0 {
                 if given.len() != joint.nq() {
-                    return Err(err(key("q0"), format!("expected {} values for a {} joint, got {}", joint.nq(), joint.kind(), given.len())));
+                    return Err(err(
+                        key("q0"),
+                        format!(
+                            "expected {} values for a {} joint, got {}",
+                            joint.nq(),
+                            joint.kind(),
+                            given.len()
+                        ),
+                    ));
                 }
-                let scale = if matches!(joint, Joint::Revolute { .. } | Joint::SphericalZYZ) { unit } else { 1.0 };
+                let scale = if matches!(joint, Joint::Revolute { .. } | Joint::SphericalZYZ) {
+                    unit
+                } else {
+                    1.0
+                };
                 q = given.iter().map(|x| x * scale).collect();
-                joint.check_configuration(&q, "q0").map_err(|e| core("q0", e))?;
+                joint
+                    .check_configuration(&q, "q0")
+                    .map_err(|e| core("q0", e))?;
             }
             let mut v = vec![0.0; joint.nv()];
             if let Some(given) = &b.v0 {
                 if given.len() != joint.nv() {
-                    return Err(err(key("v0"), format!("expected {} values for a {} joint, got {}", joint.nv(), joint.kind(), given.len())));
+                    return Err(err(
+                        key("v0"),
+                        format!(
+                            "expected {} values for a {} joint, got {}",
+                            joint.nv(),
+                            joint.kind(),
+                            given.len()
+                        ),
+                    ));
                 }
                 let scale = if angular { rate_unit } else { 1.0 };
                 v = given.iter().map(|x| x * scale).collect();
@@ -237,14 +278,18 @@ impl Scene {
         let mut effects = Vec::new();
         for (k, e) in sf.effect.iter().enumerate() {
             effects.push(match e {
-                EffectFile::Gravity { g } => Effect::gravity(Vec3::from(*g)).map_err(|x| err(format!("effect[{k}].g"), x.to_string()))?,
+                EffectFile::Gravity { g } => Effect::gravity(Vec3::from(*g))
+                    .map_err(|x| err(format!("effect[{k}].g"), x.to_string()))?,
             });
         }
         let mut settings = Settings::default();
         if let Some(s) = sf.simulate {
             settings.t_span = match (s.t_span, s.t_end) {
                 (Some(_), Some(_)) => {
-                    return Err(err("simulate.t_end".into(), "give either t_span or t_end, not both".into()))
+                    return Err(err(
+                        "simulate.t_end".into(),
+                        "give either t_span or t_end, not both".into(),
+                    ))
                 }
                 (Some([a, b]), None) => Some((a, b)),
                 (None, Some(b)) => Some((0.0, b)),
@@ -252,13 +297,24 @@ impl Scene {
             };
             if let Some((a, b)) = settings.t_span {
                 if !(a.is_finite() && b.is_finite()) || a == b {
-                    return Err(err("simulate.t_span".into(), format!("expected two different finite times, got [{a}, {b}]")));
+                    return Err(err(
+                        "simulate.t_span".into(),
+                        format!("expected two different finite times, got [{a}, {b}]"),
+                    ));
                 }
             }
-            for (name, x) in [("rtol", s.rtol), ("atol", s.atol), ("max_step", s.max_step), ("first_step", s.first_step)] {
+            for (name, x) in [
+                ("rtol", s.rtol),
+                ("atol", s.atol),
+                ("max_step", s.max_step),
+                ("first_step", s.first_step),
+            ] {
                 if let Some(x) = x {
                     if !(x > 0.0) || !x.is_finite() {
-                        return Err(err(format!("simulate.{name}"), format!("expected a finite number > 0, got {x}")));
+                        return Err(err(
+                            format!("simulate.{name}"),
+                            format!("expected a finite number > 0, got {x}"),
+                        ));
                     }
                 }
             }
@@ -316,22 +372,33 @@ rtol = 1e-9
         assert_eq!(s.model.nq, 3);
         assert!((s.q0[1] - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
         assert!((s.v0[1] - 1.0).abs() < 1e-14);
-        assert_eq!(s.effects, vec![Effect::Gravity { g: Vec3::new(0.0, 0.0, -9.81) }]);
+        assert_eq!(
+            s.effects,
+            vec![Effect::Gravity {
+                g: Vec3::new(0.0, 0.0, -9.81)
+            }]
+        );
         assert_eq!(s.settings.t_span, Some((0.0, 10.0)));
     }
 
     #[test]
     fn errors_name_file_and_key() {
         let bad_parent = PENDULUM.replace("name = \"rod\"", "name = \"rod\"\nparent = \"nope\"");
-        let e = Scene::from_toml(&bad_parent, "p.toml").unwrap_err().to_string();
+        let e = Scene::from_toml(&bad_parent, "p.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.starts_with("p.toml: body[0] ('rod').parent"), "{e}");
         let bad_mass = PENDULUM.replace("mass = 2.51", "mass = -1");
-        let e = Scene::from_toml(&bad_mass, "p.toml").unwrap_err().to_string();
+        let e = Scene::from_toml(&bad_mass, "p.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("body[0] ('rod').mass"), "{e}");
         let typo = PENDULUM.replace("mass = 2.51", "mass = 2.51\nmas = 3");
         let e = Scene::from_toml(&typo, "p.toml").unwrap_err().to_string();
         assert!(e.contains("p.toml") && e.contains("mas"), "{e}");
-        let e = Scene::from_toml("[[body]\n", "x.toml").unwrap_err().to_string();
+        let e = Scene::from_toml("[[body]\n", "x.toml")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("x.toml") && e.contains("line 1"), "{e}");
         let neg = PENDULUM.replace("inertia_diag = [1.255e-4,", "inertia_diag = [-1.255e-4,");
         let e = Scene::from_toml(&neg, "p.toml").unwrap_err().to_string();

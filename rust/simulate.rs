@@ -43,7 +43,8 @@ impl<'a> Dynamics<'a> {
     pub fn energy(&mut self, q: &[f64], v: &[f64]) -> f64 {
         kinematics::positions(self.model, q, &mut self.data.links);
         kinematics::velocities(self.model, q, v, &mut self.data.links);
-        recursive::kinetic_energy(&self.data) + recursive::potential_energy(&self.data, &self.effects.gravity)
+        recursive::kinetic_energy(&self.data)
+            + recursive::potential_energy(&self.data, &self.effects.gravity)
     }
 }
 
@@ -64,13 +65,25 @@ impl OdeSystem for Dynamics<'_> {
         let (qdot, vdot) = dydt.split_at_mut(nq);
         self.model.velocity_to_qdot(q, v, qdot);
         self.tau.fill(0.0);
-        let ext = if self.effects.apply(t, q, v, &mut self.tau, &mut self.wrenches) {
+        let ext = if self
+            .effects
+            .apply(t, q, v, &mut self.tau, &mut self.wrenches)
+        {
             Some(self.wrenches.as_slice())
         } else {
             None
         };
-        recursive::forward_dynamics(self.model, &mut self.data, q, v, &self.tau, &self.effects.gravity, ext, vdot)
-            .map_err(|e| e.to_string())
+        recursive::forward_dynamics(
+            self.model,
+            &mut self.data,
+            q,
+            v,
+            &self.tau,
+            &self.effects.gravity,
+            ext,
+            vdot,
+        )
+        .map_err(|e| e.to_string())
     }
 
     /// Unit quaternions; the right-hand side normalises them too, so FSAL stays valid.
@@ -137,7 +150,10 @@ pub fn simulate(
         if e.index >= n {
             return Err(Error::arg(
                 format!("events[{k}].index"),
-                format!("an index into {} (0..{n})", if e.on_velocity { "v" } else { "q" }),
+                format!(
+                    "an index into {} (0..{n})",
+                    if e.on_velocity { "v" } else { "q" }
+                ),
                 e.index.to_string(),
             ));
         }

@@ -66,14 +66,17 @@ def cmd_simulate(args) -> int:
     result = simulate(scene, t_span, rtol=args.rtol, atol=args.atol, energy=True, progress=report)
     wall = time.perf_counter() - start
     finish()
+    model = scene.model
     e = np.asarray(result.energy)
-    scale = max(np.max(np.abs(e)), 1e-300)
+    # Relative to the largest kinetic energy reached: the total may be ~0 (zero potential at
+    # the pivot), which would make a ratio to |E| meaningless.
+    kinetic = max(model.kinetic_energy(q, v) for q, v in zip(result.q, result.v))
+    drift = np.max(np.abs(e - e[0]))
     print(f"{scene.name}: {result.message}")
     print(f"  {result.n_accepted} steps ({result.n_rejected} rejected), {result.nfev} evaluations, "
           f"{wall * 1e3:.1f} ms")
-    print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {np.max(np.abs(e - e[0])):.3e} J "
-          f"({np.max(np.abs(e - e[0])) / scale:.2e} of max |E|)")
-    model = scene.model
+    print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J "
+          f"({drift / max(kinetic, 1e-300):.2e} of the largest kinetic energy)")
     if args.out:
         _write_trajectory(Path(args.out), result, model)
         print(f"  trajectory written to {args.out}")

@@ -20,7 +20,11 @@ class ModelStructureError(InvalidInputError):
     """A kinematic tree that cannot be built: unknown parent, duplicate name."""
 
 
-class SingularityError(PointMassDynError, ArithmeticError):
+class NumericalError(PointMassDynError, ArithmeticError):
+    """Finite inputs gave a non-finite or meaningless result (overflow, singular matrix)."""
+
+
+class SingularityError(NumericalError):
     """The equations cannot be solved at this state (e.g. a ZYZ joint at sin(theta) = 0)."""
 
 
@@ -41,6 +45,7 @@ __all__ = [
     "InvalidInputError",
     "InertiaError",
     "ModelStructureError",
+    "NumericalError",
     "SingularityError",
     "SimulationError",
     "SceneError",

@@ -6,7 +6,12 @@ use super::errors::IntoPyResult;
 use crate::body::RigidBody;
 use crate::point_masses::EquimomentalSet;
 
-#[pyclass(name = "RigidBody", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[pyclass(
+    name = "RigidBody",
+    module = "pointmass_dyn._core",
+    frozen,
+    from_py_object
+)]
 #[derive(Clone)]
 pub struct PyRigidBody {
     pub inner: RigidBody,
@@ -16,14 +21,23 @@ pub struct PyRigidBody {
 impl PyRigidBody {
     #[new]
     #[pyo3(signature = (mass, com, inertia))]
-    fn new(py: Python<'_>, mass: f64, com: &Bound<'_, PyAny>, inertia: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        mass: f64,
+        com: &Bound<'_, PyAny>,
+        inertia: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
         let inner = RigidBody::new(mass, vec3(com, "com")?, mat3(inertia, "inertia")?).py(py)?;
         Ok(PyRigidBody { inner })
     }
 
     /// Mass, COM and inertia about the COM of a set of point masses.
     #[staticmethod]
-    fn from_point_masses(py: Python<'_>, masses: &Bound<'_, PyAny>, positions: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn from_point_masses(
+        py: Python<'_>,
+        masses: &Bound<'_, PyAny>,
+        positions: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
         let m = vector(masses, "masses", None)?;
         let p = points(positions, "positions")?;
         Ok(PyRigidBody {
@@ -45,7 +59,11 @@ impl PyRigidBody {
     }
 
     /// Inertia about `point` (body frame), by the parallel-axis theorem.
-    fn inertia_about<'py>(&self, py: Python<'py>, point: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn inertia_about<'py>(
+        &self,
+        py: Python<'py>,
+        point: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let p = vec3(point, "point")?;
         crate::error::check_finite("point", p.as_slice()).py(py)?;
         mat3_to_array(py, &self.inner.inertia_about(&p))
@@ -53,7 +71,11 @@ impl PyRigidBody {
 
     /// The equimomental seven point masses, box centred at `center` (default: the COM).
     #[pyo3(signature = (center=None))]
-    fn point_masses(&self, py: Python<'_>, center: Option<&Bound<'_, PyAny>>) -> PyResult<PyPointMasses> {
+    fn point_masses(
+        &self,
+        py: Python<'_>,
+        center: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyPointMasses> {
         let c = match center {
             Some(c) if !c.is_none() => {
                 let c = vec3(c, "center")?;
@@ -103,7 +125,12 @@ impl PyPointMasses {
     /// Positions in the body frame, shape (7, 3).
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let flat: Vec<f64> = self.inner.positions.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+        let flat: Vec<f64> = self
+            .inner
+            .positions
+            .iter()
+            .flat_map(|p| [p.x, p.y, p.z])
+            .collect();
         to_array(py, flat, &[7, 3])
     }
     #[getter]
@@ -117,10 +144,15 @@ impl PyPointMasses {
     /// The rigid body these points represent (mass, COM, inertia rebuilt from them).
     fn to_body(&self, py: Python<'_>) -> PyResult<PyRigidBody> {
         Ok(PyRigidBody {
-            inner: RigidBody::from_point_masses(&self.inner.masses, &self.inner.positions).py(py)?,
+            inner: RigidBody::from_point_masses(&self.inner.masses, &self.inner.positions)
+                .py(py)?,
         })
     }
     fn __repr__(&self) -> String {
-        format!("PointMasses(masses={:?}, half_sides={:?})", self.inner.masses, self.inner.half_sides.as_slice())
+        format!(
+            "PointMasses(masses={:?}, half_sides={:?})",
+            self.inner.masses,
+            self.inner.half_sides.as_slice()
+        )
     }
 }

@@ -7,12 +7,16 @@ use pyo3::prelude::*;
 use super::errors::invalid;
 use crate::spatial::{Mat3, Vec3};
 
-fn shape_str(shape: &[usize]) -> String {
+pub fn shape_str(shape: &[usize]) -> String {
     match shape.len() {
         1 => format!("shape ({},)", shape[0]),
         _ => format!(
             "shape ({})",
-            shape.iter().map(|s| s.to_string()).collect::<Vec<_>>().join(", ")
+            shape
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
     }
 }
@@ -26,12 +30,18 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
             .name()
             .map(|n| n.to_string())
             .unwrap_or_else(|_| "?".into());
-        invalid(py, arg, "an array of real numbers", format!("an object of type {ty}"))
+        invalid(
+            py,
+            arg,
+            "an array of real numbers",
+            format!("an object of type {ty}"),
+        )
     })?;
     let shape = arr.shape().to_vec();
+    // Raw memory only in C order; Fortran-ordered or strided arrays are read logically.
     let data = match arr.as_slice() {
-        Ok(s) => s.to_vec(),
-        Err(_) => arr.as_array().iter().copied().collect(),
+        Ok(s) if arr.is_c_contiguous() => s.to_vec(),
+        _ => arr.as_array().iter().copied().collect(),
     };
     Ok((shape, data))
 }
@@ -53,8 +63,16 @@ pub fn vector(obj: &Bound<'_, PyAny>, arg: &str, len: Option<usize>) -> PyResult
 /// straight into `out`; anything else goes through `vector`.
 pub fn vector_into(obj: &Bound<'_, PyAny>, arg: &str, out: &mut [f64]) -> PyResult<()> {
     if let Ok(a) = obj.cast::<PyArray1<f64>>() {
-        let ro = a.readonly();
-        if let Ok(s) = ro.as_slice() {
+        // SAFETY: the data is copied at once while attached to the interpreter, so no Python
+        // code can write to the array meanwhile; this skips rust-numpy's borrow tracking,
+        // which costs more than the copy for small arrays.
+        if let Ok(s) = unsafe { a.as_slice() }.map_err(|_| ()).and_then(|s| {
+            if a.is_c_contiguous() {
+                Ok(s)
+            } else {
+                Err(())
+            }
+        }) {
             if s.len() == out.len() {
                 out.copy_from_slice(s);
                 return Ok(());
@@ -67,7 +85,9 @@ pub fn vector_into(obj: &Bound<'_, PyAny>, arg: &str, out: &mut [f64]) -> PyResu
 }
 
 pub fn vec3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec3> {
-    Ok(Vec3::from_column_slice(&vector(obj, arg, Some(3))?))
+    let mut v = [0.0; 3];
+    vector_into(obj, arg, &mut v)?;
+    Ok(Vec3::from(v))
 }
 
 pub fn mat3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Mat3> {
@@ -92,7 +112,11 @@ pub fn to_array1<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
 }
 
 /// A row-major array of the given shape from C-ordered data.
-pub fn to_array<'py>(py: Python<'py>, data: Vec<f64>, shape: &[usize]) -> PyResult<Bound<'py, PyAny>> {
+pub fn to_array<'py>(
+    py: Python<'py>,
+    data: Vec<f64>,
+    shape: &[usize],
+) -> PyResult<Bound<'py, PyAny>> {
     let flat = PyArray1::from_vec(py, data);
     Ok(flat.reshape(shape.to_vec())?.into_any())
 }
@@ -103,5 +127,9 @@ pub fn mat3_to_array<'py>(py: Python<'py>, m: &Mat3) -> PyResult<Bound<'py, PyAn
 
 pub fn dmatrix_to_array<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Bound<'py, PyAny>> {
     // nalgebra is column-major; NumPy wants C order.
-    to_array(py, m.transpose().as_slice().to_vec(), &[m.nrows(), m.ncols()])
+    to_array(
+        py,
+        m.transpose().as_slice().to_vec(),
+        &[m.nrows(), m.ncols()],
+    )
 }

@@ -38,6 +38,27 @@ impl<T> IntoPyResult<T> for Result<T, Error> {
     }
 }
 
-pub fn invalid(py: Python<'_>, arg: &str, expected: impl std::fmt::Display, got: impl std::fmt::Display) -> PyErr {
-    py_error(py, "InvalidInputError", format!("{arg}: expected {expected}, got {got}"))
+/// Raises `NumericalError` if a result computed from finite inputs is not finite.
+pub fn check_result(py: Python<'_>, what: &str, values: &[f64]) -> PyResult<()> {
+    match values.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(py_error(
+            py,
+            "NumericalError",
+            format!("{what}: the result is not finite ({} at index {k}) although the inputs are: the state overflows double precision", values[k]),
+        )),
+    }
+}
+
+pub fn invalid(
+    py: Python<'_>,
+    arg: &str,
+    expected: impl std::fmt::Display,
+    got: impl std::fmt::Display,
+) -> PyErr {
+    py_error(
+        py,
+        "InvalidInputError",
+        format!("{arg}: expected {expected}, got {got}"),
+    )
 }

@@ -5,7 +5,7 @@ use pyo3::types::PyDict;
 
 use super::body::PyRigidBody;
 use super::convert::{dmatrix_to_array, mat3, points, to_array, to_array1, vec3, vector_into};
-use super::errors::{invalid, IntoPyResult};
+use super::errors::{check_result, invalid, IntoPyResult};
 use crate::denoc;
 use crate::joint::Joint;
 use crate::kinematics;
@@ -27,23 +27,33 @@ pub struct PyJoint {
 impl PyJoint {
     #[staticmethod]
     fn revolute(py: Python<'_>, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyJoint { inner: Joint::revolute(vec3(axis, "axis")?).py(py)? })
+        Ok(PyJoint {
+            inner: Joint::revolute(vec3(axis, "axis")?).py(py)?,
+        })
     }
     #[staticmethod]
     fn prismatic(py: Python<'_>, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
-        Ok(PyJoint { inner: Joint::prismatic(vec3(axis, "axis")?).py(py)? })
+        Ok(PyJoint {
+            inner: Joint::prismatic(vec3(axis, "axis")?).py(py)?,
+        })
     }
     #[staticmethod]
     fn spherical_zyz() -> Self {
-        PyJoint { inner: Joint::SphericalZYZ }
+        PyJoint {
+            inner: Joint::SphericalZYZ,
+        }
     }
     #[staticmethod]
     fn spherical() -> Self {
-        PyJoint { inner: Joint::Spherical }
+        PyJoint {
+            inner: Joint::Spherical,
+        }
     }
     #[staticmethod]
     fn fixed() -> Self {
-        PyJoint { inner: Joint::Fixed }
+        PyJoint {
+            inner: Joint::Fixed,
+        }
     }
     #[getter]
     fn kind(&self) -> &'static str {
@@ -60,14 +70,22 @@ impl PyJoint {
     #[getter]
     fn axis<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
         match self.inner {
-            Joint::Revolute { axis } | Joint::Prismatic { axis } => Some(to_array1(py, axis.as_slice()).into_any()),
+            Joint::Revolute { axis } | Joint::Prismatic { axis } => {
+                Some(to_array1(py, axis.as_slice()).into_any())
+            }
             _ => None,
         }
     }
     fn __repr__(&self) -> String {
         match self.inner {
             Joint::Revolute { axis } | Joint::Prismatic { axis } => {
-                format!("{}(axis=[{}, {}, {}])", self.inner.kind(), axis.x, axis.y, axis.z)
+                format!(
+                    "{}(axis=[{}, {}, {}])",
+                    self.inner.kind(),
+                    axis.x,
+                    axis.y,
+                    axis.z
+                )
             }
             _ => format!("{}()", self.inner.kind()),
         }
@@ -106,7 +124,12 @@ fn method_arg(py: Python<'_>, method: &str) -> PyResult<Method> {
     match method {
         "recursive" => Ok(Method::Recursive),
         "denoc" => Ok(Method::Denoc),
-        other => Err(invalid(py, "method", "'recursive' or 'denoc'", format!("'{other}'"))),
+        other => Err(invalid(
+            py,
+            "method",
+            "'recursive' or 'denoc'",
+            format!("'{other}'"),
+        )),
     }
 }
 
@@ -126,12 +149,19 @@ impl PyModel {
     }
 
     /// Reads q (and v) into the model's buffers and validates them.
-    fn load_state(&mut self, py: Python<'_>, q: &Bound<'_, PyAny>, v: Option<&Bound<'_, PyAny>>) -> PyResult<()> {
+    fn load_state(
+        &mut self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
         vector_into(q, "q", &mut self.q)?;
         if let Some(v) = v {
             vector_into(v, "v", &mut self.v)?;
         }
-        self.model.check_state(&self.q, v.map(|_| self.v.as_slice())).py(py)
+        self.model
+            .check_state(&self.q, v.map(|_| self.v.as_slice()))
+            .py(py)
     }
 
     fn load_x(&mut self, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -> PyResult<()> {
@@ -145,10 +175,12 @@ impl PyModel {
                 let (shape, data) = super::convert::array(f, "external")?;
                 let n = self.model.links.len();
                 if shape != [n, 6] {
-                    return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), format!("shape {shape:?}")));
+                    return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), super::convert::shape_str(&shape)));
                 }
                 crate::error::check_finite("external", &data).py(f.py())?;
-                Ok(Some(data.chunks_exact(6).map(Vec6::from_column_slice).collect()))
+                Ok(Some(
+                    data.chunks_exact(6).map(Vec6::from_column_slice).collect(),
+                ))
             }
             _ => Ok(None),
         }
@@ -183,7 +215,10 @@ impl PyModel {
                 return Err(super::errors::py_error(
                     py,
                     "ModelStructureError",
-                    format!("parent: expected -1 (the world) or a body index 0..{}, got {p}", self.model.nbodies()),
+                    format!(
+                        "parent: expected -1 (the world) or a body index 0..{}, got {p}",
+                        self.model.nbodies()
+                    ),
                 ))
             }
         };
@@ -201,7 +236,14 @@ impl PyModel {
         };
         let k = self
             .model
-            .add_body(body.inner, joint.inner, parent, Placement::new(r, t), name, center)
+            .add_body(
+                body.inner,
+                joint.inner,
+                parent,
+                Placement::new(r, t),
+                name,
+                center,
+            )
             .py(py)?;
         *self = PyModel::from_model(std::mem::take(&mut self.model));
         Ok(k)
@@ -231,7 +273,11 @@ impl PyModel {
     /// Names of the bodies that define each moving link, in q/v order.
     #[getter]
     fn link_names(&self) -> Vec<String> {
-        self.model.links.iter().map(|l| self.model.bodies[l.body].name.clone()).collect()
+        self.model
+            .links
+            .iter()
+            .map(|l| self.model.bodies[l.body].name.clone())
+            .collect()
     }
     #[getter]
     fn total_mass(&self) -> f64 {
@@ -240,7 +286,14 @@ impl PyModel {
     /// Per body: (name, joint kind, parent index or -1, link index or -1).
     fn body_info(&self, py: Python<'_>, index: usize) -> PyResult<(String, String, i64, i64)> {
         let b = self.model.bodies.get(index).ok_or_else(|| {
-            super::errors::py_error(py, "ModelStructureError", format!("index: no body {index} (the model has {})", self.model.nbodies()))
+            super::errors::py_error(
+                py,
+                "ModelStructureError",
+                format!(
+                    "index: no body {index} (the model has {})",
+                    self.model.nbodies()
+                ),
+            )
         })?;
         Ok((
             b.name.clone(),
@@ -251,7 +304,11 @@ impl PyModel {
     }
     /// (q index, v index, nq, nv) of each link's joint.
     fn joint_slices(&self) -> Vec<(usize, usize, usize, usize)> {
-        self.model.links.iter().map(|l| (l.q_index, l.v_index, l.joint.nq(), l.joint.nv())).collect()
+        self.model
+            .links
+            .iter()
+            .map(|l| (l.q_index, l.v_index, l.joint.nq(), l.joint.nv()))
+            .collect()
     }
 
     fn neutral<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
@@ -259,7 +316,11 @@ impl PyModel {
     }
 
     /// World placements of every body at `q`: (rotations (nbodies, 3, 3), origins (nbodies, 3)).
-    fn placements<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    fn placements<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         self.load_state(py, q, None)?;
         kinematics::positions(&self.model, &self.q, &mut self.data.links);
         let nb = self.model.nbodies();
@@ -270,21 +331,35 @@ impl PyModel {
             rots.extend_from_slice(p.rotation.transpose().as_slice());
             origins.extend_from_slice(p.translation.as_slice());
         }
-        Ok((to_array(py, rots, &[nb, 3, 3])?, to_array(py, origins, &[nb, 3])?))
+        Ok((
+            to_array(py, rots, &[nb, 3, 3])?,
+            to_array(py, origins, &[nb, 3])?,
+        ))
     }
 
     /// The seven point masses of every moving link: (masses (nlinks, 7), world positions
     /// (nlinks, 7, 3)) at `q`.
-    fn point_masses<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    fn point_masses<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         self.load_state(py, q, None)?;
         let den = denoc::matrices(&self.model, &self.q);
         let n = self.model.links.len();
         let pts = den.points.transpose().as_slice().to_vec();
-        Ok((to_array(py, den.masses.as_slice().to_vec(), &[n, 7])?, to_array(py, pts, &[n, 7, 3])?))
+        Ok((
+            to_array(py, den.masses.as_slice().to_vec(), &[n, 7])?,
+            to_array(py, pts, &[n, 7, 3])?,
+        ))
     }
 
     /// The DeNOC matrices at `q`: dict with D, Nl, Nd, N, masses (7n,), points (7n, 3).
-    fn denoc<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    fn denoc<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
         self.load_state(py, q, None)?;
         let (model, qv) = (&self.model, &self.q);
         let den = py.detach(|| denoc::matrices(model, qv));
@@ -299,7 +374,12 @@ impl PyModel {
     }
 
     /// Time derivatives of the DeNOC matrices at `(q, v)`: dict with D, Nl, Nd, N.
-    fn denoc_rates<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, v: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    fn denoc_rates<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
         self.load_state(py, q, Some(v))?;
         let (model, qv, vv) = (&self.model, &self.q, &self.v);
         let (_, rates) = py.detach(|| denoc::matrices_and_rates(model, qv, vv));
@@ -313,7 +393,12 @@ impl PyModel {
 
     /// Generalized inertia matrix (GIM), nv × nv.
     #[pyo3(signature = (q, method="recursive"))]
-    fn mass_matrix<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, method: &str) -> PyResult<Bound<'py, PyAny>> {
+    fn mass_matrix<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let method = method_arg(py, method)?;
         self.load_state(py, q, None)?;
         match method {
@@ -330,7 +415,12 @@ impl PyModel {
     }
 
     /// Convective matrix `C = Nᵀ M Ṅ` (explicit DeNOC products).
-    fn convective_matrix<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, v: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn convective_matrix<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         self.load_state(py, q, Some(v))?;
         let (model, qv, vv) = (&self.model, &self.q, &self.v);
         let c = py.detach(|| denoc::convective_matrix(model, qv, vv));
@@ -339,7 +429,12 @@ impl PyModel {
 
     /// Generalized gravity force `Nᵀ f^G` (right-hand side; Pinocchio's
     /// `computeGeneralizedGravity` is its negative).
-    fn gravity_forces<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, gravity: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn gravity_forces<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        gravity: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let g = gravity_arg(py, Some(gravity))?;
         self.load_state(py, q, None)?;
         let tg = denoc::gravity_forces(&self.model, &self.q, &g);
@@ -347,7 +442,12 @@ impl PyModel {
     }
 
     /// `Nᵀ f` for forces on the point masses, shape (nlinks, 7, 3) or (7·nlinks, 3), world.
-    fn generalized_forces<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, forces: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn generalized_forces<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        forces: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         self.load_state(py, q, None)?;
         let f = points(forces, "forces")?;
         for p in &f {
@@ -359,11 +459,27 @@ impl PyModel {
 
     /// Bias forces `C v − τ_g` (Pinocchio's `nonLinearEffects`).
     #[pyo3(signature = (q, v, gravity=None))]
-    fn bias_forces<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, v: &Bound<'_, PyAny>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<Bound<'py, PyAny>> {
+    fn bias_forces<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let g = gravity_arg(py, gravity)?;
         self.load_state(py, q, Some(v))?;
         self.x.fill(0.0);
-        recursive::inverse_dynamics(&self.model, &mut self.data, &self.q, &self.v, &self.x, &g, None, &mut self.out);
+        recursive::inverse_dynamics(
+            &self.model,
+            &mut self.data,
+            &self.q,
+            &self.v,
+            &self.x,
+            &g,
+            None,
+            &mut self.out,
+        );
+        check_result(py, "bias_forces", &self.out)?;
         Ok(to_array1(py, &self.out).into_any())
     }
 
@@ -386,17 +502,40 @@ impl PyModel {
         let ext = self.external_wrenches(external)?;
         match method {
             Method::Recursive => {
-                let (model, data, qv, vv, tv, out) = (&self.model, &mut self.data, &self.q, &self.v, &self.x, &mut self.out);
-                let mut run = || recursive::forward_dynamics(model, data, qv, vv, tv, &g, ext.as_deref(), out);
-                if model.links.len() >= DETACH_LINKS { py.detach(run) } else { run() }.py(py)?;
+                let (model, data, qv, vv, tv, out) = (
+                    &self.model,
+                    &mut self.data,
+                    &self.q,
+                    &self.v,
+                    &self.x,
+                    &mut self.out,
+                );
+                let mut run = || {
+                    recursive::forward_dynamics(model, data, qv, vv, tv, &g, ext.as_deref(), out)
+                };
+                if model.links.len() >= DETACH_LINKS {
+                    py.detach(run)
+                } else {
+                    run()
+                }
+                .py(py)?;
+                check_result(py, "forward_dynamics", &self.out)?;
                 Ok(to_array1(py, &self.out).into_any())
             }
             Method::Denoc => {
                 if ext.is_some() {
-                    return Err(invalid(py, "external", "None with method='denoc' (apply point forces with generalized_forces)", "wrenches"));
+                    return Err(invalid(
+                        py,
+                        "external",
+                        "None with method='denoc' (apply point forces with generalized_forces)",
+                        "wrenches",
+                    ));
                 }
                 let (model, qv, vv, tv) = (&self.model, &self.q, &self.v, &self.x);
-                let a = py.detach(|| denoc::forward_dynamics(model, qv, vv, tv, &g)).py(py)?;
+                let a = py
+                    .detach(|| denoc::forward_dynamics(model, qv, vv, tv, &g))
+                    .py(py)?;
+                check_result(py, "forward_dynamics", a.as_slice())?;
                 Ok(to_array1(py, a.as_slice()).into_any())
             }
         }
@@ -421,24 +560,49 @@ impl PyModel {
         let ext = self.external_wrenches(external)?;
         match method {
             Method::Recursive => {
-                let (model, data, qv, vv, av, out) = (&self.model, &mut self.data, &self.q, &self.v, &self.x, &mut self.out);
-                let mut run = || recursive::inverse_dynamics(model, data, qv, vv, av, &g, ext.as_deref(), out);
-                if model.links.len() >= DETACH_LINKS { py.detach(run) } else { run() };
+                let (model, data, qv, vv, av, out) = (
+                    &self.model,
+                    &mut self.data,
+                    &self.q,
+                    &self.v,
+                    &self.x,
+                    &mut self.out,
+                );
+                let mut run = || {
+                    recursive::inverse_dynamics(model, data, qv, vv, av, &g, ext.as_deref(), out)
+                };
+                if model.links.len() >= DETACH_LINKS {
+                    py.detach(run)
+                } else {
+                    run()
+                };
+                check_result(py, "inverse_dynamics", &self.out)?;
                 Ok(to_array1(py, &self.out).into_any())
             }
             Method::Denoc => {
                 if ext.is_some() {
-                    return Err(invalid(py, "external", "None with method='denoc'", "wrenches"));
+                    return Err(invalid(
+                        py,
+                        "external",
+                        "None with method='denoc'",
+                        "wrenches",
+                    ));
                 }
                 let (model, qv, vv, av) = (&self.model, &self.q, &self.v, &self.x);
                 let tau = py.detach(|| denoc::inverse_dynamics(model, qv, vv, av, &g));
+                check_result(py, "inverse_dynamics", tau.as_slice())?;
                 Ok(to_array1(py, tau.as_slice()).into_any())
             }
         }
     }
 
     /// Kinetic energy `½ vᵀ I v`.
-    fn kinetic_energy(&mut self, py: Python<'_>, q: &Bound<'_, PyAny>, v: &Bound<'_, PyAny>) -> PyResult<f64> {
+    fn kinetic_energy(
+        &mut self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<f64> {
         self.load_state(py, q, Some(v))?;
         kinematics::positions(&self.model, &self.q, &mut self.data.links);
         kinematics::velocities(&self.model, &self.q, &self.v, &mut self.data.links);
@@ -446,7 +610,12 @@ impl PyModel {
     }
 
     /// Gravitational potential energy `−Σ m_ij g·x_ij` (zero at the world origin).
-    fn potential_energy(&mut self, py: Python<'_>, q: &Bound<'_, PyAny>, gravity: &Bound<'_, PyAny>) -> PyResult<f64> {
+    fn potential_energy(
+        &mut self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        gravity: &Bound<'_, PyAny>,
+    ) -> PyResult<f64> {
         let g = gravity_arg(py, Some(gravity))?;
         self.load_state(py, q, None)?;
         kinematics::positions(&self.model, &self.q, &mut self.data.links);
@@ -454,7 +623,12 @@ impl PyModel {
     }
 
     /// `q̇` from `v` (differs from `v` only for quaternion joints).
-    fn velocity_to_qdot<'py>(&mut self, py: Python<'py>, q: &Bound<'_, PyAny>, v: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn velocity_to_qdot<'py>(
+        &mut self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
         self.load_state(py, q, Some(v))?;
         let mut qd = vec![0.0; self.model.nq];
         self.model.velocity_to_qdot(&self.q, &self.v, &mut qd);
@@ -471,4 +645,3 @@ impl PyModel {
         )
     }
 }
-

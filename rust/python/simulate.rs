@@ -9,11 +9,18 @@ use super::convert::{array, to_array, to_array1, vec3, vector};
 use super::errors::{invalid, py_error, IntoPyResult};
 use super::model::PyModel;
 use crate::effects::Effect;
-use crate::integrator::{self, Controller, DenseOutput, Event, EventDirection, FnSystem, Rk45Options, Tol};
+use crate::integrator::{
+    self, Controller, DenseOutput, Event, EventDirection, FnSystem, Rk45Options, Tol,
+};
 use crate::scene::{Scene, Settings};
 use crate::simulate::{simulate, StateEvent};
 
-#[pyclass(name = "Effect", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[pyclass(
+    name = "Effect",
+    module = "pointmass_dyn._core",
+    frozen,
+    from_py_object
+)]
 #[derive(Clone)]
 pub struct PyEffect {
     pub inner: Effect,
@@ -29,7 +36,9 @@ impl PyEffect {
             Some(g) if !g.is_none() => vec3(g, "g")?,
             _ => crate::spatial::Vec3::new(0.0, 0.0, -9.81),
         };
-        Ok(PyEffect { inner: Effect::gravity(g).py(py)? })
+        Ok(PyEffect {
+            inner: Effect::gravity(g).py(py)?,
+        })
     }
     #[getter]
     fn name(&self) -> &'static str {
@@ -46,7 +55,12 @@ impl PyEffect {
 }
 
 /// `q[index]` (or `v[index]`) crossing `value`; evaluated in Rust, no GIL needed.
-#[pyclass(name = "StateEvent", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[pyclass(
+    name = "StateEvent",
+    module = "pointmass_dyn._core",
+    frozen,
+    from_py_object
+)]
 #[derive(Clone)]
 pub struct PyStateEvent {
     pub inner: StateEvent,
@@ -58,7 +72,12 @@ fn terminal_count(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<usize> {
     }
     match obj.extract::<i64>() {
         Ok(n) if n >= 0 => Ok(n as usize),
-        _ => Err(invalid(py, "terminal", "a bool or a count >= 0", obj.repr().map(|r| r.to_string()).unwrap_or_default())),
+        _ => Err(invalid(
+            py,
+            "terminal",
+            "a bool or a count >= 0",
+            obj.repr().map(|r| r.to_string()).unwrap_or_default(),
+        )),
     }
 }
 
@@ -66,7 +85,14 @@ fn terminal_count(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<usize> {
 impl PyStateEvent {
     #[new]
     #[pyo3(signature = (variable, index, value=0.0, direction=0, terminal=None))]
-    fn new(py: Python<'_>, variable: &str, index: usize, value: f64, direction: i32, terminal: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+    fn new(
+        py: Python<'_>,
+        variable: &str,
+        index: usize,
+        value: f64,
+        direction: i32,
+        terminal: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
         let on_velocity = match variable {
             "q" => false,
             "v" => true,
@@ -79,7 +105,15 @@ impl PyStateEvent {
             Some(t) if !t.is_none() => terminal_count(py, t)?,
             _ => 0,
         };
-        Ok(PyStateEvent { inner: StateEvent { on_velocity, index, value, direction: direction.signum(), terminal } })
+        Ok(PyStateEvent {
+            inner: StateEvent {
+                on_velocity,
+                index,
+                value,
+                direction: direction.signum(),
+                terminal,
+            },
+        })
     }
     #[getter]
     fn terminal(&self) -> usize {
@@ -117,7 +151,12 @@ fn opt_positive(py: Python<'_>, x: Option<f64>, arg: &str) -> PyResult<Option<f6
 fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     let v = vector(obj, "t_span", Some(2))?;
     if !(v[0].is_finite() && v[1].is_finite()) || v[0] == v[1] {
-        return Err(invalid(py, "t_span", "two different finite times (t0, t_end)", format!("({}, {})", v[0], v[1])));
+        return Err(invalid(
+            py,
+            "t_span",
+            "two different finite times (t0, t_end)",
+            format!("({}, {})", v[0], v[1]),
+        ));
     }
     Ok((v[0], v[1]))
 }
@@ -148,7 +187,8 @@ impl PyScene {
             Some(v) if !v.is_none() => vector(v, "v0", Some(m.nv))?,
             _ => vec![0.0; m.nv],
         };
-        m.check_state(&q, Some(&v)).map_err(|e| super::errors::to_py(py, rename_arg(e)))?;
+        m.check_state(&q, Some(&v))
+            .map_err(|e| super::errors::to_py(py, rename_arg(e)))?;
         m.normalize(&mut q);
         let mut list = Vec::new();
         if let Some(effs) = effects {
@@ -156,7 +196,12 @@ impl PyScene {
                 for (k, e) in effs.try_iter()?.enumerate() {
                     let e = e?;
                     let eff = e.cast::<PyEffect>().map_err(|_| {
-                        invalid(py, &format!("effects[{k}]"), "an effect such as pmd.Gravity(...)", e.repr().map(|r| r.to_string()).unwrap_or_default())
+                        invalid(
+                            py,
+                            &format!("effects[{k}]"),
+                            "an effect such as pmd.Gravity(...)",
+                            e.repr().map(|r| r.to_string()).unwrap_or_default(),
+                        )
                     })?;
                     list.push(eff.get().inner.clone());
                 }
@@ -208,7 +253,11 @@ impl PyScene {
     }
     #[getter]
     fn effects(&self) -> Vec<PyEffect> {
-        self.inner.effects.iter().map(|e| PyEffect { inner: e.clone() }).collect()
+        self.inner
+            .effects
+            .iter()
+            .map(|e| PyEffect { inner: e.clone() })
+            .collect()
     }
     #[getter]
     fn name(&self) -> String {
@@ -250,18 +299,24 @@ impl PyScene {
             s.model.nbodies(),
             s.model.nq,
             s.model.nv,
-            s.effects.iter().map(|e| e.name()).collect::<Vec<_>>().join(", ")
+            s.effects
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(", ")
         )
     }
 }
 
 fn rename_arg(e: crate::error::Error) -> crate::error::Error {
     match e {
-        crate::error::Error::InvalidArgument { arg, expected, got } => crate::error::Error::InvalidArgument {
-            arg: format!("{arg}0"),
-            expected,
-            got,
-        },
+        crate::error::Error::InvalidArgument { arg, expected, got } => {
+            crate::error::Error::InvalidArgument {
+                arg: format!("{arg}0"),
+                expected,
+                got,
+            }
+        }
         other => other,
     }
 }
@@ -277,7 +332,12 @@ fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller> {
     match name {
         "standard" | "scipy" => Ok(Controller::Standard),
         "pi" => Ok(Controller::hairer_pi()),
-        other => Err(invalid(py, "controller", "'standard' (SciPy's) or 'pi' (Hairer's PI)", format!("'{other}'"))),
+        other => Err(invalid(
+            py,
+            "controller",
+            "'standard' (SciPy's) or 'pi' (Hairer's PI)",
+            format!("'{other}'"),
+        )),
     }
 }
 
@@ -295,7 +355,11 @@ fn options(
     dense: bool,
     controller: &str,
 ) -> PyResult<Rk45Options> {
-    let mut o = Rk45Options { dense, controller: controller_arg(py, controller)?, ..Default::default() };
+    let mut o = Rk45Options {
+        dense,
+        controller: controller_arg(py, controller)?,
+        ..Default::default()
+    };
     if let Some(r) = rtol.filter(|r| !r.is_none()) {
         o.rtol = tol_arg(r, "rtol", dim)?;
     }
@@ -325,29 +389,70 @@ struct PyEventSpec {
 
 fn event_spec(py: Python<'_>, k: usize, e: &Bound<'_, PyAny>) -> PyResult<PyEventSpec> {
     if !e.is_callable() {
-        return Err(invalid(py, &format!("events[{k}]"), "a callable or a pmd.StateEvent", e.repr().map(|r| r.to_string()).unwrap_or_default()));
+        return Err(invalid(
+            py,
+            &format!("events[{k}]"),
+            "a callable or a pmd.StateEvent",
+            e.repr().map(|r| r.to_string()).unwrap_or_default(),
+        ));
     }
     let terminal = match e.getattr("terminal") {
         Ok(t) if !t.is_none() => terminal_count(py, &t)?,
         _ => 0,
     };
     let direction = match e.getattr("direction") {
-        Ok(d) if !d.is_none() => d.extract::<f64>().map_err(|_| invalid(py, &format!("events[{k}].direction"), "a number", "another type"))?,
+        Ok(d) if !d.is_none() => d.extract::<f64>().map_err(|_| {
+            invalid(
+                py,
+                &format!("events[{k}].direction"),
+                "a number",
+                "another type",
+            )
+        })?,
         _ => 0.0,
     };
-    Ok(PyEventSpec { func: e.clone().unbind(), terminal, direction })
+    Ok(PyEventSpec {
+        func: e.clone().unbind(),
+        terminal,
+        direction,
+    })
 }
 
 /// Builds an event that calls Python (re-attaching to the interpreter when called from a
 /// detached thread); the first exception is kept in `failure` and re-raised afterwards.
-fn python_event<'a>(spec: &'a PyEventSpec, split: Option<usize>, failure: &'a Mutex<Option<PyErr>>) -> Event<'a> {
+fn python_event<'a>(
+    spec: &'a PyEventSpec,
+    split: Option<usize>,
+    failure: &'a Mutex<Option<PyErr>>,
+) -> Event<'a> {
     let f = move |t: f64, y: &[f64]| -> f64 {
         Python::attach(|py| {
             let args = match split {
-                Some(nq) => PyTuple::new(py, [t.into_pyobject(py).map(|x| x.into_any()), Ok(PyArray1::from_slice(py, &y[..nq]).into_any()), Ok(PyArray1::from_slice(py, &y[nq..]).into_any())].into_iter().collect::<Result<Vec<_>, _>>().unwrap_or_default()),
-                None => PyTuple::new(py, [t.into_pyobject(py).map(|x| x.into_any()), Ok(PyArray1::from_slice(py, y).into_any())].into_iter().collect::<Result<Vec<_>, _>>().unwrap_or_default()),
+                Some(nq) => PyTuple::new(
+                    py,
+                    [
+                        t.into_pyobject(py).map(|x| x.into_any()),
+                        Ok(PyArray1::from_slice(py, &y[..nq]).into_any()),
+                        Ok(PyArray1::from_slice(py, &y[nq..]).into_any()),
+                    ]
+                    .into_iter()
+                    .collect::<Result<Vec<_>, _>>()
+                    .unwrap_or_default(),
+                ),
+                None => PyTuple::new(
+                    py,
+                    [
+                        t.into_pyobject(py).map(|x| x.into_any()),
+                        Ok(PyArray1::from_slice(py, y).into_any()),
+                    ]
+                    .into_iter()
+                    .collect::<Result<Vec<_>, _>>()
+                    .unwrap_or_default(),
+                ),
             };
-            let out = args.and_then(|a| spec.func.bind(py).call1(a)).and_then(|r| r.extract::<f64>().map_err(PyErr::from));
+            let out = args
+                .and_then(|a| spec.func.bind(py).call1(a))
+                .and_then(|r| r.extract::<f64>().map_err(PyErr::from));
             match out {
                 Ok(x) => x,
                 Err(e) => {
@@ -359,7 +464,9 @@ fn python_event<'a>(spec: &'a PyEventSpec, split: Option<usize>, failure: &'a Mu
             }
         })
     };
-    Event::new(f).direction(EventDirection::from_sign(spec.direction)).terminal(spec.terminal)
+    Event::new(f)
+        .direction(EventDirection::from_sign(spec.direction))
+        .terminal(spec.terminal)
 }
 
 /// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
@@ -385,7 +492,10 @@ pub fn simulate_scene<'py>(
     let (nq, nv) = (s.model.nq, s.model.nv);
     let t_span = match t_span.filter(|t| !t.is_none()) {
         Some(t) => t_span_arg(py, t)?,
-        None => s.settings.t_span.ok_or_else(|| invalid(py, "t_span", "(t0, t_end): the scene sets none", "None"))?,
+        None => s
+            .settings
+            .t_span
+            .ok_or_else(|| invalid(py, "t_span", "(t0, t_end): the scene sets none", "None"))?,
     };
     let mut opts = options(
         py,
@@ -429,7 +539,10 @@ pub fn simulate_scene<'py>(
     let model = &s.model;
     let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
     let result = py.detach(|| {
-        let extra: Vec<Event<'_>> = py_events.iter().map(|spec| python_event(spec, Some(nq), &failure)).collect();
+        let extra: Vec<Event<'_>> = py_events
+            .iter()
+            .map(|spec| python_event(spec, Some(nq), &failure))
+            .collect();
         // Every few hundred evaluations: look for Ctrl-C, and report progress if asked.
         let hook: crate::simulate::Progress<'_> = Box::new(|t: f64| {
             Python::attach(|py| {
@@ -448,7 +561,18 @@ pub fn simulate_scene<'py>(
                 }
             })
         });
-        simulate(model, effects, q0, v0, t_span, &opts, &state_events, extra, energy, Some(hook))
+        simulate(
+            model,
+            effects,
+            q0,
+            v0,
+            t_span,
+            &opts,
+            &state_events,
+            extra,
+            energy,
+            Some(hook),
+        )
     });
     if let Some(err) = failure.into_inner().ok().flatten() {
         return Err(err);
@@ -509,7 +633,12 @@ impl PyDenseSolution {
         }
         let (shape, ts) = array(t, "t")?;
         if shape.len() != 1 {
-            return Err(invalid(py, "t", "a scalar or a 1-D array", format!("shape {shape:?}")));
+            return Err(invalid(
+                py,
+                "t",
+                "a scalar or a 1-D array",
+                format!("shape {shape:?}"),
+            ));
         }
         let mut out = vec![0.0; dim * ts.len()];
         let mut buf = vec![0.0; dim];
@@ -548,12 +677,28 @@ pub fn rk45<'py>(
     controller: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !fun.is_callable() {
-        return Err(invalid(py, "fun", "a callable fun(t, y) -> array", fun.repr().map(|r| r.to_string()).unwrap_or_default()));
+        return Err(invalid(
+            py,
+            "fun",
+            "a callable fun(t, y) -> array",
+            fun.repr().map(|r| r.to_string()).unwrap_or_default(),
+        ));
     }
     let t_span = t_span_arg(py, t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
-    let opts = options(py, dim, rtol, atol, t_eval, first_step, max_step, max_steps, dense_output, controller)?;
+    let opts = options(
+        py,
+        dim,
+        rtol,
+        atol,
+        t_eval,
+        first_step,
+        max_step,
+        max_steps,
+        dense_output,
+        controller,
+    )?;
     let mut specs = Vec::new();
     if let Some(evs) = events.filter(|e| !e.is_none()) {
         if evs.is_callable() {
@@ -565,24 +710,31 @@ pub fn rk45<'py>(
         }
     }
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let mut evs: Vec<Event<'_>> = specs.iter().map(|s| python_event(s, None, &failure)).collect();
+    let mut evs: Vec<Event<'_>> = specs
+        .iter()
+        .map(|s| python_event(s, None, &failure))
+        .collect();
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let sys = FnSystem::new(dim, |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
-        let mut call = || -> PyResult<()> {
-            let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
-            let v = vector(&out, "fun(t, y)", Some(dim))?;
-            dydt.copy_from_slice(&v);
-            Ok(())
-        };
-        call().map_err(|e| {
-            let msg = e.to_string();
-            if let Ok(mut slot) = rhs_failure.lock() {
-                slot.get_or_insert(e);
-            }
-            msg
-        })
-    });
-    let sol = integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
+    let sys = FnSystem::new(
+        dim,
+        |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
+            let mut call = || -> PyResult<()> {
+                let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
+                let v = vector(&out, "fun(t, y)", Some(dim))?;
+                dydt.copy_from_slice(&v);
+                Ok(())
+            };
+            call().map_err(|e| {
+                let msg = e.to_string();
+                if let Ok(mut slot) = rhs_failure.lock() {
+                    slot.get_or_insert(e);
+                }
+                msg
+            })
+        },
+    );
+    let sol =
+        integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
     drop(evs);
     if let Some(err) = rhs_failure.into_inner().ok().flatten() {
         return Err(err);
@@ -606,8 +758,22 @@ pub fn rk45<'py>(
         te.append(to_array1(py, times))?;
         ye.append(to_array(py, ys.clone(), &[times.len(), dim])?)?;
     }
-    d.set_item("t_events", if specs.is_empty() { py.None().into_bound(py) } else { te.into_any() })?;
-    d.set_item("y_events", if specs.is_empty() { py.None().into_bound(py) } else { ye.into_any() })?;
+    d.set_item(
+        "t_events",
+        if specs.is_empty() {
+            py.None().into_bound(py)
+        } else {
+            te.into_any()
+        },
+    )?;
+    d.set_item(
+        "y_events",
+        if specs.is_empty() {
+            py.None().into_bound(py)
+        } else {
+            ye.into_any()
+        },
+    )?;
     d.set_item("nfev", sol.nfev)?;
     d.set_item("njev", 0)?;
     d.set_item("nlu", 0)?;

@@ -41,18 +41,9 @@ fn invert_joint_inertia(d: &Mat3, dof: usize) -> Option<Mat3> {
                 None
             }
         }
-        3 => {
-            let ch = d.cholesky()?;
-            // Reject a numerically singular block (an Euler singularity).
-            let l = ch.l_dirty();
-            let (lo, hi) = (0..3).fold((f64::INFINITY, 0.0f64), |(lo, hi), k| {
-                (lo.min(l[(k, k)].abs()), hi.max(l[(k, k)].abs()))
-            });
-            if lo <= 1e-7 * hi {
-                return None;
-            }
-            Some(ch.inverse())
-        }
+        // Coordinate singularities are refused before the recursion; an ill-conditioned but
+        // positive block (a slender body) is solved, to the accuracy its conditioning allows.
+        3 => Some(d.cholesky()?.inverse()),
         _ => None,
     }
 }
@@ -69,6 +60,7 @@ pub fn forward_dynamics(
     external: Option<&[Vec6]>,
     a: &mut [f64],
 ) -> Result<()> {
+    super::check_singularities(model, q)?;
     kinematics::positions(model, q, &mut data.links);
     kinematics::velocities(model, q, v, &mut data.links);
     for (i, s) in data.links.iter().enumerate() {

@@ -81,6 +81,20 @@ pub fn potential_energy(data: &Data, g: &Vec3) -> f64 {
         .sum::<f64>()
 }
 
+/// Refuses a configuration at a joint's coordinate singularity (ZYZ at sin θ ≈ 0), for the
+/// recursive and the explicit paths alike.
+pub fn check_singularities(model: &Model, q: &[f64]) -> crate::error::Result<()> {
+    for (i, l) in model.links.iter().enumerate() {
+        if l.joint
+            .singularity(&q[l.q_index..l.q_index + l.joint.nq()])
+            .is_some()
+        {
+            return Err(crate::error::Error::Singular(singular_message(model, i, q)));
+        }
+    }
+    Ok(())
+}
+
 /// A message naming the link whose joint makes the recursion singular.
 pub(crate) fn singular_message(model: &Model, link: usize, q: &[f64]) -> String {
     let l = &model.links[link];
@@ -92,6 +106,6 @@ pub(crate) fn singular_message(model: &Model, link: usize, q: &[f64]) -> String 
             l.q_index + 1,
             q[l.q_index + 1]
         ),
-        _ => format!("joint of body '{name}' has a singular articulated inertia (massless subtree?)"),
+        _ => format!("joint of body '{name}' has a singular articulated inertia (a massless subtree, or a body too slender for the recursion: try method='denoc')"),
     }
 }
