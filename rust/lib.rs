@@ -2,6 +2,7 @@
 //!
 //! The core knows nothing of Python; `python` (behind the `python` feature) converts arrays
 //! and errors and nothing else.
+pub mod benchmark_models;
 pub mod body;
 pub mod denoc;
 pub mod effects;
