@@ -7,7 +7,7 @@
 //! parent, in the body frame; `SphericalZYZ` is the paper's Euler-angle joint with Euler
 //! rates as speeds (singular where sin θ = 0).
 use crate::error::{Error, Result};
-use crate::spatial::{skew, stack, Mat3, Vec3, Vec6};
+use crate::spatial::{stack, Mat3, Vec3, Vec6};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Joint {
@@ -46,11 +46,23 @@ pub fn rot_z(a: f64) -> Mat3 {
     Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 
-/// Rotation by `angle` about the unit vector `e` (Rodrigues).
+/// Rotation by `angle` about the unit vector `e` (Rodrigues: `c 1 + s ẽ + (1 − c) e eᵀ`).
+#[inline]
 pub fn axis_angle(e: &Vec3, angle: f64) -> Mat3 {
     let (s, c) = angle.sin_cos();
-    let k = skew(e);
-    Mat3::identity() + k * s + k * k * (1.0 - c)
+    let t = 1.0 - c;
+    let (x, y, z) = (e.x, e.y, e.z);
+    Mat3::new(
+        c + t * x * x,
+        t * x * y - s * z,
+        t * x * z + s * y,
+        t * x * y + s * z,
+        c + t * y * y,
+        t * y * z - s * x,
+        t * x * z - s * y,
+        t * y * z + s * x,
+        c + t * z * z,
+    )
 }
 
 /// Rotation matrix of a quaternion `(x, y, z, w)`, normalised first.
@@ -121,6 +133,13 @@ impl Joint {
             Joint::Fixed => 0,
         }
     }
+    /// Whether the joint's motion subspace is purely angular (`P = [A; 0]`) rather than
+    /// purely linear (`[0; A]`): true for every joint but `Prismatic`.
+    #[inline]
+    pub fn moves_angular(&self) -> bool {
+        !matches!(self, Joint::Prismatic { .. })
+    }
+
     pub fn kind(&self) -> &'static str {
         match self {
             Joint::Revolute { .. } => "Revolute",

@@ -40,12 +40,16 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
             None => (Mat3::identity(), Vec3::zeros()),
         };
         let qi = &q[l.q_index..l.q_index + l.joint.nq()];
-        let r_joint = r_parent * l.placement.rotation;
+        // Most joints sit at an unrotated placement: skip that product.
+        let r_joint = if l.placement_rotated { r_parent * l.placement.rotation } else { r_parent };
         let (r_q, t_q) = l.joint.transform(qi);
         let s = &mut st[i];
         s.joint_rotation = r_joint;
         s.rotation = r_joint * r_q;
-        s.origin = o_parent + r_parent * l.placement.translation + r_joint * t_q;
+        s.origin = o_parent + r_parent * l.placement.translation;
+        if let crate::joint::Joint::Prismatic { .. } = l.joint {
+            s.origin += r_joint * t_q;
+        }
         s.s = l.joint.subspace(qi, &r_joint, &s.rotation);
         s.inertia = l.inertia.rotated(&s.rotation);
     }

@@ -31,6 +31,8 @@ pub struct Link {
     pub joint: Joint,
     /// Joint frame in the parent link's frame.
     pub placement: Placement,
+    /// Whether `placement.rotation` differs from the identity (kinematics skips it if not).
+    pub placement_rotated: bool,
     pub q_index: usize,
     pub v_index: usize,
     /// The link's rigid body (with welded children), link frame.
@@ -143,6 +145,7 @@ impl Model {
                 parent: parent_link,
                 joint,
                 placement: joint_in_link,
+                placement_rotated: joint_in_link.rotation != Mat3::identity(),
                 q_index: self.nq,
                 v_index: self.nv,
                 rigid: body,

@@ -112,10 +112,20 @@ impl BodyInertia {
     /// The same body seen in a frame rotated by `r` (coordinates `x' = r x`).
     #[inline]
     pub fn rotated(&self, r: &Mat3) -> Self {
+        // R I Rᵀ, computing the upper triangle only (the result is symmetric).
+        let ri = r * self.rotational;
+        let mut rot = Mat3::zeros();
+        for a in 0..3 {
+            for b in a..3 {
+                let x = ri[(a, 0)] * r[(b, 0)] + ri[(a, 1)] * r[(b, 1)] + ri[(a, 2)] * r[(b, 2)];
+                rot[(a, b)] = x;
+                rot[(b, a)] = x;
+            }
+        }
         BodyInertia {
             mass: self.mass,
             first_moment: r * self.first_moment,
-            rotational: r * self.rotational * r.transpose(),
+            rotational: rot,
         }
     }
 
@@ -175,6 +185,77 @@ impl BodyInertia {
     }
 }
 
+/// A symmetric 6×6 articulated inertia `[[P, Q], [Qᵀ, R]]` kept as 3×3 blocks, so the
+/// articulated-body recursion works on 3×3 products only (every joint here moves along a
+/// purely angular or a purely linear subspace).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArticulatedInertia {
+    pub p: Mat3,
+    pub q: Mat3,
+    pub r: Mat3,
+}
+
+impl ArticulatedInertia {
+    pub fn zero() -> Self {
+        ArticulatedInertia {
+            p: Mat3::zeros(),
+            q: Mat3::zeros(),
+            r: Mat3::zeros(),
+        }
+    }
+
+    #[inline]
+    pub fn from_body(b: &BodyInertia) -> Self {
+        ArticulatedInertia {
+            p: b.rotational,
+            q: skew(&b.first_moment),
+            r: Mat3::from_diagonal_element(b.mass),
+        }
+    }
+
+    /// `M t`.
+    #[inline]
+    pub fn mul_twist(&self, t: &Vec6) -> Vec6 {
+        let w = angular(t);
+        let v = linear(t);
+        stack(
+            &(self.p * w + self.q * v),
+            &(self.q.tr_mul(&w) + self.r * v),
+        )
+    }
+
+    /// `AᵀMA` for the twist shift `A = [[1, 0], [K, 1]]`, `K = ã` (moves the reference point
+    /// from O to `O + a`... seen from the parent: see `forward`), by blocks:
+    /// `[[P + QK − KQᵀ − KRK, Q − KR], [Qᵀ + RK, R]]`.
+    #[inline]
+    pub fn shifted(&self, a: &Vec3) -> Self {
+        let k = skew(a);
+        let qk = self.q * k;
+        let kr = k * self.r;
+        ArticulatedInertia {
+            p: self.p + qk + qk.transpose() - kr * k,
+            q: self.q - kr,
+            r: self.r,
+        }
+    }
+
+    #[inline]
+    pub fn add(&mut self, o: &ArticulatedInertia) {
+        self.p += o.p;
+        self.q += o.q;
+        self.r += o.r;
+    }
+
+    pub fn to_matrix(&self) -> Mat6 {
+        let mut m = Mat6::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.p);
+        m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.q);
+        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.q.transpose());
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.r);
+        m
+    }
+}
+
 /// Moves a wrench `[n; f]` taken about O to the point `O − s`: `n' = n + s × f`.
 #[inline]
 pub fn shift_wrench(w: &Vec6, s: &Vec3) -> Vec6 {
@@ -227,5 +308,13 @@ mod tests {
         assert!((bi.to_matrix() - m6).norm() < 1e-14);
         let t = Vec6::new(0.3, -1.0, 2.0, 0.5, 0.1, -0.4);
         assert!((bi.mul_twist(&t) - m6 * t).norm() < 1e-14);
+        // Articulated blocks: same product, and the shift equals AᵀMA.
+        let art = ArticulatedInertia::from_body(&bi);
+        assert!((art.mul_twist(&t) - m6 * t).norm() < 1e-14);
+        let a = Vec3::new(0.2, -0.5, 0.9);
+        let mut shift = Mat6::identity();
+        shift.fixed_view_mut::<3, 3>(3, 0).copy_from(&skew(&a));
+        let expect = shift.transpose() * m6 * shift;
+        assert!((art.shifted(&a).to_matrix() - expect).norm() < 1e-13);
     }
 }

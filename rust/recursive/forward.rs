@@ -1,46 +1,18 @@
 //! Recursive forward dynamics: the articulated-body recursion written with DeNOC twists
 //! about moving link origins (equivalent to Saha's UDUᵀ decomposition of the GIM). O(n), no
-//! n × n matrix, no allocation.
+//! n × n matrix, no allocation. Every joint moves along a purely angular or purely linear
+//! subspace (`P = [A; 0]` or `[0; A]`), so all products are 3×3 blocks.
 use super::{base_accel, singular_message, Data};
 use crate::error::{Error, Result};
 use crate::kinematics;
 use crate::model::Model;
-use crate::spatial::{angular, shift_twist, shift_wrench, skew, Mat3, Mat6, Vec3, Vec6};
-
-/// `AᵀMA` for the twist shift `A = [[1, 0], [K, 1]]`, `K = ã`, written by 3×3 blocks of
-/// `M = [[P, Q], [Qᵀ, R]]`: `[[P + QK − KQᵀ − KRK, Q − KR], [Qᵀ + RK, R]]`.
-#[inline]
-fn shift_inertia(m: &Mat6, a: &Vec3) -> Mat6 {
-    let k = skew(a);
-    let p = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let q = m.fixed_view::<3, 3>(0, 3).into_owned();
-    let r = m.fixed_view::<3, 3>(3, 3).into_owned();
-    let qk = q * k;
-    let kr = k * r;
-    let top_left = p + qk + qk.transpose() - kr * k;
-    let top_right = q - kr;
-    let mut out = Mat6::zeros();
-    out.fixed_view_mut::<3, 3>(0, 0).copy_from(&top_left);
-    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&top_right);
-    out.fixed_view_mut::<3, 3>(3, 0)
-        .copy_from(&top_right.transpose());
-    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&r);
-    out
-}
+use crate::spatial::{angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Vec3, Vec6};
 
 /// Inverts the dof × dof block `D = Pᵀ M̂ P`; `None` if it is not positive definite.
 #[inline]
 fn invert_joint_inertia(d: &Mat3, dof: usize) -> Option<Mat3> {
     match dof {
-        1 => {
-            if d[(0, 0)] > 0.0 {
-                let mut out = Mat3::zeros();
-                out[(0, 0)] = 1.0 / d[(0, 0)];
-                Some(out)
-            } else {
-                None
-            }
-        }
+        1 => (d[(0, 0)] > 0.0).then(|| Mat3::from_diagonal(&Vec3::new(1.0 / d[(0, 0)], 0.0, 0.0))),
         // Coordinate singularities are refused before the recursion; an ill-conditioned but
         // positive block (a slender body) is solved, to the accuracy its conditioning allows.
         3 => Some(d.cholesky()?.inverse()),
@@ -48,8 +20,29 @@ fn invert_joint_inertia(d: &Mat3, dof: usize) -> Option<Mat3> {
     }
 }
 
+/// `M̂ [a; 0]` (angular motion) or `M̂ [0; a]` (linear motion).
+#[inline]
+fn mul_axis(m: &ArticulatedInertia, a: &Vec3, angular_motion: bool) -> Vec6 {
+    if angular_motion {
+        stack(&(m.p * a), &m.q.tr_mul(a))
+    } else {
+        stack(&(m.q * a), &(m.r * a))
+    }
+}
+
+/// `[a; 0]ᵀ w` or `[0; a]ᵀ w`.
+#[inline]
+fn dot_axis(a: &Vec3, w: &Vec6, angular_motion: bool) -> f64 {
+    if angular_motion {
+        a.dot(&angular(w))
+    } else {
+        a.dot(&linear(w))
+    }
+}
+
 /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`. Errors at a singular joint
 /// (a SphericalZYZ joint at sin θ = 0).
+#[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics(
     model: &Model,
     data: &mut Data,
@@ -64,7 +57,7 @@ pub fn forward_dynamics(
     kinematics::positions(model, q, &mut data.links);
     kinematics::velocities(model, q, v, &mut data.links);
     for (i, s) in data.links.iter().enumerate() {
-        data.art_inertia[i] = s.inertia.to_matrix();
+        data.art_inertia[i] = ArticulatedInertia::from_body(&s.inertia);
         let mut b = s.inertia.bias(&angular(&s.twist));
         if let Some(f) = external {
             b -= f[i];
@@ -73,23 +66,27 @@ pub fn forward_dynamics(
     }
     for (i, l) in model.links.iter().enumerate().rev() {
         let dof = l.joint.nv();
+        let ang = l.joint.moves_angular();
         let m = data.art_inertia[i];
         let b = data.art_bias[i];
-        let s = data.links[i].s;
+        let link = &data.links[i];
+        let mut axes = [Vec3::zeros(); 3];
         let mut u = [Vec6::zeros(); 3];
         let mut d = Mat3::identity();
         let mut ut = Vec3::zeros();
         for k in 0..dof {
-            u[k] = m * s[k];
-            ut[k] = tau[l.v_index + k] - s[k].dot(&b);
+            axes[k] = if ang { angular(&link.s[k]) } else { linear(&link.s[k]) };
+            u[k] = mul_axis(&m, &axes[k], ang);
+            ut[k] = tau[l.v_index + k] - dot_axis(&axes[k], &b, ang);
         }
         for r in 0..dof {
-            for c in 0..dof {
-                d[(r, c)] = s[r].dot(&u[c]);
+            for c in r..dof {
+                let x = dot_axis(&axes[r], &u[c], ang);
+                d[(r, c)] = x;
+                d[(c, r)] = x;
             }
         }
-        let d_inv = invert_joint_inertia(&d, dof)
-            .ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
+        let d_inv = invert_joint_inertia(&d, dof).ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
         data.u[i] = u;
         data.d_inv[i] = d_inv;
         data.u_tau[i] = ut;
@@ -104,12 +101,17 @@ pub fn forward_dynamics(
                 for c in 0..dof {
                     ud += u[c] * d_inv[(c, r)];
                 }
-                ma -= ud * u[r].transpose();
+                let (ua, ul) = (angular(&u[r]), linear(&u[r]));
+                let (da, dl) = (angular(&ud), linear(&ud));
+                ma.p -= da * ua.transpose();
+                ma.q -= da * ul.transpose();
+                ma.r -= dl * ul.transpose();
                 ud_u += u[r] * dut[r];
             }
-            let ba = b + ma * data.links[i].xi + ud_u;
-            let arm = data.links[i].origin - data.links[p].origin;
-            data.art_inertia[p] += shift_inertia(&ma, &(-arm));
+            let ba = b + ma.mul_twist(&link.xi) + ud_u;
+            let arm = link.origin - data.links[p].origin;
+            let moved = ma.shifted(&(-arm));
+            data.art_inertia[p].add(&moved);
             data.art_bias[p] += shift_wrench(&ba, &arm);
         }
     }

@@ -12,7 +12,7 @@ mod tests;
 use crate::joint::Joint;
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{BodyInertia, Mat3, Mat6, Vec3, Vec6};
+use crate::spatial::{ArticulatedInertia, BodyInertia, Mat3, Vec3, Vec6};
 
 pub use forward::forward_dynamics;
 pub use inverse::inverse_dynamics;
@@ -26,7 +26,7 @@ pub struct Data {
     pub accel: Vec<Vec6>,
     /// Wrenches transmitted by each joint.
     pub wrench: Vec<Vec6>,
-    pub art_inertia: Vec<Mat6>,
+    pub art_inertia: Vec<ArticulatedInertia>,
     pub art_bias: Vec<Vec6>,
     /// `U = M̂ P` (columns).
     pub u: Vec<[Vec6; 3]>,
@@ -44,7 +44,7 @@ impl Data {
             links: vec![LinkState::default(); n],
             accel: vec![Vec6::zeros(); n],
             wrench: vec![Vec6::zeros(); n],
-            art_inertia: vec![Mat6::zeros(); n],
+            art_inertia: vec![ArticulatedInertia::zero(); n],
             art_bias: vec![Vec6::zeros(); n],
             u: vec![[Vec6::zeros(); 3]; n],
             d_inv: vec![Mat3::zeros(); n],

@@ -173,3 +173,49 @@ fn energy_power_balance() {
         "{de} vs {power}"
     );
 }
+
+#[test]
+fn recursive_agrees_with_explicit_on_50_body_trees() {
+    for seed in [11u64, 12, 13] {
+        let model = random_tree(seed, 50);
+        let (q, v, a) = random_state(&model, seed);
+        let nv = model.nv;
+        let mut data = Data::new(&model);
+        let mut gim = DMatrix::zeros(nv, nv);
+        mass_matrix(&model, &mut data, &q, &mut gim);
+        let gim_explicit = denoc::mass_matrix(&model, &q);
+        assert!((&gim - &gim_explicit).norm() <= 1e-12 * gim_explicit.norm());
+        let mut tau = vec![0.0; nv];
+        inverse_dynamics(&model, &mut data, &q, &v, &a, &G, None, &mut tau);
+        let tau_explicit = denoc::inverse_dynamics(&model, &q, &v, &a, &G);
+        assert!(rel(&DVector::from_vec(tau.clone()), &tau_explicit) <= 1e-10);
+        let mut acc = vec![0.0; nv];
+        forward_dynamics(&model, &mut data, &q, &v, &tau, &G, None, &mut acc).unwrap();
+        let acc_explicit = denoc::forward_dynamics(&model, &q, &v, &tau, &G).unwrap();
+        assert!(rel(&DVector::from_vec(acc.clone()), &acc_explicit) <= 1e-10, "seed {seed}");
+        assert!(rel(&DVector::from_vec(acc), &DVector::from_vec(a)) <= 1e-9, "seed {seed}");
+    }
+}
+
+#[test]
+fn thousand_body_chain_inverse_of_forward() {
+    let model = crate::benchmark_models::chain(1000);
+    let n = model.nv;
+    let q: Vec<f64> = (0..n).map(|k| 0.3 * ((k as f64) * 0.37).sin()).collect();
+    let v: Vec<f64> = (0..n).map(|k| 0.5 * ((k as f64) * 0.11).cos()).collect();
+    let tau: Vec<f64> = (0..n).map(|k| ((k as f64) * 0.73).sin()).collect();
+    let mut data = Data::new(&model);
+    let mut a = vec![0.0; n];
+    forward_dynamics(&model, &mut data, &q, &v, &tau, &G, None, &mut a).unwrap();
+    assert!(a.iter().all(|x| x.is_finite()));
+    let mut back = vec![0.0; n];
+    inverse_dynamics(&model, &mut data, &q, &v, &a, &G, None, &mut back);
+    let err = DVector::from_vec(back.clone()) - DVector::from_vec(tau.clone());
+    let scale = DVector::from_vec(tau).norm();
+    assert!(err.norm() <= 1e-8 * scale, "relative {}", err.norm() / scale);
+    // The composite-body GIM of the long chain stays symmetric positive definite.
+    let mut gim = DMatrix::zeros(n, n);
+    mass_matrix(&model, &mut data, &q, &mut gim);
+    assert!((&gim - gim.transpose()).norm() == 0.0);
+    assert!(gim.cholesky().is_some());
+}
