@@ -57,18 +57,24 @@ impl EquimomentalSet {
         // Shift second moments, not inertias, to the centre: J_p = J_c + m r rᵀ.
         let mut j = body.second_moments_about_com() + r * r.transpose() * m;
         // Rounding can leave |J_ik| just above sqrt(J_ii J_kk) for a degenerate body (a rod or
-        // plate turned off the axes). Raise the smaller diagonal to make the pair consistent —
-        // a change of rounding size — rather than clamp the ratio below, which costs √eps.
+        // plate turned off the axes, a point mass with noise in its products). Make the pair
+        // consistent by the smaller of two changes: raise the smaller diagonal to J_ik²/J_large,
+        // or shrink |J_ik| to sqrt(J_ii J_kk). Clamping the ratio below instead would cost √eps.
         for (i, k) in [(0, 1), (1, 2), (0, 2)] {
-            let need = j[(i, k)] * j[(i, k)];
-            if need > j[(i, i)] * j[(k, k)] {
-                let (small, large) = if j[(i, i)] <= j[(k, k)] {
-                    (i, k)
+            let off = j[(i, k)];
+            let bound = (j[(i, i)] * j[(k, k)]).max(0.0).sqrt();
+            if off.abs() > bound {
+                let (small, large) = if j[(i, i)] <= j[(k, k)] { (i, k) } else { (k, i) };
+                let raise = if j[(large, large)] > 0.0 {
+                    off * off / j[(large, large)] - j[(small, small)]
                 } else {
-                    (k, i)
+                    f64::INFINITY
                 };
-                if j[(large, large)] > 0.0 {
-                    j[(small, small)] = need / j[(large, large)];
+                if raise <= off.abs() - bound {
+                    j[(small, small)] += raise;
+                } else {
+                    j[(i, k)] = bound.copysign(off);
+                    j[(k, i)] = j[(i, k)];
                 }
             }
         }
@@ -162,6 +168,19 @@ mod tests {
         for (m, e) in set.masses.iter().zip(expect) {
             assert!((m - e).abs() < 1e-15, "{:?}", set.masses);
         }
+    }
+
+    #[test]
+    fn inconsistent_rounding_is_corrected_by_the_smaller_change() {
+        // A flat body (second moments ~1e-30 along x and z) whose product J_xz = 1e-10 is
+        // inconsistent within the validation tolerance: the fix must not invent a huge moment
+        // (J_small raised to J_xz²/J_large) but shrink the product instead.
+        let i = Mat3::new(1.0, 0.0, -1e-10, 0.0, 2e-30, 0.0, -1e-10, 0.0, 1.0);
+        let b = RigidBody::new(1.0, Vec3::new(0.1, 0.0, 0.0), i).unwrap();
+        let set = EquimomentalSet::solve(&b, &b.com);
+        assert!(set.half_sides.norm() < 2.0, "{}", set.half_sides);
+        let back = RigidBody::from_point_masses(&set.masses, &set.positions).unwrap();
+        assert!((back.inertia - b.inertia).norm() < 1e-9, "{}", back.inertia);
     }
 
     #[test]
