@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use serde::Deserialize;
 
 use crate::body::RigidBody;
-use crate::effects::Effect;
+use crate::effects::{Disabled, Effect, Effects};
 use crate::error::Error;
 use crate::joint::{rot_x, rot_y, rot_z, Joint};
 use crate::model::Model;
@@ -38,6 +38,8 @@ pub struct Settings {
     pub max_step: Option<f64>,
     pub max_steps: Option<usize>,
     pub first_step: Option<f64>,
+    /// Effect families to leave out (`[simulate] disable = [...]`).
+    pub disable: Option<Disabled>,
 }
 
 #[derive(Debug, Clone)]
@@ -60,6 +62,9 @@ struct SceneFile {
     angles: Option<String>,
     /// "radians" or "degrees" (per second): units of angular v0; default: as `angles`.
     rates: Option<String>,
+    /// A URDF file, relative to the scene file's directory: its robot starts the model (at
+    /// q = 0, v = 0); `[[body]]` entries follow and may name its links as parents.
+    urdf: Option<String>,
     #[serde(default)]
     body: Vec<BodyFile>,
     #[serde(default)]
@@ -96,11 +101,9 @@ enum JointFile {
     Fixed,
 }
 
-#[derive(Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
-enum EffectFile {
-    Gravity { g: [f64; 3] },
-}
+/// One `[[effect]]` table, read by `Effect::from_toml` (so a new effect type needs no
+/// change here); its `type` key selects the effect.
+type EffectFile = toml::Table;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -112,6 +115,8 @@ struct SimulateFile {
     max_step: Option<f64>,
     max_steps: Option<usize>,
     first_step: Option<f64>,
+    /// Effect families switched off without editing the scene ("gravity", "springs", ...).
+    disable: Option<Vec<String>>,
 }
 
 impl Scene {
@@ -144,16 +149,22 @@ impl Scene {
         };
         let unit = unit_of("angles", sf.angles.as_deref(), 1.0)?;
         let rate_unit = unit_of("rates", sf.rates.as_deref(), unit)?;
-        if sf.body.is_empty() {
+        if sf.body.is_empty() && sf.urdf.is_none() {
             return Err(err(
                 "body".into(),
-                "a scene needs at least one [[body]]".into(),
+                "a scene needs at least one [[body]] (or a urdf)".into(),
             ));
         }
         let mut model = Model::new();
         let mut index: HashMap<String, usize> = HashMap::new();
-        let mut q0 = Vec::new();
-        let mut v0 = Vec::new();
+        if let Some(rel) = &sf.urdf {
+            model = scene_urdf(file, rel).map_err(|m| err("urdf".into(), m))?;
+            for (k, b) in model.bodies.iter().enumerate() {
+                index.insert(b.name.clone(), k);
+            }
+        }
+        let mut q0 = model.neutral();
+        let mut v0 = vec![0.0; model.nv];
         for (k, b) in sf.body.iter().enumerate() {
             let key = |field: &str| format!("body[{k}] ('{}').{field}", b.name);
             let core = |field: &str, e: Error| err(key(field), e.to_string());
@@ -275,13 +286,27 @@ impl Scene {
             v0.extend(v);
         }
         model.normalize(&mut q0);
+        // Effect errors: the key is `effect[k].field`, the message what was expected.
+        let effect_err = |x: Error, prefix: &str| match x {
+            Error::InvalidArgument { arg, expected, got } => err(
+                if arg.is_empty() {
+                    prefix.trim_end_matches('.').to_string()
+                } else {
+                    format!("{prefix}{arg}")
+                },
+                format!("expected {expected}, got {got}"),
+            ),
+            other => err(prefix.trim_end_matches('.').to_string(), other.to_string()),
+        };
         let mut effects = Vec::new();
         for (k, e) in sf.effect.iter().enumerate() {
-            effects.push(match e {
-                EffectFile::Gravity { g } => Effect::gravity(Vec3::from(*g))
-                    .map_err(|x| err(format!("effect[{k}].g"), x.to_string()))?,
-            });
+            effects
+                .push(Effect::from_toml(e).map_err(|x| effect_err(x, &format!("effect[{k}].")))?);
         }
+        // Resolve joint and body names, table widths and effect names against the model now,
+        // so a scene that loads also runs.
+        Effects::new(&model, &effects, Disabled::none(), "effect")
+            .map_err(|x| effect_err(x, ""))?;
         let mut settings = Settings::default();
         if let Some(s) = sf.simulate {
             settings.t_span = match (s.t_span, s.t_end) {
@@ -323,6 +348,11 @@ impl Scene {
             settings.max_step = s.max_step;
             settings.max_steps = s.max_steps;
             settings.first_step = s.first_step;
+            if let Some(names) = &s.disable {
+                settings.disable = Some(
+                    Disabled::parse(names, "simulate.disable").map_err(|x| effect_err(x, ""))?,
+                );
+            }
         }
         Ok(Scene {
             name: sf.name.unwrap_or_else(|| file.to_string()),
@@ -334,6 +364,17 @@ impl Scene {
             settings,
         })
     }
+}
+
+/// The model of a scene's `urdf` file, resolved relative to the scene file's directory
+/// (`file` is the scene's path; its URDF warnings are not reported here).
+fn scene_urdf(file: &str, rel: &str) -> Result<Model, String> {
+    let dir = std::path::Path::new(file)
+        .parent()
+        .unwrap_or(std::path::Path::new(""));
+    crate::urdf::load_urdf(&dir.join(rel))
+        .map(|u| u.model)
+        .map_err(|e| e.to_string())
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {

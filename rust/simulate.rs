@@ -1,6 +1,10 @@
 //! The simulate loop, entirely in Rust: state `y = [q; v]`, `q̇` from `v`, `v̇` from the
 //! recursive forward dynamics with the scene's declared effects, integrated by our RK45.
-use crate::effects::{Effect, EffectSet};
+//!
+//! The right-hand side asks the effects for joint forces and link wrenches only when the
+//! scene declares such effects; gravity rides on the base acceleration. A scene with no
+//! effects runs the bare forward dynamics.
+use crate::effects::{Context, Disabled, Effect, Effects, Probe};
 use crate::error::{Error, Result};
 use crate::integrator::{self, Event, OdeSystem, Rk45Options, Status};
 use crate::kinematics;
@@ -12,13 +16,14 @@ use crate::spatial::Vec6;
 pub struct Dynamics<'a> {
     pub model: &'a Model,
     pub data: Data,
-    pub effects: EffectSet,
+    pub effects: Effects,
     tau: Vec<f64>,
     wrenches: Vec<Vec6>,
     /// Called with the current time every `PROGRESS_EVERY` evaluations; returning false
     /// stops the run (Ctrl-C from Python, a cancelled progress bar).
     progress: Option<Progress<'a>>,
     calls: usize,
+    probe: Option<Probe>,
 }
 
 /// A progress hook: current time in, "keep going?" out.
@@ -27,48 +32,124 @@ pub type Progress<'a> = Box<dyn FnMut(f64) -> bool + Send + 'a>;
 const PROGRESS_EVERY: usize = 256;
 
 impl<'a> Dynamics<'a> {
+    /// The system with `effects` resolved against `model`, none disabled.
+    ///
+    /// Panics if an effect does not fit the model (an unknown joint name, a table of the
+    /// wrong width); for user input use [`Dynamics::try_new`]. Gravity always fits.
     pub fn new(model: &'a Model, effects: &[Effect]) -> Self {
+        match Self::try_new(model, effects, Disabled::none()) {
+            Ok(d) => d,
+            Err(e) => panic!("effects that fit the model (use Dynamics::try_new): {e}"),
+        }
+    }
+
+    /// The system with `effects` resolved against `model`, the `disabled` families left out.
+    pub fn try_new(model: &'a Model, effects: &[Effect], disabled: Disabled) -> Result<Self> {
+        Ok(Self::with_effects(
+            model,
+            Effects::new(model, effects, disabled, "effects")?,
+        ))
+    }
+
+    pub fn with_effects(model: &'a Model, effects: Effects) -> Self {
         Dynamics {
             model,
             data: Data::new(model),
-            effects: EffectSet::new(effects),
+            effects,
             tau: vec![0.0; model.nv],
             wrenches: vec![Vec6::zeros(); model.links.len()],
             progress: None,
             calls: 0,
+            probe: None,
         }
     }
 
-    /// Kinetic plus gravitational potential energy of the declared gravity.
+    /// Kinetic energy plus the potential energy of the enabled conservative effects
+    /// (gravity, springs).
     pub fn energy(&mut self, q: &[f64], v: &[f64]) -> f64 {
         kinematics::positions(self.model, q, &mut self.data.links);
         kinematics::velocities(self.model, q, v, &mut self.data.links);
-        recursive::kinetic_energy(&self.data)
-            + recursive::potential_energy(&self.data, &self.effects.gravity)
+        let cx = Context {
+            model: self.model,
+            t: 0.0,
+            q,
+            v,
+        };
+        recursive::kinetic_energy(&self.data) + self.effects.potential_energy(&cx, &self.data.links)
     }
-}
 
-impl OdeSystem for Dynamics<'_> {
-    fn dim(&self) -> usize {
-        self.model.nq + self.model.nv
+    /// Kinetic energy and `(label, V)` of each conservative effect.
+    pub fn energies(&mut self, q: &[f64], v: &[f64]) -> (f64, Vec<(String, f64)>) {
+        kinematics::positions(self.model, q, &mut self.data.links);
+        kinematics::velocities(self.model, q, v, &mut self.data.links);
+        let cx = Context {
+            model: self.model,
+            t: 0.0,
+            q,
+            v,
+        };
+        (
+            recursive::kinetic_energy(&self.data),
+            self.effects.potentials(&cx, &self.data.links),
+        )
     }
 
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> std::result::Result<(), String> {
-        let (nq, _) = (self.model.nq, self.model.nv);
-        if let Some(hook) = self.progress.as_mut() {
-            self.calls += 1;
-            if self.calls % PROGRESS_EVERY == 0 && !hook(t) {
-                return Err("interrupted".into());
-            }
+    /// Generalized force of each enabled effect at `(t, q, v)`: row-major
+    /// `effects.len() × nv` into `out`.
+    pub fn effect_forces(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        let probe = self.probe.get_or_insert_with(|| Probe::new(self.model));
+        let cx = Context {
+            model: self.model,
+            t,
+            q,
+            v,
+        };
+        probe.forces(&mut self.effects, &cx, out)
+    }
+
+    /// Power `τ_e · v` of each enabled effect at `(t, q, v)` into `out` (length
+    /// `effects.len()`); `scratch` has length `effects.len() × nv`.
+    pub fn effect_power(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        self.effect_forces(t, q, v, scratch)?;
+        let nv = self.model.nv;
+        for (k, p) in out.iter_mut().enumerate() {
+            *p = scratch[k * nv..(k + 1) * nv]
+                .iter()
+                .zip(v)
+                .map(|(a, b)| a * b)
+                .sum();
         }
-        let (q, v) = y.split_at(nq);
-        let (qdot, vdot) = dydt.split_at_mut(nq);
-        self.model.velocity_to_qdot(q, v, qdot);
-        self.tau.fill(0.0);
-        let ext = if self
-            .effects
-            .apply(t, q, v, &mut self.tau, &mut self.wrenches)
-        {
+        Ok(())
+    }
+
+    /// Accelerations `v̇` at `(t, q, v)` (one right-hand-side evaluation, without `q̇`).
+    pub fn accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        let cx = Context {
+            model: self.model,
+            t,
+            q,
+            v,
+        };
+        let ext = if self.effects.apply(&cx, &mut self.tau, &mut self.wrenches)? {
             Some(self.wrenches.as_slice())
         } else {
             None
@@ -81,9 +162,29 @@ impl OdeSystem for Dynamics<'_> {
             &self.tau,
             &self.effects.gravity,
             ext,
-            vdot,
+            a,
         )
         .map_err(|e| e.to_string())
+    }
+}
+
+impl OdeSystem for Dynamics<'_> {
+    fn dim(&self) -> usize {
+        self.model.nq + self.model.nv
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> std::result::Result<(), String> {
+        let nq = self.model.nq;
+        if let Some(hook) = self.progress.as_mut() {
+            self.calls += 1;
+            if self.calls % PROGRESS_EVERY == 0 && !hook(t) {
+                return Err("interrupted".into());
+            }
+        }
+        let (q, v) = y.split_at(nq);
+        let (qdot, vdot) = dydt.split_at_mut(nq);
+        self.model.velocity_to_qdot(q, v, qdot);
+        self.accelerations(t, q, v, vdot)
     }
 
     /// Unit quaternions; the right-hand side normalises them too, so FSAL stays valid.
@@ -104,6 +205,15 @@ pub struct StateEvent {
     pub terminal: usize,
 }
 
+/// What to record at every output time besides `t`, `q`, `v`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Record {
+    /// Kinetic plus the enabled effects' potential energy (gravity, springs).
+    pub energy: bool,
+    /// Power `τ_e · v` of each enabled effect.
+    pub power: bool,
+}
+
 #[derive(Debug, Clone)]
 pub struct Trajectory {
     pub nq: usize,
@@ -114,6 +224,10 @@ pub struct Trajectory {
     /// Row-major N × nv.
     pub v: Vec<f64>,
     pub energy: Option<Vec<f64>>,
+    /// Output names of the enabled effects (the columns of `power`).
+    pub effect_labels: Vec<String>,
+    /// Row-major N × effect_labels.len().
+    pub power: Option<Vec<f64>>,
     pub t_events: Vec<Vec<f64>>,
     /// Per event, row-major states `[q; v]` at the event times.
     pub y_events: Vec<Vec<f64>>,
@@ -126,21 +240,22 @@ pub struct Trajectory {
     pub success: bool,
 }
 
-/// Integrates `model` with `effects` from `(q0, v0)` over `t_span`. `extra_events` are
-/// caller-built events on `y = [q; v]` (e.g. Python callables), evaluated after the
-/// state events. Invalid input is an `Err`; a run that fails midway returns `Ok` with
-/// `success = false` and a message naming the reason and the time reached.
+/// Integrates `model` with `effects` (minus the `disabled` families) from `(q0, v0)` over
+/// `t_span`. `extra_events` are caller-built events on `y = [q; v]` (e.g. Python callables),
+/// evaluated after the state events. Invalid input is an `Err`; a run that fails midway
+/// returns `Ok` with `success = false` and a message naming the reason and the time reached.
 #[allow(clippy::too_many_arguments)]
 pub fn simulate(
     model: &Model,
     effects: &[Effect],
+    disabled: Disabled,
     q0: &[f64],
     v0: &[f64],
     t_span: (f64, f64),
     opts: &Rk45Options,
     state_events: &[StateEvent],
     extra_events: Vec<Event<'_>>,
-    record_energy: bool,
+    record: Record,
     progress: Option<Progress<'_>>,
 ) -> Result<Trajectory> {
     model.check_state(q0, Some(v0))?;
@@ -158,6 +273,7 @@ pub fn simulate(
             ));
         }
     }
+    let mut sys = Dynamics::try_new(model, effects, disabled)?;
     let mut y0 = Vec::with_capacity(nq + nv);
     y0.extend_from_slice(q0);
     y0.extend_from_slice(v0);
@@ -175,10 +291,10 @@ pub fn simulate(
         .collect();
     events.extend(extra_events);
 
-    let mut sys = Dynamics::new(model, effects);
     sys.progress = progress;
     let sol = integrator::rk45(&mut sys, t_span, &y0, opts, &mut events)
         .map_err(|e| Error::InvalidSetting(e.to_string()))?;
+    drop(events);
     let n = sol.t.len();
     let mut q = Vec::with_capacity(n * nq);
     let mut v = Vec::with_capacity(n * nv);
@@ -191,11 +307,31 @@ pub fn simulate(
     for row in q.chunks_exact_mut(nq.max(1)).take(n) {
         model.normalize(row);
     }
-    let energy = record_energy.then(|| {
+    let row = |i: usize, m: usize| i * m..(i + 1) * m;
+    let energy = record.energy.then(|| {
         (0..n)
-            .map(|i| sys.energy(&q[i * nq..(i + 1) * nq], &v[i * nv..(i + 1) * nv]))
+            .map(|i| sys.energy(&q[row(i, nq)], &v[row(i, nv)]))
             .collect()
     });
+    let labels = sys.effects.labels();
+    let power = if record.power {
+        let m = labels.len();
+        let mut out = vec![0.0; n * m];
+        let mut scratch = vec![0.0; m * nv];
+        for i in 0..n {
+            sys.effect_power(
+                sol.t[i],
+                &q[row(i, nq)],
+                &v[row(i, nv)],
+                &mut scratch,
+                &mut out[i * m..(i + 1) * m],
+            )
+            .map_err(|e| Error::InvalidSetting(format!("power at t = {}: {e}", sol.t[i])))?;
+        }
+        Some(out)
+    } else {
+        None
+    };
     Ok(Trajectory {
         nq,
         nv,
@@ -204,6 +340,8 @@ pub fn simulate(
         q,
         v,
         energy,
+        effect_labels: labels,
+        power,
         t_events: sol.t_events,
         y_events: sol.y_events,
         nfev: sol.nfev,

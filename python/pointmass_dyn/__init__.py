@@ -20,7 +20,25 @@ from .errors import (
     SingularityError,
 )
 from .scenes import builtin_scenes, load_scene
-from .simulation import Gravity, OdeResult, SimulationResult, rk45, simulate
+from .simulation import (
+    Damper,
+    ExternalForce,
+    Gravity,
+    JointFriction,
+    JointTorque,
+    OdeResult,
+    PDTorque,
+    SimulationResult,
+    Spring,
+    TabulatedTorque,
+    TorqueFunction,
+    effect_forces,
+    effect_power,
+    energies,
+    rk45,
+    simulate,
+)
+from .work_precision import WorkPrecision, work_precision  # noqa: E402 (after simulation)
 
 
 def Revolute(axis) -> Joint:  # noqa: N802 - reads like a class at the call site
@@ -64,6 +82,17 @@ __all__ = [
     "Fixed",
     "Effect",
     "Gravity",
+    "Spring",
+    "Damper",
+    "JointFriction",
+    "JointTorque",
+    "TabulatedTorque",
+    "PDTorque",
+    "TorqueFunction",
+    "ExternalForce",
+    "effect_forces",
+    "effect_power",
+    "energies",
     "Scene",
     "StateEvent",
     "load_scene",
@@ -72,6 +101,8 @@ __all__ = [
     "SimulationResult",
     "rk45",
     "OdeResult",
+    "work_precision",
+    "WorkPrecision",
     "errors",
     "PointMassDynError",
     "InvalidInputError",

@@ -192,18 +192,96 @@ class Model:
         """Gravitational potential energy ``−Σ m_ij g·x_ij`` (J), zero at the world origin."""
     def velocity_to_qdot(self, q: ArrayLike, v: ArrayLike) -> _Array:
         """``q̇`` from ``v`` (differs from ``v`` only for quaternion joints), shape (nq,)."""
+    @staticmethod
+    def from_urdf(path: Any) -> Model:
+        """A fixed-base robot from a URDF file (``path``: str or os.PathLike): root link welded to the world, revolute,
+        continuous (q = angle), prismatic and fixed joints; joint order and body (link) names
+        as Pinocchio's ``buildModelFromUrdf``. Raises
+        :class:`pointmass_dyn.errors.UrdfError` naming the file and the element; warns with
+        :class:`pointmass_dyn.errors.UrdfWarning` (mimic joints loaded as independent,
+        ignored elements)."""
+    @property
+    def joint_names(self) -> list[str]:
+        """Names of the moving joints in q/v order (URDF joint names; for models built with
+        ``add_body``, the names of the bodies that define each link)."""
+    def joint_limits(self) -> dict[str, tuple[float, float, float, float]]:
+        """``{joint: (lower, upper, effort, velocity)}`` in q/v order; ±inf where the URDF
+        gives no bound (continuous joints have no position bounds)."""
+    def joint_dynamics(self) -> dict[str, tuple[float, float]]:
+        """``{joint: (damping, friction)}`` from URDF ``<dynamics>``, in q/v order (0 where
+        absent); recorded, not applied by the model."""
+
+#: Joints selected by body name or body index, one or a sequence; ``None``: every moving joint.
+_Joints = Union[str, int, Sequence[Union[str, int]], None]
+#: One number for all selected joints, or one per joint.
+_PerJoint = Union[float, ArrayLike]
+#: Effect families, as ``disable`` names them.
+_Family = Literal["gravity", "springs", "dampers", "friction", "torques", "external"]
 
 @final
 class Effect:
-    """Something a scene applies to its model (for now: uniform gravity)."""
+    """Something a scene applies to its model; build with the factories (``pmd.Gravity``,
+    ``pmd.Spring``, ...). Each is computed only when declared; SI units, radians."""
 
     __hash__: ClassVar[None]  # type: ignore[assignment]
     @staticmethod
     def gravity(g: Optional[ArrayLike] = None) -> Effect:
         """Uniform gravity ``g`` (m/s², world frame); default ``(0, 0, -9.81)``."""
+    @staticmethod
+    def spring(
+        joints: _Joints, stiffness: _PerJoint, rest: Optional[_PerJoint] = None, name: Optional[str] = None
+    ) -> Effect:
+        """Joint springs ``τ = −k (q − rest)``; on quaternion joints ``τ = −k θ`` with θ the
+        rotation vector of ``rest⁻¹ q``. ``rest``: one number for the 1-dof joints, or the
+        selected joints' coordinates (4 per quaternion joint)."""
+    @staticmethod
+    def damper(joints: _Joints, damping: _PerJoint, name: Optional[str] = None) -> Effect:
+        """Viscous dampers ``τ = −c v`` on every speed of the selected joints."""
+    @staticmethod
+    def friction(
+        joints: _Joints, friction: _PerJoint, v_eps: Optional[float] = None, name: Optional[str] = None
+    ) -> Effect:
+        """Regularised Coulomb friction ``τ = −F tanh(v / v_eps)`` (default v_eps 1e-3)."""
+    @staticmethod
+    def joint_torque(joints: _Joints, tau: _PerJoint, name: Optional[str] = None) -> Effect:
+        """Constant torques: one number for every speed of the selected joints, or one per speed."""
+    @staticmethod
+    def tabulated_torque(
+        joints: _Joints, time: ArrayLike, values: ArrayLike, name: Optional[str] = None
+    ) -> Effect:
+        """Torques tabulated in time (N,) with values (N, speeds), linear, clamped outside."""
+    @staticmethod
+    def pd_torque(
+        joints: _Joints,
+        kp: _PerJoint,
+        kd: _PerJoint,
+        time: ArrayLike,
+        reference: ArrayLike,
+        name: Optional[str] = None,
+    ) -> Effect:
+        """``τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)`` on 1-dof joints; ``q̇_ref`` is the
+        table's slope."""
+    @staticmethod
+    def torque_function(f: Callable[[float, _Array, _Array], ArrayLike], name: Optional[str] = None) -> Effect:
+        """Generalized forces ``f(t, q, v) -> (nv,)`` from Python (one Python call per evaluation)."""
+    @staticmethod
+    def external_force(
+        body: Union[str, int],
+        force: Optional[ArrayLike] = None,
+        point: Optional[ArrayLike] = None,
+        moment: Optional[ArrayLike] = None,
+        time: Optional[ArrayLike] = None,
+        frame: Literal["world", "body"] = "world",
+        name: Optional[str] = None,
+    ) -> Effect:
+        """A force at a body-fixed ``point`` plus a ``moment``, constant (3,) or tabulated
+        ((N, 3) with ``time`` (N,)), in world or body axes."""
     @property
     def name(self) -> str:
-        """The effect's kind, e.g. ``'gravity'``."""
+        """The effect's name: the one given, else its family's, e.g. ``'gravity'``."""
+    @property
+    def kind(self) -> _Family:
+        """The effect's family (what ``disable`` switches off)."""
     def __eq__(self, other: object, /) -> bool: ...
 
 @final
@@ -242,9 +320,11 @@ class Scene:
         atol: Optional[float] = None,
         name: Optional[str] = None,
         description: Optional[str] = None,
+        disable: Union[_Family, Sequence[_Family], None] = None,
     ) -> Scene:
         """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
-        ``effects`` act (none: no gravity)."""
+        ``effects`` act (none: no gravity); joint and body names and table widths are checked
+        against the model here. ``disable``: families switched off by default."""
     @staticmethod
     def from_toml(text: str, file: str = "<string>") -> Scene:
         """Parses a scene from TOML text; raises :class:`pointmass_dyn.errors.SceneError`
@@ -278,6 +358,9 @@ class Scene:
     def max_steps(self) -> Optional[int]: ...
     @property
     def first_step(self) -> Optional[float]: ...
+    @property
+    def disable(self) -> Optional[list[str]]:
+        """Effect families the scene switches off (``[simulate] disable``), or ``None``."""
 
 @final
 class DenseSolution:
@@ -302,11 +385,31 @@ def simulate_scene(
     energy: bool = False,
     controller: _Controller = "standard",
     progress: Optional[Callable[[float], Any]] = None,
+    disable: Union[_Family, Sequence[_Family], None] = None,
+    power: bool = False,
+    stiffness: Literal["warn", "stop", "off"] = "warn",
 ) -> dict[str, Any]:
     """Integrates a scene in Rust (GIL released); returns the fields of
-    ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``t_events``,
-    ``q_events``, ``v_events``, ``nfev``, ``n_accepted``, ``n_rejected``, ``status``,
-    ``message``, ``success``, ``t_reached``)."""
+    ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``power``,
+    ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``n_accepted``, ``n_rejected``,
+    ``status``, ``message``, ``success``, ``t_reached``)."""
+
+def effect_forces(
+    scene: Scene,
+    t: float,
+    q: ArrayLike,
+    v: ArrayLike,
+    disable: Union[_Family, Sequence[_Family], None] = None,
+) -> dict[str, _Array]:
+    """Generalized force (nv,) of each enabled effect at ``(t, q, v)``, by effect name."""
+
+def energies(
+    scene: Scene,
+    q: ArrayLike,
+    v: ArrayLike,
+    disable: Union[_Family, Sequence[_Family], None] = None,
+) -> dict[str, float]:
+    """``kinetic``, each conservative effect's potential energy by name, and ``total``."""
 
 def rk45(
     fun: Callable[[float, _Array], ArrayLike],
@@ -321,8 +424,12 @@ def rk45(
     max_steps: Optional[int] = None,
     dense_output: bool = False,
     controller: _Controller = "standard",
+    stiffness: Literal["warn", "stop", "off"] = "warn",
 ) -> dict[str, Any]:
     """Dormand–Prince 5(4) on ``fun(t, y)``, step for step SciPy's ``solve_ivp(RK45)``;
     returns ``t``, ``y`` (n, N), ``sol`` (:class:`DenseSolution` or ``None``),
     ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
-    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``."""
+    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, and ``stiff``:
+    ``None`` or the first stiffness detection ``{"t", "h_lambda", "h", "lambda"}``.
+    ``stiffness``: ``"warn"`` detects and reports (steps unchanged), ``"stop"`` ends the
+    run at the detection (status -1), ``"off"`` skips the test."""

@@ -1,4 +1,5 @@
-"""``pointmass-dyn``: simulate a scene, print its point masses, list the bundled scenes."""
+"""``pointmass-dyn``: simulate a scene, print its point masses, list the bundled scenes,
+measure work–precision."""
 
 from __future__ import annotations
 
@@ -110,6 +111,37 @@ def cmd_scenes(args) -> int:
     return 0
 
 
+def cmd_work_precision(args) -> int:
+    from .work_precision import (
+        DEFAULT_TOLERANCES,
+        plot_work_precision,
+        work_precision,
+        write_csv,
+    )
+
+    tols = DEFAULT_TOLERANCES if not args.tolerances else tuple(args.tolerances)
+    results = []
+    for name in args.scene:
+        def say(msg: str) -> None:
+            if args.verbose:
+                print(f"  {msg}", file=sys.stderr, flush=True)
+
+        res = work_precision(
+            name, tols, t_end=args.t_end, repeats=args.repeats, scipy=not args.no_scipy,
+            scipy_repeats=args.scipy_repeats, rk4=not args.no_rk4, progress=say,
+        )
+        results.append(res)
+        print(res.table())
+        print()
+    if args.out:
+        write_csv(results, args.out)
+        print(f"table written to {args.out}")
+    if args.plot:
+        plot_work_precision(results, args.plot)
+        print(f"plot written to {args.plot}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="pointmass-dyn",
@@ -129,6 +161,23 @@ def build_parser() -> argparse.ArgumentParser:
     pm.set_defaults(func=cmd_point_masses)
     sc = sub.add_parser("scenes", help="list the bundled scenes")
     sc.set_defaults(func=cmd_scenes)
+    wp = sub.add_parser(
+        "work-precision",
+        help="error, time and evaluations of simulate against tolerance, beside SciPy RK45 "
+             "and fixed-step RK4",
+    )
+    wp.add_argument("scene", nargs="+", help="one or more scene files or bundled names")
+    wp.add_argument("--plot", default=None, help="write the work-precision plot (PNG)")
+    wp.add_argument("--out", default=None, help="write the table to a .csv file")
+    wp.add_argument("--t-end", type=float, default=None, help="end time (s); default: the scene's")
+    wp.add_argument("--tolerances", type=float, nargs="+", default=None,
+                    help="rtol = atol values (default 1e-3 ... 1e-12)")
+    wp.add_argument("--repeats", type=int, default=5, help="timing runs of simulate (best kept)")
+    wp.add_argument("--scipy-repeats", type=int, default=2, help="timing runs of SciPy RK45")
+    wp.add_argument("--no-scipy", action="store_true", help="skip SciPy RK45 (the slow part)")
+    wp.add_argument("--no-rk4", action="store_true", help="skip the fixed-step RK4 line")
+    wp.add_argument("-v", "--verbose", action="store_true", help="report progress on stderr")
+    wp.set_defaults(func=cmd_work_precision)
     return p
 
 

@@ -40,6 +40,14 @@ class SceneError(InvalidInputError):
     """A scene file or scene description that cannot be loaded; names the file and the key."""
 
 
+class UrdfError(InvalidInputError):
+    """A URDF file that cannot be loaded; names the file and the element (joint or link)."""
+
+
+class UrdfWarning(UserWarning):
+    """A URDF loaded differently from what it says (mimic joints, ignored elements)."""
+
+
 __all__ = [
     "PointMassDynError",
     "InvalidInputError",
@@ -49,4 +57,6 @@ __all__ = [
     "SingularityError",
     "SimulationError",
     "SceneError",
+    "UrdfError",
+    "UrdfWarning",
 ]

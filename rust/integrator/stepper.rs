@@ -3,7 +3,10 @@
 //! (scipy/integrate/_ivp/rk.py, common.py). Arithmetic is kept in NumPy's order so the
 //! accept/reject decisions, and hence the step counts, match SciPy.
 
-use super::{dense, Controller, InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, Tol};
+use super::{
+    dense, Controller, InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, Stiffness,
+    StiffnessCheck, Tol, NONSTIFF_RESET, STIFF_H_LAMBDA, STIFF_STEPS,
+};
 
 pub(crate) const N_STAGES: usize = 6;
 pub(crate) const C: [f64; N_STAGES] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0];
@@ -107,6 +110,16 @@ pub struct Stepper<S: OdeSystem> {
     n_accepted: usize,
     n_rejected: usize,
     state: State,
+    stiffness_check: StiffnessCheck,
+    /// Hairer's IASTI / NONSTI counters.
+    stiff_count: usize,
+    nonstiff_count: usize,
+    /// `h·|λ|` of the last accepted step (NaN before the first, or with the check off).
+    h_lambda: f64,
+    /// First detection.
+    stiffness: Option<Stiffness>,
+    /// `StiffnessCheck::Stop`: the failure the next `step` returns.
+    stop: Option<Status>,
 }
 
 fn expand_tol(tol: &Tol, name: &'static str, dim: usize) -> Result<Vec<f64>, InputError> {
@@ -276,6 +289,12 @@ impl<S: OdeSystem> Stepper<S> {
             n_accepted: 0,
             n_rejected: 0,
             state: State::Uninitialised,
+            stiffness_check: opts.stiffness,
+            stiff_count: 0,
+            nonstiff_count: 0,
+            h_lambda: f64::NAN,
+            stiffness: None,
+            stop: None,
         })
     }
 
@@ -441,13 +460,80 @@ impl<S: OdeSystem> Stepper<S> {
         MIN_FACTOR.max(SAFETY * error_norm.powf(exponent))
     }
 
+    /// Hairer's stiffness test on the step just accepted (before projection): `h·|λ|` from the
+    /// two stage states at `t + h` (`y_stage` holds stage 6, `y_new` stage 7) and their
+    /// derivatives (`k[5]`, `k[6]`).
+    fn stiffness_test(&mut self, h: f64, t_new: f64) {
+        let n = self.dim;
+        let (k6, k7) = (&self.k[5 * n..6 * n], &self.k[6 * n..7 * n]);
+        let y6 = &self.y_stage;
+        let y7 = &self.y_new;
+        // Scaled sums, so that huge (but finite) states or derivatives cannot overflow.
+        let (mut sk, mut sy) = (0.0f64, 0.0f64);
+        for i in 0..n {
+            sk = sk.max((k7[i] - k6[i]).abs());
+            sy = sy.max((y7[i] - y6[i]).abs());
+        }
+        if !(sy > 0.0 && sy.is_finite() && sk.is_finite()) {
+            // Identical stage states (or an overflowing difference): no information; Hairer
+            // keeps the previous estimate.
+            return;
+        }
+        let (mut num, mut den) = (0.0, 0.0);
+        if sk > 0.0 {
+            for i in 0..n {
+                let dk = (k7[i] - k6[i]) / sk;
+                let dy = (y7[i] - y6[i]) / sy;
+                num += dk * dk;
+                den += dy * dy;
+            }
+        } else {
+            den = 1.0;
+        }
+        let h_lambda = h.abs() * (sk / sy) * (num / den).sqrt();
+        if !h_lambda.is_finite() {
+            return;
+        }
+        self.h_lambda = h_lambda;
+        if h_lambda > STIFF_H_LAMBDA {
+            self.nonstiff_count = 0;
+            self.stiff_count += 1;
+            if self.stiff_count == STIFF_STEPS && self.stiffness.is_none() {
+                let s = Stiffness {
+                    t: t_new,
+                    h_lambda,
+                    h: h.abs(),
+                };
+                self.stiffness = Some(s);
+                if self.stiffness_check == StiffnessCheck::Stop {
+                    self.stop = Some(Status::Stiff {
+                        t: t_new,
+                        h_lambda,
+                        h: h.abs(),
+                    });
+                }
+            }
+        } else {
+            self.nonstiff_count += 1;
+            if self.nonstiff_count == NONSTIFF_RESET {
+                self.stiff_count = 0;
+            }
+        }
+    }
+
     /// Take one accepted step (retrying with smaller steps as needed), SciPy `_step_impl`.
-    /// `Err` carries a failure status (StepTooSmall, MaxSteps, NonFinite, RhsError); after it,
-    /// every call returns the same error.
+    /// `Err` carries a failure status (StepTooSmall, MaxSteps, NonFinite, RhsError, and Stiff
+    /// with [`StiffnessCheck::Stop`]: the step that completes a detection is accepted and
+    /// returned, the next call fails); after it, every call returns the same error.
     pub fn step(&mut self) -> Result<StepOutcome, Status> {
         match &self.state {
             State::Uninitialised => self.initialize()?,
-            State::Running => {}
+            State::Running => {
+                if let Some(s) = self.stop.take() {
+                    self.state = State::Failed(s.clone());
+                    return Err(s);
+                }
+            }
             State::Finished => return Ok(StepOutcome::Finished),
             State::Failed(s) => return Err(s.clone()),
         }
@@ -503,6 +589,9 @@ impl<S: OdeSystem> Stepper<S> {
             rejected = true;
             self.n_rejected += 1;
         };
+        if self.stiffness_check != StiffnessCheck::Off {
+            self.stiffness_test(t_new - t, t_new);
+        }
         self.sys.project(&mut self.y_new);
         check_state(&self.y_new, t, t_new)?;
         std::mem::swap(&mut self.y_old, &mut self.y);
@@ -579,6 +668,14 @@ impl<S: OdeSystem> Stepper<S> {
     }
     pub fn rtol_clamped(&self) -> bool {
         self.rtol_clamped
+    }
+    /// First stiffness detection, if any (see [`StiffnessCheck`]).
+    pub fn stiffness(&self) -> Option<Stiffness> {
+        self.stiffness
+    }
+    /// Hairer's `h·|λ|` estimate on the last accepted step (NaN before it or with the check off).
+    pub fn h_lambda(&self) -> f64 {
+        self.h_lambda
     }
     pub fn is_finished(&self) -> bool {
         self.state == State::Finished

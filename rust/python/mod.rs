@@ -19,6 +19,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulate::PyScene>()?;
     m.add_class::<simulate::PyDenseSolution>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::rk45, m)?)?;
     Ok(())
 }

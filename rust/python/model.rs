@@ -101,6 +101,8 @@ pub struct PyModel {
     x: Vec<f64>,
     out: Vec<f64>,
     gim: DMatrix<f64>,
+    /// The URDF joints (names, limits, damping, friction) of a model from `from_urdf`.
+    pub urdf_joints: Vec<crate::urdf::UrdfJoint>,
 }
 
 /// `None` means no gravity: a model computes only what it is asked for.
@@ -133,7 +135,84 @@ fn method_arg(py: Python<'_>, method: &str) -> PyResult<Method> {
     }
 }
 
+#[derive(Clone, Copy)]
+enum Direction {
+    Forward,
+    Inverse,
+}
+
+impl Direction {
+    fn name(self) -> &'static str {
+        match self {
+            Direction::Forward => "forward_dynamics",
+            Direction::Inverse => "inverse_dynamics",
+        }
+    }
+    /// The argument that is not a state: τ for forward dynamics, a for inverse.
+    fn input(self) -> &'static str {
+        match self {
+            Direction::Forward => "tau",
+            Direction::Inverse => "a",
+        }
+    }
+}
+
 impl PyModel {
+    /// Forward or inverse dynamics on either path: one place validates, dispatches, releases
+    /// the GIL for large models and checks the result.
+    #[allow(clippy::too_many_arguments)]
+    fn dynamics<'py>(
+        &mut self,
+        py: Python<'py>,
+        direction: Direction,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        x: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let method = method_arg(py, method)?;
+        let g = gravity_arg(py, gravity)?;
+        self.load_state(py, q, Some(v))?;
+        self.load_x(py, x, direction.input())?;
+        let ext = self.external_wrenches(external)?;
+        let (model, qv, vv, xv) = (&self.model, &self.q, &self.v, &self.x);
+        match method {
+            Method::Recursive => {
+                let (data, out) = (&mut self.data, &mut self.out);
+                let mut run = || match direction {
+                    Direction::Forward => recursive::forward_dynamics(model, data, qv, vv, xv, &g, ext.as_deref(), out),
+                    Direction::Inverse => {
+                        recursive::inverse_dynamics(model, data, qv, vv, xv, &g, ext.as_deref(), out);
+                        Ok(())
+                    }
+                };
+                if model.links.len() >= DETACH_LINKS { py.detach(run) } else { run() }.py(py)?;
+                check_result(py, direction.name(), &self.out)?;
+                Ok(to_array1(py, &self.out).into_any())
+            }
+            Method::Denoc => {
+                if ext.is_some() {
+                    return Err(invalid(
+                        py,
+                        "external",
+                        "None with method='denoc' (apply point forces with generalized_forces)",
+                        "wrenches",
+                    ));
+                }
+                let out = py
+                    .detach(|| match direction {
+                        Direction::Forward => denoc::forward_dynamics(model, qv, vv, xv, &g),
+                        Direction::Inverse => Ok(denoc::inverse_dynamics(model, qv, vv, xv, &g)),
+                    })
+                    .py(py)?;
+                check_result(py, direction.name(), out.as_slice())?;
+                Ok(to_array1(py, out.as_slice()).into_any())
+            }
+        }
+    }
+
     pub fn from_model(model: Model) -> Self {
         let data = Data::new(&model);
         let (nq, nv) = (model.nq, model.nv);
@@ -145,6 +224,7 @@ impl PyModel {
             x: vec![0.0; nv],
             out: vec![0.0; nv],
             gim: DMatrix::zeros(nv, nv),
+            urdf_joints: Vec::new(),
         }
     }
 
@@ -245,7 +325,9 @@ impl PyModel {
                 center,
             )
             .py(py)?;
+        let urdf_joints = std::mem::take(&mut self.urdf_joints);
         *self = PyModel::from_model(std::mem::take(&mut self.model));
+        self.urdf_joints = urdf_joints;
         Ok(k)
     }
 
@@ -485,6 +567,7 @@ impl PyModel {
 
     /// Accelerations from `I a + C v = τ + τ_g + τ_ext`.
     #[pyo3(signature = (q, v, tau, gravity=None, external=None, method="recursive"))]
+    #[allow(clippy::too_many_arguments)]
     fn forward_dynamics<'py>(
         &mut self,
         py: Python<'py>,
@@ -495,54 +578,12 @@ impl PyModel {
         external: Option<&Bound<'_, PyAny>>,
         method: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let method = method_arg(py, method)?;
-        let g = gravity_arg(py, gravity)?;
-        self.load_state(py, q, Some(v))?;
-        self.load_x(py, tau, "tau")?;
-        let ext = self.external_wrenches(external)?;
-        match method {
-            Method::Recursive => {
-                let (model, data, qv, vv, tv, out) = (
-                    &self.model,
-                    &mut self.data,
-                    &self.q,
-                    &self.v,
-                    &self.x,
-                    &mut self.out,
-                );
-                let mut run = || {
-                    recursive::forward_dynamics(model, data, qv, vv, tv, &g, ext.as_deref(), out)
-                };
-                if model.links.len() >= DETACH_LINKS {
-                    py.detach(run)
-                } else {
-                    run()
-                }
-                .py(py)?;
-                check_result(py, "forward_dynamics", &self.out)?;
-                Ok(to_array1(py, &self.out).into_any())
-            }
-            Method::Denoc => {
-                if ext.is_some() {
-                    return Err(invalid(
-                        py,
-                        "external",
-                        "None with method='denoc' (apply point forces with generalized_forces)",
-                        "wrenches",
-                    ));
-                }
-                let (model, qv, vv, tv) = (&self.model, &self.q, &self.v, &self.x);
-                let a = py
-                    .detach(|| denoc::forward_dynamics(model, qv, vv, tv, &g))
-                    .py(py)?;
-                check_result(py, "forward_dynamics", a.as_slice())?;
-                Ok(to_array1(py, a.as_slice()).into_any())
-            }
-        }
+        self.dynamics(py, Direction::Forward, q, v, tau, gravity, external, method)
     }
 
     /// Joint forces `τ = I a + C v − τ_g − τ_ext`.
     #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive"))]
+    #[allow(clippy::too_many_arguments)]
     fn inverse_dynamics<'py>(
         &mut self,
         py: Python<'py>,
@@ -553,47 +594,7 @@ impl PyModel {
         external: Option<&Bound<'_, PyAny>>,
         method: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let method = method_arg(py, method)?;
-        let g = gravity_arg(py, gravity)?;
-        self.load_state(py, q, Some(v))?;
-        self.load_x(py, a, "a")?;
-        let ext = self.external_wrenches(external)?;
-        match method {
-            Method::Recursive => {
-                let (model, data, qv, vv, av, out) = (
-                    &self.model,
-                    &mut self.data,
-                    &self.q,
-                    &self.v,
-                    &self.x,
-                    &mut self.out,
-                );
-                let mut run = || {
-                    recursive::inverse_dynamics(model, data, qv, vv, av, &g, ext.as_deref(), out)
-                };
-                if model.links.len() >= DETACH_LINKS {
-                    py.detach(run)
-                } else {
-                    run()
-                };
-                check_result(py, "inverse_dynamics", &self.out)?;
-                Ok(to_array1(py, &self.out).into_any())
-            }
-            Method::Denoc => {
-                if ext.is_some() {
-                    return Err(invalid(
-                        py,
-                        "external",
-                        "None with method='denoc'",
-                        "wrenches",
-                    ));
-                }
-                let (model, qv, vv, av) = (&self.model, &self.q, &self.v, &self.x);
-                let tau = py.detach(|| denoc::inverse_dynamics(model, qv, vv, av, &g));
-                check_result(py, "inverse_dynamics", tau.as_slice())?;
-                Ok(to_array1(py, tau.as_slice()).into_any())
-            }
-        }
+        self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method)
     }
 
     /// Kinetic energy `½ vᵀ I v`.
@@ -644,4 +645,73 @@ impl PyModel {
             self.model.nv
         )
     }
+
+    /// Loads a fixed-base robot from a URDF file (joint order and body names as Pinocchio's
+    /// `buildModelFromUrdf`). Raises `UrdfError`; warnings go through `warnings.warn` as
+    /// `UrdfWarning`.
+    #[staticmethod]
+    fn from_urdf(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
+        let urdf = crate::urdf::load_urdf(&path)
+            .map_err(|e| super::errors::py_error(py, "UrdfError", e.to_string()))?;
+        if !urdf.warnings.is_empty() {
+            let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
+            let warnings = py.import("warnings")?;
+            for w in &urdf.warnings {
+                warnings.call_method1("warn", (w.as_str(), &category, 1))?;
+            }
+        }
+        let mut m = PyModel::from_model(urdf.model);
+        m.urdf_joints = urdf.joints;
+        Ok(m)
+    }
+
+    /// Names of the moving joints in q/v order: the URDF joint names for a model from
+    /// `from_urdf`, otherwise the names of the bodies that define each link.
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        self.model
+            .links
+            .iter()
+            .map(|l| match urdf_joint(&self.urdf_joints, l.body) {
+                Some(j) => j.name.clone(),
+                None => self.model.bodies[l.body].name.clone(),
+            })
+            .collect()
+    }
+
+    /// `{joint name: (lower, upper, effort, velocity)}` for the moving joints in q/v order.
+    /// What the file does not give is unbounded: ±inf position bounds (always, for
+    /// continuous joints), inf effort and velocity.
+    fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        let names = self.joint_names();
+        for (l, name) in self.model.links.iter().zip(names) {
+            let inf = f64::INFINITY;
+            let lim = urdf_joint(&self.urdf_joints, l.body)
+                .and_then(|j| j.limit)
+                .map(|x| (x.lower, x.upper, x.effort, x.velocity))
+                .unwrap_or((-inf, inf, inf, inf));
+            d.set_item(name, lim)?;
+        }
+        Ok(d)
+    }
+
+    /// `{joint name: (damping, friction)}` from the URDF `<dynamics>` elements, for the
+    /// moving joints in q/v order (0 where absent). Not applied by the model itself.
+    fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        let names = self.joint_names();
+        for (l, name) in self.model.links.iter().zip(names) {
+            let dyn_ = urdf_joint(&self.urdf_joints, l.body)
+                .map(|j| (j.damping, j.friction))
+                .unwrap_or((0.0, 0.0));
+            d.set_item(name, dyn_)?;
+        }
+        Ok(d)
+    }
+}
+
+/// The URDF joint whose child is body `body`.
+fn urdf_joint(joints: &[crate::urdf::UrdfJoint], body: usize) -> Option<&crate::urdf::UrdfJoint> {
+    joints.iter().find(|j| j.body == body)
 }

@@ -1,19 +1,23 @@
 //! Scenes, effects, `simulate` and the generic `rk45`.
-use std::sync::Mutex;
+use std::cell::RefCell;
+use std::sync::{Arc, Mutex};
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
-use super::convert::{array, to_array, to_array1, vec3, vector};
+use super::convert::{array, shape_str, to_array, to_array1, vec3, vector};
 use super::errors::{invalid, py_error, IntoPyResult};
 use super::model::PyModel;
-use crate::effects::Effect;
+use crate::effects::{
+    Damper, Disabled, Effect, Effects, External, ExternalLoad, Frame, Friction, JointRef, Matrix,
+    PerJoint, Spring, Table, Torque, TorqueFunction, TorqueLaw,
+};
 use crate::integrator::{
     self, Controller, DenseOutput, Event, EventDirection, FnSystem, Rk45Options, Tol,
 };
 use crate::scene::{Scene, Settings};
-use crate::simulate::{simulate, StateEvent};
+use crate::simulate::{simulate, Dynamics, Record, StateEvent};
 
 #[pyclass(
     name = "Effect",
@@ -24,6 +28,140 @@ use crate::simulate::{simulate, StateEvent};
 #[derive(Clone)]
 pub struct PyEffect {
     pub inner: Effect,
+}
+
+thread_local! {
+    /// The first exception a Python torque function raised during the current call (the
+    /// integration runs on the calling thread, detached from the interpreter).
+    static CALLBACK_ERROR: RefCell<Option<PyErr>> = const { RefCell::new(None) };
+}
+
+fn take_callback_error() -> Option<PyErr> {
+    CALLBACK_ERROR.with(|c| c.borrow_mut().take())
+}
+
+fn repr_of(obj: &Bound<'_, PyAny>) -> String {
+    obj.repr().map(|r| r.to_string()).unwrap_or_default()
+}
+
+/// A body name or index.
+fn joint_ref(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<JointRef> {
+    if let Ok(s) = obj.extract::<String>() {
+        return Ok(JointRef::Name(s));
+    }
+    if !obj.is_instance_of::<pyo3::types::PyBool>() {
+        if let Ok(i) = obj.extract::<i64>() {
+            if i >= 0 {
+                return Ok(JointRef::Index(i as usize));
+            }
+        }
+    }
+    Err(invalid(
+        obj.py(),
+        arg,
+        "a body name (str) or body index (int >= 0)",
+        repr_of(obj),
+    ))
+}
+
+/// `None` (every moving joint), one body name or index, or a sequence of them.
+fn joints_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<JointRef>>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    if obj.extract::<String>().is_ok() || obj.extract::<i64>().is_ok() {
+        return Ok(Some(vec![joint_ref(obj, "joints")?]));
+    }
+    let mut out = Vec::new();
+    let items = obj.try_iter().map_err(|_| {
+        invalid(
+            obj.py(),
+            "joints",
+            "None, a body name or index, or a sequence of them",
+            repr_of(obj),
+        )
+    })?;
+    for (k, x) in items.enumerate() {
+        out.push(joint_ref(&x?, &format!("joints[{k}]"))?);
+    }
+    Ok(Some(out))
+}
+
+/// A number (all joints) or a 1-D array (one per joint).
+fn per_joint_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<PerJoint> {
+    if let Ok(x) = obj.extract::<f64>() {
+        return Ok(PerJoint::All(x));
+    }
+    Ok(PerJoint::Each(vector(obj, arg, None)?))
+}
+
+/// A 1-D or 2-D array, one row per time.
+fn matrix_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Matrix> {
+    let (shape, values) = array(obj, arg)?;
+    match shape.as_slice() {
+        [n] => Ok(Matrix {
+            values,
+            rows: *n,
+            cols: 1,
+            one_d: true,
+        }),
+        [n, c] => Ok(Matrix {
+            values,
+            rows: *n,
+            cols: *c,
+            one_d: false,
+        }),
+        _ => Err(invalid(
+            obj.py(),
+            arg,
+            "a 1-D or 2-D array (one row per time)",
+            shape_str(&shape),
+        )),
+    }
+}
+
+fn table_arg(
+    py: Python<'_>,
+    time: &Bound<'_, PyAny>,
+    values: &Bound<'_, PyAny>,
+    values_arg: &str,
+) -> PyResult<Table> {
+    let t = vector(time, "time", None)?;
+    let m = matrix_arg(values, values_arg)?;
+    Table::new(t, m, "time", values_arg).py(py)
+}
+
+fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
+    obj.filter(|o| !o.is_none())
+}
+
+/// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
+/// every evaluation; the first exception is kept for the caller to re-raise.
+fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
+    TorqueFunction(Arc::new(
+        move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
+            Python::attach(|py| {
+                let mut call = || -> PyResult<()> {
+                    let r = func.bind(py).call1((
+                        t,
+                        PyArray1::from_slice(py, q),
+                        PyArray1::from_slice(py, v),
+                    ))?;
+                    let x = vector(&r, "torque function f(t, q, v)", Some(out.len()))?;
+                    crate::error::check_finite("torque function f(t, q, v)", &x).py(py)?;
+                    out.copy_from_slice(&x);
+                    Ok(())
+                };
+                call().map_err(|e| {
+                    let msg = e.to_string();
+                    CALLBACK_ERROR.with(|c| {
+                        c.borrow_mut().get_or_insert(e);
+                    });
+                    msg
+                })
+            })
+        },
+    ))
 }
 
 #[pymethods]
@@ -40,13 +178,240 @@ impl PyEffect {
             inner: Effect::gravity(g).py(py)?,
         })
     }
+
+    /// Joint springs `τ = −k (q − rest)` (rotation-vector spring on quaternion joints).
+    #[staticmethod]
+    #[pyo3(signature = (joints, stiffness, rest=None, name=None))]
+    fn spring(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        stiffness: &Bound<'_, PyAny>,
+        rest: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let k = per_joint_arg(stiffness, "stiffness")?;
+        let rest = opt(rest).map(|r| per_joint_arg(r, "rest")).transpose()?;
+        Ok(PyEffect {
+            inner: Effect::Spring(Spring::new(name, joints, k, rest).py(py)?),
+        })
+    }
+
+    /// Viscous joint dampers `τ = −c v`.
+    #[staticmethod]
+    #[pyo3(signature = (joints, damping, name=None))]
+    fn damper(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        damping: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let c = per_joint_arg(damping, "damping")?;
+        Ok(PyEffect {
+            inner: Effect::Damper(Damper::new(name, joints, c).py(py)?),
+        })
+    }
+
+    /// Regularised Coulomb friction `τ = −F tanh(v / v_eps)`.
+    #[staticmethod]
+    #[pyo3(signature = (joints, friction, v_eps=None, name=None))]
+    fn friction(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        friction: &Bound<'_, PyAny>,
+        v_eps: Option<f64>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let f = per_joint_arg(friction, "friction")?;
+        Ok(PyEffect {
+            inner: Effect::Friction(Friction::new(name, joints, f, v_eps).py(py)?),
+        })
+    }
+
+    /// Constant joint torques (forces on prismatic joints), one per speed or one for all.
+    #[staticmethod]
+    #[pyo3(signature = (joints, tau, name=None))]
+    fn joint_torque(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        tau: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let tau = per_joint_arg(tau, "tau")?;
+        Ok(PyEffect {
+            inner: Effect::Torque(Torque::constant(name, joints, tau).py(py)?),
+        })
+    }
+
+    /// Joint torques tabulated in time: linear between rows, clamped outside.
+    #[staticmethod]
+    #[pyo3(signature = (joints, time, values, name=None))]
+    fn tabulated_torque(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        time: &Bound<'_, PyAny>,
+        values: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let table = table_arg(py, time, values, "values")?;
+        Ok(PyEffect {
+            inner: Effect::Torque(Torque::tabulated(name, joints, table).py(py)?),
+        })
+    }
+
+    /// PD torques tracking a tabulated reference on 1-dof joints.
+    #[staticmethod]
+    #[pyo3(signature = (joints, kp, kd, time, reference, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn pd_torque(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        kp: &Bound<'_, PyAny>,
+        kd: &Bound<'_, PyAny>,
+        time: &Bound<'_, PyAny>,
+        reference: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let kp = per_joint_arg(kp, "kp")?;
+        let kd = per_joint_arg(kd, "kd")?;
+        let table = table_arg(py, time, reference, "reference")?;
+        Ok(PyEffect {
+            inner: Effect::Torque(Torque::pd(name, joints, kp, kd, table).py(py)?),
+        })
+    }
+
+    /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
+    #[staticmethod]
+    #[pyo3(signature = (f, name=None))]
+    fn torque_function(
+        py: Python<'_>,
+        f: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        if !f.is_callable() {
+            return Err(invalid(py, "f", "a callable f(t, q, v) -> tau", repr_of(f)));
+        }
+        Ok(PyEffect {
+            inner: Effect::Torque(Torque::function(name, torque_callback(f.clone().unbind()))),
+        })
+    }
+
+    /// A force (and moment) on a body at a body-fixed point, constant or tabulated.
+    #[staticmethod]
+    #[pyo3(signature = (body, force=None, point=None, moment=None, time=None, frame="world", name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn external_force(
+        py: Python<'_>,
+        body: &Bound<'_, PyAny>,
+        force: Option<&Bound<'_, PyAny>>,
+        point: Option<&Bound<'_, PyAny>>,
+        moment: Option<&Bound<'_, PyAny>>,
+        time: Option<&Bound<'_, PyAny>>,
+        frame: &str,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let body = joint_ref(body, "body")?;
+        let point = match opt(point) {
+            Some(p) => vec3(p, "point")?,
+            None => crate::spatial::Vec3::zeros(),
+        };
+        let frame = Frame::parse(frame, "frame").py(py)?;
+        let (force, moment) = (opt(force), opt(moment));
+        if force.is_none() && moment.is_none() {
+            return Err(invalid(py, "force", "a force (or a moment)", "None"));
+        }
+        let inner = match opt(time) {
+            Some(t) => {
+                let t = vector(t, "time", None)?;
+                let f = force.map(|f| matrix_arg(f, "force")).transpose()?;
+                let m = moment.map(|m| matrix_arg(m, "moment")).transpose()?;
+                External::tabulated(name, body, point, t, f, m, frame).py(py)?
+            }
+            None => {
+                let zero = crate::spatial::Vec3::zeros();
+                let f = force.map(|f| vec3(f, "force")).transpose()?.unwrap_or(zero);
+                let m = moment
+                    .map(|m| vec3(m, "moment"))
+                    .transpose()?
+                    .unwrap_or(zero);
+                External::constant(name, body, point, f, m, frame).py(py)?
+            }
+        };
+        Ok(PyEffect {
+            inner: Effect::External(inner),
+        })
+    }
+
+    /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).
     #[getter]
-    fn name(&self) -> &'static str {
-        self.inner.name()
+    fn name(&self) -> String {
+        self.inner.name().to_string()
+    }
+    /// The family, as `disable` names it.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.inner.kind().name()
     }
     fn __repr__(&self) -> String {
+        let label = match self.inner.label() {
+            Some(l) => format!(", name='{l}'"),
+            None => String::new(),
+        };
+        let joints = |j: &Option<Vec<JointRef>>| match j {
+            None => "all".to_string(),
+            Some(v) => format!(
+                "[{}]",
+                v.iter()
+                    .map(|r| r.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
         match &self.inner {
             Effect::Gravity { g } => format!("Gravity(g=[{}, {}, {}])", g.x, g.y, g.z),
+            Effect::Spring(e) => format!("Spring(joints={}{label})", joints(&e.joints)),
+            Effect::Damper(e) => format!("Damper(joints={}{label})", joints(&e.joints)),
+            Effect::Friction(e) => format!(
+                "JointFriction(joints={}, v_eps={}{label})",
+                joints(&e.joints),
+                e.v_eps
+            ),
+            Effect::Torque(e) => match &e.law {
+                TorqueLaw::Constant(_) => {
+                    format!("JointTorque(joints={}{label})", joints(&e.joints))
+                }
+                TorqueLaw::Tabulated(t) => format!(
+                    "TabulatedTorque(joints={}, {} rows{label})",
+                    joints(&e.joints),
+                    t.len()
+                ),
+                TorqueLaw::Pd { reference, .. } => format!(
+                    "PDTorque(joints={}, {} rows{label})",
+                    joints(&e.joints),
+                    reference.len()
+                ),
+                TorqueLaw::Function(_) => match self.inner.label() {
+                    Some(l) => format!("TorqueFunction(name='{l}')"),
+                    None => "TorqueFunction()".to_string(),
+                },
+            },
+            Effect::External(e) => format!(
+                "ExternalForce(body={}, point=[{}, {}, {}], frame='{}'{}{label})",
+                e.body,
+                e.point.x,
+                e.point.y,
+                e.point.z,
+                e.frame.name(),
+                match &e.load {
+                    ExternalLoad::Constant { .. } => String::new(),
+                    ExternalLoad::Tabulated(t) => format!(", {} rows", t.len()),
+                }
+            ),
         }
     }
     fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {
@@ -164,7 +529,7 @@ fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
 #[pymethods]
 impl PyScene {
     #[new]
-    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None))]
+    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -177,6 +542,7 @@ impl PyScene {
         atol: Option<f64>,
         name: Option<String>,
         description: Option<String>,
+        disable: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let m = model.model.clone();
         let mut q = match q0 {
@@ -207,6 +573,8 @@ impl PyScene {
                 }
             }
         }
+        // Joint and body names, table widths and effect names must fit the model.
+        Effects::new(&m, &list, Disabled::none(), "effects").py(py)?;
         let settings = Settings {
             t_span: match t_span {
                 Some(t) if !t.is_none() => Some(t_span_arg(py, t)?),
@@ -214,6 +582,7 @@ impl PyScene {
             },
             rtol: opt_positive(py, rtol, "rtol")?,
             atol: opt_positive(py, atol, "atol")?,
+            disable: disable_arg(py, disable)?,
             ..Settings::default()
         };
         Ok(PyScene {
@@ -291,6 +660,11 @@ impl PyScene {
     fn first_step(&self) -> Option<f64> {
         self.inner.settings.first_step
     }
+    /// Effect families the scene switches off (`None`: the scene says nothing).
+    #[getter]
+    fn disable(&self) -> Option<Vec<&'static str>> {
+        self.inner.settings.disable.map(|d| d.names())
+    }
     fn __repr__(&self) -> String {
         let s = &self.inner;
         format!(
@@ -306,6 +680,30 @@ impl PyScene {
                 .join(", ")
         )
     }
+}
+
+/// `None`, one family name, or a sequence of them.
+fn disable_arg(py: Python<'_>, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Disabled>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    let names: Vec<String> = if let Ok(s) = obj.extract::<String>() {
+        vec![s]
+    } else {
+        let bad = || {
+            invalid(
+                py,
+                "disable",
+                "None, an effect family name or a sequence of them",
+                repr_of(obj),
+            )
+        };
+        obj.try_iter()
+            .map_err(|_| bad())?
+            .map(|x| x.and_then(|x| x.extract::<String>()).map_err(|_| bad()))
+            .collect::<PyResult<_>>()?
+    };
+    Disabled::parse(&names, "disable").py(py).map(Some)
 }
 
 fn rename_arg(e: crate::error::Error) -> crate::error::Error {
@@ -471,7 +869,7 @@ fn python_event<'a>(
 
 /// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
-#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None))]
+#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None, disable=None, power=false, stiffness="warn"))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_scene<'py>(
     py: Python<'py>,
@@ -487,8 +885,14 @@ pub fn simulate_scene<'py>(
     energy: bool,
     controller: &str,
     progress: Option<Py<PyAny>>,
+    disable: Option<&Bound<'_, PyAny>>,
+    power: bool,
+    stiffness: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
+    let disabled = disable_arg(py, disable)?
+        .or(s.settings.disable)
+        .unwrap_or_default();
     let (nq, nv) = (s.model.nq, s.model.nv);
     let t_span = match t_span.filter(|t| !t.is_none()) {
         Some(t) => t_span_arg(py, t)?,
@@ -509,6 +913,7 @@ pub fn simulate_scene<'py>(
         false,
         controller,
     )?;
+    opts.stiffness = stiffness_arg(py, stiffness)?; // stiffness detection (integrator)
     if rtol.is_none_or(|r| r.is_none()) {
         if let Some(r) = s.settings.rtol {
             opts.rtol = Tol::Scalar(r);
@@ -538,6 +943,7 @@ pub fn simulate_scene<'py>(
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let model = &s.model;
     let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
+    take_callback_error();
     let result = py.detach(|| {
         let extra: Vec<Event<'_>> = py_events
             .iter()
@@ -564,16 +970,20 @@ pub fn simulate_scene<'py>(
         simulate(
             model,
             effects,
+            disabled,
             q0,
             v0,
             t_span,
             &opts,
             &state_events,
             extra,
-            energy,
+            Record { energy, power },
             Some(hook),
         )
     });
+    if let Some(err) = take_callback_error() {
+        return Err(err);
+    }
     if let Some(err) = failure.into_inner().ok().flatten() {
         return Err(err);
     }
@@ -584,6 +994,18 @@ pub fn simulate_scene<'py>(
     d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
     d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
     d.set_item("energy", traj.energy.map(|e| to_array1(py, &e).into_any()))?;
+    match &traj.power {
+        Some(p) => {
+            let m = traj.effect_labels.len();
+            let pd = PyDict::new(py);
+            for (k, label) in traj.effect_labels.iter().enumerate() {
+                let col: Vec<f64> = (0..n).map(|i| p[i * m + k]).collect();
+                pd.set_item(label, to_array1(py, &col))?;
+            }
+            d.set_item("power", pd)?;
+        }
+        None => d.set_item("power", py.None())?,
+    }
     // Events back in the caller's order: state events were evaluated first.
     let ns = state_events.len();
     let te = PyList::empty(py);
@@ -614,6 +1036,84 @@ pub fn simulate_scene<'py>(
     d.set_item("message", traj.message)?;
     d.set_item("success", traj.success)?;
     d.set_item("t_reached", traj.t_reached)?;
+    Ok(d)
+}
+
+/// `(q, v)` checked against the scene's model.
+fn scene_state(
+    py: Python<'_>,
+    s: &Scene,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+) -> PyResult<(Vec<f64>, Vec<f64>)> {
+    let q = vector(q, "q", Some(s.model.nq))?;
+    let v = vector(v, "v", Some(s.model.nv))?;
+    s.model.check_state(&q, Some(&v)).py(py)?;
+    Ok((q, v))
+}
+
+/// The generalized force of each enabled effect of `scene` at `(t, q, v)`: a dict from the
+/// effect's name to an (nv,) array (gravity's included).
+#[pyfunction]
+#[pyo3(signature = (scene, t, q, v, disable=None))]
+pub fn effect_forces<'py>(
+    py: Python<'py>,
+    scene: PyRef<'_, PyScene>,
+    t: f64,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    disable: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = &scene.inner;
+    if !t.is_finite() {
+        return Err(invalid(py, "t", "a finite time", t));
+    }
+    let (q, v) = scene_state(py, s, q, v)?;
+    let disabled = disable_arg(py, disable)?
+        .or(s.settings.disable)
+        .unwrap_or_default();
+    let mut sys = Dynamics::try_new(&s.model, &s.effects, disabled).py(py)?;
+    let nv = s.model.nv;
+    let mut out = vec![0.0; sys.effects.len() * nv];
+    take_callback_error();
+    let r = sys.effect_forces(t, &q, &v, &mut out);
+    if let Some(e) = take_callback_error() {
+        return Err(e);
+    }
+    r.map_err(|m| py_error(py, "NumericalError", m))?;
+    let d = PyDict::new(py);
+    for (k, label) in sys.effects.labels().iter().enumerate() {
+        d.set_item(label, to_array1(py, &out[k * nv..(k + 1) * nv]))?;
+    }
+    Ok(d)
+}
+
+/// Kinetic energy, the potential energy of each enabled conservative effect (gravity,
+/// springs) under its name, and their sum under `total`.
+#[pyfunction]
+#[pyo3(signature = (scene, q, v, disable=None))]
+pub fn energies<'py>(
+    py: Python<'py>,
+    scene: PyRef<'_, PyScene>,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    disable: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s = &scene.inner;
+    let (q, v) = scene_state(py, s, q, v)?;
+    let disabled = disable_arg(py, disable)?
+        .or(s.settings.disable)
+        .unwrap_or_default();
+    let mut sys = Dynamics::try_new(&s.model, &s.effects, disabled).py(py)?;
+    let (kinetic, potentials) = sys.energies(&q, &v);
+    let d = PyDict::new(py);
+    d.set_item("kinetic", kinetic)?;
+    let mut total = kinetic;
+    for (label, e) in potentials {
+        total += e;
+        d.set_item(label, e)?;
+    }
+    d.set_item("total", total)?;
     Ok(d)
 }
 
@@ -659,7 +1159,7 @@ impl PyDenseSolution {
 /// Generic Dormand–Prince 5(4) on a Python right-hand side `fun(t, y) -> array`;
 /// step for step SciPy's `solve_ivp(method="RK45")`.
 #[pyfunction]
-#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard"))]
+#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn"))]
 #[allow(clippy::too_many_arguments)]
 pub fn rk45<'py>(
     py: Python<'py>,
@@ -675,6 +1175,7 @@ pub fn rk45<'py>(
     max_steps: Option<usize>,
     dense_output: bool,
     controller: &str,
+    stiffness: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !fun.is_callable() {
         return Err(invalid(
@@ -687,7 +1188,7 @@ pub fn rk45<'py>(
     let t_span = t_span_arg(py, t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
-    let opts = options(
+    let mut opts = options(
         py,
         dim,
         rtol,
@@ -699,6 +1200,7 @@ pub fn rk45<'py>(
         dense_output,
         controller,
     )?;
+    opts.stiffness = stiffness_arg(py, stiffness)?; // stiffness detection (integrator)
     let mut specs = Vec::new();
     if let Some(evs) = events.filter(|e| !e.is_none()) {
         if evs.is_callable() {
@@ -783,10 +1285,49 @@ pub fn rk45<'py>(
     d.set_item("message", sol.message.clone())?;
     d.set_item("success", sol.success())?;
     d.set_item("t_reached", sol.t_reached)?;
+    d.set_item("stiff", stiffness_dict(py, sol.stiffness)?)?;
     d.set_item("sol", sol.dense.map(|inner| PyDenseSolution { inner }))?;
     Ok(d)
 }
 
 fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
     py_error(py, "InvalidInputError", e.to_string())
+}
+
+// ---------------------------------------------------------------------------------------------
+// Stiffness detection (rust/integrator): the `stiffness` keyword of `rk45` and `simulate_scene`,
+// and `rk45`'s `stiff` entry.
+// ---------------------------------------------------------------------------------------------
+
+/// `"warn"` (default: detect, report, steps unchanged), `"stop"` or `"off"`.
+fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::StiffnessCheck> {
+    match name {
+        "warn" => Ok(integrator::StiffnessCheck::Warn),
+        "stop" => Ok(integrator::StiffnessCheck::Stop),
+        "off" => Ok(integrator::StiffnessCheck::Off),
+        other => Err(invalid(
+            py,
+            "stiffness",
+            "'warn' (detect and report), 'stop' (stop at the detection) or 'off'",
+            format!("'{other}'"),
+        )),
+    }
+}
+
+/// `None`, or `{"t", "h_lambda", "h", "lambda"}` of the first detection.
+fn stiffness_dict<'py>(
+    py: Python<'py>,
+    s: Option<integrator::Stiffness>,
+) -> PyResult<Bound<'py, PyAny>> {
+    match s {
+        None => Ok(py.None().into_bound(py)),
+        Some(s) => {
+            let d = PyDict::new(py);
+            d.set_item("t", s.t)?;
+            d.set_item("h_lambda", s.h_lambda)?;
+            d.set_item("h", s.h)?;
+            d.set_item("lambda", s.lambda())?;
+            Ok(d.into_any())
+        }
+    }
 }

@@ -1,0 +1,367 @@
+"""Work–precision of :func:`pointmass_dyn.simulate`: error against an independent reference,
+wall time, right-hand-side evaluations and steps, tolerance by tolerance; beside it SciPy's
+RK45 driving the same right-hand side from Python, and a fixed-step classical RK4 (MuJoCo's
+integrator) given the same number of evaluations.
+
+    result = pmd.work_precision("chain7")           # a scene, or a bundled scene's name
+    print(result.table())
+    result.to_csv("chain7.csv"); result.plot("chain7.png")
+
+or ``pointmass-dyn work-precision chain7 --plot wp.png --out table.csv``.
+
+Definitions (all errors on the state ``y = [q; v]``, radians and SI units):
+
+* reference: SciPy ``solve_ivp(method="DOP853", rtol=atol=1e-13, dense_output=True)`` on the
+  scene's right-hand side called from Python (``Model.forward_dynamics``, plus the effects'
+  generalized forces) — a different method, step sequence and code path from ``simulate``.
+  It is cross-checked once against ``simulate`` at ``rtol = atol = 1e-13``
+  (``WorkPrecision.reference_check``).
+* ``err_final``: ``max|y(T) − y_ref(T)| / max|y_ref(T)|``.
+* ``err_dense``: the same over ``n_dense`` equally spaced times (our dense output, i.e. what
+  ``t_eval`` returns): ``max_t max|y(t) − y_ref(t)| / max_t max|y_ref(t)|``.
+* ``err_energy``: ``max|E − E(0)|`` over the accepted steps divided by the largest kinetic
+  energy along the reference (E = kinetic + gravity + springs, as ``energy=True`` records).
+* ``time``: best wall time of ``repeats`` calls of ``simulate`` (no output options); SciPy's
+  the best of ``scipy_repeats``. Since our RK45 takes exactly SciPy's steps, equal tolerance
+  means equal error, and ``speedup = scipy_time / time`` is the time ratio at equal error.
+* RK4: ``N = nfev / 4`` equal steps over the span (the same number of evaluations as
+  ``simulate`` at that tolerance), errors measured the same way at its step times.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import os
+import re
+import time
+from dataclasses import dataclass, field
+from typing import Any, Callable, Optional, Sequence
+
+import numpy as np
+
+from . import _core
+from .scenes import load_scene
+from .simulation import energies, simulate
+
+#: Tolerances of the study (rtol = atol), loose to tight.
+DEFAULT_TOLERANCES = tuple(10.0**-k for k in range(3, 13))
+#: Reference tolerance (DOP853, and our own cross-check run).
+REFERENCE_TOL = 1e-13
+
+
+def _scene_of(scene: Any):
+    if isinstance(scene, _core.Scene):
+        return scene
+    return load_scene(scene)
+
+
+_GRAVITY_REPR = re.compile(r"^Gravity\(g=\[([^,\]]+), ([^,\]]+), ([^,\]]+)\]\)$")
+
+
+def scene_rhs(scene) -> Callable[[float, np.ndarray], np.ndarray]:
+    """``f(t, y)`` of the scene in Python, ``y = [q; v]``: ``q̇`` from ``v`` and ``v̇`` from
+    ``Model.forward_dynamics``. Gravity alone rides on ``forward_dynamics(..., gravity=g)``
+    (SciPy's cheapest faithful call); any other declared effect is added through
+    :func:`pointmass_dyn.effect_forces`."""
+    model = scene.model
+    nq, nv = model.nq, model.nv
+    disabled = set(scene.disable or ())
+    g = None
+    others = False
+    for e in scene.effects:
+        if e.kind in disabled:
+            continue
+        m = _GRAVITY_REPR.match(repr(e)) if e.kind == "gravity" else None
+        if m is not None and g is None:
+            cand = np.array([float(x) for x in m.groups()])
+            if e == _core.Effect.gravity(cand):
+                g = cand
+                continue
+        others = True
+    kinds = [model.body_info(i)[1] for i in range(model.nbodies)]
+    qdot_is_v = nq == nv and "Spherical" not in kinds
+    zeros = np.zeros(nv)
+
+    if not others:
+
+        def rhs(t, y):
+            q, v = y[:nq], y[nq:]
+            a = model.forward_dynamics(q, v, zeros, gravity=g)
+            qd = v if qdot_is_v else model.velocity_to_qdot(q, v)
+            return np.concatenate([qd, a])
+
+        return rhs
+
+    def rhs_effects(t, y):
+        q, v = y[:nq], y[nq:]
+        tau = sum(_core.effect_forces(scene, t, q, v, None).values())
+        a = model.forward_dynamics(q, v, np.asarray(tau, dtype=float), gravity=None)
+        qd = v if qdot_is_v else model.velocity_to_qdot(q, v)
+        return np.concatenate([qd, a])
+
+    return rhs_effects
+
+
+def _rel(diff: np.ndarray, ref: np.ndarray) -> float:
+    scale = float(np.max(np.abs(ref)))
+    err = float(np.max(np.abs(diff)))
+    return err / scale if scale > 0 else err
+
+
+def _best_time(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
+    best, out = math.inf, None
+    for _ in range(max(1, repeats)):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def rk4_fixed(rhs, t_span, y0, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Classical fixed-step RK4 (MuJoCo's ``mjINT_RK4``): times and states, ``n_steps + 1``
+    rows."""
+    t0, t1 = float(t_span[0]), float(t_span[1])
+    h = (t1 - t0) / n_steps
+    ys = np.empty((n_steps + 1, len(y0)))
+    ts = t0 + h * np.arange(n_steps + 1)
+    ts[-1] = t1
+    y = np.array(y0, dtype=float)
+    ys[0] = y
+    for k in range(n_steps):
+        t = ts[k]
+        k1 = rhs(t, y)
+        k2 = rhs(t + h / 2, y + (h / 2) * k1)
+        k3 = rhs(t + h / 2, y + (h / 2) * k2)
+        k4 = rhs(t + h, y + h * k3)
+        y = y + (h / 6) * (k1 + 2 * k2 + 2 * k3 + k4)
+        ys[k + 1] = y
+    return ts, ys
+
+
+@dataclass
+class WorkPrecision:
+    """Result of :func:`work_precision`: one row (a dict) per tolerance."""
+
+    scene: str
+    t_span: tuple[float, float]
+    rows: list[dict] = field(default_factory=list)
+    #: How the reference was computed and how well it agrees with ``simulate`` at 1e-13.
+    reference_check: dict = field(default_factory=dict)
+
+    COLUMNS = (
+        "tol", "nfev", "steps", "rejected", "time", "err_final", "err_dense", "err_energy",
+        "scipy_time", "scipy_nfev", "scipy_err_final", "speedup",
+        "rk4_steps", "rk4_err_final", "rk4_err_dense", "rk4_err_energy",
+    )
+
+    def column(self, name: str) -> np.ndarray:
+        return np.array([r.get(name, np.nan) for r in self.rows], dtype=float)
+
+    def table(self) -> str:
+        """A fixed-width text table (times in ms)."""
+        head = (f"{'tol':>7} {'nfev':>7} {'steps':>6} {'time ms':>8} {'err_final':>9} "
+                f"{'err_dense':>9} {'err_E':>9} {'scipy ms':>9} {'speedup':>7} "
+                f"{'rk4 err':>9}")
+        lines = [f"{self.scene}: t = {self.t_span[0]:g} .. {self.t_span[1]:g} s; "
+                 f"reference {self.reference_check.get('method', '?')}; "
+                 f"ours at {REFERENCE_TOL:g} vs reference: "
+                 f"{self.reference_check.get('err_final', float('nan')):.1e} (final), "
+                 f"{self.reference_check.get('err_dense', float('nan')):.1e} (dense)", head]
+
+        def f(x, spec, width):
+            return format(x, spec) if x is not None and np.isfinite(x) else "-".rjust(width)
+
+        for r in self.rows:
+            lines.append(
+                f"{r['tol']:>7.0e} {r['nfev']:>7d} {r['steps']:>6d} {r['time'] * 1e3:>8.2f} "
+                f"{f(r['err_final'], '9.2e', 9)} {f(r['err_dense'], '9.2e', 9)} "
+                f"{f(r['err_energy'], '9.2e', 9)} "
+                f"{f(r.get('scipy_time', np.nan) * 1e3, '9.1f', 9)} "
+                f"{f(r.get('speedup', np.nan), '7.1f', 7)} "
+                f"{f(r.get('rk4_err_final', np.nan), '9.2e', 9)}"
+            )
+        return "\n".join(lines)
+
+    def to_csv(self, path: str | os.PathLike) -> None:
+        write_csv([self], path)
+
+    def plot(self, path: Optional[str | os.PathLike] = None):
+        """Error against wall time and against tolerance; saves to ``path`` if given."""
+        return plot_work_precision([self], path)
+
+
+def work_precision(
+    scene: Any,
+    tolerances: Sequence[float] = DEFAULT_TOLERANCES,
+    *,
+    t_end: Optional[float] = None,
+    repeats: int = 5,
+    scipy: bool = True,
+    scipy_repeats: int = 2,
+    rk4: bool = True,
+    n_dense: int = 1001,
+    reference_check: bool = True,
+    progress: Optional[Callable[[str], Any]] = None,
+) -> WorkPrecision:
+    """Measures ``simulate`` on ``scene`` (a :class:`Scene`, a scene file or a bundled name)
+    at ``rtol = atol = tol`` for each tolerance; see the module docstring for the
+    definitions. ``t_end`` overrides the scene's end time (default: the scene's, else 10 s).
+    ``scipy`` / ``rk4`` switch the comparison lines off (they cost Python time, up to
+    seconds per tolerance). ``progress(msg)`` is called before each measurement."""
+    from scipy.integrate import solve_ivp
+
+    sc = _scene_of(scene)
+    t0, t1 = sc.t_span or (0.0, 10.0)
+    if t_end is not None:
+        t1 = float(t_end)
+    span = (float(t0), float(t1))
+    say = progress or (lambda msg: None)
+    model = sc.model
+    nq = model.nq
+    y0 = np.concatenate([sc.q0, sc.v0])
+    rhs = scene_rhs(sc)
+    t_grid = np.linspace(span[0], span[1], n_dense)
+
+    say(f"{sc.name}: reference (DOP853, rtol = atol = {REFERENCE_TOL:g})")
+    ref = solve_ivp(rhs, span, y0, method="DOP853", rtol=REFERENCE_TOL, atol=REFERENCE_TOL,
+                    dense_output=True)
+    if not ref.success:
+        raise RuntimeError(f"{sc.name}: the DOP853 reference failed: {ref.message}")
+    y_ref_end = ref.y[:, -1]
+    y_ref_grid = ref.sol(t_grid).T
+    kinetic = max(model.kinetic_energy(y[:nq], y[nq:]) for y in y_ref_grid)
+    e_scale = kinetic if kinetic > 0 else 1.0
+
+    def total_energy(y):
+        return energies(sc, y[:nq], y[nq:])["total"]
+
+    out = WorkPrecision(scene=sc.name, t_span=span)
+    out.reference_check = {"method": f"DOP853 rtol=atol={REFERENCE_TOL:g}",
+                           "nfev": int(ref.nfev), "energy_scale": float(e_scale)}
+    if reference_check:
+        say(f"{sc.name}: cross-check, simulate at {REFERENCE_TOL:g}")
+        ours = simulate(sc, span, rtol=REFERENCE_TOL, atol=REFERENCE_TOL, t_eval=t_grid)
+        y_ours = np.hstack([ours.q, ours.v])
+        out.reference_check.update(
+            err_final=_rel(y_ours[-1] - y_ref_end, y_ref_end),
+            err_dense=_rel(y_ours - y_ref_grid, y_ref_grid),
+            ours_nfev=int(ours.nfev),
+        )
+
+    for tol in tolerances:
+        row: dict[str, Any] = {"tol": float(tol)}
+        say(f"{sc.name}: simulate at {tol:g}")
+        t_run, r = _best_time(lambda: simulate(sc, span, rtol=tol, atol=tol), repeats)
+        if not r.success:
+            row.update(tol=float(tol), nfev=r.nfev, steps=r.n_accepted, rejected=r.n_rejected,
+                       time=t_run, err_final=np.nan, err_dense=np.nan, err_energy=np.nan,
+                       message=r.message)
+            out.rows.append(row)
+            continue
+        y_end = np.concatenate([r.q[-1], r.v[-1]])
+        dense = simulate(sc, span, rtol=tol, atol=tol, t_eval=t_grid)
+        y_dense = np.hstack([dense.q, dense.v])
+        withe = simulate(sc, span, rtol=tol, atol=tol, energy=True)
+        e = np.asarray(withe.energy)
+        row.update(
+            nfev=int(r.nfev), steps=int(r.n_accepted), rejected=int(r.n_rejected), time=t_run,
+            err_final=_rel(y_end - y_ref_end, y_ref_end),
+            err_dense=_rel(y_dense - y_ref_grid, y_ref_grid),
+            err_energy=float(np.max(np.abs(e - e[0])) / e_scale),
+            message=r.message,
+        )
+        if scipy:
+            say(f"{sc.name}: SciPy RK45 at {tol:g}")
+            t_sp, s = _best_time(
+                lambda: solve_ivp(rhs, span, y0, method="RK45", rtol=tol, atol=tol),
+                scipy_repeats)
+            row.update(scipy_time=t_sp, scipy_nfev=int(s.nfev),
+                       scipy_err_final=_rel(s.y[:, -1] - y_ref_end, y_ref_end),
+                       speedup=t_sp / t_run)
+        if rk4:
+            say(f"{sc.name}: RK4 with {r.nfev} evaluations")
+            n = max(1, int(round(r.nfev / 4)))
+            with np.errstate(all="ignore"):
+                try:
+                    ts, ys = rk4_fixed(rhs, span, y0, n)
+                    ok = bool(np.all(np.isfinite(ys)))
+                except Exception:  # a blown-up RK4 state makes the dynamics refuse it
+                    ts, ys, ok = None, None, False
+            if ok:
+                y_at = ref.sol(ts).T
+                pick = np.unique(np.linspace(0, n, min(n + 1, 2001)).astype(int))
+                e4 = np.array([total_energy(ys[k]) for k in pick])
+                row.update(rk4_steps=n, rk4_err_final=_rel(ys[-1] - y_ref_end, y_ref_end),
+                           rk4_err_dense=_rel(ys - y_at, y_at),
+                           rk4_err_energy=float(np.max(np.abs(e4 - e4[0])) / e_scale))
+            else:
+                row.update(rk4_steps=n, rk4_err_final=np.inf, rk4_err_dense=np.inf,
+                           rk4_err_energy=np.inf)
+        out.rows.append(row)
+    return out
+
+
+def write_csv(results: Sequence[WorkPrecision], path: str | os.PathLike) -> None:
+    """All rows of ``results`` in one CSV file, a ``scene`` column first."""
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(("scene",) + WorkPrecision.COLUMNS)
+        for res in results:
+            for r in res.rows:
+                w.writerow((res.scene,) + tuple(
+                    repr(r[c]) if isinstance(r.get(c), float) else r.get(c, "")
+                    for c in WorkPrecision.COLUMNS))
+
+
+def plot_work_precision(results: Sequence[WorkPrecision], path=None, title: str = ""):
+    """One row per scene: error against wall time (ours, SciPy RK45 on our right-hand side,
+    fixed-step RK4 with our number of evaluations, drawn at our time), and errors against the
+    tolerance."""
+    from .plotting import _pyplot
+
+    plt = _pyplot()
+    n = len(results)
+    fig, axes = plt.subplots(n, 2, figsize=(10, 3.4 * n + 0.4), squeeze=False)
+    for (ax_t, ax_tol), res in zip(axes, results):
+        tol = res.column("tol")
+        tm = res.column("time") * 1e3
+        ef = res.column("err_final")
+        ax_t.loglog(tm, ef, "o-", color="C0", label="ours (simulate), final")
+        ax_t.loglog(tm, res.column("err_dense"), "s--", color="C0", mfc="none", ms=4,
+                    label="ours, max over dense output")
+        if np.isfinite(res.column("scipy_time")).any():
+            ax_t.loglog(res.column("scipy_time") * 1e3, res.column("scipy_err_final"), "o-",
+                        color="C3", label="SciPy RK45, our rhs from Python")
+        if np.isfinite(res.column("rk4_err_final")).any():
+            r4 = res.column("rk4_err_final")
+            r4 = np.where(np.isfinite(r4), r4, np.nan)
+            ax_t.loglog(tm, r4, "^-", color="C2", label="fixed-step RK4, same nfev")
+        for x, y, t in zip(tm, ef, tol):
+            ax_t.annotate(f"{t:.0e}", (x, y), fontsize=6, xytext=(3, 3),
+                          textcoords="offset points")
+        ax_t.set_xlabel("wall time (ms)")
+        ax_t.set_ylabel("relative error")
+        ax_t.set_title(f"{res.scene}, {res.t_span[1] - res.t_span[0]:g} s", fontsize=9)
+        ax_t.grid(alpha=0.3, which="both")
+        ax_t.legend(fontsize=7)
+        ax_tol.loglog(tol, ef, "o-", color="C0", label="final state")
+        ax_tol.loglog(tol, res.column("err_dense"), "s--", color="C0", mfc="none", ms=4,
+                      label="max over dense output")
+        ax_tol.loglog(tol, res.column("err_energy"), "d-", color="C1", label="energy")
+        ax_tol.loglog(tol, tol, ":", color="gray", label="error = tol")
+        ax_tol.invert_xaxis()
+        ax_tol.set_xlabel("rtol = atol")
+        ax_tol.grid(alpha=0.3, which="both")
+        ax_tol.legend(fontsize=7)
+    if title:
+        fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
+
+
+__all__ = ["work_precision", "WorkPrecision", "plot_work_precision", "write_csv", "scene_rhs",
+           "rk4_fixed", "DEFAULT_TOLERANCES"]

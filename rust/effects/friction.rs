@@ -1,0 +1,114 @@
+//! Regularised Coulomb joint friction: `τ = −F tanh(v / v_eps)` on each speed of a 1-dof or
+//! Euler-angle joint, and `τ = −F tanh(|ω| / v_eps) ω/|ω|` (isotropic, frame-independent) on
+//! a quaternion spherical joint's angular velocity `ω`. `F` is the friction torque (N·m) or
+//! force (N) reached when sliding well above `v_eps`; below it the law is viscous with slope
+//! `F / v_eps`, which keeps the equations smooth (no stick-slip switching). Power ≤ 0.
+use super::{resolve_joints, Context, Fields, ForceLaw, JointRef, PerJoint, Sign};
+use crate::error::{Error, Result};
+use crate::joint::Joint;
+use crate::model::Model;
+use crate::spatial::Vec6;
+
+/// Default regularisation speed (rad/s or m/s).
+pub const DEFAULT_V_EPS: f64 = 1e-3;
+
+/// Keys of a `type = "friction"` table.
+pub(super) const KEYS: &[&str] = &["name", "joints", "friction", "v_eps"];
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Friction {
+    pub name: Option<String>,
+    /// `None`: every moving joint.
+    pub joints: Option<Vec<JointRef>>,
+    /// Friction level `F`, one number or one per selected joint.
+    pub friction: PerJoint,
+    /// Regularisation speed `v_eps > 0`.
+    pub v_eps: f64,
+}
+
+impl Friction {
+    pub fn new(
+        name: Option<String>,
+        joints: Option<Vec<JointRef>>,
+        friction: PerJoint,
+        v_eps: Option<f64>,
+    ) -> Result<Friction> {
+        friction.check("friction", Sign::NonNegative)?;
+        let v_eps = v_eps.unwrap_or(DEFAULT_V_EPS);
+        if !(v_eps > 0.0 && v_eps.is_finite()) {
+            return Err(Error::arg(
+                "v_eps",
+                "a finite number > 0",
+                v_eps.to_string(),
+            ));
+        }
+        Ok(Friction {
+            name,
+            joints,
+            friction,
+            v_eps,
+        })
+    }
+
+    pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<Friction> {
+        let name = f.string("name")?;
+        let joints = f.joints("joints")?;
+        let friction = f.per_joint("friction")?;
+        let v_eps = f.number("v_eps")?;
+        let friction = friction
+            .ok_or_else(|| Error::arg("friction", "a number >= 0 or one per joint", "nothing"))?;
+        Friction::new(name, joints, friction, v_eps)
+    }
+
+    pub fn build(&self, model: &Model) -> Result<FrictionLaw> {
+        let slots = resolve_joints(model, &self.joints, "joints")?;
+        let f = self.friction.expand(slots.len(), "friction", "joint")?;
+        let mut law = FrictionLaw {
+            scalar: Vec::new(),
+            ball: Vec::new(),
+            inv_eps: 1.0 / self.v_eps,
+        };
+        for (s, f) in slots.iter().zip(f) {
+            match s.joint {
+                Joint::Spherical => law.ball.push((s.v_index, f)),
+                _ => {
+                    for k in 0..s.joint.nv() {
+                        law.scalar.push((s.v_index + k, f));
+                    }
+                }
+            }
+        }
+        Ok(law)
+    }
+}
+
+pub struct FrictionLaw {
+    scalar: Vec<(usize, f64)>,
+    ball: Vec<(usize, f64)>,
+    inv_eps: f64,
+}
+
+impl ForceLaw for FrictionLaw {
+    #[inline]
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        _wrenches: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        for &(i, f) in &self.scalar {
+            tau[i] -= f * (cx.v[i] * self.inv_eps).tanh();
+        }
+        for &(i, f) in &self.ball {
+            let w = &cx.v[i..i + 3];
+            let s = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+            if s > 0.0 {
+                let c = f * (s * self.inv_eps).tanh() / s;
+                for k in 0..3 {
+                    tau[i + k] -= c * w[k];
+                }
+            }
+        }
+        Ok(false)
+    }
+}

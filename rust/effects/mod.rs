@@ -1,0 +1,980 @@
+//! Effects a scene declares. The engine composes exactly the declared ones: an undeclared
+//! effect costs nothing, and a scene with none runs free motion.
+//!
+//! Two layers:
+//! * [`Effect`] is the declaration a scene stores (TOML `[[effect]]` tables, `pmd.Spring(...)`
+//!   and friends in Python): plain, comparable data that names joints and bodies but does not
+//!   know the model yet.
+//! * [`ForceLaw`] is the one trait the engine calls. [`Effects::new`] resolves each declaration
+//!   against the model (joint names to coordinate slots, tables to their columns) into a
+//!   `Box<dyn ForceLaw>` with everything it needs preallocated, so evaluating it allocates
+//!   nothing. A new effect is a new file here with a declaration, a law and `from_toml`, plus
+//!   one variant and one match arm below; `simulate.rs` and the recursion do not change.
+//!
+//! Uniform gravity is a law whose [`ForceLaw::base_acceleration`] the engine puts on the
+//! base twist rate `[0; −g]`, so it costs no extra pass. Every other law adds generalized
+//! joint forces to `τ` and/or wrenches `[moment about the link origin; force]` (world axes)
+//! on the moving links, which the O(n) forward dynamics takes as `external`.
+//!
+//! Families (the names of the global disable switch, MuJoCo-style): `gravity`, `springs`,
+//! `dampers`, `friction`, `torques` (constant, tabulated, PD and callback torques) and
+//! `external`. All effect parameters are SI with angles in radians, whatever a scene's
+//! `angles` key says (that key is about `q0`, `v0` and `rpy`).
+//!
+//! Energy: gravity and springs are conservative ([`ForceLaw::potential_energy`]); for every
+//! effect `e` its power is `P_e = τ_e · v`, so along any motion
+//! `d(T + V_gravity + V_springs)/dt = Σ_{e non-conservative} P_e`.
+//!
+//! Scene files: one `[[effect]]` table per effect, `type` selecting it; every type but
+//! gravity takes an optional `name` (its output key; default the family's name, numbered
+//! `springs_2`, ... from the second on). `joints` is a body name or index or a list of them
+//! (omitted: every moving joint); per-joint numbers are one number or a list, one per joint.
+//!
+//! | type               | keys                                                        |
+//! |--------------------|-------------------------------------------------------------|
+//! | `gravity`          | `g = [x, y, z]`                                             |
+//! | `spring`           | `joints`, `stiffness`, `rest` (number, or coordinates)      |
+//! | `damper`           | `joints`, `damping`                                         |
+//! | `friction`         | `joints`, `friction`, `v_eps` (default 1e-3)                |
+//! | `torque`           | `joints`, `tau` (number, or one per speed)                  |
+//! | `tabulated_torque` | `joints`, `time = [...]`, `values` (list, or rows per time) |
+//! | `pd_torque`        | `joints`, `kp`, `kd`, `time`, `reference` (rows per time)   |
+//! | `external`         | `body`, `point`, `frame` ("world"/"body"), `force`, `moment`; with `time`, `force`/`moment` are rows per time |
+//!
+//! `[simulate] disable = ["gravity", "springs"]` switches families off.
+pub mod damper;
+pub mod external;
+pub mod friction;
+pub mod gravity;
+pub mod spring;
+pub mod table;
+pub mod torque;
+
+use crate::error::{check_finite, Error, Result};
+use crate::joint::Joint;
+use crate::kinematics::LinkState;
+use crate::model::Model;
+use crate::recursive::{self, Data};
+use crate::spatial::{Vec3, Vec6};
+
+pub use damper::Damper;
+pub use external::{External, ExternalLoad, Frame};
+pub use friction::Friction;
+pub use spring::Spring;
+pub use table::Table;
+pub use torque::{Torque, TorqueFunction, TorqueLaw};
+
+// ------------------------------------------------------------------------------------------
+// Declarations
+// ------------------------------------------------------------------------------------------
+
+/// A declared effect (see the module docs). Each variant's data lives in its own file.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Effect {
+    /// Uniform gravity `g` (m/s², world frame): `f_ij = m_ij g` on every point mass.
+    Gravity {
+        g: Vec3,
+    },
+    Spring(Spring),
+    Damper(Damper),
+    Friction(Friction),
+    Torque(Torque),
+    External(External),
+}
+
+impl Effect {
+    pub fn gravity(g: Vec3) -> Result<Effect> {
+        check_finite("gravity", g.as_slice())?;
+        Ok(Effect::Gravity { g })
+    }
+
+    /// The family this effect belongs to (what `disable` switches off).
+    pub fn kind(&self) -> Kind {
+        match self {
+            Effect::Gravity { .. } => Kind::Gravity,
+            Effect::Spring(_) => Kind::Springs,
+            Effect::Damper(_) => Kind::Dampers,
+            Effect::Friction(_) => Kind::Friction,
+            Effect::Torque(_) => Kind::Torques,
+            Effect::External(_) => Kind::External,
+        }
+    }
+
+    /// The name the user gave, if any.
+    pub fn label(&self) -> Option<&str> {
+        match self {
+            Effect::Gravity { .. } => None,
+            Effect::Spring(e) => e.name.as_deref(),
+            Effect::Damper(e) => e.name.as_deref(),
+            Effect::Friction(e) => e.name.as_deref(),
+            Effect::Torque(e) => e.name.as_deref(),
+            Effect::External(e) => e.name.as_deref(),
+        }
+    }
+
+    /// The user's name, or the family's.
+    pub fn name(&self) -> &str {
+        self.label().unwrap_or(self.kind().name())
+    }
+
+    /// Resolves the declaration against `model` into the law the engine evaluates. Errors
+    /// name the field at fault (`joints`, `stiffness`, `values`, ...).
+    pub fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
+        Ok(match self {
+            Effect::Gravity { g } => Box::new(gravity::GravityLaw { g: *g }),
+            Effect::Spring(e) => Box::new(e.build(model)?),
+            Effect::Damper(e) => Box::new(e.build(model)?),
+            Effect::Friction(e) => Box::new(e.build(model)?),
+            Effect::Torque(e) => e.build(model)?,
+            Effect::External(e) => Box::new(e.build(model)?),
+        })
+    }
+
+    /// Parses one `[[effect]]` table of a scene file. Errors name the key (without the
+    /// `effect[k].` prefix, which the scene adds).
+    pub fn from_toml(table: &toml::Table) -> Result<Effect> {
+        let mut f = Fields::new(table);
+        let ty = f
+            .string("type")?
+            .ok_or_else(|| Error::arg("type", format!("one of {TOML_TYPES}"), "nothing"))?;
+        let keys: &[&str] = match ty.as_str() {
+            "gravity" => &["g"],
+            "spring" => spring::KEYS,
+            "damper" => damper::KEYS,
+            "friction" => friction::KEYS,
+            "torque" => torque::KEYS_CONSTANT,
+            "tabulated_torque" => torque::KEYS_TABULATED,
+            "pd_torque" => torque::KEYS_PD,
+            "external" => external::KEYS,
+            _ => &[],
+        };
+        // A misspelt key first: it is usually why a required one is missing.
+        if !keys.is_empty() {
+            f.check_keys(&ty, keys)?;
+        }
+        let e = match ty.as_str() {
+            "gravity" => {
+                let g = f
+                    .vec3("g")?
+                    .ok_or_else(|| Error::arg("g", "a 3-vector (m/s², world frame)", "nothing"))?;
+                Effect::gravity(g)?
+            }
+            "spring" => Effect::Spring(Spring::from_toml(&mut f)?),
+            "damper" => Effect::Damper(Damper::from_toml(&mut f)?),
+            "friction" => Effect::Friction(Friction::from_toml(&mut f)?),
+            "torque" | "tabulated_torque" | "pd_torque" => {
+                Effect::Torque(Torque::from_toml(&ty, &mut f)?)
+            }
+            "external" => Effect::External(External::from_toml(&mut f)?),
+            other => {
+                return Err(Error::arg(
+                    "type",
+                    format!("one of {TOML_TYPES}"),
+                    format!("\"{other}\""),
+                ))
+            }
+        };
+        Ok(e)
+    }
+}
+
+const TOML_TYPES: &str = "\"gravity\", \"spring\", \"damper\", \"friction\", \"torque\", \
+\"tabulated_torque\", \"pd_torque\", \"external\"";
+
+/// Effect families: what a global disable switch turns off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Kind {
+    Gravity,
+    Springs,
+    Dampers,
+    Friction,
+    Torques,
+    External,
+}
+
+impl Kind {
+    pub const ALL: [Kind; 6] = [
+        Kind::Gravity,
+        Kind::Springs,
+        Kind::Dampers,
+        Kind::Friction,
+        Kind::Torques,
+        Kind::External,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Gravity => "gravity",
+            Kind::Springs => "springs",
+            Kind::Dampers => "dampers",
+            Kind::Friction => "friction",
+            Kind::Torques => "torques",
+            Kind::External => "external",
+        }
+    }
+
+    /// The family named `name` (singular forms accepted: `spring`, `damper`, `torque`).
+    pub fn parse(name: &str) -> Option<Kind> {
+        Some(match name {
+            "gravity" => Kind::Gravity,
+            "springs" | "spring" => Kind::Springs,
+            "dampers" | "damper" => Kind::Dampers,
+            "friction" => Kind::Friction,
+            "torques" | "torque" => Kind::Torques,
+            "external" => Kind::External,
+            _ => return None,
+        })
+    }
+
+    fn bit(self) -> u8 {
+        1 << (self as u8)
+    }
+}
+
+/// The set of disabled families (empty by default).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Disabled(u8);
+
+impl Disabled {
+    pub fn none() -> Self {
+        Disabled(0)
+    }
+    pub fn with(self, kind: Kind) -> Self {
+        Disabled(self.0 | kind.bit())
+    }
+    pub fn contains(self, kind: Kind) -> bool {
+        self.0 & kind.bit() != 0
+    }
+    /// Parses family names; errors name `arg` and list the valid names.
+    pub fn parse<S: AsRef<str>>(names: &[S], arg: &str) -> Result<Self> {
+        let mut d = Disabled::none();
+        for (k, n) in names.iter().enumerate() {
+            let n = n.as_ref();
+            let kind = Kind::parse(n).ok_or_else(|| {
+                Error::arg(
+                    format!("{arg}[{k}]"),
+                    "one of \"gravity\", \"springs\", \"dampers\", \"friction\", \"torques\", \"external\"",
+                    format!("\"{n}\""),
+                )
+            })?;
+            d = d.with(kind);
+        }
+        Ok(d)
+    }
+    /// The disabled families' names, in `Kind::ALL` order.
+    pub fn names(self) -> Vec<&'static str> {
+        Kind::ALL
+            .iter()
+            .filter(|k| self.contains(**k))
+            .map(|k| k.name())
+            .collect()
+    }
+}
+
+/// A joint (or body) chosen by its body's name or its body index (as `add_body` returns).
+#[derive(Debug, Clone, PartialEq)]
+pub enum JointRef {
+    Name(String),
+    Index(usize),
+}
+
+impl std::fmt::Display for JointRef {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            JointRef::Name(n) => write!(f, "'{n}'"),
+            JointRef::Index(i) => write!(f, "{i}"),
+        }
+    }
+}
+
+/// A parameter given once for all selected joints or once per selected joint.
+#[derive(Debug, Clone, PartialEq)]
+pub enum PerJoint {
+    All(f64),
+    Each(Vec<f64>),
+}
+
+/// What a parameter must be.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Sign {
+    Any,
+    NonNegative,
+    Positive,
+}
+
+impl Sign {
+    fn ok(self, x: f64) -> bool {
+        x.is_finite()
+            && match self {
+                Sign::Any => true,
+                Sign::NonNegative => x >= 0.0,
+                Sign::Positive => x > 0.0,
+            }
+    }
+    fn expected(self) -> &'static str {
+        match self {
+            Sign::Any => "finite numbers",
+            Sign::NonNegative => "finite numbers >= 0",
+            Sign::Positive => "finite numbers > 0",
+        }
+    }
+}
+
+/// Checks every entry of `values` against `sign`; names `arg` and the first bad index.
+pub fn check_values(arg: &str, values: &[f64], sign: Sign) -> Result<()> {
+    match values.iter().position(|x| !sign.ok(*x)) {
+        None => Ok(()),
+        Some(k) => Err(Error::arg(
+            arg,
+            sign.expected(),
+            format!("{} at index {k}", values[k]),
+        )),
+    }
+}
+
+impl PerJoint {
+    pub fn check(&self, arg: &str, sign: Sign) -> Result<()> {
+        match self {
+            PerJoint::All(x) => {
+                if sign.ok(*x) {
+                    Ok(())
+                } else {
+                    Err(Error::arg(arg, sign.expected(), x.to_string()))
+                }
+            }
+            PerJoint::Each(v) => {
+                if v.is_empty() {
+                    return Err(Error::arg(arg, "a number or a non-empty list", "[]"));
+                }
+                check_values(arg, v, sign)
+            }
+        }
+    }
+
+    /// The `n` values, one per item; `what` says what the items are (for the error).
+    pub fn expand(&self, n: usize, arg: &str, what: &str) -> Result<Vec<f64>> {
+        match self {
+            PerJoint::All(x) => Ok(vec![*x; n]),
+            PerJoint::Each(v) if v.len() == n => Ok(v.clone()),
+            PerJoint::Each(v) => Err(Error::arg(
+                arg,
+                format!("a number or {n} values, one per {what}"),
+                format!("{} values", v.len()),
+            )),
+        }
+    }
+}
+
+/// A joint an effect acts on, resolved against the model.
+#[derive(Debug, Clone)]
+pub struct JointSlot {
+    pub body: usize,
+    pub link: usize,
+    pub name: String,
+    pub joint: Joint,
+    pub q_index: usize,
+    pub v_index: usize,
+}
+
+/// Resolves a body name or index to the body's index; errors name `arg`.
+pub fn resolve_body(model: &Model, r: &JointRef, arg: &str) -> Result<usize> {
+    match r {
+        JointRef::Name(n) => model.body_index(n).ok_or_else(|| {
+            let names: Vec<String> = model
+                .bodies
+                .iter()
+                .map(|b| format!("'{}'", b.name))
+                .collect();
+            Error::arg(
+                arg,
+                format!("the name of a body of the model ({})", names.join(", ")),
+                format!("'{n}'"),
+            )
+        }),
+        JointRef::Index(i) if *i < model.nbodies() => Ok(*i),
+        JointRef::Index(i) => Err(Error::arg(
+            arg,
+            format!("a body index 0..{}", model.nbodies()),
+            i.to_string(),
+        )),
+    }
+}
+
+/// Resolves a selection (`None`: every moving joint, in q/v order) to coordinate slots.
+pub fn resolve_joints(
+    model: &Model,
+    selection: &Option<Vec<JointRef>>,
+    arg: &str,
+) -> Result<Vec<JointSlot>> {
+    let slot = |link: usize| {
+        let l = &model.links[link];
+        JointSlot {
+            body: l.body,
+            link,
+            name: model.bodies[l.body].name.clone(),
+            joint: l.joint,
+            q_index: l.q_index,
+            v_index: l.v_index,
+        }
+    };
+    let Some(refs) = selection else {
+        return Ok((0..model.links.len()).map(slot).collect());
+    };
+    if refs.is_empty() {
+        return Err(Error::arg(arg, "at least one joint", "an empty list"));
+    }
+    let mut out: Vec<JointSlot> = Vec::with_capacity(refs.len());
+    for (k, r) in refs.iter().enumerate() {
+        let b = resolve_body(model, r, arg)?;
+        let rec = &model.bodies[b];
+        let link = match (rec.joint, rec.link) {
+            (Joint::Fixed, _) | (_, None) => {
+                return Err(Error::arg(
+                    arg,
+                    "bodies on moving joints",
+                    format!(
+                    "body '{}' (entry {k}), which is on a Fixed joint: it has no joint coordinate",
+                    rec.name
+                ),
+                ))
+            }
+            (_, Some(l)) => l,
+        };
+        if out.iter().any(|s| s.link == link) {
+            return Err(Error::arg(
+                arg,
+                "each joint once",
+                format!("body '{}' twice", rec.name),
+            ));
+        }
+        out.push(slot(link));
+    }
+    Ok(out)
+}
+
+// ------------------------------------------------------------------------------------------
+// The engine's side
+// ------------------------------------------------------------------------------------------
+
+/// The state an effect is evaluated at.
+#[derive(Clone, Copy)]
+pub struct Context<'a> {
+    pub model: &'a Model,
+    pub t: f64,
+    pub q: &'a [f64],
+    pub v: &'a [f64],
+}
+
+/// One effect, resolved against a model: the only interface the engine knows.
+pub trait ForceLaw: Send {
+    /// A uniform acceleration field put on the base twist rate (gravity). The engine then
+    /// never calls `apply` for this law in the right-hand side. Default: none.
+    fn base_acceleration(&self) -> Option<Vec3> {
+        None
+    }
+    /// Whether `apply` may write link wrenches (so the engine zeroes that buffer only then).
+    fn writes_wrenches(&self) -> bool {
+        false
+    }
+    /// Adds this effect's generalized joint forces at `cx` to `tau` (length nv) and its link
+    /// wrenches `[moment about the link origin; force]` (world axes) to `wrenches`; returns
+    /// whether it wrote a wrench. Must not allocate. An `Err` stops the integration.
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        wrenches: &mut [Vec6],
+    ) -> std::result::Result<bool, String>;
+    /// Potential energy of a conservative effect (`links` holds positions at `cx.q`);
+    /// `None` for the others.
+    fn potential_energy(&self, _cx: &Context<'_>, _links: &[LinkState]) -> Option<f64> {
+        None
+    }
+}
+
+struct Item {
+    label: String,
+    kind: Kind,
+    law: Box<dyn ForceLaw>,
+    /// Evaluated in the right-hand side (false for base-acceleration laws).
+    in_rhs: bool,
+}
+
+/// Names an effect output may not take (they are keys of the energy dictionary).
+pub const RESERVED_LABELS: [&str; 2] = ["kinetic", "total"];
+
+/// The declared, enabled effects of a scene, resolved against its model.
+pub struct Effects {
+    /// Sum of the enabled uniform gravities (zero when none).
+    pub gravity: Vec3,
+    items: Vec<Item>,
+    rhs_items: usize,
+    rhs_wrenches: bool,
+}
+
+impl Default for Effects {
+    fn default() -> Self {
+        Effects {
+            gravity: Vec3::zeros(),
+            items: Vec::new(),
+            rhs_items: 0,
+            rhs_wrenches: false,
+        }
+    }
+}
+
+/// Prefixes the argument an error names (`joints` → `effects[2].joints`).
+pub fn prefix_error(e: Error, prefix: &str) -> Error {
+    match e {
+        Error::InvalidArgument { arg, expected, got } => Error::InvalidArgument {
+            arg: if arg.is_empty() {
+                prefix.to_string()
+            } else {
+                format!("{prefix}.{arg}")
+            },
+            expected,
+            got,
+        },
+        Error::InvalidInertia { arg, reason } => Error::InvalidInertia {
+            arg: format!("{prefix}.{arg}"),
+            reason,
+        },
+        Error::InvalidModel { arg, reason } => Error::InvalidModel {
+            arg: format!("{prefix}.{arg}"),
+            reason,
+        },
+        Error::Singular(m) => Error::Singular(format!("{prefix}: {m}")),
+        Error::InvalidSetting(m) => Error::InvalidSetting(format!("{prefix}: {m}")),
+    }
+}
+
+impl Effects {
+    /// No effect at all: free motion.
+    pub fn none() -> Self {
+        Effects::default()
+    }
+
+    /// Resolves `specs` against `model`, leaving out the `disabled` families. Errors name
+    /// `{list}[k].field` (`list` is `effects` for Python, `effect` in a scene file).
+    pub fn new(model: &Model, specs: &[Effect], disabled: Disabled, list: &str) -> Result<Self> {
+        let mut set = Effects::none();
+        // Labels: the user's names first (unique, not reserved), then the family names,
+        // numbered from the second of a family on (`springs`, `springs_2`, ...).
+        let mut labels: Vec<Option<String>> = vec![None; specs.len()];
+        for (k, s) in specs.iter().enumerate() {
+            if let Some(l) = s.label() {
+                let arg = format!("{list}[{k}].name");
+                if l.is_empty() || RESERVED_LABELS.contains(&l) {
+                    return Err(Error::arg(
+                        arg,
+                        "a non-empty name other than 'kinetic' and 'total'",
+                        format!("'{l}'"),
+                    ));
+                }
+                if labels.iter().flatten().any(|x| x == l) {
+                    return Err(Error::arg(
+                        arg,
+                        "a name no other effect has",
+                        format!("'{l}' again"),
+                    ));
+                }
+                labels[k] = Some(l.to_string());
+            }
+        }
+        for (k, s) in specs.iter().enumerate() {
+            if labels[k].is_none() {
+                let base = s.kind().name();
+                let mut n = 1;
+                let mut l = base.to_string();
+                while labels.iter().flatten().any(|x| *x == l) {
+                    n += 1;
+                    l = format!("{base}_{n}");
+                }
+                labels[k] = Some(l);
+            }
+        }
+        for (k, (s, label)) in specs.iter().zip(labels).enumerate() {
+            // Resolve even disabled effects, so a scene is valid or not whatever is switched off.
+            let law = s
+                .build(model)
+                .map_err(|e| prefix_error(e, &format!("{list}[{k}]")))?;
+            if disabled.contains(s.kind()) {
+                continue;
+            }
+            let in_rhs = match law.base_acceleration() {
+                Some(g) => {
+                    set.gravity += g;
+                    false
+                }
+                None => true,
+            };
+            if in_rhs {
+                set.rhs_items += 1;
+                set.rhs_wrenches |= law.writes_wrenches();
+            }
+            set.items.push(Item {
+                label: label.unwrap_or_default(),
+                kind: s.kind(),
+                law,
+                in_rhs,
+            });
+        }
+        Ok(set)
+    }
+
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.items.is_empty()
+    }
+    /// Output names of the enabled effects, in declaration order.
+    pub fn labels(&self) -> Vec<String> {
+        self.items.iter().map(|i| i.label.clone()).collect()
+    }
+    pub fn kinds(&self) -> Vec<Kind> {
+        self.items.iter().map(|i| i.kind).collect()
+    }
+
+    /// The right-hand side's composition: overwrites `tau` with the sum of the joint forces
+    /// of the enabled effects (gravity excepted: it rides on the base acceleration) and, when
+    /// any effect writes wrenches, `wrenches` with theirs; returns whether it wrote wrenches.
+    /// With no such effect it touches nothing (`tau` is expected zero then).
+    #[inline]
+    pub fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        wrenches: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        if self.rhs_items == 0 {
+            return Ok(false);
+        }
+        tau.fill(0.0);
+        if self.rhs_wrenches {
+            wrenches.fill(Vec6::zeros());
+        }
+        let mut wrote = false;
+        for item in self.items.iter_mut().filter(|i| i.in_rhs) {
+            wrote |= item.law.apply(cx, tau, wrenches)?;
+        }
+        Ok(wrote)
+    }
+
+    /// Sum of the potential energies (gravity, springs); `links` holds positions at `cx.q`.
+    pub fn potential_energy(&self, cx: &Context<'_>, links: &[LinkState]) -> f64 {
+        self.items
+            .iter()
+            .filter_map(|i| i.law.potential_energy(cx, links))
+            .sum()
+    }
+
+    /// `(label, V)` of every conservative effect.
+    pub fn potentials(&self, cx: &Context<'_>, links: &[LinkState]) -> Vec<(String, f64)> {
+        self.items
+            .iter()
+            .filter_map(|i| {
+                i.law
+                    .potential_energy(cx, links)
+                    .map(|v| (i.label.clone(), v))
+            })
+            .collect()
+    }
+}
+
+/// Workspace for evaluating effects one by one (per-effect generalized forces and power):
+/// wrenches become joint forces through the inverse dynamics at rest, `τ_e = −ID(q, 0, 0)`.
+pub struct Probe {
+    data: Data,
+    zeros: Vec<f64>,
+    tau: Vec<f64>,
+    id_out: Vec<f64>,
+    wrenches: Vec<Vec6>,
+}
+
+impl Probe {
+    pub fn new(model: &Model) -> Self {
+        Probe {
+            data: Data::new(model),
+            zeros: vec![0.0; model.nv],
+            tau: vec![0.0; model.nv],
+            id_out: vec![0.0; model.nv],
+            wrenches: vec![Vec6::zeros(); model.links.len()],
+        }
+    }
+
+    /// Generalized force of each enabled effect at `cx`, row-major `len × nv` into `out`
+    /// (gravity's included: `Nᵀ f^G`).
+    pub fn forces(
+        &mut self,
+        effects: &mut Effects,
+        cx: &Context<'_>,
+        out: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        let nv = cx.model.nv;
+        for (k, item) in effects.items.iter_mut().enumerate() {
+            let row = &mut out[k * nv..(k + 1) * nv];
+            if let Some(g) = item.law.base_acceleration() {
+                recursive::inverse_dynamics(
+                    cx.model,
+                    &mut self.data,
+                    cx.q,
+                    &self.zeros,
+                    &self.zeros,
+                    &g,
+                    None,
+                    &mut self.id_out,
+                );
+                for (r, x) in row.iter_mut().zip(&self.id_out) {
+                    *r = -x;
+                }
+                continue;
+            }
+            self.tau.fill(0.0);
+            self.wrenches.fill(Vec6::zeros());
+            let wrote = item.law.apply(cx, &mut self.tau, &mut self.wrenches)?;
+            row.copy_from_slice(&self.tau);
+            if wrote {
+                recursive::inverse_dynamics(
+                    cx.model,
+                    &mut self.data,
+                    cx.q,
+                    &self.zeros,
+                    &self.zeros,
+                    &Vec3::zeros(),
+                    Some(&self.wrenches),
+                    &mut self.id_out,
+                );
+                for (r, x) in row.iter_mut().zip(&self.id_out) {
+                    *r -= x;
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Scene-file fields
+// ------------------------------------------------------------------------------------------
+
+/// The keys of one `[[effect]]` table, read with errors that name the key; `check_keys` refuses
+/// unknown keys up front.
+pub struct Fields<'a> {
+    table: &'a toml::Table,
+}
+
+fn toml_got(v: &toml::Value) -> String {
+    let s = v.to_string();
+    if s.len() > 60 {
+        format!(
+            "{}...",
+            &s[..s.char_indices().nth(57).map(|(i, _)| i).unwrap_or(s.len())]
+        )
+    } else {
+        s
+    }
+}
+
+fn toml_number(v: &toml::Value) -> Option<f64> {
+    match v {
+        toml::Value::Float(x) => Some(*x),
+        toml::Value::Integer(i) => Some(*i as f64),
+        _ => None,
+    }
+}
+
+impl<'a> Fields<'a> {
+    pub fn new(table: &'a toml::Table) -> Self {
+        Fields { table }
+    }
+
+    pub fn get(&mut self, key: &'static str) -> Option<&'a toml::Value> {
+        self.table.get(key)
+    }
+
+    pub fn has(&self, key: &str) -> bool {
+        self.table.contains_key(key)
+    }
+
+    /// Errors on a key that is not `type` or one of `keys`, listing those.
+    pub fn check_keys(&self, ty: &str, keys: &[&str]) -> Result<()> {
+        for key in self.table.keys() {
+            if key != "type" && !keys.contains(&key.as_str()) {
+                return Err(Error::arg(
+                    key.as_str(),
+                    format!("a key of a \"{ty}\" effect (type, {})", keys.join(", ")),
+                    "an unknown key",
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    pub fn string(&mut self, key: &'static str) -> Result<Option<String>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(toml::Value::String(s)) => Ok(Some(s.clone())),
+            Some(v) => Err(Error::arg(key, "a string", toml_got(v))),
+        }
+    }
+
+    pub fn number(&mut self, key: &'static str) -> Result<Option<f64>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => toml_number(v)
+                .map(Some)
+                .ok_or_else(|| Error::arg(key, "a number", toml_got(v))),
+        }
+    }
+
+    pub fn list(&mut self, key: &'static str) -> Result<Option<Vec<f64>>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => list_of_numbers(v)
+                .map(Some)
+                .ok_or_else(|| Error::arg(key, "a list of numbers", toml_got(v))),
+        }
+    }
+
+    pub fn vec3(&mut self, key: &'static str) -> Result<Option<Vec3>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => match list_of_numbers(v) {
+                Some(x) if x.len() == 3 => {
+                    check_finite(key, &x)?;
+                    Ok(Some(Vec3::new(x[0], x[1], x[2])))
+                }
+                _ => Err(Error::arg(key, "a list of 3 numbers", toml_got(v))),
+            },
+        }
+    }
+
+    /// A number (for all joints) or a list of numbers (one per joint).
+    pub fn per_joint(&mut self, key: &'static str) -> Result<Option<PerJoint>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => {
+                if let Some(x) = toml_number(v) {
+                    return Ok(Some(PerJoint::All(x)));
+                }
+                list_of_numbers(v)
+                    .map(|x| Some(PerJoint::Each(x)))
+                    .ok_or_else(|| Error::arg(key, "a number or a list of numbers", toml_got(v)))
+            }
+        }
+    }
+
+    /// A body name or index, or a list of them.
+    pub fn joints(&mut self, key: &'static str) -> Result<Option<Vec<JointRef>>> {
+        let one = |v: &toml::Value| -> Option<JointRef> {
+            match v {
+                toml::Value::String(s) => Some(JointRef::Name(s.clone())),
+                toml::Value::Integer(i) if *i >= 0 => Some(JointRef::Index(*i as usize)),
+                _ => None,
+            }
+        };
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => {
+                let bad = || {
+                    Error::arg(
+                        key,
+                        "a body name or index (>= 0), or a list of them",
+                        toml_got(v),
+                    )
+                };
+                if let toml::Value::Array(a) = v {
+                    a.iter()
+                        .map(|x| one(x).ok_or_else(bad))
+                        .collect::<Result<Vec<_>>>()
+                        .map(Some)
+                } else {
+                    one(v).map(|r| Some(vec![r])).ok_or_else(bad)
+                }
+            }
+        }
+    }
+
+    /// A table of numbers: a list (one column) or a list of equal-length rows. Returns
+    /// `(values row-major, rows, cols, given as one list)`.
+    pub fn matrix(&mut self, key: &'static str) -> Result<Option<Matrix>> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(v) => {
+                if let Some(x) = list_of_numbers(v) {
+                    let n = x.len();
+                    return Ok(Some(Matrix {
+                        values: x,
+                        rows: n,
+                        cols: 1,
+                        one_d: true,
+                    }));
+                }
+                let bad = || {
+                    Error::arg(
+                        key,
+                        "a list of numbers or a list of rows of numbers",
+                        toml_got(v),
+                    )
+                };
+                let toml::Value::Array(rows) = v else {
+                    return Err(bad());
+                };
+                let mut values = Vec::new();
+                let mut cols = None;
+                for (i, r) in rows.iter().enumerate() {
+                    let row = list_of_numbers(r).ok_or_else(bad)?;
+                    match cols {
+                        None => cols = Some(row.len()),
+                        Some(c) if c != row.len() => {
+                            return Err(Error::arg(
+                                key,
+                                format!("rows of equal length ({c})"),
+                                format!("row {i} of length {}", row.len()),
+                            ))
+                        }
+                        _ => {}
+                    }
+                    values.extend(row);
+                }
+                Ok(Some(Matrix {
+                    values,
+                    rows: rows.len(),
+                    cols: cols.unwrap_or(0),
+                    one_d: false,
+                }))
+            }
+        }
+    }
+}
+
+fn list_of_numbers(v: &toml::Value) -> Option<Vec<f64>> {
+    match v {
+        toml::Value::Array(a) => a.iter().map(toml_number).collect(),
+        _ => None,
+    }
+}
+
+/// A numeric table as given (row-major).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Matrix {
+    pub values: Vec<f64>,
+    pub rows: usize,
+    pub cols: usize,
+    /// Given as a flat list (shape `(rows,)`).
+    pub one_d: bool,
+}
+
+impl Matrix {
+    pub fn shape(&self) -> String {
+        if self.one_d {
+            format!("shape ({},)", self.rows)
+        } else {
+            format!("shape ({}, {})", self.rows, self.cols)
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

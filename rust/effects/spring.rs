@@ -1,0 +1,198 @@
+//! Joint springs. On a revolute or prismatic joint: `τ = −k (q − q_rest)`, potential
+//! `½ k (q − q_rest)²`. On a quaternion `Spherical` joint: an isotropic rotational spring on
+//! the rotation vector `θ = log(q_rest⁻¹ q)` (|θ| ≤ π) of the joint rotation relative to its
+//! rest orientation: `τ = −k θ` (body-frame speeds, which is exactly `−∂V/∂` of the potential
+//! `½ k |θ|²` since `θ` is an eigenvector of the SO(3) Jacobians). Euler-angle
+//! (`SphericalZYZ`) joints are refused: use the quaternion joint.
+use super::{resolve_joints, Context, Fields, ForceLaw, JointRef, PerJoint, Sign};
+use crate::error::{Error, Result};
+use crate::joint::Joint;
+use crate::kinematics::LinkState;
+use crate::model::Model;
+use crate::spatial::Vec6;
+
+/// Keys of a `type = "spring"` table.
+pub(super) const KEYS: &[&str] = &["name", "joints", "stiffness", "rest"];
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Spring {
+    pub name: Option<String>,
+    /// `None`: every moving joint.
+    pub joints: Option<Vec<JointRef>>,
+    /// N·m/rad or N/m, one number or one per selected joint.
+    pub stiffness: PerJoint,
+    /// Rest configuration: one number for every 1-dof joint (quaternion joints then rest at
+    /// the identity), or the selected joints' coordinates in order (1 per revolute or
+    /// prismatic joint, 4 per quaternion joint: x, y, z, w).
+    pub rest: PerJoint,
+}
+
+impl Spring {
+    pub fn new(
+        name: Option<String>,
+        joints: Option<Vec<JointRef>>,
+        stiffness: PerJoint,
+        rest: Option<PerJoint>,
+    ) -> Result<Spring> {
+        stiffness.check("stiffness", Sign::NonNegative)?;
+        let rest = rest.unwrap_or(PerJoint::All(0.0));
+        rest.check("rest", Sign::Any)?;
+        Ok(Spring {
+            name,
+            joints,
+            stiffness,
+            rest,
+        })
+    }
+
+    pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<Spring> {
+        let name = f.string("name")?;
+        let joints = f.joints("joints")?;
+        let stiffness = f.per_joint("stiffness")?;
+        let rest = f.per_joint("rest")?;
+        let stiffness = stiffness
+            .ok_or_else(|| Error::arg("stiffness", "a number >= 0 or one per joint", "nothing"))?;
+        Spring::new(name, joints, stiffness, rest)
+    }
+
+    pub fn build(&self, model: &Model) -> Result<SpringLaw> {
+        let slots = resolve_joints(model, &self.joints, "joints")?;
+        let k = self.stiffness.expand(slots.len(), "stiffness", "joint")?;
+        let ncoords: usize = slots.iter().map(|s| s.joint.nq()).sum();
+        let mut law = SpringLaw {
+            linear: Vec::new(),
+            ball: Vec::new(),
+        };
+        let mut at = 0; // position in a flat `rest` list
+        if let PerJoint::Each(r) = &self.rest {
+            if r.len() != ncoords {
+                return Err(Error::arg(
+                    "rest",
+                    format!("a number for the 1-dof joints, or {ncoords} values: the selected joints' coordinates (1 per revolute/prismatic joint, 4 per quaternion joint)"),
+                    format!("{} values", r.len()),
+                ));
+            }
+        }
+        for (s, k) in slots.iter().zip(k) {
+            match s.joint {
+                Joint::Revolute { .. } | Joint::Prismatic { .. } => {
+                    let rest = match &self.rest {
+                        PerJoint::All(x) => *x,
+                        PerJoint::Each(r) => r[at],
+                    };
+                    law.linear.push(Linear {
+                        q: s.q_index,
+                        v: s.v_index,
+                        k,
+                        rest,
+                    });
+                }
+                Joint::Spherical => {
+                    let mut r = [0.0, 0.0, 0.0, 1.0];
+                    if let PerJoint::Each(given) = &self.rest {
+                        r.copy_from_slice(&given[at..at + 4]);
+                    }
+                    let n = r.iter().map(|x| x * x).sum::<f64>().sqrt();
+                    if n <= 1e-8 {
+                        return Err(Error::arg(
+                            "rest",
+                            "a quaternion (x, y, z, w) of non-zero norm for a Spherical joint",
+                            format!("{r:?} for body '{}'", s.name),
+                        ));
+                    }
+                    law.ball.push(Ball {
+                        q: s.q_index,
+                        v: s.v_index,
+                        k,
+                        rest_conj: [-r[0] / n, -r[1] / n, -r[2] / n, r[3] / n],
+                    });
+                }
+                Joint::SphericalZYZ | Joint::Fixed => {
+                    return Err(Error::arg(
+                        "joints",
+                        "revolute, prismatic or quaternion Spherical joints (a spring on Euler angles is not a rotational spring: use the Spherical joint)",
+                        format!("body '{}' on a {} joint", s.name, s.joint.kind()),
+                    ))
+                }
+            }
+            at += s.joint.nq();
+        }
+        Ok(law)
+    }
+}
+
+struct Linear {
+    q: usize,
+    v: usize,
+    k: f64,
+    rest: f64,
+}
+
+struct Ball {
+    q: usize,
+    v: usize,
+    k: f64,
+    /// Conjugate of the (unit) rest quaternion.
+    rest_conj: [f64; 4],
+}
+
+pub struct SpringLaw {
+    linear: Vec<Linear>,
+    ball: Vec<Ball>,
+}
+
+/// Rotation vector (|θ| ≤ π) of `r ⊗ q/|q|`, quaternions `(x, y, z, w)`.
+#[inline]
+pub fn relative_rotation_vector(r: &[f64; 4], q: &[f64]) -> [f64; 3] {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (bx, by, bz, bw) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    let (ax, ay, az, aw) = (r[0], r[1], r[2], r[3]);
+    let mut w = aw * bw - (ax * bx + ay * by + az * bz);
+    let mut x = aw * bx + bw * ax + (ay * bz - az * by);
+    let mut y = aw * by + bw * ay + (az * bx - ax * bz);
+    let mut z = aw * bz + bw * az + (ax * by - ay * bx);
+    if w < 0.0 {
+        (w, x, y, z) = (-w, -x, -y, -z);
+    }
+    let s = (x * x + y * y + z * z).sqrt();
+    let factor = if s > 0.0 {
+        2.0 * s.atan2(w) / s
+    } else {
+        2.0 / w
+    };
+    [factor * x, factor * y, factor * z]
+}
+
+impl ForceLaw for SpringLaw {
+    #[inline]
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        _wrenches: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        for s in &self.linear {
+            tau[s.v] -= s.k * (cx.q[s.q] - s.rest);
+        }
+        for s in &self.ball {
+            let th = relative_rotation_vector(&s.rest_conj, &cx.q[s.q..s.q + 4]);
+            for (k, x) in th.iter().enumerate() {
+                tau[s.v + k] -= s.k * x;
+            }
+        }
+        Ok(false)
+    }
+
+    fn potential_energy(&self, cx: &Context<'_>, _links: &[LinkState]) -> Option<f64> {
+        let mut e = 0.0;
+        for s in &self.linear {
+            let d = cx.q[s.q] - s.rest;
+            e += 0.5 * s.k * d * d;
+        }
+        for s in &self.ball {
+            let th = relative_rotation_vector(&s.rest_conj, &cx.q[s.q..s.q + 4]);
+            e += 0.5 * s.k * (th[0] * th[0] + th[1] * th[1] + th[2] * th[2]);
+        }
+        Some(e)
+    }
+}

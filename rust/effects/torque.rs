@@ -1,0 +1,352 @@
+//! Joint torques (forces on prismatic joints), the `torques` family:
+//! * constant: `τ = τ_0` on the selected joints' speeds;
+//! * tabulated in time: linear interpolation between rows, the end rows held outside;
+//! * a PD law tracking a tabulated reference on 1-dof joints:
+//!   `τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)`, with `q̇_ref` the slope of the table's
+//!   segment (right-continuous at breakpoints, zero outside the table);
+//! * a function `f(t, q, v) → τ` (length nv), e.g. a Python callable.
+use std::sync::Arc;
+
+use super::table::Table;
+use super::{
+    resolve_joints, Context, Fields, ForceLaw, JointRef, JointSlot, Matrix, PerJoint, Sign,
+};
+use crate::error::{Error, Result};
+use crate::joint::Joint;
+use crate::model::Model;
+use crate::spatial::Vec6;
+
+/// A torque callback: `f(t, q, v, out)` writes all `nv` generalized forces into `out`.
+pub type TorqueFn =
+    dyn Fn(f64, &[f64], &[f64], &mut [f64]) -> std::result::Result<(), String> + Send + Sync;
+
+/// A shared torque callback (equal only to itself).
+#[derive(Clone)]
+pub struct TorqueFunction(pub Arc<TorqueFn>);
+
+impl std::fmt::Debug for TorqueFunction {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "TorqueFunction({:p})", Arc::as_ptr(&self.0))
+    }
+}
+
+impl PartialEq for TorqueFunction {
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum TorqueLaw {
+    /// One number for every speed of the selected joints, or one per speed.
+    Constant(PerJoint),
+    /// One column per speed of the selected joints, in order.
+    Tabulated(Table),
+    /// 1-dof joints only; the reference has one column per selected joint.
+    Pd {
+        kp: PerJoint,
+        kd: PerJoint,
+        reference: Table,
+    },
+    /// All `nv` generalized forces from a function; acts on every joint (`joints` is None).
+    Function(TorqueFunction),
+}
+
+/// Keys of `type = "torque"`, `"tabulated_torque"` and `"pd_torque"` tables.
+pub(super) const KEYS_CONSTANT: &[&str] = &["name", "joints", "tau"];
+pub(super) const KEYS_TABULATED: &[&str] = &["name", "joints", "time", "values"];
+pub(super) const KEYS_PD: &[&str] = &["name", "joints", "kp", "kd", "time", "reference"];
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Torque {
+    pub name: Option<String>,
+    /// `None`: every moving joint.
+    pub joints: Option<Vec<JointRef>>,
+    pub law: TorqueLaw,
+}
+
+impl Torque {
+    pub fn constant(
+        name: Option<String>,
+        joints: Option<Vec<JointRef>>,
+        tau: PerJoint,
+    ) -> Result<Torque> {
+        tau.check("tau", Sign::Any)?;
+        Ok(Torque {
+            name,
+            joints,
+            law: TorqueLaw::Constant(tau),
+        })
+    }
+
+    pub fn tabulated(
+        name: Option<String>,
+        joints: Option<Vec<JointRef>>,
+        table: Table,
+    ) -> Result<Torque> {
+        Ok(Torque {
+            name,
+            joints,
+            law: TorqueLaw::Tabulated(table),
+        })
+    }
+
+    pub fn pd(
+        name: Option<String>,
+        joints: Option<Vec<JointRef>>,
+        kp: PerJoint,
+        kd: PerJoint,
+        reference: Table,
+    ) -> Result<Torque> {
+        kp.check("kp", Sign::NonNegative)?;
+        kd.check("kd", Sign::NonNegative)?;
+        Ok(Torque {
+            name,
+            joints,
+            law: TorqueLaw::Pd { kp, kd, reference },
+        })
+    }
+
+    pub fn function(name: Option<String>, f: TorqueFunction) -> Torque {
+        Torque {
+            name,
+            joints: None,
+            law: TorqueLaw::Function(f),
+        }
+    }
+
+    pub(super) fn from_toml(ty: &str, f: &mut Fields<'_>) -> Result<Torque> {
+        let name = f.string("name")?;
+        let joints = f.joints("joints")?;
+        let need = |key: &str, what: &str| Error::arg(key, what, "nothing");
+        match ty {
+            "torque" => {
+                let tau = f
+                    .per_joint("tau")?
+                    .ok_or_else(|| need("tau", "a number or one per joint speed"))?;
+                Torque::constant(name, joints, tau)
+            }
+            "tabulated_torque" => {
+                let time = f.list("time")?;
+                let values = f.matrix("values")?;
+                let time = time.ok_or_else(|| need("time", "a list of increasing times"))?;
+                let values = values.ok_or_else(|| {
+                    need("values", "one row per time, one column per joint speed")
+                })?;
+                Torque::tabulated(name, joints, Table::new(time, values, "time", "values")?)
+            }
+            _ => {
+                let kp = f.per_joint("kp")?;
+                let kd = f.per_joint("kd")?;
+                let time = f.list("time")?;
+                let reference = f.matrix("reference")?;
+                let kp = kp.ok_or_else(|| need("kp", "a number >= 0 or one per joint"))?;
+                let kd = kd.ok_or_else(|| need("kd", "a number >= 0 or one per joint"))?;
+                let time = time.ok_or_else(|| need("time", "a list of increasing times"))?;
+                let reference = reference
+                    .ok_or_else(|| need("reference", "one row per time, one column per joint"))?;
+                let table = Table::new(time, reference, "time", "reference")?;
+                Torque::pd(name, joints, kp, kd, table)
+            }
+        }
+    }
+
+    pub fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
+        if let TorqueLaw::Function(f) = &self.law {
+            if self.joints.is_some() {
+                return Err(Error::arg(
+                    "joints",
+                    "None for a torque function (it returns all nv generalized forces)",
+                    "a selection",
+                ));
+            }
+            return Ok(Box::new(FunctionLaw {
+                f: f.clone(),
+                out: vec![0.0; model.nv],
+            }));
+        }
+        let slots = resolve_joints(model, &self.joints, "joints")?;
+        let dofs: Vec<usize> = slots
+            .iter()
+            .flat_map(|s| (0..s.joint.nv()).map(move |k| s.v_index + k))
+            .collect();
+        let names = || {
+            slots
+                .iter()
+                .map(|s| format!("'{}'", s.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        match &self.law {
+            TorqueLaw::Constant(tau) => {
+                let tau = tau.expand(dofs.len(), "tau", "speed of the selected joints")?;
+                Ok(Box::new(ConstantLaw {
+                    dofs: dofs.into_iter().zip(tau).collect(),
+                }))
+            }
+            TorqueLaw::Tabulated(table) => {
+                if table.cols() != dofs.len() {
+                    return Err(Error::arg(
+                        "values",
+                        format!(
+                            "shape ({}, {}): one column per speed of the selected joints ({})",
+                            table.len(),
+                            dofs.len(),
+                            names()
+                        ),
+                        table.shape(),
+                    ));
+                }
+                Ok(Box::new(TableLaw {
+                    row: vec![0.0; dofs.len()],
+                    dofs,
+                    table: table.clone(),
+                    hint: 0,
+                }))
+            }
+            TorqueLaw::Pd { kp, kd, reference } => {
+                one_dof_only(&slots)?;
+                let n = slots.len();
+                if reference.cols() != n {
+                    return Err(Error::arg(
+                        "reference",
+                        format!(
+                            "shape ({}, {n}): one column per selected joint ({})",
+                            reference.len(),
+                            names()
+                        ),
+                        reference.shape(),
+                    ));
+                }
+                let kp = kp.expand(n, "kp", "joint")?;
+                let kd = kd.expand(n, "kd", "joint")?;
+                Ok(Box::new(PdLaw {
+                    joints: slots
+                        .iter()
+                        .zip(kp.into_iter().zip(kd))
+                        .map(|(s, (kp, kd))| (s.q_index, s.v_index, kp, kd))
+                        .collect(),
+                    table: reference.clone(),
+                    hint: 0,
+                    r: vec![0.0; n],
+                    rd: vec![0.0; n],
+                }))
+            }
+            TorqueLaw::Function(_) => unreachable!("handled above"),
+        }
+    }
+}
+
+fn one_dof_only(slots: &[JointSlot]) -> Result<()> {
+    match slots
+        .iter()
+        .find(|s| !matches!(s.joint, Joint::Revolute { .. } | Joint::Prismatic { .. }))
+    {
+        None => Ok(()),
+        Some(s) => Err(Error::arg(
+            "joints",
+            "revolute or prismatic joints for a PD torque",
+            format!("body '{}' on a {} joint", s.name, s.joint.kind()),
+        )),
+    }
+}
+
+/// A `Matrix` from a flat column (Python and tests build tables this way).
+pub fn column(values: Vec<f64>) -> Matrix {
+    let n = values.len();
+    Matrix {
+        values,
+        rows: n,
+        cols: 1,
+        one_d: true,
+    }
+}
+
+struct ConstantLaw {
+    dofs: Vec<(usize, f64)>,
+}
+
+impl ForceLaw for ConstantLaw {
+    #[inline]
+    fn apply(
+        &mut self,
+        _cx: &Context<'_>,
+        tau: &mut [f64],
+        _w: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        for &(i, x) in &self.dofs {
+            tau[i] += x;
+        }
+        Ok(false)
+    }
+}
+
+struct TableLaw {
+    dofs: Vec<usize>,
+    table: Table,
+    hint: usize,
+    row: Vec<f64>,
+}
+
+impl ForceLaw for TableLaw {
+    #[inline]
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        _w: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        self.table.eval(cx.t, &mut self.hint, &mut self.row);
+        for (&i, x) in self.dofs.iter().zip(&self.row) {
+            tau[i] += x;
+        }
+        Ok(false)
+    }
+}
+
+struct PdLaw {
+    /// (q index, v index, kp, kd)
+    joints: Vec<(usize, usize, f64, f64)>,
+    table: Table,
+    hint: usize,
+    r: Vec<f64>,
+    rd: Vec<f64>,
+}
+
+impl ForceLaw for PdLaw {
+    #[inline]
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        _w: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        self.table
+            .eval_with_slope(cx.t, &mut self.hint, &mut self.r, &mut self.rd);
+        for (k, &(iq, iv, kp, kd)) in self.joints.iter().enumerate() {
+            tau[iv] += kp * (self.r[k] - cx.q[iq]) + kd * (self.rd[k] - cx.v[iv]);
+        }
+        Ok(false)
+    }
+}
+
+struct FunctionLaw {
+    f: TorqueFunction,
+    out: Vec<f64>,
+}
+
+impl ForceLaw for FunctionLaw {
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        _w: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        self.out.fill(0.0);
+        (self.f.0)(cx.t, cx.q, cx.v, &mut self.out)?;
+        for (t, x) in tau.iter_mut().zip(&self.out) {
+            *t += x;
+        }
+        Ok(false)
+    }
+}
