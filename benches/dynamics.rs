@@ -5,7 +5,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::DMatrix;
 use pointmass_dyn::benchmark_models::{chain, paper_pendulum, tree};
-use pointmass_dyn::effects::Effect;
+use pointmass_dyn::effects::{Disabled, Effect};
 use pointmass_dyn::integrator::{Rk45Options, Stepper};
 use pointmass_dyn::model::Model;
 use pointmass_dyn::recursive::{self, Data};
@@ -113,9 +113,15 @@ fn bench(c: &mut Criterion) {
         group.bench_function(BenchmarkId::from_parameter(&name), |b| {
             b.iter_batched_ref(
                 || {
-                    let mut st =
-                        Stepper::new(Dynamics::new(&model, &effects), 0.0, &y0, 1e9, &opts)
-                            .expect("valid options");
+                    let mut st = Stepper::new(
+                        Dynamics::try_new(&model, &effects, Disabled::none())
+                            .expect("gravity fits any model"),
+                        0.0,
+                        &y0,
+                        1e9,
+                        &opts,
+                    )
+                    .expect("valid options");
                     st.initialize().expect("initial step");
                     st
                 },

@@ -32,17 +32,6 @@ pub type Progress<'a> = Box<dyn FnMut(f64) -> bool + Send + 'a>;
 const PROGRESS_EVERY: usize = 256;
 
 impl<'a> Dynamics<'a> {
-    /// The system with `effects` resolved against `model`, none disabled.
-    ///
-    /// Panics if an effect does not fit the model (an unknown joint name, a table of the
-    /// wrong width); for user input use [`Dynamics::try_new`]. Gravity always fits.
-    pub fn new(model: &'a Model, effects: &[Effect]) -> Self {
-        match Self::try_new(model, effects, Disabled::none()) {
-            Ok(d) => d,
-            Err(e) => panic!("effects that fit the model (use Dynamics::try_new): {e}"),
-        }
-    }
-
     /// The system with `effects` resolved against `model`, the `disabled` families left out.
     pub fn try_new(model: &'a Model, effects: &[Effect], disabled: Disabled) -> Result<Self> {
         Ok(Self::with_effects(
