@@ -41,7 +41,11 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
         };
         let qi = &q[l.q_index..l.q_index + l.joint.nq()];
         // Most joints sit at an unrotated placement: skip that product.
-        let r_joint = if l.placement_rotated { r_parent * l.placement.rotation } else { r_parent };
+        let r_joint = if l.placement_rotated {
+            r_parent * l.placement.rotation
+        } else {
+            r_parent
+        };
         let (r_q, t_q) = l.joint.transform(qi);
         let s = &mut st[i];
         s.joint_rotation = r_joint;

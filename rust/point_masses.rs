@@ -64,7 +64,11 @@ impl EquimomentalSet {
             let off = j[(i, k)];
             let bound = (j[(i, i)] * j[(k, k)]).max(0.0).sqrt();
             if off.abs() > bound {
-                let (small, large) = if j[(i, i)] <= j[(k, k)] { (i, k) } else { (k, i) };
+                let (small, large) = if j[(i, i)] <= j[(k, k)] {
+                    (i, k)
+                } else {
+                    (k, i)
+                };
                 let raise = if j[(large, large)] > 0.0 {
                     off * off / j[(large, large)] - j[(small, small)]
                 } else {

@@ -250,7 +250,8 @@ impl ArticulatedInertia {
         let mut m = Mat6::zeros();
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.p);
         m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.q);
-        m.fixed_view_mut::<3, 3>(3, 0).copy_from(&self.q.transpose());
+        m.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&self.q.transpose());
         m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.r);
         m
     }

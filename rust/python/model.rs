@@ -182,13 +182,36 @@ impl PyModel {
             Method::Recursive => {
                 let (data, out) = (&mut self.data, &mut self.out);
                 let mut run = || match direction {
-                    Direction::Forward => recursive::forward_dynamics(model, data, qv, vv, xv, &g, ext.as_deref(), out),
+                    Direction::Forward => recursive::forward_dynamics(
+                        model,
+                        data,
+                        qv,
+                        vv,
+                        xv,
+                        &g,
+                        ext.as_deref(),
+                        out,
+                    ),
                     Direction::Inverse => {
-                        recursive::inverse_dynamics(model, data, qv, vv, xv, &g, ext.as_deref(), out);
+                        recursive::inverse_dynamics(
+                            model,
+                            data,
+                            qv,
+                            vv,
+                            xv,
+                            &g,
+                            ext.as_deref(),
+                            out,
+                        );
                         Ok(())
                     }
                 };
-                if model.links.len() >= DETACH_LINKS { py.detach(run) } else { run() }.py(py)?;
+                if model.links.len() >= DETACH_LINKS {
+                    py.detach(run)
+                } else {
+                    run()
+                }
+                .py(py)?;
                 check_result(py, direction.name(), &self.out)?;
                 Ok(to_array1(py, &self.out).into_any())
             }

@@ -6,7 +6,9 @@ use super::{base_accel, singular_message, Data};
 use crate::error::{Error, Result};
 use crate::kinematics;
 use crate::model::Model;
-use crate::spatial::{angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Vec3, Vec6};
+use crate::spatial::{
+    angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Vec3, Vec6,
+};
 
 /// Inverts the dof × dof block `D = Pᵀ M̂ P`; `None` if it is not positive definite.
 #[inline]
@@ -75,7 +77,11 @@ pub fn forward_dynamics(
         let mut d = Mat3::identity();
         let mut ut = Vec3::zeros();
         for k in 0..dof {
-            axes[k] = if ang { angular(&link.s[k]) } else { linear(&link.s[k]) };
+            axes[k] = if ang {
+                angular(&link.s[k])
+            } else {
+                linear(&link.s[k])
+            };
             u[k] = mul_axis(&m, &axes[k], ang);
             ut[k] = tau[l.v_index + k] - dot_axis(&axes[k], &b, ang);
         }
@@ -86,7 +92,8 @@ pub fn forward_dynamics(
                 d[(c, r)] = x;
             }
         }
-        let d_inv = invert_joint_inertia(&d, dof).ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
+        let d_inv = invert_joint_inertia(&d, dof)
+            .ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
         data.u[i] = u;
         data.d_inv[i] = d_inv;
         data.u_tau[i] = ut;

@@ -192,8 +192,14 @@ fn recursive_agrees_with_explicit_on_50_body_trees() {
         let mut acc = vec![0.0; nv];
         forward_dynamics(&model, &mut data, &q, &v, &tau, &G, None, &mut acc).unwrap();
         let acc_explicit = denoc::forward_dynamics(&model, &q, &v, &tau, &G).unwrap();
-        assert!(rel(&DVector::from_vec(acc.clone()), &acc_explicit) <= 1e-10, "seed {seed}");
-        assert!(rel(&DVector::from_vec(acc), &DVector::from_vec(a)) <= 1e-9, "seed {seed}");
+        assert!(
+            rel(&DVector::from_vec(acc.clone()), &acc_explicit) <= 1e-10,
+            "seed {seed}"
+        );
+        assert!(
+            rel(&DVector::from_vec(acc), &DVector::from_vec(a)) <= 1e-9,
+            "seed {seed}"
+        );
     }
 }
 
@@ -212,7 +218,11 @@ fn thousand_body_chain_inverse_of_forward() {
     inverse_dynamics(&model, &mut data, &q, &v, &a, &G, None, &mut back);
     let err = DVector::from_vec(back.clone()) - DVector::from_vec(tau.clone());
     let scale = DVector::from_vec(tau).norm();
-    assert!(err.norm() <= 1e-8 * scale, "relative {}", err.norm() / scale);
+    assert!(
+        err.norm() <= 1e-8 * scale,
+        "relative {}",
+        err.norm() / scale
+    );
     // The composite-body GIM of the long chain stays symmetric positive definite.
     let mut gim = DMatrix::zeros(n, n);
     mass_matrix(&model, &mut data, &q, &mut gim);
