@@ -337,6 +337,10 @@ def plot_work_precision(results: Sequence[WorkPrecision], path=None, title: str 
             r4 = res.column("rk4_err_final")
             r4 = np.where(np.isfinite(r4), r4, np.nan)
             ax_t.loglog(tm, r4, "^-", color="C2", label="fixed-step RK4, same nfev")
+        floor = res.reference_check.get("err_final")
+        if floor is not None and np.isfinite(floor) and floor > 0:
+            ax_t.axhline(floor, color="gray", ls=":", lw=1,
+                         label=f"reference floor (ours at {REFERENCE_TOL:g} vs DOP853)")
         for x, y, t in zip(tm, ef, tol):
             ax_t.annotate(f"{t:.0e}", (x, y), fontsize=6, xytext=(3, 3),
                           textcoords="offset points")

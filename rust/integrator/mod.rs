@@ -372,16 +372,25 @@ impl Status {
         let f = fmt_time;
         match self {
             Status::Success => {
-                format!("reached the end of the integration interval at t = {}", f(t_reached))
+                format!(
+                    "reached the end of the integration interval at t = {}",
+                    f(t_reached)
+                )
             }
             Status::TerminalEvent { event, t } => {
                 format!("terminal event {event} occurred at t = {}", f(*t))
             }
             Status::StepTooSmall { t, min_step } => {
-                format!("step size fell below the minimum {min_step:.3e} at t = {}", f(*t))
+                format!(
+                    "step size fell below the minimum {min_step:.3e} at t = {}",
+                    f(*t)
+                )
             }
             Status::MaxSteps { t, max_steps } => {
-                format!("maximum number of steps ({max_steps}) reached at t = {}", f(*t))
+                format!(
+                    "maximum number of steps ({max_steps}) reached at t = {}",
+                    f(*t)
+                )
             }
             Status::NonFinite { t, at, what } => {
                 let what = match what {
@@ -390,7 +399,11 @@ impl Status {
                     }
                     NonFiniteKind::State => "the state became non-finite (NaN or inf)",
                 };
-                format!("{what} at t = {}; integration reached t = {}", f(*at), f(*t))
+                format!(
+                    "{what} at t = {}; integration reached t = {}",
+                    f(*at),
+                    f(*t)
+                )
             }
             Status::RhsError { t, at, message } => format!(
                 "the right-hand side failed at t = {}: {message}; integration reached t = {}",
@@ -1418,10 +1431,16 @@ mod tests {
         assert!(s.t < 0.05, "detected late, at t = {}", s.t);
         assert!(s.h_lambda > STIFF_H_LAMBDA);
         // |λ| estimated within a few per cent (the Jacobian is exactly λ).
-        assert!((s.lambda() / lambda.abs() - 1.0).abs() < 0.05, "{}", s.lambda());
+        assert!(
+            (s.lambda() / lambda.abs() - 1.0).abs() < 0.05,
+            "{}",
+            s.lambda()
+        );
         assert!(
             warn.message.starts_with("reached the end")
-                && warn.message.contains("warning: the problem looks stiff from t = "),
+                && warn
+                    .message
+                    .contains("warning: the problem looks stiff from t = "),
             "{}",
             warn.message
         );
@@ -1462,11 +1481,15 @@ mod tests {
             ..tol(1e-6)
         };
         let sol = rk45(prothero_robinson(-1e5), (0.0, 10.0), &[1.0], &opts, &mut []).unwrap();
-        assert!(matches!(sol.status, Status::MaxSteps { max_steps: 500, .. }));
+        assert!(matches!(
+            sol.status,
+            Status::MaxSteps { max_steps: 500, .. }
+        ));
         assert_eq!(sol.n_accepted, 500);
         assert!(sol.stiffness.is_some());
         assert!(
-            sol.message.starts_with("maximum number of steps (500) reached")
+            sol.message
+                .starts_with("maximum number of steps (500) reached")
                 && sol.message.contains("looks stiff"),
             "{}",
             sol.message
@@ -1625,4 +1648,3 @@ damping = 3e3
         );
     }
 }
-
