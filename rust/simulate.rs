@@ -279,11 +279,35 @@ pub fn simulate(
         })
         .collect();
     events.extend(extra_events);
+    // Euler-angle joints: a terminal event where sin θ changes sign, located on the dense
+    // output, stops the run at the singularity even when a loose tolerance would step over
+    // it, and long before the integrator crawls towards it with ever smaller steps.
+    let n_user = events.len();
+    let guarded: Vec<usize> = (0..model.links.len())
+        .filter(|&i| matches!(model.links[i].joint, crate::joint::Joint::SphericalZYZ))
+        .collect();
+    for &i in &guarded {
+        let theta = model.links[i].q_index + 1;
+        events.push(Event::new(move |_t, y: &[f64]| y[theta].sin()).terminal(1));
+    }
 
     sys.progress = progress;
-    let sol = integrator::rk45(&mut sys, t_span, &y0, opts, &mut events)
+    let mut sol = integrator::rk45(&mut sys, t_span, &y0, opts, &mut events)
         .map_err(|e| Error::InvalidSetting(e.to_string()))?;
     drop(events);
+    if let Status::TerminalEvent { event, t } = sol.status {
+        if event >= n_user {
+            let link = guarded[event - n_user];
+            let name = &model.bodies[model.links[link].body].name;
+            let message = format!(
+                "SphericalZYZ joint of body '{name}' reached its Euler singularity (sin theta = 0) at t = {t}: the Euler-angle rates diverge there; model the joint as Spherical (a quaternion) to move through it"
+            );
+            sol.message = format!("{message}; integration stopped at t = {t}");
+            sol.status = Status::RhsError { t, at: t, message };
+        }
+    }
+    sol.t_events.truncate(n_user);
+    sol.y_events.truncate(n_user);
     let n = sol.t.len();
     let mut q = Vec::with_capacity(n * nq);
     let mut v = Vec::with_capacity(n * nv);
@@ -324,7 +348,7 @@ pub fn simulate(
     Ok(Trajectory {
         nq,
         nv,
-        success: sol.success(),
+        success: sol.status.is_success(),
         t: sol.t,
         q,
         v,

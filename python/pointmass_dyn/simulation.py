@@ -177,6 +177,7 @@ def simulate(
     progress: Optional[Callable[[float], Any]] = None,
     disable: Any = None,
     power: bool = False,
+    stiffness: str = "warn",
 ) -> SimulationResult:
     """Integrates a scene with our adaptive RK45, entirely in Rust with the GIL released.
 
@@ -192,7 +193,12 @@ def simulate(
     ``"springs"``, ``"dampers"``, ``"friction"``, ``"torques"``, ``"external"``); ``None``
     takes the scene's ``[simulate] disable`` list, ``()`` switches nothing off.
     ``progress(t)`` is called every few hundred right-hand-side evaluations (an exception it
-    raises stops the run and is re-raised, as is Ctrl-C).
+    raises stops the run and is re-raised, as is Ctrl-C). ``stiffness`` is what Hairer's
+    stiffness test does when it fires: ``"warn"`` (default) notes it in the message and
+    changes no step, ``"stop"`` ends the run, ``"off"`` skips the test.
+
+    A ``SphericalZYZ`` joint reaching its Euler singularity (sin θ = 0) ends the run there
+    with ``success=False`` and a message naming the joint and the time.
 
     A run that cannot finish returns ``success=False`` with a message giving the reason and
     the time reached; call ``.raise_for_status()`` to turn that into a
@@ -213,6 +219,7 @@ def simulate(
         progress,
         disable,
         power,
+        stiffness,
     )
     return SimulationResult(scene=scene.name, **out)
 
@@ -266,6 +273,7 @@ def rk45(
     max_steps: Optional[int] = None,
     dense_output: bool = False,
     controller: str = "standard",
+    stiffness: str = "warn",
 ) -> OdeResult:
     """Our Dormand–Prince 5(4) on ``fun(t, y)``, step for step SciPy's
     ``solve_ivp(fun, t_span, y0, method="RK45")`` with the same options.
@@ -288,6 +296,7 @@ def rk45(
         max_steps,
         dense_output,
         controller,
+        stiffness,
     )
     return OdeResult(out)
 
