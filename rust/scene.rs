@@ -65,11 +65,24 @@ struct SceneFile {
     /// A URDF file, relative to the scene file's directory: its robot starts the model (at
     /// q = 0, v = 0); `[[body]]` entries follow and may name its links as parents.
     urdf: Option<String>,
+    /// Which of the URDF's `<dynamics>` attributes become effects: "damping" (a damper per
+    /// joint) and/or "friction" (regularised Coulomb friction per joint).
+    urdf_dynamics: Option<Vec<String>>,
+    /// Initial state of the whole model (overrides per-body q0/v0): `q0` (nq values) and
+    /// `v0` (nv values), angular entries in the file's units.
+    initial: Option<InitialFile>,
     #[serde(default)]
     body: Vec<BodyFile>,
     #[serde(default)]
     effect: Vec<EffectFile>,
     simulate: Option<SimulateFile>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InitialFile {
+    q0: Option<Vec<f64>>,
+    v0: Option<Vec<f64>>,
 }
 
 #[derive(Deserialize)]
@@ -157,11 +170,17 @@ impl Scene {
         }
         let mut model = Model::new();
         let mut index: HashMap<String, usize> = HashMap::new();
+        let mut urdf_effects = Vec::new();
         if let Some(rel) = &sf.urdf {
-            model = scene_urdf(file, rel).map_err(|m| err("urdf".into(), m))?;
+            let urdf = scene_urdf(file, rel).map_err(|m| err("urdf".into(), m))?;
+            urdf_effects = urdf_dynamics_effects(&urdf, sf.urdf_dynamics.as_deref())
+                .map_err(|m| err("urdf_dynamics".into(), m))?;
+            model = urdf.model;
             for (k, b) in model.bodies.iter().enumerate() {
                 index.insert(b.name.clone(), k);
             }
+        } else if sf.urdf_dynamics.is_some() {
+            return Err(err("urdf_dynamics".into(), "needs a urdf key".into()));
         }
         let mut q0 = model.neutral();
         let mut v0 = vec![0.0; model.nv];
@@ -285,6 +304,44 @@ impl Scene {
             q0.extend(q);
             v0.extend(v);
         }
+        if let Some(init) = &sf.initial {
+            // Scale the angular coordinates (revolute and ZYZ angles, all rotational speeds).
+            for (given, target, n, arg) in [
+                (&init.q0, &mut q0, model.nq, "q0"),
+                (&init.v0, &mut v0, model.nv, "v0"),
+            ] {
+                let Some(given) = given else { continue };
+                if given.len() != n {
+                    return Err(err(
+                        format!("initial.{arg}"),
+                        format!("expected {n} values, got {}", given.len()),
+                    ));
+                }
+                target.copy_from_slice(given);
+                for l in &model.links {
+                    let angular_q = matches!(l.joint, Joint::Revolute { .. } | Joint::SphericalZYZ);
+                    let (start, len, scale) = if arg == "q0" {
+                        (l.q_index, l.joint.nq(), if angular_q { unit } else { 1.0 })
+                    } else {
+                        (
+                            l.v_index,
+                            l.joint.nv(),
+                            if l.joint.moves_angular() {
+                                rate_unit
+                            } else {
+                                1.0
+                            },
+                        )
+                    };
+                    target[start..start + len]
+                        .iter_mut()
+                        .for_each(|x| *x *= scale);
+                }
+            }
+            model
+                .check_state(&q0, Some(&v0))
+                .map_err(|e| err("initial".into(), e.to_string()))?;
+        }
         model.normalize(&mut q0);
         // Effect errors: the key is `effect[k].field`, the message what was expected.
         let effect_err = |x: Error, prefix: &str| match x {
@@ -298,7 +355,7 @@ impl Scene {
             ),
             other => err(prefix.trim_end_matches('.').to_string(), other.to_string()),
         };
-        let mut effects = Vec::new();
+        let mut effects = urdf_effects;
         for (k, e) in sf.effect.iter().enumerate() {
             effects
                 .push(Effect::from_toml(e).map_err(|x| effect_err(x, &format!("effect[{k}].")))?);
@@ -368,13 +425,58 @@ impl Scene {
 
 /// The model of a scene's `urdf` file, resolved relative to the scene file's directory
 /// (`file` is the scene's path; its URDF warnings are not reported here).
-fn scene_urdf(file: &str, rel: &str) -> Result<Model, String> {
+fn scene_urdf(file: &str, rel: &str) -> Result<crate::urdf::Urdf, String> {
     let dir = std::path::Path::new(file)
         .parent()
         .unwrap_or(std::path::Path::new(""));
-    crate::urdf::load_urdf(&dir.join(rel))
-        .map(|u| u.model)
-        .map_err(|e| e.to_string())
+    crate::urdf::load_urdf(&dir.join(rel)).map_err(|e| e.to_string())
+}
+
+/// Effects from the URDF's `<dynamics damping friction>` as the scene asks: a damper and/or
+/// a friction effect over the joints whose value is non-zero (none if all are zero).
+fn urdf_dynamics_effects(
+    urdf: &crate::urdf::Urdf,
+    asked: Option<&[String]>,
+) -> Result<Vec<Effect>, String> {
+    use crate::effects::{damper::Damper, friction::Friction, JointRef, PerJoint};
+    let mut out = Vec::new();
+    for what in asked.unwrap_or(&[]) {
+        let pick = |f: fn(&crate::urdf::UrdfJoint) -> f64| -> (Vec<JointRef>, Vec<f64>) {
+            urdf.joints
+                .iter()
+                .filter(|j| j.q_index.is_some() && f(j) != 0.0)
+                .map(|j| (JointRef::Index(j.body), f(j)))
+                .unzip()
+        };
+        match what.as_str() {
+            "damping" => {
+                let (joints, values) = pick(|j| j.damping);
+                if !joints.is_empty() {
+                    let name = Some("urdf_damping".to_string());
+                    out.push(Effect::Damper(
+                        Damper::new(name, Some(joints), PerJoint::Each(values))
+                            .map_err(|e| e.to_string())?,
+                    ));
+                }
+            }
+            "friction" => {
+                let (joints, values) = pick(|j| j.friction);
+                if !joints.is_empty() {
+                    let name = Some("urdf_friction".to_string());
+                    out.push(Effect::Friction(
+                        Friction::new(name, Some(joints), PerJoint::Each(values), None)
+                            .map_err(|e| e.to_string())?,
+                    ));
+                }
+            }
+            other => {
+                return Err(format!(
+                    "expected \"damping\" and/or \"friction\", got \"{other}\""
+                ))
+            }
+        }
+    }
+    Ok(out)
 }
 
 fn line_col(text: &str, offset: usize) -> (usize, usize) {

@@ -526,3 +526,41 @@ def test_scene_with_urdf(tmp_path):
     bad.write_text('urdf = "robots/nope.urdf"\n')
     with pytest.raises(pmd.errors.SceneError, match=r"bad\.toml: urdf: .*nope\.urdf: cannot read"):
         pmd.load_scene(bad)
+
+
+def test_scene_maps_urdf_dynamics_to_effects_and_sets_initial_state(tmp_path):
+    """`urdf_dynamics` turns the URDF's <dynamics damping friction> into our effects, and
+    `[initial]` sets the whole state; checked against the URDF's own numbers."""
+    import shutil
+
+    bundled = Path(pmd.__file__).with_name("scenes") / "panda.urdf"
+    shutil.copy(bundled, tmp_path / "panda.urdf")
+    q0 = [10, -20, 30, -90, 15, 60, -5]
+    (tmp_path / "s.toml").write_text(
+        'urdf = "panda.urdf"\nurdf_dynamics = ["damping", "friction"]\nangles = "degrees"\n'
+        f"[initial]\nq0 = {q0}\nv0 = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6, 0.7]\n"
+    )
+    scene = pmd.load_scene(tmp_path / "s.toml")
+    model = scene.model
+    np.testing.assert_allclose(scene.q0, np.radians(q0), rtol=0, atol=1e-15)
+    forces = pmd.effect_forces(scene, 0.0, scene.q0, scene.v0)
+    assert "urdf_damping" in forces  # panda.urdf: damping 0.003 on every arm joint
+    assert "urdf_friction" not in forces  # all friction values are 0: nothing computed
+    dyn = pmd.Model.from_urdf(tmp_path / "panda.urdf").joint_dynamics()
+    damping = np.array([dyn[name][0] for name in pmd.Model.from_urdf(tmp_path / "panda.urdf").joint_names])
+    np.testing.assert_allclose(forces["urdf_damping"], -damping * scene.v0, rtol=1e-15)
+    assert model.nq == 7
+
+
+def test_scene_urdf_dynamics_errors(tmp_path):
+    import shutil
+
+    bundled = Path(pmd.__file__).with_name("scenes") / "panda.urdf"
+    shutil.copy(bundled, tmp_path / "panda.urdf")
+    bad = tmp_path / "bad.toml"
+    bad.write_text('urdf = "panda.urdf"\nurdf_dynamics = ["stiction"]\n')
+    with pytest.raises(pmd.SceneError, match=r"bad.toml: urdf_dynamics: .*stiction"):
+        pmd.load_scene(bad)
+    bad.write_text('urdf = "panda.urdf"\n[initial]\nq0 = [0, 0]\n')
+    with pytest.raises(pmd.SceneError, match=r"initial.q0: expected 7 values, got 2"):
+        pmd.load_scene(bad)
