@@ -18,9 +18,8 @@ import timeit
 
 import numpy as np
 import pinocchio as pin
-from scipy.integrate import solve_ivp
-
 import pointmass_dyn as pmd
+from scipy.integrate import solve_ivp
 
 G = np.array([0.0, 0.0, -9.81])
 INERTIA = np.diag([1e-3, 7.5e-3, 7.5e-3])

@@ -8,12 +8,11 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pointmass_dyn as pmd
 import pytest
+from conftest import record
 from scipy.integrate import cumulative_simpson
 from scipy.spatial.transform import Rotation
-
-import pointmass_dyn as pmd
-from conftest import record
 
 G = np.array([0.0, 0.0, -9.81])
 TIGHT = dict(rtol=1e-12, atol=1e-12)

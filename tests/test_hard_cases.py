@@ -14,13 +14,12 @@ import re
 
 import mpmath as mp
 import numpy as np
+import pointmass_dyn as pmd
 import pytest
+from conftest import record, rod_inertia
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 from scipy.special import ellipj, ellipk, ellipkinc
-
-import pointmass_dyn as pmd
-from conftest import record, rod_inertia
 
 EPS = np.finfo(float).eps
 G = np.array([0.0, 0.0, -9.81])
@@ -404,7 +403,7 @@ def test_200_link_rope_released_horizontally_keeps_its_symmetry():
     n, half_len, half_mass = 100, 0.5, 0.5
     link = rope_link(half_mass / n, half_len / n, 0.005)
     model = pmd.Model()
-    for side, rot in [(0, np.eye(3)), (1, np.diag([-1.0, -1.0, 1.0]))]:
+    for _side, rot in [(0, np.eye(3)), (1, np.diag([-1.0, -1.0, 1.0]))]:
         parent = -1
         for k in range(n):
             parent = model.add_body(link, pmd.Revolute([0, 1, 0]), parent=parent,

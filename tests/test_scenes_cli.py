@@ -13,12 +13,11 @@ import sys
 from pathlib import Path
 
 import numpy as np
-import pytest
-from scipy.spatial.transform import Rotation
-
 import pointmass_dyn as pmd
 import pointmass_dyn._core as core
+import pytest
 from pointmass_dyn import cli
+from scipy.spatial.transform import Rotation
 
 PKG_DIR = Path(pmd.__file__).resolve().parent
 PYTHON_DIR = PKG_DIR.parent

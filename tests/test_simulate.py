@@ -8,14 +8,13 @@ from __future__ import annotations
 import re
 
 import numpy as np
+import pointmass_dyn as pmd
 import pytest
+from conftest import PAPER_A, PAPER_D, PAPER_M, record, rel_err, rod_body
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 from scipy.spatial.transform import Rotation
 from scipy.special import ellipk
-
-import pointmass_dyn as pmd
-from conftest import PAPER_A, PAPER_D, PAPER_M, record, rel_err, rod_body
 
 G = np.array([0.0, 0.0, -9.81])
 # Compound pendulum about its end, released horizontal (amplitude 90°): design.md §3.

@@ -10,14 +10,13 @@ import csv
 import math
 
 import numpy as np
-import pytest
-from scipy.integrate import solve_ivp
-from scipy.special import ellipj, ellipk
-
 import pointmass_dyn as pmd
+import pytest
 from conftest import PAPER_A, PAPER_D, PAPER_M, record
 from pointmass_dyn.cli import main
 from pointmass_dyn.work_precision import rk4_fixed, scene_rhs
+from scipy.integrate import solve_ivp
+from scipy.special import ellipj, ellipk
 
 G = np.array([0.0, 0.0, -9.81])
 T_END = 2.0

@@ -38,78 +38,78 @@ from .simulation import (
     rk45,
     simulate,
 )
-from .work_precision import WorkPrecision, work_precision  # noqa: E402 (after simulation)
+from .work_precision import WorkPrecision, work_precision
 
 
-def Revolute(axis) -> Joint:  # noqa: N802 - reads like a class at the call site
+def Revolute(axis) -> Joint:
     """Revolute joint about ``axis`` (joint frame); q is the angle in radians."""
     return Joint.revolute(axis)
 
 
-def Prismatic(axis) -> Joint:  # noqa: N802
+def Prismatic(axis) -> Joint:
     """Prismatic joint along ``axis`` (joint frame); q is the displacement."""
     return Joint.prismatic(axis)
 
 
-def SphericalZYZ() -> Joint:  # noqa: N802
+def SphericalZYZ() -> Joint:
     """The paper's spherical joint: ZYZ Euler angles (phi, theta, psi), Euler rates as speeds.
 
     Singular where sin(theta) = 0; use :func:`Spherical` for motions through it."""
     return Joint.spherical_zyz()
 
 
-def Spherical() -> Joint:  # noqa: N802
+def Spherical() -> Joint:
     """Quaternion spherical joint: q = (x, y, z, w), speeds = angular velocity relative to the
     parent in the body frame (as Pinocchio's JointModelSpherical)."""
     return Joint.spherical()
 
 
-def Fixed() -> Joint:  # noqa: N802
+def Fixed() -> Joint:
     """Rigid attachment: the body is welded into its parent for dynamics."""
     return Joint.fixed()
 
 
 __all__ = [
-    "__version__",
-    "RigidBody",
-    "PointMasses",
-    "Joint",
-    "Model",
-    "Revolute",
-    "Prismatic",
-    "SphericalZYZ",
-    "Spherical",
-    "Fixed",
-    "Effect",
-    "Gravity",
-    "Spring",
     "Damper",
+    "Effect",
+    "ExternalForce",
+    "Fixed",
+    "Gravity",
+    "InertiaError",
+    "InvalidInputError",
+    "Joint",
     "JointFriction",
     "JointTorque",
-    "TabulatedTorque",
+    "Model",
+    "ModelStructureError",
+    "NumericalError",
+    "OdeResult",
     "PDTorque",
+    "PointMassDynError",
+    "PointMasses",
+    "Prismatic",
+    "Revolute",
+    "RigidBody",
+    "Scene",
+    "SceneError",
+    "SimulationError",
+    "SimulationResult",
+    "SingularityError",
+    "Spherical",
+    "SphericalZYZ",
+    "Spring",
+    "StateEvent",
+    "TabulatedTorque",
     "TorqueFunction",
-    "ExternalForce",
+    "WorkPrecision",
+    "__version__",
+    "builtin_scenes",
     "effect_forces",
     "effect_power",
     "energies",
-    "Scene",
-    "StateEvent",
-    "load_scene",
-    "builtin_scenes",
-    "simulate",
-    "SimulationResult",
-    "rk45",
-    "OdeResult",
-    "work_precision",
-    "WorkPrecision",
     "errors",
-    "PointMassDynError",
-    "InvalidInputError",
-    "InertiaError",
-    "ModelStructureError",
-    "NumericalError",
-    "SingularityError",
-    "SimulationError",
-    "SceneError",
+    "load_scene",
+    "rk45",
+    "simulate",
+    "work_precision",
 ]

@@ -7,21 +7,23 @@ shape raises :class:`pointmass_dyn.errors.InvalidInputError` naming the argument
 returned are fresh float64 NumPy arrays.
 """
 
-from typing import Any, Callable, ClassVar, Literal, Optional, Sequence, Union, final
+from collections.abc import Sequence
+from typing import Any, Callable, ClassVar, Literal, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from typing_extensions import TypeAlias
 
 __version__: str
 
-_Array = NDArray[np.float64]
+_Array: TypeAlias = NDArray[np.float64]
 #: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).
 _Method = str
 #: ``"standard"`` (SciPy's step-size controller, also ``"scipy"``) or ``"pi"`` (Hairer's PI).
 _Controller = str
 #: A Python event: ``f(t, q, v) -> float`` (``simulate_scene``) or ``f(t, y) -> float``
 #: (``rk45``), with optional ``terminal`` (bool or count) and ``direction`` attributes.
-_EventFunc = Callable[..., float]
+_EventFunc: TypeAlias = Callable[..., float]
 
 @final
 class RigidBody:
@@ -44,7 +46,7 @@ class RigidBody:
         """Inertia tensor about the COM, body frame, shape (3, 3)."""
     def inertia_about(self, point: ArrayLike) -> _Array:
         """Inertia about ``point`` (body frame) by the parallel-axis theorem, shape (3, 3)."""
-    def point_masses(self, center: Optional[ArrayLike] = None) -> PointMasses:
+    def point_masses(self, center: ArrayLike | None = None) -> PointMasses:
         """The seven equimomental point masses, box centred at ``center`` (default: the COM)."""
 
 @final
@@ -95,7 +97,7 @@ class Joint:
     def nv(self) -> int:
         """Number of speeds."""
     @property
-    def axis(self) -> Optional[_Array]:
+    def axis(self) -> _Array | None:
         """Unit axis, shape (3,), of a revolute or prismatic joint; ``None`` otherwise."""
 
 @final
@@ -111,10 +113,10 @@ class Model:
         body: RigidBody,
         joint: Joint,
         parent: int = -1,
-        translation: Optional[ArrayLike] = None,
-        rotation: Optional[ArrayLike] = None,
-        name: Optional[str] = None,
-        point_mass_center: Optional[ArrayLike] = None,
+        translation: ArrayLike | None = None,
+        rotation: ArrayLike | None = None,
+        name: str | None = None,
+        point_mass_center: ArrayLike | None = None,
     ) -> int:
         """Adds ``body`` on ``joint`` below ``parent`` (-1: the world), the joint frame placed
         at ``translation``/``rotation`` in the parent's body frame; returns its index."""
@@ -163,15 +165,15 @@ class Model:
     def generalized_forces(self, q: ArrayLike, forces: ArrayLike) -> _Array:
         """``Nᵀ f`` for world forces on the point masses, shape (nlinks, 7, 3) or
         (7·nlinks, 3); returns shape (nv,)."""
-    def bias_forces(self, q: ArrayLike, v: ArrayLike, gravity: Optional[ArrayLike] = None) -> _Array:
+    def bias_forces(self, q: ArrayLike, v: ArrayLike, gravity: ArrayLike | None = None) -> _Array:
         """``C v − τ_g`` (Pinocchio's ``nonLinearEffects``), shape (nv,)."""
     def forward_dynamics(
         self,
         q: ArrayLike,
         v: ArrayLike,
         tau: ArrayLike,
-        gravity: Optional[ArrayLike] = None,
-        external: Optional[ArrayLike] = None,
+        gravity: ArrayLike | None = None,
+        external: ArrayLike | None = None,
         method: _Method = "recursive",
     ) -> _Array:
         """Accelerations from ``I a + C v = τ + τ_g + τ_ext``, shape (nv,). ``external``:
@@ -181,8 +183,8 @@ class Model:
         q: ArrayLike,
         v: ArrayLike,
         a: ArrayLike,
-        gravity: Optional[ArrayLike] = None,
-        external: Optional[ArrayLike] = None,
+        gravity: ArrayLike | None = None,
+        external: ArrayLike | None = None,
         method: _Method = "recursive",
     ) -> _Array:
         """Joint forces ``τ = I a + C v − τ_g − τ_ext``, shape (nv,)."""
@@ -212,11 +214,11 @@ class Model:
         absent); recorded, not applied by the model."""
 
 #: Joints selected by body name or body index, one or a sequence; ``None``: every moving joint.
-_Joints = Union[str, int, Sequence[Union[str, int]], None]
+_Joints: TypeAlias = str | int | Sequence[str | int] | None
 #: One number for all selected joints, or one per joint.
-_PerJoint = Union[float, ArrayLike]
+_PerJoint: TypeAlias = float | ArrayLike
 #: Effect families, as ``disable`` names them.
-_Family = Literal["gravity", "springs", "dampers", "friction", "torques", "external"]
+_Family: TypeAlias = Literal["gravity", "springs", "dampers", "friction", "torques", "external"]
 
 @final
 class Effect:
@@ -225,29 +227,29 @@ class Effect:
 
     __hash__: ClassVar[None]  # type: ignore[assignment]
     @staticmethod
-    def gravity(g: Optional[ArrayLike] = None) -> Effect:
+    def gravity(g: ArrayLike | None = None) -> Effect:
         """Uniform gravity ``g`` (m/s², world frame); default ``(0, 0, -9.81)``."""
     @staticmethod
     def spring(
-        joints: _Joints, stiffness: _PerJoint, rest: Optional[_PerJoint] = None, name: Optional[str] = None
+        joints: _Joints, stiffness: _PerJoint, rest: _PerJoint | None = None, name: str | None = None
     ) -> Effect:
         """Joint springs ``τ = −k (q − rest)``; on quaternion joints ``τ = −k θ`` with θ the
         rotation vector of ``rest⁻¹ q``. ``rest``: one number for the 1-dof joints, or the
         selected joints' coordinates (4 per quaternion joint)."""
     @staticmethod
-    def damper(joints: _Joints, damping: _PerJoint, name: Optional[str] = None) -> Effect:
+    def damper(joints: _Joints, damping: _PerJoint, name: str | None = None) -> Effect:
         """Viscous dampers ``τ = −c v`` on every speed of the selected joints."""
     @staticmethod
     def friction(
-        joints: _Joints, friction: _PerJoint, v_eps: Optional[float] = None, name: Optional[str] = None
+        joints: _Joints, friction: _PerJoint, v_eps: float | None = None, name: str | None = None
     ) -> Effect:
         """Regularised Coulomb friction ``τ = −F tanh(v / v_eps)`` (default v_eps 1e-3)."""
     @staticmethod
-    def joint_torque(joints: _Joints, tau: _PerJoint, name: Optional[str] = None) -> Effect:
+    def joint_torque(joints: _Joints, tau: _PerJoint, name: str | None = None) -> Effect:
         """Constant torques: one number for every speed of the selected joints, or one per speed."""
     @staticmethod
     def tabulated_torque(
-        joints: _Joints, time: ArrayLike, values: ArrayLike, name: Optional[str] = None
+        joints: _Joints, time: ArrayLike, values: ArrayLike, name: str | None = None
     ) -> Effect:
         """Torques tabulated in time (N,) with values (N, speeds), linear, clamped outside."""
     @staticmethod
@@ -257,22 +259,22 @@ class Effect:
         kd: _PerJoint,
         time: ArrayLike,
         reference: ArrayLike,
-        name: Optional[str] = None,
+        name: str | None = None,
     ) -> Effect:
         """``τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)`` on 1-dof joints; ``q̇_ref`` is the
         table's slope."""
     @staticmethod
-    def torque_function(f: Callable[[float, _Array, _Array], ArrayLike], name: Optional[str] = None) -> Effect:
+    def torque_function(f: Callable[[float, _Array, _Array], ArrayLike], name: str | None = None) -> Effect:
         """Generalized forces ``f(t, q, v) -> (nv,)`` from Python (one Python call per evaluation)."""
     @staticmethod
     def external_force(
-        body: Union[str, int],
-        force: Optional[ArrayLike] = None,
-        point: Optional[ArrayLike] = None,
-        moment: Optional[ArrayLike] = None,
-        time: Optional[ArrayLike] = None,
+        body: str | int,
+        force: ArrayLike | None = None,
+        point: ArrayLike | None = None,
+        moment: ArrayLike | None = None,
+        time: ArrayLike | None = None,
         frame: Literal["world", "body"] = "world",
-        name: Optional[str] = None,
+        name: str | None = None,
     ) -> Effect:
         """A force at a body-fixed ``point`` plus a ``moment``, constant (3,) or tabulated
         ((N, 3) with ``time`` (N,)), in world or body axes."""
@@ -296,7 +298,7 @@ class StateEvent:
         index: int,
         value: float = 0.0,
         direction: int = 0,
-        terminal: Union[bool, int, None] = None,
+        terminal: bool | int | None = None,
     ) -> StateEvent: ...
     @property
     def terminal(self) -> int:
@@ -312,15 +314,15 @@ class Scene:
     def __new__(
         cls,
         model: Model,
-        q0: Optional[ArrayLike] = None,
-        v0: Optional[ArrayLike] = None,
-        effects: Optional[Sequence[Effect]] = None,
-        t_span: Optional[ArrayLike] = None,
-        rtol: Optional[float] = None,
-        atol: Optional[float] = None,
-        name: Optional[str] = None,
-        description: Optional[str] = None,
-        disable: Union[_Family, Sequence[_Family], None] = None,
+        q0: ArrayLike | None = None,
+        v0: ArrayLike | None = None,
+        effects: Sequence[Effect] | None = None,
+        t_span: ArrayLike | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        name: str | None = None,
+        description: str | None = None,
+        disable: _Family | Sequence[_Family] | None = None,
     ) -> Scene:
         """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
         ``effects`` act (none: no gravity); joint and body names and table widths are checked
@@ -346,20 +348,20 @@ class Scene:
     @property
     def description(self) -> str: ...
     @property
-    def t_span(self) -> Optional[tuple[float, float]]:
+    def t_span(self) -> tuple[float, float] | None:
         """Default integration interval, if the scene sets one."""
     @property
-    def rtol(self) -> Optional[float]: ...
+    def rtol(self) -> float | None: ...
     @property
-    def atol(self) -> Optional[float]: ...
+    def atol(self) -> float | None: ...
     @property
-    def max_step(self) -> Optional[float]: ...
+    def max_step(self) -> float | None: ...
     @property
-    def max_steps(self) -> Optional[int]: ...
+    def max_steps(self) -> int | None: ...
     @property
-    def first_step(self) -> Optional[float]: ...
+    def first_step(self) -> float | None: ...
     @property
-    def disable(self) -> Optional[list[str]]:
+    def disable(self) -> list[str] | None:
         """Effect families the scene switches off (``[simulate] disable``), or ``None``."""
 
 @final
@@ -374,18 +376,18 @@ class DenseSolution:
 
 def simulate_scene(
     scene: Scene,
-    t_span: Optional[ArrayLike] = None,
-    rtol: Optional[ArrayLike] = None,
-    atol: Optional[ArrayLike] = None,
-    t_eval: Optional[ArrayLike] = None,
-    events: Optional[Sequence[Union[StateEvent, _EventFunc]]] = None,
-    first_step: Optional[float] = None,
-    max_step: Optional[float] = None,
-    max_steps: Optional[int] = None,
+    t_span: ArrayLike | None = None,
+    rtol: ArrayLike | None = None,
+    atol: ArrayLike | None = None,
+    t_eval: ArrayLike | None = None,
+    events: Sequence[StateEvent | _EventFunc] | None = None,
+    first_step: float | None = None,
+    max_step: float | None = None,
+    max_steps: int | None = None,
     energy: bool = False,
     controller: _Controller = "standard",
-    progress: Optional[Callable[[float], Any]] = None,
-    disable: Union[_Family, Sequence[_Family], None] = None,
+    progress: Callable[[float], Any] | None = None,
+    disable: _Family | Sequence[_Family] | None = None,
     power: bool = False,
     stiffness: Literal["warn", "stop", "off"] = "warn",
 ) -> dict[str, Any]:
@@ -399,7 +401,7 @@ def effect_forces(
     t: float,
     q: ArrayLike,
     v: ArrayLike,
-    disable: Union[_Family, Sequence[_Family], None] = None,
+    disable: _Family | Sequence[_Family] | None = None,
 ) -> dict[str, _Array]:
     """Generalized force (nv,) of each enabled effect at ``(t, q, v)``, by effect name."""
 
@@ -407,7 +409,7 @@ def energies(
     scene: Scene,
     q: ArrayLike,
     v: ArrayLike,
-    disable: Union[_Family, Sequence[_Family], None] = None,
+    disable: _Family | Sequence[_Family] | None = None,
 ) -> dict[str, float]:
     """``kinetic``, each conservative effect's potential energy by name, and ``total``."""
 
@@ -415,13 +417,13 @@ def rk45(
     fun: Callable[[float, _Array], ArrayLike],
     t_span: ArrayLike,
     y0: ArrayLike,
-    rtol: Optional[ArrayLike] = None,
-    atol: Optional[ArrayLike] = None,
-    t_eval: Optional[ArrayLike] = None,
-    events: Union[_EventFunc, Sequence[_EventFunc], None] = None,
-    first_step: Optional[float] = None,
-    max_step: Optional[float] = None,
-    max_steps: Optional[int] = None,
+    rtol: ArrayLike | None = None,
+    atol: ArrayLike | None = None,
+    t_eval: ArrayLike | None = None,
+    events: _EventFunc | Sequence[_EventFunc] | None = None,
+    first_step: float | None = None,
+    max_step: float | None = None,
+    max_steps: int | None = None,
     dense_output: bool = False,
     controller: _Controller = "standard",
     stiffness: Literal["warn", "stop", "off"] = "warn",

@@ -49,14 +49,14 @@ class UrdfWarning(UserWarning):
 
 
 __all__ = [
-    "PointMassDynError",
-    "InvalidInputError",
     "InertiaError",
+    "InvalidInputError",
     "ModelStructureError",
     "NumericalError",
-    "SingularityError",
-    "SimulationError",
+    "PointMassDynError",
     "SceneError",
+    "SimulationError",
+    "SingularityError",
     "UrdfError",
     "UrdfWarning",
 ]

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Optional
 
 import numpy as np
 
@@ -24,7 +23,7 @@ def _pyplot():
 def coordinate_labels(model) -> tuple[list[str], list[str], list[bool]]:
     """Labels for q and v, and which q entries are angles (shown in degrees)."""
     qlab, vlab, angular = [], [], []
-    for name, (iq, iv, nq, nv) in zip(model.link_names, model.joint_slices()):
+    for name in model.link_names:
         kind = model.body_info(model.body_names.index(name))[1]
         if kind == "SphericalZYZ":
             qlab += [f"{name} φ", f"{name} θ", f"{name} ψ"]
@@ -41,7 +40,7 @@ def coordinate_labels(model) -> tuple[list[str], list[str], list[bool]]:
     return qlab, vlab, angular
 
 
-def plot_trajectory(result, model, path: Optional[str | Path] = None, title: str = ""):
+def plot_trajectory(result, model, path: str | Path | None = None, title: str = ""):
     """Joint coordinates and rates against time (angles in degrees), like the paper's
     Figs. 4 and 5, plus the energy when it was recorded. Saves to ``path`` if given."""
     plt = _pyplot()

@@ -29,8 +29,9 @@ scene.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable
 
 import numpy as np
 
@@ -39,12 +40,12 @@ from ._core import Effect, Scene, StateEvent
 from .errors import SimulationError
 
 
-def Gravity(g: Sequence[float] = (0.0, 0.0, -9.81)) -> Effect:  # noqa: N802
+def Gravity(g: Sequence[float] = (0.0, 0.0, -9.81)) -> Effect:
     """Uniform gravity ``g`` (m/s², world frame), declared per scene."""
     return Effect.gravity(g)
 
 
-def Spring(joints: Any, stiffness: Any, rest: Any = None, *, name: Optional[str] = None) -> Effect:  # noqa: N802
+def Spring(joints: Any, stiffness: Any, rest: Any = None, *, name: str | None = None) -> Effect:
     """Joint springs, family ``springs``.
 
     Revolute/prismatic joints: ``τ = −k (q − rest)``, potential ``½ k (q − rest)²``.
@@ -56,14 +57,14 @@ def Spring(joints: Any, stiffness: Any, rest: Any = None, *, name: Optional[str]
     return Effect.spring(joints, stiffness, rest, name)
 
 
-def Damper(joints: Any, damping: Any, *, name: Optional[str] = None) -> Effect:  # noqa: N802
+def Damper(joints: Any, damping: Any, *, name: str | None = None) -> Effect:
     """Viscous joint dampers ``τ = −c v`` on every speed of the selected joints, family
     ``dampers``; ``damping`` ≥ 0, one number or one per joint."""
     return Effect.damper(joints, damping, name)
 
 
-def JointFriction(  # noqa: N802
-    joints: Any, friction: Any, v_eps: float = 1e-3, *, name: Optional[str] = None
+def JointFriction(
+    joints: Any, friction: Any, v_eps: float = 1e-3, *, name: str | None = None
 ) -> Effect:
     """Regularised Coulomb friction, family ``friction``: ``τ = −F tanh(v / v_eps)`` per
     speed (``τ = −F tanh(|ω|/v_eps) ω/|ω|`` on a quaternion joint). ``F`` (``friction`` ≥ 0,
@@ -72,13 +73,13 @@ def JointFriction(  # noqa: N802
     return Effect.friction(joints, friction, v_eps, name)
 
 
-def JointTorque(joints: Any, tau: Any, *, name: Optional[str] = None) -> Effect:  # noqa: N802
+def JointTorque(joints: Any, tau: Any, *, name: str | None = None) -> Effect:
     """Constant joint torques (forces on prismatic joints), family ``torques``: one number
     for every speed of the selected joints, or one per speed (3 for a spherical joint)."""
     return Effect.joint_torque(joints, tau, name)
 
 
-def TabulatedTorque(joints: Any, time: Any, values: Any, *, name: Optional[str] = None) -> Effect:  # noqa: N802
+def TabulatedTorque(joints: Any, time: Any, values: Any, *, name: str | None = None) -> Effect:
     """Joint torques tabulated in time, family ``torques``: ``time`` (N,) strictly
     increasing, ``values`` (N, n) with one column per speed of the selected joints ((N,)
     for one). Linear interpolation between rows (as ``numpy.interp``), the end rows held
@@ -86,8 +87,8 @@ def TabulatedTorque(joints: Any, time: Any, values: Any, *, name: Optional[str] 
     return Effect.tabulated_torque(joints, time, values, name)
 
 
-def PDTorque(  # noqa: N802
-    joints: Any, kp: Any, kd: Any, time: Any, reference: Any, *, name: Optional[str] = None
+def PDTorque(
+    joints: Any, kp: Any, kd: Any, time: Any, reference: Any, *, name: str | None = None
 ) -> Effect:
     """A PD law tracking a tabulated reference on revolute/prismatic joints, family
     ``torques``: ``τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)``. ``reference`` (N, n) holds one
@@ -97,7 +98,7 @@ def PDTorque(  # noqa: N802
     return Effect.pd_torque(joints, kp, kd, time, reference, name)
 
 
-def TorqueFunction(f: Callable[[float, np.ndarray, np.ndarray], Any], *, name: Optional[str] = None) -> Effect:  # noqa: N802
+def TorqueFunction(f: Callable[[float, np.ndarray, np.ndarray], Any], *, name: str | None = None) -> Effect:
     """Generalized forces from a Python callable ``f(t, q, v) -> tau`` (nv,), family
     ``torques``. It has a price the Rust effects do not: every right-hand-side evaluation
     re-attaches to the interpreter (takes the GIL), builds two arrays and calls Python —
@@ -108,7 +109,7 @@ def TorqueFunction(f: Callable[[float, np.ndarray, np.ndarray], Any], *, name: O
     return Effect.torque_function(f, name)
 
 
-def ExternalForce(  # noqa: N802
+def ExternalForce(
     body: Any,
     force: Any = None,
     point: Any = (0.0, 0.0, 0.0),
@@ -116,7 +117,7 @@ def ExternalForce(  # noqa: N802
     moment: Any = None,
     time: Any = None,
     frame: str = "world",
-    name: Optional[str] = None,
+    name: str | None = None,
 ) -> Effect:
     """A force on ``body`` (name or index) applied at ``point`` (body frame), plus an
     optional pure ``moment``; family ``external``. ``frame="world"``: world components;
@@ -133,7 +134,7 @@ class SimulationResult:
     t: np.ndarray
     q: np.ndarray
     v: np.ndarray
-    energy: Optional[np.ndarray]
+    energy: np.ndarray | None
     t_events: list
     q_events: list
     v_events: list
@@ -148,13 +149,13 @@ class SimulationResult:
     extras: dict = field(default_factory=dict)
     #: Power ``τ_e · v`` (W) of each enabled effect at the output times, by effect name,
     #: when ``simulate(..., power=True)``.
-    power: Optional[dict] = None
+    power: dict | None = None
 
     @property
     def nsteps(self) -> int:
         return self.n_accepted
 
-    def raise_for_status(self) -> "SimulationResult":
+    def raise_for_status(self) -> SimulationResult:
         """Raises :class:`SimulationError` (with ``.t``) if the run failed; returns self."""
         if not self.success:
             raise SimulationError(self.message, self.t_reached)
@@ -163,18 +164,18 @@ class SimulationResult:
 
 def simulate(
     scene: Scene,
-    t_span: Optional[Sequence[float]] = None,
+    t_span: Sequence[float] | None = None,
     *,
     rtol: Any = None,
     atol: Any = None,
     t_eval: Any = None,
-    events: Optional[Sequence[Any]] = None,
-    first_step: Optional[float] = None,
-    max_step: Optional[float] = None,
-    max_steps: Optional[int] = None,
+    events: Sequence[Any] | None = None,
+    first_step: float | None = None,
+    max_step: float | None = None,
+    max_steps: int | None = None,
     energy: bool = False,
     controller: str = "standard",
-    progress: Optional[Callable[[float], Any]] = None,
+    progress: Callable[[float], Any] | None = None,
     disable: Any = None,
     power: bool = False,
     stiffness: str = "warn",
@@ -268,9 +269,9 @@ def rk45(
     atol: Any = 1e-6,
     t_eval: Any = None,
     events: Any = None,
-    first_step: Optional[float] = None,
+    first_step: float | None = None,
     max_step: float = np.inf,
-    max_steps: Optional[int] = None,
+    max_steps: int | None = None,
     dense_output: bool = False,
     controller: str = "standard",
     stiffness: str = "warn",
@@ -302,21 +303,21 @@ def rk45(
 
 
 __all__ = [
-    "Gravity",
-    "Spring",
     "Damper",
+    "ExternalForce",
+    "Gravity",
     "JointFriction",
     "JointTorque",
-    "TabulatedTorque",
+    "OdeResult",
     "PDTorque",
-    "TorqueFunction",
-    "ExternalForce",
     "SimulationResult",
-    "simulate",
+    "Spring",
+    "StateEvent",
+    "TabulatedTorque",
+    "TorqueFunction",
     "effect_forces",
     "effect_power",
     "energies",
-    "OdeResult",
     "rk45",
-    "StateEvent",
+    "simulate",
 ]

@@ -35,8 +35,9 @@ import math
 import os
 import re
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, Optional, Sequence
+from typing import Any, Callable
 
 import numpy as np
 
@@ -186,7 +187,7 @@ class WorkPrecision:
     def to_csv(self, path: str | os.PathLike) -> None:
         write_csv([self], path)
 
-    def plot(self, path: Optional[str | os.PathLike] = None):
+    def plot(self, path: str | os.PathLike | None = None):
         """Error against wall time and against tolerance; saves to ``path`` if given."""
         return plot_work_precision([self], path)
 
@@ -195,14 +196,14 @@ def work_precision(
     scene: Any,
     tolerances: Sequence[float] = DEFAULT_TOLERANCES,
     *,
-    t_end: Optional[float] = None,
+    t_end: float | None = None,
     repeats: int = 5,
     scipy: bool = True,
     scipy_repeats: int = 2,
     rk4: bool = True,
     n_dense: int = 1001,
     reference_check: bool = True,
-    progress: Optional[Callable[[str], Any]] = None,
+    progress: Callable[[str], Any] | None = None,
 ) -> WorkPrecision:
     """Measures ``simulate`` on ``scene`` (a :class:`Scene`, a scene file or a bundled name)
     at ``rtol = atol = tol`` for each tolerance; see the module docstring for the
@@ -367,5 +368,12 @@ def plot_work_precision(results: Sequence[WorkPrecision], path=None, title: str 
     return fig
 
 
-__all__ = ["work_precision", "WorkPrecision", "plot_work_precision", "write_csv", "scene_rhs",
-           "rk4_fixed", "DEFAULT_TOLERANCES"]
+__all__ = [
+    "DEFAULT_TOLERANCES",
+    "WorkPrecision",
+    "plot_work_precision",
+    "rk4_fixed",
+    "scene_rhs",
+    "work_precision",
+    "write_csv",
+]
