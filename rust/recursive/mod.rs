@@ -4,6 +4,7 @@
 //! All vectors are world-axes, about each link's origin, angular part first. Nothing here
 //! allocates: `Data` is the workspace, sized once per model.
 pub mod forward;
+pub mod forward_local;
 pub mod inverse;
 pub mod mass_matrix;
 #[cfg(test)]
@@ -15,6 +16,7 @@ use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, BodyInertia, Mat3, Vec3, Vec6};
 
 pub use forward::forward_dynamics;
+pub use forward_local::{forward_dynamics_local, LocalLink};
 pub use inverse::inverse_dynamics;
 pub use mass_matrix::mass_matrix;
 
@@ -35,6 +37,8 @@ pub struct Data {
     /// `τ − Pᵀ b̂`.
     pub u_tau: Vec<Vec3>,
     pub composite: Vec<BodyInertia>,
+    /// Workspace of the body-frame recursion (`forward_local`), per link.
+    pub local: Vec<LocalLink>,
 }
 
 impl Data {
@@ -50,6 +54,7 @@ impl Data {
             d_inv: vec![Mat3::zeros(); n],
             u_tau: vec![Vec3::zeros(); n],
             composite: vec![BodyInertia::zero(); n],
+            local: vec![LocalLink::default(); n],
         }
     }
 

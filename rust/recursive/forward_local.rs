@@ -1,0 +1,869 @@
+//! Body-frame articulated-body forward dynamics (Featherstone / Pinocchio style).
+//!
+//! The same recursion as `forward::forward_dynamics_world` — twists `[ω; v_O]` about each
+//! link origin, "twist rates" `[ω̇; a_O]` (classical accelerations), the Newton–Euler wrench
+//! `M ṫ + [ω × I ω; ω × (ω × h)]` — but every per-link quantity is kept in the link's own
+//! frame. Then the link inertia is the constant one built from the seven point masses (no
+//! rotation per call), the joint columns are constant for revolute, prismatic and quaternion
+//! joints (`S = [a; 0]`, `[0; a]`, `[1; 0]`) and depend on ψ, θ only for ZYZ, and no world
+//! orientation is needed (except to bring external wrenches, given in world axes, into the
+//! body). Going from link `i` to its parent takes the joint's rotation `E` (child axes in
+//! parent axes) and offset `r` (child origin in parent coordinates): twists go down as
+//! `[Eᵀ ω; Eᵀ (v + ω × r)]`, wrenches up as `[E n + r × E f; E f]`, articulated inertias up
+//! as `E M Eᵀ` by 3×3 blocks followed by the shift to the parent origin.
+//!
+//! Revolute joints about a coordinate axis (the common case) rotate blocks with a plane
+//! rotation instead of a full 3×3 product.
+use super::{singular_message, Data};
+use crate::error::{Error, Result};
+use crate::joint::{axis_angle, quat_to_matrix, Joint};
+use crate::model::Model;
+use crate::spatial::{Mat3, Vec3, Vec6};
+
+/// Per-link workspace of the body-frame recursion (all in the link's frame, about its origin).
+#[derive(Debug, Clone, Copy)]
+pub struct LocalLink {
+    /// Link axes in parent axes (`x_parent = rot x + offset`).
+    pub rot: Mat3,
+    /// Link origin in parent coordinates.
+    pub offset: Vec3,
+    /// Link orientation in the world (only kept when external wrenches are given).
+    pub world_rot: Mat3,
+    /// Joint columns: their angular part (linear part for a prismatic joint).
+    pub s: [Vec3; 3],
+    pub twist: Vec6,
+    /// Velocity-dependent twist rate `ξ` (body frame).
+    pub xi: Vec6,
+    pub inertia: LocalInertia,
+    pub bias: Vec6,
+    pub u: [Vec6; 3],
+    pub d_inv: Mat3,
+    pub u_tau: Vec3,
+    pub accel: Vec6,
+    /// 0: general rotation; 1, 2, 3: plane rotation about x, y, z (`rot` = R_axis(q)).
+    pub plane: u8,
+    pub cs: (f64, f64),
+}
+
+impl Default for LocalLink {
+    fn default() -> Self {
+        LocalLink {
+            rot: Mat3::identity(),
+            offset: Vec3::zeros(),
+            world_rot: Mat3::identity(),
+            s: [Vec3::zeros(); 3],
+            twist: Vec6::zeros(),
+            xi: Vec6::zeros(),
+            inertia: LocalInertia::default(),
+            bias: Vec6::zeros(),
+            u: [Vec6::zeros(); 3],
+            d_inv: Mat3::zeros(),
+            u_tau: Vec3::zeros(),
+            accel: Vec6::zeros(),
+            plane: 0,
+            cs: (1.0, 0.0),
+        }
+    }
+}
+
+/// A symmetric 3×3 matrix by its upper triangle: `[xx, yy, zz, xy, xz, yz]`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Sym3(pub [f64; 6]);
+
+/// Index of entry `(i, j)` in `Sym3`.
+#[inline(always)]
+const fn sidx(i: usize, j: usize) -> usize {
+    if i == j {
+        i
+    } else {
+        i + j + 2 // (0, 1) → 3, (0, 2) → 4, (1, 2) → 5
+    }
+}
+
+impl Sym3 {
+    #[inline(always)]
+    fn at(&self, i: usize, j: usize) -> f64 {
+        self.0[sidx(i, j)]
+    }
+    #[inline(always)]
+    fn from_mat(m: &Mat3) -> Self {
+        Sym3([
+            m[(0, 0)],
+            m[(1, 1)],
+            m[(2, 2)],
+            m[(0, 1)],
+            m[(0, 2)],
+            m[(1, 2)],
+        ])
+    }
+    #[inline(always)]
+    fn mul(&self, x: &Vec3) -> Vec3 {
+        let [xx, yy, zz, xy, xz, yz] = self.0;
+        Vec3::new(
+            xx * x.x + xy * x.y + xz * x.z,
+            xy * x.x + yy * x.y + yz * x.z,
+            xz * x.x + yz * x.y + zz * x.z,
+        )
+    }
+    /// `self − k a aᵀ`.
+    #[inline(always)]
+    fn sub_outer(&mut self, a: &Vec3, k: f64) {
+        let ka = a * k;
+        self.0[0] -= ka.x * a.x;
+        self.0[1] -= ka.y * a.y;
+        self.0[2] -= ka.z * a.z;
+        self.0[3] -= ka.x * a.y;
+        self.0[4] -= ka.x * a.z;
+        self.0[5] -= ka.y * a.z;
+    }
+    pub fn to_mat(&self) -> Mat3 {
+        let [xx, yy, zz, xy, xz, yz] = self.0;
+        Mat3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
+    }
+}
+
+/// Articulated inertia `[[P, Q], [Qᵀ, R]]` with the symmetric blocks stored as such.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LocalInertia {
+    pub p: Sym3,
+    pub q: Mat3,
+    pub r: Sym3,
+}
+
+#[inline(always)]
+fn v3(t: &Vec6, o: usize) -> Vec3 {
+    Vec3::new(t[o], t[o + 1], t[o + 2])
+}
+
+#[inline(always)]
+fn six(a: &Vec3, b: &Vec3) -> Vec6 {
+    Vec6::new(a.x, a.y, a.z, b.x, b.y, b.z)
+}
+
+#[inline(always)]
+fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+    Vec3::new(
+        a.y * b.z - a.z * b.y,
+        a.z * b.x - a.x * b.z,
+        a.x * b.y - a.y * b.x,
+    )
+}
+
+#[inline(always)]
+fn mul(m: &Mat3, x: &Vec3) -> Vec3 {
+    Vec3::new(
+        m[(0, 0)] * x.x + m[(0, 1)] * x.y + m[(0, 2)] * x.z,
+        m[(1, 0)] * x.x + m[(1, 1)] * x.y + m[(1, 2)] * x.z,
+        m[(2, 0)] * x.x + m[(2, 1)] * x.y + m[(2, 2)] * x.z,
+    )
+}
+
+#[inline(always)]
+fn tr_mul(m: &Mat3, x: &Vec3) -> Vec3 {
+    Vec3::new(
+        m[(0, 0)] * x.x + m[(1, 0)] * x.y + m[(2, 0)] * x.z,
+        m[(0, 1)] * x.x + m[(1, 1)] * x.y + m[(2, 1)] * x.z,
+        m[(0, 2)] * x.x + m[(1, 2)] * x.y + m[(2, 2)] * x.z,
+    )
+}
+
+/// `a b` for 3×3 matrices, written out.
+#[inline(always)]
+fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
+    let mut c = Mat3::zeros();
+    for j in 0..3 {
+        for i in 0..3 {
+            c[(i, j)] = a[(i, 0)] * b[(0, j)] + a[(i, 1)] * b[(1, j)] + a[(i, 2)] * b[(2, j)];
+        }
+    }
+    c
+}
+
+/// A rotation `E` (child axes in parent axes) applied to vectors and 3×3 blocks.
+trait Rot: Copy {
+    /// `E x`.
+    fn mul(&self, x: &Vec3) -> Vec3;
+    /// `Eᵀ x`.
+    fn tr_mul(&self, x: &Vec3) -> Vec3;
+    /// `E X Eᵀ`; `SYM` when X (hence the result) is symmetric.
+    fn conj<const SYM: bool>(&self, x: &Mat3) -> Mat3;
+    /// `E X Eᵀ` for symmetric X.
+    fn conj_sym(&self, x: &Sym3) -> Sym3;
+    /// `R_p E` (world orientation of the child from its parent's).
+    fn after(&self, rp: &Mat3) -> Mat3;
+}
+
+#[derive(Clone, Copy)]
+struct General(Mat3);
+
+impl Rot for General {
+    #[inline(always)]
+    fn mul(&self, x: &Vec3) -> Vec3 {
+        mul(&self.0, x)
+    }
+    #[inline(always)]
+    fn tr_mul(&self, x: &Vec3) -> Vec3 {
+        tr_mul(&self.0, x)
+    }
+    #[inline(always)]
+    fn conj<const SYM: bool>(&self, x: &Mat3) -> Mat3 {
+        let e = &self.0;
+        // Y = X Eᵀ: Y[r][c] = Σ_k X[r][k] E[c][k].
+        let mut y = Mat3::zeros();
+        for c in 0..3 {
+            for r in 0..3 {
+                y[(r, c)] = x[(r, 0)] * e[(c, 0)] + x[(r, 1)] * e[(c, 1)] + x[(r, 2)] * e[(c, 2)];
+            }
+        }
+        let mut z = Mat3::zeros();
+        for c in 0..3 {
+            for r in 0..3 {
+                if SYM && r > c {
+                    continue;
+                }
+                let v = e[(r, 0)] * y[(0, c)] + e[(r, 1)] * y[(1, c)] + e[(r, 2)] * y[(2, c)];
+                z[(r, c)] = v;
+                if SYM {
+                    z[(c, r)] = v;
+                }
+            }
+        }
+        z
+    }
+    #[inline(always)]
+    fn conj_sym(&self, x: &Sym3) -> Sym3 {
+        let e = &self.0;
+        // Y = E X (full), then the upper triangle of Y Eᵀ.
+        let mut y = Mat3::zeros();
+        for c in 0..3 {
+            for r in 0..3 {
+                y[(r, c)] =
+                    e[(r, 0)] * x.at(0, c) + e[(r, 1)] * x.at(1, c) + e[(r, 2)] * x.at(2, c);
+            }
+        }
+        let z = |r: usize, c: usize| {
+            y[(r, 0)] * e[(c, 0)] + y[(r, 1)] * e[(c, 1)] + y[(r, 2)] * e[(c, 2)]
+        };
+        Sym3([z(0, 0), z(1, 1), z(2, 2), z(0, 1), z(0, 2), z(1, 2)])
+    }
+    #[inline(always)]
+    fn after(&self, rp: &Mat3) -> Mat3 {
+        mat_mul(rp, &self.0)
+    }
+}
+
+/// Rotation by an angle (cosine `c`, sine `s`) about a coordinate axis, turning `e_I`
+/// towards `e_J`: `E e_I = c e_I + s e_J`, `E e_J = −s e_I + c e_J` (x: I, J = 1, 2; y: 2, 0;
+/// z: 0, 1).
+#[derive(Clone, Copy)]
+struct Plane<const I: usize, const J: usize> {
+    c: f64,
+    s: f64,
+}
+
+impl<const I: usize, const J: usize> Rot for Plane<I, J> {
+    #[inline(always)]
+    fn mul(&self, x: &Vec3) -> Vec3 {
+        let mut y = *x;
+        y[I] = self.c * x[I] - self.s * x[J];
+        y[J] = self.s * x[I] + self.c * x[J];
+        y
+    }
+    #[inline(always)]
+    fn tr_mul(&self, x: &Vec3) -> Vec3 {
+        let mut y = *x;
+        y[I] = self.c * x[I] + self.s * x[J];
+        y[J] = -self.s * x[I] + self.c * x[J];
+        y
+    }
+    #[inline(always)]
+    fn conj<const SYM: bool>(&self, x: &Mat3) -> Mat3 {
+        let (c, s) = (self.c, self.s);
+        // Rows first: Y = E X.
+        let mut y = *x;
+        for col in 0..3 {
+            let (a, b) = (x[(I, col)], x[(J, col)]);
+            y[(I, col)] = c * a - s * b;
+            y[(J, col)] = s * a + c * b;
+        }
+        // Then columns: Z = Y Eᵀ.
+        let mut z = y;
+        for row in 0..3 {
+            let (a, b) = (y[(row, I)], y[(row, J)]);
+            z[(row, I)] = c * a - s * b;
+            z[(row, J)] = s * a + c * b;
+        }
+        z
+    }
+    #[inline(always)]
+    fn conj_sym(&self, x: &Sym3) -> Sym3 {
+        const { assert!(I < 3 && J < 3 && I != J) };
+        let k = 3 - I - J;
+        let (c, s) = (self.c, self.s);
+        let (a, b, d) = (x.at(I, I), x.at(I, J), x.at(J, J));
+        let (cc, ss, cs) = (c * c, s * s, c * s);
+        let cs2b = 2.0 * cs * b;
+        let mut out = *x;
+        out.0[sidx(I, I)] = cc * a - cs2b + ss * d;
+        out.0[sidx(J, J)] = ss * a + cs2b + cc * d;
+        out.0[sidx(I, J)] = cs * (a - d) + (cc - ss) * b;
+        let (ik, jk) = (x.at(I, k), x.at(J, k));
+        out.0[sidx(I, k)] = c * ik - s * jk;
+        out.0[sidx(J, k)] = s * ik + c * jk;
+        out
+    }
+    #[inline(always)]
+    fn after(&self, rp: &Mat3) -> Mat3 {
+        let mut out = *rp;
+        for row in 0..3 {
+            let (x, y) = (rp[(row, I)], rp[(row, J)]);
+            out[(row, I)] = self.c * x + self.s * y;
+            out[(row, J)] = -self.s * x + self.c * y;
+        }
+        out
+    }
+}
+
+/// Shifts articulated-inertia blocks (parent axes, about the child origin) to the parent
+/// origin, which sits at `−r` from the child origin: `AᵀMA` with `A = [[1, 0], [K, 1]]`,
+/// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and adds the result into `out`.
+#[inline(always)]
+fn shift_add(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut LocalInertia) {
+    // K = skew(−r) = [[0, z, −y], [−z, 0, x], [y, −x, 0]].
+    let (x, y, z) = (r.x, r.y, r.z);
+    let mut qk = Mat3::zeros();
+    let mut kr = Mat3::zeros();
+    for a in 0..3 {
+        qk[(a, 0)] = -q[(a, 1)] * z + q[(a, 2)] * y;
+        qk[(a, 1)] = q[(a, 0)] * z - q[(a, 2)] * x;
+        qk[(a, 2)] = -q[(a, 0)] * y + q[(a, 1)] * x;
+        kr[(0, a)] = z * rr.at(1, a) - y * rr.at(2, a);
+        kr[(1, a)] = -z * rr.at(0, a) + x * rr.at(2, a);
+        kr[(2, a)] = y * rr.at(0, a) - x * rr.at(1, a);
+    }
+    // (KR)K, symmetric.
+    let krk = |a: usize, b: usize| match b {
+        0 => -kr[(a, 1)] * z + kr[(a, 2)] * y,
+        1 => kr[(a, 0)] * z - kr[(a, 2)] * x,
+        _ => -kr[(a, 0)] * y + kr[(a, 1)] * x,
+    };
+    for (k, (a, b)) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+        .into_iter()
+        .enumerate()
+    {
+        out.p.0[k] += p.0[k] + qk[(a, b)] + qk[(b, a)] - krk(a, b);
+        out.r.0[k] += rr.0[k];
+    }
+    for b in 0..3 {
+        for a in 0..3 {
+            out.q[(a, b)] += q[(a, b)] - kr[(a, b)];
+        }
+    }
+}
+
+/// Runs `$body` with `$e` bound to the link's rotation, monomorphised per plane axis.
+macro_rules! with_rot {
+    ($cur:expr, $e:ident => $body:expr) => {
+        match $cur.plane {
+            1 => {
+                let $e = Plane::<1, 2> {
+                    c: $cur.cs.0,
+                    s: $cur.cs.1,
+                };
+                $body
+            }
+            2 => {
+                let $e = Plane::<2, 0> {
+                    c: $cur.cs.0,
+                    s: $cur.cs.1,
+                };
+                $body
+            }
+            3 => {
+                let $e = Plane::<0, 1> {
+                    c: $cur.cs.0,
+                    s: $cur.cs.1,
+                };
+                $body
+            }
+            _ => {
+                let $e = General($cur.rot);
+                $body
+            }
+        }
+    };
+}
+
+/// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, by the articulated-body
+/// recursion in body frames. Same contract as `forward_dynamics_world`: `external` holds one
+/// wrench per link, `[moment about the link origin; force]` in world axes; errors at a ZYZ
+/// Euler singularity or a non-positive joint block.
+#[allow(clippy::too_many_arguments)]
+pub fn forward_dynamics_local(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    g: &Vec3,
+    external: Option<&[Vec6]>,
+    a: &mut [f64],
+) -> Result<()> {
+    super::check_singularities(model, q)?;
+    let n = model.links.len();
+    let loc = &mut data.local[..n];
+
+    // Outward: joint transforms, twists, ξ, body inertias and velocity-product wrenches.
+    for i in 0..n {
+        let l = &model.links[i];
+        let (head, tail) = loc.split_at_mut(i);
+        let cur = &mut tail[0];
+        let parent = l.parent.map(|p| &head[p]);
+        let qi = &q[l.q_index..];
+        let vi = &v[l.v_index..];
+        let pl = &l.placement;
+        let mut w_j = Vec3::zeros();
+        let mut v_j = Vec3::zeros();
+        let mut sdot_qd = Vec3::zeros();
+        cur.plane = 0;
+        cur.offset = pl.translation;
+        match l.joint {
+            Joint::Revolute { axis } => {
+                let plane = if l.placement_rotated {
+                    0
+                } else if axis.y == 0.0 && axis.z == 0.0 && axis.x == 1.0 {
+                    1
+                } else if axis.x == 0.0 && axis.z == 0.0 && axis.y == 1.0 {
+                    2
+                } else if axis.x == 0.0 && axis.y == 0.0 && axis.z == 1.0 {
+                    3
+                } else {
+                    0
+                };
+                cur.plane = plane;
+                if plane != 0 {
+                    let (s, c) = qi[0].sin_cos();
+                    cur.cs = (c, s);
+                } else {
+                    let rq = axis_angle(&axis, qi[0]);
+                    cur.rot = if l.placement_rotated {
+                        mat_mul(&pl.rotation, &rq)
+                    } else {
+                        rq
+                    };
+                }
+                cur.s[0] = axis;
+                w_j = axis * vi[0];
+            }
+            Joint::Prismatic { axis } => {
+                cur.rot = pl.rotation;
+                cur.offset += mul(&pl.rotation, &(axis * qi[0]));
+                cur.s[0] = axis;
+                v_j = axis * vi[0];
+            }
+            Joint::Spherical => {
+                let rq = quat_to_matrix(qi);
+                cur.rot = if l.placement_rotated {
+                    mat_mul(&pl.rotation, &rq)
+                } else {
+                    rq
+                };
+                cur.s = [Vec3::x(), Vec3::y(), Vec3::z()];
+                w_j = Vec3::new(vi[0], vi[1], vi[2]);
+            }
+            Joint::SphericalZYZ => {
+                let (sp, cp) = qi[0].sin_cos();
+                let (st, ct) = qi[1].sin_cos();
+                let (ss, cs) = qi[2].sin_cos();
+                // Rz(φ) Ry(θ) Rz(ψ).
+                let rq = Mat3::new(
+                    cp * ct * cs - sp * ss,
+                    -cp * ct * ss - sp * cs,
+                    cp * st,
+                    sp * ct * cs + cp * ss,
+                    -sp * ct * ss + cp * cs,
+                    sp * st,
+                    -st * cs,
+                    st * ss,
+                    ct,
+                );
+                cur.rot = if l.placement_rotated {
+                    mat_mul(&pl.rotation, &rq)
+                } else {
+                    rq
+                };
+                // Relative angular velocity in the body frame: R_qᵀ L(φ, θ) q̇ = S q̇, with
+                // S = [R_qᵀ e_z, Rz(−ψ) e_y, e_z] (independent of φ).
+                cur.s = [
+                    Vec3::new(-st * cs, st * ss, ct),
+                    Vec3::new(ss, cs, 0.0),
+                    Vec3::z(),
+                ];
+                let (dphi, dtheta, dpsi) = (vi[0], vi[1], vi[2]);
+                w_j = cur.s[0] * dphi + cur.s[1] * dtheta + cur.s[2] * dpsi;
+                // Ṡ q̇: the body-frame columns turn with θ and ψ.
+                let d0 = Vec3::new(
+                    -ct * cs * dtheta + st * ss * dpsi,
+                    ct * ss * dtheta + st * cs * dpsi,
+                    -st * dtheta,
+                );
+                let d1 = Vec3::new(cs * dpsi, -ss * dpsi, 0.0);
+                sdot_qd = d0 * dphi + d1 * dtheta;
+            }
+            Joint::Fixed => {
+                cur.rot = pl.rotation;
+            }
+        }
+        let fext = external.map(|f| &f[i]);
+        with_rot!(cur, e => outward(e, cur, parent, &w_j, &v_j, &sdot_qd, fext));
+        // The link's own inertia starts its articulated inertia.
+        let bi = &l.inertia;
+        let h = bi.first_moment;
+        let mass = bi.mass;
+        cur.inertia = LocalInertia {
+            p: Sym3::from_mat(&bi.rotational),
+            q: Mat3::new(0.0, -h.z, h.y, h.z, 0.0, -h.x, -h.y, h.x, 0.0),
+            r: Sym3([mass, mass, mass, 0.0, 0.0, 0.0]),
+        };
+        let w = v3(&cur.twist, 0);
+        let iw = mul(&bi.rotational, &w);
+        cur.bias += six(&cross(&w, &iw), &cross(&w, &cross(&w, &h)));
+    }
+
+    // Inward: articulated inertias and biases.
+    for i in (0..n).rev() {
+        let l = &model.links[i];
+        let (head, tail) = loc.split_at_mut(i);
+        let cur = &mut tail[0];
+        let parent = l.parent.map(|p| &mut head[p]);
+        let ti = &tau[l.v_index..];
+        let ok = match (l.joint, cur.plane) {
+            (Joint::Revolute { .. }, 1) => {
+                let e = Plane::<1, 2> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                backward_1::<_, 0, true>(e, cur, parent, ti[0])
+            }
+            (Joint::Revolute { .. }, 2) => {
+                let e = Plane::<2, 0> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                backward_1::<_, 1, true>(e, cur, parent, ti[0])
+            }
+            (Joint::Revolute { .. }, 3) => {
+                let e = Plane::<0, 1> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                backward_1::<_, 2, true>(e, cur, parent, ti[0])
+            }
+            (Joint::Revolute { .. }, _) => {
+                backward_1::<_, 3, true>(General(cur.rot), cur, parent, ti[0])
+            }
+            (Joint::Prismatic { .. }, _) => {
+                backward_1::<_, 3, false>(General(cur.rot), cur, parent, ti[0])
+            }
+            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => backward_3(cur, parent, ti),
+            (Joint::Fixed, _) => {
+                if let Some(p) = parent {
+                    let m = cur.inertia;
+                    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
+                    let z = Vec3::zeros();
+                    finish(General(cur.rot), &m, &ba, &bl, &z, &z, cur, p);
+                }
+                true
+            }
+        };
+        if !ok {
+            return Err(Error::Singular(singular_message(model, i, q)));
+        }
+    }
+
+    // Outward: accelerations.
+    let base = Vec6::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z);
+    for i in 0..n {
+        let l = &model.links[i];
+        let (head, tail) = loc.split_at_mut(i);
+        let cur = &mut tail[0];
+        let pacc = match l.parent {
+            Some(p) => &head[p].accel,
+            None => &base,
+        };
+        let out = &mut a[l.v_index..];
+        match (l.joint, cur.plane) {
+            (Joint::Revolute { .. }, 1) => {
+                let e = Plane::<1, 2> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                out[0] = forward_1::<_, 0, true>(e, cur, pacc);
+            }
+            (Joint::Revolute { .. }, 2) => {
+                let e = Plane::<2, 0> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                out[0] = forward_1::<_, 1, true>(e, cur, pacc);
+            }
+            (Joint::Revolute { .. }, 3) => {
+                let e = Plane::<0, 1> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                out[0] = forward_1::<_, 2, true>(e, cur, pacc);
+            }
+            (Joint::Revolute { .. }, _) => {
+                out[0] = forward_1::<_, 3, true>(General(cur.rot), cur, pacc);
+            }
+            (Joint::Prismatic { .. }, _) => {
+                out[0] = forward_1::<_, 3, false>(General(cur.rot), cur, pacc);
+            }
+            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => forward_3(cur, pacc, out),
+            (Joint::Fixed, _) => {
+                let (ya, yl) = carry(General(cur.rot), cur, pacc);
+                cur.accel = six(&ya, &yl);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Twist, `ξ`, and the external wrench in body axes (stored negated in `bias`).
+#[inline(always)]
+fn outward<R: Rot>(
+    e: R,
+    cur: &mut LocalLink,
+    parent: Option<&LocalLink>,
+    w_j: &Vec3,
+    v_j: &Vec3,
+    sdot_qd: &Vec3,
+    fext: Option<&Vec6>,
+) {
+    let offset = cur.offset;
+    let (wpc, vpc) = match parent {
+        Some(p) => {
+            // Parent twist carried to this origin, in this frame.
+            let wp = v3(&p.twist, 0);
+            let vp = v3(&p.twist, 3) + cross(&wp, &offset);
+            (e.tr_mul(&wp), e.tr_mul(&vp))
+        }
+        None => (Vec3::zeros(), Vec3::zeros()),
+    };
+    let w = wpc + w_j;
+    let vlin = vpc + v_j;
+    cur.twist = six(&w, &vlin);
+    // ξ = [ω × w_J + Ṡ q̇; ω_p × (v − v_p) + ω × v_J], with ω × w_J = ω_p × w_J and
+    // v − v_p = ω_p × r + v_J (this frame).
+    let xa = cross(&wpc, w_j) + sdot_qd;
+    let rel = vlin
+        - match parent {
+            Some(p) => e.tr_mul(&v3(&p.twist, 3)),
+            None => Vec3::zeros(),
+        };
+    let xl = cross(&wpc, &rel) + cross(&w, v_j);
+    cur.xi = six(&xa, &xl);
+    match fext {
+        Some(f) => {
+            let rw = match parent {
+                Some(p) => e.after(&p.world_rot),
+                None => e.after(&Mat3::identity()),
+            };
+            cur.world_rot = rw;
+            cur.bias = -six(&tr_mul(&rw, &v3(f, 0)), &tr_mul(&rw, &v3(f, 3)));
+        }
+        None => cur.bias = Vec6::zeros(),
+    }
+}
+
+/// One 1-dof joint inward: `U = M̂ S`, `D`, `u`, then `M^a`, `b^a` into the parent. `AX < 3`:
+/// a revolute joint about coordinate axis `AX` (S = e_AX, no products); `ANG`: the joint
+/// moves along an angular (else linear) axis.
+#[inline(always)]
+fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
+    e: R,
+    cur: &mut LocalLink,
+    parent: Option<&mut LocalLink>,
+    tau: f64,
+) -> bool {
+    let m = &cur.inertia;
+    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
+    let s0 = cur.s[0];
+    let (ua, ul) = if AX < 3 {
+        (
+            Vec3::new(m.p.at(0, AX), m.p.at(1, AX), m.p.at(2, AX)),
+            Vec3::new(m.q[(AX, 0)], m.q[(AX, 1)], m.q[(AX, 2)]),
+        )
+    } else if ANG {
+        (m.p.mul(&s0), tr_mul(&m.q, &s0))
+    } else {
+        (mul(&m.q, &s0), m.r.mul(&s0))
+    };
+    let (d, sb) = if AX < 3 {
+        (ua[AX], ba[AX])
+    } else if ANG {
+        (s0.dot(&ua), s0.dot(&ba))
+    } else {
+        (s0.dot(&ul), s0.dot(&bl))
+    };
+    if d.is_nan() || d <= 0.0 {
+        return false;
+    }
+    let dinv = 1.0 / d;
+    let ut = tau - sb;
+    cur.u[0] = six(&ua, &ul);
+    cur.d_inv[(0, 0)] = dinv;
+    cur.u_tau[0] = ut;
+    if let Some(parent) = parent {
+        // M^a = M̂ − U Uᵀ / d; b^a = b̂ + M^a ξ + U ut / d.
+        let da = ua * dinv;
+        let mut ma = *m;
+        ma.p.sub_outer(&ua, dinv);
+        ma.r.sub_outer(&ul, dinv);
+        for c in 0..3 {
+            for r in 0..3 {
+                ma.q[(r, c)] -= da[r] * ul[c];
+            }
+        }
+        let k = ut * dinv;
+        finish(e, &ma, &ba, &bl, &(ua * k), &(ul * k), cur, parent);
+    }
+    true
+}
+
+/// One 3-dof (spherical) joint inward.
+#[inline(always)]
+fn backward_3(cur: &mut LocalLink, parent: Option<&mut LocalLink>, tau: &[f64]) -> bool {
+    let m = &cur.inertia;
+    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
+    let mut u = [Vec6::zeros(); 3];
+    let mut d = Mat3::zeros();
+    let mut ut = Vec3::zeros();
+    for k in 0..3 {
+        let sk = cur.s[k];
+        u[k] = six(&m.p.mul(&sk), &tr_mul(&m.q, &sk));
+        ut[k] = tau[k] - sk.dot(&ba);
+    }
+    for r in 0..3 {
+        for c in r..3 {
+            let x = cur.s[r].dot(&v3(&u[c], 0));
+            d[(r, c)] = x;
+            d[(c, r)] = x;
+        }
+    }
+    let d_inv = match d.cholesky() {
+        Some(ch) => ch.inverse(),
+        None => return false,
+    };
+    cur.u = u;
+    cur.d_inv = d_inv;
+    cur.u_tau = ut;
+    if let Some(parent) = parent {
+        let mut ma = *m;
+        let dut = d_inv * ut;
+        let mut ud_u = Vec6::zeros();
+        for r in 0..3 {
+            let ud = u[0] * d_inv[(0, r)] + u[1] * d_inv[(1, r)] + u[2] * d_inv[(2, r)];
+            let (ua, ul) = (v3(&u[r], 0), v3(&u[r], 3));
+            let (da, dl) = (v3(&ud, 0), v3(&ud, 3));
+            // U D⁻¹ Uᵀ is symmetric as a whole: its upper triangles suffice.
+            for (k, (i, j)) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
+                .into_iter()
+                .enumerate()
+            {
+                ma.p.0[k] -= da[i] * ua[j];
+                ma.r.0[k] -= dl[i] * ul[j];
+            }
+            for c in 0..3 {
+                for rr in 0..3 {
+                    ma.q[(rr, c)] -= da[rr] * ul[c];
+                }
+            }
+            ud_u += u[r] * dut[r];
+        }
+        let e = General(cur.rot);
+        finish(e, &ma, &ba, &bl, &v3(&ud_u, 0), &v3(&ud_u, 3), cur, parent);
+    }
+    true
+}
+
+/// `b^a = b̂ + M^a ξ + k` (`k = U D⁻¹ u`), then `M^a`, `b^a` carried to the parent (rotated
+/// by `E`, shifted by the offset) and added there.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn finish<R: Rot>(
+    e: R,
+    ma: &LocalInertia,
+    ba: &Vec3,
+    bl: &Vec3,
+    ka: &Vec3,
+    kl: &Vec3,
+    cur: &LocalLink,
+    parent: &mut LocalLink,
+) {
+    let xa = v3(&cur.xi, 0);
+    let xl = v3(&cur.xi, 3);
+    let fa = ba + ma.p.mul(&xa) + mul(&ma.q, &xl) + ka;
+    let fl = bl + tr_mul(&ma.q, &xa) + ma.r.mul(&xl) + kl;
+    let r = &cur.offset;
+    let fa = e.mul(&fa);
+    let fl = e.mul(&fl);
+    shift_add(
+        &e.conj_sym(&ma.p),
+        &e.conj::<false>(&ma.q),
+        &e.conj_sym(&ma.r),
+        r,
+        &mut parent.inertia,
+    );
+    let na = fa + cross(r, &fl);
+    parent.bias += six(&na, &fl);
+}
+
+/// The parent's twist rate carried to this link plus `ξ` (this frame).
+#[inline(always)]
+fn carry<R: Rot>(e: R, cur: &LocalLink, pacc: &Vec6) -> (Vec3, Vec3) {
+    let ap = v3(pacc, 0);
+    let lp = v3(pacc, 3) + cross(&ap, &cur.offset);
+    (
+        e.tr_mul(&ap) + v3(&cur.xi, 0),
+        e.tr_mul(&lp) + v3(&cur.xi, 3),
+    )
+}
+
+#[inline(always)]
+fn forward_1<R: Rot, const AX: usize, const ANG: bool>(
+    e: R,
+    cur: &mut LocalLink,
+    pacc: &Vec6,
+) -> f64 {
+    let (mut ya, mut yl) = carry(e, cur, pacc);
+    let u = &cur.u[0];
+    let uy = u[0] * ya.x + u[1] * ya.y + u[2] * ya.z + u[3] * yl.x + u[4] * yl.y + u[5] * yl.z;
+    let qdd = (cur.u_tau[0] - uy) * cur.d_inv[(0, 0)];
+    if AX < 3 {
+        ya[AX] += qdd;
+    } else if ANG {
+        ya += cur.s[0] * qdd;
+    } else {
+        yl += cur.s[0] * qdd;
+    }
+    cur.accel = six(&ya, &yl);
+    qdd
+}
+
+#[inline(always)]
+fn forward_3(cur: &mut LocalLink, pacc: &Vec6, out: &mut [f64]) {
+    let (mut ya, yl) = carry(General(cur.rot), cur, pacc);
+    let y = six(&ya, &yl);
+    let mut rhs = Vec3::zeros();
+    for k in 0..3 {
+        rhs[k] = cur.u_tau[k] - cur.u[k].dot(&y);
+    }
+    let qdd = cur.d_inv * rhs;
+    for k in 0..3 {
+        out[k] = qdd[k];
+        ya += cur.s[k] * qdd[k];
+    }
+    cur.accel = six(&ya, &yl);
+}
