@@ -245,9 +245,9 @@ def test_slender_rod_on_a_quaternion_joint_within_its_conditioning(ratio, method
         assert transverse <= 16 * EPS
         assert axial <= 4 * EPS * cond
         worst = max(worst, axial)
-    if method == "recursive" and ratio <= 1e-4:
-        # The loss is real (world-coordinate recursion), not an artefact of the test.
-        assert worst > EPS
+    # Both paths stay within the conditioning bound asserted above (the body-frame recursion,
+    # now the default, at ~0.05 eps·cond; the former world-frame one reached ~0.6 eps·cond).
+    record(f"slender rod, quaternion, {method} d/a={ratio:g}: worst axial error", worst)
 
 
 @pytest.mark.parametrize("ratio", RATIOS + [0.0])

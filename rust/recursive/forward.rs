@@ -42,10 +42,11 @@ fn dot_axis(a: &Vec3, w: &Vec6, angular_motion: bool) -> f64 {
     }
 }
 
-/// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`. Errors at a singular joint
-/// (a SphericalZYZ joint at sin θ = 0).
+/// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, all in world axes. Errors at a
+/// singular joint (a SphericalZYZ joint at sin θ = 0). Not the default (that is the
+/// body-frame `forward_dynamics_local`); kept as an independent cross-check.
 #[allow(clippy::too_many_arguments)]
-pub fn forward_dynamics(
+pub fn forward_dynamics_world(
     model: &Model,
     data: &mut Data,
     q: &[f64],

@@ -131,17 +131,17 @@ pub struct LocalInertia {
 }
 
 #[inline(always)]
-fn v3(t: &Vec6, o: usize) -> Vec3 {
+pub(super) fn v3(t: &Vec6, o: usize) -> Vec3 {
     Vec3::new(t[o], t[o + 1], t[o + 2])
 }
 
 #[inline(always)]
-fn six(a: &Vec3, b: &Vec3) -> Vec6 {
+pub(super) fn six(a: &Vec3, b: &Vec3) -> Vec6 {
     Vec6::new(a.x, a.y, a.z, b.x, b.y, b.z)
 }
 
 #[inline(always)]
-fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
+pub(super) fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
     Vec3::new(
         a.y * b.z - a.z * b.y,
         a.z * b.x - a.x * b.z,
@@ -150,7 +150,7 @@ fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
 }
 
 #[inline(always)]
-fn mul(m: &Mat3, x: &Vec3) -> Vec3 {
+pub(super) fn mul(m: &Mat3, x: &Vec3) -> Vec3 {
     Vec3::new(
         m[(0, 0)] * x.x + m[(0, 1)] * x.y + m[(0, 2)] * x.z,
         m[(1, 0)] * x.x + m[(1, 1)] * x.y + m[(1, 2)] * x.z,
@@ -180,7 +180,7 @@ fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
 }
 
 /// A rotation `E` (child axes in parent axes) applied to vectors and 3×3 blocks.
-trait Rot: Copy {
+pub(super) trait Rot: Copy {
     /// `E x`.
     fn mul(&self, x: &Vec3) -> Vec3;
     /// `Eᵀ x`.
@@ -194,7 +194,7 @@ trait Rot: Copy {
 }
 
 #[derive(Clone, Copy)]
-struct General(Mat3);
+pub(super) struct General(pub(super) Mat3);
 
 impl Rot for General {
     #[inline(always)]
@@ -256,9 +256,9 @@ impl Rot for General {
 /// towards `e_J`: `E e_I = c e_I + s e_J`, `E e_J = −s e_I + c e_J` (x: I, J = 1, 2; y: 2, 0;
 /// z: 0, 1).
 #[derive(Clone, Copy)]
-struct Plane<const I: usize, const J: usize> {
-    c: f64,
-    s: f64,
+pub(super) struct Plane<const I: usize, const J: usize> {
+    pub(super) c: f64,
+    pub(super) s: f64,
 }
 
 impl<const I: usize, const J: usize> Rot for Plane<I, J> {
@@ -393,6 +393,7 @@ macro_rules! with_rot {
         }
     };
 }
+pub(super) use with_rot;
 
 /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, by the articulated-body
 /// recursion in body frames. Same contract as `forward_dynamics_world`: `external` holds one
@@ -414,6 +415,120 @@ pub fn forward_dynamics_local(
     let loc = &mut data.local[..n];
 
     // Outward: joint transforms, twists, ξ, body inertias and velocity-product wrenches.
+    outward_pass::<true>(model, loc, q, v, external);
+
+    // Inward: articulated inertias and biases.
+    for i in (0..n).rev() {
+        let l = &model.links[i];
+        let (head, tail) = loc.split_at_mut(i);
+        let cur = &mut tail[0];
+        let parent = l.parent.map(|p| &mut head[p]);
+        let ti = &tau[l.v_index..];
+        let ok = match (l.joint, cur.plane) {
+            (Joint::Revolute { .. }, 1) => {
+                let e = Plane::<1, 2> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                backward_1::<_, 0, true>(e, cur, parent, ti[0])
+            }
+            (Joint::Revolute { .. }, 2) => {
+                let e = Plane::<2, 0> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                backward_1::<_, 1, true>(e, cur, parent, ti[0])
+            }
+            (Joint::Revolute { .. }, 3) => {
+                let e = Plane::<0, 1> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                backward_1::<_, 2, true>(e, cur, parent, ti[0])
+            }
+            (Joint::Revolute { .. }, _) => {
+                backward_1::<_, 3, true>(General(cur.rot), cur, parent, ti[0])
+            }
+            (Joint::Prismatic { .. }, _) => {
+                backward_1::<_, 3, false>(General(cur.rot), cur, parent, ti[0])
+            }
+            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => backward_3(cur, parent, ti),
+            (Joint::Fixed, _) => {
+                if let Some(p) = parent {
+                    let m = cur.inertia;
+                    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
+                    let z = Vec3::zeros();
+                    finish(General(cur.rot), &m, &ba, &bl, &z, &z, cur, p);
+                }
+                true
+            }
+        };
+        if !ok {
+            return Err(Error::Singular(singular_message(model, i, q)));
+        }
+    }
+
+    // Outward: accelerations.
+    let base = Vec6::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z);
+    for i in 0..n {
+        let l = &model.links[i];
+        let (head, tail) = loc.split_at_mut(i);
+        let cur = &mut tail[0];
+        let pacc = match l.parent {
+            Some(p) => &head[p].accel,
+            None => &base,
+        };
+        let out = &mut a[l.v_index..];
+        match (l.joint, cur.plane) {
+            (Joint::Revolute { .. }, 1) => {
+                let e = Plane::<1, 2> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                out[0] = forward_1::<_, 0, true>(e, cur, pacc);
+            }
+            (Joint::Revolute { .. }, 2) => {
+                let e = Plane::<2, 0> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                out[0] = forward_1::<_, 1, true>(e, cur, pacc);
+            }
+            (Joint::Revolute { .. }, 3) => {
+                let e = Plane::<0, 1> {
+                    c: cur.cs.0,
+                    s: cur.cs.1,
+                };
+                out[0] = forward_1::<_, 2, true>(e, cur, pacc);
+            }
+            (Joint::Revolute { .. }, _) => {
+                out[0] = forward_1::<_, 3, true>(General(cur.rot), cur, pacc);
+            }
+            (Joint::Prismatic { .. }, _) => {
+                out[0] = forward_1::<_, 3, false>(General(cur.rot), cur, pacc);
+            }
+            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => forward_3(cur, pacc, out),
+            (Joint::Fixed, _) => {
+                let (ya, yl) = carry(General(cur.rot), cur, pacc);
+                cur.accel = six(&ya, &yl);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The outward kinematic pass shared by the body-frame forward and inverse dynamics: per
+/// link, the joint rotation `E` (or its plane-rotation cosine and sine) and offset, the joint
+/// columns, the twist, `ξ`, and in `bias` the velocity-product wrench minus the external
+/// wrench (in body axes). `ABI`: also start each articulated inertia at the link's own.
+pub(super) fn outward_pass<const ABI: bool>(
+    model: &Model,
+    loc: &mut [LocalLink],
+    q: &[f64],
+    v: &[f64],
+    external: Option<&[Vec6]>,
+) {
+    let n = model.links.len();
     for i in 0..n {
         let l = &model.links[i];
         let (head, tail) = loc.split_at_mut(i);
@@ -516,118 +631,21 @@ pub fn forward_dynamics_local(
         }
         let fext = external.map(|f| &f[i]);
         with_rot!(cur, e => outward(e, cur, parent, &w_j, &v_j, &sdot_qd, fext));
-        // The link's own inertia starts its articulated inertia.
         let bi = &l.inertia;
         let h = bi.first_moment;
-        let mass = bi.mass;
-        cur.inertia = LocalInertia {
-            p: Sym3::from_mat(&bi.rotational),
-            q: Mat3::new(0.0, -h.z, h.y, h.z, 0.0, -h.x, -h.y, h.x, 0.0),
-            r: Sym3([mass, mass, mass, 0.0, 0.0, 0.0]),
-        };
+        if ABI {
+            // The link's own inertia starts its articulated inertia.
+            let mass = bi.mass;
+            cur.inertia = LocalInertia {
+                p: Sym3::from_mat(&bi.rotational),
+                q: Mat3::new(0.0, -h.z, h.y, h.z, 0.0, -h.x, -h.y, h.x, 0.0),
+                r: Sym3([mass, mass, mass, 0.0, 0.0, 0.0]),
+            };
+        }
         let w = v3(&cur.twist, 0);
         let iw = mul(&bi.rotational, &w);
         cur.bias += six(&cross(&w, &iw), &cross(&w, &cross(&w, &h)));
     }
-
-    // Inward: articulated inertias and biases.
-    for i in (0..n).rev() {
-        let l = &model.links[i];
-        let (head, tail) = loc.split_at_mut(i);
-        let cur = &mut tail[0];
-        let parent = l.parent.map(|p| &mut head[p]);
-        let ti = &tau[l.v_index..];
-        let ok = match (l.joint, cur.plane) {
-            (Joint::Revolute { .. }, 1) => {
-                let e = Plane::<1, 2> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                backward_1::<_, 0, true>(e, cur, parent, ti[0])
-            }
-            (Joint::Revolute { .. }, 2) => {
-                let e = Plane::<2, 0> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                backward_1::<_, 1, true>(e, cur, parent, ti[0])
-            }
-            (Joint::Revolute { .. }, 3) => {
-                let e = Plane::<0, 1> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                backward_1::<_, 2, true>(e, cur, parent, ti[0])
-            }
-            (Joint::Revolute { .. }, _) => {
-                backward_1::<_, 3, true>(General(cur.rot), cur, parent, ti[0])
-            }
-            (Joint::Prismatic { .. }, _) => {
-                backward_1::<_, 3, false>(General(cur.rot), cur, parent, ti[0])
-            }
-            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => backward_3(cur, parent, ti),
-            (Joint::Fixed, _) => {
-                if let Some(p) = parent {
-                    let m = cur.inertia;
-                    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
-                    let z = Vec3::zeros();
-                    finish(General(cur.rot), &m, &ba, &bl, &z, &z, cur, p);
-                }
-                true
-            }
-        };
-        if !ok {
-            return Err(Error::Singular(singular_message(model, i, q)));
-        }
-    }
-
-    // Outward: accelerations.
-    let base = Vec6::new(0.0, 0.0, 0.0, -g.x, -g.y, -g.z);
-    for i in 0..n {
-        let l = &model.links[i];
-        let (head, tail) = loc.split_at_mut(i);
-        let cur = &mut tail[0];
-        let pacc = match l.parent {
-            Some(p) => &head[p].accel,
-            None => &base,
-        };
-        let out = &mut a[l.v_index..];
-        match (l.joint, cur.plane) {
-            (Joint::Revolute { .. }, 1) => {
-                let e = Plane::<1, 2> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                out[0] = forward_1::<_, 0, true>(e, cur, pacc);
-            }
-            (Joint::Revolute { .. }, 2) => {
-                let e = Plane::<2, 0> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                out[0] = forward_1::<_, 1, true>(e, cur, pacc);
-            }
-            (Joint::Revolute { .. }, 3) => {
-                let e = Plane::<0, 1> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                out[0] = forward_1::<_, 2, true>(e, cur, pacc);
-            }
-            (Joint::Revolute { .. }, _) => {
-                out[0] = forward_1::<_, 3, true>(General(cur.rot), cur, pacc);
-            }
-            (Joint::Prismatic { .. }, _) => {
-                out[0] = forward_1::<_, 3, false>(General(cur.rot), cur, pacc);
-            }
-            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => forward_3(cur, pacc, out),
-            (Joint::Fixed, _) => {
-                let (ya, yl) = carry(General(cur.rot), cur, pacc);
-                cur.accel = six(&ya, &yl);
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Twist, `ξ`, and the external wrench in body axes (stored negated in `bias`).
@@ -807,8 +825,6 @@ fn finish<R: Rot>(
     let fa = ba + ma.p.mul(&xa) + mul(&ma.q, &xl) + ka;
     let fl = bl + tr_mul(&ma.q, &xa) + ma.r.mul(&xl) + kl;
     let r = &cur.offset;
-    let fa = e.mul(&fa);
-    let fl = e.mul(&fl);
     shift_add(
         &e.conj_sym(&ma.p),
         &e.conj::<false>(&ma.q),
@@ -816,13 +832,21 @@ fn finish<R: Rot>(
         r,
         &mut parent.inertia,
     );
-    let na = fa + cross(r, &fl);
-    parent.bias += six(&na, &fl);
+    parent.bias += to_parent(e, r, &fa, &fl);
+}
+
+/// A wrench `[n; f]` about the child origin in child axes, as seen at the parent origin in
+/// parent axes: `[E n + r × E f; E f]`.
+#[inline(always)]
+pub(super) fn to_parent<R: Rot>(e: R, r: &Vec3, n: &Vec3, f: &Vec3) -> Vec6 {
+    let n = e.mul(n);
+    let f = e.mul(f);
+    six(&(n + cross(r, &f)), &f)
 }
 
 /// The parent's twist rate carried to this link plus `ξ` (this frame).
 #[inline(always)]
-fn carry<R: Rot>(e: R, cur: &LocalLink, pacc: &Vec6) -> (Vec3, Vec3) {
+pub(super) fn carry<R: Rot>(e: R, cur: &LocalLink, pacc: &Vec6) -> (Vec3, Vec3) {
     let ap = v3(pacc, 0);
     let lp = v3(pacc, 3) + cross(&ap, &cur.offset);
     (

@@ -5,8 +5,10 @@ use crate::model::Model;
 use crate::spatial::{shift_twist, shift_wrench, Vec3, Vec6};
 
 /// `τ = I a + C v − τ_g − Nᵀ f_ext`. `external` holds one wrench per link about its origin
-/// (world axes), applied to the link. Writes `tau` (length nv).
-pub fn inverse_dynamics(
+/// (world axes), applied to the link. Writes `tau` (length nv). World-axes version, kept as
+/// an independent cross-check of the default (body-frame `inverse_dynamics_local`).
+#[allow(clippy::too_many_arguments)]
+pub fn inverse_dynamics_world(
     model: &Model,
     data: &mut Data,
     q: &[f64],

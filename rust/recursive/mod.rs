@@ -1,11 +1,15 @@
 //! O(n) recursive dynamics over the DeNOC quantities: twists and twist rates outward,
 //! wrenches inward (`τ_i = P_iᵀ w_i`), the articulated-body recursion for forward dynamics
 //! (equivalent to Saha's UDUᵀ of the GIM, never forming it), and the composite-body GIM.
-//! All vectors are world-axes, about each link's origin, angular part first. Nothing here
-//! allocates: `Data` is the workspace, sized once per model.
+//! All vectors are about each link's origin, angular part first. The default forward and
+//! inverse dynamics (`forward_dynamics`, `inverse_dynamics`) run in body frames
+//! (`forward_local`, `inverse_local`, sharing one outward kinematic pass); the world-axes
+//! versions (`forward_dynamics_world`, `inverse_dynamics_world`) stay as cross-checks.
+//! Nothing here allocates: `Data` is the workspace, sized once per model.
 pub mod forward;
 pub mod forward_local;
 pub mod inverse;
+pub mod inverse_local;
 pub mod mass_matrix;
 #[cfg(test)]
 mod tests;
@@ -15,9 +19,10 @@ use crate::kinematics::LinkState;
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, BodyInertia, Mat3, Vec3, Vec6};
 
-pub use forward::forward_dynamics;
+pub use forward::forward_dynamics_world;
 pub use forward_local::{forward_dynamics_local, LocalLink};
-pub use inverse::inverse_dynamics;
+pub use inverse::inverse_dynamics_world;
+pub use inverse_local::inverse_dynamics_local;
 pub use mass_matrix::mass_matrix;
 
 /// Workspace for one model (like Pinocchio's `Data`).
@@ -61,6 +66,43 @@ impl Data {
     pub fn fits(&self, model: &Model) -> bool {
         self.links.len() == model.links.len()
     }
+}
+
+/// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`: the body-frame articulated-body
+/// recursion ([`forward_dynamics_local`]). `external`: one wrench per link,
+/// `[moment about the link origin; force]` in world axes. Errors at a ZYZ Euler singularity
+/// or a non-positive joint block.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn forward_dynamics(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    tau: &[f64],
+    g: &Vec3,
+    external: Option<&[Vec6]>,
+    a: &mut [f64],
+) -> crate::error::Result<()> {
+    forward_dynamics_local(model, data, q, v, tau, g, external, a)
+}
+
+/// `τ = I a + C v − τ_g − Nᵀ f_ext`: the body-frame Newton–Euler recursion
+/// ([`inverse_dynamics_local`]), which rounds the geometry exactly as [`forward_dynamics`]
+/// does. `external` as for [`forward_dynamics`]. Writes `tau` (length nv).
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub fn inverse_dynamics(
+    model: &Model,
+    data: &mut Data,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    external: Option<&[Vec6]>,
+    tau: &mut [f64],
+) {
+    inverse_dynamics_local(model, data, q, v, a, g, external, tau)
 }
 
 /// Base twist rate that puts uniform gravity into every body: `ṫ_0 = [0; −g]`.

@@ -261,7 +261,7 @@ fn both_forward(
     let mut loc = vec![0.0; model.nv];
     let mut world = vec![0.0; model.nv];
     forward_local::forward_dynamics_local(model, &mut data, q, v, tau, &G, ext, &mut loc).unwrap();
-    forward::forward_dynamics(model, &mut data, q, v, tau, &G, ext, &mut world).unwrap();
+    forward_dynamics_world(model, &mut data, q, v, tau, &G, ext, &mut world).unwrap();
     (DVector::from_vec(loc), DVector::from_vec(world))
 }
 
@@ -298,7 +298,7 @@ fn local_forward_inverts_inverse_dynamics_with_wrenches() {
         let ext = random_wrenches(&model, seed);
         let mut data = Data::new(&model);
         let mut tau = vec![0.0; model.nv];
-        inverse_dynamics(&model, &mut data, &q, &v, &a, &G, Some(&ext), &mut tau);
+        inverse_dynamics_world(&model, &mut data, &q, &v, &a, &G, Some(&ext), &mut tau);
         let mut acc = vec![0.0; model.nv];
         forward_local::forward_dynamics_local(
             &model,
@@ -431,7 +431,7 @@ fn local_forward_thousand_body_chain() {
     forward_local::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut a)
         .unwrap();
     let mut back = vec![0.0; n];
-    inverse_dynamics(&model, &mut data, &q, &v, &a, &G, None, &mut back);
+    inverse_dynamics_world(&model, &mut data, &q, &v, &a, &G, None, &mut back);
     let err = DVector::from_vec(back) - DVector::from_vec(tau.clone());
     let scale = DVector::from_vec(tau.clone()).norm();
     // The world-frame inverse dynamics rebuilds the geometry with its own rounding, and on a
@@ -446,4 +446,181 @@ fn local_forward_thousand_body_chain() {
     // And the accelerations agree with the world-frame recursion.
     let (loc, world) = both_forward(&model, &q, &v, &tau, None);
     assert!(rel(&loc, &world) <= 1e-10, "relative {}", rel(&loc, &world));
+}
+
+// ---- The body-frame inverse dynamics (`inverse_local`) against the world-frame one and the
+// ---- explicit DeNOC products; and the body-frame pair inverting each other.
+
+/// `τ` by the body-frame and the world-frame recursions on one state; returns (local, world).
+fn both_inverse(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    ext: Option<&[crate::spatial::Vec6]>,
+) -> (DVector<f64>, DVector<f64>) {
+    let mut data = Data::new(model);
+    let mut loc = vec![0.0; model.nv];
+    let mut world = vec![0.0; model.nv];
+    inverse_dynamics_local(model, &mut data, q, v, a, g, ext, &mut loc);
+    inverse_dynamics_world(model, &mut data, q, v, a, g, ext, &mut world);
+    (DVector::from_vec(loc), DVector::from_vec(world))
+}
+
+/// The explicit DeNOC `τ`, with external wrenches (about link origins, world axes) mapped by
+/// `(N_l N_d)ᵀ`.
+fn explicit_inverse(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    ext: Option<&[crate::spatial::Vec6]>,
+) -> DVector<f64> {
+    let mut tau = denoc::inverse_dynamics(model, q, v, a, &G);
+    if let Some(f) = ext {
+        let den = denoc::matrices(model, q);
+        let stacked = DVector::from_iterator(6 * f.len(), f.iter().flat_map(|w| w.iter().copied()));
+        tau -= (&den.nl * &den.nd).transpose() * stacked;
+    }
+    tau
+}
+
+#[test]
+fn local_inverse_agrees_with_world_and_explicit_on_random_trees() {
+    for n in 1..=50 {
+        for seed in [n as u64 * 31 + 1, n as u64 * 977 + 5] {
+            let model = random_tree(seed, n);
+            let (q, v, a) = random_state(&model, seed);
+            let ext = random_wrenches(&model, seed);
+            for e in [None, Some(ext.as_slice())] {
+                let (loc, world) = both_inverse(&model, &q, &v, &a, &G, e);
+                let explicit = explicit_inverse(&model, &q, &v, &a, e);
+                let tag = format!("n {n} seed {seed} ext {}", e.is_some());
+                assert!(
+                    rel(&loc, &world) <= 1e-10,
+                    "{tag}: world {}",
+                    rel(&loc, &world)
+                );
+                assert!(
+                    rel(&loc, &explicit) <= 1e-10,
+                    "{tag}: explicit {}",
+                    rel(&loc, &explicit)
+                );
+            }
+            // At rest without gravity (pure inertial), and gravity alone.
+            let zero = vec![0.0; model.nv];
+            let (loc, world) = both_inverse(&model, &q, &zero, &a, &Vec3::zeros(), None);
+            assert!(rel(&loc, &world) <= 1e-10, "n {n} seed {seed} inertial");
+            let (loc, world) = both_inverse(&model, &q, &zero, &zero, &G, None);
+            assert!(rel(&loc, &world) <= 1e-10, "n {n} seed {seed} gravity");
+        }
+    }
+}
+
+#[test]
+fn local_inverse_on_every_single_joint_type() {
+    // As `local_forward_on_every_single_joint_type`: plane-rotation and general paths.
+    let body = RigidBody::new(
+        1.3,
+        Vec3::new(0.1, -0.2, 0.05),
+        Mat3::from_diagonal(&Vec3::new(0.02, 0.03, 0.025)),
+    )
+    .unwrap();
+    let joints = [
+        Joint::revolute(Vec3::x()).unwrap(),
+        Joint::revolute(Vec3::y()).unwrap(),
+        Joint::revolute(Vec3::z()).unwrap(),
+        Joint::revolute(Vec3::new(0.3, -0.4, 0.8)).unwrap(),
+        Joint::prismatic(Vec3::new(0.2, 0.9, -0.1)).unwrap(),
+        Joint::Spherical,
+        Joint::SphericalZYZ,
+        Joint::Fixed,
+    ];
+    for (k, j0) in joints.iter().enumerate() {
+        for j1 in &joints {
+            for rotated in [false, true] {
+                let mut model = Model::new();
+                let rot = if rotated {
+                    *nalgebra::Rotation3::from_scaled_axis(Vec3::new(0.4, -0.7, 0.2)).matrix()
+                } else {
+                    Mat3::identity()
+                };
+                let place = |t: Vec3| Placement::new(rot, t);
+                let b0 = model
+                    .add_body(body, *j0, None, place(Vec3::new(0.0, 0.1, 0.0)), None, None)
+                    .unwrap();
+                model
+                    .add_body(
+                        body,
+                        *j1,
+                        Some(b0),
+                        place(Vec3::new(0.4, -0.1, 0.2)),
+                        None,
+                        None,
+                    )
+                    .unwrap();
+                if model.nv == 0 {
+                    continue;
+                }
+                let (q, v, a) = random_state(&model, 200 + k as u64);
+                let ext = random_wrenches(&model, 9);
+                for e in [None, Some(ext.as_slice())] {
+                    let (loc, world) = both_inverse(&model, &q, &v, &a, &G, e);
+                    let explicit = explicit_inverse(&model, &q, &v, &a, e);
+                    assert!(
+                        rel(&loc, &world) <= 1e-12 && rel(&loc, &explicit) <= 1e-12,
+                        "{} / {} rotated {rotated}: world {} explicit {}",
+                        j0.kind(),
+                        j1.kind(),
+                        rel(&loc, &world),
+                        rel(&loc, &explicit)
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn local_pair_inverts_on_random_trees_with_wrenches() {
+    for seed in [3u64, 4, 5, 6] {
+        let model = random_tree(seed, 40);
+        let (q, v, a) = random_state(&model, seed);
+        let ext = random_wrenches(&model, seed);
+        let mut data = Data::new(&model);
+        let mut tau = vec![0.0; model.nv];
+        inverse_dynamics_local(&model, &mut data, &q, &v, &a, &G, Some(&ext), &mut tau);
+        let mut acc = vec![0.0; model.nv];
+        forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, Some(&ext), &mut acc).unwrap();
+        assert!(
+            rel(&DVector::from_vec(acc), &DVector::from_vec(a)) <= 1e-9,
+            "seed {seed}"
+        );
+    }
+}
+
+#[test]
+fn local_pair_thousand_body_chain_inverse_of_forward() {
+    let model = crate::benchmark_models::chain(1000);
+    let n = model.nv;
+    let q: Vec<f64> = (0..n).map(|k| 0.3 * ((k as f64) * 0.37).sin()).collect();
+    let v: Vec<f64> = (0..n).map(|k| 0.5 * ((k as f64) * 0.11).cos()).collect();
+    let tau: Vec<f64> = (0..n).map(|k| ((k as f64) * 0.73).sin()).collect();
+    let mut data = Data::new(&model);
+    let mut a = vec![0.0; n];
+    forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut a).unwrap();
+    let mut back = vec![0.0; n];
+    inverse_dynamics_local(&model, &mut data, &q, &v, &a, &G, None, &mut back);
+    let err = DVector::from_vec(back) - DVector::from_vec(tau.clone());
+    let scale = DVector::from_vec(tau).norm();
+    assert!(
+        err.norm() <= 1e-8 * scale,
+        "relative {}",
+        err.norm() / scale
+    );
+    // And the body-frame τ of these accelerations agrees with the world-frame one (both
+    // evaluate the same, ill-conditioned, map; 1e-6 is the rounding floor measured for it).
+    let (loc, world) = both_inverse(&model, &q, &v, &a, &G, None);
+    assert!(rel(&loc, &world) <= 1e-6, "relative {}", rel(&loc, &world));
 }
