@@ -210,7 +210,13 @@ def work_precision(
     definitions. ``t_end`` overrides the scene's end time (default: the scene's, else 10 s).
     ``scipy`` / ``rk4`` switch the comparison lines off (they cost Python time, up to
     seconds per tolerance). ``progress(msg)`` is called before each measurement."""
-    from scipy.integrate import solve_ivp
+    try:
+        from scipy.integrate import solve_ivp
+    except ImportError as exc:
+        raise ImportError(
+            "work_precision needs SciPy for its independent reference solution: "
+            "pip install 'pointmass-dyn[bench]'"
+        ) from exc
 
     sc = _scene_of(scene)
     t0, t1 = sc.t_span or (0.0, 10.0)
