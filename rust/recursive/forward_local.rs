@@ -17,7 +17,7 @@
 use super::{singular_message, Data};
 use crate::error::{Error, Result};
 use crate::joint::{axis_angle, quat_to_matrix, Joint};
-use crate::model::Model;
+use crate::model::{Link, Model};
 use crate::spatial::{Mat3, Vec3, Vec6};
 
 /// Per-link workspace of the body-frame recursion (all in the link's frame, about its origin).
@@ -63,6 +63,39 @@ impl Default for LocalLink {
             plane: 0,
             cs: (1.0, 0.0),
         }
+    }
+}
+
+/// The plane-rotation code of a link (see `LocalLink::plane`): 1, 2, 3 for a revolute joint
+/// about x, y, z with an unrotated placement, else 0. A constant of the model, set once in
+/// `Data::new`.
+pub(super) fn plane_of(l: &Link) -> u8 {
+    match l.joint {
+        Joint::Revolute { axis } if !l.placement_rotated => {
+            if axis.y == 0.0 && axis.z == 0.0 && axis.x == 1.0 {
+                1
+            } else if axis.x == 0.0 && axis.z == 0.0 && axis.y == 1.0 {
+                2
+            } else if axis.x == 0.0 && axis.y == 0.0 && axis.z == 1.0 {
+                3
+            } else {
+                0
+            }
+        }
+        _ => 0,
+    }
+}
+
+/// The link's own inertia about its origin as a `LocalInertia` (a constant of the model, set
+/// once in `Data::new`; it starts each articulated inertia).
+pub(super) fn body_inertia_of(l: &Link) -> LocalInertia {
+    let bi = &l.inertia;
+    let h = bi.first_moment;
+    let mass = bi.mass;
+    LocalInertia {
+        p: Sym3::from_mat(&bi.rotational),
+        q: Mat3::new(0.0, -h.z, h.y, h.z, 0.0, -h.x, -h.y, h.x, 0.0),
+        r: Sym3([mass, mass, mass, 0.0, 0.0, 0.0]),
     }
 }
 
@@ -327,16 +360,19 @@ impl<const I: usize, const J: usize> Rot for Plane<I, J> {
 /// Shifts articulated-inertia blocks (parent axes, about the child origin) to the parent
 /// origin, which sits at `−r` from the child origin: `AᵀMA` with `A = [[1, 0], [K, 1]]`,
 /// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and adds the result into `out`.
+/// `ZR < 3`: row and column `ZR` of `p` and row `ZR` of `q` are zero (and not read).
 #[inline(always)]
-fn shift_add(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut LocalInertia) {
+fn shift_add<const ZR: usize>(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut LocalInertia) {
     // K = skew(−r) = [[0, z, −y], [−z, 0, x], [y, −x, 0]].
     let (x, y, z) = (r.x, r.y, r.z);
     let mut qk = Mat3::zeros();
     let mut kr = Mat3::zeros();
     for a in 0..3 {
-        qk[(a, 0)] = -q[(a, 1)] * z + q[(a, 2)] * y;
-        qk[(a, 1)] = q[(a, 0)] * z - q[(a, 2)] * x;
-        qk[(a, 2)] = -q[(a, 0)] * y + q[(a, 1)] * x;
+        if a != ZR {
+            qk[(a, 0)] = -q[(a, 1)] * z + q[(a, 2)] * y;
+            qk[(a, 1)] = q[(a, 0)] * z - q[(a, 2)] * x;
+            qk[(a, 2)] = -q[(a, 0)] * y + q[(a, 1)] * x;
+        }
         kr[(0, a)] = z * rr.at(1, a) - y * rr.at(2, a);
         kr[(1, a)] = -z * rr.at(0, a) + x * rr.at(2, a);
         kr[(2, a)] = y * rr.at(0, a) - x * rr.at(1, a);
@@ -351,12 +387,25 @@ fn shift_add(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut LocalInertia) {
         .into_iter()
         .enumerate()
     {
-        out.p.0[k] += p.0[k] + qk[(a, b)] + qk[(b, a)] - krk(a, b);
+        let v = if a == ZR && b == ZR {
+            -krk(a, b)
+        } else if a == ZR {
+            qk[(b, a)] - krk(a, b)
+        } else if b == ZR {
+            qk[(a, b)] - krk(a, b)
+        } else {
+            p.0[k] + qk[(a, b)] + qk[(b, a)] - krk(a, b)
+        };
+        out.p.0[k] += v;
         out.r.0[k] += rr.0[k];
     }
     for b in 0..3 {
         for a in 0..3 {
-            out.q[(a, b)] += q[(a, b)] - kr[(a, b)];
+            if a == ZR {
+                out.q[(a, b)] -= kr[(a, b)];
+            } else {
+                out.q[(a, b)] += q[(a, b)] - kr[(a, b)];
+            }
         }
     }
 }
@@ -410,12 +459,14 @@ pub fn forward_dynamics_local(
     external: Option<&[Vec6]>,
     a: &mut [f64],
 ) -> Result<()> {
-    super::check_singularities(model, q)?;
     let n = model.links.len();
     let loc = &mut data.local[..n];
 
-    // Outward: joint transforms, twists, ξ, body inertias and velocity-product wrenches.
-    outward_pass::<true>(model, loc, q, v, external);
+    // Outward: joint transforms, twists, ξ, body inertias and velocity-product wrenches; it
+    // also finds the first ZYZ joint at its Euler singularity (`check_singularities`).
+    if let Some(i) = outward_pass::<true>(model, loc, &data.local_body[..n], q, v, external) {
+        return Err(Error::Singular(singular_message(model, i, q)));
+    }
 
     // Inward: articulated inertias and biases.
     for i in (0..n).rev() {
@@ -425,27 +476,9 @@ pub fn forward_dynamics_local(
         let parent = l.parent.map(|p| &mut head[p]);
         let ti = &tau[l.v_index..];
         let ok = match (l.joint, cur.plane) {
-            (Joint::Revolute { .. }, 1) => {
-                let e = Plane::<1, 2> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                backward_1::<_, 0, true>(e, cur, parent, ti[0])
-            }
-            (Joint::Revolute { .. }, 2) => {
-                let e = Plane::<2, 0> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                backward_1::<_, 1, true>(e, cur, parent, ti[0])
-            }
-            (Joint::Revolute { .. }, 3) => {
-                let e = Plane::<0, 1> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
-                backward_1::<_, 2, true>(e, cur, parent, ti[0])
-            }
+            (Joint::Revolute { .. }, 1) => backward_axis::<0, 1, 2>(cur, parent, ti[0]),
+            (Joint::Revolute { .. }, 2) => backward_axis::<1, 2, 0>(cur, parent, ti[0]),
+            (Joint::Revolute { .. }, 3) => backward_axis::<2, 0, 1>(cur, parent, ti[0]),
             (Joint::Revolute { .. }, _) => {
                 backward_1::<_, 3, true>(General(cur.rot), cur, parent, ti[0])
             }
@@ -524,11 +557,13 @@ pub fn forward_dynamics_local(
 pub(super) fn outward_pass<const ABI: bool>(
     model: &Model,
     loc: &mut [LocalLink],
+    body: &[LocalInertia],
     q: &[f64],
     v: &[f64],
     external: Option<&[Vec6]>,
-) {
+) -> Option<usize> {
     let n = model.links.len();
+    let mut singular = None;
     for i in 0..n {
         let l = &model.links[i];
         let (head, tail) = loc.split_at_mut(i);
@@ -540,23 +575,11 @@ pub(super) fn outward_pass<const ABI: bool>(
         let mut w_j = Vec3::zeros();
         let mut v_j = Vec3::zeros();
         let mut sdot_qd = Vec3::zeros();
-        cur.plane = 0;
         cur.offset = pl.translation;
         match l.joint {
             Joint::Revolute { axis } => {
-                let plane = if l.placement_rotated {
-                    0
-                } else if axis.y == 0.0 && axis.z == 0.0 && axis.x == 1.0 {
-                    1
-                } else if axis.x == 0.0 && axis.z == 0.0 && axis.y == 1.0 {
-                    2
-                } else if axis.x == 0.0 && axis.y == 0.0 && axis.z == 1.0 {
-                    3
-                } else {
-                    0
-                };
-                cur.plane = plane;
-                if plane != 0 {
+                // `cur.plane` is the model's constant, set in `Data::new`.
+                if cur.plane != 0 {
                     let (s, c) = qi[0].sin_cos();
                     cur.cs = (c, s);
                 } else {
@@ -587,6 +610,9 @@ pub(super) fn outward_pass<const ABI: bool>(
                 w_j = Vec3::new(vi[0], vi[1], vi[2]);
             }
             Joint::SphericalZYZ => {
+                if singular.is_none() && l.joint.singularity(qi).is_some() {
+                    singular = Some(i);
+                }
                 let (sp, cp) = qi[0].sin_cos();
                 let (st, ct) = qi[1].sin_cos();
                 let (ss, cs) = qi[2].sin_cos();
@@ -635,17 +661,13 @@ pub(super) fn outward_pass<const ABI: bool>(
         let h = bi.first_moment;
         if ABI {
             // The link's own inertia starts its articulated inertia.
-            let mass = bi.mass;
-            cur.inertia = LocalInertia {
-                p: Sym3::from_mat(&bi.rotational),
-                q: Mat3::new(0.0, -h.z, h.y, h.z, 0.0, -h.x, -h.y, h.x, 0.0),
-                r: Sym3([mass, mass, mass, 0.0, 0.0, 0.0]),
-            };
+            cur.inertia = body[i];
         }
         let w = v3(&cur.twist, 0);
         let iw = mul(&bi.rotational, &w);
         cur.bias += six(&cross(&w, &iw), &cross(&w, &cross(&w, &h)));
     }
+    singular
 }
 
 /// Twist, `ξ`, and the external wrench in body axes (stored negated in `bias`).
@@ -750,6 +772,73 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
     true
 }
 
+/// A revolute joint about coordinate axis `K` (plane rotation `Plane<I, J>`, S = e_K) inward.
+/// After the rank-1 update `M^a = M̂ − U Uᵀ / d` with `U = M̂ e_K`, row and column `K` of
+/// `P^a` and row `K` of `Q^a` vanish, and stay so under the rotation about `e_K`: they are
+/// neither formed, rotated nor shifted, and `(M^a ξ)_K = 0` leaves `f_K = b_K + u`.
+#[inline(always)]
+fn backward_axis<const K: usize, const I: usize, const J: usize>(
+    cur: &mut LocalLink,
+    parent: Option<&mut LocalLink>,
+    tau: f64,
+) -> bool {
+    let m = &cur.inertia;
+    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
+    let ua = Vec3::new(m.p.at(0, K), m.p.at(1, K), m.p.at(2, K));
+    let ul = Vec3::new(m.q[(K, 0)], m.q[(K, 1)], m.q[(K, 2)]);
+    let d = ua[K];
+    if d.is_nan() || d <= 0.0 {
+        return false;
+    }
+    let dinv = 1.0 / d;
+    let ut = tau - ba[K];
+    cur.u[0] = six(&ua, &ul);
+    cur.d_inv[(0, 0)] = dinv;
+    cur.u_tau[0] = ut;
+    let Some(parent) = parent else {
+        return true;
+    };
+    let (c, s) = cur.cs;
+    // Rows I, J of the projected blocks (rows K vanish).
+    let (di, dj) = (ua[I] * dinv, ua[J] * dinv);
+    let pii = m.p.at(I, I) - di * ua[I];
+    let pjj = m.p.at(J, J) - dj * ua[J];
+    let pij = m.p.at(I, J) - di * ua[J];
+    let qi = Vec3::new(m.q[(I, 0)], m.q[(I, 1)], m.q[(I, 2)]) - ul * di;
+    let qj = Vec3::new(m.q[(J, 0)], m.q[(J, 1)], m.q[(J, 2)]) - ul * dj;
+    let mut ra = m.r;
+    ra.sub_outer(&ul, dinv);
+    // b^a = b̂ + M^a ξ + U ut / d.
+    let (xa, xl) = (v3(&cur.xi, 0), v3(&cur.xi, 3));
+    let k = ut * dinv;
+    let mut fa = Vec3::zeros();
+    fa[K] = ba[K] + ut;
+    fa[I] = ba[I] + pii * xa[I] + pij * xa[J] + qi.dot(&xl) + ua[I] * k;
+    fa[J] = ba[J] + pij * xa[I] + pjj * xa[J] + qj.dot(&xl) + ua[J] * k;
+    let fl = bl + qi * xa[I] + qj * xa[J] + ra.mul(&xl) + ul * k;
+    // E P^a Eᵀ: the I, J block turned by the plane rotation.
+    let (cc, ss, cs) = (c * c, s * s, c * s);
+    let cs2b = 2.0 * cs * pij;
+    let mut pp = Sym3::default();
+    pp.0[sidx(I, I)] = cc * pii - cs2b + ss * pjj;
+    pp.0[sidx(J, J)] = ss * pii + cs2b + cc * pjj;
+    pp.0[sidx(I, J)] = cs * (pii - pjj) + (cc - ss) * pij;
+    // E Q^a Eᵀ: rows I, J mixed, then columns I, J of those rows.
+    let ri = qi * c - qj * s;
+    let rj = qi * s + qj * c;
+    let mut qq = Mat3::zeros();
+    for (row, v) in [(I, ri), (J, rj)] {
+        qq[(row, I)] = c * v[I] - s * v[J];
+        qq[(row, J)] = s * v[I] + c * v[J];
+        qq[(row, K)] = v[K];
+    }
+    let e = Plane::<I, J> { c, s };
+    let r = &cur.offset;
+    shift_add::<K>(&pp, &qq, &e.conj_sym(&ra), r, &mut parent.inertia);
+    parent.bias += to_parent(e, r, &fa, &fl);
+    true
+}
+
 /// One 3-dof (spherical) joint inward.
 #[inline(always)]
 fn backward_3(cur: &mut LocalLink, parent: Option<&mut LocalLink>, tau: &[f64]) -> bool {
@@ -825,7 +914,7 @@ fn finish<R: Rot>(
     let fa = ba + ma.p.mul(&xa) + mul(&ma.q, &xl) + ka;
     let fl = bl + tr_mul(&ma.q, &xa) + ma.r.mul(&xl) + kl;
     let r = &cur.offset;
-    shift_add(
+    shift_add::<3>(
         &e.conj_sym(&ma.p),
         &e.conj::<false>(&ma.q),
         &e.conj_sym(&ma.r),

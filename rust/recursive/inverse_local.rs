@@ -31,7 +31,8 @@ pub fn inverse_dynamics_local(
 ) {
     let n = model.links.len();
     let loc = &mut data.local[..n];
-    outward_pass::<false>(model, loc, q, v, external);
+    // ZYZ singularities are not refused here (no articulated inertia to invert).
+    outward_pass::<false>(model, loc, &data.local_body[..n], q, v, external);
 
     // Outward: twist rates and each link's own wrench (added into `bias`).
     let base = base_accel(g);

@@ -25,7 +25,8 @@ pub use inverse::inverse_dynamics_world;
 pub use inverse_local::inverse_dynamics_local;
 pub use mass_matrix::mass_matrix;
 
-/// Workspace for one model (like Pinocchio's `Data`).
+/// Workspace for one model (like Pinocchio's `Data`): built by `Data::new(model)` and valid
+/// for that model only (it caches per-link constants such as the joints' plane codes).
 #[derive(Debug, Clone)]
 pub struct Data {
     pub links: Vec<LinkState>,
@@ -42,8 +43,12 @@ pub struct Data {
     /// `τ − Pᵀ b̂`.
     pub u_tau: Vec<Vec3>,
     pub composite: Vec<BodyInertia>,
-    /// Workspace of the body-frame recursion (`forward_local`), per link.
+    /// Workspace of the body-frame recursion (`forward_local`), per link; its `plane` codes
+    /// are the model's, set here once.
     pub local: Vec<LocalLink>,
+    /// Each link's own inertia in the form that starts its articulated inertia (model
+    /// constant, set here once).
+    pub local_body: Vec<forward_local::LocalInertia>,
 }
 
 impl Data {
@@ -59,7 +64,19 @@ impl Data {
             d_inv: vec![Mat3::zeros(); n],
             u_tau: vec![Vec3::zeros(); n],
             composite: vec![BodyInertia::zero(); n],
-            local: vec![LocalLink::default(); n],
+            local: model
+                .links
+                .iter()
+                .map(|l| LocalLink {
+                    plane: forward_local::plane_of(l),
+                    ..LocalLink::default()
+                })
+                .collect(),
+            local_body: model
+                .links
+                .iter()
+                .map(forward_local::body_inertia_of)
+                .collect(),
         }
     }
 
