@@ -336,17 +336,16 @@ fn local_forward_agrees_with_explicit_on_50_body_trees() {
     }
 }
 
-#[test]
-fn local_forward_on_every_single_joint_type() {
-    // One body on each joint type, at the root and below a rotated placement, so the
-    // plane-rotation fast path and the general path both run.
+/// Two bodies, every pair of joint types, at the root and below a rotated placement, so the
+/// plane-rotation fast path and the general path both run: (label, pair index, model).
+fn joint_pair_models(with_fixed: bool) -> Vec<(String, usize, Model)> {
     let body = RigidBody::new(
         1.3,
         Vec3::new(0.1, -0.2, 0.05),
         Mat3::from_diagonal(&Vec3::new(0.02, 0.03, 0.025)),
     )
     .unwrap();
-    let joints = [
+    let mut joints = vec![
         Joint::revolute(Vec3::x()).unwrap(),
         Joint::revolute(Vec3::y()).unwrap(),
         Joint::revolute(Vec3::z()).unwrap(),
@@ -355,48 +354,49 @@ fn local_forward_on_every_single_joint_type() {
         Joint::Spherical,
         Joint::SphericalZYZ,
     ];
+    if with_fixed {
+        joints.push(Joint::Fixed);
+    }
+    let mut out = Vec::new();
     for (k, j0) in joints.iter().enumerate() {
         for j1 in &joints {
             for rotated in [false, true] {
-                let mut model = Model::new();
                 let rot = if rotated {
                     *nalgebra::Rotation3::from_scaled_axis(Vec3::new(0.4, -0.7, 0.2)).matrix()
                 } else {
                     Mat3::identity()
                 };
-                let a = model
-                    .add_body(
-                        body,
-                        *j0,
-                        None,
-                        Placement::new(rot, Vec3::new(0.0, 0.1, 0.0)),
-                        None,
-                        None,
-                    )
+                let place = |t: Vec3| Placement::new(rot, t);
+                let mut model = Model::new();
+                let b0 = model
+                    .add_body(body, *j0, None, place(Vec3::new(0.0, 0.1, 0.0)), None, None)
                     .unwrap();
                 model
                     .add_body(
                         body,
                         *j1,
-                        Some(a),
-                        Placement::new(rot, Vec3::new(0.4, -0.1, 0.2)),
+                        Some(b0),
+                        place(Vec3::new(0.4, -0.1, 0.2)),
                         None,
                         None,
                     )
                     .unwrap();
-                let (q, v, a) = random_state(&model, 100 + k as u64);
-                let ext = random_wrenches(&model, 7);
-                for e in [None, Some(ext.as_slice())] {
-                    let (loc, world) = both_forward(&model, &q, &v, &a, e);
-                    assert!(
-                        rel(&loc, &world) <= 1e-12,
-                        "{} / {} rotated {rotated}: {}",
-                        j0.kind(),
-                        j1.kind(),
-                        rel(&loc, &world)
-                    );
-                }
+                let label = format!("{} / {} rotated {rotated}", j0.kind(), j1.kind());
+                out.push((label, k, model));
             }
+        }
+    }
+    out
+}
+
+#[test]
+fn local_forward_on_every_single_joint_type() {
+    for (label, k, model) in joint_pair_models(false) {
+        let (q, v, a) = random_state(&model, 100 + k as u64);
+        let ext = random_wrenches(&model, 7);
+        for e in [None, Some(ext.as_slice())] {
+            let (loc, world) = both_forward(&model, &q, &v, &a, e);
+            assert!(rel(&loc, &world) <= 1e-12, "{label}: {}", rel(&loc, &world));
         }
     }
 }
@@ -520,64 +520,21 @@ fn local_inverse_agrees_with_world_and_explicit_on_random_trees() {
 
 #[test]
 fn local_inverse_on_every_single_joint_type() {
-    // As `local_forward_on_every_single_joint_type`: plane-rotation and general paths.
-    let body = RigidBody::new(
-        1.3,
-        Vec3::new(0.1, -0.2, 0.05),
-        Mat3::from_diagonal(&Vec3::new(0.02, 0.03, 0.025)),
-    )
-    .unwrap();
-    let joints = [
-        Joint::revolute(Vec3::x()).unwrap(),
-        Joint::revolute(Vec3::y()).unwrap(),
-        Joint::revolute(Vec3::z()).unwrap(),
-        Joint::revolute(Vec3::new(0.3, -0.4, 0.8)).unwrap(),
-        Joint::prismatic(Vec3::new(0.2, 0.9, -0.1)).unwrap(),
-        Joint::Spherical,
-        Joint::SphericalZYZ,
-        Joint::Fixed,
-    ];
-    for (k, j0) in joints.iter().enumerate() {
-        for j1 in &joints {
-            for rotated in [false, true] {
-                let mut model = Model::new();
-                let rot = if rotated {
-                    *nalgebra::Rotation3::from_scaled_axis(Vec3::new(0.4, -0.7, 0.2)).matrix()
-                } else {
-                    Mat3::identity()
-                };
-                let place = |t: Vec3| Placement::new(rot, t);
-                let b0 = model
-                    .add_body(body, *j0, None, place(Vec3::new(0.0, 0.1, 0.0)), None, None)
-                    .unwrap();
-                model
-                    .add_body(
-                        body,
-                        *j1,
-                        Some(b0),
-                        place(Vec3::new(0.4, -0.1, 0.2)),
-                        None,
-                        None,
-                    )
-                    .unwrap();
-                if model.nv == 0 {
-                    continue;
-                }
-                let (q, v, a) = random_state(&model, 200 + k as u64);
-                let ext = random_wrenches(&model, 9);
-                for e in [None, Some(ext.as_slice())] {
-                    let (loc, world) = both_inverse(&model, &q, &v, &a, &G, e);
-                    let explicit = explicit_inverse(&model, &q, &v, &a, e);
-                    assert!(
-                        rel(&loc, &world) <= 1e-12 && rel(&loc, &explicit) <= 1e-12,
-                        "{} / {} rotated {rotated}: world {} explicit {}",
-                        j0.kind(),
-                        j1.kind(),
-                        rel(&loc, &world),
-                        rel(&loc, &explicit)
-                    );
-                }
-            }
+    for (label, k, model) in joint_pair_models(true) {
+        if model.nv == 0 {
+            continue;
+        }
+        let (q, v, a) = random_state(&model, 200 + k as u64);
+        let ext = random_wrenches(&model, 9);
+        for e in [None, Some(ext.as_slice())] {
+            let (loc, world) = both_inverse(&model, &q, &v, &a, &G, e);
+            let explicit = explicit_inverse(&model, &q, &v, &a, e);
+            assert!(
+                rel(&loc, &world) <= 1e-12 && rel(&loc, &explicit) <= 1e-12,
+                "{label}: world {} explicit {}",
+                rel(&loc, &world),
+                rel(&loc, &explicit)
+            );
         }
     }
 }
