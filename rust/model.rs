@@ -217,6 +217,11 @@ impl Model {
 
     /// `q̇` from `v` for the whole model.
     pub fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
+        // Only quaternion joints have nq ≠ nv; without them q̇ = v (the RHS's common case).
+        if self.nq == self.nv {
+            qdot.copy_from_slice(v);
+            return;
+        }
         for l in &self.links {
             let (iq, iv) = (l.q_index, l.v_index);
             l.joint.velocity_to_qdot(
