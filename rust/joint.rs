@@ -8,6 +8,7 @@
 //! rates as speeds (singular where sin θ = 0).
 use crate::error::{Error, Result};
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::trig::sin_cos;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Joint {
@@ -34,22 +35,22 @@ fn unit_axis(axis: Vec3) -> Result<Vec3> {
 }
 
 pub fn rot_x(a: f64) -> Mat3 {
-    let (s, c) = a.sin_cos();
+    let (s, c) = sin_cos(a);
     Mat3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
 }
 pub fn rot_y(a: f64) -> Mat3 {
-    let (s, c) = a.sin_cos();
+    let (s, c) = sin_cos(a);
     Mat3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
 }
 pub fn rot_z(a: f64) -> Mat3 {
-    let (s, c) = a.sin_cos();
+    let (s, c) = sin_cos(a);
     Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
 }
 
 /// Rotation by `angle` about the unit vector `e` (Rodrigues: `c 1 + s ẽ + (1 − c) e eᵀ`).
 #[inline]
 pub fn axis_angle(e: &Vec3, angle: f64) -> Mat3 {
-    let (s, c) = angle.sin_cos();
+    let (s, c) = sin_cos(angle);
     let t = 1.0 - c;
     let (x, y, z) = (e.x, e.y, e.z);
     Mat3::new(
@@ -84,8 +85,8 @@ pub fn quat_to_matrix(q: &[f64]) -> Mat3 {
 
 /// `L(φ, θ)` of paper eq 38b: relative angular velocity (joint frame) = `L q̇` for ZYZ angles.
 pub fn zyz_rate_matrix(phi: f64, theta: f64) -> Mat3 {
-    let (sp, cp) = phi.sin_cos();
-    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = sin_cos(phi);
+    let (st, ct) = sin_cos(theta);
     Mat3::new(0.0, -sp, cp * st, 0.0, cp, sp * st, 1.0, 0.0, ct)
 }
 
@@ -221,8 +222,8 @@ impl Joint {
             Joint::Revolute { .. } => d[0] = turn(&s[0], w_parent, true),
             Joint::Prismatic { .. } => d[0] = turn(&s[0], w_parent, false),
             Joint::SphericalZYZ => {
-                let (sp, cp) = q[0].sin_cos();
-                let (st, ct) = q[1].sin_cos();
+                let (sp, cp) = sin_cos(q[0]);
+                let (st, ct) = sin_cos(q[1]);
                 let (dphi, dtheta) = (v[0], v[1]);
                 let dl1 = Vec3::new(-cp * dphi, -sp * dphi, 0.0);
                 let dl2 = Vec3::new(

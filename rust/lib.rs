@@ -16,6 +16,7 @@ pub mod recursive;
 pub mod scene;
 pub mod simulate;
 pub mod spatial;
+pub mod trig;
 pub mod urdf;
 
 #[cfg(feature = "python")]
