@@ -13,17 +13,23 @@
 //! as `E M Eᵀ` by 3×3 blocks followed by the shift to the parent origin.
 //!
 //! Revolute joints about a coordinate axis (the common case) rotate blocks with a plane
-//! rotation instead of a full 3×3 product.
+//! rotation instead of a full 3×3 product; when their joint frame is rotated in the parent
+//! (URDF `rpy`), `E = P R_axis(q)` is applied as the constant placement rotation `P` after
+//! the plane rotation — itself a plane rotation when `P` turns about one coordinate axis
+//! (the usual `rpy = (±π/2, 0, 0)` of robot descriptions).
 use super::{singular_message, Data};
 use crate::error::{Error, Result};
 use crate::joint::{axis_angle, quat_to_matrix, Joint};
 use crate::model::{Link, Model};
 use crate::spatial::{Mat3, Vec3, Vec6};
+use crate::trig::sin_cos;
 
 /// Per-link workspace of the body-frame recursion (all in the link's frame, about its origin).
 #[derive(Debug, Clone, Copy)]
 pub struct LocalLink {
-    /// Link axes in parent axes (`x_parent = rot x + offset`).
+    /// Link axes in parent axes (`x_parent = rot x + offset`); for a revolute joint about a
+    /// coordinate axis (`plane` ≠ 0) the constant placement rotation `P` instead (used when
+    /// `placement` = 4), the joint's own turn being `cs`.
     pub rot: Mat3,
     /// Link origin in parent coordinates.
     pub offset: Vec3,
@@ -40,9 +46,13 @@ pub struct LocalLink {
     pub d_inv: Mat3,
     pub u_tau: Vec3,
     pub accel: Vec6,
-    /// 0: general rotation; 1, 2, 3: plane rotation about x, y, z (`rot` = R_axis(q)).
+    /// 0: general rotation; 1, 2, 3: a revolute joint about x, y, z, turning by `cs`.
     pub plane: u8,
     pub cs: (f64, f64),
+    /// With `plane` ≠ 0, the placement rotation `P` of the joint frame: 0 none, 1, 2, 3 a
+    /// plane rotation about x, y, z by `pcs`, 4 general (in `rot`). Model constants.
+    pub placement: u8,
+    pub pcs: (f64, f64),
 }
 
 impl Default for LocalLink {
@@ -62,16 +72,48 @@ impl Default for LocalLink {
             accel: Vec6::zeros(),
             plane: 0,
             cs: (1.0, 0.0),
+            placement: 0,
+            pcs: (1.0, 0.0),
         }
     }
 }
 
-/// The plane-rotation code of a link (see `LocalLink::plane`): 1, 2, 3 for a revolute joint
-/// about x, y, z with an unrotated placement, else 0. A constant of the model, set once in
-/// `Data::new`.
-pub(super) fn plane_of(l: &Link) -> u8 {
+/// The per-model constants of a link's body-frame workspace (set once in `Data::new`): the
+/// plane code of its joint (1, 2, 3 for a revolute joint about x, y, z, else 0) and, for
+/// those, how the joint frame is rotated in the parent (see `LocalLink::placement`).
+pub(super) fn local_link_of(l: &Link) -> LocalLink {
+    let plane = plane_of(l);
+    let mut out = LocalLink {
+        plane,
+        ..LocalLink::default()
+    };
+    if plane != 0 && l.placement_rotated {
+        let p = &l.placement.rotation;
+        out.rot = *p;
+        out.placement = 4;
+        // A turn about coordinate axis `a` (plane pair I, J) keeps e_a exactly and has the
+        // 2×2 block [[c, −s], [s, c]] in rows and columns I, J.
+        for (a, i, j) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
+            let (c, sn) = (p[(i, i)], p[(j, i)]);
+            let keeps_axis = p[(a, a)] == 1.0
+                && p[(a, i)] == 0.0
+                && p[(a, j)] == 0.0
+                && p[(i, a)] == 0.0
+                && p[(j, a)] == 0.0;
+            if keeps_axis && p[(j, j)] == c && p[(i, j)] == -sn {
+                out.placement = a as u8 + 1;
+                out.pcs = (c, sn);
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// 1, 2, 3 for a revolute joint about x, y, z, else 0.
+fn plane_of(l: &Link) -> u8 {
     match l.joint {
-        Joint::Revolute { axis } if !l.placement_rotated => {
+        Joint::Revolute { axis } => {
             if axis.y == 0.0 && axis.z == 0.0 && axis.x == 1.0 {
                 1
             } else if axis.x == 0.0 && axis.z == 0.0 && axis.y == 1.0 {
@@ -214,6 +256,11 @@ fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
 
 /// A rotation `E` (child axes in parent axes) applied to vectors and 3×3 blocks.
 pub(super) trait Rot: Copy {
+    /// The identity (lets callers skip work at compile time).
+    const IDENTITY: bool = false;
+    /// `K < 3`: the joint's own turn is about coordinate axis `K` (a revolute joint there,
+    /// `w_J = q̇ e_K`, no `v_J`, no `Ṡ q̇`); 3: unknown.
+    const AXIS: usize = 3;
     /// `E x`.
     fn mul(&self, x: &Vec3) -> Vec3;
     /// `Eᵀ x`.
@@ -295,6 +342,7 @@ pub(super) struct Plane<const I: usize, const J: usize> {
 }
 
 impl<const I: usize, const J: usize> Rot for Plane<I, J> {
+    const AXIS: usize = 3 - I - J;
     #[inline(always)]
     fn mul(&self, x: &Vec3) -> Vec3 {
         let mut y = *x;
@@ -357,6 +405,63 @@ impl<const I: usize, const J: usize> Rot for Plane<I, J> {
     }
 }
 
+/// No rotation: the placement of a joint frame that is not rotated in its parent.
+#[derive(Clone, Copy)]
+pub(super) struct Identity;
+
+impl Rot for Identity {
+    const IDENTITY: bool = true;
+    #[inline(always)]
+    fn mul(&self, x: &Vec3) -> Vec3 {
+        *x
+    }
+    #[inline(always)]
+    fn tr_mul(&self, x: &Vec3) -> Vec3 {
+        *x
+    }
+    #[inline(always)]
+    fn conj<const SYM: bool>(&self, x: &Mat3) -> Mat3 {
+        *x
+    }
+    #[inline(always)]
+    fn conj_sym(&self, x: &Sym3) -> Sym3 {
+        *x
+    }
+    #[inline(always)]
+    fn after(&self, rp: &Mat3) -> Mat3 {
+        *rp
+    }
+}
+
+/// `E = P J`: the joint's rotation `J` in a joint frame placed by the constant `P`.
+#[derive(Clone, Copy)]
+pub(super) struct Placed<P: Rot, J: Rot>(pub(super) P, pub(super) J);
+
+impl<P: Rot, J: Rot> Rot for Placed<P, J> {
+    const IDENTITY: bool = P::IDENTITY && J::IDENTITY;
+    const AXIS: usize = J::AXIS;
+    #[inline(always)]
+    fn mul(&self, x: &Vec3) -> Vec3 {
+        self.0.mul(&self.1.mul(x))
+    }
+    #[inline(always)]
+    fn tr_mul(&self, x: &Vec3) -> Vec3 {
+        self.1.tr_mul(&self.0.tr_mul(x))
+    }
+    #[inline(always)]
+    fn conj<const SYM: bool>(&self, x: &Mat3) -> Mat3 {
+        self.0.conj::<SYM>(&self.1.conj::<SYM>(x))
+    }
+    #[inline(always)]
+    fn conj_sym(&self, x: &Sym3) -> Sym3 {
+        self.0.conj_sym(&self.1.conj_sym(x))
+    }
+    #[inline(always)]
+    fn after(&self, rp: &Mat3) -> Mat3 {
+        self.1.after(&self.0.after(rp))
+    }
+}
+
 /// Shifts articulated-inertia blocks (parent axes, about the child origin) to the parent
 /// origin, which sits at `−r` from the child origin: `AᵀMA` with `A = [[1, 0], [K, 1]]`,
 /// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and adds the result into `out`.
@@ -365,6 +470,15 @@ impl<const I: usize, const J: usize> Rot for Plane<I, J> {
 fn shift_add<const ZR: usize>(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut LocalInertia) {
     // K = skew(−r) = [[0, z, −y], [−z, 0, x], [y, −x, 0]].
     let (x, y, z) = (r.x, r.y, r.z);
+    if x == 0.0 && y == 0.0 && z == 0.0 {
+        // Coincident origins (common in robot descriptions: intersecting wrist axes).
+        for k in 0..6 {
+            out.p.0[k] += p.0[k];
+            out.r.0[k] += rr.0[k];
+        }
+        out.q += q;
+        return;
+    }
     let mut qk = Mat3::zeros();
     let mut kr = Mat3::zeros();
     for a in 0..3 {
@@ -410,30 +524,79 @@ fn shift_add<const ZR: usize>(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut
     }
 }
 
-/// Runs `$body` with `$e` bound to the link's rotation, monomorphised per plane axis.
-macro_rules! with_rot {
-    ($cur:expr, $e:ident => $body:expr) => {
-        match $cur.plane {
+/// Runs `$body` with `$pl` bound to the placement rotation of a revolute joint on a
+/// coordinate axis (`LocalLink::placement`), monomorphised per kind.
+macro_rules! with_placement {
+    ($cur:expr, $pl:ident => $body:expr) => {
+        match $cur.placement {
+            0 => {
+                let $pl = Identity;
+                $body
+            }
             1 => {
-                let $e = Plane::<1, 2> {
-                    c: $cur.cs.0,
-                    s: $cur.cs.1,
+                let $pl = Plane::<1, 2> {
+                    c: $cur.pcs.0,
+                    s: $cur.pcs.1,
                 };
                 $body
             }
             2 => {
-                let $e = Plane::<2, 0> {
-                    c: $cur.cs.0,
-                    s: $cur.cs.1,
+                let $pl = Plane::<2, 0> {
+                    c: $cur.pcs.0,
+                    s: $cur.pcs.1,
                 };
                 $body
             }
             3 => {
-                let $e = Plane::<0, 1> {
+                let $pl = Plane::<0, 1> {
+                    c: $cur.pcs.0,
+                    s: $cur.pcs.1,
+                };
+                $body
+            }
+            _ => {
+                let $pl = General($cur.rot);
+                $body
+            }
+        }
+    };
+}
+pub(super) use with_placement;
+
+/// Runs `$body` with `$e` bound to the link's rotation, monomorphised per plane axis and
+/// placement kind.
+macro_rules! with_rot {
+    ($cur:expr, $e:ident => $body:expr) => {
+        match $cur.plane {
+            1 => {
+                let j = Plane::<1, 2> {
                     c: $cur.cs.0,
                     s: $cur.cs.1,
                 };
-                $body
+                with_placement!($cur, pl => {
+                    let $e = Placed(pl, j);
+                    $body
+                })
+            }
+            2 => {
+                let j = Plane::<2, 0> {
+                    c: $cur.cs.0,
+                    s: $cur.cs.1,
+                };
+                with_placement!($cur, pl => {
+                    let $e = Placed(pl, j);
+                    $body
+                })
+            }
+            3 => {
+                let j = Plane::<0, 1> {
+                    c: $cur.cs.0,
+                    s: $cur.cs.1,
+                };
+                with_placement!($cur, pl => {
+                    let $e = Placed(pl, j);
+                    $body
+                })
             }
             _ => {
                 let $e = General($cur.rot);
@@ -476,9 +639,15 @@ pub fn forward_dynamics_local(
         let parent = l.parent.map(|p| &mut head[p]);
         let ti = &tau[l.v_index..];
         let ok = match (l.joint, cur.plane) {
-            (Joint::Revolute { .. }, 1) => backward_axis::<0, 1, 2>(cur, parent, ti[0]),
-            (Joint::Revolute { .. }, 2) => backward_axis::<1, 2, 0>(cur, parent, ti[0]),
-            (Joint::Revolute { .. }, 3) => backward_axis::<2, 0, 1>(cur, parent, ti[0]),
+            (Joint::Revolute { .. }, 1) => {
+                with_placement!(cur, pl => backward_axis::<_, 0, 1, 2>(pl, cur, parent, ti[0]))
+            }
+            (Joint::Revolute { .. }, 2) => {
+                with_placement!(cur, pl => backward_axis::<_, 1, 2, 0>(pl, cur, parent, ti[0]))
+            }
+            (Joint::Revolute { .. }, 3) => {
+                with_placement!(cur, pl => backward_axis::<_, 2, 0, 1>(pl, cur, parent, ti[0]))
+            }
             (Joint::Revolute { .. }, _) => {
                 backward_1::<_, 3, true>(General(cur.rot), cur, parent, ti[0])
             }
@@ -514,25 +683,28 @@ pub fn forward_dynamics_local(
         let out = &mut a[l.v_index..];
         match (l.joint, cur.plane) {
             (Joint::Revolute { .. }, 1) => {
-                let e = Plane::<1, 2> {
+                let j = Plane::<1, 2> {
                     c: cur.cs.0,
                     s: cur.cs.1,
                 };
-                out[0] = forward_1::<_, 0, true>(e, cur, pacc);
+                out[0] =
+                    with_placement!(cur, pl => forward_1::<_, 0, true>(Placed(pl, j), cur, pacc));
             }
             (Joint::Revolute { .. }, 2) => {
-                let e = Plane::<2, 0> {
+                let j = Plane::<2, 0> {
                     c: cur.cs.0,
                     s: cur.cs.1,
                 };
-                out[0] = forward_1::<_, 1, true>(e, cur, pacc);
+                out[0] =
+                    with_placement!(cur, pl => forward_1::<_, 1, true>(Placed(pl, j), cur, pacc));
             }
             (Joint::Revolute { .. }, 3) => {
-                let e = Plane::<0, 1> {
+                let j = Plane::<0, 1> {
                     c: cur.cs.0,
                     s: cur.cs.1,
                 };
-                out[0] = forward_1::<_, 2, true>(e, cur, pacc);
+                out[0] =
+                    with_placement!(cur, pl => forward_1::<_, 2, true>(Placed(pl, j), cur, pacc));
             }
             (Joint::Revolute { .. }, _) => {
                 out[0] = forward_1::<_, 3, true>(General(cur.rot), cur, pacc);
@@ -554,6 +726,7 @@ pub fn forward_dynamics_local(
 /// link, the joint rotation `E` (or its plane-rotation cosine and sine) and offset, the joint
 /// columns, the twist, `ξ`, and in `bias` the velocity-product wrench minus the external
 /// wrench (in body axes). `ABI`: also start each articulated inertia at the link's own.
+#[inline(always)]
 pub(super) fn outward_pass<const ABI: bool>(
     model: &Model,
     loc: &mut [LocalLink],
@@ -578,9 +751,10 @@ pub(super) fn outward_pass<const ABI: bool>(
         cur.offset = pl.translation;
         match l.joint {
             Joint::Revolute { axis } => {
-                // `cur.plane` is the model's constant, set in `Data::new`.
+                // `cur.plane` is the model's constant, set in `Data::new` (with the placement
+                // rotation in `cur.rot`).
                 if cur.plane != 0 {
-                    let (s, c) = qi[0].sin_cos();
+                    let (s, c) = sin_cos(qi[0]);
                     cur.cs = (c, s);
                 } else {
                     let rq = axis_angle(&axis, qi[0]);
@@ -613,9 +787,9 @@ pub(super) fn outward_pass<const ABI: bool>(
                 if singular.is_none() && l.joint.singularity(qi).is_some() {
                     singular = Some(i);
                 }
-                let (sp, cp) = qi[0].sin_cos();
-                let (st, ct) = qi[1].sin_cos();
-                let (ss, cs) = qi[2].sin_cos();
+                let (sp, cp) = sin_cos(qi[0]);
+                let (st, ct) = sin_cos(qi[1]);
+                let (ss, cs) = sin_cos(qi[2]);
                 // Rz(φ) Ry(θ) Rz(ψ).
                 let rq = Mat3::new(
                     cp * ct * cs - sp * ss,
@@ -691,19 +865,32 @@ fn outward<R: Rot>(
         }
         None => (Vec3::zeros(), Vec3::zeros()),
     };
-    let w = wpc + w_j;
-    let vlin = vpc + v_j;
-    cur.twist = six(&w, &vlin);
     // ξ = [ω × w_J + Ṡ q̇; ω_p × (v − v_p) + ω × v_J], with ω × w_J = ω_p × w_J and
     // v − v_p = ω_p × r + v_J (this frame).
-    let xa = cross(&wpc, w_j) + sdot_qd;
-    let rel = vlin
-        - match parent {
-            Some(p) => e.tr_mul(&v3(&p.twist, 3)),
-            None => Vec3::zeros(),
-        };
-    let xl = cross(&wpc, &rel) + cross(&w, v_j);
-    cur.xi = six(&xa, &xl);
+    let vp_here = match parent {
+        Some(p) => e.tr_mul(&v3(&p.twist, 3)),
+        None => Vec3::zeros(),
+    };
+    if R::AXIS < 3 {
+        // Revolute about e_K: the same sums with the known zeros left out.
+        let k = R::AXIS;
+        let (k1, k2) = ((k + 1) % 3, (k + 2) % 3);
+        let qd = w_j[k];
+        let mut w = wpc;
+        w[k] += qd;
+        cur.twist = six(&w, &vpc);
+        let mut xa = Vec3::zeros();
+        xa[k1] = wpc[k2] * qd;
+        xa[k2] = -(wpc[k1] * qd);
+        cur.xi = six(&xa, &cross(&wpc, &(vpc - vp_here)));
+    } else {
+        let w = wpc + w_j;
+        let vlin = vpc + v_j;
+        cur.twist = six(&w, &vlin);
+        let xa = cross(&wpc, w_j) + sdot_qd;
+        let xl = cross(&wpc, &(vlin - vp_here)) + cross(&w, v_j);
+        cur.xi = six(&xa, &xl);
+    }
     match fext {
         Some(f) => {
             let rw = match parent {
@@ -775,9 +962,12 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
 /// A revolute joint about coordinate axis `K` (plane rotation `Plane<I, J>`, S = e_K) inward.
 /// After the rank-1 update `M^a = M̂ − U Uᵀ / d` with `U = M̂ e_K`, row and column `K` of
 /// `P^a` and row `K` of `Q^a` vanish, and stay so under the rotation about `e_K`: they are
-/// neither formed, rotated nor shifted, and `(M^a ξ)_K = 0` leaves `f_K = b_K + u`.
+/// neither formed nor rotated, and `(M^a ξ)_K = 0` leaves `f_K = b_K + u`. Without a
+/// placement rotation (`Pl = Identity`) they are not shifted either; otherwise the blocks
+/// are turned by the placement `pl` before the shift.
 #[inline(always)]
-fn backward_axis<const K: usize, const I: usize, const J: usize>(
+fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
+    pl: Pl,
     cur: &mut LocalLink,
     parent: Option<&mut LocalLink>,
     tau: f64,
@@ -834,8 +1024,14 @@ fn backward_axis<const K: usize, const I: usize, const J: usize>(
     }
     let e = Plane::<I, J> { c, s };
     let r = &cur.offset;
-    shift_add::<K>(&pp, &qq, &e.conj_sym(&ra), r, &mut parent.inertia);
-    parent.bias += to_parent(e, r, &fa, &fl);
+    let rr = e.conj_sym(&ra);
+    if Pl::IDENTITY {
+        shift_add::<K>(&pp, &qq, &rr, r, &mut parent.inertia);
+    } else {
+        let (pp, qq, rr) = (pl.conj_sym(&pp), pl.conj::<false>(&qq), pl.conj_sym(&rr));
+        shift_add::<3>(&pp, &qq, &rr, r, &mut parent.inertia);
+    }
+    parent.bias += to_parent(Placed(pl, e), r, &fa, &fl);
     true
 }
 

@@ -67,10 +67,7 @@ impl Data {
             local: model
                 .links
                 .iter()
-                .map(|l| LocalLink {
-                    plane: forward_local::plane_of(l),
-                    ..LocalLink::default()
-                })
+                .map(forward_local::local_link_of)
                 .collect(),
             local_body: model
                 .links

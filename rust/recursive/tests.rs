@@ -336,8 +336,34 @@ fn local_forward_agrees_with_explicit_on_50_body_trees() {
     }
 }
 
-/// Two bodies, every pair of joint types, at the root and below a rotated placement, so the
-/// plane-rotation fast path and the general path both run: (label, pair index, model).
+/// Placement rotations of the joint-pair models: none, a general one, and exact turns about
+/// x, y, z (built entry by entry, as URDF `rpy = (r, 0, 0)` gives them).
+fn pair_placements() -> Vec<(&'static str, Mat3)> {
+    let (c, s) = (0.7f64.cos(), 0.7f64.sin());
+    vec![
+        ("unrotated", Mat3::identity()),
+        (
+            "rotated",
+            *nalgebra::Rotation3::from_scaled_axis(Vec3::new(0.4, -0.7, 0.2)).matrix(),
+        ),
+        (
+            "turned about x",
+            Mat3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c),
+        ),
+        (
+            "turned about y",
+            Mat3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c),
+        ),
+        (
+            "turned about z",
+            Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0),
+        ),
+    ]
+}
+
+/// Two bodies, every pair of joint types, at the root and below each placement rotation of
+/// `pair_placements`, so the plane-rotation fast paths (with every placement kind) and the
+/// general path all run: (label, pair index, model).
 fn joint_pair_models(with_fixed: bool) -> Vec<(String, usize, Model)> {
     let body = RigidBody::new(
         1.3,
@@ -360,12 +386,7 @@ fn joint_pair_models(with_fixed: bool) -> Vec<(String, usize, Model)> {
     let mut out = Vec::new();
     for (k, j0) in joints.iter().enumerate() {
         for j1 in &joints {
-            for rotated in [false, true] {
-                let rot = if rotated {
-                    *nalgebra::Rotation3::from_scaled_axis(Vec3::new(0.4, -0.7, 0.2)).matrix()
-                } else {
-                    Mat3::identity()
-                };
+            for (placed, rot) in pair_placements() {
                 let place = |t: Vec3| Placement::new(rot, t);
                 let mut model = Model::new();
                 let b0 = model
@@ -381,12 +402,33 @@ fn joint_pair_models(with_fixed: bool) -> Vec<(String, usize, Model)> {
                         None,
                     )
                     .unwrap();
-                let label = format!("{} / {} rotated {rotated}", j0.kind(), j1.kind());
+                let label = format!("{} / {} {placed}", j0.kind(), j1.kind());
                 out.push((label, k, model));
             }
         }
     }
     out
+}
+
+#[test]
+fn placement_kinds_are_recognised() {
+    // The fast paths the joint-pair tests mean to cover: the codes of a revolute joint about z
+    // below each placement of `pair_placements` (0 none, 4 general, 1-3 a turn about x-z).
+    let body = RigidBody::new(1.0, Vec3::zeros(), Mat3::identity() * 0.1).unwrap();
+    let codes: Vec<(u8, u8)> = pair_placements()
+        .into_iter()
+        .map(|(_, rot)| {
+            let mut model = Model::new();
+            let joint = Joint::revolute(Vec3::z()).unwrap();
+            let place = Placement::new(rot, Vec3::new(0.1, 0.2, 0.3));
+            model
+                .add_body(body, joint, None, place, None, None)
+                .unwrap();
+            let l = forward_local::local_link_of(&model.links[0]);
+            (l.plane, l.placement)
+        })
+        .collect();
+    assert_eq!(codes, vec![(3, 0), (3, 4), (3, 1), (3, 2), (3, 3)]);
 }
 
 #[test]
