@@ -341,6 +341,13 @@ pub(super) struct Plane<const I: usize, const J: usize> {
     pub(super) s: f64,
 }
 
+impl<const I: usize, const J: usize> Plane<I, J> {
+    #[inline(always)]
+    pub(super) fn new((c, s): (f64, f64)) -> Self {
+        Plane { c, s }
+    }
+}
+
 impl<const I: usize, const J: usize> Rot for Plane<I, J> {
     const AXIS: usize = 3 - I - J;
     #[inline(always)]
@@ -534,24 +541,15 @@ macro_rules! with_placement {
                 $body
             }
             1 => {
-                let $pl = Plane::<1, 2> {
-                    c: $cur.pcs.0,
-                    s: $cur.pcs.1,
-                };
+                let $pl = Plane::<1, 2>::new($cur.pcs);
                 $body
             }
             2 => {
-                let $pl = Plane::<2, 0> {
-                    c: $cur.pcs.0,
-                    s: $cur.pcs.1,
-                };
+                let $pl = Plane::<2, 0>::new($cur.pcs);
                 $body
             }
             3 => {
-                let $pl = Plane::<0, 1> {
-                    c: $cur.pcs.0,
-                    s: $cur.pcs.1,
-                };
+                let $pl = Plane::<0, 1>::new($cur.pcs);
                 $body
             }
             _ => {
@@ -569,30 +567,21 @@ macro_rules! with_rot {
     ($cur:expr, $e:ident => $body:expr) => {
         match $cur.plane {
             1 => {
-                let j = Plane::<1, 2> {
-                    c: $cur.cs.0,
-                    s: $cur.cs.1,
-                };
+                let j = Plane::<1, 2>::new($cur.cs);
                 with_placement!($cur, pl => {
                     let $e = Placed(pl, j);
                     $body
                 })
             }
             2 => {
-                let j = Plane::<2, 0> {
-                    c: $cur.cs.0,
-                    s: $cur.cs.1,
-                };
+                let j = Plane::<2, 0>::new($cur.cs);
                 with_placement!($cur, pl => {
                     let $e = Placed(pl, j);
                     $body
                 })
             }
             3 => {
-                let j = Plane::<0, 1> {
-                    c: $cur.cs.0,
-                    s: $cur.cs.1,
-                };
+                let j = Plane::<0, 1>::new($cur.cs);
                 with_placement!($cur, pl => {
                     let $e = Placed(pl, j);
                     $body
@@ -683,26 +672,17 @@ pub fn forward_dynamics_local(
         let out = &mut a[l.v_index..];
         match (l.joint, cur.plane) {
             (Joint::Revolute { .. }, 1) => {
-                let j = Plane::<1, 2> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
+                let j = Plane::<1, 2>::new(cur.cs);
                 out[0] =
                     with_placement!(cur, pl => forward_1::<_, 0, true>(Placed(pl, j), cur, pacc));
             }
             (Joint::Revolute { .. }, 2) => {
-                let j = Plane::<2, 0> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
+                let j = Plane::<2, 0>::new(cur.cs);
                 out[0] =
                     with_placement!(cur, pl => forward_1::<_, 1, true>(Placed(pl, j), cur, pacc));
             }
             (Joint::Revolute { .. }, 3) => {
-                let j = Plane::<0, 1> {
-                    c: cur.cs.0,
-                    s: cur.cs.1,
-                };
+                let j = Plane::<0, 1>::new(cur.cs);
                 out[0] =
                     with_placement!(cur, pl => forward_1::<_, 2, true>(Placed(pl, j), cur, pacc));
             }
