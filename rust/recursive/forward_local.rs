@@ -53,7 +53,22 @@ pub struct LocalLink {
     /// plane rotation about x, y, z by `pcs`, 4 general (in `rot`). Model constants.
     pub placement: u8,
     pub pcs: (f64, f64),
+    /// Dispatch code of the hot loops: `5 K + placement` (0..15) for a revolute joint about
+    /// coordinate axis `K`, [`OTHER_KIND`] for every other joint. Model constant.
+    pub kind: u8,
+    /// How the offset lies: 0 zero, 1, 2, 3 along x, y, z only, 4 anywhere (always 4 for a
+    /// prismatic joint, whose offset moves). Model constant; it picks the shift's form.
+    pub offset_axis: u8,
+    /// No children: the articulated inertia starts as the link's own (copied outward).
+    pub leaf: bool,
+    /// The child of its parent whose inward step comes first (the highest index): it writes
+    /// the parent's articulated inertia as the parent's own plus its contribution, so that no
+    /// link's inertia is copied before its children add into it.
+    pub first_child: bool,
 }
+
+/// `LocalLink::kind` of every joint other than a revolute joint about a coordinate axis.
+pub const OTHER_KIND: u8 = u8::MAX;
 
 impl Default for LocalLink {
     fn default() -> Self {
@@ -74,13 +89,19 @@ impl Default for LocalLink {
             cs: (1.0, 0.0),
             placement: 0,
             pcs: (1.0, 0.0),
+            kind: OTHER_KIND,
+            offset_axis: 4,
+            leaf: true,
+            first_child: false,
         }
     }
 }
 
 /// The per-model constants of a link's body-frame workspace (set once in `Data::new`): the
 /// plane code of its joint (1, 2, 3 for a revolute joint about x, y, z, else 0) and, for
-/// those, how the joint frame is rotated in the parent (see `LocalLink::placement`).
+/// those, how the joint frame is rotated in the parent (see `LocalLink::placement`); the
+/// dispatch code, the offset's form, and the constant parts of the joint transform and
+/// columns. The tree-dependent flags (`leaf`, `first_child`) are set by [`local_links_of`].
 pub(super) fn local_link_of(l: &Link) -> LocalLink {
     let plane = plane_of(l);
     let mut out = LocalLink {
@@ -106,6 +127,49 @@ pub(super) fn local_link_of(l: &Link) -> LocalLink {
                 break;
             }
         }
+    }
+    if plane != 0 {
+        out.kind = 5 * (plane - 1) + out.placement;
+    }
+    // Constant parts of the joint transform and columns (the outward pass writes only what
+    // moves with q).
+    let t = l.placement.translation;
+    out.offset = t;
+    out.offset_axis = match l.joint {
+        Joint::Prismatic { .. } => 4,
+        _ if t == Vec3::zeros() => 0,
+        _ if t.y == 0.0 && t.z == 0.0 => 1,
+        _ if t.x == 0.0 && t.z == 0.0 => 2,
+        _ if t.x == 0.0 && t.y == 0.0 => 3,
+        _ => 4,
+    };
+    match l.joint {
+        Joint::Revolute { axis } | Joint::Prismatic { axis } => out.s[0] = axis,
+        Joint::Spherical => out.s = [Vec3::x(), Vec3::y(), Vec3::z()],
+        Joint::SphericalZYZ => {}
+        Joint::Fixed => out.rot = l.placement.rotation,
+    }
+    if let Joint::Prismatic { .. } = l.joint {
+        out.rot = l.placement.rotation;
+    }
+    out
+}
+
+/// Every link's body-frame workspace with its model constants ([`local_link_of`]) and its
+/// place in the tree (`leaf`, `first_child`).
+pub(super) fn local_links_of(model: &Model) -> Vec<LocalLink> {
+    let mut out: Vec<LocalLink> = model.links.iter().map(local_link_of).collect();
+    // Links come parents first, so the inward loop meets each parent's children from the
+    // highest index down.
+    let mut seen = vec![false; out.len()];
+    for i in (0..out.len()).rev() {
+        if let Some(p) = model.links[i].parent {
+            out[i].first_child = !seen[p];
+            seen[p] = true;
+        }
+    }
+    for (l, has_children) in out.iter_mut().zip(seen) {
+        l.leaf = !has_children;
     }
     out
 }
@@ -471,21 +535,119 @@ impl<P: Rot, J: Rot> Rot for Placed<P, J> {
 
 /// Shifts articulated-inertia blocks (parent axes, about the child origin) to the parent
 /// origin, which sits at `−r` from the child origin: `AᵀMA` with `A = [[1, 0], [K, 1]]`,
-/// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and adds the result into `out`.
-/// `ZR < 3`: row and column `ZR` of `p` and row `ZR` of `q` are zero (and not read).
+/// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and deposits the result in `out`
+/// (see [`deposit`]). `ZR < 3`: row and column `ZR` of `p` and row `ZR` of `q` are zero (and
+/// not read). `offset_axis` (`LocalLink::offset_axis`) picks the form: coincident origins
+/// need no shift, and an offset along one coordinate axis makes `K` two entries (a third of
+/// the products).
 #[inline(always)]
-fn shift_add<const ZR: usize>(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut LocalInertia) {
+fn shift_add<const ZR: usize>(
+    p: &Sym3,
+    q: &Mat3,
+    rr: &Sym3,
+    r: &Vec3,
+    offset_axis: u8,
+    start: Option<&LocalInertia>,
+    out: &mut LocalInertia,
+) {
+    match offset_axis {
+        // Coincident origins (common in robot descriptions: intersecting wrist axes).
+        0 => deposit(out, start, p, q, rr),
+        1 => shift_on_axis::<ZR, 0, 1, 2>(p, q, rr, r.x, start, out),
+        2 => shift_on_axis::<ZR, 1, 2, 0>(p, q, rr, r.y, start, out),
+        3 => shift_on_axis::<ZR, 2, 0, 1>(p, q, rr, r.z, start, out),
+        _ => shift_general::<ZR>(p, q, rr, r, start, out),
+    }
+}
+
+/// `out = start + (P, Q, R)` when this child writes first, else `out += (P, Q, R)`.
+#[inline(always)]
+fn deposit(out: &mut LocalInertia, start: Option<&LocalInertia>, p: &Sym3, q: &Mat3, r: &Sym3) {
+    match start {
+        Some(s) => {
+            for k in 0..6 {
+                out.p.0[k] = s.p.0[k] + p.0[k];
+                out.r.0[k] = s.r.0[k] + r.0[k];
+            }
+            out.q = s.q + q;
+        }
+        None => {
+            for k in 0..6 {
+                out.p.0[k] += p.0[k];
+                out.r.0[k] += r.0[k];
+            }
+            out.q += q;
+        }
+    }
+}
+
+/// [`shift_add`] for an offset `t e_A` ((A, B, C) cyclic): `K` has only `K_BC = t`,
+/// `K_CB = −t`, so `QK` has two columns, `KR` two rows and `KRK` the (B, C) block
+/// `−t² [[R_CC, −R_BC], [−R_BC, R_BB]]`.
+#[inline(always)]
+fn shift_on_axis<const ZR: usize, const A: usize, const B: usize, const C: usize>(
+    p: &Sym3,
+    q: &Mat3,
+    rr: &Sym3,
+    t: f64,
+    start: Option<&LocalInertia>,
+    out: &mut LocalInertia,
+) {
+    let tt = t * t;
+    // Known zeros (row/column ZR) are `None` and left out at compile time, not added as 0.0.
+    let pz = |a: usize, b: usize| (a != ZR && b != ZR).then(|| p.at(a, b));
+    let qt = |a: usize, b: usize, k: f64| (a != ZR).then(|| q[(a, b)] * k);
+    let mut dp = Sym3::default();
+    // (QK)_aC = t Q_aB, (QK)_aB = −t Q_aC, (QK)_aA = 0.
+    dp.0[sidx(A, A)] = sum([pz(A, A)]);
+    dp.0[sidx(B, B)] = sum([pz(B, B), qt(B, C, -2.0 * t), Some(tt * rr.at(C, C))]);
+    dp.0[sidx(C, C)] = sum([pz(C, C), qt(C, B, 2.0 * t), Some(tt * rr.at(B, B))]);
+    dp.0[sidx(B, C)] = sum([
+        pz(B, C),
+        qt(B, B, t),
+        qt(C, C, -t),
+        Some(-(tt * rr.at(B, C))),
+    ]);
+    dp.0[sidx(A, B)] = sum([pz(A, B), qt(A, C, -t)]);
+    dp.0[sidx(A, C)] = sum([pz(A, C), qt(A, B, t)]);
+    // Q − KR: row B − t R_C·, row C + t R_B·.
+    let mut dq = Mat3::zeros();
+    for col in 0..3 {
+        dq[(A, col)] = sum([qt(A, col, 1.0)]);
+        dq[(B, col)] = sum([qt(B, col, 1.0), Some(-(t * rr.at(C, col)))]);
+        dq[(C, col)] = sum([qt(C, col, 1.0), Some(t * rr.at(B, col))]);
+    }
+    deposit(out, start, &dp, &dq, rr);
+}
+
+/// The sum, left to right, of the terms that are not known zeros (`None`); 0 if none is left.
+#[inline(always)]
+fn sum<const N: usize>(terms: [Option<f64>; N]) -> f64 {
+    let mut acc: Option<f64> = None;
+    #[allow(clippy::needless_range_loop)] // an index loop unrolls; `into_iter().flatten()` did not
+    for k in 0..N {
+        if let Some(x) = terms[k] {
+            acc = Some(match acc {
+                Some(a) => a + x,
+                None => x,
+            });
+        }
+    }
+    acc.unwrap_or(0.0)
+}
+
+/// [`shift_add`] for an offset anywhere.
+#[inline(always)]
+fn shift_general<const ZR: usize>(
+    p: &Sym3,
+    q: &Mat3,
+    rr: &Sym3,
+    r: &Vec3,
+    start: Option<&LocalInertia>,
+    out: &mut LocalInertia,
+) {
     // K = skew(−r) = [[0, z, −y], [−z, 0, x], [y, −x, 0]].
     let (x, y, z) = (r.x, r.y, r.z);
-    if x == 0.0 && y == 0.0 && z == 0.0 {
-        // Coincident origins (common in robot descriptions: intersecting wrist axes).
-        for k in 0..6 {
-            out.p.0[k] += p.0[k];
-            out.r.0[k] += rr.0[k];
-        }
-        out.q += q;
-        return;
-    }
     let mut qk = Mat3::zeros();
     let mut kr = Mat3::zeros();
     for a in 0..3 {
@@ -504,11 +666,12 @@ fn shift_add<const ZR: usize>(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut
         1 => kr[(a, 0)] * z - kr[(a, 2)] * x,
         _ => -kr[(a, 0)] * y + kr[(a, 1)] * x,
     };
+    let mut dp = Sym3::default();
     for (k, (a, b)) in [(0, 0), (1, 1), (2, 2), (0, 1), (0, 2), (1, 2)]
         .into_iter()
         .enumerate()
     {
-        let v = if a == ZR && b == ZR {
+        dp.0[k] = if a == ZR && b == ZR {
             -krk(a, b)
         } else if a == ZR {
             qk[(b, a)] - krk(a, b)
@@ -517,18 +680,45 @@ fn shift_add<const ZR: usize>(p: &Sym3, q: &Mat3, rr: &Sym3, r: &Vec3, out: &mut
         } else {
             p.0[k] + qk[(a, b)] + qk[(b, a)] - krk(a, b)
         };
-        out.p.0[k] += v;
-        out.r.0[k] += rr.0[k];
     }
+    let mut dq = Mat3::zeros();
     for b in 0..3 {
         for a in 0..3 {
-            if a == ZR {
-                out.q[(a, b)] -= kr[(a, b)];
+            dq[(a, b)] = if a == ZR {
+                -kr[(a, b)]
             } else {
-                out.q[(a, b)] += q[(a, b)] - kr[(a, b)];
-            }
+                q[(a, b)] - kr[(a, b)]
+            };
         }
     }
+    deposit(out, start, &dp, &dq, rr);
+}
+
+/// A `match` on `$cur.kind`: for a revolute joint about coordinate axis K below placement
+/// kind P (kind `5 K + P`), `$cb!(placement, K, I, J)` with the placement rotation and the
+/// plane (I, J) that the joint turns; `$other` for every other joint. One jump per link and
+/// pass, each arm monomorphised.
+macro_rules! match_axis_kind {
+    ($cur:expr, $cb:ident, $other:expr) => {
+        match $cur.kind {
+            0 => $cb!(Identity, 0, 1, 2),
+            1 => $cb!(Plane::<1, 2>::new($cur.pcs), 0, 1, 2),
+            2 => $cb!(Plane::<2, 0>::new($cur.pcs), 0, 1, 2),
+            3 => $cb!(Plane::<0, 1>::new($cur.pcs), 0, 1, 2),
+            4 => $cb!(General($cur.rot), 0, 1, 2),
+            5 => $cb!(Identity, 1, 2, 0),
+            6 => $cb!(Plane::<1, 2>::new($cur.pcs), 1, 2, 0),
+            7 => $cb!(Plane::<2, 0>::new($cur.pcs), 1, 2, 0),
+            8 => $cb!(Plane::<0, 1>::new($cur.pcs), 1, 2, 0),
+            9 => $cb!(General($cur.rot), 1, 2, 0),
+            10 => $cb!(Identity, 2, 0, 1),
+            11 => $cb!(Plane::<1, 2>::new($cur.pcs), 2, 0, 1),
+            12 => $cb!(Plane::<2, 0>::new($cur.pcs), 2, 0, 1),
+            13 => $cb!(Plane::<0, 1>::new($cur.pcs), 2, 0, 1),
+            14 => $cb!(General($cur.rot), 2, 0, 1),
+            _ => $other,
+        }
+    };
 }
 
 /// Runs `$body` with `$pl` bound to the placement rotation of a revolute joint on a
@@ -621,39 +811,26 @@ pub fn forward_dynamics_local(
     }
 
     // Inward: articulated inertias and biases.
+    let body = &data.local_body[..n];
     for i in (0..n).rev() {
         let l = &model.links[i];
         let (head, tail) = loc.split_at_mut(i);
         let cur = &mut tail[0];
-        let parent = l.parent.map(|p| &mut head[p]);
-        let ti = &tau[l.v_index..];
-        let ok = match (l.joint, cur.plane) {
-            (Joint::Revolute { .. }, 1) => {
-                with_placement!(cur, pl => backward_axis::<_, 0, 1, 2>(pl, cur, parent, ti[0]))
-            }
-            (Joint::Revolute { .. }, 2) => {
-                with_placement!(cur, pl => backward_axis::<_, 1, 2, 0>(pl, cur, parent, ti[0]))
-            }
-            (Joint::Revolute { .. }, 3) => {
-                with_placement!(cur, pl => backward_axis::<_, 2, 0, 1>(pl, cur, parent, ti[0]))
-            }
-            (Joint::Revolute { .. }, _) => {
-                backward_1::<_, 3, true>(General(cur.rot), cur, parent, ti[0])
-            }
-            (Joint::Prismatic { .. }, _) => {
-                backward_1::<_, 3, false>(General(cur.rot), cur, parent, ti[0])
-            }
-            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => backward_3(cur, parent, ti),
-            (Joint::Fixed, _) => {
-                if let Some(p) = parent {
-                    let m = cur.inertia;
-                    let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
-                    let z = Vec3::zeros();
-                    finish(General(cur.rot), &m, &ba, &bl, &z, &z, cur, p);
-                }
-                true
-            }
+        // The parent's own inertia when this child writes its articulated inertia first.
+        let (parent, start) = match l.parent {
+            Some(p) => (
+                Some(&mut head[p]),
+                Some(&body[p]).filter(|_| cur.first_child),
+            ),
+            None => (None, None),
         };
+        let ti = &tau[l.v_index..];
+        macro_rules! axis {
+            ($pl:expr, $k:tt, $i:tt, $j:tt) => {
+                backward_axis::<_, $k, $i, $j>($pl, cur, parent, start, ti[0])
+            };
+        }
+        let ok = match_axis_kind!(cur, axis, backward_other(l, cur, parent, start, ti));
         if !ok {
             return Err(Error::Singular(singular_message(model, i, q)));
         }
@@ -670,36 +847,63 @@ pub fn forward_dynamics_local(
             None => &base,
         };
         let out = &mut a[l.v_index..];
-        match (l.joint, cur.plane) {
-            (Joint::Revolute { .. }, 1) => {
-                let j = Plane::<1, 2>::new(cur.cs);
-                out[0] =
-                    with_placement!(cur, pl => forward_1::<_, 0, true>(Placed(pl, j), cur, pacc));
-            }
-            (Joint::Revolute { .. }, 2) => {
-                let j = Plane::<2, 0>::new(cur.cs);
-                out[0] =
-                    with_placement!(cur, pl => forward_1::<_, 1, true>(Placed(pl, j), cur, pacc));
-            }
-            (Joint::Revolute { .. }, 3) => {
-                let j = Plane::<0, 1>::new(cur.cs);
-                out[0] =
-                    with_placement!(cur, pl => forward_1::<_, 2, true>(Placed(pl, j), cur, pacc));
-            }
-            (Joint::Revolute { .. }, _) => {
-                out[0] = forward_1::<_, 3, true>(General(cur.rot), cur, pacc);
-            }
-            (Joint::Prismatic { .. }, _) => {
-                out[0] = forward_1::<_, 3, false>(General(cur.rot), cur, pacc);
-            }
-            (Joint::Spherical, _) | (Joint::SphericalZYZ, _) => forward_3(cur, pacc, out),
-            (Joint::Fixed, _) => {
-                let (ya, yl) = carry(General(cur.rot), cur, pacc);
-                cur.accel = six(&ya, &yl);
-            }
+        macro_rules! axis {
+            ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
+                let e = Placed($pl, Plane::<$i, $j>::new(cur.cs));
+                out[0] = forward_1::<_, $k, true>(e, cur, pacc);
+            }};
         }
+        match_axis_kind!(cur, axis, forward_other(l, cur, pacc, out));
     }
     Ok(())
+}
+
+/// The inward step of every joint but a revolute one about a coordinate axis; false at a
+/// non-positive joint block.
+#[inline(never)]
+fn backward_other(
+    l: &Link,
+    cur: &mut LocalLink,
+    parent: Option<&mut LocalLink>,
+    start: Option<&LocalInertia>,
+    tau: &[f64],
+) -> bool {
+    match l.joint {
+        Joint::Revolute { .. } => {
+            backward_1::<_, 3, true>(General(cur.rot), cur, parent, start, tau[0])
+        }
+        Joint::Prismatic { .. } => {
+            backward_1::<_, 3, false>(General(cur.rot), cur, parent, start, tau[0])
+        }
+        Joint::Spherical | Joint::SphericalZYZ => backward_3(cur, parent, start, tau),
+        Joint::Fixed => {
+            if let Some(p) = parent {
+                let m = cur.inertia;
+                let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
+                let z = Vec3::zeros();
+                finish(General(cur.rot), &m, &ba, &bl, &z, &z, cur, p, start);
+            }
+            true
+        }
+    }
+}
+
+/// The acceleration step of every joint but a revolute one about a coordinate axis.
+#[inline(never)]
+fn forward_other(l: &Link, cur: &mut LocalLink, pacc: &Vec6, out: &mut [f64]) {
+    match l.joint {
+        Joint::Revolute { .. } => {
+            out[0] = forward_1::<_, 3, true>(General(cur.rot), cur, pacc);
+        }
+        Joint::Prismatic { .. } => {
+            out[0] = forward_1::<_, 3, false>(General(cur.rot), cur, pacc);
+        }
+        Joint::Spherical | Joint::SphericalZYZ => forward_3(cur, pacc, out),
+        Joint::Fixed => {
+            let (ya, yl) = carry(General(cur.rot), cur, pacc);
+            cur.accel = six(&ya, &yl);
+        }
+    }
 }
 
 /// The outward kinematic pass shared by the body-frame forward and inverse dynamics: per
@@ -724,103 +928,123 @@ pub(super) fn outward_pass<const ABI: bool>(
         let parent = l.parent.map(|p| &head[p]);
         let qi = &q[l.q_index..];
         let vi = &v[l.v_index..];
-        let pl = &l.placement;
-        let mut w_j = Vec3::zeros();
-        let mut v_j = Vec3::zeros();
-        let mut sdot_qd = Vec3::zeros();
-        cur.offset = pl.translation;
-        match l.joint {
-            Joint::Revolute { axis } => {
-                // `cur.plane` is the model's constant, set in `Data::new` (with the placement
-                // rotation in `cur.rot`).
-                if cur.plane != 0 {
-                    let (s, c) = sin_cos(qi[0]);
-                    cur.cs = (c, s);
-                } else {
-                    let rq = axis_angle(&axis, qi[0]);
-                    cur.rot = if l.placement_rotated {
-                        mat_mul(&pl.rotation, &rq)
-                    } else {
-                        rq
-                    };
-                }
-                cur.s[0] = axis;
-                w_j = axis * vi[0];
-            }
-            Joint::Prismatic { axis } => {
-                cur.rot = pl.rotation;
-                cur.offset += mul(&pl.rotation, &(axis * qi[0]));
-                cur.s[0] = axis;
-                v_j = axis * vi[0];
-            }
-            Joint::Spherical => {
-                let rq = quat_to_matrix(qi);
-                cur.rot = if l.placement_rotated {
-                    mat_mul(&pl.rotation, &rq)
-                } else {
-                    rq
-                };
-                cur.s = [Vec3::x(), Vec3::y(), Vec3::z()];
-                w_j = Vec3::new(vi[0], vi[1], vi[2]);
-            }
-            Joint::SphericalZYZ => {
-                if singular.is_none() && l.joint.singularity(qi).is_some() {
-                    singular = Some(i);
-                }
-                let (sp, cp) = sin_cos(qi[0]);
-                let (st, ct) = sin_cos(qi[1]);
-                let (ss, cs) = sin_cos(qi[2]);
-                // Rz(φ) Ry(θ) Rz(ψ).
-                let rq = Mat3::new(
-                    cp * ct * cs - sp * ss,
-                    -cp * ct * ss - sp * cs,
-                    cp * st,
-                    sp * ct * cs + cp * ss,
-                    -sp * ct * ss + cp * cs,
-                    sp * st,
-                    -st * cs,
-                    st * ss,
-                    ct,
-                );
-                cur.rot = if l.placement_rotated {
-                    mat_mul(&pl.rotation, &rq)
-                } else {
-                    rq
-                };
-                // Relative angular velocity in the body frame: R_qᵀ L(φ, θ) q̇ = S q̇, with
-                // S = [R_qᵀ e_z, Rz(−ψ) e_y, e_z] (independent of φ).
-                cur.s = [
-                    Vec3::new(-st * cs, st * ss, ct),
-                    Vec3::new(ss, cs, 0.0),
-                    Vec3::z(),
-                ];
-                let (dphi, dtheta, dpsi) = (vi[0], vi[1], vi[2]);
-                w_j = cur.s[0] * dphi + cur.s[1] * dtheta + cur.s[2] * dpsi;
-                // Ṡ q̇: the body-frame columns turn with θ and ψ.
-                let d0 = Vec3::new(
-                    -ct * cs * dtheta + st * ss * dpsi,
-                    ct * ss * dtheta + st * cs * dpsi,
-                    -st * dtheta,
-                );
-                let d1 = Vec3::new(cs * dpsi, -ss * dpsi, 0.0);
-                sdot_qd = d0 * dphi + d1 * dtheta;
-            }
-            Joint::Fixed => {
-                cur.rot = pl.rotation;
-            }
-        }
         let fext = external.map(|f| &f[i]);
-        with_rot!(cur, e => outward(e, cur, parent, &w_j, &v_j, &sdot_qd, fext));
+        // A revolute joint about coordinate axis K (the offset, the column e_K and the
+        // placement are model constants).
+        macro_rules! axis {
+            ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
+                let pl = $pl;
+                let (s, c) = sin_cos(qi[0]);
+                cur.cs = (c, s);
+                let mut w_j = Vec3::zeros();
+                w_j[$k] = vi[0];
+                let e = Placed(pl, Plane::<$i, $j>::new((c, s)));
+                let z = Vec3::zeros();
+                outward(e, cur, parent, &w_j, &z, &z, fext);
+            }};
+        }
+        match_axis_kind!(cur, axis, {
+            if outward_other(l, cur, parent, qi, vi, fext) && singular.is_none() {
+                singular = Some(i);
+            }
+        });
         let bi = &l.inertia;
         let h = bi.first_moment;
-        if ABI {
-            // The link's own inertia starts its articulated inertia.
+        if ABI && cur.leaf {
+            // A leaf's articulated inertia is its own; other links' are written by their
+            // first child inward (`LocalLink::first_child`).
             cur.inertia = body[i];
         }
         let w = v3(&cur.twist, 0);
         let iw = mul(&bi.rotational, &w);
         cur.bias += six(&cross(&w, &iw), &cross(&w, &cross(&w, &h)));
     }
+    singular
+}
+
+/// The outward step of every joint but a revolute one about a coordinate axis; true when a
+/// ZYZ joint sits at its Euler singularity.
+#[inline(never)]
+fn outward_other(
+    l: &Link,
+    cur: &mut LocalLink,
+    parent: Option<&LocalLink>,
+    qi: &[f64],
+    vi: &[f64],
+    fext: Option<&Vec6>,
+) -> bool {
+    let pl = &l.placement;
+    let mut w_j = Vec3::zeros();
+    let mut v_j = Vec3::zeros();
+    let mut sdot_qd = Vec3::zeros();
+    let mut singular = false;
+    match l.joint {
+        Joint::Revolute { axis } => {
+            let rq = axis_angle(&axis, qi[0]);
+            cur.rot = if l.placement_rotated {
+                mat_mul(&pl.rotation, &rq)
+            } else {
+                rq
+            };
+            w_j = axis * vi[0];
+        }
+        Joint::Prismatic { axis } => {
+            cur.offset = pl.translation + mul(&pl.rotation, &(axis * qi[0]));
+            v_j = axis * vi[0];
+        }
+        Joint::Spherical => {
+            let rq = quat_to_matrix(qi);
+            cur.rot = if l.placement_rotated {
+                mat_mul(&pl.rotation, &rq)
+            } else {
+                rq
+            };
+            w_j = Vec3::new(vi[0], vi[1], vi[2]);
+        }
+        Joint::SphericalZYZ => {
+            singular = l.joint.singularity(qi).is_some();
+            let (sp, cp) = sin_cos(qi[0]);
+            let (st, ct) = sin_cos(qi[1]);
+            let (ss, cs) = sin_cos(qi[2]);
+            // Rz(φ) Ry(θ) Rz(ψ).
+            let rq = Mat3::new(
+                cp * ct * cs - sp * ss,
+                -cp * ct * ss - sp * cs,
+                cp * st,
+                sp * ct * cs + cp * ss,
+                -sp * ct * ss + cp * cs,
+                sp * st,
+                -st * cs,
+                st * ss,
+                ct,
+            );
+            cur.rot = if l.placement_rotated {
+                mat_mul(&pl.rotation, &rq)
+            } else {
+                rq
+            };
+            // Relative angular velocity in the body frame: R_qᵀ L(φ, θ) q̇ = S q̇, with
+            // S = [R_qᵀ e_z, Rz(−ψ) e_y, e_z] (independent of φ).
+            cur.s = [
+                Vec3::new(-st * cs, st * ss, ct),
+                Vec3::new(ss, cs, 0.0),
+                Vec3::z(),
+            ];
+            let (dphi, dtheta, dpsi) = (vi[0], vi[1], vi[2]);
+            w_j = cur.s[0] * dphi + cur.s[1] * dtheta + cur.s[2] * dpsi;
+            // Ṡ q̇: the body-frame columns turn with θ and ψ.
+            let d0 = Vec3::new(
+                -ct * cs * dtheta + st * ss * dpsi,
+                ct * ss * dtheta + st * cs * dpsi,
+                -st * dtheta,
+            );
+            let d1 = Vec3::new(cs * dpsi, -ss * dpsi, 0.0);
+            sdot_qd = d0 * dphi + d1 * dtheta;
+        }
+        // The placement rotation and offset are constants (`local_link_of`).
+        Joint::Fixed => {}
+    }
+    outward(General(cur.rot), cur, parent, &w_j, &v_j, &sdot_qd, fext);
     singular
 }
 
@@ -892,6 +1116,7 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
     e: R,
     cur: &mut LocalLink,
     parent: Option<&mut LocalLink>,
+    start: Option<&LocalInertia>,
     tau: f64,
 ) -> bool {
     let m = &cur.inertia;
@@ -934,7 +1159,7 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
             }
         }
         let k = ut * dinv;
-        finish(e, &ma, &ba, &bl, &(ua * k), &(ul * k), cur, parent);
+        finish(e, &ma, &ba, &bl, &(ua * k), &(ul * k), cur, parent, start);
     }
     true
 }
@@ -950,6 +1175,7 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     pl: Pl,
     cur: &mut LocalLink,
     parent: Option<&mut LocalLink>,
+    start: Option<&LocalInertia>,
     tau: f64,
 ) -> bool {
     let m = &cur.inertia;
@@ -1003,13 +1229,13 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
         qq[(row, K)] = v[K];
     }
     let e = Plane::<I, J> { c, s };
-    let r = &cur.offset;
+    let (r, oa) = (&cur.offset, cur.offset_axis);
     let rr = e.conj_sym(&ra);
     if Pl::IDENTITY {
-        shift_add::<K>(&pp, &qq, &rr, r, &mut parent.inertia);
+        shift_add::<K>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     } else {
         let (pp, qq, rr) = (pl.conj_sym(&pp), pl.conj::<false>(&qq), pl.conj_sym(&rr));
-        shift_add::<3>(&pp, &qq, &rr, r, &mut parent.inertia);
+        shift_add::<3>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     }
     parent.bias += to_parent(Placed(pl, e), r, &fa, &fl);
     true
@@ -1017,7 +1243,12 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
 
 /// One 3-dof (spherical) joint inward.
 #[inline(always)]
-fn backward_3(cur: &mut LocalLink, parent: Option<&mut LocalLink>, tau: &[f64]) -> bool {
+fn backward_3(
+    cur: &mut LocalLink,
+    parent: Option<&mut LocalLink>,
+    start: Option<&LocalInertia>,
+    tau: &[f64],
+) -> bool {
     let m = &cur.inertia;
     let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
     let mut u = [Vec6::zeros(); 3];
@@ -1066,7 +1297,17 @@ fn backward_3(cur: &mut LocalLink, parent: Option<&mut LocalLink>, tau: &[f64]) 
             ud_u += u[r] * dut[r];
         }
         let e = General(cur.rot);
-        finish(e, &ma, &ba, &bl, &v3(&ud_u, 0), &v3(&ud_u, 3), cur, parent);
+        finish(
+            e,
+            &ma,
+            &ba,
+            &bl,
+            &v3(&ud_u, 0),
+            &v3(&ud_u, 3),
+            cur,
+            parent,
+            start,
+        );
     }
     true
 }
@@ -1084,6 +1325,7 @@ fn finish<R: Rot>(
     kl: &Vec3,
     cur: &LocalLink,
     parent: &mut LocalLink,
+    start: Option<&LocalInertia>,
 ) {
     let xa = v3(&cur.xi, 0);
     let xl = v3(&cur.xi, 3);
@@ -1095,6 +1337,8 @@ fn finish<R: Rot>(
         &e.conj::<false>(&ma.q),
         &e.conj_sym(&ma.r),
         r,
+        cur.offset_axis,
+        start,
         &mut parent.inertia,
     );
     parent.bias += to_parent(e, r, &fa, &fl);

@@ -64,11 +64,7 @@ impl Data {
             d_inv: vec![Mat3::zeros(); n],
             u_tau: vec![Vec3::zeros(); n],
             composite: vec![BodyInertia::zero(); n],
-            local: model
-                .links
-                .iter()
-                .map(forward_local::local_link_of)
-                .collect(),
+            local: forward_local::local_links_of(model),
             local_body: model
                 .links
                 .iter()

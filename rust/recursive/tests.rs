@@ -415,7 +415,7 @@ fn placement_kinds_are_recognised() {
     // The fast paths the joint-pair tests mean to cover: the codes of a revolute joint about z
     // below each placement of `pair_placements` (0 none, 4 general, 1-3 a turn about x-z).
     let body = RigidBody::new(1.0, Vec3::zeros(), Mat3::identity() * 0.1).unwrap();
-    let codes: Vec<(u8, u8)> = pair_placements()
+    let codes: Vec<(u8, u8, u8)> = pair_placements()
         .into_iter()
         .map(|(_, rot)| {
             let mut model = Model::new();
@@ -425,10 +425,108 @@ fn placement_kinds_are_recognised() {
                 .add_body(body, joint, None, place, None, None)
                 .unwrap();
             let l = forward_local::local_link_of(&model.links[0]);
-            (l.plane, l.placement)
+            (l.plane, l.placement, l.kind)
         })
         .collect();
-    assert_eq!(codes, vec![(3, 0), (3, 4), (3, 1), (3, 2), (3, 3)]);
+    // Dispatch code 5 K + placement, K = 2 for z.
+    let want = vec![(3, 0, 10), (3, 4, 14), (3, 1, 11), (3, 2, 12), (3, 3, 13)];
+    assert_eq!(codes, want);
+}
+
+/// A random tree whose joints are mostly revolute about a coordinate axis (the dispatch
+/// codes 0..15 of `LocalLink::kind`), below every placement kind of `pair_placements`, at
+/// offsets of every form (zero, along x, y or z only, anywhere), with some spherical and
+/// prismatic joints among them, and branching, so that links have several children.
+fn random_axis_tree(seed: u64, n: usize) -> Model {
+    let mut rng = Lcg(seed);
+    let placements = pair_placements();
+    let mut model = Model::new();
+    for k in 0..n {
+        let body = RigidBody::new(
+            rng.range(0.2, 3.0),
+            rng.vec3(0.3),
+            Mat3::from_diagonal(&Vec3::new(
+                rng.range(0.03, 0.05),
+                rng.range(0.03, 0.05),
+                rng.range(0.03, 0.05),
+            )),
+        )
+        .unwrap();
+        let pick = |rng: &mut Lcg, m: usize| ((rng.next() * m as f64) as usize).min(m - 1);
+        let axis = [Vec3::x(), Vec3::y(), Vec3::z()][pick(&mut rng, 3)];
+        let joint = match k % 9 {
+            4 => Joint::Spherical,
+            7 => Joint::prismatic(rng.vec3(1.0)).unwrap(),
+            _ => Joint::revolute(axis).unwrap(),
+        };
+        let t = rng.range(-0.4, 0.4);
+        let offset = match pick(&mut rng, 5) {
+            0 => Vec3::zeros(),
+            1 => Vec3::new(t, 0.0, 0.0),
+            2 => Vec3::new(0.0, t, 0.0),
+            3 => Vec3::new(0.0, 0.0, t),
+            _ => rng.vec3(0.4),
+        };
+        let rot = placements[pick(&mut rng, placements.len())].1;
+        let parent = (k > 0).then(|| pick(&mut rng, k));
+        model
+            .add_body(body, joint, parent, Placement::new(rot, offset), None, None)
+            .unwrap();
+    }
+    model
+}
+
+#[test]
+fn local_forward_on_axis_trees_with_every_offset_form() {
+    let mut kinds = std::collections::BTreeSet::new();
+    let mut forms = std::collections::BTreeSet::new();
+    let mut several_children = false;
+    for seed in 0..40u64 {
+        let n = 2 + (seed as usize * 7) % 30;
+        let model = random_axis_tree(seed, n);
+        let data = Data::new(&model);
+        for (i, l) in data.local.iter().enumerate() {
+            kinds.insert(l.kind);
+            if model.links[i].parent.is_some() {
+                forms.insert(l.offset_axis);
+            }
+            several_children |= !l.first_child && model.links[i].parent.is_some();
+        }
+        let (q, v, a) = random_state(&model, seed);
+        let tau: Vec<f64> = a.iter().map(|x| 3.0 * x - 0.2).collect();
+        let ext = random_wrenches(&model, seed);
+        for e in [None, Some(ext.as_slice())] {
+            let (loc, world) = both_forward(&model, &q, &v, &tau, e);
+            assert!(
+                rel(&loc, &world) <= 1e-10,
+                "seed {seed} n {n}: {}",
+                rel(&loc, &world)
+            );
+            let (loc, world) = both_inverse(&model, &q, &v, &a, &G, e);
+            let explicit = explicit_inverse(&model, &q, &v, &a, e);
+            assert!(rel(&loc, &world) <= 1e-10, "ID seed {seed} n {n}");
+            assert!(
+                rel(&loc, &explicit) <= 1e-10,
+                "ID explicit seed {seed} n {n}"
+            );
+        }
+        // The workspace reused: a call at another state first must leave no trace.
+        let mut data = Data::new(&model);
+        let mut acc = vec![0.0; model.nv];
+        let (q0, v0, _) = random_state(&model, seed + 1000);
+        forward_local::forward_dynamics_local(&model, &mut data, &q0, &v0, &a, &G, None, &mut acc)
+            .unwrap();
+        forward_local::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut acc)
+            .unwrap();
+        let explicit = denoc::forward_dynamics(&model, &q, &v, &tau, &G).unwrap();
+        let acc = DVector::from_vec(acc);
+        assert!(rel(&acc, &explicit) <= 1e-10, "explicit seed {seed}");
+    }
+    // Every fast path ran: all 15 axis codes, the general code, all five offset forms, and
+    // links that add into a parent another child already wrote.
+    assert_eq!(kinds.len(), 16, "{kinds:?}");
+    assert_eq!(forms.len(), 5, "{forms:?}");
+    assert!(several_children);
 }
 
 #[test]
