@@ -64,6 +64,9 @@ pub fn checked_rotation(r: &Mat3, arg: &str) -> Result<Mat3> {
             ),
         ));
     }
+    if let Some(q) = snapped_signed_permutation(r) {
+        return Ok(q);
+    }
     if err <= 4.0 * f64::EPSILON {
         return Ok(*r);
     }
@@ -73,6 +76,29 @@ pub fn checked_rotation(r: &Mat3, arg: &str) -> Result<Mat3> {
         (Some(u), Some(vt)) => Ok(u * vt),
         _ => Ok(*r),
     }
+}
+
+/// A rotation within 4ε, entry by entry, of a signed permutation (an exact quarter or half
+/// turn about coordinate axes, as URDF `rpy = (±π/2, 0, 0)` means) is taken as exactly that
+/// matrix. The decimal angle in a file cannot state π/2 exactly and leaves 6e-17 where the
+/// rotation has a zero; exact zeros are what the robot means, and they let the body-frame
+/// dynamics absorb the placement into the link frame (`recursive::forward_local`).
+fn snapped_signed_permutation(r: &Mat3) -> Option<Mat3> {
+    const TOL: f64 = 4.0 * f64::EPSILON;
+    let mut out = Mat3::zeros();
+    for (o, &x) in out.iter_mut().zip(r.iter()) {
+        if x.abs() <= TOL {
+            *o = 0.0;
+        } else if (x.abs() - 1.0).abs() <= TOL {
+            *o = x.signum();
+        } else {
+            return None;
+        }
+    }
+    // One ±1 per row and column, determinant +1.
+    let ones_per_row = (0..3).all(|i| out.row(i).iter().filter(|x| **x != 0.0).count() == 1);
+    let ones_per_col = (0..3).all(|j| out.column(j).iter().filter(|x| **x != 0.0).count() == 1);
+    (ones_per_row && ones_per_col && out.determinant() == 1.0).then_some(out)
 }
 
 impl Model {

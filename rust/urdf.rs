@@ -1025,6 +1025,38 @@ mod tests {
     }
 
     #[test]
+    fn quarter_turn_rpy_is_exact() {
+        // The decimal π/2 leaves cos = 6e-17; the model holds the exact quarter turn
+        // (model::checked_rotation), while an angle that is not π/2 to double precision stays
+        // as written.
+        let placed = |rpy: &str| {
+            let text = robot(&[
+                link("base", 1.0),
+                link("a", 1.0),
+                joint(
+                    "j",
+                    "revolute",
+                    "base",
+                    "a",
+                    &format!(
+                        r#"<origin xyz="0 0 0.3" rpy="{rpy}"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="5" velocity="2"/>"#
+                    ),
+                ),
+            ]);
+            load(&text).model.links[0].placement.rotation
+        };
+        let r = placed("-1.5707963267948966 0 0");
+        assert_eq!(r, Mat3::new(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, -1.0, 0.0));
+        let r = placed("1.5707963267948966 0 1.5707963267948966");
+        assert_eq!(r, Mat3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0));
+        let r = placed("3.141592653589793 0 0");
+        assert_eq!(r, Mat3::new(1.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, -1.0));
+        let r = placed("1.5708 0 0");
+        assert_eq!(r, rot_x(1.5708));
+        assert!(r[(1, 1)] != 0.0);
+    }
+
+    #[test]
     fn rpy_is_z_y_x() {
         // Yaw π/2: x → y.
         let r = rpy_matrix(&Vec3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2));

@@ -65,6 +65,14 @@ pub struct LocalLink {
     /// the parent's articulated inertia as the parent's own plus its contribution, so that no
     /// link's inertia is copied before its children add into it.
     pub first_child: bool,
+    /// A revolute joint about a coordinate axis: ±1 as it turns about `±e_K` in the
+    /// recursion's link frames (see [`local_links_of`]). Model constant.
+    pub sign: f64,
+    /// Other joints: the constant placement in the recursion's frames (`x_parent =
+    /// place_rot x + place_t` at q = 0), and whether it turns. Model constants.
+    pub place_rot: Mat3,
+    pub place_t: Vec3,
+    pub place_rotated: bool,
 }
 
 /// `LocalLink::kind` of every joint other than a revolute joint about a coordinate axis.
@@ -93,48 +101,66 @@ impl Default for LocalLink {
             offset_axis: 4,
             leaf: true,
             first_child: false,
+            sign: 1.0,
+            place_rot: Mat3::identity(),
+            place_t: Vec3::zeros(),
+            place_rotated: false,
         }
     }
 }
 
-/// The per-model constants of a link's body-frame workspace (set once in `Data::new`): the
-/// plane code of its joint (1, 2, 3 for a revolute joint about x, y, z, else 0) and, for
-/// those, how the joint frame is rotated in the parent (see `LocalLink::placement`); the
-/// dispatch code, the offset's form, and the constant parts of the joint transform and
-/// columns. The tree-dependent flags (`leaf`, `first_child`) are set by [`local_links_of`].
-pub(super) fn local_link_of(l: &Link) -> LocalLink {
-    let plane = plane_of(l);
-    let mut out = LocalLink {
-        plane,
-        ..LocalLink::default()
-    };
-    if plane != 0 && l.placement_rotated {
-        let p = &l.placement.rotation;
-        out.rot = *p;
-        out.placement = 4;
-        // A turn about coordinate axis `a` (plane pair I, J) keeps e_a exactly and has the
-        // 2×2 block [[c, −s], [s, c]] in rows and columns I, J.
-        for (a, i, j) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
-            let (c, sn) = (p[(i, i)], p[(j, i)]);
-            let keeps_axis = p[(a, a)] == 1.0
-                && p[(a, i)] == 0.0
-                && p[(a, j)] == 0.0
-                && p[(i, a)] == 0.0
-                && p[(j, a)] == 0.0;
-            if keeps_axis && p[(j, j)] == c && p[(i, j)] == -sn {
-                out.placement = a as u8 + 1;
-                out.pcs = (c, sn);
-                break;
-            }
+/// Whether every entry of `m` is exactly 0 or ±1: for a rotation, a signed permutation (an
+/// exact quarter or half turn, as `model::checked_rotation` snaps them).
+fn is_signed_permutation(m: &Mat3) -> bool {
+    m.iter().all(|&x| x == 0.0 || x.abs() == 1.0)
+}
+
+/// `(k, σ)` with `a = σ e_k`, if `a` is a signed coordinate axis.
+fn coordinate_axis(a: &Vec3) -> Option<(usize, f64)> {
+    (0..3).find_map(|k| {
+        let (i, j) = ((k + 1) % 3, (k + 2) % 3);
+        (a[i] == 0.0 && a[j] == 0.0 && a[k].abs() == 1.0).then_some((k, a[k]))
+    })
+}
+
+/// The placement kind of a constant rotation `p` (`LocalLink::placement`) and, for a plane
+/// rotation, its (cos, sin).
+fn placement_kind(p: &Mat3) -> (u8, (f64, f64)) {
+    if *p == Mat3::identity() {
+        return (0, (1.0, 0.0));
+    }
+    // A turn about coordinate axis `a` (plane pair I, J) keeps e_a exactly and has the 2×2
+    // block [[c, −s], [s, c]] in rows and columns I, J.
+    for (a, i, j) in [(0, 1, 2), (1, 2, 0), (2, 0, 1)] {
+        let (c, sn) = (p[(i, i)], p[(j, i)]);
+        let keeps_axis = p[(a, a)] == 1.0
+            && p[(a, i)] == 0.0
+            && p[(a, j)] == 0.0
+            && p[(i, a)] == 0.0
+            && p[(j, a)] == 0.0;
+        if keeps_axis && p[(j, j)] == c && p[(i, j)] == -sn {
+            return (a as u8 + 1, (c, sn));
         }
     }
-    if plane != 0 {
-        out.kind = 5 * (plane - 1) + out.placement;
-    }
-    // Constant parts of the joint transform and columns (the outward pass writes only what
-    // moves with q).
-    let t = l.placement.translation;
+    (4, (1.0, 0.0))
+}
+
+/// The link's workspace with its model constants, and its frame turn `Q` (see
+/// [`local_links_of`]) given its parent's, `frame_p`.
+///
+/// A revolute joint about a coordinate axis `e_K` below a placement `P` that is a signed
+/// permutation (the exact quarter turns of robot descriptions) absorbs `P` into the link
+/// frame: with `Q = Q_p P`, `E = Q_p P R_K(q) Qᵀ = R_{Q e_K}(q)`, a turn about a coordinate
+/// axis again, now without placement. Otherwise `Q = Q_p` and the placement becomes
+/// `Q_p P Q_pᵀ` (a plane rotation stays one, about the permuted axis). Other joints keep
+/// their own frame (`Q = 1`) and take `Q_p P` as placement.
+pub(super) fn local_link_of(l: &Link, frame_p: &Mat3) -> (LocalLink, Mat3) {
+    let mut out = LocalLink::default();
+    let pl = &l.placement;
+    // Signed permutations: these products are exact.
+    let t = frame_p * pl.translation;
     out.offset = t;
+    out.place_t = t;
     out.offset_axis = match l.joint {
         Joint::Prismatic { .. } => 4,
         _ if t == Vec3::zeros() => 0,
@@ -143,58 +169,88 @@ pub(super) fn local_link_of(l: &Link) -> LocalLink {
         _ if t.x == 0.0 && t.y == 0.0 => 3,
         _ => 4,
     };
+    let on_axis = match l.joint {
+        Joint::Revolute { axis } => coordinate_axis(&axis).map(|_| axis),
+        _ => None,
+    };
+    if let Some(axis) = on_axis {
+        let (frame, placement) = if is_signed_permutation(&pl.rotation) {
+            (frame_p * pl.rotation, Mat3::identity())
+        } else {
+            (*frame_p, frame_p * pl.rotation * frame_p.transpose())
+        };
+        let turned = frame * axis;
+        if let Some((k, sign)) = coordinate_axis(&turned) {
+            let (kind, pcs) = placement_kind(&placement);
+            out.plane = k as u8 + 1;
+            out.sign = sign;
+            out.s[0] = turned;
+            out.placement = kind;
+            out.pcs = pcs;
+            out.rot = placement;
+            out.kind = 5 * k as u8 + kind;
+            return (out, frame);
+        }
+    }
+    // Other joints keep their own frame: the parent's turn goes into the placement.
+    out.place_rot = frame_p * pl.rotation;
+    out.place_rotated = out.place_rot != Mat3::identity();
     match l.joint {
-        Joint::Revolute { axis } | Joint::Prismatic { axis } => out.s[0] = axis,
+        Joint::Revolute { axis } => out.s[0] = axis,
+        Joint::Prismatic { axis } => {
+            out.s[0] = axis;
+            out.rot = out.place_rot;
+        }
         Joint::Spherical => out.s = [Vec3::x(), Vec3::y(), Vec3::z()],
         Joint::SphericalZYZ => {}
-        Joint::Fixed => out.rot = l.placement.rotation,
+        Joint::Fixed => out.rot = out.place_rot,
     }
-    if let Joint::Prismatic { .. } = l.joint {
-        out.rot = l.placement.rotation;
-    }
-    out
+    (out, Mat3::identity())
 }
 
 /// Every link's body-frame workspace with its model constants ([`local_link_of`]) and its
-/// place in the tree (`leaf`, `first_child`).
-pub(super) fn local_links_of(model: &Model) -> Vec<LocalLink> {
-    let mut out: Vec<LocalLink> = model.links.iter().map(local_link_of).collect();
+/// place in the tree (`leaf`, `first_child`), and each link's own inertia in its (possibly
+/// turned) frame, which starts its articulated inertia.
+///
+/// The recursion's link frames may differ from the model's by a signed permutation `Q`
+/// (new coordinates `Q x`), chosen so that exact quarter-turn placements vanish; joint
+/// coordinates keep their meaning (a joint now about `−e_K` turns by `−q`, `LocalLink::sign`)
+/// and external wrenches are brought into the turned frames, so results do not depend on it.
+pub(super) fn local_links_of(model: &Model) -> (Vec<LocalLink>, Vec<LocalInertia>) {
+    let n = model.links.len();
+    let mut links = Vec::with_capacity(n);
+    let mut frames: Vec<Mat3> = Vec::with_capacity(n);
+    let mut bodies = Vec::with_capacity(n);
+    for l in &model.links {
+        let frame_p = l.parent.map_or(Mat3::identity(), |p| frames[p]);
+        let (link, frame) = local_link_of(l, &frame_p);
+        let own = body_inertia_of(l);
+        let turn = General(frame);
+        bodies.push(LocalInertia {
+            p: turn.conj_sym(&own.p),
+            q: turn.conj::<false>(&own.q),
+            r: turn.conj_sym(&own.r),
+        });
+        links.push(link);
+        frames.push(frame);
+    }
     // Links come parents first, so the inward loop meets each parent's children from the
     // highest index down.
-    let mut seen = vec![false; out.len()];
-    for i in (0..out.len()).rev() {
+    let mut seen = vec![false; n];
+    for i in (0..n).rev() {
         if let Some(p) = model.links[i].parent {
-            out[i].first_child = !seen[p];
+            links[i].first_child = !seen[p];
             seen[p] = true;
         }
     }
-    for (l, has_children) in out.iter_mut().zip(seen) {
+    for (l, has_children) in links.iter_mut().zip(seen) {
         l.leaf = !has_children;
     }
-    out
+    (links, bodies)
 }
 
-/// 1, 2, 3 for a revolute joint about x, y, z, else 0.
-fn plane_of(l: &Link) -> u8 {
-    match l.joint {
-        Joint::Revolute { axis } => {
-            if axis.y == 0.0 && axis.z == 0.0 && axis.x == 1.0 {
-                1
-            } else if axis.x == 0.0 && axis.z == 0.0 && axis.y == 1.0 {
-                2
-            } else if axis.x == 0.0 && axis.y == 0.0 && axis.z == 1.0 {
-                3
-            } else {
-                0
-            }
-        }
-        _ => 0,
-    }
-}
-
-/// The link's own inertia about its origin as a `LocalInertia` (a constant of the model, set
-/// once in `Data::new`; it starts each articulated inertia).
-pub(super) fn body_inertia_of(l: &Link) -> LocalInertia {
+/// The link's own inertia about its origin as a `LocalInertia`, in the model's link frame.
+fn body_inertia_of(l: &Link) -> LocalInertia {
     let bi = &l.inertia;
     let h = bi.first_moment;
     let mass = bi.mass;
@@ -202,6 +258,14 @@ pub(super) fn body_inertia_of(l: &Link) -> LocalInertia {
         p: Sym3::from_mat(&bi.rotational),
         q: Mat3::new(0.0, -h.z, h.y, h.z, 0.0, -h.x, -h.y, h.x, 0.0),
         r: Sym3([mass, mass, mass, 0.0, 0.0, 0.0]),
+    }
+}
+
+impl LocalInertia {
+    /// The first moment `h` (mass times COM) from the block `Q = h̃`.
+    #[inline(always)]
+    pub(super) fn first_moment(&self) -> Vec3 {
+        Vec3::new(self.q[(2, 1)], self.q[(0, 2)], self.q[(1, 0)])
     }
 }
 
@@ -236,7 +300,7 @@ impl Sym3 {
         ])
     }
     #[inline(always)]
-    fn mul(&self, x: &Vec3) -> Vec3 {
+    pub(super) fn mul(&self, x: &Vec3) -> Vec3 {
         let [xx, yy, zz, xy, xz, yz] = self.0;
         Vec3::new(
             xx * x.x + xy * x.y + xz * x.z,
@@ -827,7 +891,7 @@ pub fn forward_dynamics_local(
         let ti = &tau[l.v_index..];
         macro_rules! axis {
             ($pl:expr, $k:tt, $i:tt, $j:tt) => {
-                backward_axis::<_, $k, $i, $j>($pl, cur, parent, start, ti[0])
+                backward_axis::<_, $k, $i, $j>($pl, cur, parent, start, ti[0] * cur.sign)
             };
         }
         let ok = match_axis_kind!(cur, axis, backward_other(l, cur, parent, start, ti));
@@ -850,7 +914,7 @@ pub fn forward_dynamics_local(
         macro_rules! axis {
             ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
                 let e = Placed($pl, Plane::<$i, $j>::new(cur.cs));
-                out[0] = forward_1::<_, $k, true>(e, cur, pacc);
+                out[0] = forward_1::<_, $k, true>(e, cur, pacc) * cur.sign;
             }};
         }
         match_axis_kind!(cur, axis, forward_other(l, cur, pacc, out));
@@ -934,10 +998,12 @@ pub(super) fn outward_pass<const ABI: bool>(
         macro_rules! axis {
             ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
                 let pl = $pl;
+                // About ±e_K (`sign`): sin turns sign with the angle, cos does not.
                 let (s, c) = sin_cos(qi[0]);
+                let s = s * cur.sign;
                 cur.cs = (c, s);
                 let mut w_j = Vec3::zeros();
-                w_j[$k] = vi[0];
+                w_j[$k] = vi[0] * cur.sign;
                 let e = Placed(pl, Plane::<$i, $j>::new((c, s)));
                 let z = Vec3::zeros();
                 outward(e, cur, parent, &w_j, &z, &z, fext);
@@ -948,15 +1014,15 @@ pub(super) fn outward_pass<const ABI: bool>(
                 singular = Some(i);
             }
         });
-        let bi = &l.inertia;
-        let h = bi.first_moment;
+        let own = &body[i];
+        let h = own.first_moment();
         if ABI && cur.leaf {
             // A leaf's articulated inertia is its own; other links' are written by their
             // first child inward (`LocalLink::first_child`).
-            cur.inertia = body[i];
+            cur.inertia = *own;
         }
         let w = v3(&cur.twist, 0);
-        let iw = mul(&bi.rotational, &w);
+        let iw = own.p.mul(&w);
         cur.bias += six(&cross(&w, &iw), &cross(&w, &cross(&w, &h)));
     }
     singular
@@ -973,7 +1039,6 @@ fn outward_other(
     vi: &[f64],
     fext: Option<&Vec6>,
 ) -> bool {
-    let pl = &l.placement;
     let mut w_j = Vec3::zeros();
     let mut v_j = Vec3::zeros();
     let mut sdot_qd = Vec3::zeros();
@@ -981,21 +1046,21 @@ fn outward_other(
     match l.joint {
         Joint::Revolute { axis } => {
             let rq = axis_angle(&axis, qi[0]);
-            cur.rot = if l.placement_rotated {
-                mat_mul(&pl.rotation, &rq)
+            cur.rot = if cur.place_rotated {
+                mat_mul(&cur.place_rot, &rq)
             } else {
                 rq
             };
             w_j = axis * vi[0];
         }
         Joint::Prismatic { axis } => {
-            cur.offset = pl.translation + mul(&pl.rotation, &(axis * qi[0]));
+            cur.offset = cur.place_t + mul(&cur.place_rot, &(axis * qi[0]));
             v_j = axis * vi[0];
         }
         Joint::Spherical => {
             let rq = quat_to_matrix(qi);
-            cur.rot = if l.placement_rotated {
-                mat_mul(&pl.rotation, &rq)
+            cur.rot = if cur.place_rotated {
+                mat_mul(&cur.place_rot, &rq)
             } else {
                 rq
             };
@@ -1018,8 +1083,8 @@ fn outward_other(
                 st * ss,
                 ct,
             );
-            cur.rot = if l.placement_rotated {
-                mat_mul(&pl.rotation, &rq)
+            cur.rot = if cur.place_rotated {
+                mat_mul(&cur.place_rot, &rq)
             } else {
                 rq
             };

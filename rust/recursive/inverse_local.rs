@@ -8,8 +8,8 @@
 //! round the geometry identically, `inverse_dynamics_local(forward_dynamics_local(τ))`
 //! returns τ to the recursion's own rounding even on long chains.
 use super::forward_local::{
-    carry, cross, mul, outward_pass, six, to_parent, v3, with_placement, with_rot, General,
-    Identity, Placed, Plane,
+    carry, cross, outward_pass, six, to_parent, v3, with_placement, with_rot, General, Identity,
+    Placed, Plane,
 };
 use super::{base_accel, Data};
 use crate::model::Model;
@@ -56,11 +56,11 @@ pub fn inverse_dynamics_local(
             *y += s * *x;
         }
         cur.accel = six(&ya, &yl);
-        // M ṫ with M = [[I, h̃], [−h̃, m]] about the origin.
-        let bi = &l.inertia;
-        let h = &bi.first_moment;
-        let fa = mul(&bi.rotational, &ya) + cross(h, &yl);
-        let fl = yl * bi.mass + cross(&ya, h);
+        // M ṫ with M = [[I, h̃], [−h̃, m]] about the origin (in the recursion's link frame).
+        let own = &data.local_body[i];
+        let h = &own.first_moment();
+        let fa = own.p.mul(&ya) + cross(h, &yl);
+        let fl = yl * own.r.0[0] + cross(&ya, h);
         cur.bias += six(&fa, &fl);
     }
 

@@ -54,6 +54,7 @@ pub struct Data {
 impl Data {
     pub fn new(model: &Model) -> Self {
         let n = model.links.len();
+        let (local, local_body) = forward_local::local_links_of(model);
         Data {
             links: vec![LinkState::default(); n],
             accel: vec![Vec6::zeros(); n],
@@ -64,12 +65,8 @@ impl Data {
             d_inv: vec![Mat3::zeros(); n],
             u_tau: vec![Vec3::zeros(); n],
             composite: vec![BodyInertia::zero(); n],
-            local: forward_local::local_links_of(model),
-            local_body: model
-                .links
-                .iter()
-                .map(forward_local::body_inertia_of)
-                .collect(),
+            local,
+            local_body,
         }
     }
 

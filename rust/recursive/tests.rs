@@ -358,6 +358,21 @@ fn pair_placements() -> Vec<(&'static str, Mat3)> {
             "turned about z",
             Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0),
         ),
+        // Signed permutations, absorbed into the link frames (`local_links_of`): a quarter
+        // turn about x (URDF rpy = (π/2, 0, 0) after snapping), a half turn about y, and
+        // rpy = (π/2, 0, π/2).
+        (
+            "quarter turn about x",
+            Mat3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0),
+        ),
+        (
+            "half turn about y",
+            Mat3::new(-1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -1.0),
+        ),
+        (
+            "signed permutation",
+            Mat3::new(0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0),
+        ),
     ]
 }
 
@@ -415,7 +430,7 @@ fn placement_kinds_are_recognised() {
     // The fast paths the joint-pair tests mean to cover: the codes of a revolute joint about z
     // below each placement of `pair_placements` (0 none, 4 general, 1-3 a turn about x-z).
     let body = RigidBody::new(1.0, Vec3::zeros(), Mat3::identity() * 0.1).unwrap();
-    let codes: Vec<(u8, u8, u8)> = pair_placements()
+    let codes: Vec<(u8, u8, u8, f64)> = pair_placements()
         .into_iter()
         .map(|(_, rot)| {
             let mut model = Model::new();
@@ -424,12 +439,22 @@ fn placement_kinds_are_recognised() {
             model
                 .add_body(body, joint, None, place, None, None)
                 .unwrap();
-            let l = forward_local::local_link_of(&model.links[0]);
-            (l.plane, l.placement, l.kind)
+            let l = forward_local::local_link_of(&model.links[0], &Mat3::identity()).0;
+            (l.plane, l.placement, l.kind, l.sign)
         })
         .collect();
-    // Dispatch code 5 K + placement, K = 2 for z.
-    let want = vec![(3, 0, 10), (3, 4, 14), (3, 1, 11), (3, 2, 12), (3, 3, 13)];
+    // Dispatch code 5 K + placement, K = 2 for z. The signed permutations are absorbed: the
+    // joint turns about Q e_z with no placement (−e_y, −e_z, +e_x).
+    let want = vec![
+        (3, 0, 10, 1.0),
+        (3, 4, 14, 1.0),
+        (3, 1, 11, 1.0),
+        (3, 2, 12, 1.0),
+        (3, 3, 13, 1.0),
+        (2, 0, 5, -1.0),
+        (3, 0, 10, -1.0),
+        (1, 0, 0, 1.0),
+    ];
     assert_eq!(codes, want);
 }
 
