@@ -4,6 +4,7 @@
 //! and errors and nothing else.
 pub mod benchmark_models;
 pub mod body;
+pub mod cpu;
 pub mod denoc;
 pub mod effects;
 pub mod error;

@@ -95,6 +95,8 @@ pub struct Stepper<S: OdeSystem> {
     k: Vec<f64>,
     y_stage: Vec<f64>,
     y_new: Vec<f64>,
+    /// Per-entry scaled errors of the step (workspace of `error_norm`).
+    scaled_error: Vec<f64>,
     rtol: Vec<f64>,
     atol: Vec<f64>,
     rtol_clamped: bool,
@@ -219,6 +221,107 @@ fn check_state(y: &[f64], t_reached: f64, at: f64) -> Result<(), Status> {
     }
 }
 
+/// The first `S` entries of a tableau row.
+#[inline(always)]
+fn first<const S: usize>(row: &[f64; 5]) -> [f64; S] {
+    std::array::from_fn(|j| row[j])
+}
+
+/// `out[i] = y[i] + (k_0[i] c_0 + k_1[i] c_1 + …) h` with `k_j = k[j n..(j + 1) n]`: per
+/// entry, the products summed left to right with every coefficient (zeros too), which is
+/// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the CPU
+/// has it (`crate::cpu`; same arithmetic, packed lanes).
+#[inline]
+fn combine<const S: usize>(out: &mut [f64], y: &[f64], k: &[f64], coef: &[f64; S], h: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::cpu::has_avx2() {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { combine_avx2(out, y, k, coef, h) };
+    }
+    combine_body(out, y, k, coef, h)
+}
+
+/// [`combine`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn combine_avx2<const S: usize>(
+    out: &mut [f64],
+    y: &[f64],
+    k: &[f64],
+    coef: &[f64; S],
+    h: f64,
+) {
+    combine_body(out, y, k, coef, h)
+}
+
+#[inline(always)]
+fn combine_body<const S: usize>(out: &mut [f64], y: &[f64], k: &[f64], coef: &[f64; S], h: f64) {
+    let n = out.len();
+    let y = &y[..n];
+    let ks: [&[f64]; S] = std::array::from_fn(|j| &k[j * n..(j + 1) * n]);
+    for i in 0..n {
+        let mut acc = ks[0][i] * coef[0];
+        for j in 1..S {
+            acc += ks[j][i] * coef[j];
+        }
+        out[i] = y[i] + acc * h;
+    }
+}
+
+/// `r[i] = (K[i]ᵀ E) h / (atol[i] + max(|y[i]|, |y_new[i]|) rtol[i])`, element-wise (its
+/// AVX2 copy where the CPU has it); the caller sums the squares in order.
+#[inline]
+fn scaled_errors(r: &mut [f64], k: &[f64], ys: (&[f64], &[f64]), tols: (&[f64], &[f64]), h: f64) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::cpu::has_avx2() {
+        // SAFETY: the CPU supports AVX2, checked just above.
+        return unsafe { scaled_errors_avx2(r, k, ys, tols, h) };
+    }
+    scaled_errors_body(r, k, ys, tols, h)
+}
+
+/// [`scaled_errors`] compiled for AVX2.
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn scaled_errors_avx2(
+    r: &mut [f64],
+    k: &[f64],
+    ys: (&[f64], &[f64]),
+    tols: (&[f64], &[f64]),
+    h: f64,
+) {
+    scaled_errors_body(r, k, ys, tols, h)
+}
+
+#[inline(always)]
+fn scaled_errors_body(
+    r: &mut [f64],
+    k: &[f64],
+    (y, y_new): (&[f64], &[f64]),
+    (atol, rtol): (&[f64], &[f64]),
+    h: f64,
+) {
+    let n = r.len();
+    let ks: [&[f64]; N_STAGES + 1] = std::array::from_fn(|s| &k[s * n..(s + 1) * n]);
+    let (y, y_new, atol, rtol) = (&y[..n], &y_new[..n], &atol[..n], &rtol[..n]);
+    for i in 0..n {
+        let mut e = ks[0][i] * E[0];
+        for s in 1..N_STAGES + 1 {
+            e += ks[s][i] * E[s];
+        }
+        // Both finite here (checked): the plain comparison is `max` without NaN handling.
+        let (a, b) = (y[i].abs(), y_new[i].abs());
+        let scale = atol[i] + if a >= b { a } else { b } * rtol[i];
+        r[i] = e * h / scale;
+    }
+}
+
 impl<S: OdeSystem> Stepper<S> {
     /// Validate the inputs and allocate all workspaces (no rhs call yet).
     /// `opts.dense` and `opts.t_eval` are driver options and ignored here.
@@ -291,6 +394,7 @@ impl<S: OdeSystem> Stepper<S> {
             f: vec![0.0; dim],
             k: vec![0.0; (N_STAGES + 1) * dim],
             y_stage: vec![0.0; dim],
+            scaled_error: vec![0.0; dim],
             y_new: vec![0.0; dim],
             rtol,
             atol,
@@ -385,19 +489,14 @@ impl<S: OdeSystem> Stepper<S> {
         let n = self.dim;
         self.k[..n].copy_from_slice(&self.f);
         for s in 1..N_STAGES {
-            // dy = (K[:s]ᵀ a[:s]) h, summed stage by stage like np.dot.
-            let a = &A[s];
-            for (ys, &k0) in self.y_stage.iter_mut().zip(&self.k[..n]) {
-                *ys = k0 * a[0];
-            }
-            for (j, &aj) in a.iter().enumerate().take(s).skip(1) {
-                let kj = &self.k[j * n..(j + 1) * n];
-                for (ys, &kv) in self.y_stage.iter_mut().zip(kj) {
-                    *ys += kv * aj;
-                }
-            }
-            for (ys, &yv) in self.y_stage.iter_mut().zip(&self.y) {
-                *ys = yv + *ys * h;
+            // y_s = y + (K[:s]ᵀ a[:s]) h, summed stage by stage like np.dot.
+            let (ys, y, k) = (&mut self.y_stage[..], &self.y[..], &self.k[..s * n]);
+            match s {
+                1 => combine(ys, y, k, &first::<1>(&A[1]), h),
+                2 => combine(ys, y, k, &first::<2>(&A[2]), h),
+                3 => combine(ys, y, k, &first::<3>(&A[3]), h),
+                4 => combine(ys, y, k, &first::<4>(&A[4]), h),
+                _ => combine(ys, y, k, &first::<5>(&A[5]), h),
             }
             check_state(&self.y_stage, t, t + C[s] * h)?;
             let ks = &mut self.k[s * n..(s + 1) * n];
@@ -411,39 +510,25 @@ impl<S: OdeSystem> Stepper<S> {
             )?;
         }
         // y_new = y + h (K[:6]ᵀ B)
-        for (yn, &k0) in self.y_new.iter_mut().zip(&self.k[..n]) {
-            *yn = k0 * B[0];
-        }
-        for (j, &bj) in B.iter().enumerate().skip(1) {
-            let kj = &self.k[j * n..(j + 1) * n];
-            for (yn, &kv) in self.y_new.iter_mut().zip(kj) {
-                *yn += kv * bj;
-            }
-        }
-        for (yn, &yv) in self.y_new.iter_mut().zip(&self.y) {
-            *yn = yv + h * *yn;
-        }
+        combine(&mut self.y_new, &self.y, &self.k[..N_STAGES * n], &B, h);
         check_state(&self.y_new, t, t + h)?;
         let last = &mut self.k[N_STAGES * n..];
         call_rhs(&mut self.sys, &mut self.nfev, t, t + h, &self.y_new, last)
     }
 
     /// RMS of `(Kᵀ E) h / scale`, `scale = atol + max(|y|, |y_new|) rtol`.
-    fn error_norm(&self, h: f64) -> f64 {
+    fn error_norm(&mut self, h: f64) -> f64 {
         let n = self.dim;
-        let ks: [&[f64]; N_STAGES + 1] = std::array::from_fn(|s| &self.k[s * n..(s + 1) * n]);
-        let (y, y_new) = (&self.y[..n], &self.y_new[..n]);
-        let (atol, rtol) = (&self.atol[..n], &self.rtol[..n]);
+        scaled_errors(
+            &mut self.scaled_error,
+            &self.k,
+            (&self.y, &self.y_new),
+            (&self.atol, &self.rtol),
+            h,
+        );
+        // The sum in index order, as NumPy's norm takes it for these short vectors.
         let mut sq = 0.0;
-        for i in 0..n {
-            let mut e = ks[0][i] * E[0];
-            for (k, &es) in ks.iter().zip(&E).skip(1) {
-                e += k[i] * es;
-            }
-            // Both finite here (checked): the plain comparison is `max` without NaN handling.
-            let (a, b) = (y[i].abs(), y_new[i].abs());
-            let scale = atol[i] + if a >= b { a } else { b } * rtol[i];
-            let r = e * h / scale;
+        for r in &self.scaled_error[..n] {
             sq += r * r;
         }
         sq.sqrt() / (n as f64).sqrt()

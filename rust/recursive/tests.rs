@@ -746,3 +746,39 @@ fn local_pair_thousand_body_chain_inverse_of_forward() {
     let (loc, world) = both_inverse(&model, &q, &v, &a, &G, None);
     assert!(rel(&loc, &world) <= 1e-6, "relative {}", rel(&loc, &world));
 }
+
+#[test]
+fn avx2_copy_is_bit_identical() {
+    // The dispatching entry points run the AVX2 copy on CPUs that have it (as CI's do); it
+    // must round exactly as the baseline build does (no FMA contraction in Rust).
+    #[cfg(target_arch = "x86_64")]
+    if !crate::cpu::has_avx2() {
+        eprintln!("no AVX2 on this CPU: both sides run the baseline build");
+    }
+    let models: Vec<Model> = (0..12u64)
+        .flat_map(|seed| [random_tree(seed, 30), random_axis_tree(seed, 30)])
+        .chain([crate::benchmark_models::chain(7)])
+        .collect();
+    for (k, model) in models.iter().enumerate() {
+        let (q, v, a) = random_state(model, k as u64);
+        let tau: Vec<f64> = a.iter().map(|x| 2.0 * x + 0.1).collect();
+        let ext = random_wrenches(model, k as u64);
+        for e in [None, Some(ext.as_slice())] {
+            let mut data = Data::new(model);
+            let (mut fast, mut base) = (vec![0.0; model.nv], vec![0.0; model.nv]);
+            forward_local::forward_dynamics_local(model, &mut data, &q, &v, &tau, &G, e, &mut fast)
+                .unwrap();
+            forward_local::forward_dynamics_baseline(
+                model, &mut data, &q, &v, &tau, &G, e, &mut base,
+            )
+            .unwrap();
+            let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&fast), bits(&base), "FD model {k}");
+            inverse_local::inverse_dynamics_local(model, &mut data, &q, &v, &a, &G, e, &mut fast);
+            inverse_local::inverse_dynamics_baseline(
+                model, &mut data, &q, &v, &a, &G, e, &mut base,
+            );
+            assert_eq!(bits(&fast), bits(&base), "ID model {k}");
+        }
+    }
+}
