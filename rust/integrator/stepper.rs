@@ -848,6 +848,38 @@ mod tests {
     }
 
     #[test]
+    fn combinations_round_alike_on_every_cpu_path() {
+        // The dispatching helpers (AVX2 copy where the CPU has it) against the plain bodies,
+        // bit for bit, on awkward magnitudes and odd lengths.
+        for n in [1usize, 3, 4, 14, 33] {
+            let val = |i: usize| ((i as f64 * 0.61).sin() * 10f64.powi((i % 7) as i32 - 3)) + 0.1;
+            let k: Vec<f64> = (0..(N_STAGES + 1) * n).map(val).collect();
+            let y: Vec<f64> = (0..n).map(|i| val(i + 500)).collect();
+            let y_new: Vec<f64> = (0..n).map(|i| val(i + 900)).collect();
+            let (atol, rtol) = (vec![1e-9; n], vec![1e-6; n]);
+            let bits = |x: &[f64]| x.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            let (mut a, mut b) = (vec![0.0; n], vec![0.0; n]);
+            combine(&mut a, &y, &k, &first::<3>(&A[3]), 0.37);
+            combine_body(&mut b, &y, &k, &first::<3>(&A[3]), 0.37);
+            assert_eq!(bits(&a), bits(&b));
+            combine(&mut a, &y, &k, &B, -0.37);
+            combine_body(&mut b, &y, &k, &B, -0.37);
+            assert_eq!(bits(&a), bits(&b));
+            scaled_errors(&mut a, &k, (&y, &y_new), (&atol, &rtol), 0.37);
+            scaled_errors_body(&mut b, &k, (&y, &y_new), (&atol, &rtol), 0.37);
+            assert_eq!(bits(&a), bits(&b));
+            // And the stage sum is np.dot's: left to right over the stages.
+            let i = n - 1;
+            let mut acc = k[i] * B[0];
+            for (j, bj) in B.iter().enumerate().skip(1) {
+                acc += k[j * n + i] * bj;
+            }
+            combine(&mut a, &y, &k, &B, 0.37);
+            assert_eq!(a[i].to_bits(), (y[i] + acc * 0.37).to_bits());
+        }
+    }
+
+    #[test]
     fn first_steps_match_scipy() {
         // Reference: scipy 1.17 `RK45(lambda t, y: -y, 0, [1.0], 10)`; h_abs after init,
         // then t after each of the first three steps, and nfev.
