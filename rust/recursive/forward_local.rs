@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::joint::{axis_angle, quat_to_matrix, Joint};
 use crate::model::{Link, Model};
 use crate::spatial::{Mat3, Vec3, Vec6};
-use crate::trig::sin_cos;
+use crate::trig::{sin_cos, sin_cos4};
 
 /// Per-link workspace of the body-frame recursion (all in the link's frame, about its origin).
 #[derive(Debug, Clone, Copy)]
@@ -928,7 +928,8 @@ fn forward_dynamics_body(
 
     // Outward: joint transforms, twists, ξ, body inertias and velocity-product wrenches; it
     // also finds the first ZYZ joint at its Euler singularity (`check_singularities`).
-    if let Some(i) = outward_pass::<true>(model, loc, &data.local_body[..n], q, v, external) {
+    let (body, angles) = (&data.local_body[..n], &data.axis_angles[..]);
+    if let Some(i) = outward_pass::<true>(model, loc, body, angles, q, v, external) {
         return Err(Error::Singular(singular_message(model, i, q)));
     }
 
@@ -1037,11 +1038,24 @@ pub(super) fn outward_pass<const ABI: bool>(
     model: &Model,
     loc: &mut [LocalLink],
     body: &[LocalInertia],
+    angles: &[(usize, usize)],
     q: &[f64],
     v: &[f64],
     external: Option<&[Vec6]>,
 ) -> Option<usize> {
     let n = model.links.len();
+    // The plane rotations' (cos, sin), four joints at a time (the last group padded).
+    for group in angles.chunks(4) {
+        let x: [f64; 4] = std::array::from_fn(|j| group.get(j).map_or(0.0, |g| q[g.1]));
+        let (s, c) = sin_cos4(x).unwrap_or_else(|| {
+            let one = x.map(sin_cos);
+            (one.map(|p| p.0), one.map(|p| p.1))
+        });
+        for (j, &(i, _)) in group.iter().enumerate() {
+            // About ±e_K (`sign`): sin turns sign with the angle, cos does not.
+            loc[i].cs = (c[j], s[j] * loc[i].sign);
+        }
+    }
     let mut singular = None;
     for i in 0..n {
         let l = &model.links[i];
@@ -1056,10 +1070,7 @@ pub(super) fn outward_pass<const ABI: bool>(
         macro_rules! axis {
             ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
                 let pl = $pl;
-                // About ±e_K (`sign`): sin turns sign with the angle, cos does not.
-                let (s, c) = sin_cos(qi[0]);
-                let s = s * cur.sign;
-                cur.cs = (c, s);
+                let (c, s) = cur.cs;
                 let mut w_j = Vec3::zeros();
                 w_j[$k] = vi[0] * cur.sign;
                 let e = Placed(pl, Plane::<$i, $j>::new((c, s)));

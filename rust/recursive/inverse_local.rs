@@ -89,7 +89,8 @@ fn inverse_dynamics_body(
     let n = model.links.len();
     let loc = &mut data.local[..n];
     // ZYZ singularities are not refused here (no articulated inertia to invert).
-    outward_pass::<false>(model, loc, &data.local_body[..n], q, v, external);
+    let (body, angles) = (&data.local_body[..n], &data.axis_angles[..]);
+    outward_pass::<false>(model, loc, body, angles, q, v, external);
 
     // Outward: twist rates and each link's own wrench (added into `bias`).
     let base = base_accel(g);

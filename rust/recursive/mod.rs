@@ -49,6 +49,9 @@ pub struct Data {
     /// Each link's own inertia in the form that starts its articulated inertia (model
     /// constant, set here once).
     pub local_body: Vec<forward_local::LocalInertia>,
+    /// `(link, q index)` of the revolute joints about a coordinate axis, whose sines and
+    /// cosines the outward pass takes four at a time (model constant).
+    pub axis_angles: Vec<(usize, usize)>,
 }
 
 impl Data {
@@ -65,6 +68,13 @@ impl Data {
             d_inv: vec![Mat3::zeros(); n],
             u_tau: vec![Vec3::zeros(); n],
             composite: vec![BodyInertia::zero(); n],
+            axis_angles: local
+                .iter()
+                .zip(&model.links)
+                .enumerate()
+                .filter(|(_, (l, _))| l.kind != forward_local::OTHER_KIND)
+                .map(|(i, (_, link))| (i, link.q_index))
+                .collect(),
             local,
             local_body,
         }
