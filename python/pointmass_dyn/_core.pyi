@@ -119,7 +119,10 @@ class Model:
         point_mass_center: ArrayLike | None = None,
     ) -> int:
         """Adds ``body`` on ``joint`` below ``parent`` (-1: the world), the joint frame placed
-        at ``translation``/``rotation`` in the parent's body frame; returns its index."""
+        at ``translation``/``rotation`` in the parent's body frame; returns its index.
+
+        ``rotation`` must be a rotation to 1e-9; it is re-orthonormalised, and one within 4ε of
+        a quarter or half turn about coordinate axes is taken as exactly that turn."""
     @property
     def nq(self) -> int:
         """Length of ``q``."""
