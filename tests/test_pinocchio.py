@@ -7,13 +7,18 @@ external wrenches."""
 from __future__ import annotations
 
 import numpy as np
+import pointmass_dyn as pmd
 import pytest
 from conftest import (
     KINDS,
+    BodySpec,
     G,
+    TreeSpec,
     build_model,
     build_pinocchio,
     paper_pendulum_tree,
+    random_body,
+    random_rotation,
     random_state,
     random_tree,
     record,
@@ -387,3 +392,86 @@ def test_velocity_to_qdot_matches_pinocchio_integrate(seed):
     h = 1e-6
     fd = (pin.integrate(pm, q, h * v) - pin.integrate(pm, q, -h * v)) / (2 * h)
     assert rel_err(model.velocity_to_qdot(q, v), fd) <= 1e-8
+
+
+def _turn(axis: int, quarters: int) -> np.ndarray:
+    """A quarter/half turn about a coordinate axis computed in floating point, as from a
+    decimal rpy: cos(π/2) = 6e-17, not 0."""
+    a = quarters * (np.pi / 2)
+    c, s = np.cos(a), np.sin(a)
+    i, j = (axis + 1) % 3, (axis + 2) % 3
+    r = np.eye(3)
+    r[i, i], r[i, j], r[j, i], r[j, j] = c, -s, s, c
+    return r
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_quarter_turn_placements_match_pinocchio(seed):
+    """Revolute joints on ±x, ±y, ±z below quarter and half turns (and products of them),
+    offsets zero, along one axis or anywhere, some spherical and prismatic joints: the
+    recursions absorb the turns into their link frames (the joint then turns about ±e_K with
+    no placement). Pinocchio gets the placements as computed (with their 6e-17 entries)."""
+    rng = np.random.default_rng(100 + seed)
+    tree = TreeSpec()
+    for k in range(12):
+        kind = "Spherical" if k % 5 == 4 else ("Prismatic" if k % 7 == 6 else "Revolute")
+        axis = None
+        if kind == "Revolute":
+            axis = np.zeros(3)
+            axis[rng.integers(3)] = rng.choice([-1.0, 1.0])
+        elif kind == "Prismatic":
+            axis = rng.normal(size=3)
+            axis /= np.linalg.norm(axis)
+        choice = rng.integers(4)
+        if choice == 0:
+            rot = np.eye(3)
+        elif choice == 1:
+            rot = _turn(int(rng.integers(3)), int(rng.integers(1, 4)))
+        elif choice == 2:
+            rot = _turn(int(rng.integers(3)), 1) @ _turn(int(rng.integers(3)), -1)
+        else:
+            rot = random_rotation(rng)
+        t = np.zeros(3)
+        form = rng.integers(3)
+        if form == 1:
+            t[rng.integers(3)] = rng.uniform(-0.4, 0.4)
+        elif form == 2:
+            t = rng.uniform(-0.4, 0.4, size=3)
+        # Depth-first order (Pinocchio's CRBA needs it): the last body or one of its ancestors.
+        parent = k - 1
+        if k > 0 and rng.random() < 0.3:
+            path = [k - 1]
+            while tree.bodies[path[-1]].parent >= 0:
+                path.append(tree.bodies[path[-1]].parent)
+            parent = int(path[rng.integers(len(path))])
+        tree.bodies.append(
+            BodySpec(
+                body=random_body(rng), kind=kind, parent=parent, rotation=rot, translation=t,
+                axis=axis,
+            )
+        )
+    model = build_model(tree)
+    pm, pd = build_pinocchio(tree, G)
+    for _ in range(3):
+        q, v = random_state(model, rng)
+        errs = compare_all(
+            model, pm, pd, q, v, rng.normal(size=model.nv), rng.normal(size=model.nv),
+            f"quarter turns {seed}",
+        )
+        bad = {k: e for k, e in errs.items() if not e <= TOL}
+        assert not bad, bad
+
+
+def test_quarter_turns_are_exact_in_the_model():
+    model = pmd.Model()
+    body = pmd.RigidBody(1.0, [0.1, 0.0, 0.0], np.diag([0.01, 0.02, 0.02]))
+    b0 = model.add_body(body, pmd.Revolute([0, 0, 1]), rotation=_turn(0, 1))
+    model.add_body(body, pmd.Revolute([0, 0, 1]), parent=b0, rotation=_turn(1, -1),
+                   translation=[0.3, 0, 0])
+    model.add_body(body, pmd.Revolute([0, 0, 1]), parent=b0, rotation=_turn(2, 1) + 1e-12,
+                   translation=[0.3, 0, 0])
+    rot, _ = model.placements(model.neutral())
+    assert set(np.unique(rot[0])) <= {-1.0, 0.0, 1.0}
+    assert set(np.unique(rot[1])) <= {-1.0, 0.0, 1.0}
+    # 1e-12 away from a quarter turn is a (re-orthonormalised) rotation of its own.
+    assert not set(np.unique(rot[2])) <= {-1.0, 0.0, 1.0}
