@@ -28,8 +28,8 @@ use crate::trig::{sin_cos, sin_cos4};
 #[derive(Debug, Clone, Copy)]
 pub struct LocalLink {
     /// Link axes in parent axes (`x_parent = rot x + offset`); for a revolute joint about a
-    /// coordinate axis (`plane` ≠ 0) the constant placement rotation `P` instead (used when
-    /// `placement` = 4), the joint's own turn being `cs`.
+    /// coordinate axis (`kind` < 15) the constant placement rotation `P` instead (used when
+    /// its placement kind is 4, general), the joint's own turn being `cs`.
     pub rot: Mat3,
     /// Link origin in parent coordinates.
     pub offset: Vec3,
@@ -46,16 +46,14 @@ pub struct LocalLink {
     pub d_inv: Mat3,
     pub u_tau: Vec3,
     pub accel: Vec6,
-    /// 0: general rotation; 1, 2, 3: a revolute joint about x, y, z, turning by `cs`.
-    pub plane: u8,
+    /// A revolute joint about a coordinate axis: (cos, sin) of its turn.
     pub cs: (f64, f64),
-    /// With `plane` ≠ 0, the placement rotation `P` of the joint frame: 0 none, 1, 2, 3 a
-    /// plane rotation about x, y, z by `pcs`, 4 general (in `rot`). Model constants.
-    pub placement: u8,
-    pub pcs: (f64, f64),
-    /// Dispatch code of the hot loops: `5 K + placement` (0..15) for a revolute joint about
-    /// coordinate axis `K`, [`OTHER_KIND`] for every other joint. Model constant.
+    /// Dispatch code: `5 K + P` (0..15) for a revolute joint about coordinate axis `K`
+    /// (x, y, z: 0, 1, 2) whose joint frame is placed by `P`: 0 no rotation, 1, 2, 3 a plane
+    /// rotation about x, y, z by `pcs`, 4 a general one (in `rot`); [`OTHER_KIND`] for every
+    /// other joint. Model constants.
     pub kind: u8,
+    pub pcs: (f64, f64),
     /// How the offset lies: 0 zero, 1, 2, 3 along x, y, z only, 4 anywhere (always 4 for a
     /// prismatic joint, whose offset moves). Model constant; it picks the shift's form.
     pub offset_axis: u8,
@@ -93,9 +91,7 @@ impl Default for LocalLink {
             d_inv: Mat3::zeros(),
             u_tau: Vec3::zeros(),
             accel: Vec6::zeros(),
-            plane: 0,
             cs: (1.0, 0.0),
-            placement: 0,
             pcs: (1.0, 0.0),
             kind: OTHER_KIND,
             offset_axis: 4,
@@ -123,7 +119,7 @@ fn coordinate_axis(a: &Vec3) -> Option<(usize, f64)> {
     })
 }
 
-/// The placement kind of a constant rotation `p` (`LocalLink::placement`) and, for a plane
+/// The placement kind of a constant rotation `p` (`P` of `LocalLink::kind`) and, for a plane
 /// rotation, its (cos, sin).
 fn placement_kind(p: &Mat3) -> (u8, (f64, f64)) {
     if *p == Mat3::identity() {
@@ -182,10 +178,8 @@ pub(super) fn local_link_of(l: &Link, frame_p: &Mat3) -> (LocalLink, Mat3) {
         let turned = frame * axis;
         if let Some((k, sign)) = coordinate_axis(&turned) {
             let (kind, pcs) = placement_kind(&placement);
-            out.plane = k as u8 + 1;
             out.sign = sign;
             out.s[0] = turned;
-            out.placement = kind;
             out.pcs = pcs;
             out.rot = placement;
             out.kind = 5 * k as u8 + kind;
@@ -759,96 +753,59 @@ fn shift_general<const ZR: usize>(
 }
 
 /// A `match` on `$cur.kind`: for a revolute joint about coordinate axis K below placement
-/// kind P (kind `5 K + P`), `$cb!(placement, K, I, J)` with the placement rotation and the
-/// plane (I, J) that the joint turns; `$other` for every other joint. One jump per link and
-/// pass, each arm monomorphised.
+/// kind P (kind `5 K + P`), `$cb!(placement, K, I, J, extra…)` with the placement rotation
+/// and the plane (I, J) that the joint turns; `$other` for every other joint. One jump per
+/// link and pass, each arm monomorphised.
 macro_rules! match_axis_kind {
-    ($cur:expr, $cb:ident, $other:expr) => {
+    ($cur:expr, $cb:ident, $other:expr $(, $extra:tt)*) => {
         match $cur.kind {
-            0 => $cb!(Identity, 0, 1, 2),
-            1 => $cb!(Plane::<1, 2>::new($cur.pcs), 0, 1, 2),
-            2 => $cb!(Plane::<2, 0>::new($cur.pcs), 0, 1, 2),
-            3 => $cb!(Plane::<0, 1>::new($cur.pcs), 0, 1, 2),
-            4 => $cb!(General($cur.rot), 0, 1, 2),
-            5 => $cb!(Identity, 1, 2, 0),
-            6 => $cb!(Plane::<1, 2>::new($cur.pcs), 1, 2, 0),
-            7 => $cb!(Plane::<2, 0>::new($cur.pcs), 1, 2, 0),
-            8 => $cb!(Plane::<0, 1>::new($cur.pcs), 1, 2, 0),
-            9 => $cb!(General($cur.rot), 1, 2, 0),
-            10 => $cb!(Identity, 2, 0, 1),
-            11 => $cb!(Plane::<1, 2>::new($cur.pcs), 2, 0, 1),
-            12 => $cb!(Plane::<2, 0>::new($cur.pcs), 2, 0, 1),
-            13 => $cb!(Plane::<0, 1>::new($cur.pcs), 2, 0, 1),
-            14 => $cb!(General($cur.rot), 2, 0, 1),
+            0 => $cb!(Identity, 0, 1, 2 $(, $extra)*),
+            1 => $cb!(Plane::<1, 2>::new($cur.pcs), 0, 1, 2 $(, $extra)*),
+            2 => $cb!(Plane::<2, 0>::new($cur.pcs), 0, 1, 2 $(, $extra)*),
+            3 => $cb!(Plane::<0, 1>::new($cur.pcs), 0, 1, 2 $(, $extra)*),
+            4 => $cb!(General($cur.rot), 0, 1, 2 $(, $extra)*),
+            5 => $cb!(Identity, 1, 2, 0 $(, $extra)*),
+            6 => $cb!(Plane::<1, 2>::new($cur.pcs), 1, 2, 0 $(, $extra)*),
+            7 => $cb!(Plane::<2, 0>::new($cur.pcs), 1, 2, 0 $(, $extra)*),
+            8 => $cb!(Plane::<0, 1>::new($cur.pcs), 1, 2, 0 $(, $extra)*),
+            9 => $cb!(General($cur.rot), 1, 2, 0 $(, $extra)*),
+            10 => $cb!(Identity, 2, 0, 1 $(, $extra)*),
+            11 => $cb!(Plane::<1, 2>::new($cur.pcs), 2, 0, 1 $(, $extra)*),
+            12 => $cb!(Plane::<2, 0>::new($cur.pcs), 2, 0, 1 $(, $extra)*),
+            13 => $cb!(Plane::<0, 1>::new($cur.pcs), 2, 0, 1 $(, $extra)*),
+            14 => $cb!(General($cur.rot), 2, 0, 1 $(, $extra)*),
             _ => $other,
         }
     };
 }
 
-/// Runs `$body` with `$pl` bound to the placement rotation of a revolute joint on a
-/// coordinate axis (`LocalLink::placement`), monomorphised per kind.
-macro_rules! with_placement {
-    ($cur:expr, $pl:ident => $body:expr) => {
-        match $cur.placement {
-            0 => {
-                let $pl = Identity;
-                $body
-            }
-            1 => {
-                let $pl = Plane::<1, 2>::new($cur.pcs);
-                $body
-            }
-            2 => {
-                let $pl = Plane::<2, 0>::new($cur.pcs);
-                $body
-            }
-            3 => {
-                let $pl = Plane::<0, 1>::new($cur.pcs);
-                $body
-            }
-            _ => {
-                let $pl = General($cur.rot);
-                $body
-            }
-        }
-    };
+/// `with_rot!`'s arm: `$e` bound to `E = P R_K(q)`.
+macro_rules! with_rot_arm {
+    ($pl:expr, $k:tt, $i:tt, $j:tt, $cur:expr, $e:ident, $body:expr) => {{
+        let $e = Placed($pl, Plane::<$i, $j>::new($cur.cs));
+        $body
+    }};
 }
-pub(super) use with_placement;
+pub(super) use with_rot_arm;
 
-/// Runs `$body` with `$e` bound to the link's rotation, monomorphised per plane axis and
-/// placement kind.
+/// Runs `$body` with `$e` bound to the link's rotation `E` (child axes in parent axes),
+/// monomorphised per dispatch code (`LocalLink::kind`).
 macro_rules! with_rot {
     ($cur:expr, $e:ident => $body:expr) => {
-        match $cur.plane {
-            1 => {
-                let j = Plane::<1, 2>::new($cur.cs);
-                with_placement!($cur, pl => {
-                    let $e = Placed(pl, j);
-                    $body
-                })
-            }
-            2 => {
-                let j = Plane::<2, 0>::new($cur.cs);
-                with_placement!($cur, pl => {
-                    let $e = Placed(pl, j);
-                    $body
-                })
-            }
-            3 => {
-                let j = Plane::<0, 1>::new($cur.cs);
-                with_placement!($cur, pl => {
-                    let $e = Placed(pl, j);
-                    $body
-                })
-            }
-            _ => {
+        match_axis_kind!(
+            $cur,
+            with_rot_arm,
+            {
                 let $e = General($cur.rot);
                 $body
-            }
-        }
+            },
+            $cur,
+            $e,
+            $body
+        )
     };
 }
-pub(super) use with_rot;
+pub(super) use {match_axis_kind, with_rot};
 
 /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, by the articulated-body
 /// recursion in body frames. Same contract as `forward_dynamics_world`: `external` holds one

@@ -8,8 +8,8 @@
 //! round the geometry identically, `inverse_dynamics_local(forward_dynamics_local(τ))`
 //! returns τ to the recursion's own rounding even on long chains.
 use super::forward_local::{
-    carry, cross, outward_pass, six, to_parent, v3, with_placement, with_rot, General, Identity,
-    Placed, Plane,
+    carry, cross, match_axis_kind, outward_pass, six, to_parent, v3, with_rot, with_rot_arm,
+    General, Identity, Placed, Plane,
 };
 use super::{base_accel, Data};
 use crate::model::Model;
