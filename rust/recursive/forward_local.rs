@@ -356,7 +356,7 @@ pub(super) fn mul(m: &Mat3, x: &Vec3) -> Vec3 {
 }
 
 #[inline(always)]
-fn tr_mul(m: &Mat3, x: &Vec3) -> Vec3 {
+pub(super) fn tr_mul(m: &Mat3, x: &Vec3) -> Vec3 {
     Vec3::new(
         m[(0, 0)] * x.x + m[(1, 0)] * x.y + m[(2, 0)] * x.z,
         m[(0, 1)] * x.x + m[(1, 1)] * x.y + m[(2, 1)] * x.z,
@@ -599,7 +599,7 @@ impl<P: Rot, J: Rot> Rot for Placed<P, J> {
 /// need no shift, and an offset along one coordinate axis makes `K` two entries (a third of
 /// the products).
 #[inline(always)]
-fn shift_add<const ZR: usize>(
+pub(super) fn shift_add<const ZR: usize>(
     p: &Sym3,
     q: &Mat3,
     rr: &Sym3,
@@ -1001,18 +1001,7 @@ pub(super) fn outward_pass<const ABI: bool>(
     external: Option<&[Vec6]>,
 ) -> Option<usize> {
     let n = model.links.len();
-    // The plane rotations' (cos, sin), four joints at a time (the last group padded).
-    for group in angles.chunks(4) {
-        let x: [f64; 4] = std::array::from_fn(|j| group.get(j).map_or(0.0, |g| q[g.1]));
-        let (s, c) = sin_cos4(x).unwrap_or_else(|| {
-            let one = x.map(sin_cos);
-            (one.map(|p| p.0), one.map(|p| p.1))
-        });
-        for (j, &(i, _)) in group.iter().enumerate() {
-            // About ±e_K (`sign`): sin turns sign with the angle, cos does not.
-            loc[i].cs = (c[j], s[j] * loc[i].sign);
-        }
-    }
+    plane_turns(loc, angles, q);
     let mut singular = None;
     for i in 0..n {
         let l = &model.links[i];
@@ -1054,10 +1043,27 @@ pub(super) fn outward_pass<const ABI: bool>(
     singular
 }
 
+/// The (cos, sin) of every revolute joint about a coordinate axis (`Data::axis_angles`), four
+/// joints at a time (the last group padded).
+#[inline(always)]
+pub(super) fn plane_turns(loc: &mut [LocalLink], angles: &[(usize, usize)], q: &[f64]) {
+    for group in angles.chunks(4) {
+        let x: [f64; 4] = std::array::from_fn(|j| group.get(j).map_or(0.0, |g| q[g.1]));
+        let (s, c) = sin_cos4(x).unwrap_or_else(|| {
+            let one = x.map(sin_cos);
+            (one.map(|p| p.0), one.map(|p| p.1))
+        });
+        for (j, &(i, _)) in group.iter().enumerate() {
+            // About ±e_K (`sign`): sin turns sign with the angle, cos does not.
+            loc[i].cs = (c[j], s[j] * loc[i].sign);
+        }
+    }
+}
+
 /// The outward step of every joint but a revolute one about a coordinate axis; true when a
 /// ZYZ joint sits at its Euler singularity.
 #[inline(never)]
-fn outward_other(
+pub(super) fn outward_other(
     l: &Link,
     cur: &mut LocalLink,
     parent: Option<&LocalLink>,

@@ -1,4 +1,5 @@
-//! Generalized inertia matrix by composite bodies (O(n·depth)): each link's subtree welded
+//! Generalized inertia matrix by composite bodies in world axes (O(n·depth)), kept as a
+//! cross-check of the link-frame default (`mass_matrix_local`): each link's subtree welded
 //! into one rigid body about its origin, then `I_ij = P_iᵀ (A_jiᵀ M^c_j P_j)`.
 use nalgebra::DMatrix;
 
@@ -8,7 +9,7 @@ use crate::model::Model;
 use crate::spatial::shift_wrench;
 
 /// Fills `gim` (nv × nv, symmetric).
-pub fn mass_matrix(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix<f64>) {
+pub fn mass_matrix_world(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix<f64>) {
     kinematics::positions(model, q, &mut data.links);
     for (i, s) in data.links.iter().enumerate() {
         data.composite[i] = s.inertia;

@@ -11,6 +11,7 @@ pub mod forward_local;
 pub mod inverse;
 pub mod inverse_local;
 pub mod mass_matrix;
+pub mod mass_matrix_local;
 #[cfg(test)]
 mod tests;
 
@@ -23,7 +24,8 @@ pub use forward::forward_dynamics_world;
 pub use forward_local::{forward_dynamics_local, LocalLink};
 pub use inverse::inverse_dynamics_world;
 pub use inverse_local::inverse_dynamics_local;
-pub use mass_matrix::mass_matrix;
+pub use mass_matrix::mass_matrix_world;
+pub use mass_matrix_local::mass_matrix_local;
 
 /// Workspace for one model (like Pinocchio's `Data`): built by `Data::new(model)` and valid
 /// for that model only (it caches per-link constants such as the joints' plane codes).
@@ -52,6 +54,8 @@ pub struct Data {
     /// `(link, q index)` of the revolute joints about a coordinate axis, whose sines and
     /// cosines the outward pass takes four at a time (model constant).
     pub axis_angles: Vec<(usize, usize)>,
+    /// `nv` zeros (the speeds of a position-only outward pass).
+    pub zero_v: Vec<f64>,
 }
 
 impl Data {
@@ -75,6 +79,7 @@ impl Data {
                 .filter(|(_, (l, _))| l.kind != forward_local::OTHER_KIND)
                 .map(|(i, (_, link))| (i, link.q_index))
                 .collect(),
+            zero_v: vec![0.0; model.nv],
             local,
             local_body,
         }
@@ -102,6 +107,13 @@ pub fn forward_dynamics(
     a: &mut [f64],
 ) -> crate::error::Result<()> {
     forward_dynamics_local(model, data, q, v, tau, g, external, a)
+}
+
+/// The generalized inertia matrix (nv × nv) at `q`, by composite bodies in link frames
+/// ([`mass_matrix_local`]; [`mass_matrix_world`] is the world-frame cross-check).
+#[inline]
+pub fn mass_matrix(model: &Model, data: &mut Data, q: &[f64], gim: &mut nalgebra::DMatrix<f64>) {
+    mass_matrix_local(model, data, q, gim)
 }
 
 /// `τ = I a + C v − τ_g − Nᵀ f_ext`: the body-frame Newton–Euler recursion

@@ -547,6 +547,23 @@ fn local_forward_on_axis_trees_with_every_offset_form() {
         let explicit = denoc::forward_dynamics(&model, &q, &v, &tau, &G).unwrap();
         let acc = DVector::from_vec(acc);
         assert!(rel(&acc, &explicit) <= 1e-10, "explicit seed {seed}");
+        // The link-frame GIM (same frames and dispatch) against the world-frame one and the
+        // explicit product, symmetric and positive definite.
+        let nv = model.nv;
+        let (mut local, mut world) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
+        mass_matrix_local(&model, &mut data, &q, &mut local);
+        mass_matrix_world(&model, &mut data, &q, &mut world);
+        let explicit = denoc::mass_matrix(&model, &q);
+        assert!(
+            (&local - &world).norm() <= 1e-12 * world.norm(),
+            "GIM seed {seed}"
+        );
+        assert!(
+            (&local - &explicit).norm() <= 1e-12 * explicit.norm(),
+            "GIM seed {seed}"
+        );
+        assert_eq!(local, local.transpose());
+        assert!(local.clone().cholesky().is_some(), "GIM seed {seed}");
     }
     // Every fast path ran: all 15 axis codes, the general code, all five offset forms, and
     // links that add into a parent another child already wrote.
@@ -781,5 +798,12 @@ fn avx2_copy_is_bit_identical() {
             );
             assert_eq!(bits(&fast), bits(&base), "ID model {k}");
         }
+        let nv = model.nv;
+        let (mut fast, mut base) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
+        let mut data = Data::new(model);
+        mass_matrix_local(model, &mut data, &q, &mut fast);
+        mass_matrix_local::mass_matrix_baseline(model, &mut data, &q, &mut base);
+        let bits = |m: &DMatrix<f64>| m.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&fast), bits(&base), "GIM model {k}");
     }
 }
