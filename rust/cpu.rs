@@ -12,3 +12,52 @@
 pub fn has_avx2() -> bool {
     std::is_x86_feature_detected!("avx2")
 }
+
+/// Defines a function twice over one `#[inline(always)]` body: `$name` runs `$avx2` (the body
+/// compiled with AVX2) where the CPU has it, else `$base` (the baseline build, kept callable
+/// so that tests can compare the two bit for bit).
+///
+/// ```ignore
+/// multiversion! {
+///     /// Docs of the dispatching function.
+///     pub fn forward / forward_avx2 / forward_baseline [] (model: &Model, a: &mut [f64]) -> Result<()>
+///         => forward_body
+/// }
+/// ```
+macro_rules! multiversion {
+    (
+        $(#[$meta:meta])*
+        $vis:vis fn $name:ident / $avx2:ident / $base:ident [$($gen:tt)*]
+        ($($arg:ident : $ty:ty),* $(,)?) $(-> $ret:ty)? => $body:ident
+    ) => {
+        $(#[$meta])*
+        #[allow(clippy::too_many_arguments)]
+        #[inline]
+        $vis fn $name<$($gen)*>($($arg: $ty),*) $(-> $ret)? {
+            #[cfg(target_arch = "x86_64")]
+            if $crate::cpu::has_avx2() {
+                // SAFETY: the CPU supports AVX2, checked just above.
+                return unsafe { $avx2($($arg),*) };
+            }
+            $base($($arg),*)
+        }
+
+        /// The body compiled for AVX2.
+        ///
+        /// # Safety
+        /// The CPU must support AVX2.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        #[allow(clippy::too_many_arguments)]
+        unsafe fn $avx2<$($gen)*>($($arg: $ty),*) $(-> $ret)? {
+            $body($($arg),*)
+        }
+
+        /// The body for the baseline instruction set, whatever the CPU.
+        #[allow(clippy::too_many_arguments, dead_code)]
+        pub(crate) fn $base<$($gen)*>($($arg: $ty),*) $(-> $ret)? {
+            $body($($arg),*)
+        }
+    };
+}
+pub(crate) use multiversion;

@@ -1025,6 +1025,7 @@ mod tests {
     }
 
     #[test]
+    #[allow(clippy::approx_constant)] // 1.5708 is the point: near π/2 but not it
     fn quarter_turn_rpy_is_exact() {
         // The decimal π/2 leaves cos = 6e-17; the model holds the exact quarter turn
         // (model::checked_rotation), while an angle that is not π/2 to double precision stays

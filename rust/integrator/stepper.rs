@@ -227,34 +227,18 @@ fn first<const S: usize>(row: &[f64; 5]) -> [f64; S] {
     std::array::from_fn(|j| row[j])
 }
 
-/// `out[i] = y[i] + (k_0[i] c_0 + k_1[i] c_1 + …) h` with `k_j = k[j n..(j + 1) n]`: per
-/// entry, the products summed left to right with every coefficient (zeros too), which is
-/// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the CPU
-/// has it (`crate::cpu`; same arithmetic, packed lanes).
-#[inline]
-fn combine<const S: usize>(out: &mut [f64], y: &[f64], k: &[f64], coef: &[f64; S], h: f64) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx2() {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { combine_avx2(out, y, k, coef, h) };
-    }
-    combine_body(out, y, k, coef, h)
-}
-
-/// [`combine`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn combine_avx2<const S: usize>(
-    out: &mut [f64],
-    y: &[f64],
-    k: &[f64],
-    coef: &[f64; S],
-    h: f64,
-) {
-    combine_body(out, y, k, coef, h)
+crate::cpu::multiversion! {
+    /// `out[i] = y[i] + (k_0[i] c_0 + k_1[i] c_1 + …) h` with `k_j = k[j n..(j + 1) n]`: per
+    /// entry, the products summed left to right with every coefficient (zeros too), which is
+    /// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the
+    /// CPU has it (`crate::cpu`; same arithmetic, packed lanes).
+    fn combine / combine_avx2 / combine_baseline [const S: usize] (
+        out: &mut [f64],
+        y: &[f64],
+        k: &[f64],
+        coef: &[f64; S],
+        h: f64,
+    ) => combine_body
 }
 
 #[inline(always)]
@@ -271,32 +255,16 @@ fn combine_body<const S: usize>(out: &mut [f64], y: &[f64], k: &[f64], coef: &[f
     }
 }
 
-/// `r[i] = (K[i]ᵀ E) h / (atol[i] + max(|y[i]|, |y_new[i]|) rtol[i])`, element-wise (its
-/// AVX2 copy where the CPU has it); the caller sums the squares in order.
-#[inline]
-fn scaled_errors(r: &mut [f64], k: &[f64], ys: (&[f64], &[f64]), tols: (&[f64], &[f64]), h: f64) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx2() {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { scaled_errors_avx2(r, k, ys, tols, h) };
-    }
-    scaled_errors_body(r, k, ys, tols, h)
-}
-
-/// [`scaled_errors`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn scaled_errors_avx2(
-    r: &mut [f64],
-    k: &[f64],
-    ys: (&[f64], &[f64]),
-    tols: (&[f64], &[f64]),
-    h: f64,
-) {
-    scaled_errors_body(r, k, ys, tols, h)
+crate::cpu::multiversion! {
+    /// `r[i] = (K[i]ᵀ E) h / (atol[i] + max(|y[i]|, |y_new[i]|) rtol[i])`, element-wise (its
+    /// AVX2 copy where the CPU has it); the caller sums the squares in order.
+    fn scaled_errors / scaled_errors_avx2 / scaled_errors_baseline [] (
+        r: &mut [f64],
+        k: &[f64],
+        ys: (&[f64], &[f64]),
+        tols: (&[f64], &[f64]),
+        h: f64,
+    ) => scaled_errors_body
 }
 
 #[inline(always)]

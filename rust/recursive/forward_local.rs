@@ -807,65 +807,24 @@ macro_rules! with_rot {
 }
 pub(super) use {match_axis_kind, with_rot};
 
-/// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, by the articulated-body
-/// recursion in body frames. Same contract as `forward_dynamics_world`: `external` holds one
-/// wrench per link, `[moment about the link origin; force]` in world axes; errors at a ZYZ
-/// Euler singularity or a non-positive joint block.
-///
-/// On a CPU with AVX2 the same code runs compiled for it (see [`crate::cpu`]); the
-/// results are bit for bit those of the baseline build.
-#[allow(clippy::too_many_arguments)]
-pub fn forward_dynamics_local(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    g: &Vec3,
-    external: Option<&[Vec6]>,
-    a: &mut [f64],
-) -> Result<()> {
-    #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx2() {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { forward_dynamics_avx2(model, data, q, v, tau, g, external, a) };
-    }
-    forward_dynamics_baseline(model, data, q, v, tau, g, external, a)
-}
-
-/// [`forward_dynamics_local`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn forward_dynamics_avx2(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    g: &Vec3,
-    external: Option<&[Vec6]>,
-    a: &mut [f64],
-) -> Result<()> {
-    forward_dynamics_body(model, data, q, v, tau, g, external, a)
-}
-
-/// [`forward_dynamics_local`] for the baseline instruction set, whatever the CPU.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn forward_dynamics_baseline(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    tau: &[f64],
-    g: &Vec3,
-    external: Option<&[Vec6]>,
-    a: &mut [f64],
-) -> Result<()> {
-    forward_dynamics_body(model, data, q, v, tau, g, external, a)
+crate::cpu::multiversion! {
+    /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, by the articulated-body
+    /// recursion in body frames. Same contract as `forward_dynamics_world`: `external` holds
+    /// one wrench per link, `[moment about the link origin; force]` in world axes; errors at a
+    /// ZYZ Euler singularity or a non-positive joint block.
+    ///
+    /// On a CPU with AVX2 the same code runs compiled for it (see [`crate::cpu`]); the
+    /// results are bit for bit those of the baseline build.
+    pub fn forward_dynamics_local / forward_dynamics_avx2 / forward_dynamics_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        g: &Vec3,
+        external: Option<&[Vec6]>,
+        a: &mut [f64],
+    ) -> Result<()> => forward_dynamics_body
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -15,63 +15,22 @@ use super::{base_accel, Data};
 use crate::model::Model;
 use crate::spatial::{Vec3, Vec6};
 
-/// `τ = I a + C v − τ_g − Nᵀ f_ext`, in body frames. Same contract as
-/// `inverse::inverse_dynamics_world`: `external` holds one wrench per link, `[moment about the
-/// link origin; force]` in world axes, applied to the link; gravity enters as the base twist
-/// rate `[0; −g]`. Writes `tau` (length nv). No allocation: works in `data.local`. Compiled
-/// for AVX2 where the CPU has it, bit for bit the same results (see [`crate::cpu`]).
-#[allow(clippy::too_many_arguments)]
-pub fn inverse_dynamics_local(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    a: &[f64],
-    g: &Vec3,
-    external: Option<&[Vec6]>,
-    tau: &mut [f64],
-) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx2() {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { inverse_dynamics_avx2(model, data, q, v, a, g, external, tau) };
-    }
-    inverse_dynamics_baseline(model, data, q, v, a, g, external, tau)
-}
-
-/// [`inverse_dynamics_local`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[allow(clippy::too_many_arguments)]
-unsafe fn inverse_dynamics_avx2(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    a: &[f64],
-    g: &Vec3,
-    external: Option<&[Vec6]>,
-    tau: &mut [f64],
-) {
-    inverse_dynamics_body(model, data, q, v, a, g, external, tau)
-}
-
-/// [`inverse_dynamics_local`] for the baseline instruction set, whatever the CPU.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn inverse_dynamics_baseline(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    v: &[f64],
-    a: &[f64],
-    g: &Vec3,
-    external: Option<&[Vec6]>,
-    tau: &mut [f64],
-) {
-    inverse_dynamics_body(model, data, q, v, a, g, external, tau)
+crate::cpu::multiversion! {
+    /// `τ = I a + C v − τ_g − Nᵀ f_ext`, in body frames. Same contract as
+    /// `inverse::inverse_dynamics_world`: `external` holds one wrench per link, `[moment about the
+    /// link origin; force]` in world axes, applied to the link; gravity enters as the base twist
+    /// rate `[0; −g]`. Writes `tau` (length nv). No allocation: works in `data.local`. Compiled
+    /// for AVX2 where the CPU has it, bit for bit the same results (see [`crate::cpu`]).
+    pub fn inverse_dynamics_local / inverse_dynamics_avx2 / inverse_dynamics_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        g: &Vec3,
+        external: Option<&[Vec6]>,
+        tau: &mut [f64],
+    ) => inverse_dynamics_body
 }
 
 #[allow(clippy::too_many_arguments)]

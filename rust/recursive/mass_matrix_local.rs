@@ -15,35 +15,15 @@ use super::forward_local::{
 use super::Data;
 use crate::model::Model;
 
-/// Fills `gim` (nv × nv, symmetric) at `q`. Runs its AVX2 copy where the CPU has it
-/// ([`crate::cpu`]; the same rounding).
-pub fn mass_matrix_local(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix<f64>) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::cpu::has_avx2() {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { mass_matrix_avx2(model, data, q, gim) };
-    }
-    mass_matrix_baseline(model, data, q, gim)
-}
-
-/// [`mass_matrix_local`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn mass_matrix_avx2(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix<f64>) {
-    mass_matrix_body(model, data, q, gim)
-}
-
-/// [`mass_matrix_local`] for the baseline instruction set, whatever the CPU.
-pub(super) fn mass_matrix_baseline(
-    model: &Model,
-    data: &mut Data,
-    q: &[f64],
-    gim: &mut DMatrix<f64>,
-) {
-    mass_matrix_body(model, data, q, gim)
+crate::cpu::multiversion! {
+    /// Fills `gim` (nv × nv, symmetric) at `q`. Runs its AVX2 copy where the CPU has it
+    /// ([`crate::cpu`]; the same rounding).
+    pub fn mass_matrix_local / mass_matrix_avx2 / mass_matrix_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+        gim: &mut DMatrix<f64>,
+    ) => mass_matrix_body
 }
 
 #[inline(always)]
