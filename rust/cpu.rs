@@ -6,11 +6,17 @@
 //! IEEE operation and its rounding are the baseline build's and results are bit for bit the
 //! same (`recursive::tests::avx2_copy_is_bit_identical`, `integrator::stepper` tests).
 
-/// Whether the CPU has AVX2 (a cached flag after the first call).
+/// Whether the AVX2 copies run: the CPU has AVX2 and the environment variable
+/// `POINTMASS_DYN_BASELINE` is not set (set it to run the baseline build everywhere, e.g.
+/// under tools that do not decode every AVX instruction, such as older valgrind). Read once.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub fn has_avx2() -> bool {
-    std::is_x86_feature_detected!("avx2")
+    static AVX2: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *AVX2.get_or_init(|| {
+        std::is_x86_feature_detected!("avx2")
+            && std::env::var_os("POINTMASS_DYN_BASELINE").is_none()
+    })
 }
 
 /// Defines a function twice over one `#[inline(always)]` body: `$name` runs `$avx2` (the body

@@ -1,0 +1,64 @@
+//! A plain loop of calls, for instruction counts (callgrind) and quick timings, steadier on a
+//! shared machine than criterion's wall times:
+//!
+//! ```text
+//! cargo build --release --example loop
+//! valgrind --tool=callgrind target/release/examples/loop fd 7 100000   # ÷ 100000 per call
+//! target/release/examples/loop scene python/pointmass_dyn/scenes/panda.toml 1000000
+//! ```
+//!
+//! `fd`, `id`, `gim` N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
+//! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model. Subtract a
+//! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
+//! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::cpu`).
+use std::hint::black_box;
+
+use nalgebra::DMatrix;
+use pointmass_dyn::benchmark_models::chain;
+use pointmass_dyn::model::Model;
+use pointmass_dyn::recursive::{self, Data};
+use pointmass_dyn::scene::Scene;
+use pointmass_dyn::spatial::Vec3;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: loop (fd|id|gim) N ITERS | loop scene PATH ITERS";
+    let (what, arg, iters) = match args.as_slice() {
+        [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
+        _ => return Err(usage.into()),
+    };
+    let model: Model = match what {
+        "scene" => Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?.model,
+        _ => chain(arg.parse()?),
+    };
+    let nv = model.nv;
+    let q: Vec<f64> = match what {
+        "scene" => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
+        _ => vec![0.3; model.nq],
+    };
+    let v: Vec<f64> = (0..nv).map(|k| (k as f64 * 0.7).sin()).collect();
+    let tau: Vec<f64> = (0..nv).map(|k| (k as f64 * 0.3).cos()).collect();
+    let g = Vec3::new(0.0, 0.0, -9.81);
+    let mut data = Data::new(&model);
+    let mut out = vec![0.0; nv];
+    let mut gim = DMatrix::zeros(nv, nv);
+    let start = std::time::Instant::now();
+    for _ in 0..iters {
+        match what {
+            "fd" | "scene" => {
+                let q = black_box(&q);
+                recursive::forward_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)?
+            }
+            "id" => {
+                let q = black_box(&q);
+                recursive::inverse_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)
+            }
+            "gim" => recursive::mass_matrix(&model, &mut data, black_box(&q), &mut gim),
+            _ => return Err(usage.into()),
+        }
+    }
+    let per_call = start.elapsed().as_secs_f64() / iters.max(1) as f64;
+    println!("{what} {arg}: {:.1} ns per call", per_call * 1e9);
+    black_box((&out, &gim));
+    Ok(())
+}
