@@ -508,7 +508,13 @@ impl PyModel {
         self.load_state(py, q, None)?;
         match method {
             Method::Recursive => {
-                recursive::mass_matrix(&self.model, &mut self.data, &self.q, &mut self.gim);
+                let (model, data, qv, gim) = (&self.model, &mut self.data, &self.q, &mut self.gim);
+                // O(n·depth): long chains are worth releasing the interpreter for.
+                if model.links.len() >= DETACH_LINKS {
+                    py.detach(|| recursive::mass_matrix(model, data, qv, gim));
+                } else {
+                    recursive::mass_matrix(model, data, qv, gim);
+                }
                 dmatrix_to_array(py, &self.gim)
             }
             Method::Denoc => {
