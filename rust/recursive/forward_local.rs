@@ -1120,7 +1120,7 @@ fn outward<R: Rot>(
         Some(p) => {
             // Parent twist carried to this origin, in this frame.
             let wp = v3(&p.twist, 0);
-            let vp = v3(&p.twist, 3) + cross(&wp, &offset);
+            let vp = v3(&p.twist, 3) + cross_offset(&wp, &offset, cur.offset_axis);
             (e.tr_mul(&wp), e.tr_mul(&vp))
         }
         None => (Vec3::zeros(), Vec3::zeros()),
@@ -1293,7 +1293,7 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
         let (pp, qq, rr) = (pl.conj_sym(&pp), pl.conj::<false>(&qq), pl.conj_sym(&rr));
         shift_add::<3>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     }
-    parent.bias += to_parent(Placed(pl, e), r, &fa, &fl);
+    parent.bias += to_parent(Placed(pl, e), r, oa, &fa, &fl);
     true
 }
 
@@ -1397,23 +1397,42 @@ fn finish<R: Rot>(
         start,
         &mut parent.inertia,
     );
-    parent.bias += to_parent(e, r, &fa, &fl);
+    parent.bias += to_parent(e, r, cur.offset_axis, &fa, &fl);
 }
 
 /// A wrench `[n; f]` about the child origin in child axes, as seen at the parent origin in
-/// parent axes: `[E n + r × E f; E f]`.
+/// parent axes: `[E n + r × E f; E f]` (`form`: the offset's, `LocalLink::offset_axis`).
 #[inline(always)]
-pub(super) fn to_parent<R: Rot>(e: R, r: &Vec3, n: &Vec3, f: &Vec3) -> Vec6 {
+pub(super) fn to_parent<R: Rot>(e: R, r: &Vec3, form: u8, n: &Vec3, f: &Vec3) -> Vec6 {
     let n = e.mul(n);
     let f = e.mul(f);
-    six(&(n + cross(r, &f)), &f)
+    six(&(n - cross_offset(&f, r, form)), &f)
+}
+
+/// The offset form (`LocalLink::offset_axis`) that takes the general cross product: the
+/// walks that carry one wrench per step (inverse dynamics inward, GIM columns) count fewer
+/// instructions without the branch.
+pub(super) const ANYWHERE: u8 = 4;
+
+/// `w × r` for an offset `r` of the given form (`LocalLink::offset_axis`: 0 zero, 1, 2, 3
+/// along x, y, z only, 4 anywhere): along one axis it takes two products instead of six.
+/// The values are `cross(w, r)`'s (only the signs of exact zeros may differ).
+#[inline(always)]
+pub(super) fn cross_offset(w: &Vec3, r: &Vec3, form: u8) -> Vec3 {
+    match form {
+        0 => Vec3::zeros(),
+        1 => Vec3::new(0.0, w.z * r.x, -(w.y * r.x)),
+        2 => Vec3::new(-(w.z * r.y), 0.0, w.x * r.y),
+        3 => Vec3::new(w.y * r.z, -(w.x * r.z), 0.0),
+        _ => cross(w, r),
+    }
 }
 
 /// The parent's twist rate carried to this link plus `ξ` (this frame).
 #[inline(always)]
 pub(super) fn carry<R: Rot>(e: R, cur: &LocalLink, pacc: &Vec6) -> (Vec3, Vec3) {
     let ap = v3(pacc, 0);
-    let lp = v3(pacc, 3) + cross(&ap, &cur.offset);
+    let lp = v3(pacc, 3) + cross_offset(&ap, &cur.offset, cur.offset_axis);
     (
         e.tr_mul(&ap) + v3(&cur.xi, 0),
         e.tr_mul(&lp) + v3(&cur.xi, 3),

@@ -9,7 +9,7 @@
 //! returns τ to the recursion's own rounding even on long chains.
 use super::forward_local::{
     carry, cross, match_axis_kind, outward_pass, six, to_parent, v3, with_rot, with_rot_arm,
-    General, Identity, Placed, Plane,
+    General, Identity, Placed, Plane, ANYWHERE,
 };
 use super::{base_accel, Data};
 use crate::model::Model;
@@ -92,7 +92,7 @@ fn inverse_dynamics_body(
             tau[l.v_index + k] = cur.s[k].dot(w);
         }
         if let Some(p) = l.parent {
-            let up = with_rot!(cur, e => to_parent(e, &cur.offset, &wa, &wl));
+            let up = with_rot!(cur, e => to_parent(e, &cur.offset, ANYWHERE, &wa, &wl));
             head[p].bias += up;
         }
     }

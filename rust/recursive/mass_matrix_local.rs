@@ -10,7 +10,7 @@ use nalgebra::DMatrix;
 
 use super::forward_local::{
     match_axis_kind, mul, outward_other, plane_turns, shift_add, to_parent, tr_mul, v3, with_rot,
-    with_rot_arm, General, Identity, Placed, Plane, Rot,
+    with_rot_arm, General, Identity, Placed, Plane, Rot, ANYWHERE,
 };
 use super::Data;
 use crate::model::Model;
@@ -100,7 +100,7 @@ fn mass_matrix_body(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix
             let mut j = i;
             while let Some(p) = model.links[j].parent {
                 let cj = &loc[j];
-                let f = with_rot!(cj, e => to_parent(e, &cj.offset, &fa, &fl));
+                let f = with_rot!(cj, e => to_parent(e, &cj.offset, ANYWHERE, &fa, &fl));
                 (fa, fl) = (v3(&f, 0), v3(&f, 3));
                 let cp = &loc[p];
                 let (nvp, angular_p) = dofs(p, cp);
