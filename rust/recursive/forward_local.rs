@@ -13,10 +13,12 @@
 //! as `E M Eᵀ` by 3×3 blocks followed by the shift to the parent origin.
 //!
 //! Revolute joints about a coordinate axis (the common case) rotate blocks with a plane
-//! rotation instead of a full 3×3 product; when their joint frame is rotated in the parent
-//! (URDF `rpy`), `E = P R_axis(q)` is applied as the constant placement rotation `P` after
-//! the plane rotation — itself a plane rotation when `P` turns about one coordinate axis
-//! (the usual `rpy = (±π/2, 0, 0)` of robot descriptions).
+//! rotation instead of a full 3×3 product. A placement that is a signed permutation (the
+//! exact quarter and half turns of robot descriptions, `rpy = (±π/2, 0, 0)`) is absorbed into
+//! the link frames (`local_links_of`); any other rotated joint frame gives `E = P R_axis(q)`,
+//! with the constant `P` applied after the plane rotation — itself a plane rotation when `P`
+//! turns about one coordinate axis. Each link's case is one dispatch code
+//! (`LocalLink::kind`), and offsets along one axis take a shorter shift (`offset_axis`).
 use super::{singular_message, Data};
 use crate::error::{Error, Result};
 use crate::joint::{axis_angle, quat_to_matrix, Joint};
