@@ -3,10 +3,15 @@
 //! `t = N_l N_d q̇`, point velocities `V = D t`, `N = D N_l N_d`, `M = diag(m_ij 1₃)`:
 //! GIM `I = Nᵀ M N`, convective matrix `C = Nᵀ M Ṅ`, generalized forces `τ = Nᵀ f`.
 //! Everything here is dense and allocates; the recursive algorithms in `recursive` are the
-//! fast path and are checked against this one.
+//! fast path and are checked against this one. The matrices grow as n² (`D` alone is
+//! 21n × 6n) and their products as n³, so every function first checks that the whole
+//! memory can be had (an `OutOfMemory` error naming the size, not an abort) and checks for
+//! interruption (`interrupt::check`) between blocks of the products.
 use nalgebra::{DMatrix, DVector};
 
+use crate::alloc::{ensure_available, try_zeros, try_zeros_vector};
 use crate::error::{Error, Result};
+use crate::interrupt;
 use crate::kinematics::{self, LinkState};
 use crate::model::Model;
 use crate::spatial::{angular, linear, skew, Mat3, Vec3};
@@ -63,19 +68,63 @@ fn point_offsets(model: &Model, st: &[LinkState], i: usize) -> [Vec3; 7] {
     d
 }
 
-fn assemble(model: &Model, st: &[LinkState], rates: bool) -> (Denoc, Option<DenocRates>) {
+/// Bytes of the explicit matrices for `model` (with their rates if asked), counted before
+/// anything is allocated.
+fn dense_bytes(model: &Model, rates: bool) -> u128 {
+    let (n, nv) = (model.links.len() as u128, model.nv as u128);
+    // D, N_l, N_d, N_l N_d and N, plus masses and points.
+    let one = 21 * n * 6 * n + 36 * n * n + 6 * n * nv + 6 * n * nv + 21 * n * nv + 28 * n;
+    // Rates: their own D, N_l, N_d and three terms of Ṅ; the callers' products (n × n).
+    let total = if rates { 2 * one + 2 * 21 * n * nv } else { one } + 2 * nv * nv;
+    8 * total
+}
+
+/// `a b` computed in blocks of columns, checking for interruption between blocks.
+fn product(a: &DMatrix<f64>, b: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>> {
+    const BLOCK: usize = 64;
+    let mut out = try_zeros(a.nrows(), b.ncols(), what)?;
+    let mut j = 0;
+    while j < b.ncols() {
+        interrupt::check(what)?;
+        let w = BLOCK.min(b.ncols() - j);
+        out.columns_mut(j, w).gemm(1.0, a, &b.columns(j, w), 0.0);
+        j += w;
+    }
+    Ok(out)
+}
+
+/// `D (N_l N_d)`: the association with n³ rather than 21n³ products.
+fn chain(d: &DMatrix<f64>, nl: &DMatrix<f64>, nd: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>> {
+    product(d, &product(nl, nd, what)?, what)
+}
+
+fn assemble(
+    model: &Model,
+    st: &[LinkState],
+    rates: bool,
+    what: &str,
+) -> Result<(Denoc, Option<DenocRates>)> {
+    ensure_available(
+        dense_bytes(model, rates),
+        &format!(
+            "{what}: the explicit DeNOC matrices of {} links (D alone is {} × {})",
+            model.links.len(),
+            21 * model.links.len(),
+            6 * model.links.len()
+        ),
+    )?;
     let n = model.links.len();
     let nv = model.nv;
-    let mut d = DMatrix::zeros(21 * n, 6 * n);
-    let mut nl = DMatrix::zeros(6 * n, 6 * n);
-    let mut nd = DMatrix::zeros(6 * n, nv);
-    let mut masses = DVector::zeros(7 * n);
-    let mut points = DMatrix::zeros(7 * n, 3);
+    let mut d = try_zeros(21 * n, 6 * n, "D")?;
+    let mut nl = try_zeros(6 * n, 6 * n, "N_l")?;
+    let mut nd = try_zeros(6 * n, nv, "N_d")?;
+    let mut masses = try_zeros_vector(7 * n, "point masses")?;
+    let mut points = try_zeros(7 * n, 3, "point positions")?;
     let (mut dd, mut nld, ndd) = if rates {
         (
-            DMatrix::zeros(21 * n, 6 * n),
-            DMatrix::zeros(6 * n, 6 * n),
-            DMatrix::zeros(6 * n, nv),
+            try_zeros(21 * n, 6 * n, "Ḋ")?,
+            try_zeros(6 * n, 6 * n, "Ṅ_l")?,
+            try_zeros(6 * n, nv, "Ṅ_d")?,
         )
     } else {
         (
@@ -119,7 +168,7 @@ fn assemble(model: &Model, st: &[LinkState], rates: bool) -> (Denoc, Option<Deno
                 .copy_from(&st[i].s[c]);
         }
     }
-    let n_mat = &d * &nl * &nd;
+    let n_mat = chain(&d, &nl, &nd, what)?;
     let denoc = Denoc {
         d,
         nl,
@@ -129,9 +178,9 @@ fn assemble(model: &Model, st: &[LinkState], rates: bool) -> (Denoc, Option<Deno
         points,
     };
     if !rates {
-        return (denoc, None);
+        return Ok((denoc, None));
     }
-    (
+    Ok((
         denoc,
         Some(DenocRates {
             d: dd,
@@ -139,20 +188,45 @@ fn assemble(model: &Model, st: &[LinkState], rates: bool) -> (Denoc, Option<Deno
             nd: ndd,
             n: DMatrix::zeros(0, 0),
         }),
-    )
+    ))
 }
 
 /// The DeNOC matrices at configuration `q` (checked by the caller).
-pub fn matrices(model: &Model, q: &[f64]) -> Denoc {
+pub fn matrices(model: &Model, q: &[f64]) -> Result<Denoc> {
     let st = states(model, q, None);
-    assemble(model, &st, false).0
+    Ok(assemble(model, &st, false, "denoc")?.0)
+}
+
+/// The seven point masses of every link and their world positions (7n × 3) at `q`,
+/// without the matrices.
+pub fn point_positions(model: &Model, q: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
+    let st = states(model, q, None);
+    let n = model.links.len();
+    let mut masses = DVector::zeros(7 * n);
+    let mut points = DMatrix::zeros(7 * n, 3);
+    for (i, l) in model.links.iter().enumerate() {
+        for (j, dij) in point_offsets(model, &st, i).iter().enumerate() {
+            masses[7 * i + j] = l.points.masses[j];
+            let x = st[i].origin + dij;
+            for c in 0..3 {
+                points[(7 * i + j, c)] = x[c];
+            }
+        }
+    }
+    (masses, points)
 }
 
 /// The DeNOC matrices and their time derivatives at `(q, v)`.
-pub fn matrices_and_rates(model: &Model, q: &[f64], v: &[f64]) -> (Denoc, DenocRates) {
+pub fn matrices_and_rates(model: &Model, q: &[f64], v: &[f64]) -> Result<(Denoc, DenocRates)> {
+    rates_for(model, q, v, "denoc_rates")
+}
+
+fn rates_for(model: &Model, q: &[f64], v: &[f64], what: &str) -> Result<(Denoc, DenocRates)> {
     let st = states(model, q, Some(v));
-    let (den, rates) = assemble(model, &st, true);
-    let mut rates = rates.expect("rates requested");
+    let (den, rates) = assemble(model, &st, true, what)?;
+    let Some(mut rates) = rates else {
+        return Err(Error::Singular("DeNOC rates were not assembled".into()));
+    };
     // Ṗ_i for each joint, in the columns of Ṅ_d.
     for (i, l) in model.links.iter().enumerate() {
         let w_parent = l
@@ -176,32 +250,35 @@ pub fn matrices_and_rates(model: &Model, q: &[f64], v: &[f64]) -> (Denoc, DenocR
                 .copy_from(&sdot[c]);
         }
     }
-    rates.n =
-        &rates.d * &den.nl * &den.nd + &den.d * &rates.nl * &den.nd + &den.d * &den.nl * &rates.nd;
-    (den, rates)
+    rates.n = chain(&rates.d, &den.nl, &den.nd, what)?;
+    rates.n += chain(&den.d, &rates.nl, &den.nd, what)?;
+    rates.n += chain(&den.d, &den.nl, &rates.nd, what)?;
+    Ok((den, rates))
 }
 
 /// `Nᵀ M X` for a 21n-row matrix X, with M the diagonal of point masses.
-fn nt_m(den: &Denoc, x: &DMatrix<f64>) -> DMatrix<f64> {
-    let mut mx = x.clone();
+fn nt_m(den: &Denoc, x: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>> {
+    let mut mx = try_zeros(x.nrows(), x.ncols(), what)?;
+    mx.copy_from(x);
     for r in 0..mx.nrows() {
         let m = den.masses[r / 3];
         mx.row_mut(r).scale_mut(m);
     }
-    den.n.transpose() * mx
+    product(&den.n.transpose(), &mx, what)
 }
 
 /// Generalized inertia matrix `Nᵀ M N`.
-pub fn mass_matrix(model: &Model, q: &[f64]) -> DMatrix<f64> {
-    let den = matrices(model, q);
-    let gim = nt_m(&den, &den.n);
-    (&gim + gim.transpose()) * 0.5
+pub fn mass_matrix(model: &Model, q: &[f64]) -> Result<DMatrix<f64>> {
+    let st = states(model, q, None);
+    let (den, _) = assemble(model, &st, false, "mass_matrix")?;
+    let gim = nt_m(&den, &den.n, "mass_matrix")?;
+    Ok((&gim + gim.transpose()) * 0.5)
 }
 
 /// Convective matrix `C = Nᵀ M Ṅ` (so that `İ − 2C` is skew-symmetric).
-pub fn convective_matrix(model: &Model, q: &[f64], v: &[f64]) -> DMatrix<f64> {
-    let (den, rates) = matrices_and_rates(model, q, v);
-    nt_m(&den, &rates.n)
+pub fn convective_matrix(model: &Model, q: &[f64], v: &[f64]) -> Result<DMatrix<f64>> {
+    let (den, rates) = rates_for(model, q, v, "convective_matrix")?;
+    nt_m(&den, &rates.n, "convective_matrix")
 }
 
 /// `Nᵀ f` for forces `f` on the 7n point masses (world coordinates, one row each).
@@ -217,7 +294,7 @@ pub fn generalized_forces(model: &Model, q: &[f64], point_forces: &[Vec3]) -> Re
             format!("{} forces", point_forces.len()),
         ));
     }
-    let den = matrices(model, q);
+    let den = matrices(model, q)?;
     let mut f = DVector::zeros(3 * point_forces.len());
     for (j, p) in point_forces.iter().enumerate() {
         f.fixed_rows_mut::<3>(3 * j).copy_from(p);
@@ -227,21 +304,27 @@ pub fn generalized_forces(model: &Model, q: &[f64], point_forces: &[Vec3]) -> Re
 
 /// Generalized gravity force `Nᵀ f^G`, `f^G_ij = m_ij g` (on the right-hand side:
 /// Pinocchio's `computeGeneralizedGravity` is its negative).
-pub fn gravity_forces(model: &Model, q: &[f64], g: &Vec3) -> DVector<f64> {
-    let den = matrices(model, q);
+pub fn gravity_forces(model: &Model, q: &[f64], g: &Vec3) -> Result<DVector<f64>> {
+    let den = matrices(model, q)?;
     let mut f = DVector::zeros(den.n.nrows());
     for j in 0..den.masses.len() {
         f.fixed_rows_mut::<3>(3 * j).copy_from(&(g * den.masses[j]));
     }
-    den.n.transpose() * f
+    Ok(den.n.transpose() * f)
 }
 
 /// `I a + C v − τ_g = τ`.
-pub fn inverse_dynamics(model: &Model, q: &[f64], v: &[f64], a: &[f64], g: &Vec3) -> DVector<f64> {
-    let gim = mass_matrix(model, q);
-    let c = convective_matrix(model, q, v);
-    let tg = gravity_forces(model, q, g);
-    gim * DVector::from_column_slice(a) + c * DVector::from_column_slice(v) - tg
+pub fn inverse_dynamics(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+) -> Result<DVector<f64>> {
+    let gim = mass_matrix(model, q)?;
+    let c = convective_matrix(model, q, v)?;
+    let tg = gravity_forces(model, q, g)?;
+    Ok(gim * DVector::from_column_slice(a) + c * DVector::from_column_slice(v) - tg)
 }
 
 /// Solves `I a = τ + τ_g − C v` by Cholesky.
@@ -253,9 +336,9 @@ pub fn forward_dynamics(
     g: &Vec3,
 ) -> Result<DVector<f64>> {
     crate::recursive::check_singularities(model, q)?;
-    let gim = mass_matrix(model, q);
-    let c = convective_matrix(model, q, v);
-    let rhs = DVector::from_column_slice(tau) + gravity_forces(model, q, g)
+    let gim = mass_matrix(model, q)?;
+    let c = convective_matrix(model, q, v)?;
+    let rhs = DVector::from_column_slice(tau) + gravity_forces(model, q, g)?
         - c * DVector::from_column_slice(v);
     match gim.cholesky() {
         Some(ch) => Ok(ch.solve(&rhs)),

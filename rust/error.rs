@@ -23,6 +23,28 @@ pub enum Error {
     /// An integrator setting out of range (the message names it).
     #[error("{0}")]
     InvalidSetting(String),
+    /// A memory request sized by the input that the system refused (or that cannot even be
+    /// expressed); `what` names the computation and the array.
+    #[error("{what}: cannot allocate {} ({detail})", human_bytes(*bytes))]
+    OutOfMemory {
+        what: String,
+        bytes: u128,
+        detail: String,
+    },
+    /// The caller asked to stop (Ctrl-C from Python) while a long computation ran.
+    #[error("{0}: interrupted")]
+    Interrupted(String),
+}
+
+/// `2.5e10` bytes as "25.0 GB".
+pub fn human_bytes(bytes: u128) -> String {
+    let b = bytes as f64;
+    match b {
+        b if b >= 1e9 => format!("{:.1} GB", b / 1e9),
+        b if b >= 1e6 => format!("{:.1} MB", b / 1e6),
+        b if b >= 1e3 => format!("{:.1} kB", b / 1e3),
+        b => format!("{b} bytes"),
+    }
 }
 
 impl Error {

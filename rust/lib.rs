@@ -2,6 +2,7 @@
 //!
 //! The core knows nothing of Python; `python` (behind the `python` feature) converts arrays
 //! and errors and nothing else.
+pub mod alloc;
 pub mod benchmark_models;
 pub mod body;
 pub mod cpu;
@@ -9,6 +10,7 @@ pub mod denoc;
 pub mod effects;
 pub mod error;
 pub mod integrator;
+pub mod interrupt;
 pub mod joint;
 pub mod kinematics;
 pub mod model;

@@ -46,7 +46,8 @@ pub struct Settings {
 pub struct Scene {
     pub name: String,
     pub description: String,
-    pub model: Model,
+    /// Shared with the Python `Model` objects made from it (`scene.model`): never copied.
+    pub model: std::sync::Arc<Model>,
     pub q0: Vec<f64>,
     pub v0: Vec<f64>,
     pub effects: Vec<Effect>,
@@ -414,7 +415,7 @@ impl Scene {
         Ok(Scene {
             name: sf.name.unwrap_or_else(|| file.to_string()),
             description: sf.description.unwrap_or_default(),
-            model,
+            model: std::sync::Arc::new(model),
             q0,
             v0,
             effects,

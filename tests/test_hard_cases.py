@@ -677,15 +677,24 @@ def test_state_that_overflows_midway_stops_with_a_message():
         s.model.forward_dynamics(s.q0, [0, 1e200, 0], np.zeros(3), gravity=G)
 
 
-def test_nan_from_a_torque_function_is_raised():
+def test_nan_from_a_torque_function_fails_the_run_with_its_time():
+    # As a NaN from a built-in effect does (issue 11): success=False, the time reached and
+    # the trajectory up to it, not an exception that throws the run away.
     s = _spatial()
 
     def bad(t, q, v):
         return np.array([np.nan, 0, 0]) if t > 0.5 else np.zeros(3)
 
     scene = pmd.Scene(s.model, s.q0, s.v0, effects=[pmd.Gravity(G), pmd.TorqueFunction(bad)])
-    with pytest.raises(pmd.InvalidInputError, match="finite"):
-        pmd.simulate(scene, (0.0, 1.0))
+    r = pmd.simulate(scene, (0.0, 1.0))
+    assert not r.success and r.status == -1
+    assert "finite" in r.message and "torque function" in r.message
+    # The NaN came in a step from t_reached towards t > 0.5; nothing after it was accepted.
+    assert 0.1 < r.t_reached < 1.0 and r.t[-1] == r.t_reached and len(r.t) > 1
+    assert f"{r.t_reached}" in r.message
+    with pytest.raises(pmd.SimulationError) as info:
+        r.raise_for_status()
+    assert info.value.t == r.t_reached and info.value.result is r
 
 
 def test_rk45_nan_derivative_stops_at_once():

@@ -358,7 +358,7 @@ class _Stop(Exception):
 
 def test_progress_callback_and_its_exception(spatial):
     times = []
-    r = pmd.simulate(spatial, (0.0, 10.0), rtol=1e-10, progress=times.append)
+    r = pmd.simulate(spatial, (0.0, 10.0), rtol=1e-10, progress=times.append, progress_interval=0)
     assert r.success and len(times) >= 5
     assert all(0.0 <= t <= 10.0 for t in times) and times == sorted(times)
 
@@ -366,8 +366,12 @@ def test_progress_callback_and_its_exception(spatial):
         if t > 1.0:
             raise _Stop(f"stopped at {t}")
 
-    with pytest.raises(_Stop, match="stopped at"):
-        pmd.simulate(spatial, (0.0, 10.0), rtol=1e-10, progress=stop)
+    with pytest.raises(_Stop, match="stopped at") as info:
+        pmd.simulate(spatial, (0.0, 10.0), rtol=1e-10, progress=stop, progress_interval=0)
+    # What was computed before the callback raised comes with the exception (issue 11).
+    partial = info.value.result
+    assert not partial.success and 1.0 < partial.t_reached < 10.0
+    assert partial.t[-1] == partial.t_reached and partial.q.shape == (len(partial.t), 3)
 
 
 def test_python_event_exception_propagates(spatial):

@@ -105,7 +105,8 @@ class Model:
     """A kinematic tree of rigid bodies, each represented by seven point masses.
 
     ``q`` and ``v`` list the joints in the order the bodies were added; gravity is applied
-    only when given (``gravity=None`` means none)."""
+    only when given (``gravity=None`` means none). Safe to use from many threads at once
+    (each call takes its own workspace; long calls release the GIL)."""
 
     def __new__(cls) -> Model: ...
     def add_body(
@@ -393,11 +394,13 @@ def simulate_scene(
     disable: _Family | Sequence[_Family] | None = None,
     power: bool = False,
     stiffness: Literal["warn", "stop", "off"] = "warn",
+    progress_interval: float | None = None,
 ) -> dict[str, Any]:
     """Integrates a scene in Rust (GIL released); returns the fields of
     ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``power``,
     ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``n_accepted``, ``n_rejected``,
-    ``status``, ``message``, ``success``, ``t_reached``)."""
+    ``status``, ``message``, ``success``, ``t_reached``) and ``error``: ``None``, or the
+    exception a Python callback raised (Ctrl-C included), for the caller to re-raise."""
 
 def effect_forces(
     scene: Scene,
@@ -434,7 +437,8 @@ def rk45(
     """Dormand–Prince 5(4) on ``fun(t, y)``, step for step SciPy's ``solve_ivp(RK45)``;
     returns ``t``, ``y`` (n, N), ``sol`` (:class:`DenseSolution` or ``None``),
     ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
-    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, and ``stiff``:
-    ``None`` or the first stiffness detection ``{"t", "h_lambda", "h", "lambda"}``.
+    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``stiff``:
+    ``None`` or the first stiffness detection ``{"t", "h_lambda", "h", "lambda"}``, and
+    ``error``: ``None`` or the exception ``fun`` or an event raised, to re-raise.
     ``stiffness``: ``"warn"`` detects and reports (steps unchanged), ``"stop"`` ends the
     run at the detection (status -1), ``"off"`` skips the test."""

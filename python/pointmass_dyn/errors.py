@@ -28,12 +28,22 @@ class SingularityError(NumericalError):
     """The equations cannot be solved at this state (e.g. a ZYZ joint at sin(theta) = 0)."""
 
 
-class SimulationError(PointMassDynError, RuntimeError):
-    """A simulation that could not finish; ``t`` is the time it reached."""
+class OutOfMemoryError(PointMassDynError, MemoryError):
+    """A computation whose arrays (sized by the model) the system cannot provide; the message
+    names the computation and the size. Raised before the computation starts."""
 
-    def __init__(self, message: str, t: float | None = None):
+
+class SimulationError(PointMassDynError, RuntimeError):
+    """A simulation that could not finish; ``t`` is the time it reached and ``result`` what
+    was computed up to there (a ``SimulationResult``), when there is one."""
+
+    def __init__(self, message: str, t: float | None = None, result=None):
         super().__init__(message)
         self.t = t
+        self.result = result
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.t, self.result))
 
 
 class SceneError(InvalidInputError):
@@ -53,6 +63,7 @@ __all__ = [
     "InvalidInputError",
     "ModelStructureError",
     "NumericalError",
+    "OutOfMemoryError",
     "PointMassDynError",
     "SceneError",
     "SimulationError",

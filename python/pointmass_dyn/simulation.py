@@ -158,7 +158,7 @@ class SimulationResult:
     def raise_for_status(self) -> SimulationResult:
         """Raises :class:`SimulationError` (with ``.t``) if the run failed; returns self."""
         if not self.success:
-            raise SimulationError(self.message, self.t_reached)
+            raise SimulationError(self.message, self.t_reached, self)
         return self
 
 
@@ -179,6 +179,7 @@ def simulate(
     disable: Any = None,
     power: bool = False,
     stiffness: str = "warn",
+    progress_interval: float = 0.05,
 ) -> SimulationResult:
     """Integrates a scene with our adaptive RK45, entirely in Rust with the GIL released.
 
@@ -193,8 +194,9 @@ def simulate(
     be checked. ``disable`` names effect families to switch off (``"gravity"``,
     ``"springs"``, ``"dampers"``, ``"friction"``, ``"torques"``, ``"external"``); ``None``
     takes the scene's ``[simulate] disable`` list, ``()`` switches nothing off.
-    ``progress(t)`` is called every few hundred right-hand-side evaluations (an exception it
-    raises stops the run and is re-raised, as is Ctrl-C). ``stiffness`` is what Hairer's
+    ``progress(t)`` is called every ``progress_interval`` seconds of computation (0.05;
+    0 for every poll, i.e. every 64 evaluations), when the run also looks for Ctrl-C: by
+    elapsed time, so that a busy Python thread beside the run barely slows it. ``stiffness`` is what Hairer's
     stiffness test does when it fires: ``"warn"`` (default) notes it in the message and
     changes no step, ``"stop"`` ends the run, ``"off"`` skips the test.
 
@@ -202,8 +204,12 @@ def simulate(
     with ``success=False`` and a message naming the joint and the time.
 
     A run that cannot finish returns ``success=False`` with a message giving the reason and
-    the time reached; call ``.raise_for_status()`` to turn that into a
-    :class:`SimulationError`. Invalid arguments raise :class:`InvalidInputError`.
+    the time reached (a non-finite force from any effect, a ``TorqueFunction`` included);
+    call ``.raise_for_status()`` to turn that into a :class:`SimulationError`. An exception
+    raised by Python code the run calls (a ``TorqueFunction``, an event, ``progress``) and
+    Ctrl-C (``KeyboardInterrupt``) stop the run and propagate as themselves, with the
+    trajectory computed so far attached as ``.result`` (a ``SimulationResult`` with
+    ``success=False`` and ``t_reached``). Invalid arguments raise :class:`InvalidInputError`.
     """
     out = _core.simulate_scene(
         scene,
@@ -221,8 +227,32 @@ def simulate(
         disable,
         power,
         stiffness,
+        progress_interval,
     )
-    return SimulationResult(scene=scene.name, **out)
+    error = out.pop("error")
+    result = SimulationResult(scene=scene.name, **out)
+    if error is not None:
+        raise _with_partial_result(error, result)
+    return result
+
+
+def _with_partial_result(error: BaseException, result: Any) -> BaseException:
+    """Attaches what a run computed before a Python callback raised (or Ctrl-C) to the
+    exception as ``.result``, and says so in the traceback."""
+    try:
+        error.result = result
+        note = (
+            f"pointmass_dyn: the run stopped at t = {result.t_reached}; what it computed is "
+            "in this exception's .result"
+        )
+        notes = getattr(error, "__notes__", None)
+        if notes is None:
+            error.__notes__ = [note]
+        else:
+            notes.append(note)
+    except (AttributeError, TypeError):  # an exception type that takes no attributes
+        pass
+    return error
 
 
 def effect_forces(scene: Scene, t: float, q: Any, v: Any, *, disable: Any = None) -> dict:
@@ -282,7 +312,8 @@ def rk45(
     Returns a SciPy-like result: ``t``, ``y`` (n, N), ``sol`` (when ``dense_output``),
     ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``status`` (0 end reached,
     1 terminal event, -1 failure), ``message``, ``success``; plus ``n_accepted``,
-    ``n_rejected`` and ``t_reached``.
+    ``n_rejected`` and ``t_reached``. An exception raised by ``fun`` or an event (Ctrl-C
+    included) propagates with the partial result attached as ``.result``.
     """
     out = _core.rk45(
         fun,
@@ -299,7 +330,11 @@ def rk45(
         controller,
         stiffness,
     )
-    return OdeResult(out)
+    error = out.pop("error")
+    result = OdeResult(out)
+    if error is not None:
+        raise _with_partial_result(error, result)
+    return result
 
 
 __all__ = [

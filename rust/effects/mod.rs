@@ -545,6 +545,16 @@ pub fn prefix_error(e: Error, prefix: &str) -> Error {
         },
         Error::Singular(m) => Error::Singular(format!("{prefix}: {m}")),
         Error::InvalidSetting(m) => Error::InvalidSetting(format!("{prefix}: {m}")),
+        Error::OutOfMemory {
+            what,
+            bytes,
+            detail,
+        } => Error::OutOfMemory {
+            what: format!("{prefix}.{what}"),
+            bytes,
+            detail,
+        },
+        Error::Interrupted(m) => Error::Interrupted(format!("{prefix}: {m}")),
     }
 }
 

@@ -24,6 +24,11 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
         Error::InvalidInertia { .. } => "InertiaError",
         Error::InvalidModel { .. } => "ModelStructureError",
         Error::Singular(_) => "SingularityError",
+        Error::OutOfMemory { .. } => "OutOfMemoryError",
+        // Only when no signal handler left its own exception to re-raise.
+        Error::Interrupted(_) => {
+            return pyo3::exceptions::PyKeyboardInterrupt::new_err(err.to_string());
+        }
     };
     py_error(py, class, err.to_string())
 }

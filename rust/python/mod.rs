@@ -3,6 +3,7 @@ mod body;
 mod convert;
 mod errors;
 mod model;
+mod signals;
 mod simulate;
 
 use pyo3::prelude::*;

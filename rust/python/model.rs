@@ -1,14 +1,18 @@
 //! `Joint` and `Model`: the tree, kinematics and both dynamics paths.
-use nalgebra::DMatrix;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::body::PyRigidBody;
 use super::convert::{dmatrix_to_array, mat3, points, to_array, to_array1, vec3, vector_into};
 use super::errors::{check_result, invalid, IntoPyResult};
+use super::signals::detach_interruptible;
 use crate::denoc;
 use crate::joint::Joint;
 use crate::kinematics;
+use crate::alloc::try_zeros;
 use crate::model::Model;
 use crate::recursive::{self, Data};
 use crate::spatial::{Placement, Vec3, Vec6};
@@ -92,17 +96,83 @@ impl PyJoint {
     }
 }
 
-#[pyclass(name = "Model", module = "pointmass_dyn._core")]
-pub struct PyModel {
-    pub model: Model,
-    pub data: Data,
+/// One version of a model: replaced, never mutated, by `add_body`, so calls in flight, scenes
+/// and copies share it without locks.
+#[derive(Clone)]
+pub struct Version {
+    pub model: Arc<Model>,
+    /// The URDF joints (names, limits, damping, friction) of a model from `from_urdf`.
+    pub urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>,
+    id: u64,
+}
+
+static NEXT_VERSION: AtomicU64 = AtomicU64::new(1);
+
+fn next_version() -> u64 {
+    NEXT_VERSION.fetch_add(1, Ordering::Relaxed)
+}
+
+/// The buffers of one call: taken from the model's pool, so any number of threads can use
+/// one `Model` at once, and put back for the next call.
+struct Workspace {
+    version: Version,
+    data: Data,
     q: Vec<f64>,
     v: Vec<f64>,
     x: Vec<f64>,
     out: Vec<f64>,
-    gim: DMatrix<f64>,
-    /// The URDF joints (names, limits, damping, friction) of a model from `from_urdf`.
-    pub urdf_joints: Vec<crate::urdf::UrdfJoint>,
+}
+
+impl Workspace {
+    fn new(version: Version) -> Self {
+        let m = &version.model;
+        let (nq, nv) = (m.nq, m.nv);
+        Workspace {
+            data: Data::new(m),
+            q: vec![0.0; nq],
+            v: vec![0.0; nv],
+            x: vec![0.0; nv],
+            out: vec![0.0; nv],
+            version,
+        }
+    }
+
+    fn model(&self) -> &Model {
+        &self.version.model
+    }
+
+    /// Reads q (and v) into the buffers and validates them.
+    fn load_state(
+        &mut self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        vector_into(q, "q", &mut self.q)?;
+        if let Some(v) = v {
+            vector_into(v, "v", &mut self.v)?;
+        }
+        self.version
+            .model
+            .check_state(&self.q, v.map(|_| self.v.as_slice()))
+            .py(py)
+    }
+
+    fn load_x(&mut self, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -> PyResult<()> {
+        vector_into(x, arg, &mut self.x)?;
+        crate::error::check_finite(arg, &self.x).py(py)
+    }
+}
+
+/// Workspaces kept for reuse per model (more threads than this allocate their own).
+const POOL: usize = 4;
+
+#[pyclass(name = "Model", module = "pointmass_dyn._core", frozen)]
+pub struct PyModel {
+    current: Mutex<Version>,
+    /// `current.id`, readable without the lock on every call.
+    current_id: AtomicU64,
+    pool: Mutex<Vec<Box<Workspace>>>,
 }
 
 /// `None` means no gravity: a model computes only what it is asked for.
@@ -162,7 +232,7 @@ impl PyModel {
     /// the GIL for large models and checks the result.
     #[allow(clippy::too_many_arguments)]
     fn dynamics<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         direction: Direction,
         q: &Bound<'_, PyAny>,
@@ -174,26 +244,23 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyAny>> {
         let method = method_arg(py, method)?;
         let g = gravity_arg(py, gravity)?;
-        self.load_state(py, q, Some(v))?;
-        self.load_x(py, x, direction.input())?;
-        let ext = self.external_wrenches(external)?;
-        let (model, qv, vv, xv) = (&self.model, &self.q, &self.v, &self.x);
-        match method {
-            Method::Recursive => {
-                let (data, out) = (&mut self.data, &mut self.out);
-                let mut run = || match direction {
-                    Direction::Forward => recursive::forward_dynamics(
-                        model,
-                        data,
-                        qv,
-                        vv,
-                        xv,
-                        &g,
-                        ext.as_deref(),
-                        out,
-                    ),
-                    Direction::Inverse => {
-                        recursive::inverse_dynamics(
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, Some(v))?;
+            ws.load_x(py, x, direction.input())?;
+            let ext = external_wrenches(ws.model(), external)?;
+            let Workspace {
+                version,
+                data,
+                q: qv,
+                v: vv,
+                x: xv,
+                out,
+            } = ws;
+            let model: &Model = &version.model;
+            match method {
+                Method::Recursive => {
+                    let mut run = || match direction {
+                        Direction::Forward => recursive::forward_dynamics(
                             model,
                             data,
                             qv,
@@ -202,91 +269,126 @@ impl PyModel {
                             &g,
                             ext.as_deref(),
                             out,
-                        );
-                        Ok(())
+                        ),
+                        Direction::Inverse => {
+                            recursive::inverse_dynamics(
+                                model,
+                                data,
+                                qv,
+                                vv,
+                                xv,
+                                &g,
+                                ext.as_deref(),
+                                out,
+                            );
+                            Ok(())
+                        }
+                    };
+                    if model.links.len() >= DETACH_LINKS {
+                        py.detach(run)
+                    } else {
+                        run()
                     }
-                };
-                if model.links.len() >= DETACH_LINKS {
-                    py.detach(run)
-                } else {
-                    run()
-                }
-                .py(py)?;
-                check_result(py, direction.name(), &self.out)?;
-                Ok(to_array1(py, &self.out).into_any())
-            }
-            Method::Denoc => {
-                if ext.is_some() {
-                    return Err(invalid(
-                        py,
-                        "external",
-                        "None with method='denoc' (apply point forces with generalized_forces)",
-                        "wrenches",
-                    ));
-                }
-                let out = py
-                    .detach(|| match direction {
-                        Direction::Forward => denoc::forward_dynamics(model, qv, vv, xv, &g),
-                        Direction::Inverse => Ok(denoc::inverse_dynamics(model, qv, vv, xv, &g)),
-                    })
                     .py(py)?;
-                check_result(py, direction.name(), out.as_slice())?;
-                Ok(to_array1(py, out.as_slice()).into_any())
+                    check_result(py, direction.name(), out)?;
+                    Ok(to_array1(py, out).into_any())
+                }
+                Method::Denoc => {
+                    if ext.is_some() {
+                        return Err(invalid(
+                            py,
+                            "external",
+                            "None with method='denoc' (apply point forces with generalized_forces)",
+                            "wrenches",
+                        ));
+                    }
+                    let out = detach_interruptible(py, || match direction {
+                        Direction::Forward => denoc::forward_dynamics(model, qv, vv, xv, &g),
+                        Direction::Inverse => denoc::inverse_dynamics(model, qv, vv, xv, &g),
+                    })?;
+                    check_result(py, direction.name(), out.as_slice())?;
+                    Ok(to_array1(py, out.as_slice()).into_any())
+                }
             }
-        }
+        })
     }
 
     pub fn from_model(model: Model) -> Self {
-        let data = Data::new(&model);
-        let (nq, nv) = (model.nq, model.nv);
+        Self::from_parts(Arc::new(model), Arc::new(Vec::new()))
+    }
+
+    /// A model sharing `model` (a scene's, another model's): nothing is copied until one of
+    /// them adds a body.
+    pub fn from_parts(model: Arc<Model>, urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>) -> Self {
+        let id = next_version();
         PyModel {
-            model,
-            data,
-            q: vec![0.0; nq],
-            v: vec![0.0; nv],
-            x: vec![0.0; nv],
-            out: vec![0.0; nv],
-            gim: DMatrix::zeros(nv, nv),
-            urdf_joints: Vec::new(),
+            current: Mutex::new(Version {
+                model,
+                urdf_joints,
+                id,
+            }),
+            current_id: AtomicU64::new(id),
+            pool: Mutex::new(Vec::new()),
         }
     }
 
-    /// Reads q (and v) into the model's buffers and validates them.
-    fn load_state(
-        &mut self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<()> {
-        vector_into(q, "q", &mut self.q)?;
-        if let Some(v) = v {
-            vector_into(v, "v", &mut self.v)?;
-        }
-        self.model
-            .check_state(&self.q, v.map(|_| self.v.as_slice()))
-            .py(py)
+    /// The model as it is now (shared, immutable).
+    pub fn model(&self) -> Arc<Model> {
+        self.version().model.clone()
     }
 
-    fn load_x(&mut self, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -> PyResult<()> {
-        vector_into(x, arg, &mut self.x)?;
-        crate::error::check_finite(arg, &self.x).py(py)
+    /// The URDF joints of a model from `from_urdf` (empty otherwise).
+    pub fn urdf_joints(&self) -> Arc<Vec<crate::urdf::UrdfJoint>> {
+        self.version().urdf_joints.clone()
     }
 
-    fn external_wrenches(&self, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Vec6>>> {
-        match obj {
-            Some(f) if !f.is_none() => {
-                let (shape, data) = super::convert::array(f, "external")?;
-                let n = self.model.links.len();
-                if shape != [n, 6] {
-                    return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), super::convert::shape_str(&shape)));
-                }
-                crate::error::check_finite("external", &data).py(f.py())?;
-                Ok(Some(
-                    data.chunks_exact(6).map(Vec6::from_column_slice).collect(),
-                ))
+    fn version(&self) -> MutexGuard<'_, Version> {
+        // A thread that panicked while holding the lock left a whole `Version` behind: the
+        // value is still consistent, so a poisoned lock is taken as it is.
+        self.current.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    fn pool(&self) -> MutexGuard<'_, Vec<Box<Workspace>>> {
+        self.pool.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Runs `f` with a workspace of the current model: one from the pool when there is one
+    /// of this version, otherwise a new one (put back afterwards for the next call).
+    fn with_workspace<R>(&self, f: impl FnOnce(&mut Workspace) -> PyResult<R>) -> PyResult<R> {
+        let id = self.current_id.load(Ordering::Acquire);
+        let reused = self.pool().pop().filter(|ws| ws.version.id == id);
+        let mut ws = match reused {
+            Some(ws) => ws,
+            None => Box::new(Workspace::new(self.version().clone())),
+        };
+        let result = f(&mut ws);
+        if ws.version.id == self.current_id.load(Ordering::Acquire) {
+            let mut pool = self.pool();
+            if pool.len() < POOL {
+                pool.push(ws);
             }
-            _ => Ok(None),
         }
+        result
+    }
+}
+
+fn external_wrenches(
+    model: &Model,
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<Vec<Vec6>>> {
+    match obj {
+        Some(f) if !f.is_none() => {
+            let (shape, data) = super::convert::array(f, "external")?;
+            let n = model.links.len();
+            if shape != [n, 6] {
+                return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), super::convert::shape_str(&shape)));
+            }
+            crate::error::check_finite("external", &data).py(f.py())?;
+            Ok(Some(
+                data.chunks_exact(6).map(Vec6::from_column_slice).collect(),
+            ))
+        }
+        _ => Ok(None),
     }
 }
 
@@ -301,7 +403,7 @@ impl PyModel {
     #[pyo3(signature = (body, joint, parent=-1, translation=None, rotation=None, name=None, point_mass_center=None))]
     #[allow(clippy::too_many_arguments)]
     fn add_body(
-        &mut self,
+        &self,
         py: Python<'_>,
         body: PyRef<'_, PyRigidBody>,
         joint: PyRef<'_, PyJoint>,
@@ -311,20 +413,6 @@ impl PyModel {
         name: Option<String>,
         point_mass_center: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<usize> {
-        let parent = match parent {
-            -1 => None,
-            p if p >= 0 => Some(p as usize),
-            p => {
-                return Err(super::errors::py_error(
-                    py,
-                    "ModelStructureError",
-                    format!(
-                        "parent: expected -1 (the world) or a body index 0..{}, got {p}",
-                        self.model.nbodies()
-                    ),
-                ))
-            }
-        };
         let t = match translation {
             Some(t) if !t.is_none() => vec3(t, "translation")?,
             _ => Vec3::zeros(),
@@ -337,8 +425,24 @@ impl PyModel {
             Some(c) if !c.is_none() => Some(vec3(c, "point_mass_center")?),
             _ => None,
         };
-        let k = self
-            .model
+        let mut version = self.version();
+        let parent = match parent {
+            -1 => None,
+            p if p >= 0 => Some(p as usize),
+            p => {
+                return Err(super::errors::py_error(
+                    py,
+                    "ModelStructureError",
+                    format!(
+                        "parent: expected -1 (the world) or a body index 0..{}, got {p}",
+                        version.model.nbodies()
+                    ),
+                ))
+            }
+        };
+        // Copy-on-write: a model shared with a scene, a copy or a call in flight is copied
+        // once; a model built body by body is extended in place (amortised O(1) per body).
+        let k = Arc::make_mut(&mut version.model)
             .add_body(
                 body.inner,
                 joint.inner,
@@ -348,56 +452,56 @@ impl PyModel {
                 center,
             )
             .py(py)?;
-        let urdf_joints = std::mem::take(&mut self.urdf_joints);
-        *self = PyModel::from_model(std::mem::take(&mut self.model));
-        self.urdf_joints = urdf_joints;
+        version.id = next_version();
+        self.current_id.store(version.id, Ordering::Release);
+        drop(version);
+        self.pool().clear();
         Ok(k)
     }
 
     #[getter]
     fn nq(&self) -> usize {
-        self.model.nq
+        self.version().model.nq
     }
     #[getter]
     fn nv(&self) -> usize {
-        self.model.nv
+        self.version().model.nv
     }
     #[getter]
     fn nbodies(&self) -> usize {
-        self.model.nbodies()
+        self.version().model.nbodies()
     }
     /// Moving links (bodies on Fixed joints are welded into their parent's link).
     #[getter]
     fn nlinks(&self) -> usize {
-        self.model.links.len()
+        self.version().model.links.len()
     }
     #[getter]
     fn body_names(&self) -> Vec<String> {
-        self.model.bodies.iter().map(|b| b.name.clone()).collect()
+        let m = self.model();
+        m.bodies.iter().map(|b| b.name.clone()).collect()
     }
     /// Names of the bodies that define each moving link, in q/v order.
     #[getter]
     fn link_names(&self) -> Vec<String> {
-        self.model
-            .links
+        let m = self.model();
+        m.links
             .iter()
-            .map(|l| self.model.bodies[l.body].name.clone())
+            .map(|l| m.bodies[l.body].name.clone())
             .collect()
     }
     #[getter]
     fn total_mass(&self) -> f64 {
-        self.model.total_mass()
+        self.model().total_mass()
     }
     /// Per body: (name, joint kind, parent index or -1, link index or -1).
     fn body_info(&self, py: Python<'_>, index: usize) -> PyResult<(String, String, i64, i64)> {
-        let b = self.model.bodies.get(index).ok_or_else(|| {
+        let m = self.model();
+        let b = m.bodies.get(index).ok_or_else(|| {
             super::errors::py_error(
                 py,
                 "ModelStructureError",
-                format!(
-                    "index: no body {index} (the model has {})",
-                    self.model.nbodies()
-                ),
+                format!("index: no body {index} (the model has {})", m.nbodies()),
             )
         })?;
         Ok((
@@ -409,7 +513,7 @@ impl PyModel {
     }
     /// (q index, v index, nq, nv) of each link's joint.
     fn joint_slices(&self) -> Vec<(usize, usize, usize, usize)> {
-        self.model
+        self.model()
             .links
             .iter()
             .map(|l| (l.q_index, l.v_index, l.joint.nq(), l.joint.nv()))
@@ -417,57 +521,57 @@ impl PyModel {
     }
 
     fn neutral<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_array1(py, &self.model.neutral()).into_any()
+        to_array1(py, &self.model().neutral()).into_any()
     }
 
     /// World placements of every body at `q`: (rotations (nbodies, 3, 3), origins (nbodies, 3)).
     fn placements<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        self.load_state(py, q, None)?;
-        kinematics::positions(&self.model, &self.q, &mut self.data.links);
-        let nb = self.model.nbodies();
-        let mut rots = Vec::with_capacity(9 * nb);
-        let mut origins = Vec::with_capacity(3 * nb);
-        for b in 0..nb {
-            let p = kinematics::body_placement(&self.model, &self.data.links, b);
-            rots.extend_from_slice(p.rotation.transpose().as_slice());
-            origins.extend_from_slice(p.translation.as_slice());
-        }
-        Ok((
-            to_array(py, rots, &[nb, 3, 3])?,
-            to_array(py, origins, &[nb, 3])?,
-        ))
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, None)?;
+            let model: &Model = &ws.version.model;
+            kinematics::positions(model, &ws.q, &mut ws.data.links);
+            let nb = model.nbodies();
+            let mut rots = Vec::with_capacity(9 * nb);
+            let mut origins = Vec::with_capacity(3 * nb);
+            for b in 0..nb {
+                let p = kinematics::body_placement(model, &ws.data.links, b);
+                rots.extend_from_slice(p.rotation.transpose().as_slice());
+                origins.extend_from_slice(p.translation.as_slice());
+            }
+            Ok((
+                to_array(py, rots, &[nb, 3, 3])?,
+                to_array(py, origins, &[nb, 3])?,
+            ))
+        })
     }
 
     /// The seven point masses of every moving link: (masses (nlinks, 7), world positions
     /// (nlinks, 7, 3)) at `q`.
     fn point_masses<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        self.load_state(py, q, None)?;
-        let den = denoc::matrices(&self.model, &self.q);
-        let n = self.model.links.len();
-        let pts = den.points.transpose().as_slice().to_vec();
-        Ok((
-            to_array(py, den.masses.as_slice().to_vec(), &[n, 7])?,
-            to_array(py, pts, &[n, 7, 3])?,
-        ))
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, None)?;
+            let (masses, points) = denoc::point_positions(ws.model(), &ws.q);
+            let n = ws.model().links.len();
+            let pts = points.transpose().as_slice().to_vec();
+            Ok((
+                to_array(py, masses.as_slice().to_vec(), &[n, 7])?,
+                to_array(py, pts, &[n, 7, 3])?,
+            ))
+        })
     }
 
     /// The DeNOC matrices at `q`: dict with D, Nl, Nd, N, masses (7n,), points (7n, 3).
-    fn denoc<'py>(
-        &mut self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        self.load_state(py, q, None)?;
-        let (model, qv) = (&self.model, &self.q);
-        let den = py.detach(|| denoc::matrices(model, qv));
+    fn denoc<'py>(&self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+        let (model, qv) = self.state_only(py, q)?;
+        let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
         let d = PyDict::new(py);
         d.set_item("D", dmatrix_to_array(py, &den.d)?)?;
         d.set_item("Nl", dmatrix_to_array(py, &den.nl)?)?;
@@ -480,14 +584,13 @@ impl PyModel {
 
     /// Time derivatives of the DeNOC matrices at `(q, v)`: dict with D, Nl, Nd, N.
     fn denoc_rates<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        self.load_state(py, q, Some(v))?;
-        let (model, qv, vv) = (&self.model, &self.q, &self.v);
-        let (_, rates) = py.detach(|| denoc::matrices_and_rates(model, qv, vv));
+        let (model, qv, vv) = self.state(py, q, v)?;
+        let (_, rates) = detach_interruptible(py, || denoc::matrices_and_rates(&model, &qv, &vv))?;
         let d = PyDict::new(py);
         d.set_item("D", dmatrix_to_array(py, &rates.d)?)?;
         d.set_item("Nl", dmatrix_to_array(py, &rates.nl)?)?;
@@ -499,27 +602,32 @@ impl PyModel {
     /// Generalized inertia matrix (GIM), nv × nv.
     #[pyo3(signature = (q, method="recursive"))]
     fn mass_matrix<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         method: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let method = method_arg(py, method)?;
-        self.load_state(py, q, None)?;
         match method {
-            Method::Recursive => {
-                let (model, data, qv, gim) = (&self.model, &mut self.data, &self.q, &mut self.gim);
+            Method::Recursive => self.with_workspace(|ws| {
+                ws.load_state(py, q, None)?;
+                let nv = ws.model().nv;
+                let mut gim = try_zeros(nv, nv, "mass_matrix").py(py)?;
+                let Workspace {
+                    version, data, q: qv, ..
+                } = ws;
+                let model: &Model = &version.model;
                 // O(n·depth): long chains are worth releasing the interpreter for.
                 if model.links.len() >= DETACH_LINKS {
-                    py.detach(|| recursive::mass_matrix(model, data, qv, gim));
+                    py.detach(|| recursive::mass_matrix(model, data, qv, &mut gim));
                 } else {
-                    recursive::mass_matrix(model, data, qv, gim);
+                    recursive::mass_matrix(model, data, qv, &mut gim);
                 }
-                dmatrix_to_array(py, &self.gim)
-            }
+                dmatrix_to_array(py, &gim)
+            }),
             Method::Denoc => {
-                let (model, qv) = (&self.model, &self.q);
-                let m = py.detach(|| denoc::mass_matrix(model, qv));
+                let (model, qv) = self.state_only(py, q)?;
+                let m = detach_interruptible(py, || denoc::mass_matrix(&model, &qv))?;
                 dmatrix_to_array(py, &m)
             }
         }
@@ -527,78 +635,79 @@ impl PyModel {
 
     /// Convective matrix `C = Nᵀ M Ṅ` (explicit DeNOC products).
     fn convective_matrix<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.load_state(py, q, Some(v))?;
-        let (model, qv, vv) = (&self.model, &self.q, &self.v);
-        let c = py.detach(|| denoc::convective_matrix(model, qv, vv));
+        let (model, qv, vv) = self.state(py, q, v)?;
+        let c = detach_interruptible(py, || denoc::convective_matrix(&model, &qv, &vv))?;
         dmatrix_to_array(py, &c)
     }
 
     /// Generalized gravity force `Nᵀ f^G` (right-hand side; Pinocchio's
     /// `computeGeneralizedGravity` is its negative).
     fn gravity_forces<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         gravity: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let g = gravity_arg(py, Some(gravity))?;
-        self.load_state(py, q, None)?;
-        let tg = denoc::gravity_forces(&self.model, &self.q, &g);
+        let (model, qv) = self.state_only(py, q)?;
+        let tg = detach_interruptible(py, || denoc::gravity_forces(&model, &qv, &g))?;
         Ok(to_array1(py, tg.as_slice()).into_any())
     }
 
     /// `Nᵀ f` for forces on the point masses, shape (nlinks, 7, 3) or (7·nlinks, 3), world.
     fn generalized_forces<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         forces: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.load_state(py, q, None)?;
+        let (model, qv) = self.state_only(py, q)?;
         let f = points(forces, "forces")?;
         for p in &f {
             crate::error::check_finite("forces", p.as_slice()).py(py)?;
         }
-        let tau = denoc::generalized_forces(&self.model, &self.q, &f).py(py)?;
+        let tau = detach_interruptible(py, || denoc::generalized_forces(&model, &qv, &f))?;
         Ok(to_array1(py, tau.as_slice()).into_any())
     }
 
     /// Bias forces `C v − τ_g` (Pinocchio's `nonLinearEffects`).
     #[pyo3(signature = (q, v, gravity=None))]
     fn bias_forces<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
         gravity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let g = gravity_arg(py, gravity)?;
-        self.load_state(py, q, Some(v))?;
-        self.x.fill(0.0);
-        recursive::inverse_dynamics(
-            &self.model,
-            &mut self.data,
-            &self.q,
-            &self.v,
-            &self.x,
-            &g,
-            None,
-            &mut self.out,
-        );
-        check_result(py, "bias_forces", &self.out)?;
-        Ok(to_array1(py, &self.out).into_any())
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, Some(v))?;
+            ws.x.fill(0.0);
+            recursive::inverse_dynamics(
+                &ws.version.model,
+                &mut ws.data,
+                &ws.q,
+                &ws.v,
+                &ws.x,
+                &g,
+                None,
+                &mut ws.out,
+            );
+            check_result(py, "bias_forces", &ws.out)?;
+            Ok(to_array1(py, &ws.out).into_any())
+        })
     }
 
     /// Accelerations from `I a + C v = τ + τ_g + τ_ext`.
     #[pyo3(signature = (q, v, tau, gravity=None, external=None, method="recursive"))]
     #[allow(clippy::too_many_arguments)]
     fn forward_dynamics<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
@@ -614,7 +723,7 @@ impl PyModel {
     #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive"))]
     #[allow(clippy::too_many_arguments)]
     fn inverse_dynamics<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
@@ -628,50 +737,58 @@ impl PyModel {
 
     /// Kinetic energy `½ vᵀ I v`.
     fn kinetic_energy(
-        &mut self,
+        &self,
         py: Python<'_>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
     ) -> PyResult<f64> {
-        self.load_state(py, q, Some(v))?;
-        kinematics::positions(&self.model, &self.q, &mut self.data.links);
-        kinematics::velocities(&self.model, &self.q, &self.v, &mut self.data.links);
-        Ok(recursive::kinetic_energy(&self.data))
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, Some(v))?;
+            let model: &Model = &ws.version.model;
+            kinematics::positions(model, &ws.q, &mut ws.data.links);
+            kinematics::velocities(model, &ws.q, &ws.v, &mut ws.data.links);
+            Ok(recursive::kinetic_energy(&ws.data))
+        })
     }
 
     /// Gravitational potential energy `−Σ m_ij g·x_ij` (zero at the world origin).
     fn potential_energy(
-        &mut self,
+        &self,
         py: Python<'_>,
         q: &Bound<'_, PyAny>,
         gravity: &Bound<'_, PyAny>,
     ) -> PyResult<f64> {
         let g = gravity_arg(py, Some(gravity))?;
-        self.load_state(py, q, None)?;
-        kinematics::positions(&self.model, &self.q, &mut self.data.links);
-        Ok(recursive::potential_energy(&self.data, &g))
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, None)?;
+            kinematics::positions(&ws.version.model, &ws.q, &mut ws.data.links);
+            Ok(recursive::potential_energy(&ws.data, &g))
+        })
     }
 
     /// `q̇` from `v` (differs from `v` only for quaternion joints).
     fn velocity_to_qdot<'py>(
-        &mut self,
+        &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.load_state(py, q, Some(v))?;
-        let mut qd = vec![0.0; self.model.nq];
-        self.model.velocity_to_qdot(&self.q, &self.v, &mut qd);
-        Ok(to_array1(py, &qd).into_any())
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, Some(v))?;
+            let mut qd = vec![0.0; ws.model().nq];
+            ws.model().velocity_to_qdot(&ws.q, &ws.v, &mut qd);
+            Ok(to_array1(py, &qd).into_any())
+        })
     }
 
     fn __repr__(&self) -> String {
+        let m = self.model();
         format!(
             "Model(nbodies={}, nlinks={}, nq={}, nv={})",
-            self.model.nbodies(),
-            self.model.links.len(),
-            self.model.nq,
-            self.model.nv
+            m.nbodies(),
+            m.links.len(),
+            m.nq,
+            m.nv
         )
     }
 
@@ -689,34 +806,30 @@ impl PyModel {
                 warnings.call_method1("warn", (w.as_str(), &category, 1))?;
             }
         }
-        let mut m = PyModel::from_model(urdf.model);
-        m.urdf_joints = urdf.joints;
-        Ok(m)
+        Ok(PyModel::from_parts(
+            Arc::new(urdf.model),
+            Arc::new(urdf.joints),
+        ))
     }
 
     /// Names of the moving joints in q/v order: the URDF joint names for a model from
     /// `from_urdf`, otherwise the names of the bodies that define each link.
     #[getter]
     fn joint_names(&self) -> Vec<String> {
-        self.model
-            .links
-            .iter()
-            .map(|l| match urdf_joint(&self.urdf_joints, l.body) {
-                Some(j) => j.name.clone(),
-                None => self.model.bodies[l.body].name.clone(),
-            })
-            .collect()
+        let v = self.version().clone();
+        joint_names(&v.model, &v.urdf_joints)
     }
 
     /// `{joint name: (lower, upper, effort, velocity)}` for the moving joints in q/v order.
     /// What the file does not give is unbounded: ±inf position bounds (always, for
     /// continuous joints), inf effort and velocity.
     fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let ver = self.version().clone();
         let d = PyDict::new(py);
-        let names = self.joint_names();
-        for (l, name) in self.model.links.iter().zip(names) {
+        let names = joint_names(&ver.model, &ver.urdf_joints);
+        for (l, name) in ver.model.links.iter().zip(names) {
             let inf = f64::INFINITY;
-            let lim = urdf_joint(&self.urdf_joints, l.body)
+            let lim = urdf_joint(&ver.urdf_joints, l.body)
                 .and_then(|j| j.limit)
                 .map(|x| (x.lower, x.upper, x.effort, x.velocity))
                 .unwrap_or((-inf, inf, inf, inf));
@@ -728,16 +841,54 @@ impl PyModel {
     /// `{joint name: (damping, friction)}` from the URDF `<dynamics>` elements, for the
     /// moving joints in q/v order (0 where absent). Not applied by the model itself.
     fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let ver = self.version().clone();
         let d = PyDict::new(py);
-        let names = self.joint_names();
-        for (l, name) in self.model.links.iter().zip(names) {
-            let dyn_ = urdf_joint(&self.urdf_joints, l.body)
+        let names = joint_names(&ver.model, &ver.urdf_joints);
+        for (l, name) in ver.model.links.iter().zip(names) {
+            let dyn_ = urdf_joint(&ver.urdf_joints, l.body)
                 .map(|j| (j.damping, j.friction))
                 .unwrap_or((0.0, 0.0));
             d.set_item(name, dyn_)?;
         }
         Ok(d)
     }
+}
+
+impl PyModel {
+    /// The current model and a checked copy of `q`, for the calls that run detached and
+    /// need no workspace.
+    fn state_only(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<(Arc<Model>, Vec<f64>)> {
+        let model = self.model();
+        let q = super::convert::vector(q, "q", Some(model.nq))?;
+        model.check_state(&q, None).py(py)?;
+        Ok((model, q))
+    }
+
+    /// As [`PyModel::state_only`] with `v`.
+    #[allow(clippy::type_complexity)]
+    fn state(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<(Arc<Model>, Vec<f64>, Vec<f64>)> {
+        let model = self.model();
+        let q = super::convert::vector(q, "q", Some(model.nq))?;
+        let v = super::convert::vector(v, "v", Some(model.nv))?;
+        model.check_state(&q, Some(&v)).py(py)?;
+        Ok((model, q, v))
+    }
+}
+
+fn joint_names(model: &Model, urdf_joints: &[crate::urdf::UrdfJoint]) -> Vec<String> {
+    model
+        .links
+        .iter()
+        .map(|l| match urdf_joint(urdf_joints, l.body) {
+            Some(j) => j.name.clone(),
+            None => model.bodies[l.body].name.clone(),
+        })
+        .collect()
 }
 
 /// The URDF joint whose child is body `body`.

@@ -8,6 +8,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 
 use super::convert::{array, shape_str, to_array, to_array1, vec3, vector};
 use super::errors::{invalid, py_error, IntoPyResult};
+use super::signals::Watch;
 use super::model::PyModel;
 use crate::effects::{
     Damper, Disabled, Effect, Effects, External, ExternalLoad, Frame, Friction, JointRef, Matrix,
@@ -136,29 +137,36 @@ fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyA
 }
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
-/// every evaluation; the first exception is kept for the caller to re-raise.
+/// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
+/// caller to re-raise; a non-finite torque fails the run like any effect's (`success=False`
+/// with the time), so it is not an exception.
 fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
     TorqueFunction(Arc::new(
         move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
             Python::attach(|py| {
-                let mut call = || -> PyResult<()> {
+                let call = || -> PyResult<Vec<f64>> {
                     let r = func.bind(py).call1((
                         t,
                         PyArray1::from_slice(py, q),
                         PyArray1::from_slice(py, v),
                     ))?;
-                    let x = vector(&r, "torque function f(t, q, v)", Some(out.len()))?;
-                    crate::error::check_finite("torque function f(t, q, v)", &x).py(py)?;
-                    out.copy_from_slice(&x);
-                    Ok(())
+                    vector(&r, "torque function f(t, q, v)", Some(out.len()))
                 };
-                call().map_err(|e| {
-                    let msg = e.to_string();
-                    CALLBACK_ERROR.with(|c| {
-                        c.borrow_mut().get_or_insert(e);
-                    });
-                    msg
-                })
+                match call() {
+                    Ok(x) => {
+                        crate::error::check_finite("torque function f(t, q, v)", &x)
+                            .map_err(|e| e.to_string())?;
+                        out.copy_from_slice(&x);
+                        Ok(())
+                    }
+                    Err(e) => {
+                        let msg = e.to_string();
+                        CALLBACK_ERROR.with(|c| {
+                            c.borrow_mut().get_or_insert(e);
+                        });
+                        Err(msg)
+                    }
+                }
             })
         },
     ))
@@ -544,7 +552,7 @@ impl PyScene {
         description: Option<String>,
         disable: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let m = model.model.clone();
+        let m = model.model();
         let mut q = match q0 {
             Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
             _ => m.neutral(),
@@ -607,10 +615,11 @@ impl PyScene {
             .map_err(|e| py_error(py, "SceneError", e.to_string()))
     }
 
-    /// A copy of the scene's model.
+    /// The scene's model (shared, not copied: adding a body to it copies it first, so the
+    /// scene never changes).
     #[getter]
     fn model(&self) -> PyModel {
-        PyModel::from_model(self.inner.model.clone())
+        PyModel::from_parts(self.inner.model.clone(), Default::default())
     }
     #[getter]
     fn q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
@@ -869,7 +878,7 @@ fn python_event<'a>(
 
 /// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
-#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None, disable=None, power=false, stiffness="warn"))]
+#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None, disable=None, power=false, stiffness="warn", progress_interval=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_scene<'py>(
     py: Python<'py>,
@@ -888,8 +897,21 @@ pub fn simulate_scene<'py>(
     disable: Option<&Bound<'_, PyAny>>,
     power: bool,
     stiffness: &str,
+    progress_interval: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
+    let interval = match progress_interval {
+        None => super::signals::INTERVAL,
+        Some(x) if (0.0..=3600.0).contains(&x) => std::time::Duration::from_secs_f64(x),
+        Some(x) => {
+            return Err(invalid(
+                py,
+                "progress_interval",
+                "seconds between progress calls, 0 to 3600",
+                x,
+            ))
+        }
+    };
     let disabled = disable_arg(py, disable)?
         .or(s.settings.disable)
         .unwrap_or_default();
@@ -943,28 +965,19 @@ pub fn simulate_scene<'py>(
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let model = &s.model;
     let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
+    let mut watch = Watch::every(interval);
     take_callback_error();
     let result = py.detach(|| {
         let extra: Vec<Event<'_>> = py_events
             .iter()
             .map(|spec| python_event(spec, Some(nq), &failure))
             .collect();
-        // Every few hundred evaluations: look for Ctrl-C, and report progress if asked.
+        // Ctrl-C and progress by elapsed time (signals::INTERVAL), not per evaluation, so a
+        // busy Python thread beside the run costs one hand-over of the interpreter per poll.
         let hook: crate::simulate::Progress<'_> = Box::new(|t: f64| {
-            Python::attach(|py| {
-                let outcome = py.check_signals().and_then(|_| match &progress {
-                    Some(cb) => cb.bind(py).call1((t,)).map(|_| ()),
-                    None => Ok(()),
-                });
-                match outcome {
-                    Ok(()) => true,
-                    Err(e) => {
-                        if let Ok(mut slot) = failure.lock() {
-                            slot.get_or_insert(e);
-                        }
-                        false
-                    }
-                }
+            watch.poll(|py| match &progress {
+                Some(cb) => cb.bind(py).call1((t,)).map(|_| ()),
+                None => Ok(()),
             })
         });
         simulate(
@@ -981,15 +994,19 @@ pub fn simulate_scene<'py>(
             Some(hook),
         )
     });
-    if let Some(err) = take_callback_error() {
-        return Err(err);
-    }
-    if let Some(err) = failure.into_inner().ok().flatten() {
-        return Err(err);
-    }
-    let traj = result.py(py)?;
+    // A Python callback that raised (or Ctrl-C) ends the run; its exception is re-raised by
+    // `pointmass_dyn.simulate` with the trajectory computed so far attached.
+    let raised = take_callback_error()
+        .or(failure.into_inner().ok().flatten())
+        .or(watch.error.take());
+    let (traj, raised) = match (result, raised) {
+        (Ok(traj), raised) => (traj, raised),
+        (Err(_), Some(raised)) => return Err(raised),
+        (Err(e), None) => return Err(super::errors::to_py(py, e)),
+    };
     let n = traj.t.len();
     let d = PyDict::new(py);
+    d.set_item("error", raised.map(|e| e.into_value(py)))?;
     d.set_item("t", to_array1(py, &traj.t))?;
     d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
     d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
@@ -1128,6 +1145,16 @@ pub struct PyDenseSolution {
 impl PyDenseSolution {
     fn __call__<'py>(&self, py: Python<'py>, t: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
         let dim = self.inner.dim();
+        if self.inner.n_segments() == 0 {
+            return Err(py_error(
+                py,
+                "SimulationError",
+                format!(
+                    "sol(t): the run ended at t = {} before its first step, so there is nothing to interpolate",
+                    self.inner.breakpoints().first().copied().unwrap_or(f64::NAN)
+                ),
+            ));
+        }
         if let Ok(x) = t.extract::<f64>() {
             return Ok(to_array1(py, &self.inner.eval(x)).into_any());
         }
@@ -1238,12 +1265,13 @@ pub fn rk45<'py>(
     let sol =
         integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
     drop(evs);
-    if let Some(err) = rhs_failure.into_inner().ok().flatten() {
-        return Err(err);
-    }
-    if let Some(err) = failure.into_inner().ok().flatten() {
-        return Err(err);
-    }
+    // An exception from `fun` or an event (Ctrl-C included) is re-raised by
+    // `pointmass_dyn.rk45` with the solution computed so far attached.
+    let raised = rhs_failure
+        .into_inner()
+        .ok()
+        .flatten()
+        .or(failure.into_inner().ok().flatten());
     let n = sol.t.len();
     let mut y_t = vec![0.0; dim * n];
     for i in 0..n {
@@ -1252,6 +1280,7 @@ pub fn rk45<'py>(
         }
     }
     let d = PyDict::new(py);
+    d.set_item("error", raised.map(|e| e.into_value(py)))?;
     d.set_item("t", to_array1(py, &sol.t))?;
     d.set_item("y", to_array(py, y_t, &[dim, n])?)?;
     let te = PyList::empty(py);

@@ -1,0 +1,78 @@
+//! Ctrl-C (and progress reports) while the interpreter is released. Re-attaching to the
+//! interpreter waits for whichever Python thread holds it, up to its switch interval (5 ms),
+//! so a long computation re-attaches by elapsed time, at most every [`INTERVAL`], never per
+//! evaluation: beside a busy Python thread that costs at most a few per cent.
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+use pyo3::prelude::*;
+
+use super::errors::IntoPyResult;
+use crate::interrupt;
+
+/// How often a detached computation looks at the interpreter.
+pub const INTERVAL: Duration = Duration::from_millis(50);
+
+/// Polls Python's signal handlers (and an optional callback) at most every [`INTERVAL`];
+/// keeps the first exception raised.
+pub struct Watch {
+    last: Instant,
+    interval: Duration,
+    pub error: Option<PyErr>,
+}
+
+impl Default for Watch {
+    fn default() -> Self {
+        Watch::every(INTERVAL)
+    }
+}
+
+impl Watch {
+    pub fn every(interval: Duration) -> Self {
+        Watch {
+            last: Instant::now(),
+            interval,
+            error: None,
+        }
+    }
+
+    /// `true` to keep going. `also` runs after the signal handlers, attached, when due.
+    pub fn poll(&mut self, also: impl FnOnce(Python<'_>) -> PyResult<()>) -> bool {
+        if self.error.is_some() {
+            return false;
+        }
+        if self.last.elapsed() < self.interval {
+            return true;
+        }
+        let outcome = Python::attach(|py| py.check_signals().and_then(|_| also(py)));
+        self.last = Instant::now();
+        match outcome {
+            Ok(()) => true,
+            Err(e) => {
+                self.error = Some(e);
+                false
+            }
+        }
+    }
+}
+
+/// Runs `f` detached from the interpreter with Ctrl-C honoured: the core's long loops call
+/// `interrupt::check`, which polls the signal handlers by elapsed time. A `KeyboardInterrupt`
+/// (or whatever a signal handler raised) comes back as itself.
+pub fn detach_interruptible<T: Send>(
+    py: Python<'_>,
+    f: impl FnOnce() -> crate::error::Result<T> + Send,
+) -> PyResult<T> {
+    let (result, raised) = py.detach(|| {
+        let watch = Rc::new(RefCell::new(Watch::default()));
+        let poller = watch.clone();
+        let result = interrupt::with_poller(Box::new(move || poller.borrow_mut().poll(|_| Ok(()))), f);
+        let raised = watch.borrow_mut().error.take();
+        (result, raised)
+    });
+    match raised {
+        Some(e) => Err(e),
+        None => result.py(py),
+    }
+}
