@@ -349,6 +349,9 @@ pub enum Status {
     },
     /// The right-hand side returned `Err(message)`.
     RhsError { t: f64, at: f64, message: String },
+    /// Event number `event` was NaN at `at` (a Python event that raised reports NaN); the
+    /// step that reached `at` was discarded.
+    EventNaN { t: f64, at: f64, event: usize },
     /// Stiffness was detected and [`StiffnessCheck::Stop`] asked to stop (see [`Stiffness`]).
     Stiff { t: f64, h_lambda: f64, h: f64 },
 }
@@ -407,6 +410,11 @@ impl Status {
             }
             Status::RhsError { t, at, message } => format!(
                 "the right-hand side failed at t = {}: {message}; integration reached t = {}",
+                f(*at),
+                f(*t)
+            ),
+            Status::EventNaN { t, at, event } => format!(
+                "event {event} returned NaN (not a number) at t = {}; integration reached t = {}",
                 f(*at),
                 f(*t)
             ),
@@ -537,6 +545,16 @@ pub fn rk45<S: OdeSystem>(
     // Event state; all buffers are allocated once here.
     let n_ev = events.len();
     let mut g: Vec<f64> = events.iter_mut().map(|e| (e.func)(t0, y0)).collect();
+    // An event that is not a number cannot be watched: the run stops there with the reason
+    // (a Python event that raised reports NaN and keeps its exception for the caller).
+    let nan_event = |g: &[f64], t_old: f64, at: f64| {
+        g.iter().position(|x| x.is_nan()).map(|event| Status::EventNaN {
+            t: t_old,
+            at,
+            event,
+        })
+    };
+    let mut failed_at_start = nan_event(&g, t0, t0);
     let mut g_new = vec![0.0; n_ev];
     let mut counts = vec![0usize; n_ev];
     let mut roots: Vec<(usize, f64)> = Vec::with_capacity(n_ev);
@@ -548,6 +566,9 @@ pub fn rk45<S: OdeSystem>(
     let mut y_term = vec![0.0; dim];
 
     let status = loop {
+        if let Some(s) = failed_at_start.take() {
+            break s;
+        }
         let outcome = match st.step() {
             Ok(o) => o,
             Err(s) => break s, // SciPy stores nothing from a failed step
@@ -570,6 +591,13 @@ pub fn rk45<S: OdeSystem>(
             let y = st.y();
             for (e, gn) in events.iter_mut().zip(g_new.iter_mut()) {
                 *gn = (e.func)(t, y);
+            }
+            if let Some(s) = nan_event(&g_new, t_old, t) {
+                // Nothing of this step is kept (its state, output or dense segment).
+                if let Some(d) = dense.as_mut() {
+                    d.pop_segment();
+                }
+                break s;
             }
             roots.clear();
             for i in 0..n_ev {
@@ -654,7 +682,7 @@ pub fn rk45<S: OdeSystem>(
     };
 
     let t_reached = match &status {
-        Status::TerminalEvent { t, .. } => *t,
+        Status::TerminalEvent { t, .. } | Status::EventNaN { t, .. } => *t,
         _ => st.t(),
     };
     let stiffness = st.stiffness();
