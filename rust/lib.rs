@@ -12,6 +12,7 @@ pub mod integrator;
 pub mod joint;
 pub mod kinematics;
 pub mod model;
+pub mod persist;
 pub mod point_masses;
 pub mod recursive;
 pub mod scene;
