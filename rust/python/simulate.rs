@@ -136,9 +136,12 @@ fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyA
 }
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
-/// every evaluation; the first exception is kept for the caller to re-raise.
-fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
-    TorqueFunction(Arc::new(
+/// every evaluation; the first exception is kept for the caller to re-raise. `func` is kept
+/// as the function's source, which pickling carries (`pickle.rs`).
+pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
+    let source: Arc<dyn std::any::Any + Send + Sync> =
+        Arc::new(Python::attach(|py| func.clone_ref(py)));
+    TorqueFunction::with_source(Arc::new(
         move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
             Python::attach(|py| {
                 let mut call = || -> PyResult<()> {
@@ -161,7 +164,7 @@ fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
                 })
             })
         },
-    ))
+    ), source)
 }
 
 #[pymethods]
@@ -1121,7 +1124,7 @@ pub fn energies<'py>(
 /// times (shape (n, len(t))), as SciPy's `OdeSolution`.
 #[pyclass(name = "DenseSolution", module = "pointmass_dyn._core", frozen)]
 pub struct PyDenseSolution {
-    inner: DenseOutput,
+    pub(crate) inner: DenseOutput,
 }
 
 #[pymethods]
