@@ -240,10 +240,17 @@ impl Model {
                 return bad(format!("two bodies named '{}'", b.name));
             }
             if b.parent.is_some_and(|p| p >= i) {
-                return bad(format!("body {i} has parent {:?}, not an earlier body", b.parent));
+                return bad(format!(
+                    "body {i} has parent {:?}, not an earlier body",
+                    b.parent
+                ));
             }
             if b.link.is_some_and(|l| l >= self.links.len()) {
-                return bad(format!("body {i} belongs to link {:?} of {}", b.link, self.links.len()));
+                return bad(format!(
+                    "body {i} belongs to link {:?} of {}",
+                    b.link,
+                    self.links.len()
+                ));
             }
             let parent_link = b.parent.and_then(|p| self.bodies[p].link);
             let own_link = |l: usize| self.links[l].body == i;
@@ -259,7 +266,9 @@ impl Model {
             if owner.is_none_or(|b| b.link != Some(l) || b.joint != link.joint) {
                 return bad(format!("link {l} and its body {} disagree", link.body));
             }
-            let parent_link = owner.and_then(|b| b.parent).and_then(|p| self.bodies[p].link);
+            let parent_link = owner
+                .and_then(|b| b.parent)
+                .and_then(|p| self.bodies[p].link);
             if link.parent != parent_link || link.parent.is_some_and(|p| p >= l) {
                 return bad(format!("link {l} has parent {:?}", link.parent));
             }

@@ -49,13 +49,12 @@ pub fn encode<T: Serialize + ?Sized>(value: &T) -> Result<Vec<u8>, PersistError>
     let mut out = Vec::with_capacity(256);
     out.extend_from_slice(MAGIC);
     out.push(FORMAT_VERSION);
-    let out = postcard::to_extend(value, out)
-        .map_err(|e| {
-            // Postcard drops the message; the only value that refuses is this one.
-            PersistError(format!(
-                "cannot serialise ({e}): it holds a torque function without a source (a Rust closure)"
-            ))
-        })?;
+    let out = postcard::to_extend(value, out).map_err(|e| {
+        // Postcard drops the message; the only value that refuses is this one.
+        PersistError(format!(
+            "cannot serialise ({e}): it holds a torque function without a source (a Rust closure)"
+        ))
+    })?;
     let mut out = out;
     let sum = fnv1a64(&out);
     out.extend_from_slice(&sum.to_le_bytes());
@@ -158,7 +157,10 @@ mod tests {
             let back: Model = decode(&encode(&m).unwrap()).unwrap();
             same_model(&m, &back);
         }
-        let panda = concat!(env!("CARGO_MANIFEST_DIR"), "/python/pointmass_dyn/scenes/panda.urdf");
+        let panda = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/python/pointmass_dyn/scenes/panda.urdf"
+        );
         let u = crate::urdf::load_urdf(std::path::Path::new(panda)).unwrap();
         let back: Model = decode(&encode(&u.model).unwrap()).unwrap();
         same_model(&u.model, &back);
@@ -239,6 +241,182 @@ mod tests {
         };
         assert!(g.source().is_none());
         assert!((g.0)(0.0, &[], &[], &mut []).is_err());
+    }
+
+    /// One of everything that can be serialised, from literal numbers only (no arithmetic, so
+    /// the bytes are the same on every platform).
+    fn one_of_everything() -> Vec<u8> {
+        use crate::effects::{Damper, Disabled, External, Frame, Friction, JointRef, Kind};
+        use crate::joint::Joint;
+        use crate::model::{BodyRecord, Link};
+        use crate::point_masses::EquimomentalSet;
+        use crate::scene::{Scene, Settings};
+        use crate::simulate::StateEvent;
+        use crate::spatial::{BodyInertia, Placement};
+        use crate::urdf::{Limit, Mimic, UrdfJoint};
+        let v = |x: f64| Vec3::new(x, -x, 0.5);
+        let body = RigidBody {
+            mass: 2.0,
+            com: v(0.25),
+            inertia: Mat3::identity(),
+        };
+        let placement = Placement::new(Mat3::identity(), v(1.0));
+        let joints = [
+            Joint::Revolute { axis: Vec3::x() },
+            Joint::Prismatic { axis: Vec3::y() },
+            Joint::SphericalZYZ,
+            Joint::Spherical,
+            Joint::Fixed,
+        ];
+        let points = EquimomentalSet {
+            masses: [0.25, -0.5, 1.0, 0.0, 1.0, -0.5, 0.75],
+            positions: [v(0.125); 7],
+            half_sides: v(0.0625),
+            center: v(2.0),
+        };
+        let model = Model {
+            bodies: vec![BodyRecord {
+                name: "b".into(),
+                body,
+                joint: joints[0],
+                parent: None,
+                placement,
+                link: Some(0),
+                in_link: Placement::identity(),
+                point_mass_center: Some(v(3.0)),
+            }],
+            links: vec![Link {
+                body: 0,
+                parent: None,
+                joint: joints[0],
+                placement,
+                placement_rotated: false,
+                q_index: 0,
+                v_index: 0,
+                rigid: body,
+                points,
+                inertia: BodyInertia {
+                    mass: 2.0,
+                    first_moment: v(4.0),
+                    rotational: Mat3::identity(),
+                },
+            }],
+            nq: 1,
+            nv: 1,
+        };
+        let col = |x: Vec<f64>| crate::effects::torque::column(x);
+        let table = Table::new(vec![0.0, 1.0], col(vec![1.0, 2.0]), "t", "v").unwrap();
+        let each = PerJoint::Each(vec![1.0, 2.0]);
+        let refs = Some(vec![JointRef::Name("b".into()), JointRef::Index(0)]);
+        let source: crate::effects::TorqueSource = Arc::new(());
+        let f = TorqueFunction::with_source(Arc::new(|_, _, _, _| Ok(())), source);
+        let effects = vec![
+            Effect::Gravity { g: v(9.5) },
+            Effect::Spring(
+                Spring::new(Some("s".into()), refs.clone(), each.clone(), None).unwrap(),
+            ),
+            Effect::Damper(Damper::new(None, refs.clone(), PerJoint::All(0.5)).unwrap()),
+            Effect::Friction(Friction::new(None, None, each.clone(), Some(0.25)).unwrap()),
+            Effect::Torque(Torque::constant(None, refs.clone(), each.clone()).unwrap()),
+            Effect::Torque(Torque::tabulated(None, None, table.clone()).unwrap()),
+            Effect::Torque(Torque::pd(None, refs, each.clone(), each, table).unwrap()),
+            Effect::Torque(Torque::function(Some("f".into()), f)),
+            Effect::External(
+                External::constant(
+                    None,
+                    JointRef::Index(0),
+                    v(1.0),
+                    v(2.0),
+                    v(3.0),
+                    Frame::Body,
+                )
+                .unwrap(),
+            ),
+            Effect::External(
+                External::tabulated(
+                    None,
+                    JointRef::Index(0),
+                    v(1.0),
+                    vec![0.0, 1.0],
+                    Some(crate::effects::Matrix {
+                        values: vec![1.0; 6],
+                        rows: 2,
+                        cols: 3,
+                        one_d: false,
+                    }),
+                    None,
+                    Frame::World,
+                )
+                .unwrap(),
+            ),
+        ];
+        let scene = Scene {
+            name: "n".into(),
+            description: "d".into(),
+            model,
+            q0: vec![0.5],
+            v0: vec![-0.5],
+            effects,
+            settings: Settings {
+                t_span: Some((0.0, 1.0)),
+                rtol: Some(1e-6),
+                atol: None,
+                max_step: Some(0.5),
+                max_steps: Some(1000),
+                first_step: None,
+                disable: Some(Disabled::none().with(Kind::Springs)),
+            },
+        };
+        let event = StateEvent {
+            on_velocity: true,
+            index: 3,
+            value: 0.5,
+            direction: -1,
+            terminal: 2,
+        };
+        let urdf = UrdfJoint {
+            name: "j".into(),
+            kind: "continuous",
+            parent: "p".into(),
+            child: "c".into(),
+            body: 1,
+            link: None,
+            q_index: Some(0),
+            v_index: Some(0),
+            axis: Vec3::z(),
+            limit: Some(Limit {
+                lower: f64::NEG_INFINITY,
+                upper: f64::INFINITY,
+                effort: 1.0,
+                velocity: 2.0,
+            }),
+            damping: 0.5,
+            friction: 0.25,
+            mimic: Some(Mimic {
+                joint: "k".into(),
+                multiplier: -1.0,
+                offset: 0.5,
+            }),
+        };
+        let mut dense = DenseOutput::new(1, 0.0);
+        dense.push_segment(0.0, 0.5, &[1.0], &[1.0, 2.0, 3.0, 4.0]);
+        dense.push_breakpoint(0.5);
+        encode(&(scene, joints, event, urdf, dense)).unwrap()
+    }
+
+    /// The layout is pinned: if this fails, a serialised type changed shape. Bump
+    /// `FORMAT_VERSION` (old pickles are then refused by name, not misread) and update the
+    /// checksum below.
+    #[test]
+    fn the_format_layout_is_pinned() {
+        let bytes = one_of_everything();
+        assert_eq!(bytes[3], FORMAT_VERSION);
+        let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
+        assert_eq!(
+            (FORMAT_VERSION, bytes.len(), sum),
+            (1, 1786, 0xcb16_1ad1_c2f6_03d0),
+            "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
+        );
     }
 
     #[test]

@@ -181,7 +181,9 @@ pub fn _loads(
             restore(py, &mut inner.effects, callables)?;
             // What `Scene(...)` checks: the state fits the model, the effects resolve.
             check(inner.model.check_state(&inner.q0, Some(&inner.v0)))?;
-            check(Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").map(|_| ()))?;
+            check(
+                Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").map(|_| ()),
+            )?;
             Py::new(py, PyScene { inner })?.into_any()
         }
         Payload::DenseSolution(inner) => Py::new(py, PyDenseSolution { inner })?.into_any(),

@@ -141,30 +141,33 @@ fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyA
 pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
     let source: Arc<dyn std::any::Any + Send + Sync> =
         Arc::new(Python::attach(|py| func.clone_ref(py)));
-    TorqueFunction::with_source(Arc::new(
-        move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
-            Python::attach(|py| {
-                let mut call = || -> PyResult<()> {
-                    let r = func.bind(py).call1((
-                        t,
-                        PyArray1::from_slice(py, q),
-                        PyArray1::from_slice(py, v),
-                    ))?;
-                    let x = vector(&r, "torque function f(t, q, v)", Some(out.len()))?;
-                    crate::error::check_finite("torque function f(t, q, v)", &x).py(py)?;
-                    out.copy_from_slice(&x);
-                    Ok(())
-                };
-                call().map_err(|e| {
-                    let msg = e.to_string();
-                    CALLBACK_ERROR.with(|c| {
-                        c.borrow_mut().get_or_insert(e);
-                    });
-                    msg
+    TorqueFunction::with_source(
+        Arc::new(
+            move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
+                Python::attach(|py| {
+                    let mut call = || -> PyResult<()> {
+                        let r = func.bind(py).call1((
+                            t,
+                            PyArray1::from_slice(py, q),
+                            PyArray1::from_slice(py, v),
+                        ))?;
+                        let x = vector(&r, "torque function f(t, q, v)", Some(out.len()))?;
+                        crate::error::check_finite("torque function f(t, q, v)", &x).py(py)?;
+                        out.copy_from_slice(&x);
+                        Ok(())
+                    };
+                    call().map_err(|e| {
+                        let msg = e.to_string();
+                        CALLBACK_ERROR.with(|c| {
+                            c.borrow_mut().get_or_insert(e);
+                        });
+                        msg
+                    })
                 })
-            })
-        },
-    ), source)
+            },
+        ),
+        source,
+    )
 }
 
 #[pymethods]
