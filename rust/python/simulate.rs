@@ -136,38 +136,35 @@ fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyA
 }
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
-/// every evaluation; the first exception is kept for the caller to re-raise. `func` is kept
-/// as the function's source, which pickling carries (`pickle.rs`).
+/// every evaluation; the first exception is kept for the caller to re-raise. `func` is also
+/// kept as the function's source, which pickling carries (`pickle.rs`).
 pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
-    let source: Arc<dyn std::any::Any + Send + Sync> =
-        Arc::new(Python::attach(|py| func.clone_ref(py)));
-    TorqueFunction::with_source(
-        Arc::new(
-            move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
-                Python::attach(|py| {
-                    let mut call = || -> PyResult<()> {
-                        let r = func.bind(py).call1((
-                            t,
-                            PyArray1::from_slice(py, q),
-                            PyArray1::from_slice(py, v),
-                        ))?;
-                        let x = vector(&r, "torque function f(t, q, v)", Some(out.len()))?;
-                        crate::error::check_finite("torque function f(t, q, v)", &x).py(py)?;
-                        out.copy_from_slice(&x);
-                        Ok(())
-                    };
-                    call().map_err(|e| {
-                        let msg = e.to_string();
-                        CALLBACK_ERROR.with(|c| {
-                            c.borrow_mut().get_or_insert(e);
-                        });
-                        msg
-                    })
+    let source = Python::attach(|py| func.clone_ref(py));
+    let f = TorqueFunction::new(Arc::new(
+        move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
+            Python::attach(|py| {
+                let mut call = || -> PyResult<()> {
+                    let r = func.bind(py).call1((
+                        t,
+                        PyArray1::from_slice(py, q),
+                        PyArray1::from_slice(py, v),
+                    ))?;
+                    let x = vector(&r, "torque function f(t, q, v)", Some(out.len()))?;
+                    crate::error::check_finite("torque function f(t, q, v)", &x).py(py)?;
+                    out.copy_from_slice(&x);
+                    Ok(())
+                };
+                call().map_err(|e| {
+                    let msg = e.to_string();
+                    CALLBACK_ERROR.with(|c| {
+                        c.borrow_mut().get_or_insert(e);
+                    });
+                    msg
                 })
-            },
-        ),
-        source,
-    )
+            })
+        },
+    ));
+    TorqueFunction::with_source(f.0, Arc::new(source))
 }
 
 #[pymethods]
