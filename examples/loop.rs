@@ -28,7 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => return Err(usage.into()),
     };
     let model: Model = match what {
-        "scene" => Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?.model,
+        "scene" => (*Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?.model).clone(),
         _ => chain(arg.parse()?),
     };
     let nv = model.nv;

@@ -10,7 +10,7 @@ use crate::spatial::{BodyInertia, Mat3, Vec3};
 /// trace of the tensor: rounding in a user's numbers must not make a valid body invalid.
 pub const INERTIA_RTOL: f64 = 1e-9;
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RigidBody {
     pub mass: f64,
     pub com: Vec3,

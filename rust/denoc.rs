@@ -75,7 +75,11 @@ fn dense_bytes(model: &Model, rates: bool) -> u128 {
     // D, N_l, N_d, N_l N_d and N, plus masses and points.
     let one = 21 * n * 6 * n + 36 * n * n + 6 * n * nv + 6 * n * nv + 21 * n * nv + 28 * n;
     // Rates: their own D, N_l, N_d and three terms of Ṅ; the callers' products (n × n).
-    let total = if rates { 2 * one + 2 * 21 * n * nv } else { one } + 2 * nv * nv;
+    let total = if rates {
+        2 * one + 2 * 21 * n * nv
+    } else {
+        one
+    } + 2 * nv * nv;
     8 * total
 }
 
@@ -94,7 +98,12 @@ fn product(a: &DMatrix<f64>, b: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64
 }
 
 /// `D (N_l N_d)`: the association with n³ rather than 21n³ products.
-fn chain(d: &DMatrix<f64>, nl: &DMatrix<f64>, nd: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>> {
+fn chain(
+    d: &DMatrix<f64>,
+    nl: &DMatrix<f64>,
+    nd: &DMatrix<f64>,
+    what: &str,
+) -> Result<DMatrix<f64>> {
     product(d, &product(nl, nd, what)?, what)
 }
 

@@ -10,7 +10,7 @@ use crate::error::{Error, Result};
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
 use crate::trig::sin_cos;
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Joint {
     Revolute { axis: Vec3 },
     Prismatic { axis: Vec3 },

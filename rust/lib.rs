@@ -14,6 +14,7 @@ pub mod interrupt;
 pub mod joint;
 pub mod kinematics;
 pub mod model;
+pub mod persist;
 pub mod point_masses;
 pub mod recursive;
 pub mod scene;

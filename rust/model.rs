@@ -8,7 +8,7 @@ use crate::joint::Joint;
 use crate::point_masses::EquimomentalSet;
 use crate::spatial::{BodyInertia, Mat3, Placement, Vec3};
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct BodyRecord {
     pub name: String,
     pub body: RigidBody,
@@ -23,7 +23,7 @@ pub struct BodyRecord {
     pub point_mass_center: Option<Vec3>,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Link {
     /// Index of the moving body that defines the link.
     pub body: usize,
@@ -42,12 +42,38 @@ pub struct Link {
     pub inertia: BodyInertia,
 }
 
-#[derive(Debug, Clone, Default)]
+/// Serialised whole, derived link data included, so a round trip is bit-identical for every
+/// model (those `urdf.rs` finishes by hand too); deserialising checks the tree's indices.
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "ModelData")]
 pub struct Model {
     pub bodies: Vec<BodyRecord>,
     pub links: Vec<Link>,
     pub nq: usize,
     pub nv: usize,
+}
+
+/// A deserialised model, checked by [`Model::check_structure`] before use.
+#[derive(serde::Deserialize)]
+struct ModelData {
+    bodies: Vec<BodyRecord>,
+    links: Vec<Link>,
+    nq: usize,
+    nv: usize,
+}
+
+impl TryFrom<ModelData> for Model {
+    type Error = Error;
+    fn try_from(d: ModelData) -> Result<Model> {
+        let m = Model {
+            bodies: d.bodies,
+            links: d.links,
+            nq: d.nq,
+            nv: d.nv,
+        };
+        m.check_structure()?;
+        Ok(m)
+    }
 }
 
 /// Checks that `r` is a proper rotation (to 1e-9) and returns it re-orthonormalised.
@@ -201,6 +227,64 @@ impl Model {
         let c = center.unwrap_or(link.rigid.com);
         link.points = EquimomentalSet::solve(&link.rigid, &c);
         link.inertia = BodyInertia::from_points(&link.points.masses, &link.points.positions);
+    }
+
+    /// Checks the tree's bookkeeping as `add_body` keeps it (parents before children, links
+    /// and bodies pointing at each other, coordinate slots in order, unique names), so that a
+    /// model assembled from outside data (deserialised) indexes nothing out of range.
+    pub fn check_structure(&self) -> Result<()> {
+        let bad = |reason: String| Err(Error::model("model", reason));
+        let mut names = std::collections::HashSet::new();
+        for (i, b) in self.bodies.iter().enumerate() {
+            if !names.insert(b.name.as_str()) {
+                return bad(format!("two bodies named '{}'", b.name));
+            }
+            if b.parent.is_some_and(|p| p >= i) {
+                return bad(format!(
+                    "body {i} has parent {:?}, not an earlier body",
+                    b.parent
+                ));
+            }
+            if b.link.is_some_and(|l| l >= self.links.len()) {
+                return bad(format!(
+                    "body {i} belongs to link {:?} of {}",
+                    b.link,
+                    self.links.len()
+                ));
+            }
+            let parent_link = b.parent.and_then(|p| self.bodies[p].link);
+            let own_link = |l: usize| self.links[l].body == i;
+            if matches!(b.joint, Joint::Fixed) && b.link != parent_link
+                || !matches!(b.joint, Joint::Fixed) && !b.link.is_some_and(own_link)
+            {
+                return bad(format!("body {i} is not in the link its joint gives it"));
+            }
+        }
+        let (mut nq, mut nv) = (0, 0);
+        for (l, link) in self.links.iter().enumerate() {
+            let owner = self.bodies.get(link.body);
+            if owner.is_none_or(|b| b.link != Some(l) || b.joint != link.joint) {
+                return bad(format!("link {l} and its body {} disagree", link.body));
+            }
+            let parent_link = owner
+                .and_then(|b| b.parent)
+                .and_then(|p| self.bodies[p].link);
+            if link.parent != parent_link || link.parent.is_some_and(|p| p >= l) {
+                return bad(format!("link {l} has parent {:?}", link.parent));
+            }
+            if matches!(link.joint, Joint::Fixed) || link.q_index != nq || link.v_index != nv {
+                return bad(format!("link {l}: joint or coordinate slots out of order"));
+            }
+            nq += link.joint.nq();
+            nv += link.joint.nv();
+        }
+        if (nq, nv) != (self.nq, self.nv) {
+            return bad(format!(
+                "nq = {}, nv = {} where the joints give {nq}, {nv}",
+                self.nq, self.nv
+            ));
+        }
+        Ok(())
     }
 
     pub fn neutral(&self) -> Vec<f64> {

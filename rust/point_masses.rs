@@ -21,7 +21,7 @@ pub const SIGNS: [[f64; 3]; 7] = [
     [1.0, -1.0, -1.0],
 ];
 
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct EquimomentalSet {
     pub masses: [f64; 7],
     /// Positions in the body frame.

@@ -30,7 +30,7 @@ impl std::fmt::Display for SceneError {
 impl std::error::Error for SceneError {}
 
 /// Integrator settings a scene may carry; the caller's arguments override them.
-#[derive(Debug, Clone, Default, PartialEq)]
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Settings {
     pub t_span: Option<(f64, f64)>,
     pub rtol: Option<f64>,
@@ -42,7 +42,7 @@ pub struct Settings {
     pub disable: Option<Disabled>,
 }
 
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Scene {
     pub name: String,
     pub description: String,

@@ -186,7 +186,7 @@ impl OdeSystem for Dynamics<'_> {
 }
 
 /// An event on the state: `q[index] − value` or `v[index] − value` crossing zero.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StateEvent {
     pub on_velocity: bool,
     pub index: usize,

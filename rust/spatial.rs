@@ -29,7 +29,7 @@ pub fn stack(a: &Vec3, b: &Vec3) -> Vec6 {
 
 /// A rigid placement: a point with coordinates `x` in the child frame has coordinates
 /// `rotation * x + translation` in the parent frame.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Placement {
     pub rotation: Mat3,
     pub translation: Vec3,
@@ -71,7 +71,7 @@ impl Placement {
 
 /// Mass, first moment `h = m c` and rotational inertia `I_O`, all about a reference point O
 /// (the body origin). Its 6×6 matrix is `[[I_O, h̃], [−h̃, m 1]]` = `Σ_j D_jᵀ m_j D_j`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BodyInertia {
     pub mass: f64,
     pub first_moment: Vec3,

@@ -41,7 +41,7 @@ use crate::point_masses::EquimomentalSet;
 use crate::spatial::{BodyInertia, Mat3, Placement, Vec3};
 
 /// `<limit>` of a joint. A continuous joint has `lower = −∞`, `upper = +∞`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Limit {
     pub lower: f64,
     pub upper: f64,
@@ -50,7 +50,7 @@ pub struct Limit {
 }
 
 /// `<mimic joint multiplier offset>`: recorded, not enforced.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mimic {
     pub joint: String,
     pub multiplier: f64,
@@ -58,7 +58,7 @@ pub struct Mimic {
 }
 
 /// One URDF joint, in the model's order (depth first; the moving ones in q/v order).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct UrdfJoint {
     pub name: String,
     /// "revolute", "continuous", "prismatic" or "fixed".
@@ -80,6 +80,58 @@ pub struct UrdfJoint {
     pub damping: f64,
     pub friction: f64,
     pub mimic: Option<Mimic>,
+}
+
+/// A deserialised [`UrdfJoint`], its `kind` owned until matched to one of the four names.
+#[derive(serde::Deserialize)]
+struct UrdfJointData {
+    name: String,
+    kind: String,
+    parent: String,
+    child: String,
+    body: usize,
+    link: Option<usize>,
+    q_index: Option<usize>,
+    v_index: Option<usize>,
+    axis: Vec3,
+    limit: Option<Limit>,
+    damping: f64,
+    friction: f64,
+    mimic: Option<Mimic>,
+}
+
+// By hand: a derived impl would require `'de: 'static` for the `&'static str`.
+impl<'de> serde::Deserialize<'de> for UrdfJoint {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        <UrdfJointData as serde::Deserialize>::deserialize(d)?
+            .try_into()
+            .map_err(serde::de::Error::custom)
+    }
+}
+
+impl TryFrom<UrdfJointData> for UrdfJoint {
+    type Error = String;
+    fn try_from(j: UrdfJointData) -> Result<UrdfJoint, String> {
+        let kind = ["revolute", "continuous", "prismatic", "fixed"]
+            .into_iter()
+            .find(|k| *k == j.kind)
+            .ok_or_else(|| format!("joint '{}': unknown kind '{}'", j.name, j.kind))?;
+        Ok(UrdfJoint {
+            name: j.name,
+            kind,
+            parent: j.parent,
+            child: j.child,
+            body: j.body,
+            link: j.link,
+            q_index: j.q_index,
+            v_index: j.v_index,
+            axis: j.axis,
+            limit: j.limit,
+            damping: j.damping,
+            friction: j.friction,
+            mimic: j.mimic,
+        })
+    }
 }
 
 impl UrdfJoint {

@@ -7,7 +7,7 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-from . import errors
+from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from .errors import (
     InertiaError,

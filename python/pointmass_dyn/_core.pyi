@@ -442,3 +442,16 @@ def rk45(
     ``error``: ``None`` or the exception ``fun`` or an event raised, to re-raise.
     ``stiffness``: ``"warn"`` detects and reports (steps unchanged), ``"stop"`` ends the
     run at the detection (status -1), ``"off"`` skips the test."""
+
+# Pickling (``pointmass_dyn/_pickle.py`` registers these with ``copyreg``).
+_Pickled: TypeAlias = (
+    RigidBody | PointMasses | Joint | Model | Effect | StateEvent | Scene | DenseSolution
+)
+
+def _dumps(obj: _Pickled) -> tuple[bytes, tuple[Callable[..., Any], ...]]:
+    """``(data, callables)``: a versioned, checksummed binary encoding of ``obj`` (every float
+    bit for bit) and the Python callables of its ``TorqueFunction`` effects, in order."""
+
+def _loads(data: bytes, callables: tuple[Callable[..., Any], ...] | None = None) -> _Pickled:
+    """The object ``_dumps`` encoded; raises :class:`pointmass_dyn.errors.UnpicklingError`
+    for data that is truncated, altered or of another format version."""

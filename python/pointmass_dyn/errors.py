@@ -3,6 +3,8 @@ expected and what was given."""
 
 from __future__ import annotations
 
+import pickle
+
 
 class PointMassDynError(Exception):
     """Base of every error raised by pointmass_dyn."""
@@ -54,6 +56,11 @@ class UrdfError(InvalidInputError):
     """A URDF file that cannot be loaded; names the file and the element (joint or link)."""
 
 
+class UnpicklingError(PointMassDynError, pickle.UnpicklingError):
+    """Pickled data that cannot be loaded: not ours, truncated or altered (a checksum guards
+    it), or written by a version of pointmass_dyn with another serialisation format."""
+
+
 class UrdfWarning(UserWarning):
     """A URDF loaded differently from what it says (mimic joints, ignored elements)."""
 
@@ -68,6 +75,7 @@ __all__ = [
     "SceneError",
     "SimulationError",
     "SingularityError",
+    "UnpicklingError",
     "UrdfError",
     "UrdfWarning",
 ]

@@ -8,7 +8,7 @@ use crate::spatial::Vec6;
 /// Keys of a `type = "damper"` table.
 pub(super) const KEYS: &[&str] = &["name", "joints", "damping"];
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Damper {
     pub name: Option<String>,
     /// `None`: every moving joint.

@@ -13,7 +13,7 @@ use crate::error::{check_finite, Error, Result};
 use crate::model::Model;
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Frame {
     World,
     Body,
@@ -39,7 +39,7 @@ impl Frame {
     }
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum ExternalLoad {
     Constant {
         force: Vec3,
@@ -52,7 +52,7 @@ pub enum ExternalLoad {
 /// Keys of a `type = "external"` table.
 pub(super) const KEYS: &[&str] = &["name", "body", "point", "frame", "force", "moment", "time"];
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct External {
     pub name: Option<String>,
     pub body: JointRef,

@@ -15,7 +15,7 @@ pub const DEFAULT_V_EPS: f64 = 1e-3;
 /// Keys of a `type = "friction"` table.
 pub(super) const KEYS: &[&str] = &["name", "joints", "friction", "v_eps"];
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Friction {
     pub name: Option<String>,
     /// `None`: every moving joint.

@@ -62,14 +62,14 @@ pub use external::{External, ExternalLoad, Frame};
 pub use friction::Friction;
 pub use spring::Spring;
 pub use table::Table;
-pub use torque::{Torque, TorqueFunction, TorqueLaw};
+pub use torque::{Torque, TorqueFunction, TorqueLaw, TorqueSource};
 
 // ------------------------------------------------------------------------------------------
 // Declarations
 // ------------------------------------------------------------------------------------------
 
 /// A declared effect (see the module docs). Each variant's data lives in its own file.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Effect {
     /// Uniform gravity `g` (m/s², world frame): `f_ij = m_ij g` on every point mass.
     Gravity {
@@ -232,7 +232,7 @@ impl Kind {
 }
 
 /// The set of disabled families (empty by default).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct Disabled(u8);
 
 impl Disabled {
@@ -272,7 +272,7 @@ impl Disabled {
 }
 
 /// A joint (or body) chosen by its body's name or its body index (as `add_body` returns).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum JointRef {
     Name(String),
     Index(usize),
@@ -288,7 +288,7 @@ impl std::fmt::Display for JointRef {
 }
 
 /// A parameter given once for all selected joints or once per selected joint.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum PerJoint {
     All(f64),
     Each(Vec<f64>),

@@ -14,7 +14,7 @@ use crate::spatial::Vec6;
 /// Keys of a `type = "spring"` table.
 pub(super) const KEYS: &[&str] = &["name", "joints", "stiffness", "rest"];
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Spring {
     pub name: Option<String>,
     /// `None`: every moving joint.

@@ -5,7 +5,8 @@ use crate::error::{Error, Result};
 
 use super::{check_values, Matrix, Sign};
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "TableData")]
 pub struct Table {
     time: Vec<f64>,
     /// Row-major `len × cols`.
@@ -13,6 +14,29 @@ pub struct Table {
     cols: usize,
     /// The values were given as a flat list (one column), for error messages.
     one_d: bool,
+}
+
+/// A deserialised table, checked by [`Table::new`] before use.
+#[derive(serde::Deserialize)]
+struct TableData {
+    time: Vec<f64>,
+    values: Vec<f64>,
+    cols: usize,
+    one_d: bool,
+}
+
+impl TryFrom<TableData> for Table {
+    type Error = Error;
+    fn try_from(t: TableData) -> Result<Table> {
+        let rows = t.time.len();
+        let values = Matrix {
+            values: t.values,
+            rows,
+            cols: t.cols,
+            one_d: t.one_d,
+        };
+        Table::new(t.time, values, "time", "values")
+    }
 }
 
 impl Table {

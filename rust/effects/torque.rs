@@ -5,6 +5,7 @@
 //!   `τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)`, with `q̇_ref` the slope of the table's
 //!   segment (right-continuous at breakpoints, zero outside the table);
 //! * a function `f(t, q, v) → τ` (length nv), e.g. a Python callable.
+use std::any::Any;
 use std::sync::Arc;
 
 use super::table::Table;
@@ -20,13 +21,74 @@ use crate::spatial::Vec6;
 pub type TorqueFn =
     dyn Fn(f64, &[f64], &[f64], &mut [f64]) -> std::result::Result<(), String> + Send + Sync;
 
-/// A shared torque callback (equal only to itself).
+/// What a torque callback was made from (e.g. a Python callable), kept beside the closure so
+/// a serialised scene can carry it; the core never looks inside.
+pub type TorqueSource = Arc<dyn Any + Send + Sync>;
+
+/// A shared torque callback (equal only to itself), with the object it was made from, if any.
+///
+/// Serialisation writes no data for it: whoever serialises a scene carries the sources beside
+/// the bytes (the Python bindings pickle them as objects, in effect order) and replaces each
+/// deserialised function, a placeholder that fails when called, with one rebuilt from its
+/// source. A function without a source (a Rust closure) cannot be serialised.
 #[derive(Clone)]
-pub struct TorqueFunction(pub Arc<TorqueFn>);
+pub struct TorqueFunction(pub Arc<TorqueFn>, pub Option<TorqueSource>);
+
+impl TorqueFunction {
+    /// A callback without a source (it cannot be serialised).
+    pub fn new(f: Arc<TorqueFn>) -> Self {
+        TorqueFunction(f, None)
+    }
+
+    /// A callback made from `source`, which serialisation carries beside the bytes.
+    pub fn with_source(f: Arc<TorqueFn>, source: TorqueSource) -> Self {
+        TorqueFunction(f, Some(source))
+    }
+
+    /// The object this callback was made from, if it was given.
+    pub fn source(&self) -> Option<&TorqueSource> {
+        self.1.as_ref()
+    }
+
+    /// What deserialisation returns until the caller restores the callback from its source.
+    pub fn unrestored() -> Self {
+        TorqueFunction::new(Arc::new(|_, _, _, _| {
+            Err("this torque function was deserialised without its callable: restore it from the source serialised beside the data".to_string())
+        }))
+    }
+}
 
 impl std::fmt::Debug for TorqueFunction {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "TorqueFunction({:p})", Arc::as_ptr(&self.0))
+    }
+}
+
+impl serde::Serialize for TorqueFunction {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        if self.1.is_none() {
+            return Err(serde::ser::Error::custom(
+                "a torque function without a source (a Rust closure) cannot be serialised",
+            ));
+        }
+        s.serialize_unit_struct("TorqueFunction")
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for TorqueFunction {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct Unit;
+        impl serde::de::Visitor<'_> for Unit {
+            type Value = ();
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("a torque function marker (unit)")
+            }
+            fn visit_unit<E: serde::de::Error>(self) -> std::result::Result<(), E> {
+                Ok(())
+            }
+        }
+        d.deserialize_unit_struct("TorqueFunction", Unit)?;
+        Ok(TorqueFunction::unrestored())
     }
 }
 
@@ -36,7 +98,7 @@ impl PartialEq for TorqueFunction {
     }
 }
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum TorqueLaw {
     /// One number for every speed of the selected joints, or one per speed.
     Constant(PerJoint),
@@ -57,7 +119,7 @@ pub(super) const KEYS_CONSTANT: &[&str] = &["name", "joints", "tau"];
 pub(super) const KEYS_TABULATED: &[&str] = &["name", "joints", "time", "values"];
 pub(super) const KEYS_PD: &[&str] = &["name", "joints", "kp", "kd", "time", "reference"];
 
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Torque {
     pub name: Option<String>,
     /// `None`: every moving joint.

@@ -76,7 +76,8 @@ pub fn eval_segment(t_old: f64, h: f64, y_old: &[f64], q: &[f64], t: f64, out: &
 /// Breakpoints are t0 and the output time of each step (the event time for a terminal step);
 /// segment `i` spans `breakpoints[i]..breakpoints[i+1]`. A time exactly on a breakpoint uses the
 /// earlier segment, and times outside the range extrapolate the first/last segment, as in SciPy.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(try_from = "DenseData")]
 pub struct DenseOutput {
     dim: usize,
     ts: Vec<f64>,
@@ -84,6 +85,46 @@ pub struct DenseOutput {
     h: Vec<f64>,
     y_old: Vec<f64>,
     q: Vec<f64>,
+}
+
+/// A deserialised dense output, its lengths checked before use.
+#[derive(serde::Deserialize)]
+struct DenseData {
+    dim: usize,
+    ts: Vec<f64>,
+    t_old: Vec<f64>,
+    h: Vec<f64>,
+    y_old: Vec<f64>,
+    q: Vec<f64>,
+}
+
+impl TryFrom<DenseData> for DenseOutput {
+    type Error = String;
+    fn try_from(d: DenseData) -> Result<Self, String> {
+        let n = d.t_old.len();
+        let consistent = d.ts.len() == n + 1
+            && d.h.len() == n
+            && Some(d.y_old.len()) == n.checked_mul(d.dim)
+            && Some(d.q.len()) == n.checked_mul(d.dim).and_then(|x| x.checked_mul(4));
+        if !consistent {
+            return Err(format!(
+                "inconsistent dense output: {n} segments of dimension {}, {} breakpoints, {} steps, {} states, {} coefficients",
+                d.dim,
+                d.ts.len(),
+                d.h.len(),
+                d.y_old.len(),
+                d.q.len()
+            ));
+        }
+        Ok(DenseOutput {
+            dim: d.dim,
+            ts: d.ts,
+            t_old: d.t_old,
+            h: d.h,
+            y_old: d.y_old,
+            q: d.q,
+        })
+    }
 }
 
 impl DenseOutput {

@@ -548,11 +548,13 @@ pub fn rk45<S: OdeSystem>(
     // An event that is not a number cannot be watched: the run stops there with the reason
     // (a Python event that raised reports NaN and keeps its exception for the caller).
     let nan_event = |g: &[f64], t_old: f64, at: f64| {
-        g.iter().position(|x| x.is_nan()).map(|event| Status::EventNaN {
-            t: t_old,
-            at,
-            event,
-        })
+        g.iter()
+            .position(|x| x.is_nan())
+            .map(|event| Status::EventNaN {
+                t: t_old,
+                at,
+                event,
+            })
     };
     let mut failed_at_start = nan_event(&g, t0, t0);
     let mut g_new = vec![0.0; n_ev];

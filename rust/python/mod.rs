@@ -3,6 +3,7 @@ mod body;
 mod convert;
 mod errors;
 mod model;
+mod pickle;
 mod signals;
 mod simulate;
 
@@ -23,5 +24,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::rk45, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
+    m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;
     Ok(())
 }

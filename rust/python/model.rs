@@ -9,10 +9,10 @@ use super::body::PyRigidBody;
 use super::convert::{dmatrix_to_array, mat3, points, to_array, to_array1, vec3, vector_into};
 use super::errors::{check_result, invalid, IntoPyResult};
 use super::signals::detach_interruptible;
+use crate::alloc::try_zeros;
 use crate::denoc;
 use crate::joint::Joint;
 use crate::kinematics;
-use crate::alloc::try_zeros;
 use crate::model::Model;
 use crate::recursive::{self, Data};
 use crate::spatial::{Placement, Vec3, Vec6};
@@ -372,10 +372,7 @@ impl PyModel {
     }
 }
 
-fn external_wrenches(
-    model: &Model,
-    obj: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<Vec<Vec6>>> {
+fn external_wrenches(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Vec6>>> {
     match obj {
         Some(f) if !f.is_none() => {
             let (shape, data) = super::convert::array(f, "external")?;
@@ -614,7 +611,10 @@ impl PyModel {
                 let nv = ws.model().nv;
                 let mut gim = try_zeros(nv, nv, "mass_matrix").py(py)?;
                 let Workspace {
-                    version, data, q: qv, ..
+                    version,
+                    data,
+                    q: qv,
+                    ..
                 } = ws;
                 let model: &Model = &version.model;
                 // O(n·depth): long chains are worth releasing the interpreter for.

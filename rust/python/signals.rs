@@ -67,7 +67,8 @@ pub fn detach_interruptible<T: Send>(
     let (result, raised) = py.detach(|| {
         let watch = Rc::new(RefCell::new(Watch::default()));
         let poller = watch.clone();
-        let result = interrupt::with_poller(Box::new(move || poller.borrow_mut().poll(|_| Ok(()))), f);
+        let result =
+            interrupt::with_poller(Box::new(move || poller.borrow_mut().poll(|_| Ok(()))), f);
         let raised = watch.borrow_mut().error.take();
         (result, raised)
     });

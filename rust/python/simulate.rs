@@ -8,8 +8,8 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 
 use super::convert::{array, shape_str, to_array, to_array1, vec3, vector};
 use super::errors::{invalid, py_error, IntoPyResult};
-use super::signals::Watch;
 use super::model::PyModel;
+use super::signals::Watch;
 use crate::effects::{
     Damper, Disabled, Effect, Effects, External, ExternalLoad, Frame, Friction, JointRef, Matrix,
     PerJoint, Spring, Table, Torque, TorqueFunction, TorqueLaw,
@@ -139,9 +139,11 @@ fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyA
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
 /// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
 /// caller to re-raise; a non-finite torque fails the run like any effect's (`success=False`
-/// with the time), so it is not an exception.
-fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
-    TorqueFunction(Arc::new(
+/// with the time), so it is not an exception. `func` is also kept as the function's source,
+/// which pickling carries (`pickle.rs`).
+pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
+    let source = Python::attach(|py| func.clone_ref(py));
+    let f = TorqueFunction::new(Arc::new(
         move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
             Python::attach(|py| {
                 let call = || -> PyResult<Vec<f64>> {
@@ -169,7 +171,8 @@ fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
                 }
             })
         },
-    ))
+    ));
+    TorqueFunction::with_source(f.0, Arc::new(source))
 }
 
 #[pymethods]
@@ -1138,7 +1141,7 @@ pub fn energies<'py>(
 /// times (shape (n, len(t))), as SciPy's `OdeSolution`.
 #[pyclass(name = "DenseSolution", module = "pointmass_dyn._core", frozen)]
 pub struct PyDenseSolution {
-    inner: DenseOutput,
+    pub(crate) inner: DenseOutput,
 }
 
 #[pymethods]
