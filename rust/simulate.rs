@@ -295,8 +295,15 @@ pub fn simulate(
     }
 
     sys.progress = progress;
-    let mut sol = integrator::rk45(&mut sys, t_span, &y0, opts, &mut events)
-        .map_err(|e| Error::InvalidSetting(e.to_string()))?;
+    let mut sol =
+        integrator::rk45(&mut sys, t_span, &y0, opts, &mut events).map_err(|e| match e {
+            integrator::InputError::OutputTooLarge { bytes, .. } => Error::OutOfMemory {
+                what: "simulate".into(),
+                bytes,
+                detail: e.to_string(),
+            },
+            e => Error::InvalidSetting(e.to_string()),
+        })?;
     drop(events);
     if let Status::TerminalEvent { event, t } = sol.status {
         if event >= n_user {

@@ -286,3 +286,23 @@ def test_long_dense_denoc_call_hears_ctrl_c():
     # Not a speed assertion: the call must have stopped itself, not run to its end.
     assert not finished
     assert elapsed < 10.0, elapsed
+
+
+@needs_rlimit
+def test_t_eval_too_large_for_memory_is_refused_before_the_run():
+    # 10^6 output times of a 4000-component state: 32 GB of output, refused at once with our
+    # error, not an abort once the run has filled the memory.
+    r = _run_limited(
+        """
+        m = chain(2000)
+        s = pmd.Scene(m, effects=[pmd.Gravity()])
+        resource.setrlimit(resource.RLIMIT_AS, (__CAP__, __CAP__))
+        try:
+            pmd.simulate(s, (0.0, 1e-3), t_eval=np.linspace(0.0, 1e-3, 10**6))
+        except pmd.errors.OutOfMemoryError as e:
+            print("REFUSED:", e)
+        """,
+        4 * 2**30,
+    )
+    assert r.returncode == 0, (r.returncode, r.stderr[-2000:])
+    assert "REFUSED:" in r.stdout and "t_eval" in r.stdout, r.stdout

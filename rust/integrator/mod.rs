@@ -279,6 +279,12 @@ pub enum InputError {
     },
     #[error("max_step: must be positive, got {0}")]
     MaxStep(f64),
+    #[error("t_eval: {points} output times of {dim} components need {bytes} bytes, which cannot be allocated")]
+    OutputTooLarge {
+        points: usize,
+        dim: usize,
+        bytes: u128,
+    },
     #[error("max_steps: must be at least 1")]
     MaxSteps,
     #[error("first_step: must be positive and finite, got {0}")]
@@ -315,7 +321,9 @@ impl InputError {
                 "first_step"
             }
             InputError::Controller { .. } => "controller",
-            InputError::TEvalOutsideSpan { .. } | InputError::TEvalNotSorted { .. } => "t_eval",
+            InputError::TEvalOutsideSpan { .. }
+            | InputError::TEvalNotSorted { .. }
+            | InputError::OutputTooLarge { .. } => "t_eval",
         }
     }
 }
@@ -536,6 +544,17 @@ pub fn rk45<S: OdeSystem>(
 
     let mut t_out: Vec<f64> = Vec::new();
     let mut y_out: Vec<f64> = Vec::new();
+    if let Some(te) = t_eval {
+        // The caller sized the output: refuse it now, clearly, rather than abort mid-run.
+        let too_large = || InputError::OutputTooLarge {
+            points: te.len(),
+            dim,
+            bytes: te.len() as u128 * (dim as u128 + 1) * 8,
+        };
+        let len = te.len().checked_mul(dim).ok_or_else(too_large)?;
+        y_out.try_reserve_exact(len).map_err(|_| too_large())?;
+        t_out.try_reserve_exact(te.len()).map_err(|_| too_large())?;
+    }
     if t_eval.is_none() {
         t_out.push(t0);
         y_out.extend_from_slice(y0);

@@ -1323,7 +1323,11 @@ pub fn rk45<'py>(
 }
 
 fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
-    py_error(py, "InvalidInputError", e.to_string())
+    let class = match e {
+        integrator::InputError::OutputTooLarge { .. } => "OutOfMemoryError",
+        _ => "InvalidInputError",
+    };
+    py_error(py, class, e.to_string())
 }
 
 // ---------------------------------------------------------------------------------------------
