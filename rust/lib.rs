@@ -8,6 +8,7 @@ pub mod cpu;
 pub mod denoc;
 pub mod effects;
 pub mod error;
+pub mod files;
 pub mod integrator;
 pub mod joint;
 pub mod kinematics;

@@ -607,6 +607,15 @@ impl PyScene {
             .map_err(|e| py_error(py, "SceneError", e.to_string()))
     }
 
+    /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
+    /// before it is opened). Raises `SceneError` naming the file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
+        Scene::from_file(&path)
+            .map(|inner| PyScene { inner })
+            .map_err(|e| py_error(py, "SceneError", e.to_string()))
+    }
+
     /// A copy of the scene's model.
     #[getter]
     fn model(&self) -> PyModel {
