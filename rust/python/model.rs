@@ -246,7 +246,9 @@ impl PyModel {
             v: vec![0.0; nv],
             x: vec![0.0; nv],
             out: vec![0.0; nv],
-            gim: DMatrix::zeros(nv, nv),
+            // Allocated by the first `mass_matrix` call: nv² doubles would make merely
+            // loading a long chain cost gigabytes (135k links: 146 GB).
+            gim: DMatrix::zeros(0, 0),
             urdf_joints: Vec::new(),
         }
     }
@@ -508,6 +510,10 @@ impl PyModel {
         self.load_state(py, q, None)?;
         match method {
             Method::Recursive => {
+                let nv = self.model.nv;
+                if self.gim.nrows() != nv {
+                    self.gim = dense_matrix(nv, nv)?;
+                }
                 let (model, data, qv, gim) = (&self.model, &mut self.data, &self.q, &mut self.gim);
                 // O(n·depth): long chains are worth releasing the interpreter for.
                 if model.links.len() >= DETACH_LINKS {
@@ -737,6 +743,23 @@ impl PyModel {
             d.set_item(name, dyn_)?;
         }
         Ok(d)
+    }
+}
+
+/// An all-zero `rows × cols` matrix, or `MemoryError` if it cannot be allocated (instead of
+/// the process aborting).
+fn dense_matrix(rows: usize, cols: usize) -> PyResult<DMatrix<f64>> {
+    let n = rows.checked_mul(cols);
+    let mut data: Vec<f64> = Vec::new();
+    match n.map(|n| data.try_reserve_exact(n)) {
+        Some(Ok(())) => {
+            data.resize(rows * cols, 0.0);
+            Ok(DMatrix::from_vec(rows, cols, data))
+        }
+        _ => Err(pyo3::exceptions::PyMemoryError::new_err(format!(
+            "mass_matrix: cannot allocate the dense {rows} x {cols} matrix ({:.3e} bytes)",
+            rows as f64 * cols as f64 * 8.0
+        ))),
     }
 }
 
