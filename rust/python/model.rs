@@ -300,19 +300,30 @@ impl PyModel {
     }
 
     /// Adds a body; returns its index. See the package docs for the arguments.
-    #[pyo3(signature = (body, joint, parent=-1, translation=None, rotation=None, name=None, point_mass_center=None))]
+    #[pyo3(signature = (body, joint, parent=None, translation=None, rotation=None, name=None, point_mass_center=None))]
     #[allow(clippy::too_many_arguments)]
     fn add_body(
         &mut self,
         py: Python<'_>,
         body: PyRef<'_, PyRigidBody>,
         joint: PyRef<'_, PyJoint>,
-        parent: i64,
+        parent: Option<&Bound<'_, PyAny>>,
         translation: Option<&Bound<'_, PyAny>>,
         rotation: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
         point_mass_center: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<usize> {
+        // -1 (or None) is the world; any int is taken (no OverflowError), a non-int is a TypeError.
+        let parent = match parent.filter(|p| !p.is_none()) {
+            None => -1,
+            Some(p) => super::convert::int_arg(
+                p,
+                "parent",
+                i64::MIN,
+                i64::MAX,
+                "-1 (the world) or a body index >= 0",
+            )?,
+        };
         let parent = match parent {
             -1 => None,
             p if p >= 0 => Some(p as usize),
@@ -391,7 +402,12 @@ impl PyModel {
         self.model.total_mass()
     }
     /// Per body: (name, joint kind, parent index or -1, link index or -1).
-    fn body_info(&self, py: Python<'_>, index: usize) -> PyResult<(String, String, i64, i64)> {
+    fn body_info(
+        &self,
+        py: Python<'_>,
+        index: &Bound<'_, PyAny>,
+    ) -> PyResult<(String, String, i64, i64)> {
+        let index = super::convert::count_arg(index, "index", "a body index >= 0")?;
         let b = self.model.bodies.get(index).ok_or_else(|| {
             super::errors::py_error(
                 py,
@@ -438,6 +454,7 @@ impl PyModel {
             rots.extend_from_slice(p.rotation.transpose().as_slice());
             origins.extend_from_slice(p.translation.as_slice());
         }
+        check_result(py, "placements", &origins)?;
         Ok((
             to_array(py, rots, &[nb, 3, 3])?,
             to_array(py, origins, &[nb, 3])?,
@@ -455,6 +472,7 @@ impl PyModel {
         let den = denoc::matrices(&self.model, &self.q);
         let n = self.model.links.len();
         let pts = den.points.transpose().as_slice().to_vec();
+        check_result(py, "point_masses", &pts)?;
         Ok((
             to_array(py, den.masses.as_slice().to_vec(), &[n, 7])?,
             to_array(py, pts, &[n, 7, 3])?,
@@ -470,6 +488,9 @@ impl PyModel {
         self.load_state(py, q, None)?;
         let (model, qv) = (&self.model, &self.q);
         let den = py.detach(|| denoc::matrices(model, qv));
+        for (k, m) in [("D", &den.d), ("N", &den.n), ("points", &den.points)] {
+            check_result(py, &format!("denoc['{k}']"), m.as_slice())?;
+        }
         let d = PyDict::new(py);
         d.set_item("D", dmatrix_to_array(py, &den.d)?)?;
         d.set_item("Nl", dmatrix_to_array(py, &den.nl)?)?;
@@ -490,6 +511,9 @@ impl PyModel {
         self.load_state(py, q, Some(v))?;
         let (model, qv, vv) = (&self.model, &self.q, &self.v);
         let (_, rates) = py.detach(|| denoc::matrices_and_rates(model, qv, vv));
+        for (k, m) in [("D", &rates.d), ("N", &rates.n)] {
+            check_result(py, &format!("denoc_rates['{k}']"), m.as_slice())?;
+        }
         let d = PyDict::new(py);
         d.set_item("D", dmatrix_to_array(py, &rates.d)?)?;
         d.set_item("Nl", dmatrix_to_array(py, &rates.nl)?)?;
@@ -521,11 +545,13 @@ impl PyModel {
                 } else {
                     recursive::mass_matrix(model, data, qv, gim);
                 }
+                check_result(py, "mass_matrix", self.gim.as_slice())?;
                 dmatrix_to_array(py, &self.gim)
             }
             Method::Denoc => {
                 let (model, qv) = (&self.model, &self.q);
                 let m = py.detach(|| denoc::mass_matrix(model, qv));
+                check_result(py, "mass_matrix", m.as_slice())?;
                 dmatrix_to_array(py, &m)
             }
         }
@@ -541,6 +567,7 @@ impl PyModel {
         self.load_state(py, q, Some(v))?;
         let (model, qv, vv) = (&self.model, &self.q, &self.v);
         let c = py.detach(|| denoc::convective_matrix(model, qv, vv));
+        check_result(py, "convective_matrix", c.as_slice())?;
         dmatrix_to_array(py, &c)
     }
 
@@ -555,6 +582,7 @@ impl PyModel {
         let g = gravity_arg(py, Some(gravity))?;
         self.load_state(py, q, None)?;
         let tg = denoc::gravity_forces(&self.model, &self.q, &g);
+        check_result(py, "gravity_forces", tg.as_slice())?;
         Ok(to_array1(py, tg.as_slice()).into_any())
     }
 
@@ -571,6 +599,7 @@ impl PyModel {
             crate::error::check_finite("forces", p.as_slice()).py(py)?;
         }
         let tau = denoc::generalized_forces(&self.model, &self.q, &f).py(py)?;
+        check_result(py, "generalized_forces", tau.as_slice())?;
         Ok(to_array1(py, tau.as_slice()).into_any())
     }
 
@@ -642,7 +671,9 @@ impl PyModel {
         self.load_state(py, q, Some(v))?;
         kinematics::positions(&self.model, &self.q, &mut self.data.links);
         kinematics::velocities(&self.model, &self.q, &self.v, &mut self.data.links);
-        Ok(recursive::kinetic_energy(&self.data))
+        let e = recursive::kinetic_energy(&self.data);
+        check_result(py, "kinetic_energy", &[e])?;
+        Ok(e)
     }
 
     /// Gravitational potential energy `−Σ m_ij g·x_ij` (zero at the world origin).
@@ -655,7 +686,9 @@ impl PyModel {
         let g = gravity_arg(py, Some(gravity))?;
         self.load_state(py, q, None)?;
         kinematics::positions(&self.model, &self.q, &mut self.data.links);
-        Ok(recursive::potential_energy(&self.data, &g))
+        let e = recursive::potential_energy(&self.data, &g);
+        check_result(py, "potential_energy", &[e])?;
+        Ok(e)
     }
 
     /// `q̇` from `v` (differs from `v` only for quaternion joints).
@@ -668,6 +701,7 @@ impl PyModel {
         self.load_state(py, q, Some(v))?;
         let mut qd = vec![0.0; self.model.nq];
         self.model.velocity_to_qdot(&self.q, &self.v, &mut qd);
+        check_result(py, "velocity_to_qdot", &qd)?;
         Ok(to_array1(py, &qd).into_any())
     }
 
