@@ -158,7 +158,12 @@ pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
                 py,
                 arg,
                 "a real number within the double range (|x| < 1.8e308)",
-                format!("an int of {} digits", short_repr(obj).len()),
+                format!(
+                    "an int of {} bits",
+                    obj.call_method0("bit_length")
+                        .and_then(|b| b.extract::<u64>())
+                        .unwrap_or(0)
+                ),
             )
         });
     }
