@@ -332,5 +332,12 @@ def test_huge_axis_is_normalised_not_refused():
         pmd.Revolute([np.nan, 1, 0])
 
 
+def test_work_precision_tolerances_are_checked():
+    scene = pmd.load_scene("pendulum_planar")
+    for bad in (["0.3"], [1e-3, "a"], [1j], [0.0], [[1e-3]]):
+        with pytest.raises(InvalidInputError, match="tolerances"):
+            pmd.work_precision(scene, bad)
+
+
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(pytest.main([__file__, "-q"]))
