@@ -339,5 +339,14 @@ def test_work_precision_tolerances_are_checked():
             pmd.work_precision(scene, bad)
 
 
+def test_cli_reports_unreadable_and_unwritable_files(tmp_path, capsys):
+    from pointmass_dyn.cli import main
+
+    assert main(["simulate", str(tmp_path), "--t-end", "0.01"]) == 2
+    assert "directory" in capsys.readouterr().err
+    out = tmp_path / "missing" / "traj.csv"
+    assert main(["simulate", "pendulum_planar", "--t-end", "0.01", "--out", str(out)]) == 2
+    assert "cannot write the output file" in capsys.readouterr().err
+
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(pytest.main([__file__, "-q"]))
