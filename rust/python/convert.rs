@@ -53,7 +53,8 @@ fn short_repr(obj: &Bound<'_, PyAny>) -> String {
 fn is_exact_ndarray(obj: &Bound<'_, PyAny>) -> bool {
     let py = obj.py();
     let t = <PyUntypedArray as pyo3::PyTypeInfo>::type_object_raw(py);
-    obj.get_type().as_ptr() == t as *mut pyo3::ffi::PyObject
+    // SAFETY: `obj` is a live object; reading its type pointer takes no reference.
+    unsafe { pyo3::ffi::Py_TYPE(obj.as_ptr()) == t }
 }
 
 fn is_masked(obj: &Bound<'_, PyAny>) -> bool {
