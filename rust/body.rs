@@ -4,6 +4,7 @@
 //! `I_xy = −Σ m x y`. The paper writes products of inertia with the opposite sign; that is
 //! converted at the boundary, never here.
 use crate::error::{check_finite, Error, Result};
+use crate::point_masses::EquimomentalSet;
 use crate::spatial::{BodyInertia, Mat3, Vec3};
 
 /// Relative tolerance for symmetry, definiteness and the triangle inequality, scaled by the
@@ -16,6 +17,17 @@ pub struct RigidBody {
     pub com: Vec3,
     /// Inertia about the COM, body frame, exactly symmetric.
     pub inertia: Mat3,
+}
+
+fn overflow(mass: f64, com: &Vec3, inertia: &Mat3) -> Error {
+    Error::inertia(
+        "inertia",
+        format!(
+            "the body's derived quantities (principal moments, seven point masses, inertia about the body origin) overflow double precision (mass {mass:e}, largest inertia entry {:e}, centre of mass at distance {:e}); use smaller units",
+            inertia.abs().max(),
+            com.norm()
+        ),
+    )
 }
 
 impl RigidBody {
@@ -47,10 +59,14 @@ impl RigidBody {
                 format!("expected a symmetric 3x3 tensor, got entries differing from their transposes by up to {asym:.3e}"),
             ));
         }
-        let sym = (inertia + inertia.transpose()) * 0.5;
+        // Halves first: the sum of two entries near f64::MAX would overflow.
+        let sym = inertia * 0.5 + inertia.transpose() * 0.5;
         let eig = sym.symmetric_eigenvalues();
         let (lo, hi) = (eig.min(), eig.max());
         let trace = eig.sum();
+        if !(eig.iter().all(|x| x.is_finite()) && trace.is_finite()) {
+            return Err(overflow(mass, &com, &inertia));
+        }
         if lo < -tol {
             return Err(Error::inertia(
                 "inertia",
@@ -66,11 +82,38 @@ impl RigidBody {
                 ),
             ));
         }
-        Ok(RigidBody {
+        let body = RigidBody {
             mass,
             com,
             inertia: sym,
-        })
+        };
+        body.check_derived()?;
+        Ok(body)
+    }
+
+    /// Refuses a body whose derived quantities overflow double precision although its own
+    /// numbers are finite: second moments, the seven point masses about the COM and about
+    /// the body origin, the inertia about the body origin (where a joint attaches it).
+    fn check_derived(&self) -> Result<()> {
+        let origin = Vec3::zeros();
+        let finite = |m: &Mat3| m.iter().all(|x| x.is_finite());
+        let set_ok = |c: &Vec3| {
+            let p = EquimomentalSet::solve(self, c);
+            p.masses.iter().all(|x| x.is_finite())
+                && p.half_sides.iter().all(|x| x.is_finite())
+                && p.positions.iter().all(|x| x.iter().all(|y| y.is_finite()))
+        };
+        let about = self.inertia_at(&origin);
+        if finite(&self.second_moments_about_com())
+            && finite(&about.rotational)
+            && about.first_moment.iter().all(|x| x.is_finite())
+            && set_ok(&self.com)
+            && set_ok(&origin)
+        {
+            Ok(())
+        } else {
+            Err(overflow(self.mass, &self.com, &self.inertia))
+        }
     }
 
     /// Mass, COM and inertia about the COM of a set of point masses (some may be negative,

@@ -23,15 +23,21 @@ pub enum Joint {
 pub type Subspace = [Vec6; 3];
 
 fn unit_axis(axis: Vec3) -> Result<Vec3> {
-    let n = axis.norm();
-    if !n.is_finite() || n == 0.0 {
+    let largest = axis.amax();
+    if !axis.iter().all(|x| x.is_finite()) || largest == 0.0 {
         return Err(Error::arg(
             "axis",
             "a finite, non-zero 3-vector",
             format!("[{}, {}, {}]", axis.x, axis.y, axis.z),
         ));
     }
-    Ok(axis / n)
+    let n = axis.norm();
+    if n.is_finite() && n > 1e-100 {
+        return Ok(axis / n);
+    }
+    // The squares overflow (|x| > 1e154) or underflow: divide by the largest entry first.
+    let scaled = axis / largest;
+    Ok(scaled / scaled.norm())
 }
 
 pub fn rot_x(a: f64) -> Mat3 {

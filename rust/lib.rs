@@ -9,6 +9,7 @@ pub mod cpu;
 pub mod denoc;
 pub mod effects;
 pub mod error;
+pub mod files;
 pub mod integrator;
 pub mod interrupt;
 pub mod joint;

@@ -2,6 +2,8 @@
 //! welded into their moving ancestor (a "link"), so dynamics runs over links only. Each link
 //! carries its merged rigid body, its seven point masses and the 6×6 mass matrix about its
 //! origin built once from those points, in the link frame.
+use std::collections::HashMap;
+
 use crate::body::RigidBody;
 use crate::error::{check_finite, Error, Result};
 use crate::joint::Joint;
@@ -51,6 +53,11 @@ pub struct Model {
     pub links: Vec<Link>,
     pub nq: usize,
     pub nv: usize,
+    /// Body index by name, kept by `add_body` (the only place bodies are added or named), so
+    /// name lookups and duplicate checks cost O(1) and building a model is linear. Derived
+    /// from `bodies`: not serialised, rebuilt when deserialising.
+    #[serde(skip_serializing)]
+    names: HashMap<String, usize>,
 }
 
 /// A deserialised model, checked by [`Model::check_structure`] before use.
@@ -65,11 +72,18 @@ struct ModelData {
 impl TryFrom<ModelData> for Model {
     type Error = Error;
     fn try_from(d: ModelData) -> Result<Model> {
+        let names = d
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(k, b)| (b.name.clone(), k))
+            .collect();
         let m = Model {
             bodies: d.bodies,
             links: d.links,
             nq: d.nq,
             nv: d.nv,
+            names,
         };
         m.check_structure()?;
         Ok(m)
@@ -127,6 +141,39 @@ fn snapped_signed_permutation(r: &Mat3) -> Option<Mat3> {
     (ones_per_row && ones_per_col && out.determinant() == 1.0).then_some(out)
 }
 
+/// Refuses a link whose derived quantities (merged body, seven point masses, inertia about
+/// the link origin) overflow double precision, although each body's numbers are finite.
+fn check_link(link: &Link, body: &str, link_body: &str) -> Result<()> {
+    let p = &link.points;
+    let i = &link.inertia;
+    let finite = link.rigid.mass.is_finite()
+        && link.rigid.com.iter().all(|x| x.is_finite())
+        && link.rigid.inertia.iter().all(|x| x.is_finite())
+        && p.masses.iter().all(|x| x.is_finite())
+        && p.half_sides.iter().all(|x| x.is_finite())
+        && p.positions.iter().all(|x| x.iter().all(|y| y.is_finite()))
+        && i.mass.is_finite()
+        && i.first_moment.iter().all(|x| x.is_finite())
+        && i.rotational.iter().all(|x| x.is_finite());
+    if finite {
+        return Ok(());
+    }
+    let whose = if body == link_body {
+        format!("body '{body}'")
+    } else {
+        format!("body '{body}' (welded into the link of body '{link_body}')")
+    };
+    Err(Error::inertia(
+        "body",
+        format!(
+            "{whose}: its seven point masses or its inertia about the link origin overflow double precision (mass {:e}, largest inertia entry {:e}, centre of mass at distance {:e}); use smaller units",
+            link.rigid.mass,
+            link.rigid.inertia.abs().max(),
+            link.rigid.com.norm()
+        ),
+    ))
+}
+
 impl Model {
     pub fn new() -> Self {
         Self::default()
@@ -137,7 +184,14 @@ impl Model {
     }
 
     pub fn body_index(&self, name: &str) -> Option<usize> {
-        self.bodies.iter().position(|b| b.name == name)
+        match self.names.get(name) {
+            Some(&k) if self.bodies.get(k).is_some_and(|b| b.name == name) => Some(k),
+            // `bodies` is public: if it was changed behind `add_body`'s back, scan.
+            _ if self.names.len() != self.bodies.len() => {
+                self.bodies.iter().position(|b| b.name == name)
+            }
+            _ => None,
+        }
     }
 
     /// Adds a body on `joint` below `parent` (None: the world). `placement` puts the joint
@@ -184,11 +238,13 @@ impl Model {
         let joint_in_link = parent_in_link.compose(&placement);
         let (link, in_link) = if let Joint::Fixed = joint {
             if let Some(l) = parent_link {
-                let link = &mut self.links[l];
+                let mut link = self.links[l].clone();
                 let welded = body.transformed(&joint_in_link.rotation, &joint_in_link.translation);
                 link.rigid = link.rigid.merged(&welded);
                 let center = self.bodies[link.body].point_mass_center;
-                Self::refresh_points(link, center);
+                Self::refresh_points(&mut link, center);
+                check_link(&link, &name, &self.bodies[link.body].name)?;
+                self.links[l] = link;
             }
             (parent_link, joint_in_link)
         } else {
@@ -205,11 +261,13 @@ impl Model {
                 inertia: BodyInertia::zero(),
             };
             Self::refresh_points(&mut link, point_mass_center);
+            check_link(&link, &name, &name)?;
             self.nq += joint.nq();
             self.nv += joint.nv();
             self.links.push(link);
             (Some(self.links.len() - 1), Placement::identity())
         };
+        self.names.insert(name.clone(), index);
         self.bodies.push(BodyRecord {
             name,
             body,

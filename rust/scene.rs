@@ -134,8 +134,30 @@ struct SimulateFile {
 }
 
 impl Scene {
-    /// Parses a scene from TOML text; `file` names it in errors.
+    /// Reads and parses a scene file. Only a regular file of at most
+    /// [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a device is refused before it is
+    /// opened); errors name the path (shortened if too long to show).
+    pub fn from_file(path: &std::path::Path) -> Result<Scene, SceneError> {
+        let file = crate::files::display_path(path);
+        let text = crate::files::read_text(path, "scene").map_err(|message| SceneError {
+            file: file.clone(),
+            key: String::new(),
+            message,
+        })?;
+        let dir = path.parent().unwrap_or(std::path::Path::new(""));
+        Self::parse(&text, &file, dir)
+    }
+
+    /// Parses a scene from TOML text; `file` names it in errors, and a `urdf` key is resolved
+    /// relative to its directory.
     pub fn from_toml(text: &str, file: &str) -> Result<Scene, SceneError> {
+        let dir = std::path::Path::new(file)
+            .parent()
+            .unwrap_or(std::path::Path::new(""));
+        Self::parse(text, file, dir)
+    }
+
+    fn parse(text: &str, file: &str, dir: &std::path::Path) -> Result<Scene, SceneError> {
         let err = |key: String, message: String| SceneError {
             file: file.to_string(),
             key,
@@ -173,7 +195,7 @@ impl Scene {
         let mut index: HashMap<String, usize> = HashMap::new();
         let mut urdf_effects = Vec::new();
         if let Some(rel) = &sf.urdf {
-            let urdf = scene_urdf(file, rel).map_err(|m| err("urdf".into(), m))?;
+            let urdf = scene_urdf(dir, rel).map_err(|m| err("urdf".into(), m))?;
             urdf_effects = urdf_dynamics_effects(&urdf, sf.urdf_dynamics.as_deref())
                 .map_err(|m| err("urdf_dynamics".into(), m))?;
             model = urdf.model;
@@ -425,11 +447,8 @@ impl Scene {
 }
 
 /// The model of a scene's `urdf` file, resolved relative to the scene file's directory
-/// (`file` is the scene's path; its URDF warnings are not reported here).
-fn scene_urdf(file: &str, rel: &str) -> Result<crate::urdf::Urdf, String> {
-    let dir = std::path::Path::new(file)
-        .parent()
-        .unwrap_or(std::path::Path::new(""));
+/// `dir` (its URDF warnings are not reported here).
+fn scene_urdf(dir: &std::path::Path, rel: &str) -> Result<crate::urdf::Urdf, String> {
     crate::urdf::load_urdf(&dir.join(rel)).map_err(|e| e.to_string())
 }
 

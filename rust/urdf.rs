@@ -184,12 +184,14 @@ impl std::fmt::Display for UrdfError {
 impl std::error::Error for UrdfError {}
 
 /// Reads and loads a URDF file; errors name `path` as given.
+/// Only a regular file of at most [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a
+/// device is refused before it is opened); a path too long to show is shortened in messages.
 pub fn load_urdf(path: &Path) -> Result<Urdf, UrdfError> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| UrdfError {
+    let file = crate::files::display_path(path);
+    let text = crate::files::read_text(path, "URDF").map_err(|message| UrdfError {
         file: file.clone(),
         element: String::new(),
-        message: format!("cannot read the URDF file: {e}"),
+        message,
     })?;
     model_from_urdf(&text, &file, path.parent())
 }
@@ -263,7 +265,9 @@ struct JointData {
 /// Error builder bound to one file.
 struct Ctx<'a> {
     file: &'a str,
-    doc: &'a Document<'a>,
+    /// Byte offset of the start of each line, so a node's line is a binary search (roxmltree's
+    /// `text_pos_at` scans from the start of the text: quadratic over a large file).
+    line_starts: Vec<usize>,
 }
 
 impl Ctx<'_> {
@@ -275,7 +279,8 @@ impl Ctx<'_> {
         }
     }
     fn line(&self, node: Node) -> u32 {
-        self.doc.text_pos_at(node.range().start).row
+        let pos = node.range().start;
+        self.line_starts.partition_point(|&s| s <= pos) as u32
     }
     /// An error about `node`, with its line.
     fn at(&self, element: &str, node: Node, message: impl std::fmt::Display) -> UrdfError {
@@ -658,7 +663,10 @@ pub fn model_from_urdf(text: &str, file: &str, base_dir: Option<&Path>) -> Resul
             message: format!("malformed XML at line {line}, column {col}: {e}"),
         }
     })?;
-    let ctx = Ctx { file, doc: &doc };
+    let line_starts: Vec<usize> = std::iter::once(0)
+        .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+        .collect();
+    let ctx = Ctx { file, line_starts };
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(ctx.at(

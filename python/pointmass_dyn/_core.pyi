@@ -7,6 +7,7 @@ shape raises :class:`pointmass_dyn.errors.InvalidInputError` naming the argument
 returned are fresh float64 NumPy arrays.
 """
 
+import os
 from collections.abc import Sequence
 from typing import Any, Callable, ClassVar, Literal, final
 
@@ -335,6 +336,11 @@ class Scene:
     def from_toml(text: str, file: str = "<string>") -> Scene:
         """Parses a scene from TOML text; raises :class:`pointmass_dyn.errors.SceneError`
         naming ``file`` and the key."""
+    @staticmethod
+    def from_file(path: str | os.PathLike[str]) -> Scene:
+        """Reads a scene file: only a regular file of at most 128 MiB (a FIFO, a device or a
+        directory is refused before it is opened); raises
+        :class:`pointmass_dyn.errors.SceneError` naming the file."""
     @property
     def model(self) -> Model:
         """A copy of the scene's model."""

@@ -188,6 +188,9 @@ def main(argv=None) -> int:
     except PointMassDynError as exc:
         print(f"pointmass-dyn: error: {exc}", file=sys.stderr)
         return 2
+    except OSError as exc:  # writing --out / --plot (inputs are read with our own errors)
+        print(f"pointmass-dyn: error: cannot write the output file: {exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":  # pragma: no cover

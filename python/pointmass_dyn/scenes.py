@@ -16,26 +16,44 @@ def builtin_scenes() -> dict[str, Path]:
     return {p.stem: p for p in sorted(_BUNDLED.glob("*.toml"))}
 
 
+def _shown(text: str) -> str:
+    """A path as shown in messages: shortened in the middle if longer than 200 characters."""
+    if len(text) <= 200:
+        return text
+    return f"{text[:100]}…{text[-90:]} (a path of {len(text)} characters)"
+
+
 def resolve_scene_path(path_or_name: str | os.PathLike) -> Path:
-    """A bundled scene's file for a bare name, otherwise the path itself."""
-    text = os.fspath(path_or_name)
+    """A bundled scene's file for a bare name, otherwise the path itself (not checked: a path
+    that cannot be read is reported by ``load_scene``)."""
+    try:
+        text = os.fspath(path_or_name)
+    except TypeError:
+        raise TypeError(
+            f"path_or_name: expected a str or os.PathLike, got {type(path_or_name).__name__}"
+        ) from None
+    if isinstance(text, bytes):
+        raise TypeError("path_or_name: expected a str or os.PathLike, got bytes")
     bundled = builtin_scenes()
     if text in bundled:
         return bundled[text]
-    path = Path(text)
-    if path.is_file():
-        return path
-    raise SceneError(
-        f"{text}: no such scene file, and not a bundled scene "
-        f"(bundled: {', '.join(bundled) or 'none'})"
-    )
+    return Path(text)
 
 
 def load_scene(path_or_name: str | os.PathLike) -> Scene:
-    """Loads a scene from a TOML file, or a bundled scene by name (see ``builtin_scenes()``)."""
+    """Loads a scene from a TOML file, or a bundled scene by name (see ``builtin_scenes()``).
+
+    Only a regular file of at most 128 MiB is read (a FIFO, a device or a directory is refused
+    with ``SceneError`` before it is opened)."""
     path = resolve_scene_path(path_or_name)
     try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise SceneError(f"{path}: cannot read the scene file: {exc}") from exc
-    return Scene.from_toml(text, str(path))
+        os.lstat(path)
+    except FileNotFoundError:
+        bundled = builtin_scenes()
+        raise SceneError(
+            f"{_shown(str(path))}: no such scene file, and not a bundled scene "
+            f"(bundled: {', '.join(bundled) or 'none'})"
+        ) from None
+    except (OSError, ValueError):
+        pass  # reported by the reader, with the path and the reason
+    return Scene.from_file(path)

@@ -265,8 +265,9 @@ def effect_forces(scene: Scene, t: float, q: Any, v: Any, *, disable: Any = None
 
 def effect_power(scene: Scene, t: float, q: Any, v: Any, *, disable: Any = None) -> dict:
     """Power ``τ_e · v`` (W) each enabled effect injects at ``(t, q, v)``, by effect name."""
+    forces = effect_forces(scene, t, q, v, disable=disable)  # validates v first
     v = np.asarray(v, dtype=float)
-    return {k: float(f @ v) for k, f in effect_forces(scene, t, q, v, disable=disable).items()}
+    return {k: float(f @ v) for k, f in forces.items()}
 
 
 def energies(scene: Scene, q: Any, v: Any, *, disable: Any = None) -> dict:
@@ -324,7 +325,7 @@ def rk45(
         t_eval,
         events,
         first_step,
-        None if max_step is None or np.isinf(max_step) else float(max_step),
+        max_step,  # inf: no limit (checked in Rust: a real number)
         max_steps,
         dense_output,
         controller,

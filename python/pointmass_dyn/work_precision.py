@@ -42,6 +42,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core
+from .errors import InvalidInputError
 from .scenes import load_scene
 from .simulation import energies, simulate
 
@@ -192,6 +193,21 @@ class WorkPrecision:
         return plot_work_precision([self], path)
 
 
+def _tolerances_arg(tolerances) -> list[float]:
+    """Real tolerances in (0, 1), or ``InvalidInputError`` naming the argument."""
+    given = repr(tolerances)[:80]
+    try:
+        arr = np.asarray(tolerances)
+    except (ValueError, TypeError):
+        arr = None
+    if arr is None or arr.ndim > 1 or arr.dtype.kind not in "iuf":
+        raise InvalidInputError(f"tolerances: expected a sequence of real numbers > 0, got {given}")
+    tols = [float(x) for x in np.atleast_1d(arr)]
+    if not all(0 < t < 1 for t in tols):
+        raise InvalidInputError(f"tolerances: expected numbers in (0, 1), got {given}")
+    return tols
+
+
 def work_precision(
     scene: Any,
     tolerances: Sequence[float] = DEFAULT_TOLERANCES,
@@ -219,8 +235,11 @@ def work_precision(
         ) from exc
 
     sc = _scene_of(scene)
+    tolerances = _tolerances_arg(tolerances)
     t0, t1 = sc.t_span or (0.0, 10.0)
     if t_end is not None:
+        if isinstance(t_end, (str, bytes, complex)) or not np.isrealobj(t_end):
+            raise InvalidInputError(f"t_end: expected a real number, got {t_end!r}")
         t1 = float(t_end)
     span = (float(t0), float(t1))
     say = progress or (lambda msg: None)

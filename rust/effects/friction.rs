@@ -35,11 +35,12 @@ impl Friction {
     ) -> Result<Friction> {
         friction.check("friction", Sign::NonNegative)?;
         let v_eps = v_eps.unwrap_or(DEFAULT_V_EPS);
-        if !(v_eps > 0.0 && v_eps.is_finite()) {
+        // The law uses 1 / v_eps: a subnormal v_eps would make it inf and 0 · inf = NaN.
+        if !(v_eps > 0.0 && v_eps.is_finite() && (1.0 / v_eps).is_finite()) {
             return Err(Error::arg(
                 "v_eps",
-                "a finite number > 0",
-                v_eps.to_string(),
+                "a finite number > 0 whose reciprocal is finite (>= 5.6e-309)",
+                format!("{v_eps:e}"),
             ));
         }
         Ok(Friction {

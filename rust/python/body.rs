@@ -1,8 +1,8 @@
 //! `RigidBody` and its seven point masses.
 use pyo3::prelude::*;
 
-use super::convert::{mat3, mat3_to_array, points, to_array, to_array1, vec3, vector};
-use super::errors::IntoPyResult;
+use super::convert::{mat3, mat3_to_array, points, real, to_array, to_array1, vec3, vector};
+use super::errors::{check_result, IntoPyResult};
 use crate::body::RigidBody;
 use crate::point_masses::EquimomentalSet;
 
@@ -23,10 +23,11 @@ impl PyRigidBody {
     #[pyo3(signature = (mass, com, inertia))]
     fn new(
         py: Python<'_>,
-        mass: f64,
+        mass: &Bound<'_, PyAny>,
         com: &Bound<'_, PyAny>,
         inertia: &Bound<'_, PyAny>,
     ) -> PyResult<Self> {
+        let mass = real(mass, "mass")?;
         let inner = RigidBody::new(mass, vec3(com, "com")?, mat3(inertia, "inertia")?).py(py)?;
         Ok(PyRigidBody { inner })
     }
@@ -66,7 +67,9 @@ impl PyRigidBody {
     ) -> PyResult<Bound<'py, PyAny>> {
         let p = vec3(point, "point")?;
         crate::error::check_finite("point", p.as_slice()).py(py)?;
-        mat3_to_array(py, &self.inner.inertia_about(&p))
+        let i = self.inner.inertia_about(&p);
+        check_result(py, "inertia_about", i.as_slice())?;
+        mat3_to_array(py, &i)
     }
 
     /// The equimomental seven point masses, box centred at `center` (default: the COM).
@@ -84,9 +87,10 @@ impl PyRigidBody {
             }
             _ => self.inner.com,
         };
-        Ok(PyPointMasses {
-            inner: EquimomentalSet::solve(&self.inner, &c),
-        })
+        let inner = EquimomentalSet::solve(&self.inner, &c);
+        check_result(py, "point_masses", &inner.masses)?;
+        check_result(py, "point_masses", inner.half_sides.as_slice())?;
+        Ok(PyPointMasses { inner })
     }
 
     fn __repr__(&self) -> String {

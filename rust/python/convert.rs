@@ -1,8 +1,19 @@
-//! NumPy ⇄ Rust conversions. Anything array-like (lists, integer arrays) is accepted and
-//! converted to float64; a wrong shape names the argument, the expected and the given shape.
+//! NumPy ⇄ Rust conversions. Real numeric input only: Python floats and ints, NumPy arrays
+//! and scalars of integer or floating dtype, and sequences of those (converted to float64).
+//! Refused with `InvalidInputError` naming the argument and what was given: complex numbers,
+//! strings and bytes, bools and bool arrays (a mask passed as numbers is a bug, not a value),
+//! object arrays (ragged lists, `Decimal`, huge ints), masked arrays (the mask would be
+//! silently dropped). A wrong shape names the argument, the expected and the given shape.
+//! Index and count arguments are Python ints (or NumPy integers) converted by [`int_arg`].
 use nalgebra::DMatrix;
-use numpy::{AllowTypeChange, PyArray1, PyArrayLikeDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{
+    AllowTypeChange, PyArray1, PyArrayDescrMethods, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray,
+    PyUntypedArrayMethods,
+};
+use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString, PyType};
 
 use super::errors::invalid;
 use crate::spatial::{Mat3, Vec3};
@@ -21,9 +32,214 @@ pub fn shape_str(shape: &[usize]) -> String {
     }
 }
 
-/// Any array-like of numbers: its shape and its entries in C order.
+fn type_name(obj: &Bound<'_, PyAny>) -> String {
+    obj.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// `repr(obj)`, cut to 60 characters.
+fn short_repr(obj: &Bound<'_, PyAny>) -> String {
+    let r = obj.repr().map(|r| r.to_string()).unwrap_or_default();
+    if r.chars().count() > 60 {
+        let head: String = r.chars().take(50).collect();
+        format!("{head}… ({} characters)", r.chars().count())
+    } else {
+        r
+    }
+}
+
+fn is_exact_ndarray(obj: &Bound<'_, PyAny>) -> bool {
+    let py = obj.py();
+    let t = <PyUntypedArray as pyo3::PyTypeInfo>::type_object_raw(py);
+    // SAFETY: `obj` is a live object; reading its type pointer takes no reference.
+    unsafe { pyo3::ffi::Py_TYPE(obj.as_ptr()) == t }
+}
+
+fn is_masked(obj: &Bound<'_, PyAny>) -> bool {
+    static MASKED: PyOnceLock<Py<PyType>> = PyOnceLock::new();
+    let py = obj.py();
+    MASKED
+        .get_or_try_init(py, || -> PyResult<Py<PyType>> {
+            Ok(py
+                .import("numpy.ma")?
+                .getattr("MaskedArray")?
+                .cast_into::<PyType>()?
+                .unbind())
+        })
+        .map(|t| obj.is_instance(t.bind(py)).unwrap_or(false))
+        .unwrap_or(false)
+}
+
+/// Refuses an array whose dtype is not integer or floating.
+fn check_dtype(arr: &Bound<'_, PyUntypedArray>, arg: &str) -> PyResult<()> {
+    let dtype = arr.dtype();
+    let what = match dtype.kind() {
+        b'i' | b'u' | b'f' => return Ok(()),
+        b'b' => "a bool array (bools are refused as numbers)".to_string(),
+        b'c' => format!("a complex array (dtype {dtype}): the imaginary part would be lost"),
+        b'U' | b'S' => format!("an array of strings (dtype {dtype})"),
+        b'O' => {
+            "an array of Python objects (dtype object: ragged, non-numeric or out-of-range entries)"
+                .to_string()
+        }
+        _ => format!("an array of dtype {dtype}"),
+    };
+    Err(invalid(arr.py(), arg, "real numbers", what))
+}
+
+/// `obj` as a NumPy array of real (integer or floating) dtype, or `InvalidInputError`.
+pub fn real_array<'py>(obj: &Bound<'py, PyAny>, arg: &str) -> PyResult<Bound<'py, PyAny>> {
+    let py = obj.py();
+    if let Ok(a) = obj.cast::<PyUntypedArray>() {
+        if !is_exact_ndarray(obj) && is_masked(obj) {
+            return Err(invalid(
+                py,
+                arg,
+                "real numbers (a plain array)",
+                "a masked array: fill it (a.filled(...)) or drop the masked entries first",
+            ));
+        }
+        check_dtype(a, arg)?;
+        return Ok(obj.clone());
+    }
+    if obj.is_instance_of::<PyString>()
+        || obj.is_instance_of::<PyBytes>()
+        || obj.is_instance_of::<PyByteArray>()
+    {
+        return Err(invalid(
+            py,
+            arg,
+            "real numbers",
+            format!("a {}: {}", type_name(obj), short_repr(obj)),
+        ));
+    }
+    let a = py
+        .import("numpy")
+        .and_then(|np| np.call_method1("asarray", (obj,)))
+        .map_err(|_| {
+            invalid(
+                py,
+                arg,
+                "an array of real numbers",
+                format!("an object of type {}", type_name(obj)),
+            )
+        })?;
+    let arr = a.cast::<PyUntypedArray>().map_err(|_| {
+        invalid(
+            py,
+            arg,
+            "an array of real numbers",
+            format!("an object of type {}", type_name(obj)),
+        )
+    })?;
+    if is_masked(&a) {
+        return Err(invalid(
+            py,
+            arg,
+            "real numbers (a plain array)",
+            "a masked array",
+        ));
+    }
+    check_dtype(arr, arg)?;
+    Ok(a)
+}
+
+/// A real number: a Python float or int, a NumPy integer or floating scalar, or a 0-d array
+/// of those. NaN and inf pass (callers decide); an int beyond the double range does not.
+pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
+    let py = obj.py();
+    if let Ok(f) = obj.cast_exact::<PyFloat>() {
+        return Ok(f.value());
+    }
+    if obj.is_instance_of::<PyInt>() && !obj.is_instance_of::<PyBool>() {
+        return obj.extract::<f64>().map_err(|_| {
+            invalid(
+                py,
+                arg,
+                "a real number within the double range (|x| < 1.8e308)",
+                format!(
+                    "an int of {} bits",
+                    obj.call_method0("bit_length")
+                        .and_then(|b| b.extract::<u64>())
+                        .unwrap_or(0)
+                ),
+            )
+        });
+    }
+    let a = real_array(obj, arg)?;
+    let arr = a.cast::<PyUntypedArray>()?;
+    if arr.ndim() != 0 {
+        return Err(invalid(
+            py,
+            arg,
+            "a real number",
+            format!("an array of {}", shape_str(arr.shape())),
+        ));
+    }
+    let x: PyArrayLikeDyn<'_, f64, AllowTypeChange> = a.extract()?;
+    Ok(x.as_array().iter().next().copied().unwrap_or(f64::NAN))
+}
+
+/// An optional real number (`None` → `None`).
+pub fn opt_real(obj: Option<&Bound<'_, PyAny>>, arg: &str) -> PyResult<Option<f64>> {
+    match obj {
+        Some(o) if !o.is_none() => real(o, arg).map(Some),
+        _ => Ok(None),
+    }
+}
+
+/// An integer argument (index or count) in `lo..=hi`: a Python int or NumPy integer.
+/// `TypeError` for another type (a float, a str); `InvalidInputError` naming the argument,
+/// `expected` and the value for an int out of range (negative or huge: no `OverflowError`).
+pub fn int_arg(
+    obj: &Bound<'_, PyAny>,
+    arg: &str,
+    lo: i64,
+    hi: i64,
+    expected: &str,
+) -> PyResult<i64> {
+    let py = obj.py();
+    if obj.is_instance_of::<PyBool>() {
+        return Err(invalid(
+            py,
+            arg,
+            expected,
+            format!("the bool {}", short_repr(obj)),
+        ));
+    }
+    match obj.extract::<i64>() {
+        Ok(n) if (lo..=hi).contains(&n) => Ok(n),
+        Ok(n) => Err(invalid(py, arg, expected, n)),
+        Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
+            Err(invalid(py, arg, expected, short_repr(obj)))
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// A count or index `>= 0` (at most `i64::MAX`).
+pub fn count_arg(obj: &Bound<'_, PyAny>, arg: &str, expected: &str) -> PyResult<usize> {
+    int_arg(obj, arg, 0, i64::MAX, expected).map(|n| n as usize)
+}
+
+/// An optional count (`None` → `None`).
+pub fn opt_count(
+    obj: Option<&Bound<'_, PyAny>>,
+    arg: &str,
+    expected: &str,
+) -> PyResult<Option<usize>> {
+    match obj {
+        Some(o) if !o.is_none() => count_arg(o, arg, expected).map(Some),
+        _ => Ok(None),
+    }
+}
+
+/// Any array-like of real numbers: its shape and its entries in C order.
 pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let py = obj.py();
+    let obj = &real_array(obj, arg)?;
     let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj.extract().map_err(|_| {
         let ty = obj
             .get_type()
@@ -62,7 +278,8 @@ pub fn vector(obj: &Bound<'_, PyAny>, arg: &str, len: Option<usize>) -> PyResult
 /// Fast path for the per-call dynamics functions: a contiguous float64 1-D array is copied
 /// straight into `out`; anything else goes through `vector`.
 pub fn vector_into(obj: &Bound<'_, PyAny>, arg: &str, out: &mut [f64]) -> PyResult<()> {
-    if let Ok(a) = obj.cast::<PyArray1<f64>>() {
+    // Exactly an ndarray (a subclass such as a masked array takes the checked path).
+    if let (Ok(a), true) = (obj.cast::<PyArray1<f64>>(), is_exact_ndarray(obj)) {
         // SAFETY: the data is copied at once while attached to the interpreter, so no Python
         // code can write to the array meanwhile; this skips rust-numpy's borrow tracking,
         // which costs more than the copy for small arrays.

@@ -397,14 +397,14 @@ impl PyModel {
     }
 
     /// Adds a body; returns its index. See the package docs for the arguments.
-    #[pyo3(signature = (body, joint, parent=-1, translation=None, rotation=None, name=None, point_mass_center=None))]
+    #[pyo3(signature = (body, joint, parent=None, translation=None, rotation=None, name=None, point_mass_center=None))]
     #[allow(clippy::too_many_arguments)]
     fn add_body(
         &self,
         py: Python<'_>,
         body: PyRef<'_, PyRigidBody>,
         joint: PyRef<'_, PyJoint>,
-        parent: i64,
+        parent: Option<&Bound<'_, PyAny>>,
         translation: Option<&Bound<'_, PyAny>>,
         rotation: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
@@ -421,6 +421,17 @@ impl PyModel {
         let center = match point_mass_center {
             Some(c) if !c.is_none() => Some(vec3(c, "point_mass_center")?),
             _ => None,
+        };
+        // -1 (or None) is the world; any int is taken (no OverflowError), a non-int is a TypeError.
+        let parent = match parent.filter(|p| !p.is_none()) {
+            None => -1,
+            Some(p) => super::convert::int_arg(
+                p,
+                "parent",
+                i64::MIN,
+                i64::MAX,
+                "-1 (the world) or a body index >= 0",
+            )?,
         };
         let mut version = self.version();
         let parent = match parent {
@@ -492,7 +503,12 @@ impl PyModel {
         self.model().total_mass()
     }
     /// Per body: (name, joint kind, parent index or -1, link index or -1).
-    fn body_info(&self, py: Python<'_>, index: usize) -> PyResult<(String, String, i64, i64)> {
+    fn body_info(
+        &self,
+        py: Python<'_>,
+        index: &Bound<'_, PyAny>,
+    ) -> PyResult<(String, String, i64, i64)> {
+        let index = super::convert::count_arg(index, "index", "a body index >= 0")?;
         let m = self.model();
         let b = m.bodies.get(index).ok_or_else(|| {
             super::errors::py_error(
@@ -539,6 +555,7 @@ impl PyModel {
                 rots.extend_from_slice(p.rotation.transpose().as_slice());
                 origins.extend_from_slice(p.translation.as_slice());
             }
+            check_result(py, "placements", &origins)?;
             Ok((
                 to_array(py, rots, &[nb, 3, 3])?,
                 to_array(py, origins, &[nb, 3])?,
@@ -558,6 +575,7 @@ impl PyModel {
             let (masses, points) = denoc::point_positions(ws.model(), &ws.q);
             let n = ws.model().links.len();
             let pts = points.transpose().as_slice().to_vec();
+            check_result(py, "point_masses", &pts)?;
             Ok((
                 to_array(py, masses.as_slice().to_vec(), &[n, 7])?,
                 to_array(py, pts, &[n, 7, 3])?,
@@ -569,6 +587,9 @@ impl PyModel {
     fn denoc<'py>(&self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
         let (model, qv) = self.state_only(py, q)?;
         let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
+        for (k, m) in [("D", &den.d), ("N", &den.n), ("points", &den.points)] {
+            check_result(py, &format!("denoc['{k}']"), m.as_slice())?;
+        }
         let d = PyDict::new(py);
         d.set_item("D", dmatrix_to_array(py, &den.d)?)?;
         d.set_item("Nl", dmatrix_to_array(py, &den.nl)?)?;
@@ -588,6 +609,9 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyDict>> {
         let (model, qv, vv) = self.state(py, q, v)?;
         let (_, rates) = detach_interruptible(py, || denoc::matrices_and_rates(&model, &qv, &vv))?;
+        for (k, m) in [("D", &rates.d), ("N", &rates.n)] {
+            check_result(py, &format!("denoc_rates['{k}']"), m.as_slice())?;
+        }
         let d = PyDict::new(py);
         d.set_item("D", dmatrix_to_array(py, &rates.d)?)?;
         d.set_item("Nl", dmatrix_to_array(py, &rates.nl)?)?;
@@ -623,11 +647,13 @@ impl PyModel {
                 } else {
                     recursive::mass_matrix(model, data, qv, &mut gim);
                 }
+                check_result(py, "mass_matrix", gim.as_slice())?;
                 dmatrix_to_array(py, &gim)
             }),
             Method::Denoc => {
                 let (model, qv) = self.state_only(py, q)?;
                 let m = detach_interruptible(py, || denoc::mass_matrix(&model, &qv))?;
+                check_result(py, "mass_matrix", m.as_slice())?;
                 dmatrix_to_array(py, &m)
             }
         }
@@ -642,6 +668,7 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyAny>> {
         let (model, qv, vv) = self.state(py, q, v)?;
         let c = detach_interruptible(py, || denoc::convective_matrix(&model, &qv, &vv))?;
+        check_result(py, "convective_matrix", c.as_slice())?;
         dmatrix_to_array(py, &c)
     }
 
@@ -656,6 +683,7 @@ impl PyModel {
         let g = gravity_arg(py, Some(gravity))?;
         let (model, qv) = self.state_only(py, q)?;
         let tg = detach_interruptible(py, || denoc::gravity_forces(&model, &qv, &g))?;
+        check_result(py, "gravity_forces", tg.as_slice())?;
         Ok(to_array1(py, tg.as_slice()).into_any())
     }
 
@@ -672,6 +700,7 @@ impl PyModel {
             crate::error::check_finite("forces", p.as_slice()).py(py)?;
         }
         let tau = detach_interruptible(py, || denoc::generalized_forces(&model, &qv, &f))?;
+        check_result(py, "generalized_forces", tau.as_slice())?;
         Ok(to_array1(py, tau.as_slice()).into_any())
     }
 
@@ -747,7 +776,9 @@ impl PyModel {
             let model: &Model = &ws.version.model;
             kinematics::positions(model, &ws.q, &mut ws.data.links);
             kinematics::velocities(model, &ws.q, &ws.v, &mut ws.data.links);
-            Ok(recursive::kinetic_energy(&ws.data))
+            let e = recursive::kinetic_energy(&ws.data);
+            check_result(py, "kinetic_energy", &[e])?;
+            Ok(e)
         })
     }
 
@@ -762,7 +793,9 @@ impl PyModel {
         self.with_workspace(|ws| {
             ws.load_state(py, q, None)?;
             kinematics::positions(&ws.version.model, &ws.q, &mut ws.data.links);
-            Ok(recursive::potential_energy(&ws.data, &g))
+            let e = recursive::potential_energy(&ws.data, &g);
+            check_result(py, "potential_energy", &[e])?;
+            Ok(e)
         })
     }
 
@@ -777,6 +810,7 @@ impl PyModel {
             ws.load_state(py, q, Some(v))?;
             let mut qd = vec![0.0; ws.model().nq];
             ws.model().velocity_to_qdot(&ws.q, &ws.v, &mut qd);
+            check_result(py, "velocity_to_qdot", &qd)?;
             Ok(to_array1(py, &qd).into_any())
         })
     }

@@ -6,8 +6,11 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
 
-use super::convert::{array, shape_str, to_array, to_array1, vec3, vector};
-use super::errors::{invalid, py_error, IntoPyResult};
+use super::convert::{
+    array, count_arg, int_arg, opt_count, opt_real, real, shape_str, to_array, to_array1, vec3,
+    vector,
+};
+use super::errors::{check_result, invalid, py_error, IntoPyResult};
 use super::model::PyModel;
 use super::signals::Watch;
 use crate::effects::{
@@ -90,10 +93,17 @@ fn joints_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<JointRef>>>
 
 /// A number (all joints) or a 1-D array (one per joint).
 fn per_joint_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<PerJoint> {
-    if let Ok(x) = obj.extract::<f64>() {
-        return Ok(PerJoint::All(x));
+    let (shape, values) = array(obj, arg)?;
+    match shape.len() {
+        0 => Ok(PerJoint::All(values[0])),
+        1 => Ok(PerJoint::Each(values)),
+        _ => Err(invalid(
+            obj.py(),
+            arg,
+            "a number or a 1-D array",
+            shape_str(&shape),
+        )),
     }
-    Ok(PerJoint::Each(vector(obj, arg, None)?))
 }
 
 /// A 1-D or 2-D array, one row per time.
@@ -231,9 +241,10 @@ impl PyEffect {
         py: Python<'_>,
         joints: Option<&Bound<'_, PyAny>>,
         friction: &Bound<'_, PyAny>,
-        v_eps: Option<f64>,
+        v_eps: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
     ) -> PyResult<Self> {
+        let v_eps = opt_real(v_eps, "v_eps")?;
         let joints = joints_arg(joints)?;
         let f = per_joint_arg(friction, "friction")?;
         Ok(PyEffect {
@@ -443,8 +454,8 @@ pub struct PyStateEvent {
 }
 
 fn terminal_count(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<usize> {
-    if let Ok(b) = obj.extract::<bool>() {
-        return Ok(b as usize);
+    if let Ok(b) = obj.cast::<pyo3::types::PyBool>() {
+        return Ok(b.is_true() as usize);
     }
     match obj.extract::<i64>() {
         Ok(n) if n >= 0 => Ok(n as usize),
@@ -460,15 +471,21 @@ fn terminal_count(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<usize> {
 #[pymethods]
 impl PyStateEvent {
     #[new]
-    #[pyo3(signature = (variable, index, value=0.0, direction=0, terminal=None))]
+    #[pyo3(signature = (variable, index, value=None, direction=None, terminal=None))]
     fn new(
         py: Python<'_>,
         variable: &str,
-        index: usize,
-        value: f64,
-        direction: i32,
+        index: &Bound<'_, PyAny>,
+        value: Option<&Bound<'_, PyAny>>,
+        direction: Option<&Bound<'_, PyAny>>,
         terminal: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
+        let index = count_arg(index, "index", "a coordinate index >= 0")?;
+        let value = opt_real(value, "value")?.unwrap_or(0.0);
+        let direction = match direction.filter(|d| !d.is_none()) {
+            None => 0,
+            Some(d) => int_arg(d, "direction", i64::MIN, i64::MAX, "-1, 0 or 1")?.signum() as i32,
+        };
         let on_velocity = match variable {
             "q" => false,
             "v" => true,
@@ -549,12 +566,13 @@ impl PyScene {
         v0: Option<&Bound<'_, PyAny>>,
         effects: Option<&Bound<'_, PyAny>>,
         t_span: Option<&Bound<'_, PyAny>>,
-        rtol: Option<f64>,
-        atol: Option<f64>,
+        rtol: Option<&Bound<'_, PyAny>>,
+        atol: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
         description: Option<String>,
         disable: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
+        let (rtol, atol) = (opt_real(rtol, "rtol")?, opt_real(atol, "atol")?);
         let m = model.model();
         let mut q = match q0 {
             Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
@@ -614,6 +632,15 @@ impl PyScene {
     #[pyo3(signature = (text, file="<string>"))]
     fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
         Scene::from_toml(text, file)
+            .map(|inner| PyScene { inner })
+            .map_err(|e| py_error(py, "SceneError", e.to_string()))
+    }
+
+    /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
+    /// before it is opened). Raises `SceneError` naming the file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
+        Scene::from_file(&path)
             .map(|inner| PyScene { inner })
             .map_err(|e| py_error(py, "SceneError", e.to_string()))
     }
@@ -732,10 +759,19 @@ fn rename_arg(e: crate::error::Error) -> crate::error::Error {
 }
 
 fn tol_arg(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Tol> {
-    if let Ok(x) = obj.extract::<f64>() {
-        return Ok(Tol::Scalar(x));
+    let (shape, values) = array(obj, arg)?;
+    if shape.is_empty() {
+        return Ok(Tol::Scalar(values[0]));
     }
-    Ok(Tol::PerComponent(vector(obj, arg, Some(dim))?))
+    if shape != [dim] {
+        return Err(invalid(
+            obj.py(),
+            arg,
+            format!("a number or shape ({dim},)"),
+            shape_str(&shape),
+        ));
+    }
+    Ok(Tol::PerComponent(values))
 }
 
 fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller> {
@@ -749,6 +785,20 @@ fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller> {
             format!("'{other}'"),
         )),
     }
+}
+
+/// `first_step`, `max_step` (inf: no limit) and `max_steps` as numbers and a count.
+#[allow(clippy::type_complexity)]
+fn step_args(
+    first_step: Option<&Bound<'_, PyAny>>,
+    max_step: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Option<f64>, Option<f64>, Option<usize>)> {
+    Ok((
+        opt_real(first_step, "first_step")?,
+        opt_real(max_step, "max_step")?.filter(|x| *x != f64::INFINITY),
+        opt_count(max_steps, "max_steps", "a step count >= 0 (or None)")?,
+    ))
 }
 
 /// Options common to `rk45` and `simulate`.
@@ -792,6 +842,8 @@ fn options(
 /// A Python event callable: `(args...) -> float`, with optional `terminal` and `direction`
 /// attributes (SciPy's convention).
 struct PyEventSpec {
+    /// Position in the caller's `events` (named in errors).
+    index: usize,
     func: Py<PyAny>,
     terminal: usize,
     direction: f64,
@@ -811,17 +863,11 @@ fn event_spec(py: Python<'_>, k: usize, e: &Bound<'_, PyAny>) -> PyResult<PyEven
         _ => 0,
     };
     let direction = match e.getattr("direction") {
-        Ok(d) if !d.is_none() => d.extract::<f64>().map_err(|_| {
-            invalid(
-                py,
-                &format!("events[{k}].direction"),
-                "a number",
-                "another type",
-            )
-        })?,
+        Ok(d) if !d.is_none() => real(&d, &format!("events[{k}].direction"))?,
         _ => 0.0,
     };
     Ok(PyEventSpec {
+        index: k,
         func: e.clone().unbind(),
         terminal,
         direction,
@@ -860,9 +906,31 @@ fn python_event<'a>(
                     .unwrap_or_default(),
                 ),
             };
+            // A non-number or NaN would silently hide the event: an error naming it.
+            let name = format!("events[{}]", spec.index);
             let out = args
                 .and_then(|a| spec.func.bind(py).call1(a))
-                .and_then(|r| r.extract::<f64>().map_err(PyErr::from));
+                .and_then(|r| {
+                    real(&r, &name).map_err(|_| {
+                        invalid(
+                            py,
+                            &name,
+                            "an event function returning a real number",
+                            format!("{} at t = {t}", repr_of(&r)),
+                        )
+                    })
+                })
+                .and_then(|x| {
+                    if x.is_nan() {
+                        Err(py_error(
+                            py,
+                            "NumericalError",
+                            format!("{name}: the event function returned NaN at t = {t}"),
+                        ))
+                    } else {
+                        Ok(x)
+                    }
+                });
             match out {
                 Ok(x) => x,
                 Err(e) => {
@@ -891,9 +959,9 @@ pub fn simulate_scene<'py>(
     atol: Option<&Bound<'_, PyAny>>,
     t_eval: Option<&Bound<'_, PyAny>>,
     events: Option<&Bound<'_, PyAny>>,
-    first_step: Option<f64>,
-    max_step: Option<f64>,
-    max_steps: Option<usize>,
+    first_step: Option<&Bound<'_, PyAny>>,
+    max_step: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
     energy: bool,
     controller: &str,
     progress: Option<Py<PyAny>>,
@@ -902,6 +970,7 @@ pub fn simulate_scene<'py>(
     stiffness: &str,
     progress_interval: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let (first_step, max_step, max_steps) = step_args(first_step, max_step, max_steps)?;
     let s = &scene.inner;
     let interval = match progress_interval {
         None => super::signals::INTERVAL,
@@ -1079,12 +1148,13 @@ fn scene_state(
 pub fn effect_forces<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,
-    t: f64,
+    t: &Bound<'_, PyAny>,
     q: &Bound<'_, PyAny>,
     v: &Bound<'_, PyAny>,
     disable: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
+    let t = real(t, "t")?;
     if !t.is_finite() {
         return Err(invalid(py, "t", "a finite time", t));
     }
@@ -1101,6 +1171,13 @@ pub fn effect_forces<'py>(
         return Err(e);
     }
     r.map_err(|m| py_error(py, "NumericalError", m))?;
+    for (k, label) in sys.effects.labels().iter().enumerate() {
+        check_result(
+            py,
+            &format!("effect_forces['{label}']"),
+            &out[k * nv..(k + 1) * nv],
+        )?;
+    }
     let d = PyDict::new(py);
     for (k, label) in sys.effects.labels().iter().enumerate() {
         d.set_item(label, to_array1(py, &out[k * nv..(k + 1) * nv]))?;
@@ -1127,12 +1204,15 @@ pub fn energies<'py>(
     let mut sys = Dynamics::try_new(&s.model, &s.effects, disabled).py(py)?;
     let (kinetic, potentials) = sys.energies(&q, &v);
     let d = PyDict::new(py);
+    check_result(py, "energies['kinetic']", &[kinetic])?;
     d.set_item("kinetic", kinetic)?;
     let mut total = kinetic;
     for (label, e) in potentials {
+        check_result(py, &format!("energies['{label}']"), &[e])?;
         total += e;
         d.set_item(label, e)?;
     }
+    check_result(py, "energies['total']", &[total])?;
     d.set_item("total", total)?;
     Ok(d)
 }
@@ -1158,10 +1238,32 @@ impl PyDenseSolution {
                 ),
             ));
         }
-        if let Ok(x) = t.extract::<f64>() {
-            return Ok(to_array1(py, &self.inner.eval(x)).into_any());
-        }
         let (shape, ts) = array(t, "t")?;
+        if let Some(bad) = ts.iter().find(|x| !x.is_finite()) {
+            return Err(invalid(py, "t", "finite times", bad));
+        }
+        // Outside the integrated interval the interpolant extrapolates, and overflows far away.
+        let check = |x: f64, y: &[f64]| -> PyResult<()> {
+            if y.iter().all(|v| v.is_finite()) {
+                return Ok(());
+            }
+            let b = self.inner.breakpoints();
+            let (first, last) = (
+                b.first().copied().unwrap_or(f64::NAN),
+                b.last().copied().unwrap_or(f64::NAN),
+            );
+            let (lo, hi) = (first.min(last), first.max(last));
+            Err(py_error(
+                py,
+                "NumericalError",
+                format!("sol(t): the dense output at t = {x:e} is not finite: it extrapolates the solution on [{lo}, {hi}] far outside it"),
+            ))
+        };
+        if shape.is_empty() {
+            let y = self.inner.eval(ts[0]);
+            check(ts[0], &y)?;
+            return Ok(to_array1(py, &y).into_any());
+        }
         if shape.len() != 1 {
             return Err(invalid(
                 py,
@@ -1174,6 +1276,7 @@ impl PyDenseSolution {
         let mut buf = vec![0.0; dim];
         for (j, x) in ts.iter().enumerate() {
             self.inner.eval_into(*x, &mut buf);
+            check(*x, &buf)?;
             for i in 0..dim {
                 out[i * ts.len() + j] = buf[i];
             }
@@ -1200,9 +1303,9 @@ pub fn rk45<'py>(
     atol: Option<&Bound<'_, PyAny>>,
     t_eval: Option<&Bound<'_, PyAny>>,
     events: Option<&Bound<'_, PyAny>>,
-    first_step: Option<f64>,
-    max_step: Option<f64>,
-    max_steps: Option<usize>,
+    first_step: Option<&Bound<'_, PyAny>>,
+    max_step: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
     dense_output: bool,
     controller: &str,
     stiffness: &str,
@@ -1218,6 +1321,7 @@ pub fn rk45<'py>(
     let t_span = t_span_arg(py, t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
+    let (first_step, max_step, max_steps) = step_args(first_step, max_step, max_steps)?;
     let mut opts = options(
         py,
         dim,
