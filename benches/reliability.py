@@ -11,6 +11,9 @@
 from __future__ import annotations
 
 import argparse
+import statistics
+import subprocess
+import sys
 import threading
 import time
 
@@ -27,29 +30,49 @@ def best_of(n: int, f) -> float:
     return best
 
 
-def busy_thread_ratio(t_end: float, repeats: int) -> tuple[float, float]:
+def busy_thread_ratio(t_end: float, pairs: int) -> dict[str, list[float]]:
+    """Times alone, beside a busy Python thread and (the control: the same load on the other
+    core, but no interpreter to share) beside a busy process, interleaved run by run so that
+    the machine's drift hits all three alike."""
     scene = pmd.load_scene("chain7")
 
-    def run():
+    def run() -> float:
+        t0 = time.perf_counter()
         r = pmd.simulate(scene, (0.0, t_end), rtol=1e-11, atol=1e-11)
         assert r.success, r.message
+        return time.perf_counter() - t0
 
-    alone = best_of(repeats, run)
-    stop = threading.Event()
+    def beside_busy() -> float:
+        stop = threading.Event()
 
-    def busy():
-        x = 0
-        while not stop.is_set():
-            x += 1
+        def busy():
+            x = 0
+            while not stop.is_set():
+                x += 1
 
-    t = threading.Thread(target=busy, daemon=True)
-    t.start()
-    try:
-        beside = best_of(repeats, run)
-    finally:
-        stop.set()
-        t.join()
-    return alone, beside
+        t = threading.Thread(target=busy, daemon=True)
+        t.start()
+        try:
+            return run()
+        finally:
+            stop.set()
+            t.join()
+
+    def beside_process() -> float:
+        p = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+        time.sleep(0.05)
+        try:
+            return run()
+        finally:
+            p.kill()
+            p.wait()
+
+    times: dict[str, list[float]] = {"alone": [], "thread": [], "process": []}
+    for _ in range(pairs):
+        times["alone"].append(run())
+        times["thread"].append(beside_busy())
+        times["process"].append(beside_process())
+    return times
 
 
 def build_chain(n: int) -> pmd.Model:
@@ -68,11 +91,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="shorter runs (a smoke test)")
     args = ap.parse_args()
-    t_end, repeats = (24.0, 1) if args.quick else (240.0, 3)
+    t_end, pairs = (24.0, 1) if args.quick else (240.0, 7)
 
-    alone, beside = busy_thread_ratio(t_end, repeats)
-    print(f"simulate chain7 0..{t_end:g} s at rtol 1e-11: alone {alone:.3f} s, beside a busy "
-          f"Python thread {beside:.3f} s: ratio {beside / alone:.2f} (target <= 1.2)")
+    times = busy_thread_ratio(t_end, pairs)
+    med = {k: statistics.median(v) for k, v in times.items()}
+    print(f"simulate chain7 0..{t_end:g} s at rtol 1e-11, {pairs} interleaved runs each, median "
+          f"(best): alone {med['alone']:.3f} s ({min(times['alone']):.3f}), beside a busy Python "
+          f"thread {med['thread']:.3f} s ({min(times['thread']):.3f}), beside a busy process "
+          f"{med['process']:.3f} s ({min(times['process']):.3f})")
+    print(f"  busy thread / alone: {med['thread'] / med['alone']:.2f} (target <= 1.2); the "
+          f"control, busy process / alone: {med['process'] / med['alone']:.2f}")
 
     for n in (1000, 5000):
         t = best_of(1 if n > 1000 else 3, lambda n=n: build_chain(n))

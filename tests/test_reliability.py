@@ -140,7 +140,7 @@ def test_one_model_many_threads_same_numbers():
                 a = model.forward_dynamics(q, v, np.zeros(300), gravity=G)
                 if not np.array_equal(a, ref_a[k]):
                     mismatches.append(("a", k))
-        except BaseException as exc:  # noqa: BLE001 - reported below
+        except BaseException as exc:
             errors.append(exc)
 
     threads = [threading.Thread(target=work, args=(j,)) for j in range(4)]
@@ -166,7 +166,7 @@ def test_adding_bodies_while_other_threads_compute():
                     model.mass_matrix(q)
                 except pmd.InvalidInputError:
                     pass  # q was sized for an older version: a clear error, not a crash
-        except BaseException as exc:  # noqa: BLE001
+        except BaseException as exc:
             errors.append(exc)
 
     t = threading.Thread(target=compute)

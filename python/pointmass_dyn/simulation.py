@@ -179,7 +179,7 @@ def simulate(
     disable: Any = None,
     power: bool = False,
     stiffness: str = "warn",
-    progress_interval: float = 0.05,
+    progress_interval: float | None = None,
 ) -> SimulationResult:
     """Integrates a scene with our adaptive RK45, entirely in Rust with the GIL released.
 
@@ -194,9 +194,10 @@ def simulate(
     be checked. ``disable`` names effect families to switch off (``"gravity"``,
     ``"springs"``, ``"dampers"``, ``"friction"``, ``"torques"``, ``"external"``); ``None``
     takes the scene's ``[simulate] disable`` list, ``()`` switches nothing off.
-    ``progress(t)`` is called every ``progress_interval`` seconds of computation (0.05;
-    0 for every poll, i.e. every 64 evaluations), when the run also looks for Ctrl-C: by
-    elapsed time, so that a busy Python thread beside the run barely slows it. ``stiffness`` is what Hairer's
+    ``progress(t)`` is called when the run looks for Ctrl-C: by elapsed time, every 50 ms
+    (every 250 ms at most while another Python thread keeps the interpreter busy, so that
+    such a thread barely slows the run), or every ``progress_interval`` seconds if given (0:
+    every 64 evaluations). ``stiffness`` is what Hairer's
     stiffness test does when it fires: ``"warn"`` (default) notes it in the message and
     changes no step, ``"stop"`` ends the run, ``"off"`` skips the test.
 

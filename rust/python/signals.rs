@@ -1,7 +1,9 @@
 //! Ctrl-C (and progress reports) while the interpreter is released. Re-attaching to the
-//! interpreter waits for whichever Python thread holds it, up to its switch interval (5 ms),
-//! so a long computation re-attaches by elapsed time, at most every [`INTERVAL`], never per
-//! evaluation: beside a busy Python thread that costs at most a few per cent.
+//! interpreter waits for whichever Python thread holds it, up to its switch interval (5 ms)
+//! and more, so a long computation re-attaches by elapsed time, every [`INTERVAL`], never per
+//! evaluation; when re-attaching had to wait (a busy Python thread), the interval doubles up
+//! to [`MAX_INTERVAL`], so such a neighbour costs a few per cent, and Ctrl-C still answers
+//! within a quarter of a second.
 use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
@@ -13,26 +15,39 @@ use crate::interrupt;
 
 /// How often a detached computation looks at the interpreter.
 pub const INTERVAL: Duration = Duration::from_millis(50);
+/// The longest interval when the interpreter is busy elsewhere.
+pub const MAX_INTERVAL: Duration = Duration::from_millis(250);
+/// An attach that took longer than this waited for another thread.
+const CONTENDED: Duration = Duration::from_millis(1);
 
 /// Polls Python's signal handlers (and an optional callback) at most every [`INTERVAL`];
 /// keeps the first exception raised.
 pub struct Watch {
     last: Instant,
     interval: Duration,
+    /// Back off when the interpreter is contended (not when the caller chose the interval).
+    adaptive: bool,
+    current: Duration,
     pub error: Option<PyErr>,
 }
 
 impl Default for Watch {
     fn default() -> Self {
-        Watch::every(INTERVAL)
+        Watch {
+            adaptive: true,
+            ..Watch::every(INTERVAL)
+        }
     }
 }
 
 impl Watch {
+    /// Polls every `interval` exactly (a progress interval the caller chose).
     pub fn every(interval: Duration) -> Self {
         Watch {
             last: Instant::now(),
             interval,
+            adaptive: false,
+            current: interval,
             error: None,
         }
     }
@@ -42,11 +57,23 @@ impl Watch {
         if self.error.is_some() {
             return false;
         }
-        if self.last.elapsed() < self.interval {
+        if self.last.elapsed() < self.current {
             return true;
         }
-        let outcome = Python::attach(|py| py.check_signals().and_then(|_| also(py)));
+        let asked = Instant::now();
+        let mut waited = Duration::ZERO;
+        let outcome = Python::attach(|py| {
+            waited = asked.elapsed();
+            py.check_signals().and_then(|_| also(py))
+        });
         self.last = Instant::now();
+        if self.adaptive {
+            self.current = if waited > CONTENDED {
+                (self.current * 2).min(MAX_INTERVAL)
+            } else {
+                self.interval
+            };
+        }
         match outcome {
             Ok(()) => true,
             Err(e) => {

@@ -972,9 +972,11 @@ pub fn simulate_scene<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let (first_step, max_step, max_steps) = step_args(first_step, max_step, max_steps)?;
     let s = &scene.inner;
-    let interval = match progress_interval {
-        None => super::signals::INTERVAL,
-        Some(x) if (0.0..=3600.0).contains(&x) => std::time::Duration::from_secs_f64(x),
+    let watch = match progress_interval {
+        None => Watch::default(),
+        Some(x) if (0.0..=3600.0).contains(&x) => {
+            Watch::every(std::time::Duration::from_secs_f64(x))
+        }
         Some(x) => {
             return Err(invalid(
                 py,
@@ -1037,7 +1039,7 @@ pub fn simulate_scene<'py>(
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let model = &s.model;
     let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
-    let mut watch = Watch::every(interval);
+    let mut watch = watch;
     take_callback_error();
     let result = py.detach(|| {
         let extra: Vec<Event<'_>> = py_events
