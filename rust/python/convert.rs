@@ -115,25 +115,19 @@ pub fn real_array<'py>(obj: &Bound<'py, PyAny>, arg: &str) -> PyResult<Bound<'py
             format!("a {}: {}", type_name(obj), short_repr(obj)),
         ));
     }
-    let a = py
-        .import("numpy")
-        .and_then(|np| np.call_method1("asarray", (obj,)))
-        .map_err(|_| {
-            invalid(
-                py,
-                arg,
-                "an array of real numbers",
-                format!("an object of type {}", type_name(obj)),
-            )
-        })?;
-    let arr = a.cast::<PyUntypedArray>().map_err(|_| {
+    let not_an_array = || {
         invalid(
             py,
             arg,
             "an array of real numbers",
             format!("an object of type {}", type_name(obj)),
         )
-    })?;
+    };
+    let a = py
+        .import("numpy")
+        .and_then(|np| np.call_method1("asarray", (obj,)))
+        .map_err(|_| not_an_array())?;
+    let arr = a.cast::<PyUntypedArray>().map_err(|_| not_an_array())?;
     if is_masked(&a) {
         return Err(invalid(
             py,
