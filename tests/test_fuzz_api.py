@@ -172,7 +172,7 @@ def build_calls(data) -> None:
         m = pmd.Model()
         call(data, op, m.add_body, rod_body(), pmd.Revolute([0, 0, 1]),
              parent=data.draw(st.one_of(ints, junk)), translation=data.draw(arrays(3)),
-             rotation=data.draw(st.one_of(st.none(), st.just(np.eye(3) * data.draw(floats)), arrays(9))),
+             rotation=data.draw(st.one_of(st.none(), st.just(np.diag([data.draw(floats)] * 3)), arrays(9))),
              name=data.draw(st.one_of(st.none(), st.text(max_size=4), junk)),
              point_mass_center=data.draw(st.one_of(st.none(), arrays(3))))
     elif op == "points":
