@@ -65,6 +65,21 @@ def rod_body(m: float = PAPER_M, a: float = PAPER_A, d: float = PAPER_D) -> pmd.
     return pmd.RigidBody(m, [a / 2, 0.0, 0.0], rod_inertia(m, a, d))
 
 
+def revolute_chain(n: int) -> pmd.Model:
+    """n revolute rods (1 kg, 0.3 m) in series, axes alternating y and z."""
+    m = pmd.Model()
+    parent = -1
+    for k in range(n):
+        axis = [0, 1, 0] if k % 2 == 0 else [0, 0, 1]
+        parent = m.add_body(
+            rod_body(1.0, 0.3, 0.02),
+            pmd.Revolute(axis),
+            parent=parent,
+            translation=[0.3 if k else 0.0, 0, 0],
+        )
+    return m
+
+
 def random_rotation(rng: np.random.Generator) -> np.ndarray:
     """Uniform random rotation (from a normalised Gaussian quaternion)."""
     q = rng.normal(size=4)

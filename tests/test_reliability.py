@@ -19,21 +19,7 @@ import numpy as np
 import pointmass_dyn as pmd
 import pytest
 from conftest import G, rod_body
-
-
-def chain(n: int) -> pmd.Model:
-    """n revolute rods in series, axes alternating y and z."""
-    m = pmd.Model()
-    parent = -1
-    for k in range(n):
-        axis = [0, 1, 0] if k % 2 == 0 else [0, 0, 1]
-        parent = m.add_body(
-            rod_body(1.0, 0.3, 0.02),
-            pmd.Revolute(axis),
-            parent=parent,
-            translation=[0.3 if k else 0.0, 0, 0],
-        )
-    return m
+from conftest import revolute_chain as chain
 
 
 def chain_scene(n: int, effects=None) -> pmd.Scene:
@@ -217,7 +203,7 @@ def _run_limited(code: str, limit_bytes: int) -> subprocess.CompletedProcess:
         import numpy as np
         import pointmass_dyn as pmd
         sys.path.insert(0, {os.path.dirname(__file__)!r})
-        from test_reliability import chain
+        from conftest import revolute_chain as chain
         """
     ) + textwrap.dedent(code).replace("__CAP__", str(limit_bytes))
     return subprocess.run(
