@@ -861,9 +861,9 @@ impl PyModel {
         let ver = self.version().clone();
         let d = PyDict::new(py);
         let names = joint_names(&ver.model, &ver.urdf_joints);
-        for (l, name) in ver.model.links.iter().zip(names) {
+        for (joint, name) in link_joints(&ver.model, &ver.urdf_joints).zip(names) {
             let inf = f64::INFINITY;
-            let lim = urdf_joint(&ver.urdf_joints, l.body)
+            let lim = joint
                 .and_then(|j| j.limit)
                 .map(|x| (x.lower, x.upper, x.effort, x.velocity))
                 .unwrap_or((-inf, inf, inf, inf));
@@ -878,10 +878,8 @@ impl PyModel {
         let ver = self.version().clone();
         let d = PyDict::new(py);
         let names = joint_names(&ver.model, &ver.urdf_joints);
-        for (l, name) in ver.model.links.iter().zip(names) {
-            let dyn_ = urdf_joint(&ver.urdf_joints, l.body)
-                .map(|j| (j.damping, j.friction))
-                .unwrap_or((0.0, 0.0));
+        for (joint, name) in link_joints(&ver.model, &ver.urdf_joints).zip(names) {
+            let dyn_ = joint.map(|j| (j.damping, j.friction)).unwrap_or((0.0, 0.0));
             d.set_item(name, dyn_)?;
         }
         Ok(d)
@@ -918,14 +916,23 @@ fn joint_names(model: &Model, urdf_joints: &[crate::urdf::UrdfJoint]) -> Vec<Str
     model
         .links
         .iter()
-        .map(|l| match urdf_joint(urdf_joints, l.body) {
+        .zip(link_joints(model, urdf_joints))
+        .map(|(l, joint)| match joint {
             Some(j) => j.name.clone(),
             None => model.bodies[l.body].name.clone(),
         })
         .collect()
 }
 
-/// The URDF joint whose child is body `body`.
-fn urdf_joint(joints: &[crate::urdf::UrdfJoint], body: usize) -> Option<&crate::urdf::UrdfJoint> {
-    joints.iter().find(|j| j.body == body)
+/// The URDF joint (if any) of each moving link, in q/v order: one pass, not a search per link.
+fn link_joints<'a>(
+    model: &'a Model,
+    joints: &'a [crate::urdf::UrdfJoint],
+) -> impl Iterator<Item = Option<&'a crate::urdf::UrdfJoint>> + 'a {
+    let by_body: std::collections::HashMap<usize, &crate::urdf::UrdfJoint> =
+        joints.iter().map(|j| (j.body, j)).collect();
+    model
+        .links
+        .iter()
+        .map(move |l| by_body.get(&l.body).copied())
 }
