@@ -140,6 +140,18 @@ impl Joint {
             Joint::Fixed => 0,
         }
     }
+    /// Whether coordinate `k` of this joint's `q` is an angle (scaled by a file's angle
+    /// unit): revolute and ZYZ angles are; quaternion parts and displacements are not.
+    #[inline]
+    pub fn q_is_angle(&self, k: usize) -> bool {
+        k < self.nq() && matches!(self, Joint::Revolute { .. } | Joint::SphericalZYZ)
+    }
+    /// Whether speed `k` of this joint is an angular rate (every speed of every joint
+    /// but `Prismatic`).
+    #[inline]
+    pub fn v_is_angular(&self, k: usize) -> bool {
+        k < self.nv() && self.moves_angular()
+    }
     /// Whether the joint's motion subspace is purely angular (`P = [A; 0]`) rather than
     /// purely linear (`[0; A]`): true for every joint but `Prismatic`.
     #[inline]
