@@ -15,7 +15,6 @@ pub mod mass_matrix_local;
 #[cfg(test)]
 mod tests;
 
-use crate::joint::Joint;
 use crate::kinematics::LinkState;
 use crate::model::Model;
 use crate::spatial::{ArticulatedInertia, BodyInertia, Mat3, Vec3, Vec6};
@@ -175,13 +174,12 @@ pub fn check_singularities(model: &Model, q: &[f64]) -> crate::error::Result<()>
 pub(crate) fn singular_message(model: &Model, link: usize, q: &[f64]) -> String {
     let l = &model.links[link];
     let name = &model.bodies[l.body].name;
-    match l.joint {
-        Joint::SphericalZYZ => format!(
-            "SphericalZYZ joint of body '{name}' is at an Euler singularity: sin(theta) = {:.3e} (theta = q[{}] = {}); use the quaternion Spherical joint for motions through theta = 0 or pi",
-            q[l.q_index + 1].sin(),
-            l.q_index + 1,
-            q[l.q_index + 1]
-        ),
-        _ => format!("joint of body '{name}' has a singular articulated inertia (a massless subtree, or a body too slender for the recursion: try method='denoc')"),
+    if l.joint
+        .singularity(&q[l.q_index..l.q_index + l.joint.nq()])
+        .is_some()
+    {
+        let what = l.joint.describe_singularity(&q[l.q_index..], l.q_index);
+        return format!("{} joint of body '{name}' {what}", l.joint.kind());
     }
+    format!("joint of body '{name}' has a singular articulated inertia (a massless subtree, or a body too slender for the recursion: try method='denoc')")
 }

@@ -1,0 +1,308 @@
+//! Joints: what each joint type does, in one place per type. A joint gives its local
+//! transform, its motion columns (the joint-motion propagation matrix `P`, docs/method.md
+//! §2) and their rate, in world axes for the reference recursions and in body axes for the
+//! body-frame ones, its joint velocity and velocity-product term, which coordinates are
+//! angles, and how `q` moves with `v`. Every recursion asks the joint (through [`Joint`]'s
+//! methods, which dispatch once to the type's [`JointType`] implementation) rather than
+//! matching on it.
+//!
+//! Coordinates follow Pinocchio so models compare one to one (docs/conventions.md): a
+//! revolute/prismatic `q` is the angle/displacement along the axis given in the joint frame;
+//! `Spherical` stores a unit quaternion `(x, y, z, w)` and its 3 speeds are the body's
+//! angular velocity relative to its parent, in the body frame; `SphericalZYZ` is the paper's
+//! Euler-angle joint with Euler rates as speeds (singular where sin θ = 0).
+//!
+//! Adding a joint type: a file here implementing [`JointType`] (with its tests), a variant
+//! of [`Joint`] and its line in `dispatch!`, and a constructor; docs/adding-a-joint.md.
+mod fixed;
+mod prismatic;
+mod revolute;
+pub mod rotation;
+mod spherical;
+#[cfg(test)]
+mod tests;
+mod zyz;
+
+use crate::error::{check_finite, Error, Result};
+use crate::spatial::{stack, Mat3, Vec3, Vec6};
+
+pub use rotation::{axis_angle, quat_to_matrix, rot_x, rot_y, rot_z};
+pub use zyz::{zyz_rate_matrix, ZYZ_SINGULAR_SIN};
+
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub enum Joint {
+    Revolute { axis: Vec3 },
+    Prismatic { axis: Vec3 },
+    SphericalZYZ,
+    Spherical,
+    Fixed,
+}
+
+/// Columns of `P` (world coordinates), `dof` of them in use.
+pub type Subspace = [Vec6; 3];
+
+/// How a joint moves its body, as the body-frame recursions need to know: along one angular
+/// or one linear axis, about three angular axes, or not at all. Every joint's motion
+/// subspace is purely angular or purely linear (`P = [A; 0]` or `[0; A]`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MotionClass {
+    Rigid,
+    Angular1,
+    Linear1,
+    Angular3,
+}
+
+impl MotionClass {
+    pub const fn nv(self) -> usize {
+        match self {
+            MotionClass::Rigid => 0,
+            MotionClass::Angular1 | MotionClass::Linear1 => 1,
+            MotionClass::Angular3 => 3,
+        }
+    }
+    /// Angular motion columns (`[A; 0]`); false only for linear motion.
+    pub const fn angular(self) -> bool {
+        !matches!(self, MotionClass::Linear1)
+    }
+}
+
+/// A joint's own motion at `(q, v)` in the body-frame recursion: everything in the joint's
+/// body axes. `None` means "the identity / zero / the constant columns", which the caller
+/// skips.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct LocalMotion {
+    /// Body axes in joint-frame axes.
+    pub rotation: Option<Mat3>,
+    /// Body origin in the joint frame.
+    pub displacement: Option<Vec3>,
+    /// Motion columns (their angular part, or linear part for linear motion) when they
+    /// depend on `q`; otherwise [`JointType::local_columns`].
+    pub columns: Option<[Vec3; 3]>,
+    /// Relative angular velocity `w_J = S q̇` (angular motion).
+    pub w: Vec3,
+    /// Relative linear velocity `v_J` (linear motion).
+    pub v: Vec3,
+    /// `Ṡ q̇`, the velocity-product term of the columns (angular part).
+    pub sdot_qd: Vec3,
+}
+
+/// One joint type: everything the model, the recursions and the loaders need to know of it.
+pub trait JointType {
+    /// The name in files, messages and `repr`.
+    const NAME: &'static str;
+    const NQ: usize;
+    const MOTION: MotionClass;
+
+    /// The neutral configuration (zero angles, identity quaternion).
+    fn neutral(&self, q: &mut [f64]) {
+        q.fill(0.0);
+    }
+    /// Whether coordinate `k` of `q` is an angle (scaled by a file's angle unit).
+    fn q_is_angle(&self, k: usize) -> bool;
+    /// Rotation and translation of the body frame in the joint frame at `q`.
+    fn transform(&self, q: &[f64]) -> (Mat3, Vec3);
+    /// Columns of `P` in world coordinates. `r_joint` is the joint frame's orientation (the
+    /// parent's orientation times the fixed placement), `r_body` the body's.
+    fn subspace(&self, q: &[f64], r_joint: &Mat3, r_body: &Mat3) -> Subspace;
+    /// Time derivative of [`subspace`](JointType::subspace), given the parent's angular
+    /// velocity `w_parent`, the body's `w_body` and the joint speeds `v`.
+    fn subspace_rate(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        s: &Subspace,
+        r_joint: &Mat3,
+        w_parent: &Vec3,
+        w_body: &Vec3,
+    ) -> Subspace;
+    /// Motion columns in body axes when they do not depend on `q`.
+    fn local_columns(&self) -> [Vec3; 3];
+    /// The joint's motion in body axes (see [`LocalMotion`]).
+    fn local_motion(&self, q: &[f64], v: &[f64]) -> LocalMotion;
+    /// `q̇` from the speeds `v` (equal unless `q` is not a vector space, as a quaternion).
+    fn velocity_to_qdot(&self, _q: &[f64], v: &[f64], qdot: &mut [f64]) {
+        qdot.copy_from_slice(v);
+    }
+    /// Checks a configuration: finite (and whatever else the coordinates need).
+    fn check_configuration(&self, q: &[f64], arg: &str) -> Result<()> {
+        check_finite(arg, q)
+    }
+    /// `Some(measure)` when `q` is at (or too near) a coordinate singularity.
+    fn singularity(&self, _q: &[f64]) -> Option<f64> {
+        None
+    }
+    /// What is wrong at a singular `q` (`q_index`: the joint's first coordinate).
+    fn describe_singularity(&self, _q: &[f64], _q_index: usize) -> String {
+        String::new()
+    }
+}
+
+/// Columns fixed in a frame turning at `w` change as `w ×` them (first `N` in use).
+#[inline]
+pub(crate) fn turn_columns<const N: usize>(s: &Subspace, w: &Vec3, angular_part: bool) -> Subspace {
+    let mut d = [Vec6::zeros(); 3];
+    let z = Vec3::zeros();
+    for k in 0..N {
+        d[k] = if angular_part {
+            stack(&w.cross(&s[k].fixed_rows::<3>(0).into_owned()), &z)
+        } else {
+            stack(&z, &w.cross(&s[k].fixed_rows::<3>(3).into_owned()))
+        };
+    }
+    d
+}
+
+/// Runs `$body` with `$j` bound to the joint's [`JointType`]: the one place that matches on
+/// the joint type.
+macro_rules! dispatch {
+    ($joint:expr, $j:ident => $body:expr) => {
+        match $joint {
+            Joint::Revolute { axis } => {
+                let $j = revolute::Revolute { axis: *axis };
+                $body
+            }
+            Joint::Prismatic { axis } => {
+                let $j = prismatic::Prismatic { axis: *axis };
+                $body
+            }
+            Joint::SphericalZYZ => {
+                let $j = zyz::SphericalZyz;
+                $body
+            }
+            Joint::Spherical => {
+                let $j = spherical::Spherical;
+                $body
+            }
+            Joint::Fixed => {
+                let $j = fixed::Fixed;
+                $body
+            }
+        }
+    };
+}
+
+/// The type's constants, without a value of it.
+fn constants<J: JointType>(_: &J) -> (&'static str, usize, MotionClass) {
+    (J::NAME, J::NQ, J::MOTION)
+}
+
+fn unit_axis(axis: Vec3) -> Result<Vec3> {
+    let largest = axis.amax();
+    if !axis.iter().all(|x| x.is_finite()) || largest == 0.0 {
+        return Err(Error::arg(
+            "axis",
+            "a finite, non-zero 3-vector",
+            format!("[{}, {}, {}]", axis.x, axis.y, axis.z),
+        ));
+    }
+    let n = axis.norm();
+    if n.is_finite() && n > 1e-100 {
+        return Ok(axis / n);
+    }
+    // The squares overflow (|x| > 1e154) or underflow: divide by the largest entry first.
+    let scaled = axis / largest;
+    Ok(scaled / scaled.norm())
+}
+
+impl Joint {
+    pub fn revolute(axis: Vec3) -> Result<Joint> {
+        Ok(Joint::Revolute {
+            axis: unit_axis(axis)?,
+        })
+    }
+    pub fn prismatic(axis: Vec3) -> Result<Joint> {
+        Ok(Joint::Prismatic {
+            axis: unit_axis(axis)?,
+        })
+    }
+
+    /// The joint type's name ("Revolute", "SphericalZYZ", ...).
+    pub fn kind(&self) -> &'static str {
+        dispatch!(self, j => constants(&j).0)
+    }
+    #[inline]
+    pub fn nq(&self) -> usize {
+        dispatch!(self, j => constants(&j).1)
+    }
+    #[inline]
+    pub fn nv(&self) -> usize {
+        self.motion().nv()
+    }
+    #[inline]
+    pub fn motion(&self) -> MotionClass {
+        dispatch!(self, j => constants(&j).2)
+    }
+    /// Whether the joint's motion subspace is purely angular (`P = [A; 0]`) rather than
+    /// purely linear (`[0; A]`): true for every joint but `Prismatic`.
+    #[inline]
+    pub fn moves_angular(&self) -> bool {
+        self.motion().angular()
+    }
+    /// Whether coordinate `k` of this joint's `q` is an angle (scaled by a file's angle
+    /// unit): revolute and ZYZ angles are; quaternion parts and displacements are not.
+    #[inline]
+    pub fn q_is_angle(&self, k: usize) -> bool {
+        k < self.nq() && dispatch!(self, j => j.q_is_angle(k))
+    }
+    /// Whether speed `k` of this joint is an angular rate (every speed of every joint
+    /// but `Prismatic`).
+    #[inline]
+    pub fn v_is_angular(&self, k: usize) -> bool {
+        k < self.nv() && self.moves_angular()
+    }
+    pub fn neutral(&self, q: &mut [f64]) {
+        dispatch!(self, j => j.neutral(q))
+    }
+    /// Rotation and translation of the body frame in the joint frame at configuration `q`.
+    #[inline]
+    pub fn transform(&self, q: &[f64]) -> (Mat3, Vec3) {
+        dispatch!(self, j => j.transform(q))
+    }
+    /// See [`JointType::subspace`].
+    #[inline]
+    pub fn subspace(&self, q: &[f64], r_joint: &Mat3, r_body: &Mat3) -> Subspace {
+        dispatch!(self, j => j.subspace(q, r_joint, r_body))
+    }
+    /// See [`JointType::subspace_rate`]: axes fixed in the joint frame turn with the parent;
+    /// the quaternion joint's columns turn with the body; the ZYZ columns also change with φ
+    /// and θ.
+    #[inline]
+    pub fn subspace_rate(
+        &self,
+        q: &[f64],
+        v: &[f64],
+        s: &Subspace,
+        r_joint: &Mat3,
+        w_parent: &Vec3,
+        w_body: &Vec3,
+    ) -> Subspace {
+        dispatch!(self, j => j.subspace_rate(q, v, s, r_joint, w_parent, w_body))
+    }
+    /// See [`JointType::local_columns`].
+    pub fn local_columns(&self) -> [Vec3; 3] {
+        dispatch!(self, j => j.local_columns())
+    }
+    /// See [`JointType::local_motion`].
+    #[inline]
+    pub fn local_motion(&self, q: &[f64], v: &[f64]) -> LocalMotion {
+        dispatch!(self, j => j.local_motion(q, v))
+    }
+    /// `q̇` from the speeds `v` (they differ only for the quaternion joint).
+    pub fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
+        dispatch!(self, j => j.velocity_to_qdot(q, v, qdot))
+    }
+    /// Checks a configuration: finite, and a quaternion of usable norm.
+    pub fn check_configuration(&self, q: &[f64], arg: &str) -> Result<()> {
+        dispatch!(self, j => j.check_configuration(q, arg))
+    }
+    /// `Some(measure)` when this joint is at (or too near) its coordinate singularity
+    /// (`sin θ` for ZYZ).
+    #[inline]
+    pub fn singularity(&self, q: &[f64]) -> Option<f64> {
+        dispatch!(self, j => j.singularity(q))
+    }
+    /// What is wrong at a singular `q` (see [`JointType::describe_singularity`]).
+    pub fn describe_singularity(&self, q: &[f64], q_index: usize) -> String {
+        dispatch!(self, j => j.describe_singularity(q, q_index))
+    }
+}

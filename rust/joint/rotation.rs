@@ -1,0 +1,53 @@
+//! Rotation matrices the joints are made of: about coordinate axes, about any unit axis
+//! (Rodrigues), and of a unit quaternion.
+use crate::spatial::{Mat3, Vec3};
+use crate::trig::sin_cos;
+
+pub fn rot_x(a: f64) -> Mat3 {
+    let (s, c) = sin_cos(a);
+    Mat3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c)
+}
+pub fn rot_y(a: f64) -> Mat3 {
+    let (s, c) = sin_cos(a);
+    Mat3::new(c, 0.0, s, 0.0, 1.0, 0.0, -s, 0.0, c)
+}
+pub fn rot_z(a: f64) -> Mat3 {
+    let (s, c) = sin_cos(a);
+    Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0)
+}
+
+/// Rotation by `angle` about the unit vector `e` (Rodrigues: `c 1 + s ẽ + (1 − c) e eᵀ`).
+#[inline]
+pub fn axis_angle(e: &Vec3, angle: f64) -> Mat3 {
+    let (s, c) = sin_cos(angle);
+    let t = 1.0 - c;
+    let (x, y, z) = (e.x, e.y, e.z);
+    Mat3::new(
+        c + t * x * x,
+        t * x * y - s * z,
+        t * x * z + s * y,
+        t * x * y + s * z,
+        c + t * y * y,
+        t * y * z - s * x,
+        t * x * z - s * y,
+        t * y * z + s * x,
+        c + t * z * z,
+    )
+}
+
+/// Rotation matrix of a quaternion `(x, y, z, w)`, normalised first.
+pub fn quat_to_matrix(q: &[f64]) -> Mat3 {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (x, y, z, w) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    Mat3::new(
+        1.0 - 2.0 * (y * y + z * z),
+        2.0 * (x * y - z * w),
+        2.0 * (x * z + y * w),
+        2.0 * (x * y + z * w),
+        1.0 - 2.0 * (x * x + z * z),
+        2.0 * (y * z - x * w),
+        2.0 * (x * z - y * w),
+        2.0 * (y * z + x * w),
+        1.0 - 2.0 * (x * x + y * y),
+    )
+}
