@@ -3,11 +3,13 @@
 //! carries its merged rigid body, its seven point masses and the 6×6 mass matrix about its
 //! origin built once from those points, in the link frame.
 use std::collections::HashMap;
+use std::sync::OnceLock;
 
 use crate::body::RigidBody;
 use crate::error::{check_finite, Error, Result};
 use crate::joint::Joint;
 use crate::point_masses::EquimomentalSet;
+use crate::recursive::Compiled;
 use crate::spatial::{BodyInertia, Mat3, Placement, Vec3};
 
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -58,6 +60,10 @@ pub struct Model {
     /// from `bodies`: not serialised, rebuilt when deserialising.
     #[serde(skip_serializing)]
     names: HashMap<String, usize>,
+    /// The recursions' constants (`recursive::Compiled`), built on first use and dropped by
+    /// `add_body`. Derived: not serialised.
+    #[serde(skip_serializing)]
+    compiled: OnceLock<Compiled>,
 }
 
 /// A deserialised model, checked by [`Model::check_structure`] before use.
@@ -84,6 +90,7 @@ impl TryFrom<ModelData> for Model {
             nq: d.nq,
             nv: d.nv,
             names,
+            compiled: OnceLock::new(),
         };
         m.check_structure()?;
         Ok(m)
@@ -179,6 +186,13 @@ impl Model {
         Self::default()
     }
 
+    /// The recursions' model constants, computed on the first call after the model last
+    /// changed (through [`add_body`](Model::add_body)).
+    #[inline]
+    pub fn compiled(&self) -> &Compiled {
+        self.compiled.get_or_init(|| Compiled::new(self))
+    }
+
     pub fn nbodies(&self) -> usize {
         self.bodies.len()
     }
@@ -208,6 +222,7 @@ impl Model {
         point_mass_center: Option<Vec3>,
     ) -> Result<usize> {
         let index = self.bodies.len();
+        self.compiled = OnceLock::new();
         if let Some(p) = parent {
             if p >= index {
                 return Err(Error::model(

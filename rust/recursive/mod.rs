@@ -1,93 +1,39 @@
-//! O(n) recursive dynamics over the DeNOC quantities: twists and twist rates outward,
-//! wrenches inward (`τ_i = P_iᵀ w_i`), the articulated-body recursion for forward dynamics
-//! (equivalent to Saha's UDUᵀ of the GIM, never forming it), and the composite-body GIM.
-//! All vectors are about each link's origin, angular part first. The default forward and
-//! inverse dynamics (`forward_dynamics`, `inverse_dynamics`) run in body frames
-//! (`forward_local`, `inverse_local`, sharing one outward kinematic pass); the world-axes
-//! versions (`forward_dynamics_world`, `inverse_dynamics_world`) stay as cross-checks.
+//! O(n) recursive dynamics over the DeNOC quantities (docs/method.md §4): twists and twist
+//! rates outward, wrenches inward (`τ_i = P_iᵀ w_i`), the articulated-body recursion for
+//! forward dynamics (equivalent to Saha's UDUᵀ of the GIM, never forming it), and the
+//! composite-body GIM. All vectors are about each link's origin, angular part first.
+//!
+//! Layout (docs/architecture.md):
+//! * [`reference`]: the world-axes recursions, short and close to the equations; the tests
+//!   hold everything else to them.
+//! * [`aba`], [`rnea`], [`crba`]: the default forward dynamics, inverse dynamics and mass
+//!   matrix, in body frames; [`outward`] is the kinematic pass they share.
+//! * [`compiled`]: the model's constants for them (built once per model, [`Model::compiled`]);
+//!   [`workspace`]: their per-call values ([`Data`]).
+//! * [`algebra`] and [`shift`]: the 3×3 block algebra and the carrying of inertias and
+//!   wrenches across a joint, written out so each joint case costs only its non-zeros.
+//!
 //! Nothing here allocates: `Data` is the workspace, sized once per model.
-pub mod forward;
-pub mod forward_local;
-pub mod inverse;
-pub mod inverse_local;
-pub mod mass_matrix;
-pub mod mass_matrix_local;
+pub mod aba;
+pub(crate) mod algebra;
+pub mod compiled;
+pub mod crba;
+mod outward;
+pub mod reference;
+pub mod rnea;
+pub(crate) mod shift;
 #[cfg(test)]
 mod tests;
+pub mod workspace;
 
-use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{ArticulatedInertia, BodyInertia, Mat3, Vec3, Vec6};
+use crate::spatial::{Vec3, Vec6};
 
-pub use forward::forward_dynamics_world;
-pub use forward_local::{forward_dynamics_local, LocalLink};
-pub use inverse::inverse_dynamics_world;
-pub use inverse_local::inverse_dynamics_local;
-pub use mass_matrix::mass_matrix_world;
-pub use mass_matrix_local::mass_matrix_local;
-
-/// Workspace for one model (like Pinocchio's `Data`): built by `Data::new(model)` and valid
-/// for that model only (it caches per-link constants such as the joints' plane codes).
-#[derive(Debug, Clone)]
-pub struct Data {
-    pub links: Vec<LinkState>,
-    /// Twist rates `ṫ_i`.
-    pub accel: Vec<Vec6>,
-    /// Wrenches transmitted by each joint.
-    pub wrench: Vec<Vec6>,
-    pub art_inertia: Vec<ArticulatedInertia>,
-    pub art_bias: Vec<Vec6>,
-    /// `U = M̂ P` (columns).
-    pub u: Vec<[Vec6; 3]>,
-    /// `D⁻¹ = (Pᵀ M̂ P)⁻¹`, upper-left dof × dof block used.
-    pub d_inv: Vec<Mat3>,
-    /// `τ − Pᵀ b̂`.
-    pub u_tau: Vec<Vec3>,
-    pub composite: Vec<BodyInertia>,
-    /// Workspace of the body-frame recursion (`forward_local`), per link; its `plane` codes
-    /// are the model's, set here once.
-    pub local: Vec<LocalLink>,
-    /// Each link's own inertia in the form that starts its articulated inertia (model
-    /// constant, set here once).
-    pub local_body: Vec<forward_local::LocalInertia>,
-    /// `(link, q index)` of the revolute joints about a coordinate axis, whose sines and
-    /// cosines the outward pass takes four at a time (model constant).
-    pub axis_angles: Vec<(usize, usize)>,
-    /// `nv` zeros (the speeds of a position-only outward pass).
-    pub zero_v: Vec<f64>,
-}
-
-impl Data {
-    pub fn new(model: &Model) -> Self {
-        let n = model.links.len();
-        let (local, local_body) = forward_local::local_links_of(model);
-        Data {
-            links: vec![LinkState::default(); n],
-            accel: vec![Vec6::zeros(); n],
-            wrench: vec![Vec6::zeros(); n],
-            art_inertia: vec![ArticulatedInertia::zero(); n],
-            art_bias: vec![Vec6::zeros(); n],
-            u: vec![[Vec6::zeros(); 3]; n],
-            d_inv: vec![Mat3::zeros(); n],
-            u_tau: vec![Vec3::zeros(); n],
-            composite: vec![BodyInertia::zero(); n],
-            axis_angles: local
-                .iter()
-                .zip(&model.links)
-                .enumerate()
-                .filter(|(_, (l, _))| l.kind != forward_local::OTHER_KIND)
-                .map(|(i, (_, link))| (i, link.q_index))
-                .collect(),
-            zero_v: vec![0.0; model.nv],
-            local,
-            local_body,
-        }
-    }
-
-    pub fn fits(&self, model: &Model) -> bool {
-        self.links.len() == model.links.len()
-    }
-}
+pub use aba::forward_dynamics_local;
+pub use compiled::Compiled;
+pub use crba::mass_matrix_local;
+pub use rnea::inverse_dynamics_local;
+pub use workspace::Data;
 
 /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`: the body-frame articulated-body
 /// recursion ([`forward_dynamics_local`]). `external`: one wrench per link,
@@ -109,7 +55,7 @@ pub fn forward_dynamics(
 }
 
 /// The generalized inertia matrix (nv × nv) at `q`, by composite bodies in link frames
-/// ([`mass_matrix_local`]; [`mass_matrix_world`] is the world-frame cross-check).
+/// ([`mass_matrix_local`]; [`reference::mass_matrix_world`] is the world-frame cross-check).
 #[inline]
 pub fn mass_matrix(model: &Model, data: &mut Data, q: &[f64], gim: &mut nalgebra::DMatrix<f64>) {
     mass_matrix_local(model, data, q, gim)

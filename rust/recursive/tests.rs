@@ -3,12 +3,16 @@
 use nalgebra::{DMatrix, DVector};
 use proptest::prelude::*;
 
+use super::compiled::{self, LinkKind};
+use super::reference::{
+    forward_dynamics_world, inverse_dynamics_world, mass_matrix_world, Workspace,
+};
 use super::*;
 use crate::body::RigidBody;
 use crate::denoc;
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::{Placement, Vec3};
+use crate::spatial::{Mat3, Placement, Vec3};
 
 /// A deterministic pseudo-random stream, so a failure is reproducible from its seed.
 struct Lcg(u64);
@@ -230,7 +234,7 @@ fn thousand_body_chain_inverse_of_forward() {
     assert!(gim.cholesky().is_some());
 }
 
-// ---- The body-frame recursion (`forward_local`) against the world-frame one and the
+// ---- The body-frame recursion (`aba`) against the world-frame one and the
 // ---- explicit DeNOC path.
 
 fn random_wrenches(model: &Model, seed: u64) -> Vec<crate::spatial::Vec6> {
@@ -260,8 +264,18 @@ fn both_forward(
     let mut data = Data::new(model);
     let mut loc = vec![0.0; model.nv];
     let mut world = vec![0.0; model.nv];
-    forward_local::forward_dynamics_local(model, &mut data, q, v, tau, &G, ext, &mut loc).unwrap();
-    forward_dynamics_world(model, &mut data, q, v, tau, &G, ext, &mut world).unwrap();
+    aba::forward_dynamics_local(model, &mut data, q, v, tau, &G, ext, &mut loc).unwrap();
+    forward_dynamics_world(
+        model,
+        &mut Workspace::new(model),
+        q,
+        v,
+        tau,
+        &G,
+        ext,
+        &mut world,
+    )
+    .unwrap();
     (DVector::from_vec(loc), DVector::from_vec(world))
 }
 
@@ -298,19 +312,19 @@ fn local_forward_inverts_inverse_dynamics_with_wrenches() {
         let ext = random_wrenches(&model, seed);
         let mut data = Data::new(&model);
         let mut tau = vec![0.0; model.nv];
-        inverse_dynamics_world(&model, &mut data, &q, &v, &a, &G, Some(&ext), &mut tau);
-        let mut acc = vec![0.0; model.nv];
-        forward_local::forward_dynamics_local(
+        inverse_dynamics_world(
             &model,
-            &mut data,
+            &mut Workspace::new(&model),
             &q,
             &v,
-            &tau,
+            &a,
             &G,
             Some(&ext),
-            &mut acc,
-        )
-        .unwrap();
+            &mut tau,
+        );
+        let mut acc = vec![0.0; model.nv];
+        aba::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, Some(&ext), &mut acc)
+            .unwrap();
         assert!(
             rel(&DVector::from_vec(acc), &DVector::from_vec(a)) <= 1e-9,
             "seed {seed}"
@@ -326,8 +340,7 @@ fn local_forward_agrees_with_explicit_on_50_body_trees() {
         let tau: Vec<f64> = a.iter().map(|x| 2.0 * x - 0.5).collect();
         let mut data = Data::new(&model);
         let mut acc = vec![0.0; model.nv];
-        forward_local::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut acc)
-            .unwrap();
+        aba::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut acc).unwrap();
         let explicit = denoc::forward_dynamics(&model, &q, &v, &tau, &G).unwrap();
         assert!(
             rel(&DVector::from_vec(acc), &explicit) <= 1e-10,
@@ -358,7 +371,7 @@ fn pair_placements() -> Vec<(&'static str, Mat3)> {
             "turned about z",
             Mat3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0),
         ),
-        // Signed permutations, absorbed into the link frames (`local_links_of`): a quarter
+        // Signed permutations, absorbed into the link frames (`compiled`): a quarter
         // turn about x (URDF rpy = (π/2, 0, 0) after snapping), a half turn about y, and
         // rpy = (π/2, 0, π/2).
         (
@@ -427,10 +440,10 @@ fn joint_pair_models(with_fixed: bool) -> Vec<(String, usize, Model)> {
 
 #[test]
 fn placement_kinds_are_recognised() {
-    // The fast paths the joint-pair tests mean to cover: the codes of a revolute joint about z
-    // below each placement of `pair_placements` (0 none, 4 general, 1-3 a turn about x-z).
+    // The fast paths the joint-pair tests mean to cover: the kinds of a revolute joint about
+    // z below each placement of `pair_placements`.
     let body = RigidBody::new(1.0, Vec3::zeros(), Mat3::identity() * 0.1).unwrap();
-    let codes: Vec<(u8, f64)> = pair_placements()
+    let codes: Vec<(LinkKind, f64)> = pair_placements()
         .into_iter()
         .map(|(_, rot)| {
             let mut model = Model::new();
@@ -439,28 +452,29 @@ fn placement_kinds_are_recognised() {
             model
                 .add_body(body, joint, None, place, None, None)
                 .unwrap();
-            let l = forward_local::local_link_of(&model.links[0], &Mat3::identity()).0;
+            let l = compiled::link_consts(&model.links[0], &Mat3::identity()).0;
             (l.kind, l.sign)
         })
         .collect();
-    // Dispatch code 5 K + placement (0 none, 4 general, 1-3 a turn about x-z), K = 2 for z.
+    // Revolute about z below each placement (none, general, a turn about x-z).
     // The signed permutations are absorbed: the joint turns about Q e_z with no placement
     // (−e_y, −e_z, +e_x).
+    use LinkKind::*;
     let want = vec![
-        (10, 1.0),
-        (14, 1.0),
-        (11, 1.0),
-        (12, 1.0),
-        (13, 1.0),
-        (5, -1.0),
-        (10, -1.0),
-        (0, 1.0),
+        (RevoluteZUnplaced, 1.0),
+        (RevoluteZPlaced, 1.0),
+        (RevoluteZTurnX, 1.0),
+        (RevoluteZTurnY, 1.0),
+        (RevoluteZTurnZ, 1.0),
+        (RevoluteYUnplaced, -1.0),
+        (RevoluteZUnplaced, -1.0),
+        (RevoluteXUnplaced, 1.0),
     ];
     assert_eq!(codes, want);
 }
 
 /// A random tree whose joints are mostly revolute about a coordinate axis (the dispatch
-/// codes 0..15 of `LocalLink::kind`), below every placement kind of `pair_placements`, at
+/// `Revolute*` kinds of `LinkKind`), below every placement kind of `pair_placements`, at
 /// offsets of every form (zero, along x, y or z only, anywhere), with some spherical and
 /// prismatic joints among them, and branching, so that links have several children.
 fn random_axis_tree(seed: u64, n: usize) -> Model {
@@ -510,11 +524,10 @@ fn local_forward_on_axis_trees_with_every_offset_form() {
     for seed in 0..40u64 {
         let n = 2 + (seed as usize * 7) % 30;
         let model = random_axis_tree(seed, n);
-        let data = Data::new(&model);
-        for (i, l) in data.local.iter().enumerate() {
+        for (i, l) in model.compiled().links.iter().enumerate() {
             kinds.insert(l.kind);
             if model.links[i].parent.is_some() {
-                forms.insert(l.offset_axis);
+                forms.insert(l.offset_form);
             }
             several_children |= !l.first_child && model.links[i].parent.is_some();
         }
@@ -540,10 +553,8 @@ fn local_forward_on_axis_trees_with_every_offset_form() {
         let mut data = Data::new(&model);
         let mut acc = vec![0.0; model.nv];
         let (q0, v0, _) = random_state(&model, seed + 1000);
-        forward_local::forward_dynamics_local(&model, &mut data, &q0, &v0, &a, &G, None, &mut acc)
-            .unwrap();
-        forward_local::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut acc)
-            .unwrap();
+        aba::forward_dynamics_local(&model, &mut data, &q0, &v0, &a, &G, None, &mut acc).unwrap();
+        aba::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut acc).unwrap();
         let explicit = denoc::forward_dynamics(&model, &q, &v, &tau, &G).unwrap();
         let acc = DVector::from_vec(acc);
         assert!(rel(&acc, &explicit) <= 1e-10, "explicit seed {seed}");
@@ -552,7 +563,7 @@ fn local_forward_on_axis_trees_with_every_offset_form() {
         let nv = model.nv;
         let (mut local, mut world) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
         mass_matrix_local(&model, &mut data, &q, &mut local);
-        mass_matrix_world(&model, &mut data, &q, &mut world);
+        mass_matrix_world(&model, &mut Workspace::new(&model), &q, &mut world);
         let explicit = denoc::mass_matrix(&model, &q).unwrap();
         assert!(
             (&local - &world).norm() <= 1e-12 * world.norm(),
@@ -565,7 +576,7 @@ fn local_forward_on_axis_trees_with_every_offset_form() {
         assert_eq!(local, local.transpose());
         assert!(local.clone().cholesky().is_some(), "GIM seed {seed}");
     }
-    // Every fast path ran: all 15 axis codes, the general code, all five offset forms, and
+    // Every fast path ran: all 15 revolute-on-axis kinds, `Other`, all five offset forms, and
     // links that add into a parent another child already wrote.
     assert_eq!(kinds.len(), 16, "{kinds:?}");
     assert_eq!(forms.len(), 5, "{forms:?}");
@@ -589,7 +600,7 @@ fn local_forward_refuses_zyz_singularity() {
     let model = crate::benchmark_models::paper_pendulum();
     let mut data = Data::new(&model);
     let mut acc = vec![0.0; 3];
-    let r = forward_local::forward_dynamics_local(
+    let r = aba::forward_dynamics_local(
         &model,
         &mut data,
         &[0.2, 0.0, 0.1],
@@ -611,10 +622,18 @@ fn local_forward_thousand_body_chain() {
     let tau: Vec<f64> = (0..n).map(|k| ((k as f64) * 0.73).sin()).collect();
     let mut data = Data::new(&model);
     let mut a = vec![0.0; n];
-    forward_local::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut a)
-        .unwrap();
+    aba::forward_dynamics_local(&model, &mut data, &q, &v, &tau, &G, None, &mut a).unwrap();
     let mut back = vec![0.0; n];
-    inverse_dynamics_world(&model, &mut data, &q, &v, &a, &G, None, &mut back);
+    inverse_dynamics_world(
+        &model,
+        &mut Workspace::new(&model),
+        &q,
+        &v,
+        &a,
+        &G,
+        None,
+        &mut back,
+    );
     let err = DVector::from_vec(back) - DVector::from_vec(tau.clone());
     let scale = DVector::from_vec(tau.clone()).norm();
     // The world-frame inverse dynamics rebuilds the geometry with its own rounding, and on a
@@ -631,7 +650,7 @@ fn local_forward_thousand_body_chain() {
     assert!(rel(&loc, &world) <= 1e-10, "relative {}", rel(&loc, &world));
 }
 
-// ---- The body-frame inverse dynamics (`inverse_local`) against the world-frame one and the
+// ---- The body-frame inverse dynamics (`rnea`) against the world-frame one and the
 // ---- explicit DeNOC products; and the body-frame pair inverting each other.
 
 /// `τ` by the body-frame and the world-frame recursions on one state; returns (local, world).
@@ -647,7 +666,16 @@ fn both_inverse(
     let mut loc = vec![0.0; model.nv];
     let mut world = vec![0.0; model.nv];
     inverse_dynamics_local(model, &mut data, q, v, a, g, ext, &mut loc);
-    inverse_dynamics_world(model, &mut data, q, v, a, g, ext, &mut world);
+    inverse_dynamics_world(
+        model,
+        &mut Workspace::new(model),
+        q,
+        v,
+        a,
+        g,
+        ext,
+        &mut world,
+    );
     (DVector::from_vec(loc), DVector::from_vec(world))
 }
 
@@ -784,25 +812,20 @@ fn avx2_copy_is_bit_identical() {
         for e in [None, Some(ext.as_slice())] {
             let mut data = Data::new(model);
             let (mut fast, mut base) = (vec![0.0; model.nv], vec![0.0; model.nv]);
-            forward_local::forward_dynamics_local(model, &mut data, &q, &v, &tau, &G, e, &mut fast)
+            aba::forward_dynamics_local(model, &mut data, &q, &v, &tau, &G, e, &mut fast).unwrap();
+            aba::forward_dynamics_baseline(model, &mut data, &q, &v, &tau, &G, e, &mut base)
                 .unwrap();
-            forward_local::forward_dynamics_baseline(
-                model, &mut data, &q, &v, &tau, &G, e, &mut base,
-            )
-            .unwrap();
             let bits = |x: &[f64]| x.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
             assert_eq!(bits(&fast), bits(&base), "FD model {k}");
-            inverse_local::inverse_dynamics_local(model, &mut data, &q, &v, &a, &G, e, &mut fast);
-            inverse_local::inverse_dynamics_baseline(
-                model, &mut data, &q, &v, &a, &G, e, &mut base,
-            );
+            rnea::inverse_dynamics_local(model, &mut data, &q, &v, &a, &G, e, &mut fast);
+            rnea::inverse_dynamics_baseline(model, &mut data, &q, &v, &a, &G, e, &mut base);
             assert_eq!(bits(&fast), bits(&base), "ID model {k}");
         }
         let nv = model.nv;
         let (mut fast, mut base) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
         let mut data = Data::new(model);
         mass_matrix_local(model, &mut data, &q, &mut fast);
-        mass_matrix_local::mass_matrix_baseline(model, &mut data, &q, &mut base);
+        crba::mass_matrix_baseline(model, &mut data, &q, &mut base);
         let bits = |m: &DMatrix<f64>| m.iter().map(|y| y.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&fast), bits(&base), "GIM model {k}");
     }

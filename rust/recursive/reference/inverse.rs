@@ -1,7 +1,8 @@
 //! Recursive inverse dynamics (DeNOC / Newton–Euler): twist rates outward, wrenches inward.
-use super::{base_accel, Data};
+use super::Workspace;
 use crate::kinematics;
 use crate::model::Model;
+use crate::recursive::base_accel;
 use crate::spatial::{shift_twist, shift_wrench, Vec3, Vec6};
 
 /// `τ = I a + C v − τ_g − Nᵀ f_ext`. `external` holds one wrench per link about its origin
@@ -10,7 +11,7 @@ use crate::spatial::{shift_twist, shift_wrench, Vec3, Vec6};
 #[allow(clippy::too_many_arguments)]
 pub fn inverse_dynamics_world(
     model: &Model,
-    data: &mut Data,
+    ws: &mut Workspace,
     q: &[f64],
     v: &[f64],
     a: &[f64],
@@ -18,35 +19,35 @@ pub fn inverse_dynamics_world(
     external: Option<&[Vec6]>,
     tau: &mut [f64],
 ) {
-    kinematics::positions(model, q, &mut data.links);
-    kinematics::velocities(model, q, v, &mut data.links);
+    kinematics::positions(model, q, &mut ws.links);
+    kinematics::velocities(model, q, v, &mut ws.links);
     let base = base_accel(g);
     for (i, l) in model.links.iter().enumerate() {
-        let s = &data.links[i];
+        let s = &ws.links[i];
         let parent_accel = match l.parent {
-            Some(p) => shift_twist(&data.accel[p], &(s.origin - data.links[p].origin)),
+            Some(p) => shift_twist(&ws.accel[p], &(s.origin - ws.links[p].origin)),
             None => base,
         };
         let mut acc = parent_accel + s.xi;
         for k in 0..l.joint.nv() {
             acc += s.s[k] * a[l.v_index + k];
         }
-        data.accel[i] = acc;
+        ws.accel[i] = acc;
         let w = crate::spatial::angular(&s.twist);
         let mut wr = s.inertia.mul_twist(&acc) + s.inertia.bias(&w);
         if let Some(f) = external {
             wr -= f[i];
         }
-        data.wrench[i] = wr;
+        ws.wrench[i] = wr;
     }
     for (i, l) in model.links.iter().enumerate().rev() {
-        let w = data.wrench[i];
+        let w = ws.wrench[i];
         for k in 0..l.joint.nv() {
-            tau[l.v_index + k] = data.links[i].s[k].dot(&w);
+            tau[l.v_index + k] = ws.links[i].s[k].dot(&w);
         }
         if let Some(p) = l.parent {
-            let arm = data.links[i].origin - data.links[p].origin;
-            data.wrench[p] += shift_wrench(&w, &arm);
+            let arm = ws.links[i].origin - ws.links[p].origin;
+            ws.wrench[p] += shift_wrench(&w, &arm);
         }
     }
 }

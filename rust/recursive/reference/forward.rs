@@ -2,10 +2,11 @@
 //! about moving link origins (equivalent to Saha's UDUᵀ decomposition of the GIM). O(n), no
 //! n × n matrix, no allocation. Every joint moves along a purely angular or purely linear
 //! subspace (`P = [A; 0]` or `[0; A]`), so all products are 3×3 blocks.
-use super::{base_accel, singular_message, Data};
+use super::Workspace;
 use crate::error::{Error, Result};
 use crate::kinematics;
 use crate::model::Model;
+use crate::recursive::{base_accel, singular_message};
 use crate::spatial::{
     angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Vec3, Vec6,
 };
@@ -48,7 +49,7 @@ fn dot_axis(a: &Vec3, w: &Vec6, angular_motion: bool) -> f64 {
 #[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics_world(
     model: &Model,
-    data: &mut Data,
+    ws: &mut Workspace,
     q: &[f64],
     v: &[f64],
     tau: &[f64],
@@ -56,23 +57,23 @@ pub fn forward_dynamics_world(
     external: Option<&[Vec6]>,
     a: &mut [f64],
 ) -> Result<()> {
-    super::check_singularities(model, q)?;
-    kinematics::positions(model, q, &mut data.links);
-    kinematics::velocities(model, q, v, &mut data.links);
-    for (i, s) in data.links.iter().enumerate() {
-        data.art_inertia[i] = ArticulatedInertia::from_body(&s.inertia);
+    crate::recursive::check_singularities(model, q)?;
+    kinematics::positions(model, q, &mut ws.links);
+    kinematics::velocities(model, q, v, &mut ws.links);
+    for (i, s) in ws.links.iter().enumerate() {
+        ws.art_inertia[i] = ArticulatedInertia::from_body(&s.inertia);
         let mut b = s.inertia.bias(&angular(&s.twist));
         if let Some(f) = external {
             b -= f[i];
         }
-        data.art_bias[i] = b;
+        ws.art_bias[i] = b;
     }
     for (i, l) in model.links.iter().enumerate().rev() {
         let dof = l.joint.nv();
         let ang = l.joint.moves_angular();
-        let m = data.art_inertia[i];
-        let b = data.art_bias[i];
-        let link = &data.links[i];
+        let m = ws.art_inertia[i];
+        let b = ws.art_bias[i];
+        let link = &ws.links[i];
         let mut axes = [Vec3::zeros(); 3];
         let mut u = [Vec6::zeros(); 3];
         let mut d = Mat3::identity();
@@ -95,9 +96,9 @@ pub fn forward_dynamics_world(
         }
         let d_inv = invert_joint_inertia(&d, dof)
             .ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
-        data.u[i] = u;
-        data.d_inv[i] = d_inv;
-        data.u_tau[i] = ut;
+        ws.u[i] = u;
+        ws.d_inv[i] = d_inv;
+        ws.u_tau[i] = ut;
         if let Some(p) = l.parent {
             // Articulated inertia and bias seen through the joint:
             // M^a = M̂ − U D⁻¹ Uᵀ, b^a = b̂ + M^a ξ + U D⁻¹ (τ − Pᵀ b̂).
@@ -117,31 +118,31 @@ pub fn forward_dynamics_world(
                 ud_u += u[r] * dut[r];
             }
             let ba = b + ma.mul_twist(&link.xi) + ud_u;
-            let arm = link.origin - data.links[p].origin;
+            let arm = link.origin - ws.links[p].origin;
             let moved = ma.shifted(&(-arm));
-            data.art_inertia[p].add(&moved);
-            data.art_bias[p] += shift_wrench(&ba, &arm);
+            ws.art_inertia[p].add(&moved);
+            ws.art_bias[p] += shift_wrench(&ba, &arm);
         }
     }
     let base = base_accel(g);
     for (i, l) in model.links.iter().enumerate() {
         let dof = l.joint.nv();
-        let s = &data.links[i];
+        let s = &ws.links[i];
         let y = match l.parent {
-            Some(p) => shift_twist(&data.accel[p], &(s.origin - data.links[p].origin)),
+            Some(p) => shift_twist(&ws.accel[p], &(s.origin - ws.links[p].origin)),
             None => base,
         } + s.xi;
         let mut rhs = Vec3::zeros();
         for k in 0..dof {
-            rhs[k] = data.u_tau[i][k] - data.u[i][k].dot(&y);
+            rhs[k] = ws.u_tau[i][k] - ws.u[i][k].dot(&y);
         }
-        let qdd = data.d_inv[i] * rhs;
+        let qdd = ws.d_inv[i] * rhs;
         let mut acc = y;
         for k in 0..dof {
             a[l.v_index + k] = qdd[k];
             acc += s.s[k] * qdd[k];
         }
-        data.accel[i] = acc;
+        ws.accel[i] = acc;
     }
     Ok(())
 }

@@ -1,0 +1,93 @@
+//! Per-call values of the body-frame recursions (like Pinocchio's `Data`): everything here
+//! is overwritten by each call before it is read, so a workspace depends on its model only
+//! through its sizes, which [`Data::fits`] checks. The model's constants are in
+//! [`super::Compiled`].
+use super::algebra::LocalInertia;
+use crate::kinematics::LinkState;
+use crate::model::Model;
+use crate::spatial::{Mat3, Vec3, Vec6};
+
+/// One link's per-call values, in the link's (recursion) frame, about its origin.
+#[derive(Debug, Clone, Copy)]
+pub struct LinkWork {
+    /// Other joints (`LinkKind::Other`): link axes in parent axes, `E`.
+    pub rot: Mat3,
+    /// Link origin in parent coordinates.
+    pub offset: Vec3,
+    /// Link orientation in the world (only kept when external wrenches are given).
+    pub world_rot: Mat3,
+    /// Motion columns of a joint whose columns move with `q` (ZYZ), and of spherical joints.
+    pub s: [Vec3; 3],
+    pub twist: Vec6,
+    /// Velocity-dependent twist rate `ξ`.
+    pub xi: Vec6,
+    /// Articulated (or composite) inertia.
+    pub inertia: LocalInertia,
+    /// Articulated bias wrench (or the link's wrench, in inverse dynamics).
+    pub bias: Vec6,
+    /// `U = M̂ S` (columns).
+    pub u: [Vec6; 3],
+    /// `D⁻¹ = (Sᵀ M̂ S)⁻¹`, upper-left dof × dof block used.
+    pub d_inv: Mat3,
+    /// `τ − Sᵀ b̂`.
+    pub u_tau: Vec3,
+    /// Twist rate `ṫ`.
+    pub accel: Vec6,
+    /// A revolute joint about a coordinate axis: (cos, sin) of its turn.
+    pub cs: (f64, f64),
+}
+
+impl Default for LinkWork {
+    fn default() -> Self {
+        LinkWork {
+            rot: Mat3::identity(),
+            offset: Vec3::zeros(),
+            world_rot: Mat3::identity(),
+            s: [Vec3::zeros(); 3],
+            twist: Vec6::zeros(),
+            xi: Vec6::zeros(),
+            inertia: LocalInertia::default(),
+            bias: Vec6::zeros(),
+            u: [Vec6::zeros(); 3],
+            d_inv: Mat3::zeros(),
+            u_tau: Vec3::zeros(),
+            accel: Vec6::zeros(),
+            cs: (1.0, 0.0),
+        }
+    }
+}
+
+/// The workspace of the recursions for models of one size: built by `Data::new(model)`,
+/// reusable for any model of the same numbers of links, coordinates and speeds.
+#[derive(Debug, Clone)]
+pub struct Data {
+    /// Body-frame recursion values, per link.
+    pub local: Vec<LinkWork>,
+    /// World-frame kinematics (orientations, origins, twists), per link: what energies,
+    /// body placements and effects read, filled by `kinematics::positions`/`velocities`.
+    pub links: Vec<LinkState>,
+    /// `nv` zeros (the speeds of a position-only outward pass).
+    pub zero_v: Vec<f64>,
+    nq: usize,
+}
+
+impl Data {
+    pub fn new(model: &Model) -> Self {
+        let n = model.links.len();
+        Data {
+            local: vec![LinkWork::default(); n],
+            links: vec![LinkState::default(); n],
+            zero_v: vec![0.0; model.nv],
+            nq: model.nq,
+        }
+    }
+
+    /// Whether this workspace serves `model`: nothing in it is a model constant, so the
+    /// sizes are the whole check.
+    pub fn fits(&self, model: &Model) -> bool {
+        self.local.len() == model.links.len()
+            && self.links.len() == model.links.len()
+            && self.zero_v.len() == model.nv
+            && self.nq == model.nq
+    }
+}
