@@ -1,33 +1,17 @@
 //! Scenes: a model, the effects it calls for, its initial state and integrator settings,
 //! read from TOML. Errors name the file and the key.
-use std::collections::HashMap;
+//!
+//! Reading goes in the file's order: the TOML into the structs below, then the units, the
+//! URDF (if any), each `[[body]]` ([`bodies`]), `[initial]`, the effects and `[simulate]`.
+use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::body::RigidBody;
 use crate::effects::{Disabled, Effect, Effects};
-use crate::error::Error;
-use crate::joint::{rot_x, rot_y, rot_z, Joint};
+use crate::error::{Error, FileKind, Location, Result};
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
 
-#[derive(Debug, Clone, PartialEq)]
-pub struct SceneError {
-    pub file: String,
-    pub key: String,
-    pub message: String,
-}
-
-impl std::fmt::Display for SceneError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        if self.key.is_empty() {
-            write!(f, "{}: {}", self.file, self.message)
-        } else {
-            write!(f, "{}: {}: {}", self.file, self.key, self.message)
-        }
-    }
-}
-impl std::error::Error for SceneError {}
+mod bodies;
 
 /// Integrator settings a scene may carry; the caller's arguments override them.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -137,303 +121,40 @@ impl Scene {
     /// Reads and parses a scene file. Only a regular file of at most
     /// [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a device is refused before it is
     /// opened); errors name the path (shortened if too long to show).
-    pub fn from_file(path: &std::path::Path) -> Result<Scene, SceneError> {
-        let file = crate::files::display_path(path);
-        let text = crate::files::read_text(path, "scene").map_err(|message| SceneError {
-            file: file.clone(),
-            key: String::new(),
-            message,
-        })?;
-        let dir = path.parent().unwrap_or(std::path::Path::new(""));
-        Self::parse(&text, &file, dir)
+    pub fn from_file(path: &Path) -> Result<Scene> {
+        let text = crate::files::read_text(path, FileKind::Scene)?;
+        let dir = path.parent().unwrap_or(Path::new(""));
+        Self::parse(&text, &crate::files::display_path(path), dir)
     }
 
     /// Parses a scene from TOML text; `file` names it in errors, and a `urdf` key is resolved
     /// relative to its directory.
-    pub fn from_toml(text: &str, file: &str) -> Result<Scene, SceneError> {
-        let dir = std::path::Path::new(file)
-            .parent()
-            .unwrap_or(std::path::Path::new(""));
+    pub fn from_toml(text: &str, file: &str) -> Result<Scene> {
+        let dir = Path::new(file).parent().unwrap_or(Path::new(""));
         Self::parse(text, file, dir)
     }
 
-    fn parse(text: &str, file: &str, dir: &std::path::Path) -> Result<Scene, SceneError> {
-        let err = |key: String, message: String| SceneError {
-            file: file.to_string(),
-            key,
-            message,
-        };
-        let sf: SceneFile = toml::from_str(text).map_err(|e| {
-            let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((0, 0));
-            SceneError {
-                file: file.to_string(),
-                key: String::new(),
-                message: format!(
-                    "invalid scene TOML at line {line}, column {col}: {}",
-                    e.message()
-                ),
-            }
-        })?;
-        let unit_of = |key: &str, value: Option<&str>, default: f64| match value {
-            None => Ok(default),
-            Some("radians") => Ok(1.0),
-            Some("degrees") => Ok(std::f64::consts::PI / 180.0),
-            Some(other) => Err(err(
-                key.into(),
-                format!("expected \"radians\" or \"degrees\", got \"{other}\""),
-            )),
-        };
-        let unit = unit_of("angles", sf.angles.as_deref(), 1.0)?;
-        let rate_unit = unit_of("rates", sf.rates.as_deref(), unit)?;
+    /// Errors are [`Error::File`] of kind [`FileKind::Scene`], naming the key.
+    fn parse(text: &str, file: &str, dir: &Path) -> Result<Scene> {
+        let ctx = Ctx { file };
+        let sf = read_toml(&ctx, text)?;
+        let units = Units::of(&ctx, &sf)?;
         if sf.body.is_empty() && sf.urdf.is_none() {
-            return Err(err(
-                "body".into(),
-                "a scene needs at least one [[body]] (or a urdf)".into(),
-            ));
+            return Err(ctx.err("body", "a scene needs at least one [[body]] (or a urdf)"));
         }
-        let mut model = Model::new();
-        let mut index: HashMap<String, usize> = HashMap::new();
-        let mut urdf_effects = Vec::new();
-        if let Some(rel) = &sf.urdf {
-            let urdf = scene_urdf(dir, rel).map_err(|m| err("urdf".into(), m))?;
-            urdf_effects = urdf_dynamics_effects(&urdf, sf.urdf_dynamics.as_deref())
-                .map_err(|m| err("urdf_dynamics".into(), m))?;
-            model = urdf.model;
-            for (k, b) in model.bodies.iter().enumerate() {
-                index.insert(b.name.clone(), k);
-            }
-        } else if sf.urdf_dynamics.is_some() {
-            return Err(err("urdf_dynamics".into(), "needs a urdf key".into()));
-        }
+        let (mut model, urdf_effects) = urdf_model(&ctx, dir, &sf)?;
         let mut q0 = model.neutral();
         let mut v0 = vec![0.0; model.nv];
-        for (k, b) in sf.body.iter().enumerate() {
-            let key = |field: &str| format!("body[{k}] ('{}').{field}", b.name);
-            let core = |field: &str, e: Error| err(key(field), e.to_string());
-            let parent = match b.parent.as_deref() {
-                None | Some("world") => None,
-                Some(p) => Some(*index.get(p).ok_or_else(|| {
-                    err(
-                        key("parent"),
-                        format!("no body named '{p}' before this one (bodies must follow their parents; 'world' is the ground)"),
-                    )
-                })?),
-            };
-            let joint = match &b.joint {
-                JointFile::Revolute { axis } => Joint::revolute(Vec3::from(*axis)),
-                JointFile::Prismatic { axis } => Joint::prismatic(Vec3::from(*axis)),
-                JointFile::SphericalZYZ => Ok(Joint::SphericalZYZ),
-                JointFile::Spherical => Ok(Joint::Spherical),
-                JointFile::Fixed => Ok(Joint::Fixed),
-            }
-            .map_err(|e| core("joint.axis", e))?;
-            let rotation = match (b.rotation, b.rpy) {
-                (Some(_), Some(_)) => {
-                    return Err(err(
-                        key("rotation"),
-                        "give either rotation or rpy, not both".into(),
-                    ))
-                }
-                (Some(r), None) => Mat3::from_row_slice(&r.concat()),
-                (None, Some([r, p, y])) => rot_z(y * unit) * rot_y(p * unit) * rot_x(r * unit),
-                (None, None) => Mat3::identity(),
-            };
-            let inertia = match (b.inertia, b.inertia_diag) {
-                (Some(_), Some(_)) => {
-                    return Err(err(
-                        key("inertia"),
-                        "give either inertia or inertia_diag, not both".into(),
-                    ))
-                }
-                (Some(i), None) => Mat3::from_row_slice(&i.concat()),
-                (None, Some(d)) => Mat3::from_diagonal(&Vec3::from(d)),
-                (None, None) => {
-                    return Err(err(
-                        key("inertia"),
-                        "missing: give inertia (3x3, about the COM) or inertia_diag".into(),
-                    ))
-                }
-            };
-            let com = Vec3::from(b.com.unwrap_or([0.0; 3]));
-            let body = RigidBody::new(b.mass, com, inertia).map_err(|e| {
-                let field = match &e {
-                    Error::InvalidInertia { arg, .. } | Error::InvalidArgument { arg, .. } => {
-                        arg.clone()
-                    }
-                    _ => "inertia".into(),
-                };
-                core(&field, e)
-            })?;
-            let placement = Placement::new(rotation, Vec3::from(b.translation.unwrap_or([0.0; 3])));
-            let center = b.point_mass_center.map(Vec3::from);
-            let idx = model
-                .add_body(body, joint, parent, placement, Some(b.name.clone()), center)
-                .map_err(|e| {
-                    let field = match &e {
-                        Error::InvalidArgument { arg, .. } | Error::InvalidModel { arg, .. } => {
-                            arg.clone()
-                        }
-                        _ => String::new(),
-                    };
-                    core(&field, e)
-                })?;
-            index.insert(b.name.clone(), idx);
-            // Initial state of this joint, in file units.
-            let angular = matches!(
-                joint,
-                Joint::Revolute { .. } | Joint::SphericalZYZ | Joint::Spherical
-            );
-            let mut q = vec![0.0; joint.nq()];
-            joint.neutral(&mut q);
-            if let Some(given) = &b.q0 {
-                if given.len() != joint.nq() {
-                    return Err(err(
-                        key("q0"),
-                        format!(
-                            "expected {} values for a {} joint, got {}",
-                            joint.nq(),
-                            joint.kind(),
-                            given.len()
-                        ),
-                    ));
-                }
-                let scale = if matches!(joint, Joint::Revolute { .. } | Joint::SphericalZYZ) {
-                    unit
-                } else {
-                    1.0
-                };
-                q = given.iter().map(|x| x * scale).collect();
-                joint
-                    .check_configuration(&q, "q0")
-                    .map_err(|e| core("q0", e))?;
-            }
-            let mut v = vec![0.0; joint.nv()];
-            if let Some(given) = &b.v0 {
-                if given.len() != joint.nv() {
-                    return Err(err(
-                        key("v0"),
-                        format!(
-                            "expected {} values for a {} joint, got {}",
-                            joint.nv(),
-                            joint.kind(),
-                            given.len()
-                        ),
-                    ));
-                }
-                let scale = if angular { rate_unit } else { 1.0 };
-                v = given.iter().map(|x| x * scale).collect();
-                crate::error::check_finite("v0", &v).map_err(|e| core("v0", e))?;
-            }
-            q0.extend(q);
-            v0.extend(v);
-        }
+        bodies::add_bodies(&ctx, &mut model, &sf.body, units, &mut q0, &mut v0)?;
         if let Some(init) = &sf.initial {
-            // Scale the angular coordinates (revolute and ZYZ angles, all rotational speeds).
-            for (given, target, n, arg) in [
-                (&init.q0, &mut q0, model.nq, "q0"),
-                (&init.v0, &mut v0, model.nv, "v0"),
-            ] {
-                let Some(given) = given else { continue };
-                if given.len() != n {
-                    return Err(err(
-                        format!("initial.{arg}"),
-                        format!("expected {n} values, got {}", given.len()),
-                    ));
-                }
-                target.copy_from_slice(given);
-                for l in &model.links {
-                    let angular_q = matches!(l.joint, Joint::Revolute { .. } | Joint::SphericalZYZ);
-                    let (start, len, scale) = if arg == "q0" {
-                        (l.q_index, l.joint.nq(), if angular_q { unit } else { 1.0 })
-                    } else {
-                        (
-                            l.v_index,
-                            l.joint.nv(),
-                            if l.joint.moves_angular() {
-                                rate_unit
-                            } else {
-                                1.0
-                            },
-                        )
-                    };
-                    target[start..start + len]
-                        .iter_mut()
-                        .for_each(|x| *x *= scale);
-                }
-            }
-            model
-                .check_state(&q0, Some(&v0))
-                .map_err(|e| err("initial".into(), e.to_string()))?;
+            initial_state(&ctx, &model, init, units, &mut q0, &mut v0)?;
         }
         model.normalize(&mut q0);
-        // Effect errors: the key is `effect[k].field`, the message what was expected.
-        let effect_err = |x: Error, prefix: &str| match x {
-            Error::InvalidArgument { arg, expected, got } => err(
-                if arg.is_empty() {
-                    prefix.trim_end_matches('.').to_string()
-                } else {
-                    format!("{prefix}{arg}")
-                },
-                format!("expected {expected}, got {got}"),
-            ),
-            other => err(prefix.trim_end_matches('.').to_string(), other.to_string()),
+        let effects = scene_effects(&ctx, &model, &sf.effect, urdf_effects)?;
+        let settings = match sf.simulate {
+            Some(s) => settings(&ctx, s)?,
+            None => Settings::default(),
         };
-        let mut effects = urdf_effects;
-        for (k, e) in sf.effect.iter().enumerate() {
-            effects
-                .push(Effect::from_toml(e).map_err(|x| effect_err(x, &format!("effect[{k}].")))?);
-        }
-        // Resolve joint and body names, table widths and effect names against the model now,
-        // so a scene that loads also runs.
-        Effects::new(&model, &effects, Disabled::none(), "effect")
-            .map_err(|x| effect_err(x, ""))?;
-        let mut settings = Settings::default();
-        if let Some(s) = sf.simulate {
-            settings.t_span = match (s.t_span, s.t_end) {
-                (Some(_), Some(_)) => {
-                    return Err(err(
-                        "simulate.t_end".into(),
-                        "give either t_span or t_end, not both".into(),
-                    ))
-                }
-                (Some([a, b]), None) => Some((a, b)),
-                (None, Some(b)) => Some((0.0, b)),
-                (None, None) => None,
-            };
-            if let Some((a, b)) = settings.t_span {
-                if !(a.is_finite() && b.is_finite()) || a == b {
-                    return Err(err(
-                        "simulate.t_span".into(),
-                        format!("expected two different finite times, got [{a}, {b}]"),
-                    ));
-                }
-            }
-            for (name, x) in [
-                ("rtol", s.rtol),
-                ("atol", s.atol),
-                ("max_step", s.max_step),
-                ("first_step", s.first_step),
-            ] {
-                if let Some(x) = x {
-                    if !(x > 0.0) || !x.is_finite() {
-                        return Err(err(
-                            format!("simulate.{name}"),
-                            format!("expected a finite number > 0, got {x}"),
-                        ));
-                    }
-                }
-            }
-            settings.rtol = s.rtol;
-            settings.atol = s.atol;
-            settings.max_step = s.max_step;
-            settings.max_steps = s.max_steps;
-            settings.first_step = s.first_step;
-            if let Some(names) = &s.disable {
-                settings.disable = Some(
-                    Disabled::parse(names, "simulate.disable").map_err(|x| effect_err(x, ""))?,
-                );
-            }
-        }
         Ok(Scene {
             name: sf.name.unwrap_or_else(|| file.to_string()),
             description: sf.description.unwrap_or_default(),
@@ -446,10 +167,196 @@ impl Scene {
     }
 }
 
-/// The model of a scene's `urdf` file, resolved relative to the scene file's directory
-/// `dir` (its URDF warnings are not reported here).
-fn scene_urdf(dir: &std::path::Path, rel: &str) -> Result<crate::urdf::Urdf, String> {
-    crate::urdf::load_urdf(&dir.join(rel)).map_err(|e| e.to_string())
+/// Error builder bound to one scene file.
+struct Ctx<'a> {
+    file: &'a str,
+}
+
+impl Ctx<'_> {
+    fn at(&self, key: impl Into<String>) -> Location {
+        Location::new(self.file, key)
+    }
+    /// `file: key: message`.
+    fn err(&self, key: impl Into<String>, message: impl Into<String>) -> Error {
+        Error::file(FileKind::Scene, self.at(key), message)
+    }
+    /// A core error met at `key`: `file: key: <its whole text>`.
+    fn core(&self, key: impl Into<String>, e: Error) -> Error {
+        e.in_file(FileKind::Scene, self.at(key))
+    }
+    /// A core error whose argument is (the rest of) the key: `file: key.arg: expected ...`.
+    fn at_arg(&self, key: impl Into<String>, e: Error) -> Error {
+        e.at_arg_in_file(FileKind::Scene, self.at(key))
+    }
+}
+
+fn read_toml(ctx: &Ctx, text: &str) -> Result<SceneFile> {
+    toml::from_str(text).map_err(|e| {
+        let (line, col) = e.span().map(|s| line_col(text, s.start)).unwrap_or((0, 0));
+        let message = format!(
+            "invalid scene TOML at line {line}, column {col}: {}",
+            e.message()
+        );
+        let at = ctx.at("");
+        let at = if line > 0 {
+            at.at_line(line).at_column(col)
+        } else {
+            at
+        };
+        Error::file(FileKind::Scene, at, message)
+    })
+}
+
+/// Radians per file unit of angles and of angular rates.
+#[derive(Clone, Copy)]
+struct Units {
+    angle: f64,
+    rate: f64,
+}
+
+impl Units {
+    fn of(ctx: &Ctx, sf: &SceneFile) -> Result<Units> {
+        let unit_of = |key: &str, value: Option<&str>, default: f64| match value {
+            None => Ok(default),
+            Some("radians") => Ok(1.0),
+            Some("degrees") => Ok(std::f64::consts::PI / 180.0),
+            Some(other) => Err(ctx.err(
+                key,
+                format!("expected \"radians\" or \"degrees\", got \"{other}\""),
+            )),
+        };
+        let angle = unit_of("angles", sf.angles.as_deref(), 1.0)?;
+        let rate = unit_of("rates", sf.rates.as_deref(), angle)?;
+        Ok(Units { angle, rate })
+    }
+}
+
+/// The model the `urdf` key starts (empty without one) and the effects its `urdf_dynamics`
+/// asks for.
+fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effect>)> {
+    let Some(rel) = &sf.urdf else {
+        if sf.urdf_dynamics.is_some() {
+            return Err(ctx.err("urdf_dynamics", "needs a urdf key"));
+        }
+        return Ok((Model::new(), Vec::new()));
+    };
+    // Its URDF warnings are not reported here.
+    let urdf = crate::urdf::load_urdf(&dir.join(rel)).map_err(|e| ctx.core("urdf", e))?;
+    let effects = urdf_dynamics_effects(&urdf, sf.urdf_dynamics.as_deref())
+        .map_err(|m| ctx.err("urdf_dynamics", m))?;
+    Ok((urdf.model, effects))
+}
+
+/// `[initial]`: the whole state (overriding the bodies' `q0`/`v0`), angular coordinates in
+/// the file's units.
+fn initial_state(
+    ctx: &Ctx,
+    model: &Model,
+    init: &InitialFile,
+    units: Units,
+    q0: &mut [f64],
+    v0: &mut [f64],
+) -> Result<()> {
+    for (given, target, n, arg) in [
+        (&init.q0, &mut *q0, model.nq, "q0"),
+        (&init.v0, &mut *v0, model.nv, "v0"),
+    ] {
+        let Some(given) = given else { continue };
+        if given.len() != n {
+            return Err(ctx.err(
+                format!("initial.{arg}"),
+                format!("expected {n} values, got {}", given.len()),
+            ));
+        }
+        target.copy_from_slice(given);
+        for l in &model.links {
+            let j = &l.joint;
+            if arg == "q0" {
+                let q = &mut target[l.q_index..l.q_index + j.nq()];
+                to_radians(q, |k| j.q_is_angle(k), units.angle);
+            } else {
+                let v = &mut target[l.v_index..l.v_index + j.nv()];
+                to_radians(v, |k| j.v_is_angular(k), units.rate);
+            }
+        }
+    }
+    model
+        .check_state(q0, Some(v0))
+        .map_err(|e| ctx.err("initial", e.to_string()))
+}
+
+/// Scales the entries of `values` that are angles (or rates) by `unit`, in place.
+fn to_radians(values: &mut [f64], is_angle: impl Fn(usize) -> bool, unit: f64) {
+    for (k, x) in values.iter_mut().enumerate() {
+        if is_angle(k) {
+            *x *= unit;
+        }
+    }
+}
+
+/// The URDF's effects, then each `[[effect]]`, resolved against the model now so that a
+/// scene that loads also runs. Errors name `effect[k].field` and say what was expected.
+fn scene_effects(
+    ctx: &Ctx,
+    model: &Model,
+    tables: &[EffectFile],
+    mut effects: Vec<Effect>,
+) -> Result<Vec<Effect>> {
+    for (k, e) in tables.iter().enumerate() {
+        effects.push(Effect::from_toml(e).map_err(|x| ctx.at_arg(format!("effect[{k}]"), x))?);
+    }
+    Effects::new(model, &effects, Disabled::none(), "effect").map_err(|x| ctx.at_arg("", x))?;
+    Ok(effects)
+}
+
+/// `[simulate]`: the integrator settings, checked.
+fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
+    let t_span = match (s.t_span, s.t_end) {
+        (Some(_), Some(_)) => {
+            return Err(ctx.err("simulate.t_end", "give either t_span or t_end, not both"))
+        }
+        (Some([a, b]), None) => Some((a, b)),
+        (None, Some(b)) => Some((0.0, b)),
+        (None, None) => None,
+    };
+    if let Some((a, b)) = t_span {
+        if !(a.is_finite() && b.is_finite()) || a == b {
+            return Err(ctx.err(
+                "simulate.t_span",
+                format!("expected two different finite times, got [{a}, {b}]"),
+            ));
+        }
+    }
+    for (name, x) in [
+        ("rtol", s.rtol),
+        ("atol", s.atol),
+        ("max_step", s.max_step),
+        ("first_step", s.first_step),
+    ] {
+        if let Some(x) = x {
+            if !(x > 0.0) || !x.is_finite() {
+                return Err(ctx.err(
+                    format!("simulate.{name}"),
+                    format!("expected a finite number > 0, got {x}"),
+                ));
+            }
+        }
+    }
+    let disable = match &s.disable {
+        Some(names) => {
+            Some(Disabled::parse(names, "simulate.disable").map_err(|x| ctx.at_arg("", x))?)
+        }
+        None => None,
+    };
+    Ok(Settings {
+        t_span,
+        rtol: s.rtol,
+        atol: s.atol,
+        max_step: s.max_step,
+        max_steps: s.max_steps,
+        first_step: s.first_step,
+        disable,
+    })
 }
 
 /// Effects from the URDF's `<dynamics damping friction>` as the scene asks: a damper and/or
@@ -457,7 +364,7 @@ fn scene_urdf(dir: &std::path::Path, rel: &str) -> Result<crate::urdf::Urdf, Str
 fn urdf_dynamics_effects(
     urdf: &crate::urdf::Urdf,
     asked: Option<&[String]>,
-) -> Result<Vec<Effect>, String> {
+) -> std::result::Result<Vec<Effect>, String> {
     use crate::effects::{damper::Damper, friction::Friction, JointRef, PerJoint};
     let mut out = Vec::new();
     for what in asked.unwrap_or(&[]) {

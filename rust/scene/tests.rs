@@ -1,5 +1,6 @@
 //! The scene loader's tests.
 use super::*;
+use crate::spatial::Vec3;
 
 const PENDULUM: &str = r#"
 name = "pendulum"

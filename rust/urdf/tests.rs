@@ -1,5 +1,7 @@
 //! The URDF loader's tests: small robots written inline by the fixtures below.
 use super::*;
+use crate::joint::{rot_x, rot_y, rot_z, Joint};
+use crate::spatial::{Mat3, Vec3};
 
 fn inertial(mass: f64, xyz: &str, rpy: &str, diag: [f64; 3]) -> String {
     format!(
