@@ -23,6 +23,26 @@ fn joint(name: &str, kind: &str, parent: &str, child: &str, extra: &str) -> Stri
     )
 }
 
+/// A revolute joint about x with the `<limit>` URDF requires (effort 1, velocity 1).
+fn revolute(name: &str, parent: &str, child: &str) -> String {
+    joint(
+        name,
+        "revolute",
+        parent,
+        child,
+        r#"<limit effort="1" velocity="1"/>"#,
+    )
+}
+
+/// Links `base` and `a` (mass 1) on the revolute joint `j` whose other elements are `extra`.
+fn base_and_a(extra: &str) -> String {
+    robot(&[
+        link("base", 1.0),
+        link("a", 1.0),
+        joint("j", "revolute", "base", "a", extra),
+    ])
+}
+
 fn robot(parts: &[String]) -> String {
     format!(
         "<?xml version=\"1.0\"?>\n<robot name=\"r\">\n{}\n</robot>\n",
@@ -47,19 +67,9 @@ fn quarter_turn_rpy_is_exact() {
     // (model::checked_rotation), while an angle that is not π/2 to double precision stays
     // as written.
     let placed = |rpy: &str| {
-        let text = robot(&[
-            link("base", 1.0),
-            link("a", 1.0),
-            joint(
-                "j",
-                "revolute",
-                "base",
-                "a",
-                &format!(
-                    r#"<origin xyz="0 0 0.3" rpy="{rpy}"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="5" velocity="2"/>"#
-                ),
-            ),
-        ]);
+        let text = base_and_a(&format!(
+            r#"<origin xyz="0 0 0.3" rpy="{rpy}"/><axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="5" velocity="2"/>"#
+        ));
         load(&text).model.links[0].placement.rotation
     };
     let r = placed("-1.5707963267948966 0 0");
@@ -79,19 +89,9 @@ fn rpy_is_z_y_x() {
     let r = rpy_matrix(&Vec3::new(0.0, 0.0, std::f64::consts::FRAC_PI_2));
     assert!((r * Vec3::x() - Vec3::y()).norm() < 1e-15);
     let (a, b, c) = (0.3, -0.7, 1.9);
-    let text = robot(&[
-        link("base", 1.0),
-        link("a", 1.0),
-        joint(
-            "j",
-            "revolute",
-            "base",
-            "a",
-            &format!(
-                r#"<origin xyz="1 2 3" rpy="{a} {b} {c}"/><axis xyz="0 0 2"/><limit lower="-1" upper="1" effort="5" velocity="2"/>"#
-            ),
-        ),
-    ]);
+    let text = base_and_a(&format!(
+        r#"<origin xyz="1 2 3" rpy="{a} {b} {c}"/><axis xyz="0 0 2"/><limit lower="-1" upper="1" effort="5" velocity="2"/>"#
+    ));
     let u = load(&text);
     let l = &u.model.links[0];
     let expect = rot_z(c) * rot_y(b) * rot_x(a);
@@ -193,27 +193,9 @@ fn siblings_follow_joint_name_order() {
         link("aa", 1.0),
         link("mm", 1.0),
         link("c", 1.0),
-        joint(
-            "q1",
-            "revolute",
-            "base",
-            "mm",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
-        joint(
-            "a1",
-            "revolute",
-            "base",
-            "zz",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
-        joint(
-            "j_c",
-            "revolute",
-            "aa",
-            "c",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
+        revolute("q1", "base", "mm"),
+        revolute("a1", "base", "zz"),
+        revolute("j_c", "aa", "c"),
         joint("M1", "fixed", "base", "aa", ""),
     ]);
     let u = load(&text);
@@ -230,13 +212,7 @@ fn massless_moving_links() {
         link("base", 1.0),
         r#"<link name="virtual"/>"#.to_string(),
         link("leg", 2.0),
-        joint(
-            "hip_x",
-            "revolute",
-            "base",
-            "virtual",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
+        revolute("hip_x", "base", "virtual"),
         joint(
             "hip_y",
             "revolute",
@@ -254,13 +230,7 @@ fn massless_moving_links() {
     let text = robot(&[
         link("base", 1.0),
         r#"<link name="finger"/>"#.to_string(),
-        joint(
-            "f",
-            "revolute",
-            "base",
-            "finger",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
+        revolute("f", "base", "finger"),
     ]);
     let e = error(&text);
     assert!(
@@ -276,28 +246,12 @@ fn massless_moving_links() {
         link("base", 1.0),
         link("leg", 1.0),
         foot.clone(),
-        joint(
-            "knee",
-            "revolute",
-            "base",
-            "leg",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
+        revolute("knee", "base", "leg"),
         joint("ankle", "fixed", "leg", "foot", ""),
     ]);
     let u = load(&text);
     assert!((u.model.links[0].rigid.inertia[(0, 0)] - (0.01 + 1e-3)).abs() < 1e-15);
-    let text = robot(&[
-        link("base", 1.0),
-        foot,
-        joint(
-            "ankle",
-            "revolute",
-            "base",
-            "foot",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
-    ]);
+    let text = robot(&[link("base", 1.0), foot, revolute("ankle", "base", "foot")]);
     let e = error(&text);
     assert!(
         e.contains("link 'foot'") && e.contains("zero mass with a non-zero"),
@@ -311,7 +265,7 @@ fn rounding_noise_in_an_inertia_is_projected_away() {
     let text = robot(&[
         link("base", 1.0),
         r#"<link name="head"><inertial><origin xyz="0.0185 -0.1108 0"/><mass value="1.33687"/><inertia ixx="0" ixy="0" ixz="2.40741e-35" iyy="0" iyz="0" izz="0"/></inertial></link>"#.to_string(),
-        joint("neck", "revolute", "base", "head", r#"<limit effort="1" velocity="1"/>"#),
+        revolute("neck", "base", "head"),
     ]);
     let u = load(&text);
     let l = &u.model.links[0];
@@ -374,13 +328,7 @@ fn errors_name_file_and_element() {
     let ok = [
         link("base", 1.0),
         link("a", 1.0),
-        joint(
-            "j",
-            "revolute",
-            "base",
-            "a",
-            r#"<limit effort="1" velocity="1"/>"#,
-        ),
+        revolute("j", "base", "a"),
     ];
     load(&robot(&ok));
     // Malformed XML: the line.
@@ -407,13 +355,7 @@ fn errors_name_file_and_element() {
                 r#"<link name="a">{}</link>"#,
                 inertial(mass, "0 0 0", "0 0 0", diag)
             ),
-            joint(
-                "j",
-                "revolute",
-                "base",
-                "a",
-                r#"<limit effort="1" velocity="1"/>"#,
-            ),
+            revolute("j", "base", "a"),
         ])
     };
     let e = error(&on_moving(1.0, [-1.0, 1.0, 1.0]));
