@@ -152,17 +152,29 @@ impl Error {
             }
         };
         match self {
+            Error::Singular(m) => Error::Singular(tell(m)),
+            Error::InvalidSetting(m) => Error::InvalidSetting(tell(m)),
+            Error::Interrupted(m) => Error::Interrupted(tell(m)),
+            named => named.map_arg(|inner| joined(outer, inner)),
+        }
+    }
+
+    /// Renames the argument (or computation, or file key) this error names, as `f` says
+    /// (`q` → `q0` for a binding whose argument is called otherwise); an error that names
+    /// none is returned as it is. [`Error::in_arg`] is the way to prefix one.
+    pub fn map_arg(self, f: impl FnOnce(String) -> String) -> Self {
+        match self {
             Error::InvalidArgument { arg, expected, got } => Error::InvalidArgument {
-                arg: joined(outer, arg),
+                arg: f(arg),
                 expected,
                 got,
             },
             Error::InvalidInertia { arg, reason } => Error::InvalidInertia {
-                arg: joined(outer, arg),
+                arg: f(arg),
                 reason,
             },
             Error::InvalidModel { arg, reason } => Error::InvalidModel {
-                arg: joined(outer, arg),
+                arg: f(arg),
                 reason,
             },
             Error::OutOfMemory {
@@ -170,21 +182,21 @@ impl Error {
                 bytes,
                 detail,
             } => Error::OutOfMemory {
-                what: joined(outer, what),
+                what: f(what),
                 bytes,
                 detail,
             },
-            Error::Singular(m) => Error::Singular(tell(m)),
-            Error::InvalidSetting(m) => Error::InvalidSetting(tell(m)),
-            Error::Interrupted(m) => Error::Interrupted(tell(m)),
             Error::File { kind, at, message } => Error::File {
                 kind,
                 at: Location {
-                    key: joined(outer, at.key),
+                    key: f(at.key),
                     ..at
                 },
                 message,
             },
+            unnamed @ (Error::Singular(_) | Error::InvalidSetting(_) | Error::Interrupted(_)) => {
+                unnamed
+            }
         }
     }
 
@@ -232,5 +244,47 @@ pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
             "finite numbers",
             format!("{} at index {}", values[k], k),
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn in_arg_prefixes_names_and_messages_and_file_keys() {
+        let e = Error::arg("joints", "known joints", "'x'").in_arg("effects[2]");
+        assert_eq!(
+            e.to_string(),
+            "effects[2].joints: expected known joints, got 'x'"
+        );
+        let e = Error::arg("", "an effect", "3").in_arg("effects[2]");
+        assert_eq!(e.to_string(), "effects[2]: expected an effect, got 3");
+        let e = Error::Singular("sin(theta) = 0".into()).in_arg("q");
+        assert_eq!(e.to_string(), "q: sin(theta) = 0");
+        let at = Location::new("s.toml", "g").at_line(3);
+        let e = Error::file(FileKind::Scene, at, "expected 3 values").in_arg("effect[0]");
+        assert_eq!(e.to_string(), "s.toml: effect[0].g: expected 3 values");
+        let e = Error::arg("q", "finite numbers", "nan at index 0").map_arg(|a| a + "0");
+        assert_eq!(
+            e.to_string(),
+            "q0: expected finite numbers, got nan at index 0"
+        );
+    }
+
+    #[test]
+    fn a_core_error_placed_in_a_file() {
+        let e = Error::arg("stiffness", "numbers >= 0", "-40");
+        let at = || Location::new("b.toml", "effect[1]");
+        assert_eq!(
+            e.clone().at_arg_in_file(FileKind::Scene, at()).to_string(),
+            "b.toml: effect[1].stiffness: expected numbers >= 0, got -40"
+        );
+        assert_eq!(
+            e.in_file(FileKind::Urdf, at()).to_string(),
+            "b.toml: effect[1]: stiffness: expected numbers >= 0, got -40"
+        );
+        let whole_file = Error::file(FileKind::Urdf, Location::new("r.urdf", ""), "no <link>");
+        assert_eq!(whole_file.to_string(), "r.urdf: no <link>");
     }
 }
