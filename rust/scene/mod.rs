@@ -242,8 +242,7 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
     };
     // Its URDF warnings are not reported here.
     let urdf = crate::urdf::load_urdf(&dir.join(rel)).map_err(|e| ctx.core("urdf", e))?;
-    let effects = urdf_dynamics_effects(&urdf, sf.urdf_dynamics.as_deref())
-        .map_err(|m| ctx.err("urdf_dynamics", m))?;
+    let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
     Ok((urdf.model, effects))
 }
 
@@ -334,7 +333,7 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
         ("first_step", s.first_step),
     ] {
         if let Some(x) = x {
-            if !(x > 0.0) || !x.is_finite() {
+            if x <= 0.0 || !x.is_finite() {
                 return Err(ctx.err(
                     format!("simulate.{name}"),
                     format!("expected a finite number > 0, got {x}"),
@@ -360,11 +359,14 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
 }
 
 /// Effects from the URDF's `<dynamics damping friction>` as the scene asks: a damper and/or
-/// a friction effect over the joints whose value is non-zero (none if all are zero).
+/// a friction effect over the joints whose value is non-zero (none if all are zero). Errors
+/// are at the key `urdf_dynamics`.
 fn urdf_dynamics_effects(
+    ctx: &Ctx,
     urdf: &crate::urdf::Urdf,
     asked: Option<&[String]>,
-) -> std::result::Result<Vec<Effect>, String> {
+) -> Result<Vec<Effect>> {
+    let core = |e: Error| ctx.core("urdf_dynamics", e);
     use crate::effects::{damper::Damper, friction::Friction, JointRef, PerJoint};
     let mut out = Vec::new();
     for what in asked.unwrap_or(&[]) {
@@ -381,8 +383,7 @@ fn urdf_dynamics_effects(
                 if !joints.is_empty() {
                     let name = Some("urdf_damping".to_string());
                     out.push(Effect::Damper(
-                        Damper::new(name, Some(joints), PerJoint::Each(values))
-                            .map_err(|e| e.to_string())?,
+                        Damper::new(name, Some(joints), PerJoint::Each(values)).map_err(core)?,
                     ));
                 }
             }
@@ -392,13 +393,14 @@ fn urdf_dynamics_effects(
                     let name = Some("urdf_friction".to_string());
                     out.push(Effect::Friction(
                         Friction::new(name, Some(joints), PerJoint::Each(values), None)
-                            .map_err(|e| e.to_string())?,
+                            .map_err(core)?,
                     ));
                 }
             }
             other => {
-                return Err(format!(
-                    "expected \"damping\" and/or \"friction\", got \"{other}\""
+                return Err(ctx.err(
+                    "urdf_dynamics",
+                    format!("expected \"damping\" and/or \"friction\", got \"{other}\""),
                 ))
             }
         }
