@@ -282,12 +282,17 @@ fn count_unknown(node: Node, parent: &str, known: &[&str], ignored: &mut BTreeMa
     }
 }
 
-fn parse_link(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> Result<LinkData> {
+/// The `name` of a `<link>` or `<joint>` (`tag`), and the element as errors name it
+/// (`link 'base'`).
+fn named(ctx: &Ctx, node: Node, tag: &str) -> Result<(String, String)> {
     let name = node
         .attribute("name")
-        .ok_or_else(|| ctx.at("link", node, "<link> has no 'name' attribute"))?
-        .to_string();
-    let element = format!("link '{name}'");
+        .ok_or_else(|| ctx.at(tag, node, format!("<{tag}> has no 'name' attribute")))?;
+    Ok((name.to_string(), format!("{tag} '{name}'")))
+}
+
+fn parse_link(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> Result<LinkData> {
+    let (name, element) = named(ctx, node, "link")?;
     let mut inertial = Inertial::none();
     let mut invalid = None;
     let mut seen_inertial = false;
@@ -398,11 +403,7 @@ fn nearest_physical(i: &Mat3) -> Mat3 {
 }
 
 fn parse_joint(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> Result<JointData> {
-    let name = node
-        .attribute("name")
-        .ok_or_else(|| ctx.at("joint", node, "<joint> has no 'name' attribute"))?
-        .to_string();
-    let element = format!("joint '{name}'");
+    let (name, element) = named(ctx, node, "joint")?;
     let el = element.as_str();
     let kind = joint_kind(ctx, el, node, &name)?;
     let link_of = |tag: &str| -> Result<String> {
