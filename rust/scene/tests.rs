@@ -59,3 +59,30 @@ fn errors_name_file_and_key() {
     let e = Scene::from_toml(&neg, "p.toml").unwrap_err().to_string();
     assert!(e.contains("inertia") && e.contains("semidefinite"), "{e}");
 }
+
+#[test]
+fn errors_carry_their_location() {
+    use crate::error::{Error, FileKind};
+    let bad_parent = PENDULUM.replace("name = \"rod\"", "name = \"rod\"\nparent = \"nope\"");
+    match Scene::from_toml(&bad_parent, "p.toml").unwrap_err() {
+        Error::File { kind, at, .. } => {
+            assert_eq!(kind, FileKind::Scene);
+            assert_eq!(
+                (at.file.as_str(), at.key.as_str()),
+                ("p.toml", "body[0] ('rod').parent")
+            );
+        }
+        other => panic!("not a file error: {other}"),
+    }
+    match Scene::from_toml("[[body]\n", "x.toml").unwrap_err() {
+        Error::File { at, message, .. } => {
+            assert_eq!(at.line, Some(1));
+            let column = at.column.unwrap();
+            assert!(
+                message.contains(&format!("line 1, column {column}")),
+                "{message}"
+            );
+        }
+        other => panic!("not a file error: {other}"),
+    }
+}

@@ -184,7 +184,8 @@ pub fn rpy_matrix(rpy: &Vec3) -> Mat3 {
 
 /// Parses URDF text. `file` names it in errors and warnings; `base_dir` is the directory its
 /// relative resources would resolve against (kept in [`Urdf::base_dir`]). Errors are
-/// [`Error::File`] of kind [`FileKind::Urdf`], naming the element and, where known, the line.
+/// [`crate::error::Error::File`] of kind [`FileKind::Urdf`], naming the element and, where
+/// known, the line.
 pub fn model_from_urdf(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Urdf> {
     let ctx = Ctx::new(file, text);
     let robot = parse::parse_robot(&ctx, text)?;

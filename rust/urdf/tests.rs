@@ -448,3 +448,21 @@ fn errors_name_file_and_element() {
     assert!(error("<robot/>").contains("no <link> elements"));
     assert!(error("<model/>").contains("expected a <robot> root element"));
 }
+
+#[test]
+fn errors_carry_their_location() {
+    use crate::error::{Error, FileKind, Location};
+    let located = |text: &str| match model_from_urdf(text, "t.urdf", None).unwrap_err() {
+        Error::File { kind, at, .. } => (kind, at),
+        other => panic!("not a file error: {other}"),
+    };
+    let (kind, at) = located("<robot name=\"r\">\n<link name=\"a\">\n</robot>\n");
+    assert_eq!(kind, FileKind::Urdf);
+    assert_eq!(
+        (at.file.as_str(), at.key.as_str(), at.line),
+        ("t.urdf", "", Some(3))
+    );
+    assert!(at.column.is_some());
+    let (_, at) = located(&base_and_a(r#"<axis xyz="0 0 0"/>"#));
+    assert_eq!(at, Location::new("t.urdf", "joint 'j'").at_line(5));
+}
