@@ -1,6 +1,60 @@
-//! Errors of the core. Every variant names the argument (or element) at fault, what was
-//! expected and what was given, so the bindings can pass the message through unchanged.
+//! Errors of the core: one type. Every variant names the argument (or, for input files, the
+//! file, element or key and line) at fault, what was expected and what was given, so the
+//! bindings only translate the variant to an exception class and pass the message through.
 use thiserror::Error;
+
+/// Which loader an input-file error comes from (the bindings raise `UrdfError` or
+/// `SceneError`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FileKind {
+    Urdf,
+    Scene,
+}
+
+/// Where in an input file: the file as shown in messages, and within it the element
+/// (`joint 'elbow'`) or key (`body[0] ('rod').mass`), and the line and column when known.
+/// Shown as `file` or `file: key`; the message says the line where its sentence needs it.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Location {
+    pub file: String,
+    /// Element or key; empty for the file as a whole.
+    pub key: String,
+    pub line: Option<usize>,
+    pub column: Option<usize>,
+}
+
+impl Location {
+    pub fn new(file: impl Into<String>, key: impl Into<String>) -> Self {
+        Location {
+            file: file.into(),
+            key: key.into(),
+            line: None,
+            column: None,
+        }
+    }
+    pub fn at_line(self, line: usize) -> Self {
+        Location {
+            line: Some(line),
+            ..self
+        }
+    }
+    pub fn at_column(self, column: usize) -> Self {
+        Location {
+            column: Some(column),
+            ..self
+        }
+    }
+}
+
+impl std::fmt::Display for Location {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.key.is_empty() {
+            write!(f, "{}", self.file)
+        } else {
+            write!(f, "{}: {}", self.file, self.key)
+        }
+    }
+}
 
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum Error {
@@ -34,6 +88,13 @@ pub enum Error {
     /// The caller asked to stop (Ctrl-C from Python) while a long computation ran.
     #[error("{0}: interrupted")]
     Interrupted(String),
+    /// An input file (URDF, scene) that cannot be loaded: where, and what is wrong there.
+    #[error("{at}: {message}")]
+    File {
+        kind: FileKind,
+        at: Location,
+        message: String,
+    },
 }
 
 /// `2.5e10` bytes as "25.0 GB".
@@ -71,6 +132,105 @@ impl Error {
             reason: reason.into(),
         }
     }
+    pub fn file(kind: FileKind, at: Location, message: impl Into<String>) -> Self {
+        Error::File {
+            kind,
+            at,
+            message: message.into(),
+        }
+    }
+
+    /// The one way to say where the argument at fault sits: `outer` becomes the prefix of the
+    /// argument's name (`joints` in `effects[2]` → `effects[2].joints`; an empty name becomes
+    /// `outer`), or of the message of an error that names none (`effects[2]: ...`).
+    pub fn in_arg(self, outer: &str) -> Self {
+        let tell = |m: String| {
+            if outer.is_empty() {
+                m
+            } else {
+                format!("{outer}: {m}")
+            }
+        };
+        match self {
+            Error::Singular(m) => Error::Singular(tell(m)),
+            Error::InvalidSetting(m) => Error::InvalidSetting(tell(m)),
+            Error::Interrupted(m) => Error::Interrupted(tell(m)),
+            named => named.map_arg(|inner| joined(outer, inner)),
+        }
+    }
+
+    /// Renames the argument (or computation, or file key) this error names, as `f` says
+    /// (`q` → `q0` for a binding whose argument is called otherwise); an error that names
+    /// none is returned as it is. [`Error::in_arg`] is the way to prefix one.
+    pub fn map_arg(self, f: impl FnOnce(String) -> String) -> Self {
+        match self {
+            Error::InvalidArgument { arg, expected, got } => Error::InvalidArgument {
+                arg: f(arg),
+                expected,
+                got,
+            },
+            Error::InvalidInertia { arg, reason } => Error::InvalidInertia {
+                arg: f(arg),
+                reason,
+            },
+            Error::InvalidModel { arg, reason } => Error::InvalidModel {
+                arg: f(arg),
+                reason,
+            },
+            Error::OutOfMemory {
+                what,
+                bytes,
+                detail,
+            } => Error::OutOfMemory {
+                what: f(what),
+                bytes,
+                detail,
+            },
+            Error::File { kind, at, message } => Error::File {
+                kind,
+                at: Location {
+                    key: f(at.key),
+                    ..at
+                },
+                message,
+            },
+            unnamed @ (Error::Singular(_) | Error::InvalidSetting(_) | Error::Interrupted(_)) => {
+                unnamed
+            }
+        }
+    }
+
+    /// This error met while reading an input file at `at`: the message is this error's whole
+    /// text (argument name included), placed after the file and key.
+    pub fn in_file(self, kind: FileKind, at: Location) -> Self {
+        Error::file(kind, at, self.to_string())
+    }
+
+    /// Like [`Error::in_file`], but an invalid argument's name is appended to the key (as
+    /// [`Error::in_arg`] joins names) and the message only says what was expected and given:
+    /// `effect[1].stiffness: expected ..., got ...`.
+    pub fn at_arg_in_file(self, kind: FileKind, at: Location) -> Self {
+        match self {
+            Error::InvalidArgument { arg, expected, got } => Error::file(
+                kind,
+                Location {
+                    key: joined(&at.key, arg),
+                    ..at
+                },
+                format!("expected {expected}, got {got}"),
+            ),
+            other => other.in_file(kind, at),
+        }
+    }
+}
+
+/// `outer.inner`, or whichever of the two is not empty.
+fn joined(outer: &str, inner: String) -> String {
+    match (outer.is_empty(), inner.is_empty()) {
+        (true, _) => inner,
+        (false, true) => outer.to_string(),
+        (false, false) => format!("{outer}.{inner}"),
+    }
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
@@ -84,5 +244,47 @@ pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
             "finite numbers",
             format!("{} at index {}", values[k], k),
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn in_arg_prefixes_names_and_messages_and_file_keys() {
+        let e = Error::arg("joints", "known joints", "'x'").in_arg("effects[2]");
+        assert_eq!(
+            e.to_string(),
+            "effects[2].joints: expected known joints, got 'x'"
+        );
+        let e = Error::arg("", "an effect", "3").in_arg("effects[2]");
+        assert_eq!(e.to_string(), "effects[2]: expected an effect, got 3");
+        let e = Error::Singular("sin(theta) = 0".into()).in_arg("q");
+        assert_eq!(e.to_string(), "q: sin(theta) = 0");
+        let at = Location::new("s.toml", "g").at_line(3);
+        let e = Error::file(FileKind::Scene, at, "expected 3 values").in_arg("effect[0]");
+        assert_eq!(e.to_string(), "s.toml: effect[0].g: expected 3 values");
+        let e = Error::arg("q", "finite numbers", "nan at index 0").map_arg(|a| a + "0");
+        assert_eq!(
+            e.to_string(),
+            "q0: expected finite numbers, got nan at index 0"
+        );
+    }
+
+    #[test]
+    fn a_core_error_placed_in_a_file() {
+        let e = Error::arg("stiffness", "numbers >= 0", "-40");
+        let at = || Location::new("b.toml", "effect[1]");
+        assert_eq!(
+            e.clone().at_arg_in_file(FileKind::Scene, at()).to_string(),
+            "b.toml: effect[1].stiffness: expected numbers >= 0, got -40"
+        );
+        assert_eq!(
+            e.in_file(FileKind::Urdf, at()).to_string(),
+            "b.toml: effect[1]: stiffness: expected numbers >= 0, got -40"
+        );
+        let whole_file = Error::file(FileKind::Urdf, Location::new("r.urdf", ""), "no <link>");
+        assert_eq!(whole_file.to_string(), "r.urdf: no <link>");
     }
 }

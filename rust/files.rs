@@ -6,6 +6,8 @@
 use std::io::Read;
 use std::path::Path;
 
+use crate::error::{Error, FileKind, Location};
+
 /// Largest input file read: 128 MiB (a 150k-link URDF is about 50 MB).
 pub const MAX_FILE_BYTES: u64 = 128 * 1024 * 1024;
 
@@ -59,6 +61,19 @@ fn expected(what: &str) -> String {
     )
 }
 
+/// Refuses anything but a regular file, naming what it is.
+fn regular(meta: &std::fs::Metadata, what: &str) -> Result<(), String> {
+    if meta.is_file() {
+        Ok(())
+    } else {
+        Err(format!(
+            "{}, got {}",
+            expected(what),
+            kind_of(&meta.file_type())
+        ))
+    }
+}
+
 #[cfg(unix)]
 fn open_nonblocking(path: &Path) -> std::io::Result<std::fs::File> {
     use std::os::unix::fs::OpenOptionsExt;
@@ -73,19 +88,23 @@ fn open_nonblocking(path: &Path) -> std::io::Result<std::fs::File> {
     std::fs::File::open(path)
 }
 
-/// Reads `path` as UTF-8 text if it is a regular file of at most [`MAX_FILE_BYTES`]. `what`
-/// names the kind of file ("URDF", "scene"). The error message (without the path, which the
-/// caller puts first) says what was expected and what was found.
-pub fn read_text(path: &Path, what: &str) -> Result<String, String> {
+/// Reads `path` as UTF-8 text if it is a regular file of at most [`MAX_FILE_BYTES`]. The
+/// error names the path (shortened by [`display_path`]) and says what was expected and what
+/// was found; `kind` says which file it should have been ("URDF", "scene").
+pub fn read_text(path: &Path, kind: FileKind) -> Result<String, Error> {
+    let what = match kind {
+        FileKind::Urdf => "URDF",
+        FileKind::Scene => "scene",
+    };
+    read_checked(path, what)
+        .map_err(|message| Error::file(kind, Location::new(display_path(path), ""), message))
+}
+
+/// [`read_text`]'s work; the error is the message without the path.
+fn read_checked(path: &Path, what: &str) -> Result<String, String> {
     let cannot = |e: std::io::Error| format!("cannot read the {what} file: {e}");
     let meta = std::fs::metadata(path).map_err(cannot)?;
-    if !meta.is_file() {
-        return Err(format!(
-            "{}, got {}",
-            expected(what),
-            kind_of(&meta.file_type())
-        ));
-    }
+    regular(&meta, what)?;
     if meta.len() > MAX_FILE_BYTES {
         return Err(format!(
             "{}, got a file of {} bytes",
@@ -95,13 +114,7 @@ pub fn read_text(path: &Path, what: &str) -> Result<String, String> {
     }
     let file = open_nonblocking(path).map_err(cannot)?;
     let meta = file.metadata().map_err(cannot)?;
-    if !meta.is_file() {
-        return Err(format!(
-            "{}, got {}",
-            expected(what),
-            kind_of(&meta.file_type())
-        ));
-    }
+    regular(&meta, what)?;
     let mut bytes = Vec::with_capacity(meta.len().min(MAX_FILE_BYTES) as usize);
     file.take(MAX_FILE_BYTES + 1)
         .read_to_end(&mut bytes)
@@ -126,17 +139,23 @@ mod tests {
 
     #[test]
     fn refuses_directories_devices_and_long_paths() {
-        let e = read_text(Path::new("/"), "URDF").unwrap_err();
+        let e = read_text(Path::new("/"), FileKind::Urdf)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("regular URDF file") && e.contains("a directory"),
             "{e}"
         );
         if Path::new("/dev/zero").exists() {
-            let e = read_text(Path::new("/dev/zero"), "scene").unwrap_err();
+            let e = read_text(Path::new("/dev/zero"), FileKind::Scene)
+                .unwrap_err()
+                .to_string();
             assert!(e.contains("a character device"), "{e}");
         }
         let long = "x".repeat(100_000);
-        let e = read_text(Path::new(&long), "URDF").unwrap_err();
+        let e = read_text(Path::new(&long), FileKind::Urdf)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("cannot read the URDF file"), "{e}");
         let shown = display_path(Path::new(&long));
         assert!(shown.len() < 300 && shown.contains("100000 characters"));

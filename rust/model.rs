@@ -47,7 +47,7 @@ pub struct Link {
 }
 
 /// Serialised whole, derived link data included, so a round trip is bit-identical for every
-/// model (those `urdf.rs` finishes by hand too); deserialising checks the tree's indices.
+/// model (those the URDF loader finishes with `set_link_body` too); deserialising checks the tree's indices.
 #[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 #[serde(try_from = "ModelData")]
 pub struct Model {
@@ -146,6 +146,30 @@ fn snapped_signed_permutation(r: &Mat3) -> Option<Mat3> {
     let ones_per_row = (0..3).all(|i| out.row(i).iter().filter(|x| **x != 0.0).count() == 1);
     let ones_per_col = (0..3).all(|j| out.column(j).iter().filter(|x| **x != 0.0).count() == 1);
     (ones_per_row && ones_per_col && out.determinant() == 1.0).then_some(out)
+}
+
+/// Bodies summed in one frame; unlike [`RigidBody::merged`] any of them (or all) may have
+/// zero mass.
+fn sum_bodies(parts: &[RigidBody]) -> RigidBody {
+    let mass: f64 = parts.iter().map(|b| b.mass).sum();
+    let com = if mass > 0.0 {
+        parts.iter().fold(Vec3::zeros(), |a, b| a + b.com * b.mass) / mass
+    } else {
+        Vec3::zeros()
+    };
+    let mut inertia = Mat3::zeros();
+    for b in parts {
+        inertia += if b.mass > 0.0 {
+            b.inertia_about(&com)
+        } else {
+            b.inertia
+        };
+    }
+    RigidBody {
+        mass,
+        com,
+        inertia: (inertia + inertia.transpose()) * 0.5,
+    }
 }
 
 /// Refuses a link whose derived quantities (merged body, seven point masses, inertia about
@@ -300,6 +324,62 @@ impl Model {
         let c = center.unwrap_or(link.rigid.com);
         link.points = EquimomentalSet::solve(&link.rigid, &c);
         link.inertia = BodyInertia::from_points(&link.points.masses, &link.points.positions);
+    }
+
+    /// Replaces the own rigid body of body `index` (its record only: the link it belongs to
+    /// keeps its merged body until [`Model::set_link_body`] sets it, e.g. from
+    /// [`Model::link_bodies`]). For loaders that build the tree first and set the inertials
+    /// after, which may have zero mass (the URDF loader).
+    pub fn set_body_inertial(&mut self, index: usize, body: RigidBody) {
+        self.bodies[index].body = body;
+    }
+
+    /// Each link's body summed from the records of its bodies (its own and those welded to
+    /// it), in the link frame. Unlike the merging `add_body` does, any or all of them may
+    /// have zero mass (then the sum has mass 0, centre of mass 0).
+    pub fn link_bodies(&self) -> Vec<RigidBody> {
+        let mut parts: Vec<Vec<RigidBody>> = vec![Vec::new(); self.links.len()];
+        for b in &self.bodies {
+            if let Some(l) = b.link {
+                parts[l].push(
+                    b.body
+                        .transformed(&b.in_link.rotation, &b.in_link.translation),
+                );
+            }
+        }
+        parts.iter().map(|p| sum_bodies(p)).collect()
+    }
+
+    /// Sets link `l`'s rigid body and, from it, its seven point masses (centred at the
+    /// body's centre of mass) and its inertia about the link origin. A body without mass (the
+    /// intermediate link of a multi-axis joint in a URDF) gets seven zero masses; it must
+    /// then have no rotational inertia either, which seven point masses cannot carry.
+    pub fn set_link_body(&mut self, l: usize, body: RigidBody) -> Result<()> {
+        let link = &mut self.links[l];
+        if body.mass > 0.0 {
+            link.rigid = body;
+            link.points = EquimomentalSet::solve(&body, &body.com);
+            link.inertia = BodyInertia::from_points(&link.points.masses, &link.points.positions);
+            return Ok(());
+        }
+        if body.inertia.abs().max() > 0.0 {
+            return Err(Error::inertia(
+                "body",
+                format!(
+                    "body '{}': zero mass with a non-zero rotational inertia: seven point masses cannot represent it",
+                    self.bodies[link.body].name
+                ),
+            ));
+        }
+        link.rigid = body;
+        link.points = EquimomentalSet {
+            masses: [0.0; 7],
+            positions: [Vec3::zeros(); 7],
+            half_sides: Vec3::zeros(),
+            center: Vec3::zeros(),
+        };
+        link.inertia = BodyInertia::zero();
+        Ok(())
     }
 
     /// Checks the tree's bookkeeping as `add_body` keeps it (parents before children, links

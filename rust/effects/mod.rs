@@ -523,41 +523,6 @@ impl Default for Effects {
     }
 }
 
-/// Prefixes the argument an error names (`joints` → `effects[2].joints`).
-pub fn prefix_error(e: Error, prefix: &str) -> Error {
-    match e {
-        Error::InvalidArgument { arg, expected, got } => Error::InvalidArgument {
-            arg: if arg.is_empty() {
-                prefix.to_string()
-            } else {
-                format!("{prefix}.{arg}")
-            },
-            expected,
-            got,
-        },
-        Error::InvalidInertia { arg, reason } => Error::InvalidInertia {
-            arg: format!("{prefix}.{arg}"),
-            reason,
-        },
-        Error::InvalidModel { arg, reason } => Error::InvalidModel {
-            arg: format!("{prefix}.{arg}"),
-            reason,
-        },
-        Error::Singular(m) => Error::Singular(format!("{prefix}: {m}")),
-        Error::InvalidSetting(m) => Error::InvalidSetting(format!("{prefix}: {m}")),
-        Error::OutOfMemory {
-            what,
-            bytes,
-            detail,
-        } => Error::OutOfMemory {
-            what: format!("{prefix}.{what}"),
-            bytes,
-            detail,
-        },
-        Error::Interrupted(m) => Error::Interrupted(format!("{prefix}: {m}")),
-    }
-}
-
 impl Effects {
     /// No effect at all: free motion.
     pub fn none() -> Self {
@@ -607,7 +572,7 @@ impl Effects {
             // Resolve even disabled effects, so a scene is valid or not whatever is switched off.
             let law = s
                 .build(model)
-                .map_err(|e| prefix_error(e, &format!("{list}[{k}]")))?;
+                .map_err(|e| e.in_arg(&format!("{list}[{k}]")))?;
             if disabled.contains(s.kind()) {
                 continue;
             }

@@ -3,7 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 
-use crate::error::Error;
+use crate::error::{Error, FileKind};
 
 /// Builds an instance of `pointmass_dyn.errors.<class_name>` with `message`.
 pub fn py_error(py: Python<'_>, class_name: &str, message: String) -> PyErr {
@@ -25,6 +25,14 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
         Error::InvalidModel { .. } => "ModelStructureError",
         Error::Singular(_) => "SingularityError",
         Error::OutOfMemory { .. } => "OutOfMemoryError",
+        Error::File {
+            kind: FileKind::Urdf,
+            ..
+        } => "UrdfError",
+        Error::File {
+            kind: FileKind::Scene,
+            ..
+        } => "SceneError",
         // Only when no signal handler left its own exception to re-raise.
         Error::Interrupted(_) => {
             return pyo3::exceptions::PyKeyboardInterrupt::new_err(err.to_string());
@@ -55,15 +63,12 @@ pub fn check_result(py: Python<'_>, what: &str, values: &[f64]) -> PyResult<()> 
     }
 }
 
+/// `InvalidInputError`: `arg: expected ..., got ...` ([`Error::InvalidArgument`]'s text).
 pub fn invalid(
     py: Python<'_>,
     arg: &str,
     expected: impl std::fmt::Display,
     got: impl std::fmt::Display,
 ) -> PyErr {
-    py_error(
-        py,
-        "InvalidInputError",
-        format!("{arg}: expected {expected}, got {got}"),
-    )
+    to_py(py, Error::arg(arg, expected.to_string(), got.to_string()))
 }

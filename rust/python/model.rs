@@ -831,8 +831,7 @@ impl PyModel {
     /// `UrdfWarning`.
     #[staticmethod]
     fn from_urdf(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        let urdf = crate::urdf::load_urdf(&path)
-            .map_err(|e| super::errors::py_error(py, "UrdfError", e.to_string()))?;
+        let urdf = crate::urdf::load_urdf(&path).py(py)?;
         if !urdf.warnings.is_empty() {
             let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
             let warnings = py.import("warnings")?;

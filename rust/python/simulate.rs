@@ -633,7 +633,7 @@ impl PyScene {
     fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
         Scene::from_toml(text, file)
             .map(|inner| PyScene { inner })
-            .map_err(|e| py_error(py, "SceneError", e.to_string()))
+            .py(py)
     }
 
     /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
@@ -642,7 +642,7 @@ impl PyScene {
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
         Scene::from_file(&path)
             .map(|inner| PyScene { inner })
-            .map_err(|e| py_error(py, "SceneError", e.to_string()))
+            .py(py)
     }
 
     /// The scene's model (shared, not copied: adding a body to it copies it first, so the

@@ -1,0 +1,265 @@
+//! The model from the parsed robot, through `Model`'s own methods: every link a body on its
+//! joint (fixed ones welded into their parent's link), then the links' inertials, then each
+//! moving link's merged body; and the joint records and warnings the caller sees.
+use std::collections::{BTreeMap, HashMap};
+
+use super::parse::{Ctx, Kind, LinkData, RobotData};
+use super::tree::Tree;
+use super::UrdfJoint;
+use crate::body::RigidBody;
+use crate::error::{Error, FileKind, Location, Result};
+use crate::joint::Joint;
+use crate::model::Model;
+use crate::spatial::{Mat3, Placement, Vec3};
+
+/// The model; for each link, its body's index; the warning about invalid inertials ignored
+/// (if any).
+pub(super) struct Built {
+    pub model: Model,
+    pub body_of_link: Vec<usize>,
+    pub warning: Option<String>,
+}
+
+pub(super) fn build_model(ctx: &Ctx, robot: &RobotData, tree: &Tree) -> Result<Built> {
+    let (mut model, body_of_link) = add_bodies(ctx, robot, tree)?;
+    let warning = set_inertials(ctx, &mut model, robot, tree, &body_of_link)?;
+    set_link_bodies(ctx, &mut model, robot, tree, &body_of_link)?;
+    Ok(Built {
+        model,
+        body_of_link,
+        warning,
+    })
+}
+
+/// A core error met on `element`, named after the file and element.
+fn in_element(ctx: &Ctx, element: String, e: Error) -> Error {
+    e.in_file(FileKind::Urdf, Location::new(ctx.file, element))
+}
+
+/// The tree, root first then depth first. `add_body` merges welded bodies as it goes and
+/// needs mass > 0; it gets a placeholder for massless links, and every link's body is set
+/// from the URDF inertials afterwards.
+fn add_bodies(ctx: &Ctx, robot: &RobotData, tree: &Tree) -> Result<(Model, Vec<usize>)> {
+    let placeholder = RigidBody {
+        mass: 1.0,
+        com: Vec3::zeros(),
+        inertia: Mat3::identity(),
+    };
+    let safe = |l: &LinkData| {
+        if l.inertial.mass > 0.0 && l.invalid.is_none() {
+            l.inertial.body()
+        } else {
+            placeholder
+        }
+    };
+    let links = &robot.links;
+    let mut model = Model::new();
+    let mut body_of_link = vec![usize::MAX; links.len()];
+    let r = &links[tree.root];
+    body_of_link[tree.root] = model
+        .add_body(
+            safe(r),
+            Joint::Fixed,
+            None,
+            Placement::identity(),
+            Some(r.name.clone()),
+            None,
+        )
+        .map_err(|e| in_element(ctx, format!("link '{}'", r.name), e))?;
+    for &j in &tree.order {
+        let jd = &robot.joints[j];
+        let element = || format!("joint '{}'", jd.name);
+        let joint = match jd.kind {
+            Kind::Revolute | Kind::Continuous => Joint::revolute(jd.axis),
+            Kind::Prismatic => Joint::prismatic(jd.axis),
+            Kind::Fixed => Ok(Joint::Fixed),
+        }
+        .map_err(|e| in_element(ctx, element(), e))?;
+        let (p, c) = (tree.parent_link[j], tree.child_link[j]);
+        body_of_link[c] = model
+            .add_body(
+                safe(&links[c]),
+                joint,
+                Some(body_of_link[p]),
+                jd.origin,
+                Some(jd.child.clone()),
+                None,
+            )
+            .map_err(|e| in_element(ctx, element(), e))?;
+    }
+    Ok((model, body_of_link))
+}
+
+/// Sets every body's own inertial. A link welded to the world does not enter the dynamics
+/// (Pinocchio ignores it too): an invalid inertial there is only a warning (robots often
+/// carry a dummy root inertia: ANYmal's base, izz only, which no rigid body has); on a
+/// moving link it is an error.
+fn set_inertials(
+    ctx: &Ctx,
+    model: &mut Model,
+    robot: &RobotData,
+    tree: &Tree,
+    body_of_link: &[usize],
+) -> Result<Option<String>> {
+    let mut ignored_invalid = Vec::new();
+    let dfs_links =
+        std::iter::once(tree.root).chain(tree.order.iter().map(|&j| tree.child_link[j]));
+    for l in dfs_links {
+        let data = &robot.links[l];
+        let body = body_of_link[l];
+        if let Some((line, message)) = &data.invalid {
+            let element = format!("link '{}'", data.name);
+            if model.bodies[body].link.is_some() {
+                return Err(ctx.located(element, Some(*line), message.clone()));
+            }
+            ignored_invalid.push(format!("{element}: {message}"));
+        }
+        model.set_body_inertial(body, data.inertial.body());
+    }
+    Ok((!ignored_invalid.is_empty()).then(|| {
+        format!(
+            "{}: invalid inertia ignored on links welded to the world (outside the dynamics): {}",
+            ctx.file,
+            ignored_invalid.join("; ")
+        )
+    }))
+}
+
+/// Each moving link's body: its own inertial and those of the links welded to it. A link
+/// without mass gets an exactly zero body when some link below it has mass (the intermediate
+/// links of a multi-axis joint, as Pinocchio does) and is an error otherwise (its joint's
+/// acceleration is undetermined), as is mass 0 with a rotational inertia.
+fn set_link_bodies(
+    ctx: &Ctx,
+    model: &mut Model,
+    robot: &RobotData,
+    tree: &Tree,
+    body_of_link: &[usize],
+) -> Result<()> {
+    let merged = model.link_bodies();
+    // Mass strictly below each link (its descendant links).
+    let mut below = vec![0.0; merged.len()];
+    for l in (0..merged.len()).rev() {
+        if let Some(p) = model.links[l].parent {
+            below[p] += below[l] + merged[l].mass;
+        }
+    }
+    let joint_of_body: HashMap<usize, usize> = tree
+        .order
+        .iter()
+        .map(|&j| (body_of_link[tree.child_link[j]], j))
+        .collect();
+    for (l, body) in merged.into_iter().enumerate() {
+        let jd = &robot.joints[joint_of_body[&model.links[l].body]];
+        let massless = body.mass <= 0.0; // masses are finite: parsed so
+        if massless && body.inertia.abs().max() > 0.0 {
+            return Err(ctx.located(
+                format!("link '{}'", jd.child),
+                Some(jd.line),
+                format!(
+                    "zero mass with a non-zero rotational inertia on the {} joint '{}' (line {}): seven point masses cannot represent a body without mass; give it a mass > 0",
+                    jd.kind.name(), jd.name, jd.line
+                ),
+            ));
+        }
+        if massless && below[l] <= 0.0 {
+            return Err(ctx.located(
+                format!("joint '{}'", jd.name),
+                Some(jd.line),
+                format!(
+                    "child link '{}' has no mass and no link with mass below it, so this {} joint moves nothing and its acceleration is undetermined (line {}); give the link an <inertial> with mass > 0 or make the joint fixed",
+                    jd.child, jd.kind.name(), jd.line
+                ),
+            ));
+        }
+        model
+            .set_link_body(l, body)
+            .map_err(|e| in_element(ctx, format!("link '{}'", jd.child), e))?;
+    }
+    Ok(())
+}
+
+/// One record per joint, in the model's (depth-first) order.
+pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Vec<UrdfJoint> {
+    let model = &built.model;
+    tree.order
+        .iter()
+        .map(|&j| {
+            let jd = &robot.joints[j];
+            let body = built.body_of_link[tree.child_link[j]];
+            let link = model.bodies[body].link;
+            let (q_index, v_index) = match (jd.kind, link) {
+                (Kind::Fixed, _) | (_, None) => (None, None),
+                (_, Some(l)) => (Some(model.links[l].q_index), Some(model.links[l].v_index)),
+            };
+            UrdfJoint {
+                name: jd.name.clone(),
+                kind: jd.kind.name(),
+                parent: jd.parent.clone(),
+                child: jd.child.clone(),
+                body,
+                link,
+                q_index,
+                v_index,
+                axis: jd.axis,
+                limit: jd.limit,
+                damping: jd.damping,
+                friction: jd.friction,
+                mimic: jd.mimic.clone(),
+            }
+        })
+        .collect()
+}
+
+/// What the file says that is not loaded as said: mimic constraints (not enforced), moving
+/// joints without `<limit>`, elements the dynamics does not use.
+pub(super) fn joint_warnings(
+    file: &str,
+    joints: &[UrdfJoint],
+    ignored: &BTreeMap<String, usize>,
+) -> Vec<String> {
+    let mut warnings = Vec::new();
+    let mimics: Vec<String> = joints
+        .iter()
+        .filter_map(|j| {
+            j.mimic
+                .as_ref()
+                .map(|m| format!("'{}' (mimics '{}')", j.name, m.joint))
+        })
+        .collect();
+    if !mimics.is_empty() {
+        warnings.push(format!(
+            "{file}: mimic constraints are not supported: {} joint(s) are loaded as independent joints: {}",
+            mimics.len(),
+            mimics.join(", ")
+        ));
+    }
+    let unlimited: Vec<String> = joints
+        .iter()
+        .filter(|j| matches!(j.kind, "revolute" | "prismatic") && j.limit.is_none())
+        .map(|j| format!("'{}'", j.name))
+        .collect();
+    if !unlimited.is_empty() {
+        warnings.push(format!(
+            "{file}: revolute/prismatic joint(s) without the <limit> the URDF format requires, loaded without limits: {}",
+            unlimited.join(", ")
+        ));
+    }
+    if !ignored.is_empty() {
+        let kinds: Vec<String> = ignored
+            .iter()
+            .map(|(k, n)| {
+                if *n > 1 {
+                    format!("{k} ×{n}")
+                } else {
+                    k.clone()
+                }
+            })
+            .collect();
+        warnings.push(format!(
+            "{file}: elements ignored (not used for dynamics): {}",
+            kinds.join(", ")
+        ));
+    }
+    warnings
+}

@@ -1,0 +1,210 @@
+//! URDF import: a fixed-base robot as a [`Model`] whose joint order, body names and
+//! coordinates equal Pinocchio's `buildModelFromUrdf(path)` (no root joint).
+//!
+//! * Tree and order. The root link (the one link that is no joint's child) is welded to the
+//!   world with a `Fixed` joint. The links are then added depth first, and the children of a
+//!   link in the byte order of their joints' names: urdfdom, Pinocchio's parser, keeps joints
+//!   in a `std::map` by name, so that is Pinocchio's order (checked against `model.names` and
+//!   the order of its BODY frames). Bodies are named after the links, every link (fixed ones
+//!   included) is a body, and the moving joints are the links' joints in q/v order.
+//! * Joints. `revolute` and `continuous` → [`Joint::Revolute`] (q is the angle: Pinocchio's
+//!   continuous joint stores (cos q, sin q) instead), `prismatic` → [`Joint::Prismatic`],
+//!   `fixed` → [`Joint::Fixed`] (welded into the parent's link). `<origin xyz rpy>` places the
+//!   joint frame in the parent link's frame, `R = Rz(y) Ry(p) Rx(r)`; `<axis xyz>` (default
+//!   x) is normalised. `floating` and `planar` joints are refused with an error naming the
+//!   joint. `<limit>`, `<dynamics damping friction>` and `<mimic>` are kept in [`UrdfJoint`]
+//!   (mimic constraints are not applied: such joints are independent, with a warning).
+//! * Inertia. `<inertial>`: `com = origin.xyz`, `I_link = R I Rᵀ` with `R` from
+//!   `origin.rpy`; each link's inertial is validated like any [`RigidBody`] (a negative or
+//!   non-physical tensor is an error naming the link).
+//! * Massless links. URDF allows links without `<inertial>` (or with mass 0). Such a link on a
+//!   fixed joint adds nothing. A moving link whose merged body (with its fixed descendants)
+//!   has no mass gets an exactly zero body when some link below it has mass (the intermediate
+//!   bodies of a multi-axis joint: Pinocchio does the same), and is an error otherwise:
+//!   Pinocchio loads such a model, but its mass matrix has a zero row and `aba` returns NaN.
+//!   Mass 0 with a non-zero rotational inertia is accepted on a fixed joint (it is added to
+//!   the parent link's inertia, as Pinocchio does) and refused on a moving link that has no
+//!   mass of its own, which seven point masses cannot represent.
+//! * Ignored. Geometry (`<visual>`, `<collision>`, `<material>`) silently; any other element
+//!   the dynamics does not use (`<gazebo>`, `<transmission>`, `<calibration>`,
+//!   `<safety_controller>`, …) with one summary warning.
+//!
+//! The loader reads the XML into plain data ([`parse`]), connects the links ([`tree`]) and
+//! builds the model through `Model`'s own methods ([`build`]).
+use std::path::{Path, PathBuf};
+
+use crate::error::{FileKind, Result};
+use crate::joint::{rot_x, rot_y, rot_z};
+use crate::model::Model;
+use crate::spatial::{Mat3, Vec3};
+
+mod build;
+mod parse;
+mod tree;
+
+use parse::Ctx;
+use tree::Tree;
+
+/// `<limit>` of a joint. A continuous joint has `lower = −∞`, `upper = +∞`.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Limit {
+    pub lower: f64,
+    pub upper: f64,
+    pub effort: f64,
+    pub velocity: f64,
+}
+
+/// `<mimic joint multiplier offset>`: recorded, not enforced.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Mimic {
+    pub joint: String,
+    pub multiplier: f64,
+    pub offset: f64,
+}
+
+/// One URDF joint, in the model's order (depth first; the moving ones in q/v order).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UrdfJoint {
+    pub name: String,
+    /// "revolute", "continuous", "prismatic" or "fixed".
+    pub kind: &'static str,
+    /// Parent and child link names.
+    pub parent: String,
+    pub child: String,
+    /// Index of the child link's body in `model.bodies`.
+    pub body: usize,
+    /// The model link the child belongs to (`None`: welded to the world).
+    pub link: Option<usize>,
+    /// Position of this joint's coordinate in q and v (`None` for fixed joints).
+    pub q_index: Option<usize>,
+    pub v_index: Option<usize>,
+    /// Unit axis in the joint frame (as given, or x, for fixed joints).
+    pub axis: Vec3,
+    pub limit: Option<Limit>,
+    /// `<dynamics damping>` (N·m·s/rad or N·s/m) and `friction` (N·m or N); 0 when absent.
+    pub damping: f64,
+    pub friction: f64,
+    pub mimic: Option<Mimic>,
+}
+
+/// A deserialised [`UrdfJoint`], its `kind` owned until matched to one of the four names.
+#[derive(serde::Deserialize)]
+struct UrdfJointData {
+    name: String,
+    kind: String,
+    parent: String,
+    child: String,
+    body: usize,
+    link: Option<usize>,
+    q_index: Option<usize>,
+    v_index: Option<usize>,
+    axis: Vec3,
+    limit: Option<Limit>,
+    damping: f64,
+    friction: f64,
+    mimic: Option<Mimic>,
+}
+
+// By hand: a derived impl would require `'de: 'static` for the `&'static str`.
+impl<'de> serde::Deserialize<'de> for UrdfJoint {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        <UrdfJointData as serde::Deserialize>::deserialize(d)?
+            .try_into()
+            .map_err(serde::de::Error::custom)
+    }
+}
+
+impl TryFrom<UrdfJointData> for UrdfJoint {
+    type Error = String;
+    fn try_from(j: UrdfJointData) -> std::result::Result<UrdfJoint, String> {
+        let kind = ["revolute", "continuous", "prismatic", "fixed"]
+            .into_iter()
+            .find(|k| *k == j.kind)
+            .ok_or_else(|| format!("joint '{}': unknown kind '{}'", j.name, j.kind))?;
+        Ok(UrdfJoint {
+            name: j.name,
+            kind,
+            parent: j.parent,
+            child: j.child,
+            body: j.body,
+            link: j.link,
+            q_index: j.q_index,
+            v_index: j.v_index,
+            axis: j.axis,
+            limit: j.limit,
+            damping: j.damping,
+            friction: j.friction,
+            mimic: j.mimic,
+        })
+    }
+}
+
+impl UrdfJoint {
+    pub fn is_moving(&self) -> bool {
+        self.kind != "fixed"
+    }
+}
+
+/// A loaded URDF: the model, every joint (fixed ones included) and the warnings.
+#[derive(Debug, Clone)]
+pub struct Urdf {
+    /// `<robot name>`.
+    pub name: String,
+    pub model: Model,
+    pub joints: Vec<UrdfJoint>,
+    /// Things loaded differently from what the file says (mimic joints, ignored elements).
+    pub warnings: Vec<String>,
+    /// Directory the file's relative resources would be resolved against (the geometry is
+    /// not loaded, so nothing is resolved yet).
+    pub base_dir: Option<PathBuf>,
+}
+
+impl Urdf {
+    /// The moving joints, in q/v order.
+    pub fn moving_joints(&self) -> impl Iterator<Item = &UrdfJoint> {
+        self.joints.iter().filter(|j| j.is_moving())
+    }
+    pub fn joint(&self, name: &str) -> Option<&UrdfJoint> {
+        self.joints.iter().find(|j| j.name == name)
+    }
+}
+
+/// Reads and loads a URDF file; errors name `path` as given.
+/// Only a regular file of at most [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a
+/// device is refused before it is opened); a path too long to show is shortened in messages.
+pub fn load_urdf(path: &Path) -> Result<Urdf> {
+    let text = crate::files::read_text(path, FileKind::Urdf)?;
+    model_from_urdf(&text, &crate::files::display_path(path), path.parent())
+}
+
+/// URDF roll-pitch-yaw: `Rz(yaw) Ry(pitch) Rx(roll)`.
+pub fn rpy_matrix(rpy: &Vec3) -> Mat3 {
+    rot_z(rpy.z) * rot_y(rpy.y) * rot_x(rpy.x)
+}
+
+/// Parses URDF text. `file` names it in errors and warnings; `base_dir` is the directory its
+/// relative resources would resolve against (kept in [`Urdf::base_dir`]). Errors are
+/// [`crate::error::Error::File`] of kind [`FileKind::Urdf`], naming the element and, where
+/// known, the line.
+pub fn model_from_urdf(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Urdf> {
+    let ctx = Ctx::new(file, text);
+    let robot = parse::parse_robot(&ctx, text)?;
+    let tree = Tree::new(&ctx, &robot.links, &robot.joints)?;
+    let built = build::build_model(&ctx, &robot, &tree)?;
+    let joints = build::joint_records(&robot, &tree, &built);
+    let warnings = built
+        .warning
+        .into_iter()
+        .chain(build::joint_warnings(file, &joints, &robot.ignored))
+        .collect();
+    Ok(Urdf {
+        name: robot.name,
+        model: built.model,
+        joints,
+        warnings,
+        base_dir: base_dir.map(Path::to_path_buf),
+    })
+}
+
+#[cfg(test)]
+mod tests;
