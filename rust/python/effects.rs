@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 
 use super::convert::{array, opt_real, shape_str, vec3, vector};
 use super::errors::{invalid, IntoPyResult};
+use super::options::given;
 use crate::effects::{
     Damper, Effect, External, ExternalLoad, Frame, Friction, JointRef, Matrix, PerJoint, Spring,
     Table, Torque, TorqueFunction, TorqueLaw,
@@ -132,10 +133,6 @@ pub(super) fn table_arg(
     Table::new(t, m, "time", values_arg).py(py)
 }
 
-pub(super) fn opt<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
-    obj.filter(|o| !o.is_none())
-}
-
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
 /// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
 /// caller to re-raise; a non-finite torque fails the run like any effect's (`success=False`
@@ -202,7 +199,7 @@ impl PyEffect {
     ) -> PyResult<Self> {
         let joints = joints_arg(joints)?;
         let k = per_joint_arg(stiffness, "stiffness")?;
-        let rest = opt(rest).map(|r| per_joint_arg(r, "rest")).transpose()?;
+        let rest = given(rest).map(|r| per_joint_arg(r, "rest")).transpose()?;
         Ok(PyEffect {
             inner: Effect::Spring(Spring::new(name, joints, k, rest).py(py)?),
         })
@@ -328,16 +325,16 @@ impl PyEffect {
         name: Option<String>,
     ) -> PyResult<Self> {
         let body = joint_ref(body, "body")?;
-        let point = match opt(point) {
+        let point = match given(point) {
             Some(p) => vec3(p, "point")?,
             None => crate::spatial::Vec3::zeros(),
         };
         let frame = Frame::parse(frame, "frame").py(py)?;
-        let (force, moment) = (opt(force), opt(moment));
+        let (force, moment) = (given(force), given(moment));
         if force.is_none() && moment.is_none() {
             return Err(invalid(py, "force", "a force (or a moment)", "None"));
         }
-        let inner = match opt(time) {
+        let inner = match given(time) {
             Some(t) => {
                 let t = vector(t, "time", None)?;
                 let f = force.map(|f| matrix_arg(f, "force")).transpose()?;

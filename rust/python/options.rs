@@ -1,9 +1,11 @@
-//! The integration options common to `rk45` and `simulate_scene`.
+//! The integration arguments and result entries common to `rk45` and `simulate_scene`.
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use super::convert::{array, opt_count, opt_real, shape_str, vector};
 use super::errors::invalid;
-use crate::integrator::{self, Controller, Rk45Options, Tol};
+use crate::integrator::{self, Controller, Rk45Options, Status, Tol};
+use crate::simulate::Requested;
 
 pub(super) fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     let v = vector(obj, "t_span", Some(2))?;
@@ -47,60 +49,58 @@ pub(super) fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller>
     }
 }
 
-/// `first_step`, `max_step` (inf: no limit) and `max_steps` as numbers and a count.
-#[allow(clippy::type_complexity)]
+/// An optional argument that was given (`None` counts as not given).
+pub(super) fn given<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
+    obj.filter(|o| !o.is_none())
+}
+
+/// `first_step`, `max_step` (inf: no limit, as if not given) and `max_steps` as numbers
+/// and a count: a request with only these.
 pub(super) fn step_args(
     first_step: Option<&Bound<'_, PyAny>>,
     max_step: Option<&Bound<'_, PyAny>>,
     max_steps: Option<&Bound<'_, PyAny>>,
-) -> PyResult<(Option<f64>, Option<f64>, Option<usize>)> {
-    Ok((
-        opt_real(first_step, "first_step")?,
-        opt_real(max_step, "max_step")?.filter(|x| *x != f64::INFINITY),
-        opt_count(max_steps, "max_steps", "a step count >= 0 (or None)")?,
-    ))
+) -> PyResult<Requested> {
+    Ok(Requested {
+        first_step: opt_real(first_step, "first_step")?,
+        max_step: opt_real(max_step, "max_step")?.filter(|x| *x != f64::INFINITY),
+        max_steps: opt_count(max_steps, "max_steps", "a step count >= 0 (or None)")?,
+        ..Requested::default()
+    })
 }
 
-/// Options common to `rk45` and `simulate`.
+/// The caller's other integration arguments (common to `rk45` and `simulate`): the
+/// tolerances into `requested` (a scene's may stand in for them), the rest into the options
+/// no scene sets. The step limits come from `step_args`; `Requested` resolves them all.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn options(
     py: Python<'_>,
     dim: usize,
+    requested: &mut Requested,
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
     t_eval: Option<&Bound<'_, PyAny>>,
-    first_step: Option<f64>,
-    max_step: Option<f64>,
-    max_steps: Option<usize>,
     dense: bool,
     controller: &str,
+    stiffness: &str,
 ) -> PyResult<Rk45Options> {
-    let mut o = Rk45Options {
+    let controller = controller_arg(py, controller)?;
+    requested.rtol = given(rtol).map(|r| tol_arg(r, "rtol", dim)).transpose()?;
+    requested.atol = given(atol).map(|a| tol_arg(a, "atol", dim)).transpose()?;
+    let t_eval = given(t_eval)
+        .map(|t| vector(t, "t_eval", None))
+        .transpose()?;
+    Ok(Rk45Options {
         dense,
-        controller: controller_arg(py, controller)?,
+        controller,
+        t_eval,
+        stiffness: stiffness_arg(py, stiffness)?,
         ..Default::default()
-    };
-    if let Some(r) = rtol.filter(|r| !r.is_none()) {
-        o.rtol = tol_arg(r, "rtol", dim)?;
-    }
-    if let Some(a) = atol.filter(|a| !a.is_none()) {
-        o.atol = tol_arg(a, "atol", dim)?;
-    }
-    if let Some(t) = t_eval.filter(|t| !t.is_none()) {
-        o.t_eval = Some(vector(t, "t_eval", None)?);
-    }
-    o.first_step = first_step;
-    if let Some(m) = max_step {
-        o.max_step = m;
-    }
-    if let Some(n) = max_steps {
-        o.max_steps = n;
-    }
-    Ok(o)
+    })
 }
 
 /// `"warn"` (default: detect, report, steps unchanged), `"stop"` or `"off"`.
-pub(super) fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::StiffnessCheck> {
+fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::StiffnessCheck> {
     match name {
         "warn" => Ok(integrator::StiffnessCheck::Warn),
         "stop" => Ok(integrator::StiffnessCheck::Stop),
@@ -112,4 +112,21 @@ pub(super) fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::
             format!("'{other}'"),
         )),
     }
+}
+
+/// How the run ended: the result entries after the evaluation counts.
+pub(super) fn set_outcome(
+    d: &Bound<'_, PyDict>,
+    status: &Status,
+    n_accepted: usize,
+    n_rejected: usize,
+    message: &str,
+    t_reached: f64,
+) -> PyResult<()> {
+    d.set_item("n_accepted", n_accepted)?;
+    d.set_item("n_rejected", n_rejected)?;
+    d.set_item("status", status.code())?;
+    d.set_item("message", message)?;
+    d.set_item("success", status.is_success())?;
+    d.set_item("t_reached", t_reached)
 }

@@ -9,9 +9,10 @@ use super::convert::{to_array, to_array1, vector};
 use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::{invalid, py_error};
-use super::events::{event_spec, python_event};
-use super::options::{options, step_args, stiffness_arg, t_span_arg};
-use crate::integrator::{self, Event, FnSystem};
+use super::events::{event_spec, python_event, PyEventSpec};
+use super::options::{options, set_outcome, step_args, t_span_arg};
+use crate::integrator::{self, Event, FnSystem, OdeSystem};
+use crate::scene::Settings;
 
 /// Generic Dormand–Prince 5(4) on a Python right-hand side `fun(t, y) -> array`;
 /// step for step SciPy's `solve_ivp(method="RK45")`.
@@ -45,54 +46,28 @@ pub fn rk45<'py>(
     let t_span = t_span_arg(py, t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
-    let (first_step, max_step, max_steps) = step_args(first_step, max_step, max_steps)?;
-    let mut opts = options(
+    let mut requested = step_args(first_step, max_step, max_steps)?;
+    let base = options(
         py,
         dim,
+        &mut requested,
         rtol,
         atol,
         t_eval,
-        first_step,
-        max_step,
-        max_steps,
         dense_output,
         controller,
+        stiffness,
     )?;
-    opts.stiffness = stiffness_arg(py, stiffness)?; // stiffness detection (integrator)
-    let mut specs = Vec::new();
-    if let Some(evs) = events.filter(|e| !e.is_none()) {
-        if evs.is_callable() {
-            specs.push(event_spec(py, 0, evs)?);
-        } else {
-            for (k, e) in evs.try_iter()?.enumerate() {
-                specs.push(event_spec(py, k, &e?)?);
-            }
-        }
-    }
+    // No scene: the caller's settings, else the defaults.
+    let opts = requested.options(&Settings::default(), base);
+    let specs = event_specs(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let mut evs: Vec<Event<'_>> = specs
         .iter()
         .map(|s| python_event(s, None, &failure))
         .collect();
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let sys = FnSystem::new(
-        dim,
-        |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
-            let mut call = || -> PyResult<()> {
-                let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
-                let v = vector(&out, "fun(t, y)", Some(dim))?;
-                dydt.copy_from_slice(&v);
-                Ok(())
-            };
-            call().map_err(|e| {
-                let msg = e.to_string();
-                if let Ok(mut slot) = rhs_failure.lock() {
-                    slot.get_or_insert(e);
-                }
-                msg
-            })
-        },
-    );
+    let sys = python_system(py, fun, dim, &rhs_failure);
     let sol =
         integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
     drop(evs);
@@ -103,7 +78,61 @@ pub fn rk45<'py>(
         .ok()
         .flatten()
         .or(failure.into_inner().ok().flatten());
-    let n = sol.t.len();
+    solution_dict(py, sol, raised, !specs.is_empty())
+}
+
+/// `None`, one event callable, or a sequence of them.
+fn event_specs(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<PyEventSpec>> {
+    let mut specs = Vec::new();
+    if let Some(evs) = events.filter(|e| !e.is_none()) {
+        if evs.is_callable() {
+            specs.push(event_spec(py, 0, evs)?);
+        } else {
+            for (k, e) in evs.try_iter()?.enumerate() {
+                specs.push(event_spec(py, k, &e?)?);
+            }
+        }
+    }
+    Ok(specs)
+}
+
+/// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in
+/// `failure` (the run stops with its message).
+fn python_system<'a>(
+    py: Python<'a>,
+    fun: &'a Bound<'_, PyAny>,
+    dim: usize,
+    failure: &'a Mutex<Option<PyErr>>,
+) -> impl OdeSystem + 'a {
+    FnSystem::new(
+        dim,
+        move |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
+            let mut call = || -> PyResult<()> {
+                let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
+                let v = vector(&out, "fun(t, y)", Some(dim))?;
+                dydt.copy_from_slice(&v);
+                Ok(())
+            };
+            call().map_err(|e| {
+                let msg = e.to_string();
+                if let Ok(mut slot) = failure.lock() {
+                    slot.get_or_insert(e);
+                }
+                msg
+            })
+        },
+    )
+}
+
+/// The dict `pointmass_dyn.rk45` wraps (SciPy's `OdeResult` entries): `y` as (dim, N),
+/// the event lists `None` when no events were given.
+fn solution_dict<'py>(
+    py: Python<'py>,
+    sol: integrator::Solution,
+    raised: Option<PyErr>,
+    with_events: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (dim, n) = (sol.dim, sol.t.len());
     let mut y_t = vec![0.0; dim * n];
     for i in 0..n {
         for j in 0..dim {
@@ -120,31 +149,20 @@ pub fn rk45<'py>(
         te.append(to_array1(py, times))?;
         ye.append(to_array(py, ys.clone(), &[times.len(), dim])?)?;
     }
-    d.set_item(
-        "t_events",
-        if specs.is_empty() {
-            py.None().into_bound(py)
-        } else {
-            te.into_any()
-        },
-    )?;
-    d.set_item(
-        "y_events",
-        if specs.is_empty() {
-            py.None().into_bound(py)
-        } else {
-            ye.into_any()
-        },
-    )?;
+    let none = || py.None().into_bound(py);
+    d.set_item("t_events", if with_events { te.into_any() } else { none() })?;
+    d.set_item("y_events", if with_events { ye.into_any() } else { none() })?;
     d.set_item("nfev", sol.nfev)?;
     d.set_item("njev", 0)?;
     d.set_item("nlu", 0)?;
-    d.set_item("n_accepted", sol.n_accepted)?;
-    d.set_item("n_rejected", sol.n_rejected)?;
-    d.set_item("status", sol.status.code())?;
-    d.set_item("message", sol.message.clone())?;
-    d.set_item("success", sol.success())?;
-    d.set_item("t_reached", sol.t_reached)?;
+    set_outcome(
+        &d,
+        &sol.status,
+        sol.n_accepted,
+        sol.n_rejected,
+        &sol.message,
+        sol.t_reached,
+    )?;
     d.set_item("stiff", stiffness_dict(py, sol.stiffness)?)?;
     d.set_item("sol", sol.dense.map(|inner| PyDenseSolution { inner }))?;
     Ok(d)

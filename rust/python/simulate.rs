@@ -7,13 +7,13 @@ use pyo3::types::{PyDict, PyList};
 use super::convert::{real, to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, invalid, py_error, IntoPyResult};
-use super::events::{event_spec, python_event, PyStateEvent};
-use super::options::{options, step_args, stiffness_arg, t_span_arg};
+use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
+use super::options::{given, options, set_outcome, step_args, t_span_arg};
 use super::scene::{disable_arg, PyScene};
 use super::signals::Watch;
-use crate::integrator::{Event, Tol};
+use crate::integrator::Event;
 use crate::scene::Scene;
-use crate::simulate::{simulate, Dynamics, Record};
+use crate::simulate::{simulate, Dynamics, Progress, Record, StateEvent, Trajectory};
 
 /// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
@@ -38,99 +38,50 @@ pub fn simulate_scene<'py>(
     stiffness: &str,
     progress_interval: Option<f64>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (first_step, max_step, max_steps) = step_args(first_step, max_step, max_steps)?;
     let s = &scene.inner;
-    let watch = match progress_interval {
-        None => Watch::default(),
-        Some(x) if (0.0..=3600.0).contains(&x) => {
-            Watch::every(std::time::Duration::from_secs_f64(x))
-        }
-        Some(x) => {
-            return Err(invalid(
-                py,
-                "progress_interval",
-                "seconds between progress calls, 0 to 3600",
-                x,
-            ))
-        }
-    };
-    let disabled = disable_arg(py, disable)?
-        .or(s.settings.disable)
-        .unwrap_or_default();
     let (nq, nv) = (s.model.nq, s.model.nv);
-    let t_span = match t_span.filter(|t| !t.is_none()) {
-        Some(t) => t_span_arg(py, t)?,
-        None => s
-            .settings
-            .t_span
-            .ok_or_else(|| invalid(py, "t_span", "(t0, t_end): the scene sets none", "None"))?,
-    };
-    let mut opts = options(
+    let mut requested = step_args(first_step, max_step, max_steps)?;
+    let mut watch = watch_arg(py, progress_interval)?;
+    requested.disable = disable_arg(py, disable)?;
+    requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
+    let base = options(
         py,
         nq + nv,
+        &mut requested,
         rtol,
         atol,
         t_eval,
-        first_step.or(s.settings.first_step),
-        max_step.or(s.settings.max_step),
-        max_steps.or(s.settings.max_steps),
         false,
         controller,
+        stiffness,
     )?;
-    opts.stiffness = stiffness_arg(py, stiffness)?; // stiffness detection (integrator)
-    if rtol.is_none_or(|r| r.is_none()) {
-        if let Some(r) = s.settings.rtol {
-            opts.rtol = Tol::Scalar(r);
-        }
-    }
-    if atol.is_none_or(|a| a.is_none()) {
-        if let Some(a) = s.settings.atol {
-            opts.atol = Tol::Scalar(a);
-        }
-    }
-    let mut state_events = Vec::new();
-    let mut py_events = Vec::new();
-    // Keep the caller's order: state events first in the result would surprise; record slots.
-    let mut order = Vec::new();
-    if let Some(evs) = events.filter(|e| !e.is_none()) {
-        for (k, e) in evs.try_iter()?.enumerate() {
-            let e = e?;
-            if let Ok(se) = e.cast::<PyStateEvent>() {
-                order.push((false, state_events.len()));
-                state_events.push(se.get().inner.clone());
-            } else {
-                order.push((true, py_events.len()));
-                py_events.push(event_spec(py, k, &e)?);
-            }
-        }
-    }
+    let run = requested.resolve(&s.settings, base).py(py)?;
+    let events = SceneEvents::parse(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let model = &s.model;
-    let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
-    let mut watch = watch;
     take_callback_error();
     let result = py.detach(|| {
-        let extra: Vec<Event<'_>> = py_events
+        let extra: Vec<Event<'_>> = events
+            .python
             .iter()
             .map(|spec| python_event(spec, Some(nq), &failure))
             .collect();
         // Ctrl-C and progress by elapsed time (signals::INTERVAL), not per evaluation, so a
         // busy Python thread beside the run costs one hand-over of the interpreter per poll.
-        let hook: crate::simulate::Progress<'_> = Box::new(|t: f64| {
+        let hook: Progress<'_> = Box::new(|t: f64| {
             watch.poll(|py| match &progress {
                 Some(cb) => cb.bind(py).call1((t,)).map(|_| ()),
                 None => Ok(()),
             })
         });
         simulate(
-            model,
-            effects,
-            disabled,
-            q0,
-            v0,
-            t_span,
-            &opts,
-            &state_events,
+            &s.model,
+            &s.effects,
+            run.disabled,
+            &s.q0,
+            &s.v0,
+            run.t_span,
+            &run.opts,
+            &events.state,
             extra,
             Record { energy, power },
             Some(hook),
@@ -141,12 +92,77 @@ pub fn simulate_scene<'py>(
     let raised = take_callback_error()
         .or(failure.into_inner().ok().flatten())
         .or(watch.error.take());
-    let (traj, raised) = match (result, raised) {
-        (Ok(traj), raised) => (traj, raised),
-        (Err(_), Some(raised)) => return Err(raised),
-        (Err(e), None) => return Err(super::errors::to_py(py, e)),
-    };
-    let n = traj.t.len();
+    match (result, raised) {
+        (Ok(traj), raised) => trajectory_dict(py, traj, raised, &events),
+        (Err(_), Some(raised)) => Err(raised),
+        (Err(e), None) => Err(super::errors::to_py(py, e)),
+    }
+}
+
+/// `progress_interval`: seconds between progress calls (`None`: the default).
+fn watch_arg(py: Python<'_>, progress_interval: Option<f64>) -> PyResult<Watch> {
+    match progress_interval {
+        None => Ok(Watch::default()),
+        Some(x) if (0.0..=3600.0).contains(&x) => {
+            Ok(Watch::every(std::time::Duration::from_secs_f64(x)))
+        }
+        Some(x) => Err(invalid(
+            py,
+            "progress_interval",
+            "seconds between progress calls, 0 to 3600",
+            x,
+        )),
+    }
+}
+
+/// A run's events: the state events (evaluated in Rust, first) and the Python ones (after
+/// them), and where each stood in the caller's list.
+struct SceneEvents {
+    state: Vec<StateEvent>,
+    python: Vec<PyEventSpec>,
+    /// Per caller's event: (is a Python event, index in its list).
+    order: Vec<(bool, usize)>,
+}
+
+impl SceneEvents {
+    fn parse(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let mut out = SceneEvents {
+            state: Vec::new(),
+            python: Vec::new(),
+            order: Vec::new(),
+        };
+        if let Some(evs) = events.filter(|e| !e.is_none()) {
+            for (k, e) in evs.try_iter()?.enumerate() {
+                let e = e?;
+                if let Ok(se) = e.cast::<PyStateEvent>() {
+                    out.order.push((false, out.state.len()));
+                    out.state.push(se.get().inner.clone());
+                } else {
+                    out.order.push((true, out.python.len()));
+                    out.python.push(event_spec(py, k, &e)?);
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// The trajectory's slot of each event, in the caller's order.
+    fn slots(&self) -> impl Iterator<Item = usize> + '_ {
+        let ns = self.state.len();
+        self.order
+            .iter()
+            .map(move |&(is_py, k)| if is_py { ns + k } else { k })
+    }
+}
+
+/// The dict `pointmass_dyn.simulate` wraps into a `SimulationResult`.
+fn trajectory_dict<'py>(
+    py: Python<'py>,
+    traj: Trajectory,
+    raised: Option<PyErr>,
+    events: &SceneEvents,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (n, nq, nv) = (traj.t.len(), traj.nq, traj.nv);
     let d = PyDict::new(py);
     d.set_item("error", raised.map(|e| e.into_value(py)))?;
     d.set_item("t", to_array1(py, &traj.t))?;
@@ -154,31 +170,19 @@ pub fn simulate_scene<'py>(
     d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
     d.set_item("energy", traj.energy.map(|e| to_array1(py, &e).into_any()))?;
     match &traj.power {
-        Some(p) => {
-            let m = traj.effect_labels.len();
-            let pd = PyDict::new(py);
-            for (k, label) in traj.effect_labels.iter().enumerate() {
-                let col: Vec<f64> = (0..n).map(|i| p[i * m + k]).collect();
-                pd.set_item(label, to_array1(py, &col))?;
-            }
-            d.set_item("power", pd)?;
-        }
+        Some(p) => d.set_item("power", power_dict(py, p, n, &traj.effect_labels)?)?,
         None => d.set_item("power", py.None())?,
     }
-    // Events back in the caller's order: state events were evaluated first.
-    let ns = state_events.len();
     let te = PyList::empty(py);
     let qe = PyList::empty(py);
     let ve = PyList::empty(py);
-    for (is_py, k) in order {
-        let slot = if is_py { ns + k } else { k };
+    for slot in events.slots() {
         let times = &traj.t_events[slot];
-        let ys = &traj.y_events[slot];
         te.append(to_array1(py, times))?;
         let m = times.len();
         let mut qs = Vec::with_capacity(m * nq);
         let mut vs = Vec::with_capacity(m * nv);
-        for row in ys.chunks_exact(nq + nv) {
+        for row in traj.y_events[slot].chunks_exact(nq + nv) {
             qs.extend_from_slice(&row[..nq]);
             vs.extend_from_slice(&row[nq..]);
         }
@@ -189,13 +193,42 @@ pub fn simulate_scene<'py>(
     d.set_item("q_events", qe)?;
     d.set_item("v_events", ve)?;
     d.set_item("nfev", traj.nfev)?;
-    d.set_item("n_accepted", traj.n_accepted)?;
-    d.set_item("n_rejected", traj.n_rejected)?;
-    d.set_item("status", traj.status.code())?;
-    d.set_item("message", traj.message)?;
-    d.set_item("success", traj.success)?;
-    d.set_item("t_reached", traj.t_reached)?;
+    set_outcome(
+        &d,
+        &traj.status,
+        traj.n_accepted,
+        traj.n_rejected,
+        &traj.message,
+        traj.t_reached,
+    )?;
     Ok(d)
+}
+
+/// The power columns (row-major N × labels) as a dict from the effect's label to an array.
+fn power_dict<'py>(
+    py: Python<'py>,
+    p: &[f64],
+    n: usize,
+    labels: &[String],
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = labels.len();
+    let pd = PyDict::new(py);
+    for (k, label) in labels.iter().enumerate() {
+        let col: Vec<f64> = (0..n).map(|i| p[i * m + k]).collect();
+        pd.set_item(label, to_array1(py, &col))?;
+    }
+    Ok(pd)
+}
+
+/// The scene's equations of motion with the `disable`d families (the caller's, else the
+/// scene's) left out.
+fn scene_system<'s>(
+    py: Python<'_>,
+    s: &'s Scene,
+    disable: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Dynamics<'s>> {
+    let disabled = crate::simulate::disabled(disable_arg(py, disable)?, &s.settings);
+    Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
 }
 
 /// `(q, v)` checked against the scene's model.
@@ -229,10 +262,7 @@ pub fn effect_forces<'py>(
         return Err(invalid(py, "t", "a finite time", t));
     }
     let (q, v) = scene_state(py, s, q, v)?;
-    let disabled = disable_arg(py, disable)?
-        .or(s.settings.disable)
-        .unwrap_or_default();
-    let mut sys = Dynamics::try_new(&s.model, &s.effects, disabled).py(py)?;
+    let mut sys = scene_system(py, s, disable)?;
     let nv = s.model.nv;
     let mut out = vec![0.0; sys.effects.len() * nv];
     take_callback_error();
@@ -268,10 +298,7 @@ pub fn energies<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
     let (q, v) = scene_state(py, s, q, v)?;
-    let disabled = disable_arg(py, disable)?
-        .or(s.settings.disable)
-        .unwrap_or_default();
-    let mut sys = Dynamics::try_new(&s.model, &s.effects, disabled).py(py)?;
+    let mut sys = scene_system(py, s, disable)?;
     let (kinetic, potentials) = sys.energies(&q, &v);
     let d = PyDict::new(py);
     check_result(py, "energies['kinetic']", &[kinetic])?;
