@@ -4,7 +4,8 @@
 //! * `stepper.rs` – Butcher tableau, error norm, step-size control, [`Stepper`].
 //! * `dense.rs`   – SciPy's quartic interpolant and the piecewise [`DenseOutput`].
 //! * `events.rs`  – [`Event`] functions and SciPy's `brentq` root finder.
-//! * this file    – public types and the [`rk45`] driver (SciPy's `solve_ivp` loop).
+//! * `driver.rs`  – the [`rk45`] driver (SciPy's `solve_ivp` loop): outputs and events.
+//! * this file    – the public types.
 //!
 //! Stiffness detection ([`StiffnessCheck`], Hairer's DOPRI5 test) only observes the accepted
 //! steps: with `Off` or `Warn` the steps are exactly SciPy's; `Stop` ends the run early.
@@ -16,10 +17,12 @@
 //! SciPy's own do between CPUs); values at fixed times (t_end, t_eval, events) agree to ~1e-14.
 
 mod dense;
+mod driver;
 mod events;
 mod stepper;
 
 pub use dense::{eval_segment, DenseOutput};
+pub use driver::rk45;
 pub use events::{Event, EventDirection, EventFn};
 pub use stepper::{StepOutcome, Stepper};
 
@@ -496,239 +499,6 @@ impl Solution {
             _ => false,
         }
     }
-}
-
-fn validate_t_eval(t_eval: &[f64], t0: f64, t_end: f64) -> Result<(), InputError> {
-    let (lo, hi) = if t0 < t_end { (t0, t_end) } else { (t_end, t0) };
-    for (index, &value) in t_eval.iter().enumerate() {
-        // Written so that NaN fails too.
-        if !(value >= lo && value <= hi) {
-            return Err(InputError::TEvalOutsideSpan {
-                index,
-                value,
-                t0,
-                t_end,
-            });
-        }
-    }
-    let forward = t_end > t0;
-    for index in 1..t_eval.len() {
-        let d = t_eval[index] - t_eval[index - 1];
-        if (forward && d <= 0.0) || (!forward && d >= 0.0) {
-            let order = if forward { "increasing" } else { "decreasing" };
-            return Err(InputError::TEvalNotSorted { index, order });
-        }
-    }
-    Ok(())
-}
-
-/// Integrate `sys` over `t_span = (t0, t_end)` (backwards if `t_end < t0`) from `y0`,
-/// exactly as SciPy's `solve_ivp(..., method="RK45")`. Runtime failures are reported
-/// in `Solution::status`; only invalid input gives `Err`.
-pub fn rk45<S: OdeSystem>(
-    sys: S,
-    t_span: (f64, f64),
-    y0: &[f64],
-    opts: &Rk45Options,
-    events: &mut [Event<'_>],
-) -> Result<Solution, InputError> {
-    let (t0, t_end) = t_span;
-    let mut st = Stepper::new(sys, t0, y0, t_end, opts)?;
-    if let Some(te) = &opts.t_eval {
-        validate_t_eval(te, t0, t_end)?;
-    }
-    let dim = y0.len();
-    let dir = st.direction();
-    let t_eval = opts.t_eval.as_deref();
-    let mut t_eval_i = 0usize;
-
-    let mut t_out: Vec<f64> = Vec::new();
-    let mut y_out: Vec<f64> = Vec::new();
-    if let Some(te) = t_eval {
-        // The caller sized the output: refuse it now, clearly, rather than abort mid-run.
-        let too_large = || InputError::OutputTooLarge {
-            points: te.len(),
-            dim,
-            bytes: te.len() as u128 * (dim as u128 + 1) * 8,
-        };
-        let len = te.len().checked_mul(dim).ok_or_else(too_large)?;
-        y_out.try_reserve_exact(len).map_err(|_| too_large())?;
-        t_out.try_reserve_exact(te.len()).map_err(|_| too_large())?;
-    }
-    if t_eval.is_none() {
-        t_out.push(t0);
-        y_out.extend_from_slice(y0);
-    }
-    let mut dense = opts.dense.then(|| DenseOutput::new(dim, t0));
-
-    // Event state; all buffers are allocated once here.
-    let n_ev = events.len();
-    let mut g: Vec<f64> = events.iter_mut().map(|e| (e.func)(t0, y0)).collect();
-    // An event that is not a number cannot be watched: the run stops there with the reason
-    // (a Python event that raised reports NaN and keeps its exception for the caller).
-    let nan_event = |g: &[f64], t_old: f64, at: f64| {
-        g.iter()
-            .position(|x| x.is_nan())
-            .map(|event| Status::EventNaN {
-                t: t_old,
-                at,
-                event,
-            })
-    };
-    let mut failed_at_start = nan_event(&g, t0, t0);
-    let mut g_new = vec![0.0; n_ev];
-    let mut counts = vec![0usize; n_ev];
-    let mut roots: Vec<(usize, f64)> = Vec::with_capacity(n_ev);
-    let mut t_events: Vec<Vec<f64>> = vec![Vec::new(); n_ev];
-    let mut y_events: Vec<Vec<f64>> = vec![Vec::new(); n_ev];
-
-    let mut q = vec![0.0; 4 * dim]; // interpolant coefficients of the current step
-    let mut ybuf = vec![0.0; dim]; // interpolant values (roots, t_eval, terminal state)
-    let mut y_term = vec![0.0; dim];
-
-    let status = loop {
-        if let Some(s) = failed_at_start.take() {
-            break s;
-        }
-        let outcome = match st.step() {
-            Ok(o) => o,
-            Err(s) => break s, // SciPy stores nothing from a failed step
-        };
-        let t_old = st.t_old();
-        let mut t = st.t();
-        let h = t - t_old;
-        // The interpolant is needed for dense output, events and t_eval; it is cheap (28·dim flops).
-        let need_q = dense.is_some() || n_ev > 0 || t_eval.is_some();
-        if need_q {
-            st.fill_dense_q(&mut q);
-        }
-        if let Some(d) = dense.as_mut() {
-            d.push_segment(t_old, h, st.y_old(), &q);
-        }
-
-        let mut status = None;
-        let mut terminal_state = false;
-        if n_ev > 0 {
-            let y = st.y();
-            for (e, gn) in events.iter_mut().zip(g_new.iter_mut()) {
-                *gn = (e.func)(t, y);
-            }
-            if let Some(s) = nan_event(&g_new, t_old, t) {
-                // Nothing of this step is kept (its state, output or dense segment).
-                if let Some(d) = dense.as_mut() {
-                    d.pop_segment();
-                }
-                break s;
-            }
-            roots.clear();
-            for i in 0..n_ev {
-                if events::is_active(g[i], g_new[i], events[i].direction) {
-                    counts[i] += 1;
-                    roots.push((i, 0.0));
-                }
-            }
-            if !roots.is_empty() {
-                let y_old = st.y_old();
-                for r in roots.iter_mut() {
-                    let ev = &mut events[r.0];
-                    r.1 = events::solve_event_equation(t_old, t, |tt| {
-                        eval_segment(t_old, h, y_old, &q, tt, &mut ybuf);
-                        (ev.func)(tt, &ybuf)
-                    });
-                }
-                let term = roots
-                    .iter()
-                    .any(|&(i, _)| events[i].terminal > 0 && counts[i] >= events[i].terminal);
-                if term {
-                    // Keep the roots up to (and including) the first one that terminates.
-                    roots.sort_by(|a, b| (dir * a.1).total_cmp(&(dir * b.1)));
-                    let k = roots
-                        .iter()
-                        .position(|&(i, _)| {
-                            events[i].terminal > 0 && counts[i] >= events[i].terminal
-                        })
-                        .expect("a terminating root exists");
-                    roots.truncate(k + 1);
-                }
-                for &(i, te) in roots.iter() {
-                    eval_segment(t_old, h, y_old, &q, te, &mut ybuf);
-                    t_events[i].push(te);
-                    y_events[i].extend_from_slice(&ybuf);
-                }
-                if term {
-                    let &(i, te) = roots.last().expect("non-empty");
-                    t = te;
-                    eval_segment(t_old, h, y_old, &q, te, &mut y_term);
-                    terminal_state = true;
-                    status = Some(Status::TerminalEvent { event: i, t: te });
-                }
-            }
-            std::mem::swap(&mut g, &mut g_new);
-        }
-
-        match t_eval {
-            None => {
-                // SciPy drops a zero-length last segment (terminal root exactly at t_old).
-                let duplicate = dense.is_some() && t_out.len() > 1 && *t_out.last().unwrap() == t;
-                if duplicate {
-                    dense.as_mut().unwrap().pop_segment();
-                } else {
-                    t_out.push(t);
-                    y_out.extend_from_slice(if terminal_state { &y_term } else { st.y() });
-                    if let Some(d) = dense.as_mut() {
-                        d.push_breakpoint(t);
-                    }
-                }
-            }
-            Some(te) => {
-                // Every t_eval value up to and including t, from this step's interpolant.
-                while t_eval_i < te.len() && dir * (te[t_eval_i] - t) <= 0.0 {
-                    eval_segment(t_old, h, st.y_old(), &q, te[t_eval_i], &mut ybuf);
-                    t_out.push(te[t_eval_i]);
-                    y_out.extend_from_slice(&ybuf);
-                    t_eval_i += 1;
-                }
-                if let Some(d) = dense.as_mut() {
-                    d.push_breakpoint(t);
-                }
-            }
-        }
-
-        if let Some(s) = status {
-            break s;
-        }
-        if outcome == StepOutcome::Finished {
-            break Status::Success;
-        }
-    };
-
-    let t_reached = match &status {
-        Status::TerminalEvent { t, .. } | Status::EventNaN { t, .. } => *t,
-        _ => st.t(),
-    };
-    let stiffness = st.stiffness();
-    let mut message = status.describe(t_reached);
-    if let (Some(s), false) = (stiffness, matches!(status, Status::Stiff { .. })) {
-        message.push_str("; ");
-        message.push_str(&s.warning());
-    }
-    Ok(Solution {
-        dim,
-        t: t_out,
-        y: y_out,
-        t_events,
-        y_events,
-        nfev: st.nfev(),
-        njev: 0,
-        n_accepted: st.n_accepted(),
-        n_rejected: st.n_rejected(),
-        message,
-        status,
-        t_reached,
-        rtol_clamped: st.rtol_clamped(),
-        dense,
-        stiffness,
-    })
 }
 
 #[cfg(test)]
