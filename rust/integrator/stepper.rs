@@ -290,6 +290,70 @@ fn scaled_errors_body(
     }
 }
 
+/// The initial state and the interval: `dim` finite components, two different finite times.
+fn check_start(dim: usize, y0: &[f64], t0: f64, t_bound: f64) -> Result<(), InputError> {
+    if dim == 0 {
+        return Err(InputError::EmptyState);
+    }
+    if y0.len() != dim {
+        return Err(InputError::Y0Length {
+            expected: dim,
+            got: y0.len(),
+        });
+    }
+    if let Some((index, &value)) = y0.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(InputError::Y0NonFinite { index, value });
+    }
+    if !(t0.is_finite() && t_bound.is_finite()) {
+        return Err(InputError::TSpanNonFinite { t0, t_end: t_bound });
+    }
+    if t0 == t_bound {
+        return Err(InputError::TSpanEmpty(t0));
+    }
+    Ok(())
+}
+
+/// `rtol` and `atol` per component, and whether some rtol was raised to `100 EPS`.
+fn tolerances(opts: &Rk45Options, dim: usize) -> Result<(Vec<f64>, Vec<f64>, bool), InputError> {
+    let mut rtol = expand_tol(&opts.rtol, "rtol", dim)?;
+    let atol = expand_tol(&opts.atol, "atol", dim)?;
+    // SciPy: rtol = max(rtol, 100 EPS) with a warning; we set a flag instead.
+    let rtol_min = 100.0 * f64::EPSILON;
+    let rtol_clamped = rtol.iter().any(|&r| r < rtol_min);
+    if rtol_clamped {
+        rtol.iter_mut().for_each(|r| *r = r.max(rtol_min));
+    }
+    Ok((rtol, atol, rtol_clamped))
+}
+
+/// `max_step`, `max_steps`, `first_step` (within the interval's length `span`) and the
+/// controller's parameters.
+fn check_step_options(opts: &Rk45Options, span: f64) -> Result<(), InputError> {
+    if opts.max_step.is_nan() || opts.max_step <= 0.0 {
+        return Err(InputError::MaxStep(opts.max_step));
+    }
+    if opts.max_steps == 0 {
+        return Err(InputError::MaxSteps);
+    }
+    if let Some(h) = opts.first_step {
+        if !(h > 0.0 && h.is_finite()) {
+            return Err(InputError::FirstStepNotPositive(h));
+        }
+        if h > span {
+            return Err(InputError::FirstStepBeyondSpan {
+                first_step: h,
+                span,
+            });
+        }
+    }
+    if let Controller::PI { alpha, beta } = opts.controller {
+        if !(alpha.is_finite() && beta.is_finite() && alpha > 0.0 && beta >= 0.0) {
+            return Err(InputError::Controller { alpha, beta });
+        }
+    }
+    Ok(())
+}
+
 impl<S: OdeSystem> Stepper<S> {
     /// Validate the inputs and allocate all workspaces (no rhs call yet).
     /// `opts.dense` and `opts.t_eval` are driver options and ignored here.
@@ -301,55 +365,9 @@ impl<S: OdeSystem> Stepper<S> {
         opts: &Rk45Options,
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
-        if dim == 0 {
-            return Err(InputError::EmptyState);
-        }
-        if y0.len() != dim {
-            return Err(InputError::Y0Length {
-                expected: dim,
-                got: y0.len(),
-            });
-        }
-        if let Some((index, &value)) = y0.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(InputError::Y0NonFinite { index, value });
-        }
-        if !(t0.is_finite() && t_bound.is_finite()) {
-            return Err(InputError::TSpanNonFinite { t0, t_end: t_bound });
-        }
-        if t0 == t_bound {
-            return Err(InputError::TSpanEmpty(t0));
-        }
-        let mut rtol = expand_tol(&opts.rtol, "rtol", dim)?;
-        let atol = expand_tol(&opts.atol, "atol", dim)?;
-        // SciPy: rtol = max(rtol, 100 EPS) with a warning; we set a flag instead.
-        let rtol_min = 100.0 * f64::EPSILON;
-        let rtol_clamped = rtol.iter().any(|&r| r < rtol_min);
-        if rtol_clamped {
-            rtol.iter_mut().for_each(|r| *r = r.max(rtol_min));
-        }
-        if opts.max_step.is_nan() || opts.max_step <= 0.0 {
-            return Err(InputError::MaxStep(opts.max_step));
-        }
-        if opts.max_steps == 0 {
-            return Err(InputError::MaxSteps);
-        }
-        if let Some(h) = opts.first_step {
-            if !(h > 0.0 && h.is_finite()) {
-                return Err(InputError::FirstStepNotPositive(h));
-            }
-            let span = (t_bound - t0).abs();
-            if h > span {
-                return Err(InputError::FirstStepBeyondSpan {
-                    first_step: h,
-                    span,
-                });
-            }
-        }
-        if let Controller::PI { alpha, beta } = opts.controller {
-            if !(alpha.is_finite() && beta.is_finite() && alpha > 0.0 && beta >= 0.0) {
-                return Err(InputError::Controller { alpha, beta });
-            }
-        }
+        check_start(dim, y0, t0, t_bound)?;
+        let (rtol, atol, rtol_clamped) = tolerances(opts, dim)?;
+        check_step_options(opts, (t_bound - t0).abs())?;
         Ok(Self {
             sys,
             dim,
