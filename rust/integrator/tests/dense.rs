@@ -1,6 +1,6 @@
 use super::*;
 use crate::integrator::stepper::B;
-use crate::integrator::tests::fixtures::{observed_orders, oscillator};
+use crate::integrator::tests::fixtures::{at_halved_steps, observed_orders, oscillator};
 use crate::integrator::{rk45, Rk45Options, Tol};
 
 #[test]
@@ -83,10 +83,7 @@ fn midpoint_error(h: f64) -> f64 {
 
 #[test]
 fn dense_is_fourth_order_at_midpoints() {
-    let errs: Vec<f64> = [0.25, 0.125, 0.0625, 0.03125]
-        .iter()
-        .map(|&h| midpoint_error(h))
-        .collect();
+    let errs = at_halved_steps(midpoint_error);
     for order in observed_orders(&errs) {
         // Local interpolation error O(h^5) (4th-order interpolant) on top of the
         // O(h^5) global error; must be clearly above 4.

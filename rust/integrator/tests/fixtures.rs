@@ -70,6 +70,11 @@ pub(crate) fn tol(tol: f64) -> Rk45Options {
     }
 }
 
+/// `error(h)` at the fixed steps h = 1/4, 1/8, 1/16, 1/32.
+pub(crate) fn at_halved_steps(error: impl Fn(f64) -> f64) -> Vec<f64> {
+    [0.25, 0.125, 0.0625, 0.03125].map(error).to_vec()
+}
+
 /// The convergence orders `log2(e[i] / e[i+1])` of errors at halved step sizes.
 pub(crate) fn observed_orders(errs: &[f64]) -> Vec<f64> {
     errs.windows(2).map(|w| (w[0] / w[1]).log2()).collect()

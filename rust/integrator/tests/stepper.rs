@@ -1,5 +1,5 @@
 use super::*;
-use crate::integrator::tests::fixtures::{decay, observed_orders, oscillator};
+use crate::integrator::tests::fixtures::{at_halved_steps, decay, observed_orders, oscillator};
 
 #[test]
 fn tableau_order_conditions() {
@@ -125,10 +125,7 @@ fn fixed_step_error(h: f64) -> f64 {
 
 #[test]
 fn fifth_order_convergence_with_fixed_steps() {
-    let errs: Vec<f64> = [0.25, 0.125, 0.0625, 0.03125]
-        .iter()
-        .map(|&h| fixed_step_error(h))
-        .collect();
+    let errs = at_halved_steps(fixed_step_error);
     for order in observed_orders(&errs) {
         assert!(
             (order - 5.0).abs() < 0.3,
