@@ -25,6 +25,12 @@ pub struct PyEffect {
     pub inner: Effect,
 }
 
+impl From<Effect> for PyEffect {
+    fn from(inner: Effect) -> Self {
+        PyEffect { inner }
+    }
+}
+
 thread_local! {
     /// The first exception a Python torque function raised during the current call (the
     /// integration runs on the calling thread, detached from the interpreter).
@@ -182,9 +188,7 @@ impl PyEffect {
             Some(g) if !g.is_none() => vec3(g, "g")?,
             _ => crate::spatial::Vec3::new(0.0, 0.0, -9.81),
         };
-        Ok(PyEffect {
-            inner: Effect::gravity(g).py(py)?,
-        })
+        Ok(Effect::gravity(g).py(py)?.into())
     }
 
     /// Joint springs `τ = −k (q − rest)` (rotation-vector spring on quaternion joints).
@@ -200,9 +204,7 @@ impl PyEffect {
         let joints = joints_arg(joints)?;
         let k = per_joint_arg(stiffness, "stiffness")?;
         let rest = given(rest).map(|r| per_joint_arg(r, "rest")).transpose()?;
-        Ok(PyEffect {
-            inner: Effect::Spring(Spring::new(name, joints, k, rest).py(py)?),
-        })
+        Ok(Effect::Spring(Spring::new(name, joints, k, rest).py(py)?).into())
     }
 
     /// Viscous joint dampers `τ = −c v`.
@@ -216,9 +218,7 @@ impl PyEffect {
     ) -> PyResult<Self> {
         let joints = joints_arg(joints)?;
         let c = per_joint_arg(damping, "damping")?;
-        Ok(PyEffect {
-            inner: Effect::Damper(Damper::new(name, joints, c).py(py)?),
-        })
+        Ok(Effect::Damper(Damper::new(name, joints, c).py(py)?).into())
     }
 
     /// Regularised Coulomb friction `τ = −F tanh(v / v_eps)`.
@@ -234,9 +234,7 @@ impl PyEffect {
         let v_eps = opt_real(v_eps, "v_eps")?;
         let joints = joints_arg(joints)?;
         let f = per_joint_arg(friction, "friction")?;
-        Ok(PyEffect {
-            inner: Effect::Friction(Friction::new(name, joints, f, v_eps).py(py)?),
-        })
+        Ok(Effect::Friction(Friction::new(name, joints, f, v_eps).py(py)?).into())
     }
 
     /// Constant joint torques (forces on prismatic joints), one per speed or one for all.
@@ -250,9 +248,7 @@ impl PyEffect {
     ) -> PyResult<Self> {
         let joints = joints_arg(joints)?;
         let tau = per_joint_arg(tau, "tau")?;
-        Ok(PyEffect {
-            inner: Effect::Torque(Torque::constant(name, joints, tau).py(py)?),
-        })
+        Ok(Effect::Torque(Torque::constant(name, joints, tau).py(py)?).into())
     }
 
     /// Joint torques tabulated in time: linear between rows, clamped outside.
@@ -267,9 +263,7 @@ impl PyEffect {
     ) -> PyResult<Self> {
         let joints = joints_arg(joints)?;
         let table = table_arg(py, time, values, "values")?;
-        Ok(PyEffect {
-            inner: Effect::Torque(Torque::tabulated(name, joints, table).py(py)?),
-        })
+        Ok(Effect::Torque(Torque::tabulated(name, joints, table).py(py)?).into())
     }
 
     /// PD torques tracking a tabulated reference on 1-dof joints.
@@ -289,9 +283,7 @@ impl PyEffect {
         let kp = per_joint_arg(kp, "kp")?;
         let kd = per_joint_arg(kd, "kd")?;
         let table = table_arg(py, time, reference, "reference")?;
-        Ok(PyEffect {
-            inner: Effect::Torque(Torque::pd(name, joints, kp, kd, table).py(py)?),
-        })
+        Ok(Effect::Torque(Torque::pd(name, joints, kp, kd, table).py(py)?).into())
     }
 
     /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
@@ -305,9 +297,7 @@ impl PyEffect {
         if !f.is_callable() {
             return Err(invalid(py, "f", "a callable f(t, q, v) -> tau", repr_of(f)));
         }
-        Ok(PyEffect {
-            inner: Effect::Torque(Torque::function(name, torque_callback(f.clone().unbind()))),
-        })
+        Ok(Effect::Torque(Torque::function(name, torque_callback(f.clone().unbind()))).into())
     }
 
     /// A force (and moment) on a body at a body-fixed point, constant or tabulated.
@@ -351,9 +341,7 @@ impl PyEffect {
                 External::constant(name, body, point, f, m, frame).py(py)?
             }
         };
-        Ok(PyEffect {
-            inner: Effect::External(inner),
-        })
+        Ok(Effect::External(inner).into())
     }
 
     /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).

@@ -131,7 +131,7 @@ impl PyScene {
         self.inner
             .effects
             .iter()
-            .map(|e| PyEffect { inner: e.clone() })
+            .map(|e| e.clone().into())
             .collect()
     }
     #[getter]
