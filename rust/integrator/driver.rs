@@ -154,6 +154,7 @@ struct Segment<'s> {
 
 impl Segment<'_> {
     /// The interpolant at `t` into `out`.
+    #[inline]
     fn eval(&self, t: f64, out: &mut [f64]) {
         eval_segment(self.t_old, self.h, self.y_old, self.q, t, out);
     }
@@ -312,6 +313,7 @@ impl<'o> Output<'o> {
     }
 
     /// The step `seg`, ending at `(t, y)` (the step's end, or a terminal event's).
+    #[inline]
     fn record(&mut self, seg: &Segment<'_>, t: f64, y: &[f64], dir: f64) {
         match self.t_eval {
             None => {

@@ -24,6 +24,7 @@ pub struct Dynamics<'a> {
 }
 
 /// The effects' view of the state `(t, q, v)`.
+#[inline]
 fn context<'c>(model: &'c Model, t: f64, q: &'c [f64], v: &'c [f64]) -> Context<'c> {
     Context { model, t, q, v }
 }
