@@ -79,7 +79,8 @@ pub(crate) fn solve_event_equation(t_old: f64, t: f64, f: impl FnMut(f64) -> f64
     brentq(f, t_old, t, 4.0 * f64::EPSILON, 4.0 * f64::EPSILON, 100)
 }
 
-/// Port of SciPy's `brentq.c` (Charles Harris), so event times agree with SciPy's.
+/// Port of SciPy's `brentq.c` (Charles Harris), so event times agree with SciPy's. One
+/// function of ~80 lines on purpose: it follows the C line for line, to be checked against it.
 ///
 /// Differences, where SciPy raises: if `f(a)` and `f(b)` have the same sign (possible when the
 /// interpolant's end value differs from the step's end state by round-off), the endpoint with
