@@ -355,6 +355,8 @@ impl Model {
     /// intermediate link of a multi-axis joint in a URDF) gets seven zero masses; it must
     /// then have no rotational inertia either, which seven point masses cannot carry.
     pub fn set_link_body(&mut self, l: usize, body: RigidBody) -> Result<()> {
+        // The recursions' constants hold each link's inertia.
+        self.compiled = OnceLock::new();
         let link = &mut self.links[l];
         if body.mass > 0.0 {
             link.rigid = body;

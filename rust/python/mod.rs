@@ -1,9 +1,15 @@
 //! The Python bindings: one thin layer that converts arrays and errors and calls the core.
 mod body;
 mod convert;
+mod dense;
+mod effects;
 mod errors;
+mod events;
 mod model;
+mod options;
 mod pickle;
+mod rk45;
+mod scene;
 mod signals;
 mod simulate;
 
@@ -16,14 +22,14 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<body::PyPointMasses>()?;
     m.add_class::<model::PyJoint>()?;
     m.add_class::<model::PyModel>()?;
-    m.add_class::<simulate::PyEffect>()?;
-    m.add_class::<simulate::PyStateEvent>()?;
-    m.add_class::<simulate::PyScene>()?;
-    m.add_class::<simulate::PyDenseSolution>()?;
+    m.add_class::<effects::PyEffect>()?;
+    m.add_class::<events::PyStateEvent>()?;
+    m.add_class::<scene::PyScene>()?;
+    m.add_class::<dense::PyDenseSolution>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
-    m.add_function(wrap_pyfunction!(simulate::rk45, m)?)?;
+    m.add_function(wrap_pyfunction!(rk45::rk45, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;
     Ok(())

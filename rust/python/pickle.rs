@@ -14,9 +14,12 @@ use pyo3::types::{PyBytes, PyTuple};
 use serde::{Deserialize, Serialize};
 
 use super::body::{PyPointMasses, PyRigidBody};
+use super::dense::PyDenseSolution;
+use super::effects::{torque_callback, PyEffect};
 use super::errors::py_error;
+use super::events::PyStateEvent;
 use super::model::{PyJoint, PyModel};
-use super::simulate::{torque_callback, PyDenseSolution, PyEffect, PyScene, PyStateEvent};
+use super::scene::PyScene;
 use crate::body::RigidBody;
 use crate::effects::{Disabled, Effect, Effects, TorqueFunction, TorqueLaw};
 use crate::integrator::DenseOutput;

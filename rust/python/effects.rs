@@ -1,0 +1,417 @@
+//! `Effect`: the constructors of the effect families and the parsers of their arguments;
+//! Python torque functions as Rust callbacks.
+use std::cell::RefCell;
+use std::sync::Arc;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+
+use super::convert::{array, opt_real, shape_str, vec3, vector};
+use super::errors::{invalid, IntoPyResult};
+use super::options::given;
+use crate::effects::{
+    Damper, Effect, External, ExternalLoad, Frame, Friction, JointRef, Matrix, PerJoint, Spring,
+    Table, Torque, TorqueFunction, TorqueLaw,
+};
+
+#[pyclass(
+    name = "Effect",
+    module = "pointmass_dyn._core",
+    frozen,
+    from_py_object
+)]
+#[derive(Clone)]
+pub struct PyEffect {
+    pub inner: Effect,
+}
+
+impl From<Effect> for PyEffect {
+    fn from(inner: Effect) -> Self {
+        PyEffect { inner }
+    }
+}
+
+thread_local! {
+    /// The first exception a Python torque function raised during the current call (the
+    /// integration runs on the calling thread, detached from the interpreter).
+    static CALLBACK_ERROR: RefCell<Option<PyErr>> = const { RefCell::new(None) };
+}
+
+pub(super) fn take_callback_error() -> Option<PyErr> {
+    CALLBACK_ERROR.with(|c| c.borrow_mut().take())
+}
+
+pub(super) fn repr_of(obj: &Bound<'_, PyAny>) -> String {
+    obj.repr().map(|r| r.to_string()).unwrap_or_default()
+}
+
+/// A body name or index.
+pub(super) fn joint_ref(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<JointRef> {
+    if let Ok(s) = obj.extract::<String>() {
+        return Ok(JointRef::Name(s));
+    }
+    if !obj.is_instance_of::<pyo3::types::PyBool>() {
+        if let Ok(i) = obj.extract::<i64>() {
+            if i >= 0 {
+                return Ok(JointRef::Index(i as usize));
+            }
+        }
+    }
+    Err(invalid(
+        obj.py(),
+        arg,
+        "a body name (str) or body index (int >= 0)",
+        repr_of(obj),
+    ))
+}
+
+/// `None` (every moving joint), one body name or index, or a sequence of them.
+pub(super) fn joints_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<JointRef>>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    if obj.extract::<String>().is_ok() || obj.extract::<i64>().is_ok() {
+        return Ok(Some(vec![joint_ref(obj, "joints")?]));
+    }
+    let mut out = Vec::new();
+    let items = obj.try_iter().map_err(|_| {
+        invalid(
+            obj.py(),
+            "joints",
+            "None, a body name or index, or a sequence of them",
+            repr_of(obj),
+        )
+    })?;
+    for (k, x) in items.enumerate() {
+        out.push(joint_ref(&x?, &format!("joints[{k}]"))?);
+    }
+    Ok(Some(out))
+}
+
+/// A number (all joints) or a 1-D array (one per joint).
+pub(super) fn per_joint_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<PerJoint> {
+    let (shape, values) = array(obj, arg)?;
+    match shape.len() {
+        0 => Ok(PerJoint::All(values[0])),
+        1 => Ok(PerJoint::Each(values)),
+        _ => Err(invalid(
+            obj.py(),
+            arg,
+            "a number or a 1-D array",
+            shape_str(&shape),
+        )),
+    }
+}
+
+/// A 1-D or 2-D array, one row per time.
+pub(super) fn matrix_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Matrix> {
+    let (shape, values) = array(obj, arg)?;
+    match shape.as_slice() {
+        [n] => Ok(Matrix {
+            values,
+            rows: *n,
+            cols: 1,
+            one_d: true,
+        }),
+        [n, c] => Ok(Matrix {
+            values,
+            rows: *n,
+            cols: *c,
+            one_d: false,
+        }),
+        _ => Err(invalid(
+            obj.py(),
+            arg,
+            "a 1-D or 2-D array (one row per time)",
+            shape_str(&shape),
+        )),
+    }
+}
+
+pub(super) fn table_arg(
+    py: Python<'_>,
+    time: &Bound<'_, PyAny>,
+    values: &Bound<'_, PyAny>,
+    values_arg: &str,
+) -> PyResult<Table> {
+    let t = vector(time, "time", None)?;
+    let m = matrix_arg(values, values_arg)?;
+    Table::new(t, m, "time", values_arg).py(py)
+}
+
+/// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
+/// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
+/// caller to re-raise; a non-finite torque fails the run like any effect's (`success=False`
+/// with the time), so it is not an exception. `func` is also kept as the function's source,
+/// which pickling carries (`pickle.rs`).
+pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
+    let source = Python::attach(|py| func.clone_ref(py));
+    let f = TorqueFunction::new(Arc::new(
+        move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
+            Python::attach(|py| {
+                let call = || -> PyResult<Vec<f64>> {
+                    let r = func.bind(py).call1((
+                        t,
+                        PyArray1::from_slice(py, q),
+                        PyArray1::from_slice(py, v),
+                    ))?;
+                    vector(&r, "torque function f(t, q, v)", Some(out.len()))
+                };
+                match call() {
+                    Ok(x) => {
+                        crate::error::check_finite("torque function f(t, q, v)", &x)
+                            .map_err(|e| e.to_string())?;
+                        out.copy_from_slice(&x);
+                        Ok(())
+                    }
+                    Err(e) => {
+                        let msg = e.to_string();
+                        CALLBACK_ERROR.with(|c| {
+                            c.borrow_mut().get_or_insert(e);
+                        });
+                        Err(msg)
+                    }
+                }
+            })
+        },
+    ));
+    TorqueFunction::with_source(f.0, Arc::new(source))
+}
+
+#[pymethods]
+impl PyEffect {
+    /// Uniform gravity `g` (m/s², world frame).
+    #[staticmethod]
+    #[pyo3(signature = (g=None))]
+    fn gravity(py: Python<'_>, g: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
+        let g = match g {
+            Some(g) if !g.is_none() => vec3(g, "g")?,
+            _ => crate::spatial::Vec3::new(0.0, 0.0, -9.81),
+        };
+        Ok(Effect::gravity(g).py(py)?.into())
+    }
+
+    /// Joint springs `τ = −k (q − rest)` (rotation-vector spring on quaternion joints).
+    #[staticmethod]
+    #[pyo3(signature = (joints, stiffness, rest=None, name=None))]
+    fn spring(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        stiffness: &Bound<'_, PyAny>,
+        rest: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let k = per_joint_arg(stiffness, "stiffness")?;
+        let rest = given(rest).map(|r| per_joint_arg(r, "rest")).transpose()?;
+        Ok(Effect::Spring(Spring::new(name, joints, k, rest).py(py)?).into())
+    }
+
+    /// Viscous joint dampers `τ = −c v`.
+    #[staticmethod]
+    #[pyo3(signature = (joints, damping, name=None))]
+    fn damper(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        damping: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let c = per_joint_arg(damping, "damping")?;
+        Ok(Effect::Damper(Damper::new(name, joints, c).py(py)?).into())
+    }
+
+    /// Regularised Coulomb friction `τ = −F tanh(v / v_eps)`.
+    #[staticmethod]
+    #[pyo3(signature = (joints, friction, v_eps=None, name=None))]
+    fn friction(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        friction: &Bound<'_, PyAny>,
+        v_eps: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let v_eps = opt_real(v_eps, "v_eps")?;
+        let joints = joints_arg(joints)?;
+        let f = per_joint_arg(friction, "friction")?;
+        Ok(Effect::Friction(Friction::new(name, joints, f, v_eps).py(py)?).into())
+    }
+
+    /// Constant joint torques (forces on prismatic joints), one per speed or one for all.
+    #[staticmethod]
+    #[pyo3(signature = (joints, tau, name=None))]
+    fn joint_torque(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        tau: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let tau = per_joint_arg(tau, "tau")?;
+        Ok(Effect::Torque(Torque::constant(name, joints, tau).py(py)?).into())
+    }
+
+    /// Joint torques tabulated in time: linear between rows, clamped outside.
+    #[staticmethod]
+    #[pyo3(signature = (joints, time, values, name=None))]
+    fn tabulated_torque(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        time: &Bound<'_, PyAny>,
+        values: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let table = table_arg(py, time, values, "values")?;
+        Ok(Effect::Torque(Torque::tabulated(name, joints, table).py(py)?).into())
+    }
+
+    /// PD torques tracking a tabulated reference on 1-dof joints.
+    #[staticmethod]
+    #[pyo3(signature = (joints, kp, kd, time, reference, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn pd_torque(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        kp: &Bound<'_, PyAny>,
+        kd: &Bound<'_, PyAny>,
+        time: &Bound<'_, PyAny>,
+        reference: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let kp = per_joint_arg(kp, "kp")?;
+        let kd = per_joint_arg(kd, "kd")?;
+        let table = table_arg(py, time, reference, "reference")?;
+        Ok(Effect::Torque(Torque::pd(name, joints, kp, kd, table).py(py)?).into())
+    }
+
+    /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
+    #[staticmethod]
+    #[pyo3(signature = (f, name=None))]
+    fn torque_function(
+        py: Python<'_>,
+        f: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        if !f.is_callable() {
+            return Err(invalid(py, "f", "a callable f(t, q, v) -> tau", repr_of(f)));
+        }
+        Ok(Effect::Torque(Torque::function(name, torque_callback(f.clone().unbind()))).into())
+    }
+
+    /// A force (and moment) on a body at a body-fixed point, constant or tabulated.
+    #[staticmethod]
+    #[pyo3(signature = (body, force=None, point=None, moment=None, time=None, frame="world", name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn external_force(
+        py: Python<'_>,
+        body: &Bound<'_, PyAny>,
+        force: Option<&Bound<'_, PyAny>>,
+        point: Option<&Bound<'_, PyAny>>,
+        moment: Option<&Bound<'_, PyAny>>,
+        time: Option<&Bound<'_, PyAny>>,
+        frame: &str,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let body = joint_ref(body, "body")?;
+        let point = match given(point) {
+            Some(p) => vec3(p, "point")?,
+            None => crate::spatial::Vec3::zeros(),
+        };
+        let frame = Frame::parse(frame, "frame").py(py)?;
+        let (force, moment) = (given(force), given(moment));
+        if force.is_none() && moment.is_none() {
+            return Err(invalid(py, "force", "a force (or a moment)", "None"));
+        }
+        let inner = match given(time) {
+            Some(t) => {
+                let t = vector(t, "time", None)?;
+                let f = force.map(|f| matrix_arg(f, "force")).transpose()?;
+                let m = moment.map(|m| matrix_arg(m, "moment")).transpose()?;
+                External::tabulated(name, body, point, t, f, m, frame).py(py)?
+            }
+            None => {
+                let zero = crate::spatial::Vec3::zeros();
+                let f = force.map(|f| vec3(f, "force")).transpose()?.unwrap_or(zero);
+                let m = moment
+                    .map(|m| vec3(m, "moment"))
+                    .transpose()?
+                    .unwrap_or(zero);
+                External::constant(name, body, point, f, m, frame).py(py)?
+            }
+        };
+        Ok(Effect::External(inner).into())
+    }
+
+    /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name().to_string()
+    }
+    /// The family, as `disable` names it.
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.inner.kind().name()
+    }
+    fn __repr__(&self) -> String {
+        let label = match self.inner.label() {
+            Some(l) => format!(", name='{l}'"),
+            None => String::new(),
+        };
+        let joints = |j: &Option<Vec<JointRef>>| match j {
+            None => "all".to_string(),
+            Some(v) => format!(
+                "[{}]",
+                v.iter()
+                    .map(|r| r.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
+        match &self.inner {
+            Effect::Gravity { g } => format!("Gravity(g=[{}, {}, {}])", g.x, g.y, g.z),
+            Effect::Spring(e) => format!("Spring(joints={}{label})", joints(&e.joints)),
+            Effect::Damper(e) => format!("Damper(joints={}{label})", joints(&e.joints)),
+            Effect::Friction(e) => format!(
+                "JointFriction(joints={}, v_eps={}{label})",
+                joints(&e.joints),
+                e.v_eps
+            ),
+            Effect::Torque(e) => match &e.law {
+                TorqueLaw::Constant(_) => {
+                    format!("JointTorque(joints={}{label})", joints(&e.joints))
+                }
+                TorqueLaw::Tabulated(t) => format!(
+                    "TabulatedTorque(joints={}, {} rows{label})",
+                    joints(&e.joints),
+                    t.len()
+                ),
+                TorqueLaw::Pd { reference, .. } => format!(
+                    "PDTorque(joints={}, {} rows{label})",
+                    joints(&e.joints),
+                    reference.len()
+                ),
+                TorqueLaw::Function(_) => match self.inner.label() {
+                    Some(l) => format!("TorqueFunction(name='{l}')"),
+                    None => "TorqueFunction()".to_string(),
+                },
+            },
+            Effect::External(e) => format!(
+                "ExternalForce(body={}, point=[{}, {}, {}], frame='{}'{}{label})",
+                e.body,
+                e.point.x,
+                e.point.y,
+                e.point.z,
+                e.frame.name(),
+                match &e.load {
+                    ExternalLoad::Constant { .. } => String::new(),
+                    ExternalLoad::Tabulated(t) => format!(", {} rows", t.len()),
+                }
+            ),
+        }
+    }
+    fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {
+        self.inner == other.inner
+    }
+}

@@ -1,0 +1,195 @@
+//! `rk45`: the generic Dormand–Prince 5(4) on a Python right-hand side.
+use std::sync::Mutex;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use super::convert::{to_array, to_array1, vector};
+use super::dense::PyDenseSolution;
+use super::effects::repr_of;
+use super::errors::{invalid, py_error};
+use super::events::{event_spec, python_event, PyEventSpec};
+use super::options::{options, set_outcome, step_args, t_span_arg};
+use crate::integrator::{self, Event, FnSystem, OdeSystem};
+use crate::scene::Settings;
+
+/// Generic Dormand–Prince 5(4) on a Python right-hand side `fun(t, y) -> array`;
+/// step for step SciPy's `solve_ivp(method="RK45")`.
+#[pyfunction]
+#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn"))]
+#[allow(clippy::too_many_arguments)]
+pub fn rk45<'py>(
+    py: Python<'py>,
+    fun: &Bound<'_, PyAny>,
+    t_span: &Bound<'_, PyAny>,
+    y0: &Bound<'_, PyAny>,
+    rtol: Option<&Bound<'_, PyAny>>,
+    atol: Option<&Bound<'_, PyAny>>,
+    t_eval: Option<&Bound<'_, PyAny>>,
+    events: Option<&Bound<'_, PyAny>>,
+    first_step: Option<&Bound<'_, PyAny>>,
+    max_step: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
+    dense_output: bool,
+    controller: &str,
+    stiffness: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !fun.is_callable() {
+        return Err(invalid(
+            py,
+            "fun",
+            "a callable fun(t, y) -> array",
+            repr_of(fun),
+        ));
+    }
+    let t_span = t_span_arg(py, t_span)?;
+    let y0 = vector(y0, "y0", None)?;
+    let dim = y0.len();
+    let mut requested = step_args(first_step, max_step, max_steps)?;
+    let base = options(
+        py,
+        dim,
+        &mut requested,
+        rtol,
+        atol,
+        t_eval,
+        dense_output,
+        controller,
+        stiffness,
+    )?;
+    // No scene: the caller's settings, else the defaults.
+    let opts = requested.options(&Settings::default(), base);
+    let specs = event_specs(py, events)?;
+    let failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let mut evs: Vec<Event<'_>> = specs
+        .iter()
+        .map(|s| python_event(s, None, &failure))
+        .collect();
+    let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let sys = python_system(py, fun, dim, &rhs_failure);
+    let sol =
+        integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
+    drop(evs);
+    // An exception from `fun` or an event (Ctrl-C included) is re-raised by
+    // `pointmass_dyn.rk45` with the solution computed so far attached.
+    let raised = rhs_failure
+        .into_inner()
+        .ok()
+        .flatten()
+        .or(failure.into_inner().ok().flatten());
+    solution_dict(py, sol, raised, !specs.is_empty())
+}
+
+/// `None`, one event callable, or a sequence of them.
+fn event_specs(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<PyEventSpec>> {
+    let mut specs = Vec::new();
+    if let Some(evs) = events.filter(|e| !e.is_none()) {
+        if evs.is_callable() {
+            specs.push(event_spec(py, 0, evs)?);
+        } else {
+            for (k, e) in evs.try_iter()?.enumerate() {
+                specs.push(event_spec(py, k, &e?)?);
+            }
+        }
+    }
+    Ok(specs)
+}
+
+/// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in
+/// `failure` (the run stops with its message).
+fn python_system<'a>(
+    py: Python<'a>,
+    fun: &'a Bound<'_, PyAny>,
+    dim: usize,
+    failure: &'a Mutex<Option<PyErr>>,
+) -> impl OdeSystem + 'a {
+    FnSystem::new(
+        dim,
+        move |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
+            let mut call = || -> PyResult<()> {
+                let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
+                let v = vector(&out, "fun(t, y)", Some(dim))?;
+                dydt.copy_from_slice(&v);
+                Ok(())
+            };
+            call().map_err(|e| {
+                let msg = e.to_string();
+                if let Ok(mut slot) = failure.lock() {
+                    slot.get_or_insert(e);
+                }
+                msg
+            })
+        },
+    )
+}
+
+/// The dict `pointmass_dyn.rk45` wraps (SciPy's `OdeResult` entries): `y` as (dim, N),
+/// the event lists `None` when no events were given.
+fn solution_dict<'py>(
+    py: Python<'py>,
+    sol: integrator::Solution,
+    raised: Option<PyErr>,
+    with_events: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (dim, n) = (sol.dim, sol.t.len());
+    let mut y_t = vec![0.0; dim * n];
+    for i in 0..n {
+        for j in 0..dim {
+            y_t[j * n + i] = sol.y[i * dim + j];
+        }
+    }
+    let d = PyDict::new(py);
+    d.set_item("error", raised.map(|e| e.into_value(py)))?;
+    d.set_item("t", to_array1(py, &sol.t))?;
+    d.set_item("y", to_array(py, y_t, &[dim, n])?)?;
+    let te = PyList::empty(py);
+    let ye = PyList::empty(py);
+    for (times, ys) in sol.t_events.iter().zip(&sol.y_events) {
+        te.append(to_array1(py, times))?;
+        ye.append(to_array(py, ys.clone(), &[times.len(), dim])?)?;
+    }
+    let none = || py.None().into_bound(py);
+    d.set_item("t_events", if with_events { te.into_any() } else { none() })?;
+    d.set_item("y_events", if with_events { ye.into_any() } else { none() })?;
+    d.set_item("nfev", sol.nfev)?;
+    d.set_item("njev", 0)?;
+    d.set_item("nlu", 0)?;
+    set_outcome(
+        &d,
+        &sol.status,
+        sol.n_accepted,
+        sol.n_rejected,
+        &sol.message,
+        sol.t_reached,
+    )?;
+    d.set_item("stiff", stiffness_dict(py, sol.stiffness)?)?;
+    d.set_item("sol", sol.dense.map(|inner| PyDenseSolution { inner }))?;
+    Ok(d)
+}
+
+pub(super) fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
+    let class = match e {
+        integrator::InputError::OutputTooLarge { .. } => "OutOfMemoryError",
+        _ => "InvalidInputError",
+    };
+    py_error(py, class, e.to_string())
+}
+
+/// `None`, or `{"t", "h_lambda", "h", "lambda"}` of the first detection.
+pub(super) fn stiffness_dict<'py>(
+    py: Python<'py>,
+    s: Option<integrator::Stiffness>,
+) -> PyResult<Bound<'py, PyAny>> {
+    match s {
+        None => Ok(py.None().into_bound(py)),
+        Some(s) => {
+            let d = PyDict::new(py);
+            d.set_item("t", s.t)?;
+            d.set_item("h_lambda", s.h_lambda)?;
+            d.set_item("h", s.h)?;
+            d.set_item("lambda", s.lambda())?;
+            Ok(d.into_any())
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! `Scene`: a model, its initial state, effects and the settings of its runs.
+use pyo3::prelude::*;
+
+use super::convert::{opt_real, to_array1, vector};
+use super::effects::{repr_of, PyEffect};
+use super::errors::{invalid, IntoPyResult};
+use super::model::PyModel;
+use super::options::t_span_arg;
+use crate::effects::{Disabled, Effects};
+use crate::scene::{Scene, Settings};
+
+#[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
+pub struct PyScene {
+    pub inner: Scene,
+}
+
+pub(super) fn opt_positive(py: Python<'_>, x: Option<f64>, arg: &str) -> PyResult<Option<f64>> {
+    match x {
+        Some(v) if !(v > 0.0 && v.is_finite()) => Err(invalid(py, arg, "a finite number > 0", v)),
+        other => Ok(other),
+    }
+}
+
+#[pymethods]
+impl PyScene {
+    #[new]
+    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        model: PyRef<'_, PyModel>,
+        q0: Option<&Bound<'_, PyAny>>,
+        v0: Option<&Bound<'_, PyAny>>,
+        effects: Option<&Bound<'_, PyAny>>,
+        t_span: Option<&Bound<'_, PyAny>>,
+        rtol: Option<&Bound<'_, PyAny>>,
+        atol: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+        description: Option<String>,
+        disable: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let (rtol, atol) = (opt_real(rtol, "rtol")?, opt_real(atol, "atol")?);
+        let m = model.model();
+        let mut q = match q0 {
+            Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
+            _ => m.neutral(),
+        };
+        let v = match v0 {
+            Some(v) if !v.is_none() => vector(v, "v0", Some(m.nv))?,
+            _ => vec![0.0; m.nv],
+        };
+        m.check_state(&q, Some(&v))
+            .map_err(|e| super::errors::to_py(py, e.map_arg(|a| format!("{a}0"))))?;
+        m.normalize(&mut q);
+        let mut list = Vec::new();
+        if let Some(effs) = effects {
+            if !effs.is_none() {
+                for (k, e) in effs.try_iter()?.enumerate() {
+                    let e = e?;
+                    let eff = e.cast::<PyEffect>().map_err(|_| {
+                        invalid(
+                            py,
+                            &format!("effects[{k}]"),
+                            "an effect such as pmd.Gravity(...)",
+                            repr_of(&e),
+                        )
+                    })?;
+                    list.push(eff.get().inner.clone());
+                }
+            }
+        }
+        // Joint and body names, table widths and effect names must fit the model.
+        Effects::new(&m, &list, Disabled::none(), "effects").py(py)?;
+        let settings = Settings {
+            t_span: match t_span {
+                Some(t) if !t.is_none() => Some(t_span_arg(py, t)?),
+                _ => None,
+            },
+            rtol: opt_positive(py, rtol, "rtol")?,
+            atol: opt_positive(py, atol, "atol")?,
+            disable: disable_arg(py, disable)?,
+            ..Settings::default()
+        };
+        Ok(PyScene {
+            inner: Scene {
+                name: name.unwrap_or_else(|| "scene".into()),
+                description: description.unwrap_or_default(),
+                model: m,
+                q0: q,
+                v0: v,
+                effects: list,
+                settings,
+            },
+        })
+    }
+
+    /// Parses a scene from TOML text; `file` names it in error messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, file="<string>"))]
+    fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
+        Scene::from_toml(text, file)
+            .map(|inner| PyScene { inner })
+            .py(py)
+    }
+
+    /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
+    /// before it is opened). Raises `SceneError` naming the file.
+    #[staticmethod]
+    fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
+        Scene::from_file(&path)
+            .map(|inner| PyScene { inner })
+            .py(py)
+    }
+
+    /// The scene's model (shared, not copied: adding a body to it copies it first, so the
+    /// scene never changes).
+    #[getter]
+    fn model(&self) -> PyModel {
+        PyModel::from_parts(self.inner.model.clone(), Default::default())
+    }
+    #[getter]
+    fn q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, &self.inner.q0).into_any()
+    }
+    #[getter]
+    fn v0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, &self.inner.v0).into_any()
+    }
+    #[getter]
+    fn effects(&self) -> Vec<PyEffect> {
+        self.inner
+            .effects
+            .iter()
+            .map(|e| e.clone().into())
+            .collect()
+    }
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+    #[getter]
+    fn description(&self) -> String {
+        self.inner.description.clone()
+    }
+    #[getter]
+    fn t_span(&self) -> Option<(f64, f64)> {
+        self.inner.settings.t_span
+    }
+    #[getter]
+    fn rtol(&self) -> Option<f64> {
+        self.inner.settings.rtol
+    }
+    #[getter]
+    fn atol(&self) -> Option<f64> {
+        self.inner.settings.atol
+    }
+    #[getter]
+    fn max_step(&self) -> Option<f64> {
+        self.inner.settings.max_step
+    }
+    #[getter]
+    fn max_steps(&self) -> Option<usize> {
+        self.inner.settings.max_steps
+    }
+    #[getter]
+    fn first_step(&self) -> Option<f64> {
+        self.inner.settings.first_step
+    }
+    /// Effect families the scene switches off (`None`: the scene says nothing).
+    #[getter]
+    fn disable(&self) -> Option<Vec<&'static str>> {
+        self.inner.settings.disable.map(|d| d.names())
+    }
+    fn __repr__(&self) -> String {
+        let s = &self.inner;
+        format!(
+            "Scene(name='{}', nbodies={}, nq={}, nv={}, effects=[{}])",
+            s.name,
+            s.model.nbodies(),
+            s.model.nq,
+            s.model.nv,
+            s.effects
+                .iter()
+                .map(|e| e.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    }
+}
+
+/// `None`, one family name, or a sequence of them.
+pub(super) fn disable_arg(
+    py: Python<'_>,
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<Disabled>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(None);
+    };
+    let names: Vec<String> = if let Ok(s) = obj.extract::<String>() {
+        vec![s]
+    } else {
+        let bad = || {
+            invalid(
+                py,
+                "disable",
+                "None, an effect family name or a sequence of them",
+                repr_of(obj),
+            )
+        };
+        obj.try_iter()
+            .map_err(|_| bad())?
+            .map(|x| x.and_then(|x| x.extract::<String>()).map_err(|_| bad()))
+            .collect::<PyResult<_>>()?
+    };
+    Disabled::parse(&names, "disable").py(py).map(Some)
+}

@@ -1,0 +1,172 @@
+//! The equations of motion `y = [q; v]`, `ẏ = [q̇(v); v̇]` with `v̇` from the recursive
+//! forward dynamics and the scene's effects, as an [`OdeSystem`].
+use crate::effects::{Context, Disabled, Effect, Effects, Probe};
+use crate::error::Result;
+use crate::integrator::OdeSystem;
+use crate::kinematics;
+use crate::model::Model;
+use crate::recursive::{self, Data};
+use crate::spatial::Vec6;
+
+/// The equations of motion as a first-order system.
+pub struct Dynamics<'a> {
+    pub model: &'a Model,
+    pub data: Data,
+    pub effects: Effects,
+    tau: Vec<f64>,
+    wrenches: Vec<Vec6>,
+    /// Called with the current time every `PROGRESS_EVERY` evaluations; returning false
+    /// stops the run (Ctrl-C from Python, a cancelled progress bar). The hook decides by
+    /// elapsed time whether to do anything (the Python one re-attaches every 50 ms).
+    pub(super) progress: Option<Progress<'a>>,
+    calls: usize,
+    probe: Option<Probe>,
+}
+
+/// The effects' view of the state `(t, q, v)`.
+#[inline]
+fn context<'c>(model: &'c Model, t: f64, q: &'c [f64], v: &'c [f64]) -> Context<'c> {
+    Context { model, t, q, v }
+}
+
+/// A progress hook: current time in, "keep going?" out.
+pub type Progress<'a> = Box<dyn FnMut(f64) -> bool + Send + 'a>;
+
+/// Often enough for a 50 ms poll on any model; rare enough that the hook's clock read is
+/// lost in the evaluations' cost (≥ 64 × 0.1 µs).
+const PROGRESS_EVERY: usize = 64;
+
+impl<'a> Dynamics<'a> {
+    /// The system with `effects` resolved against `model`, the `disabled` families left out.
+    pub fn try_new(model: &'a Model, effects: &[Effect], disabled: Disabled) -> Result<Self> {
+        Ok(Self::with_effects(
+            model,
+            Effects::new(model, effects, disabled, "effects")?,
+        ))
+    }
+
+    pub fn with_effects(model: &'a Model, effects: Effects) -> Self {
+        Dynamics {
+            model,
+            data: Data::new(model),
+            effects,
+            tau: vec![0.0; model.nv],
+            wrenches: vec![Vec6::zeros(); model.links.len()],
+            progress: None,
+            calls: 0,
+            probe: None,
+        }
+    }
+
+    /// The links' positions and velocities at `(q, v)` (for the energies).
+    fn move_links(&mut self, q: &[f64], v: &[f64]) {
+        kinematics::positions(self.model, q, &mut self.data.links);
+        kinematics::velocities(self.model, q, v, &mut self.data.links);
+    }
+
+    /// Kinetic energy plus the potential energy of the enabled conservative effects
+    /// (gravity, springs).
+    pub fn energy(&mut self, q: &[f64], v: &[f64]) -> f64 {
+        self.move_links(q, v);
+        let cx = context(self.model, 0.0, q, v);
+        recursive::kinetic_energy(&self.data) + self.effects.potential_energy(&cx, &self.data.links)
+    }
+
+    /// Kinetic energy and `(label, V)` of each conservative effect.
+    pub fn energies(&mut self, q: &[f64], v: &[f64]) -> (f64, Vec<(String, f64)>) {
+        self.move_links(q, v);
+        let cx = context(self.model, 0.0, q, v);
+        (
+            recursive::kinetic_energy(&self.data),
+            self.effects.potentials(&cx, &self.data.links),
+        )
+    }
+
+    /// Generalized force of each enabled effect at `(t, q, v)`: row-major
+    /// `effects.len() × nv` into `out`.
+    pub fn effect_forces(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        out: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        let probe = self.probe.get_or_insert_with(|| Probe::new(self.model));
+        let cx = context(self.model, t, q, v);
+        probe.forces(&mut self.effects, &cx, out)
+    }
+
+    /// Power `τ_e · v` of each enabled effect at `(t, q, v)` into `out` (length
+    /// `effects.len()`); `scratch` has length `effects.len() × nv`.
+    pub fn effect_power(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        scratch: &mut [f64],
+        out: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        self.effect_forces(t, q, v, scratch)?;
+        let nv = self.model.nv;
+        for (k, p) in out.iter_mut().enumerate() {
+            *p = scratch[k * nv..(k + 1) * nv]
+                .iter()
+                .zip(v)
+                .map(|(a, b)| a * b)
+                .sum();
+        }
+        Ok(())
+    }
+
+    /// Accelerations `v̇` at `(t, q, v)` (one right-hand-side evaluation, without `q̇`).
+    pub fn accelerations(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &mut [f64],
+    ) -> std::result::Result<(), String> {
+        let cx = context(self.model, t, q, v);
+        let ext = if self.effects.apply(&cx, &mut self.tau, &mut self.wrenches)? {
+            Some(self.wrenches.as_slice())
+        } else {
+            None
+        };
+        recursive::forward_dynamics(
+            self.model,
+            &mut self.data,
+            q,
+            v,
+            &self.tau,
+            &self.effects.gravity,
+            ext,
+            a,
+        )
+        .map_err(|e| e.to_string())
+    }
+}
+
+impl OdeSystem for Dynamics<'_> {
+    fn dim(&self) -> usize {
+        self.model.nq + self.model.nv
+    }
+
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> std::result::Result<(), String> {
+        let nq = self.model.nq;
+        if let Some(hook) = self.progress.as_mut() {
+            self.calls += 1;
+            if self.calls % PROGRESS_EVERY == 0 && !hook(t) {
+                return Err("interrupted".into());
+            }
+        }
+        let (q, v) = y.split_at(nq);
+        let (qdot, vdot) = dydt.split_at_mut(nq);
+        self.model.velocity_to_qdot(q, v, qdot);
+        self.accelerations(t, q, v, vdot)
+    }
+
+    /// Unit quaternions; the right-hand side normalises them too, so FSAL stays valid.
+    fn project(&mut self, y: &mut [f64]) {
+        self.model.normalize(&mut y[..self.model.nq]);
+    }
+}

@@ -1,0 +1,260 @@
+//! The simulate loop, entirely in Rust: state `y = [q; v]`, `q̇` from `v`, `v̇` from the
+//! recursive forward dynamics with the scene's declared effects, integrated by our RK45.
+//!
+//! The right-hand side asks the effects for joint forces and link wrenches only when the
+//! scene declares such effects; gravity rides on the base acceleration. A scene with no
+//! effects runs the bare forward dynamics.
+mod dynamics;
+mod settings;
+
+pub use dynamics::{Dynamics, Progress};
+pub use settings::{disabled, Requested, Resolved};
+
+use crate::effects::{Disabled, Effect};
+use crate::error::{Error, Result};
+use crate::integrator::{self, Event, Rk45Options, Status};
+use crate::model::Model;
+
+/// An event on the state: `q[index] − value` or `v[index] − value` crossing zero.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StateEvent {
+    pub on_velocity: bool,
+    pub index: usize,
+    pub value: f64,
+    /// −1, 0 or +1 (crossing direction that counts).
+    pub direction: i32,
+    /// Stop at the n-th occurrence (0: never).
+    pub terminal: usize,
+}
+
+/// What to record at every output time besides `t`, `q`, `v`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Record {
+    /// Kinetic plus the enabled effects' potential energy (gravity, springs).
+    pub energy: bool,
+    /// Power `τ_e · v` of each enabled effect.
+    pub power: bool,
+}
+
+#[derive(Debug, Clone)]
+pub struct Trajectory {
+    pub nq: usize,
+    pub nv: usize,
+    pub t: Vec<f64>,
+    /// Row-major N × nq.
+    pub q: Vec<f64>,
+    /// Row-major N × nv.
+    pub v: Vec<f64>,
+    pub energy: Option<Vec<f64>>,
+    /// Output names of the enabled effects (the columns of `power`).
+    pub effect_labels: Vec<String>,
+    /// Row-major N × effect_labels.len().
+    pub power: Option<Vec<f64>>,
+    pub t_events: Vec<Vec<f64>>,
+    /// Per event, row-major states `[q; v]` at the event times.
+    pub y_events: Vec<Vec<f64>>,
+    pub nfev: usize,
+    pub n_accepted: usize,
+    pub n_rejected: usize,
+    pub status: Status,
+    pub message: String,
+    pub t_reached: f64,
+    pub success: bool,
+}
+
+/// Integrates `model` with `effects` (minus the `disabled` families) from `(q0, v0)` over
+/// `t_span`. `extra_events` are caller-built events on `y = [q; v]` (e.g. Python callables),
+/// evaluated after the state events. Invalid input is an `Err`; a run that fails midway
+/// returns `Ok` with `success = false` and a message naming the reason and the time reached.
+#[allow(clippy::too_many_arguments)]
+pub fn simulate(
+    model: &Model,
+    effects: &[Effect],
+    disabled: Disabled,
+    q0: &[f64],
+    v0: &[f64],
+    t_span: (f64, f64),
+    opts: &Rk45Options,
+    state_events: &[StateEvent],
+    extra_events: Vec<Event<'_>>,
+    record: Record,
+    progress: Option<Progress<'_>>,
+) -> Result<Trajectory> {
+    model.check_state(q0, Some(v0))?;
+    check_state_events(model, state_events)?;
+    let mut sys = Dynamics::try_new(model, effects, disabled)?;
+    let y0 = initial_state(model, q0, v0);
+    let mut events: Vec<Event<'_>> = state_events
+        .iter()
+        .map(|e| state_event(e, model.nq))
+        .collect();
+    events.extend(extra_events);
+    let n_user = events.len();
+    let guarded = push_euler_guards(model, &mut events);
+    sys.progress = progress;
+    let mut sol =
+        integrator::rk45(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
+    drop(events);
+    report_euler_singularity(model, &guarded, n_user, &mut sol);
+    sol.t_events.truncate(n_user);
+    sol.y_events.truncate(n_user);
+    let (q, v) = split_states(model, &sol);
+    let energy = record
+        .energy
+        .then(|| energies(&mut sys, sol.t.len(), &q, &v));
+    let labels = sys.effects.labels();
+    let power = match record.power {
+        true => Some(powers(&mut sys, labels.len(), &sol.t, &q, &v)?),
+        false => None,
+    };
+    Ok(Trajectory {
+        nq: model.nq,
+        nv: model.nv,
+        success: sol.status.is_success(),
+        t: sol.t,
+        q,
+        v,
+        energy,
+        effect_labels: labels,
+        power,
+        t_events: sol.t_events,
+        y_events: sol.y_events,
+        nfev: sol.nfev,
+        n_accepted: sol.n_accepted,
+        n_rejected: sol.n_rejected,
+        message: sol.message,
+        t_reached: sol.t_reached,
+        status: sol.status,
+    })
+}
+
+/// Each state event's index within `q` (or `v`).
+fn check_state_events(model: &Model, state_events: &[StateEvent]) -> Result<()> {
+    for (k, e) in state_events.iter().enumerate() {
+        let n = if e.on_velocity { model.nv } else { model.nq };
+        if e.index >= n {
+            return Err(Error::arg(
+                format!("events[{k}].index"),
+                format!(
+                    "an index into {} (0..{n})",
+                    if e.on_velocity { "v" } else { "q" }
+                ),
+                e.index.to_string(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `y0 = [q0; v0]` with unit quaternions.
+fn initial_state(model: &Model, q0: &[f64], v0: &[f64]) -> Vec<f64> {
+    let mut y0 = Vec::with_capacity(model.nq + model.nv);
+    y0.extend_from_slice(q0);
+    y0.extend_from_slice(v0);
+    model.normalize(&mut y0[..model.nq]);
+    y0
+}
+
+/// A state event as an integrator event on `y = [q; v]`.
+fn state_event(e: &StateEvent, nq: usize) -> Event<'static> {
+    let offset = if e.on_velocity { nq } else { 0 } + e.index;
+    let value = e.value;
+    Event::new(move |_t, y: &[f64]| y[offset] - value)
+        .direction(integrator::EventDirection::from_sign(e.direction as f64))
+        .terminal(e.terminal)
+}
+
+/// Euler-angle joints: a terminal event where sin θ changes sign, located on the dense
+/// output, stops the run at the singularity even when a loose tolerance would step over
+/// it, and long before the integrator crawls towards it with ever smaller steps. Returns
+/// the guarded links, in the order of their events (after `events`' others).
+fn push_euler_guards(model: &Model, events: &mut Vec<Event<'_>>) -> Vec<usize> {
+    let guarded: Vec<usize> = (0..model.links.len())
+        .filter(|&i| matches!(model.links[i].joint, crate::joint::Joint::SphericalZYZ))
+        .collect();
+    for &i in &guarded {
+        let theta = model.links[i].q_index + 1;
+        events.push(Event::new(move |_t, y: &[f64]| y[theta].sin()).terminal(1));
+    }
+    guarded
+}
+
+/// A run stopped by an Euler guard (event `n_user` on) failed: the status and message say
+/// which joint reached its singularity.
+fn report_euler_singularity(
+    model: &Model,
+    guarded: &[usize],
+    n_user: usize,
+    sol: &mut integrator::Solution,
+) {
+    if let Status::TerminalEvent { event, t } = sol.status {
+        if event >= n_user {
+            let link = guarded[event - n_user];
+            let name = &model.bodies[model.links[link].body].name;
+            let message = format!(
+                "SphericalZYZ joint of body '{name}' reached its Euler singularity (sin theta = 0) at t = {t}: the Euler-angle rates diverge there; model the joint as Spherical (a quaternion) to move through it"
+            );
+            sol.message = format!("{message}; integration stopped at t = {t}");
+            sol.status = Status::RhsError { t, at: t, message };
+        }
+    }
+}
+
+fn input_error(e: integrator::InputError) -> Error {
+    match e {
+        integrator::InputError::OutputTooLarge { bytes, .. } => Error::OutOfMemory {
+            what: "simulate".into(),
+            bytes,
+            detail: e.to_string(),
+        },
+        e => Error::InvalidSetting(e.to_string()),
+    }
+}
+
+/// The output states as row-major `q` (N × nq, unit quaternions) and `v` (N × nv).
+fn split_states(model: &Model, sol: &integrator::Solution) -> (Vec<f64>, Vec<f64>) {
+    let (nq, nv, n) = (model.nq, model.nv, sol.t.len());
+    let mut q = Vec::with_capacity(n * nq);
+    let mut v = Vec::with_capacity(n * nv);
+    for i in 0..n {
+        let y = sol.state(i);
+        q.extend_from_slice(&y[..nq]);
+        v.extend_from_slice(&y[nq..]);
+    }
+    // Dense output between steps is not re-projected; keep reported quaternions unit.
+    for row in q.chunks_exact_mut(nq.max(1)).take(n) {
+        model.normalize(row);
+    }
+    (q, v)
+}
+
+/// Row `i` of a row-major matrix of `m` columns.
+fn row(i: usize, m: usize) -> std::ops::Range<usize> {
+    i * m..(i + 1) * m
+}
+
+/// The energy at each of the `n` output rows of `q` and `v`.
+fn energies(sys: &mut Dynamics<'_>, n: usize, q: &[f64], v: &[f64]) -> Vec<f64> {
+    let (nq, nv) = (sys.model.nq, sys.model.nv);
+    (0..n)
+        .map(|i| sys.energy(&q[row(i, nq)], &v[row(i, nv)]))
+        .collect()
+}
+
+/// The power of each of the `m` enabled effects at each output time: row-major N × m.
+fn powers(sys: &mut Dynamics<'_>, m: usize, t: &[f64], q: &[f64], v: &[f64]) -> Result<Vec<f64>> {
+    let (nq, nv, n) = (sys.model.nq, sys.model.nv, t.len());
+    let mut out = vec![0.0; n * m];
+    let mut scratch = vec![0.0; m * nv];
+    for i in 0..n {
+        sys.effect_power(
+            t[i],
+            &q[row(i, nq)],
+            &v[row(i, nv)],
+            &mut scratch,
+            &mut out[row(i, m)],
+        )
+        .map_err(|e| Error::InvalidSetting(format!("power at t = {}: {e}", t[i])))?;
+    }
+    Ok(out)
+}

@@ -1,0 +1,143 @@
+//! Which setting a run uses: the caller's argument beats the scene's setting, which beats
+//! the default. The one place that decides it; the bindings only parse the arguments.
+use crate::effects::Disabled;
+use crate::error::{Error, Result};
+use crate::integrator::{Rk45Options, Tol};
+use crate::scene::Settings;
+
+/// What the caller of a run asked for: `None` where they said nothing (an infinite
+/// `max_step` counts as nothing said).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Requested {
+    pub t_span: Option<(f64, f64)>,
+    pub rtol: Option<Tol>,
+    pub atol: Option<Tol>,
+    pub first_step: Option<f64>,
+    pub max_step: Option<f64>,
+    pub max_steps: Option<usize>,
+    pub disable: Option<Disabled>,
+}
+
+/// The settings a run uses.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Resolved {
+    pub t_span: (f64, f64),
+    pub disabled: Disabled,
+    pub opts: Rk45Options,
+}
+
+/// The effect families to leave out: the caller's, else the scene's, else none.
+pub fn disabled(caller: Option<Disabled>, scene: &Settings) -> Disabled {
+    caller.or(scene.disable).unwrap_or_default()
+}
+
+impl Requested {
+    /// The run's settings against a scene's: `base` carries the options a scene does not
+    /// set (controller, `t_eval`, dense output, stiffness check) and the defaults of the rest.
+    /// Without a `t_span` from either, an `InvalidArgument` naming `t_span`.
+    pub fn resolve(self, scene: &Settings, base: Rk45Options) -> Result<Resolved> {
+        let t_span = self
+            .t_span
+            .or(scene.t_span)
+            .ok_or_else(|| Error::arg("t_span", "(t0, t_end): the scene sets none", "None"))?;
+        Ok(Resolved {
+            t_span,
+            disabled: disabled(self.disable, scene),
+            opts: self.options(scene, base),
+        })
+    }
+
+    /// `base` with the tolerances and step limits resolved (all but `t_span` and `disable`).
+    pub fn options(self, scene: &Settings, base: Rk45Options) -> Rk45Options {
+        Rk45Options {
+            rtol: self
+                .rtol
+                .or(scene.rtol.map(Tol::Scalar))
+                .unwrap_or(base.rtol),
+            atol: self
+                .atol
+                .or(scene.atol.map(Tol::Scalar))
+                .unwrap_or(base.atol),
+            first_step: self.first_step.or(scene.first_step).or(base.first_step),
+            max_step: self.max_step.or(scene.max_step).unwrap_or(base.max_step),
+            max_steps: self.max_steps.or(scene.max_steps).unwrap_or(base.max_steps),
+            ..base
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effects::Kind;
+
+    fn scene() -> Settings {
+        Settings {
+            t_span: Some((0.0, 2.0)),
+            rtol: Some(1e-5),
+            atol: Some(1e-7),
+            max_step: Some(0.1),
+            max_steps: Some(50),
+            first_step: Some(1e-3),
+            disable: Some(Disabled::none().with(Kind::Gravity)),
+        }
+    }
+
+    #[test]
+    fn the_caller_beats_the_scene_which_beats_the_default() {
+        let caller = Requested {
+            t_span: Some((1.0, 0.0)),
+            rtol: Some(Tol::PerComponent(vec![1e-4, 1e-4])),
+            atol: Some(Tol::Scalar(1e-9)),
+            first_step: Some(0.5),
+            max_step: Some(0.2),
+            max_steps: Some(7),
+            disable: Some(Disabled::none()),
+        };
+        let r = caller.resolve(&scene(), Rk45Options::default()).unwrap();
+        assert_eq!(r.t_span, (1.0, 0.0));
+        assert_eq!(r.disabled, Disabled::none());
+        assert_eq!(r.opts.rtol, Tol::PerComponent(vec![1e-4, 1e-4]));
+        assert_eq!(r.opts.atol, Tol::Scalar(1e-9));
+        assert_eq!(
+            (r.opts.first_step, r.opts.max_step, r.opts.max_steps),
+            (Some(0.5), 0.2, 7)
+        );
+
+        let r = Requested::default()
+            .resolve(&scene(), Rk45Options::default())
+            .unwrap();
+        assert_eq!(r.t_span, (0.0, 2.0));
+        assert_eq!(r.disabled, Disabled::none().with(Kind::Gravity));
+        assert_eq!(
+            (r.opts.rtol, r.opts.atol),
+            (Tol::Scalar(1e-5), Tol::Scalar(1e-7))
+        );
+        assert_eq!(
+            (r.opts.first_step, r.opts.max_step, r.opts.max_steps),
+            (Some(1e-3), 0.1, 50)
+        );
+
+        let caller = Requested {
+            t_span: Some((0.0, 1.0)),
+            ..Default::default()
+        };
+        let base = Rk45Options {
+            dense: true,
+            ..Default::default()
+        };
+        let r = caller.resolve(&Settings::default(), base.clone()).unwrap();
+        assert_eq!((r.opts, r.disabled), (base, Disabled::none()));
+    }
+
+    #[test]
+    fn a_run_without_t_span_names_it() {
+        let e = Requested::default()
+            .resolve(&Settings::default(), Rk45Options::default())
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "t_span: expected (t0, t_end): the scene sets none, got None"
+        );
+    }
+}
