@@ -4,7 +4,7 @@ models, and our simulate() against SciPy solve_ivp(RK45) driving pinocchio.aba.
     python benches/compare_pinocchio.py            # full table
     python benches/compare_pinocchio.py --quick    # fewer repeats
 
-Models are design.md §5's: chainN (revolute, axes alternating y, z; 0.3 m links; 1 kg, COM
+Models are docs/benchmarks.md's: chainN (revolute, axes alternating y, z; 0.3 m links; 1 kg, COM
 (0.15, 0, 0), inertia diag(1e-3, 7.5e-3, 7.5e-3)), q = 0.3 rad, v = 0, gravity (0, 0, -9.81).
 Ratios are measured in one run: this machine is shared and noisy, so compare ratios, not µs.
 """

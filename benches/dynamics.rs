@@ -1,5 +1,5 @@
 //! Rust-native costs of forward dynamics, inverse dynamics, the GIM and one RK45 step on the
-//! benchmark models of design.md §5. `cargo bench --bench dynamics`.
+//! benchmark models of docs/benchmarks.md. `cargo bench --bench dynamics`.
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};

@@ -1,5 +1,5 @@
 //! Cost of one right-hand-side evaluation (`q̇`, `v̇` of the simulate loop) with each effect
-//! declared alone, on chain7 and chain100 (design.md §5), against the bare forward dynamics.
+//! declared alone, on chain7 and chain100 (docs/benchmarks.md), against the bare forward dynamics.
 //! A scene pays only for what it declares: `free` (no effect) ≈ `base`, `gravity` ≈ `free`
 //! (gravity rides on the base acceleration), and `all, disable=...` costs what the remaining
 //! effects cost. `cargo bench --bench effects`.

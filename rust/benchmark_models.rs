@@ -1,4 +1,4 @@
-//! The models every benchmark uses (design.md §5), so figures are comparable across tools.
+//! The models every benchmark uses (docs/benchmarks.md), so figures are comparable across tools.
 use crate::body::RigidBody;
 use crate::joint::Joint;
 use crate::model::Model;

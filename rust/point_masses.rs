@@ -1,12 +1,12 @@
 //! The equimomental set of seven point masses of a rigid body (paper, Sections II and V).
 //!
 //! Seven masses at seven vertices of a box of half-sides `h`, centred at a chosen point `p`,
-//! edges along the body axes. Written with the right-hand sides divided by `h` (design.md §1)
-//! the 7×7 system is a ±1 sign matrix: the first seven rows and columns of the 8×8
-//! Hadamard matrix of the box's vertices. Its solution is closed-form — `H Hᵀ = 8 I`, and the
-//! missing eighth equation is chosen so the unused vertex (−,−,−) gets zero mass — with entries
-//! 0 and ±1/4 and condition number 2.83, whatever the body's shape. The paper's h-scaled form
-//! has condition number ~(h_max/h_min)² and is never used.
+//! edges along the body axes. Written with the right-hand sides divided by `h` (docs/method.md
+//! §1.1, paper eqs 1–7) the 7×7 system is a ±1 sign matrix: the first seven rows and columns of
+//! the 8×8 Hadamard matrix of the box's vertices. Its solution is closed-form — `H Hᵀ = 8 I`,
+//! and the missing eighth equation is chosen so the unused vertex (−,−,−) gets zero mass — with
+//! entries 0 and ±1/4 and condition number 2.83, whatever the body's shape. The paper's
+//! h-scaled form has condition number ~(h_max/h_min)² and is never used.
 use crate::body::RigidBody;
 use crate::spatial::Vec3;
 

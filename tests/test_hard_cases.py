@@ -136,12 +136,13 @@ def test_quaternion_joint_passes_the_same_motion_conserving_energy():
 # 2. Slender and flat bodies, d/a from 1e-2 to 1e-8
 # ============================================================================================
 RATIOS = [1e-2, 1e-4, 1e-6, 1e-8]
-SIGNS = np.array([  # design.md Table I
+SIGNS = np.array([  # docs/method.md §1, paper Table I
     [1, 1, 1], [1, 1, -1], [-1, 1, -1], [-1, 1, 1], [-1, -1, 1], [1, -1, 1], [1, -1, -1]])
 
 
 def exact_point_masses(m, com, inertia, center):
-    """The seven masses by design.md §1, at 50 digits (mpmath): the ±1 sign system."""
+    """The seven masses by docs/method.md §1 (paper eqs 1–7), at 50 digits (mpmath): the ±1 sign
+    system."""
     mp.mp.dps = 50
     m = mp.mpf(m)
     inertia = [[mp.mpf(float(x)) for x in row] for row in inertia]

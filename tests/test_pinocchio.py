@@ -278,12 +278,12 @@ def test_rod_inertia_convention_matches_pinocchio():
 
 
 # ---------------------------------------------------------------------------------------------
-# Benchmark models: chainN (design.md §5) and Panda (example-robot-data)
+# Benchmark models: chainN (docs/benchmarks.md) and Panda (example-robot-data)
 # ---------------------------------------------------------------------------------------------
 
 
 def chain_tree(n):
-    """design.md §5 chainN: revolute axes y, z, y, …; joint k at (0.3, 0, 0) in body k−1;
+    """docs/benchmarks.md chainN: revolute axes y, z, y, …; joint k at (0.3, 0, 0) in body k−1;
     1 kg, COM (0.15, 0, 0), inertia diag(1e-3, 7.5e-3, 7.5e-3)."""
     import pointmass_dyn as pmd
     from conftest import BodySpec, TreeSpec

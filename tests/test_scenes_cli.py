@@ -89,7 +89,7 @@ def test_bundled_chain7_is_the_benchmark():
     np.testing.assert_array_equal(s.q0, np.full(7, 0.3))
     np.testing.assert_array_equal(s.v0, np.zeros(7))
     assert (s.rtol, s.atol, s.t_span) == (1e-6, 1e-9, (0.0, 10.0))
-    # Same model as design.md §5 built in Python: same mass matrix and dynamics.
+    # Same model as docs/benchmarks.md's chainN built in Python: same mass matrix and dynamics.
     ref = pmd.Model()
     body = pmd.RigidBody(1.0, [0.15, 0, 0], np.diag([1e-3, 7.5e-3, 7.5e-3]))
     for k in range(7):
@@ -346,7 +346,8 @@ def test_cli_point_masses_prints_the_papers_masses(capsys):
     rows = [line.split() for line in out.splitlines() if re.match(r"^\s+[1-7]\s", line)]
     assert [int(r[0]) for r in rows] == list(range(1, 8))
     masses = np.array([float(r[1]) for r in rows])
-    # design.md §1: (0.6275, −0.5434, 1.1709, 0, 1.1709, −0.5434, 0.6275) kg, total m.
+    # docs/conventions.md §7: (0.6275, −0.5434, 1.1709, 0, 1.1709, −0.5434, 0.6275) kg,
+    # total m.
     np.testing.assert_allclose(masses, [0.6275, -0.5434, 1.1709, 0, 1.1709, -0.5434, 0.6275], atol=1e-4)
     assert abs(masses.sum() - 2.51) <= 1e-5
     # Printed positions are the world positions at q0: the points of the model itself.

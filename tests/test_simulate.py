@@ -17,7 +17,7 @@ from scipy.spatial.transform import Rotation
 from scipy.special import ellipk
 
 G = np.array([0.0, 0.0, -9.81])
-# Compound pendulum about its end, released horizontal (amplitude 90°): design.md §3.
+# Compound pendulum about its end, released horizontal (amplitude 90°): docs/conventions.md §7.
 I_O = PAPER_M * PAPER_A**2 / 3 + PAPER_M * PAPER_D**2 / 16
 PERIOD = 4.0 * np.sqrt(I_O / (PAPER_M * 9.81 * PAPER_A / 2)) * ellipk(0.5)
 MGA2 = PAPER_M * 9.81 * PAPER_A / 2  # energy scale of the pendulum (J)
@@ -40,7 +40,7 @@ def rotations(model: pmd.Model, qs) -> np.ndarray:
 
 
 def euler_rate_matrix(phi: float, theta: float) -> np.ndarray:
-    """L(φ, θ) of design.md §2: world angular velocity = L · (φ̇, θ̇, ψ̇)."""
+    """L(φ, θ) (docs/method.md §2, paper eq 38b): world angular velocity = L · (φ̇, θ̇, ψ̇)."""
     s, c = np.sin, np.cos
     return np.array(
         [[0.0, -s(phi), c(phi) * s(theta)], [0.0, c(phi), s(phi) * s(theta)], [1.0, 0.0, c(theta)]]

@@ -1,7 +1,10 @@
 //! Viscous joint dampers: `τ = −c v` on every speed of each selected joint (isotropic on the
 //! 3 speeds of a spherical joint). Power `−c |v|²`.
-use super::{resolve_joints, Context, Fields, ForceLaw, JointRef, PerJoint, Sign};
-use crate::error::{Error, Result};
+use super::{
+    required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
+    Sign,
+};
+use crate::error::Result;
 use crate::model::Model;
 use crate::spatial::Vec6;
 
@@ -32,24 +35,29 @@ impl Damper {
     }
 
     pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<Damper> {
-        let name = f.string("name")?;
-        let joints = f.joints("joints")?;
-        let damping = f
-            .per_joint("damping")?
-            .ok_or_else(|| Error::arg("damping", "a number >= 0 or one per joint", "nothing"))?;
+        let (name, joints) = f.name_and_joints()?;
+        let damping = f.per_joint("damping")?;
+        let damping = required(damping, "damping", "a number >= 0 or one per joint")?;
         Damper::new(name, joints, damping)
     }
+}
 
-    pub fn build(&self, model: &Model) -> Result<DamperLaw> {
+impl Declaration for Damper {
+    fn kind(&self) -> Kind {
+        Kind::Dampers
+    }
+    fn label(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         let slots = resolve_joints(model, &self.joints, "joints")?;
         let c = self.damping.expand(slots.len(), "damping", "joint")?;
-        let mut dofs = Vec::new();
-        for (s, c) in slots.iter().zip(c) {
-            for k in 0..s.joint.nv() {
-                dofs.push((s.v_index + k, c));
-            }
-        }
-        Ok(DamperLaw { dofs })
+        let dofs = slots
+            .iter()
+            .zip(c)
+            .flat_map(|(s, c)| s.speeds().map(move |i| (i, c)))
+            .collect();
+        Ok(Box::new(DamperLaw { dofs }))
     }
 }
 

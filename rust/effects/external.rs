@@ -8,7 +8,10 @@
 //! origin): `[R p × f + m; f]`, with `R` composed along the link's ancestors, so a force on
 //! link `i` costs O(depth of i) and nothing when undeclared.
 use super::table::Table;
-use super::{check_values, resolve_body, Context, Fields, ForceLaw, JointRef, Matrix, Sign};
+use super::{
+    check_values, resolve_body, Context, Declaration, Fields, ForceLaw, JointRef, Kind, Matrix,
+    Sign,
+};
 use crate::error::{check_finite, Error, Result};
 use crate::model::Model;
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
@@ -189,8 +192,16 @@ impl External {
             )
         }
     }
+}
 
-    pub fn build(&self, model: &Model) -> Result<ExternalLaw> {
+impl Declaration for External {
+    fn kind(&self) -> Kind {
+        Kind::External
+    }
+    fn label(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         let b = resolve_body(model, &self.body, "body")?;
         let rec = &model.bodies[b];
         let link = rec.link.ok_or_else(|| {
@@ -210,7 +221,7 @@ impl External {
             l = model.links[i].parent;
         }
         path.reverse();
-        Ok(ExternalLaw {
+        Ok(Box::new(ExternalLaw {
             link,
             path,
             point: rec.in_link.act_point(&self.point),
@@ -219,7 +230,7 @@ impl External {
             load: self.load.clone(),
             hint: 0,
             row: [0.0; 6],
-        })
+        }))
     }
 }
 

@@ -3,7 +3,10 @@
 //! a quaternion spherical joint's angular velocity `ω`. `F` is the friction torque (N·m) or
 //! force (N) reached when sliding well above `v_eps`; below it the law is viscous with slope
 //! `F / v_eps`, which keeps the equations smooth (no stick-slip switching). Power ≤ 0.
-use super::{resolve_joints, Context, Fields, ForceLaw, JointRef, PerJoint, Sign};
+use super::{
+    required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
+    Sign,
+};
 use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::model::Model;
@@ -52,16 +55,22 @@ impl Friction {
     }
 
     pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<Friction> {
-        let name = f.string("name")?;
-        let joints = f.joints("joints")?;
+        let (name, joints) = f.name_and_joints()?;
         let friction = f.per_joint("friction")?;
         let v_eps = f.number("v_eps")?;
-        let friction = friction
-            .ok_or_else(|| Error::arg("friction", "a number >= 0 or one per joint", "nothing"))?;
+        let friction = required(friction, "friction", "a number >= 0 or one per joint")?;
         Friction::new(name, joints, friction, v_eps)
     }
+}
 
-    pub fn build(&self, model: &Model) -> Result<FrictionLaw> {
+impl Declaration for Friction {
+    fn kind(&self) -> Kind {
+        Kind::Friction
+    }
+    fn label(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         let slots = resolve_joints(model, &self.joints, "joints")?;
         let f = self.friction.expand(slots.len(), "friction", "joint")?;
         let mut law = FrictionLaw {
@@ -72,14 +81,10 @@ impl Friction {
         for (s, f) in slots.iter().zip(f) {
             match s.joint {
                 Joint::Spherical => law.ball.push((s.v_index, f)),
-                _ => {
-                    for k in 0..s.joint.nv() {
-                        law.scalar.push((s.v_index + k, f));
-                    }
-                }
+                _ => law.scalar.extend(s.speeds().map(|i| (i, f))),
             }
         }
-        Ok(law)
+        Ok(Box::new(law))
     }
 }
 

@@ -3,13 +3,19 @@
 //!
 //! Two layers:
 //! * [`Effect`] is the declaration a scene stores (TOML `[[effect]]` tables, `pmd.Spring(...)`
-//!   and friends in Python): plain, comparable data that names joints and bodies but does not
-//!   know the model yet.
+//!   and friends in Python): plain, comparable, serialisable data that names joints and
+//!   bodies but does not know the model yet. Each variant holds a type from its own file
+//!   that implements [`Declaration`] (its family, its name, how it builds its law);
+//!   `each_effect!` is the one match that reaches them.
 //! * [`ForceLaw`] is the one trait the engine calls. [`Effects::new`] resolves each declaration
 //!   against the model (joint names to coordinate slots, tables to their columns) into a
 //!   `Box<dyn ForceLaw>` with everything it needs preallocated, so evaluating it allocates
-//!   nothing. A new effect is a new file here with a declaration, a law and `from_toml`, plus
-//!   one variant and one match arm below; `simulate.rs` and the recursion do not change.
+//!   nothing. `simulate.rs` and the recursion do not change for a new effect.
+//!
+//! Adding an effect type is a new file here (the declaration and its `Declaration`, the law,
+//! `from_toml`, tests), one variant of [`Effect`] (appended), one line in `each_effect!`, a row in
+//! `TOML_TYPES`, then persistence, the Python binding, stubs and docs: every step, with the
+//! files and functions, is in `docs/adding-an-effect.md`.
 //!
 //! Uniform gravity is a law whose [`ForceLaw::base_acceleration`] the engine puts on the
 //! base twist rate `[0; −g]`, so it costs no extra pass. Every other law adds generalized
@@ -82,6 +88,35 @@ pub enum Effect {
     External(External),
 }
 
+/// What each declared effect type implements, in its own file: the declaration's family,
+/// its user-given name and how it resolves against a model into the [`ForceLaw`] the engine
+/// evaluates. [`Effect`]'s methods reach these through [`each_effect!`].
+pub trait Declaration {
+    /// The family a global `disable` switch turns off.
+    fn kind(&self) -> Kind;
+    /// The name the user gave (the effect's output key), if any.
+    fn label(&self) -> Option<&str>;
+    /// Resolves the declaration against `model`, with everything the law needs allocated
+    /// here, once. Errors name the field at fault (`joints`, `stiffness`, `values`, ...).
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>>;
+}
+
+/// The one match over [`Effect`]'s variants: `each_effect!(effect, gravity(g) => a, e => b)`
+/// evaluates `a` for gravity (`g`: its `&Vec3`) and `b` for every other variant, with `e`
+/// bound to the variant's [`Declaration`]. A new effect type adds its line here.
+macro_rules! each_effect {
+    ($effect:expr, gravity($g:pat) => $gravity:expr, $e:ident => $each:expr) => {
+        match $effect {
+            Effect::Gravity { g: $g } => $gravity,
+            Effect::Spring($e) => $each,
+            Effect::Damper($e) => $each,
+            Effect::Friction($e) => $each,
+            Effect::Torque($e) => $each,
+            Effect::External($e) => $each,
+        }
+    };
+}
+
 impl Effect {
     pub fn gravity(g: Vec3) -> Result<Effect> {
         check_finite("gravity", g.as_slice())?;
@@ -90,26 +125,12 @@ impl Effect {
 
     /// The family this effect belongs to (what `disable` switches off).
     pub fn kind(&self) -> Kind {
-        match self {
-            Effect::Gravity { .. } => Kind::Gravity,
-            Effect::Spring(_) => Kind::Springs,
-            Effect::Damper(_) => Kind::Dampers,
-            Effect::Friction(_) => Kind::Friction,
-            Effect::Torque(_) => Kind::Torques,
-            Effect::External(_) => Kind::External,
-        }
+        each_effect!(self, gravity(_g) => Kind::Gravity, e => e.kind())
     }
 
     /// The name the user gave, if any.
     pub fn label(&self) -> Option<&str> {
-        match self {
-            Effect::Gravity { .. } => None,
-            Effect::Spring(e) => e.name.as_deref(),
-            Effect::Damper(e) => e.name.as_deref(),
-            Effect::Friction(e) => e.name.as_deref(),
-            Effect::Torque(e) => e.name.as_deref(),
-            Effect::External(e) => e.name.as_deref(),
-        }
+        each_effect!(self, gravity(_g) => None, e => e.label())
     }
 
     /// The user's name, or the family's.
@@ -120,66 +141,62 @@ impl Effect {
     /// Resolves the declaration against `model` into the law the engine evaluates. Errors
     /// name the field at fault (`joints`, `stiffness`, `values`, ...).
     pub fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
-        Ok(match self {
-            Effect::Gravity { g } => Box::new(gravity::GravityLaw { g: *g }),
-            Effect::Spring(e) => Box::new(e.build(model)?),
-            Effect::Damper(e) => Box::new(e.build(model)?),
-            Effect::Friction(e) => Box::new(e.build(model)?),
-            Effect::Torque(e) => e.build(model)?,
-            Effect::External(e) => Box::new(e.build(model)?),
-        })
+        each_effect!(
+            self,
+            gravity(g) => Ok(Box::new(gravity::GravityLaw { g: *g })),
+            e => e.build(model)
+        )
     }
 
     /// Parses one `[[effect]]` table of a scene file. Errors name the key (without the
     /// `effect[k].` prefix, which the scene adds).
     pub fn from_toml(table: &toml::Table) -> Result<Effect> {
         let mut f = Fields::new(table);
+        let one_of = || {
+            let names: Vec<String> = TOML_TYPES.iter().map(|t| format!("\"{}\"", t.0)).collect();
+            format!("one of {}", names.join(", "))
+        };
         let ty = f
             .string("type")?
-            .ok_or_else(|| Error::arg("type", format!("one of {TOML_TYPES}"), "nothing"))?;
-        let keys: &[&str] = match ty.as_str() {
-            "gravity" => &["g"],
-            "spring" => spring::KEYS,
-            "damper" => damper::KEYS,
-            "friction" => friction::KEYS,
-            "torque" => torque::KEYS_CONSTANT,
-            "tabulated_torque" => torque::KEYS_TABULATED,
-            "pd_torque" => torque::KEYS_PD,
-            "external" => external::KEYS,
-            _ => &[],
+            .ok_or_else(|| Error::arg("type", one_of(), "nothing"))?;
+        let Some((_, keys, parse)) = TOML_TYPES.iter().find(|t| t.0 == ty) else {
+            return Err(Error::arg("type", one_of(), format!("\"{ty}\"")));
         };
         // A misspelt key first: it is usually why a required one is missing.
-        if !keys.is_empty() {
-            f.check_keys(&ty, keys)?;
-        }
-        let e = match ty.as_str() {
-            "gravity" => {
-                let g = f
-                    .vec3("g")?
-                    .ok_or_else(|| Error::arg("g", "a 3-vector (m/s², world frame)", "nothing"))?;
-                Effect::gravity(g)?
-            }
-            "spring" => Effect::Spring(Spring::from_toml(&mut f)?),
-            "damper" => Effect::Damper(Damper::from_toml(&mut f)?),
-            "friction" => Effect::Friction(Friction::from_toml(&mut f)?),
-            "torque" | "tabulated_torque" | "pd_torque" => {
-                Effect::Torque(Torque::from_toml(&ty, &mut f)?)
-            }
-            "external" => Effect::External(External::from_toml(&mut f)?),
-            other => {
-                return Err(Error::arg(
-                    "type",
-                    format!("one of {TOML_TYPES}"),
-                    format!("\"{other}\""),
-                ))
-            }
-        };
-        Ok(e)
+        f.check_keys(&ty, keys)?;
+        parse(&ty, &mut f)
     }
 }
 
-const TOML_TYPES: &str = "\"gravity\", \"spring\", \"damper\", \"friction\", \"torque\", \
-\"tabulated_torque\", \"pd_torque\", \"external\"";
+/// A scene file's `[[effect]]` parser: `(type, f)` to the declared effect.
+type ParseToml = fn(&str, &mut Fields<'_>) -> Result<Effect>;
+
+/// Every `type` of a scene file's `[[effect]]` table, with its keys (besides `type`) and its
+/// parser, in the order error messages list them. A new effect type adds a row.
+const TOML_TYPES: &[(&str, &[&str], ParseToml)] = &[
+    ("gravity", gravity::KEYS, |_, f| gravity::from_toml(f)),
+    ("spring", spring::KEYS, |_, f| {
+        Ok(Effect::Spring(Spring::from_toml(f)?))
+    }),
+    ("damper", damper::KEYS, |_, f| {
+        Ok(Effect::Damper(Damper::from_toml(f)?))
+    }),
+    ("friction", friction::KEYS, |_, f| {
+        Ok(Effect::Friction(Friction::from_toml(f)?))
+    }),
+    ("torque", torque::KEYS_CONSTANT, |ty, f| {
+        Ok(Effect::Torque(Torque::from_toml(ty, f)?))
+    }),
+    ("tabulated_torque", torque::KEYS_TABULATED, |ty, f| {
+        Ok(Effect::Torque(Torque::from_toml(ty, f)?))
+    }),
+    ("pd_torque", torque::KEYS_PD, |ty, f| {
+        Ok(Effect::Torque(Torque::from_toml(ty, f)?))
+    }),
+    ("external", external::KEYS, |_, f| {
+        Ok(Effect::External(External::from_toml(f)?))
+    }),
+];
 
 /// Effect families: what a global disable switch turns off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -213,17 +230,21 @@ impl Kind {
         }
     }
 
+    /// The singular a user may write instead of `name` (the same word when there is none).
+    fn singular(self) -> &'static str {
+        match self {
+            Kind::Springs => "spring",
+            Kind::Dampers => "damper",
+            Kind::Torques => "torque",
+            other => other.name(),
+        }
+    }
+
     /// The family named `name` (singular forms accepted: `spring`, `damper`, `torque`).
     pub fn parse(name: &str) -> Option<Kind> {
-        Some(match name {
-            "gravity" => Kind::Gravity,
-            "springs" | "spring" => Kind::Springs,
-            "dampers" | "damper" => Kind::Dampers,
-            "friction" => Kind::Friction,
-            "torques" | "torque" => Kind::Torques,
-            "external" => Kind::External,
-            _ => return None,
-        })
+        Kind::ALL
+            .into_iter()
+            .find(|k| k.name() == name || k.singular() == name)
     }
 
     fn bit(self) -> u8 {
@@ -251,9 +272,13 @@ impl Disabled {
         for (k, n) in names.iter().enumerate() {
             let n = n.as_ref();
             let kind = Kind::parse(n).ok_or_else(|| {
+                let names: Vec<String> = Kind::ALL
+                    .iter()
+                    .map(|k| format!("\"{}\"", k.name()))
+                    .collect();
                 Error::arg(
                     format!("{arg}[{k}]"),
-                    "one of \"gravity\", \"springs\", \"dampers\", \"friction\", \"torques\", \"external\"",
+                    format!("one of {}", names.join(", ")),
                     format!("\"{n}\""),
                 )
             })?;
@@ -374,6 +399,13 @@ pub struct JointSlot {
     pub joint: Joint,
     pub q_index: usize,
     pub v_index: usize,
+}
+
+impl JointSlot {
+    /// The joint's speeds: their indices in `v` (and in `τ`).
+    pub fn speeds(&self) -> std::ops::Range<usize> {
+        self.v_index..self.v_index + self.joint.nv()
+    }
 }
 
 /// Resolves a body name or index to the body's index; errors name `arg`.
@@ -678,6 +710,21 @@ impl Probe {
         }
     }
 
+    /// `ID(q, 0, 0)` into `id_out`: the joint forces that hold the model at rest at `cx.q`
+    /// against gravity `g` and, `with_wrenches`, the link wrenches in `wrenches`.
+    fn inverse_at_rest(&mut self, cx: &Context<'_>, g: &Vec3, with_wrenches: bool) {
+        recursive::inverse_dynamics(
+            cx.model,
+            &mut self.data,
+            cx.q,
+            &self.zeros,
+            &self.zeros,
+            g,
+            with_wrenches.then_some(&self.wrenches[..]),
+            &mut self.id_out,
+        );
+    }
+
     /// Generalized force of each enabled effect at `cx`, row-major `len × nv` into `out`
     /// (gravity's included: `Nᵀ f^G`).
     pub fn forces(
@@ -690,16 +737,7 @@ impl Probe {
         for (k, item) in effects.items.iter_mut().enumerate() {
             let row = &mut out[k * nv..(k + 1) * nv];
             if let Some(g) = item.law.base_acceleration() {
-                recursive::inverse_dynamics(
-                    cx.model,
-                    &mut self.data,
-                    cx.q,
-                    &self.zeros,
-                    &self.zeros,
-                    &g,
-                    None,
-                    &mut self.id_out,
-                );
+                self.inverse_at_rest(cx, &g, false);
                 for (r, x) in row.iter_mut().zip(&self.id_out) {
                     *r = -x;
                 }
@@ -710,16 +748,7 @@ impl Probe {
             let wrote = item.law.apply(cx, &mut self.tau, &mut self.wrenches)?;
             row.copy_from_slice(&self.tau);
             if wrote {
-                recursive::inverse_dynamics(
-                    cx.model,
-                    &mut self.data,
-                    cx.q,
-                    &self.zeros,
-                    &self.zeros,
-                    &Vec3::zeros(),
-                    Some(&self.wrenches),
-                    &mut self.id_out,
-                );
+                self.inverse_at_rest(cx, &Vec3::zeros(), true);
                 for (r, x) in row.iter_mut().zip(&self.id_out) {
                     *r -= x;
                 }
@@ -737,6 +766,12 @@ impl Probe {
 /// unknown keys up front.
 pub struct Fields<'a> {
     table: &'a toml::Table,
+}
+
+/// A key's value that must be given: `value`, or an error naming `key`, what was `expected`
+/// and "nothing".
+pub fn required<T>(value: Option<T>, key: &str, expected: &str) -> Result<T> {
+    value.ok_or_else(|| Error::arg(key, expected, "nothing"))
 }
 
 fn toml_got(v: &toml::Value) -> String {
@@ -786,58 +821,59 @@ impl<'a> Fields<'a> {
         Ok(())
     }
 
-    pub fn string(&mut self, key: &'static str) -> Result<Option<String>> {
+    /// `key`'s value as `convert` reads it, `None` when the key is absent; an error naming
+    /// the key and what was `expected` when `convert` refuses the value.
+    fn typed<T>(
+        &mut self,
+        key: &'static str,
+        expected: &str,
+        convert: impl Fn(&toml::Value) -> Option<T>,
+    ) -> Result<Option<T>> {
         match self.get(key) {
             None => Ok(None),
-            Some(toml::Value::String(s)) => Ok(Some(s.clone())),
-            Some(v) => Err(Error::arg(key, "a string", toml_got(v))),
+            Some(v) => convert(v)
+                .map(Some)
+                .ok_or_else(|| Error::arg(key, expected, toml_got(v))),
         }
+    }
+
+    pub fn string(&mut self, key: &'static str) -> Result<Option<String>> {
+        self.typed(key, "a string", |v| v.as_str().map(str::to_string))
     }
 
     pub fn number(&mut self, key: &'static str) -> Result<Option<f64>> {
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => toml_number(v)
-                .map(Some)
-                .ok_or_else(|| Error::arg(key, "a number", toml_got(v))),
-        }
+        self.typed(key, "a number", toml_number)
     }
 
     pub fn list(&mut self, key: &'static str) -> Result<Option<Vec<f64>>> {
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => list_of_numbers(v)
-                .map(Some)
-                .ok_or_else(|| Error::arg(key, "a list of numbers", toml_got(v))),
-        }
+        self.typed(key, "a list of numbers", list_of_numbers)
     }
 
     pub fn vec3(&mut self, key: &'static str) -> Result<Option<Vec3>> {
-        match self.get(key) {
+        let x = self.typed(key, "a list of 3 numbers", |v| {
+            list_of_numbers(v).filter(|x| x.len() == 3)
+        })?;
+        match x {
             None => Ok(None),
-            Some(v) => match list_of_numbers(v) {
-                Some(x) if x.len() == 3 => {
-                    check_finite(key, &x)?;
-                    Ok(Some(Vec3::new(x[0], x[1], x[2])))
-                }
-                _ => Err(Error::arg(key, "a list of 3 numbers", toml_got(v))),
-            },
+            Some(x) => {
+                check_finite(key, &x)?;
+                Ok(Some(Vec3::new(x[0], x[1], x[2])))
+            }
         }
+    }
+
+    /// The `name` and `joints` keys of an effect on joints.
+    pub fn name_and_joints(&mut self) -> Result<(Option<String>, Option<Vec<JointRef>>)> {
+        Ok((self.string("name")?, self.joints("joints")?))
     }
 
     /// A number (for all joints) or a list of numbers (one per joint).
     pub fn per_joint(&mut self, key: &'static str) -> Result<Option<PerJoint>> {
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => {
-                if let Some(x) = toml_number(v) {
-                    return Ok(Some(PerJoint::All(x)));
-                }
-                list_of_numbers(v)
-                    .map(|x| Some(PerJoint::Each(x)))
-                    .ok_or_else(|| Error::arg(key, "a number or a list of numbers", toml_got(v)))
-            }
-        }
+        self.typed(key, "a number or a list of numbers", |v| {
+            toml_number(v)
+                .map(PerJoint::All)
+                .or_else(|| list_of_numbers(v).map(PerJoint::Each))
+        })
     }
 
     /// A body name or index, or a list of them.
@@ -849,26 +885,14 @@ impl<'a> Fields<'a> {
                 _ => None,
             }
         };
-        match self.get(key) {
-            None => Ok(None),
-            Some(v) => {
-                let bad = || {
-                    Error::arg(
-                        key,
-                        "a body name or index (>= 0), or a list of them",
-                        toml_got(v),
-                    )
-                };
-                if let toml::Value::Array(a) = v {
-                    a.iter()
-                        .map(|x| one(x).ok_or_else(bad))
-                        .collect::<Result<Vec<_>>>()
-                        .map(Some)
-                } else {
-                    one(v).map(|r| Some(vec![r])).ok_or_else(bad)
-                }
-            }
-        }
+        self.typed(
+            key,
+            "a body name or index (>= 0), or a list of them",
+            |v| match v {
+                toml::Value::Array(a) => a.iter().map(one).collect(),
+                _ => one(v).map(|r| vec![r]),
+            },
+        )
     }
 
     /// A table of numbers: a list (one column) or a list of equal-length rows. Returns

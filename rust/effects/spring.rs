@@ -4,7 +4,10 @@
 //! rest orientation: `τ = −k θ` (body-frame speeds, which is exactly `−∂V/∂` of the potential
 //! `½ k |θ|²` since `θ` is an eigenvector of the SO(3) Jacobians). Euler-angle
 //! (`SphericalZYZ`) joints are refused: use the quaternion joint.
-use super::{resolve_joints, Context, Fields, ForceLaw, JointRef, PerJoint, Sign};
+use super::{
+    required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
+    Sign,
+};
 use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::kinematics::LinkState;
@@ -46,16 +49,22 @@ impl Spring {
     }
 
     pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<Spring> {
-        let name = f.string("name")?;
-        let joints = f.joints("joints")?;
+        let (name, joints) = f.name_and_joints()?;
         let stiffness = f.per_joint("stiffness")?;
         let rest = f.per_joint("rest")?;
-        let stiffness = stiffness
-            .ok_or_else(|| Error::arg("stiffness", "a number >= 0 or one per joint", "nothing"))?;
+        let stiffness = required(stiffness, "stiffness", "a number >= 0 or one per joint")?;
         Spring::new(name, joints, stiffness, rest)
     }
+}
 
-    pub fn build(&self, model: &Model) -> Result<SpringLaw> {
+impl Declaration for Spring {
+    fn kind(&self) -> Kind {
+        Kind::Springs
+    }
+    fn label(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         let slots = resolve_joints(model, &self.joints, "joints")?;
         let k = self.stiffness.expand(slots.len(), "stiffness", "joint")?;
         let ncoords: usize = slots.iter().map(|s| s.joint.nq()).sum();
@@ -117,7 +126,7 @@ impl Spring {
             }
             at += s.joint.nq();
         }
-        Ok(law)
+        Ok(Box::new(law))
     }
 }
 

@@ -606,3 +606,49 @@ fn toml_tables_parse_and_refuse() {
         assert_eq!(arg, key, "{text}: {err}");
     }
 }
+
+/// The lists of valid names in error messages come from the registries (`TOML_TYPES`,
+/// `Kind::ALL`); these are the messages as they were written out by hand before.
+#[test]
+fn error_messages_list_every_type_and_family() {
+    let parse = |s: &str| Effect::from_toml(&s.parse::<toml::Table>().unwrap());
+    let types = "one of \"gravity\", \"spring\", \"damper\", \"friction\", \"torque\", \
+\"tabulated_torque\", \"pd_torque\", \"external\"";
+    for (text, got) in [
+        ("type = \"springs\"", "\"springs\""),
+        ("g = [0, 0, 1]", "nothing"),
+    ] {
+        let Error::InvalidArgument {
+            arg,
+            expected,
+            got: g,
+        } = parse(text).unwrap_err()
+        else {
+            panic!()
+        };
+        assert_eq!(
+            (arg.as_str(), expected.as_str(), g.as_str()),
+            ("type", types, got)
+        );
+    }
+    let err = Disabled::parse(&["sprigs"], "disable").unwrap_err();
+    let Error::InvalidArgument { expected, .. } = err else {
+        panic!()
+    };
+    assert_eq!(
+        expected,
+        "one of \"gravity\", \"springs\", \"dampers\", \"friction\", \"torques\", \"external\""
+    );
+    for (name, kind) in [
+        ("spring", Kind::Springs),
+        ("springs", Kind::Springs),
+        ("damper", Kind::Dampers),
+        ("torque", Kind::Torques),
+        ("friction", Kind::Friction),
+        ("external", Kind::External),
+        ("gravity", Kind::Gravity),
+    ] {
+        assert_eq!(Kind::parse(name), Some(kind), "{name}");
+    }
+    assert_eq!(Kind::parse("frictions"), None);
+}

@@ -10,7 +10,8 @@ use std::sync::Arc;
 
 use super::table::Table;
 use super::{
-    resolve_joints, Context, Fields, ForceLaw, JointRef, JointSlot, Matrix, PerJoint, Sign,
+    required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, JointSlot, Kind,
+    Matrix, PerJoint, Sign,
 };
 use crate::error::{Error, Result};
 use crate::joint::Joint;
@@ -178,23 +179,23 @@ impl Torque {
     }
 
     pub(super) fn from_toml(ty: &str, f: &mut Fields<'_>) -> Result<Torque> {
-        let name = f.string("name")?;
-        let joints = f.joints("joints")?;
-        let need = |key: &str, what: &str| Error::arg(key, what, "nothing");
+        let (name, joints) = f.name_and_joints()?;
+        let times = "a list of increasing times";
         match ty {
             "torque" => {
-                let tau = f
-                    .per_joint("tau")?
-                    .ok_or_else(|| need("tau", "a number or one per joint speed"))?;
+                let tau = f.per_joint("tau")?;
+                let tau = required(tau, "tau", "a number or one per joint speed")?;
                 Torque::constant(name, joints, tau)
             }
             "tabulated_torque" => {
                 let time = f.list("time")?;
                 let values = f.matrix("values")?;
-                let time = time.ok_or_else(|| need("time", "a list of increasing times"))?;
-                let values = values.ok_or_else(|| {
-                    need("values", "one row per time, one column per joint speed")
-                })?;
+                let time = required(time, "time", times)?;
+                let values = required(
+                    values,
+                    "values",
+                    "one row per time, one column per joint speed",
+                )?;
                 Torque::tabulated(name, joints, Table::new(time, values, "time", "values")?)
             }
             _ => {
@@ -202,18 +203,29 @@ impl Torque {
                 let kd = f.per_joint("kd")?;
                 let time = f.list("time")?;
                 let reference = f.matrix("reference")?;
-                let kp = kp.ok_or_else(|| need("kp", "a number >= 0 or one per joint"))?;
-                let kd = kd.ok_or_else(|| need("kd", "a number >= 0 or one per joint"))?;
-                let time = time.ok_or_else(|| need("time", "a list of increasing times"))?;
-                let reference = reference
-                    .ok_or_else(|| need("reference", "one row per time, one column per joint"))?;
+                let kp = required(kp, "kp", "a number >= 0 or one per joint")?;
+                let kd = required(kd, "kd", "a number >= 0 or one per joint")?;
+                let time = required(time, "time", times)?;
+                let reference = required(
+                    reference,
+                    "reference",
+                    "one row per time, one column per joint",
+                )?;
                 let table = Table::new(time, reference, "time", "reference")?;
                 Torque::pd(name, joints, kp, kd, table)
             }
         }
     }
+}
 
-    pub fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
+impl Declaration for Torque {
+    fn kind(&self) -> Kind {
+        Kind::Torques
+    }
+    fn label(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         if let TorqueLaw::Function(f) = &self.law {
             if self.joints.is_some() {
                 return Err(Error::arg(
@@ -228,10 +240,7 @@ impl Torque {
             }));
         }
         let slots = resolve_joints(model, &self.joints, "joints")?;
-        let dofs: Vec<usize> = slots
-            .iter()
-            .flat_map(|s| (0..s.joint.nv()).map(move |k| s.v_index + k))
-            .collect();
+        let dofs: Vec<usize> = slots.iter().flat_map(JointSlot::speeds).collect();
         let names = || {
             slots
                 .iter()
