@@ -8,10 +8,10 @@
 use nalgebra::DMatrix;
 
 use super::algebra::{mul, tr_mul, v3, Rot};
-use super::compiled::{match_axis_kind, with_rot, with_rot_arm, LinkKind};
+use super::compiled::{match_axis_kind, with_rot, with_rot_arm, LinkConsts, LinkKind};
 use super::outward::{outward_other, plane_turns};
 use super::shift::{shift_add, to_parent, OffsetForm};
-use super::workspace::Data;
+use super::workspace::{Data, LinkWork};
 use crate::model::Model;
 
 crate::cpu::multiversion! {
@@ -31,10 +31,24 @@ fn mass_matrix_body(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix
     let compiled = model.compiled();
     let consts = &compiled.links[..n];
     let work = &mut data.local[..n];
-    // Joint rotations and offsets: the plane turns' (cos, sin), the other joints' matrices
-    // (their twists come out zero, as `still` is); leaves start from their own inertia.
-    plane_turns(consts, work, &compiled.axis_angles, q);
-    let still = &data.zero_v[..];
+    positions(model, consts, work, &compiled.axis_angles, q, &data.zero_v);
+    composites(consts, work);
+    columns(consts, work, gim);
+}
+
+/// Joint rotations and offsets: the plane turns' (cos, sin), the other joints' matrices
+/// (their twists come out zero, as `still` is); leaves start from their own inertia.
+#[inline(always)]
+fn positions(
+    model: &Model,
+    consts: &[LinkConsts],
+    work: &mut [LinkWork],
+    angles: &[(usize, usize)],
+    q: &[f64],
+    still: &[f64],
+) {
+    let n = consts.len();
+    plane_turns(consts, work, angles, q);
     for i in 0..n {
         let c = &consts[i];
         let (head, tail) = work.split_at_mut(i);
@@ -58,8 +72,12 @@ fn mass_matrix_body(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix
             w.inertia = c.inertia;
         }
     }
+}
 
-    // Composite inertias, children into parents (the first child writes, see `first_child`).
+/// Composite inertias, children into parents (the first child writes, see `first_child`).
+#[inline(always)]
+fn composites(consts: &[LinkConsts], work: &mut [LinkWork]) {
+    let n = consts.len();
     for i in (1..n).rev() {
         let Some(p) = consts[i].parent else {
             continue;
@@ -79,8 +97,12 @@ fn mass_matrix_body(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix
             &mut head[p].inertia,
         ));
     }
+}
 
-    // Columns: F = I^c S, then up the chain.
+/// Columns: F = I^c S, then up the chain as a wrench.
+#[inline(always)]
+fn columns(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
+    let n = consts.len();
     let dim = gim.nrows();
     let g = gim.as_mut_slice();
     g.fill(0.0);

@@ -60,6 +60,7 @@ pub fn forward_dynamics_world(
     crate::recursive::check_singularities(model, q)?;
     kinematics::positions(model, q, &mut ws.links);
     kinematics::velocities(model, q, v, &mut ws.links);
+    // Each link's own inertia and velocity-product wrench start its articulated ones.
     for (i, s) in ws.links.iter().enumerate() {
         ws.art_inertia[i] = ArticulatedInertia::from_body(&s.inertia);
         let mut b = s.inertia.bias(&angular(&s.twist));
@@ -68,62 +69,78 @@ pub fn forward_dynamics_world(
         }
         ws.art_bias[i] = b;
     }
-    for (i, l) in model.links.iter().enumerate().rev() {
-        let dof = l.joint.nv();
-        let ang = l.joint.moves_angular();
-        let m = ws.art_inertia[i];
-        let b = ws.art_bias[i];
-        let link = &ws.links[i];
-        let mut axes = [Vec3::zeros(); 3];
-        let mut u = [Vec6::zeros(); 3];
-        let mut d = Mat3::identity();
-        let mut ut = Vec3::zeros();
-        for k in 0..dof {
-            axes[k] = if ang {
-                angular(&link.s[k])
-            } else {
-                linear(&link.s[k])
-            };
-            u[k] = mul_axis(&m, &axes[k], ang);
-            ut[k] = tau[l.v_index + k] - dot_axis(&axes[k], &b, ang);
-        }
-        for r in 0..dof {
-            for c in r..dof {
-                let x = dot_axis(&axes[r], &u[c], ang);
-                d[(r, c)] = x;
-                d[(c, r)] = x;
-            }
-        }
-        let d_inv = invert_joint_inertia(&d, dof)
-            .ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
-        ws.u[i] = u;
-        ws.d_inv[i] = d_inv;
-        ws.u_tau[i] = ut;
-        if let Some(p) = l.parent {
-            // Articulated inertia and bias seen through the joint:
-            // M^a = M̂ − U D⁻¹ Uᵀ, b^a = b̂ + M^a ξ + U D⁻¹ (τ − Pᵀ b̂).
-            let mut ma = m;
-            let dut = d_inv * ut;
-            let mut ud_u = Vec6::zeros();
-            for r in 0..dof {
-                let mut ud = Vec6::zeros();
-                for c in 0..dof {
-                    ud += u[c] * d_inv[(c, r)];
-                }
-                let (ua, ul) = (angular(&u[r]), linear(&u[r]));
-                let (da, dl) = (angular(&ud), linear(&ud));
-                ma.p -= da * ua.transpose();
-                ma.q -= da * ul.transpose();
-                ma.r -= dl * ul.transpose();
-                ud_u += u[r] * dut[r];
-            }
-            let ba = b + ma.mul_twist(&link.xi) + ud_u;
-            let arm = link.origin - ws.links[p].origin;
-            let moved = ma.shifted(&(-arm));
-            ws.art_inertia[p].add(&moved);
-            ws.art_bias[p] += shift_wrench(&ba, &arm);
+    for i in (0..model.links.len()).rev() {
+        inward_step(model, ws, i, q, tau)?;
+    }
+    accelerations(model, ws, g, a);
+    Ok(())
+}
+
+/// Link `i` inward: `U = M̂ P`, `D = Pᵀ U`, `u = τ − Pᵀ b̂`, and its articulated inertia and
+/// bias carried into the parent.
+fn inward_step(model: &Model, ws: &mut Workspace, i: usize, q: &[f64], tau: &[f64]) -> Result<()> {
+    let l = &model.links[i];
+    let dof = l.joint.nv();
+    let ang = l.joint.moves_angular();
+    let m = ws.art_inertia[i];
+    let b = ws.art_bias[i];
+    let link = &ws.links[i];
+    let mut axes = [Vec3::zeros(); 3];
+    let mut u = [Vec6::zeros(); 3];
+    let mut d = Mat3::identity();
+    let mut ut = Vec3::zeros();
+    for k in 0..dof {
+        axes[k] = if ang {
+            angular(&link.s[k])
+        } else {
+            linear(&link.s[k])
+        };
+        u[k] = mul_axis(&m, &axes[k], ang);
+        ut[k] = tau[l.v_index + k] - dot_axis(&axes[k], &b, ang);
+    }
+    for r in 0..dof {
+        for c in r..dof {
+            let x = dot_axis(&axes[r], &u[c], ang);
+            d[(r, c)] = x;
+            d[(c, r)] = x;
         }
     }
+    let d_inv = invert_joint_inertia(&d, dof)
+        .ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
+    ws.u[i] = u;
+    ws.d_inv[i] = d_inv;
+    ws.u_tau[i] = ut;
+    let Some(p) = l.parent else {
+        return Ok(());
+    };
+    // Articulated inertia and bias seen through the joint:
+    // M^a = M̂ − U D⁻¹ Uᵀ, b^a = b̂ + M^a ξ + U D⁻¹ (τ − Pᵀ b̂).
+    let mut ma = m;
+    let dut = d_inv * ut;
+    let mut ud_u = Vec6::zeros();
+    for r in 0..dof {
+        let mut ud = Vec6::zeros();
+        for c in 0..dof {
+            ud += u[c] * d_inv[(c, r)];
+        }
+        let (ua, ul) = (angular(&u[r]), linear(&u[r]));
+        let (da, dl) = (angular(&ud), linear(&ud));
+        ma.p -= da * ua.transpose();
+        ma.q -= da * ul.transpose();
+        ma.r -= dl * ul.transpose();
+        ud_u += u[r] * dut[r];
+    }
+    let link = &ws.links[i];
+    let ba = b + ma.mul_twist(&link.xi) + ud_u;
+    let arm = link.origin - ws.links[p].origin;
+    let moved = ma.shifted(&(-arm));
+    ws.art_inertia[p].add(&moved);
+    ws.art_bias[p] += shift_wrench(&ba, &arm);
+    Ok(())
+}
+
+/// Outward: `q̈ = D⁻¹ (u − Uᵀ ṫ_carried)`, `ṫ = ṫ_carried + P q̈`.
+fn accelerations(model: &Model, ws: &mut Workspace, g: &Vec3, a: &mut [f64]) {
     let base = base_accel(g);
     for (i, l) in model.links.iter().enumerate() {
         let dof = l.joint.nv();
@@ -144,5 +161,4 @@ pub fn forward_dynamics_world(
         }
         ws.accel[i] = acc;
     }
-    Ok(())
 }
