@@ -1,4 +1,4 @@
-//! Explicit DeNOC matrices (paper, Sections III–IV) for teaching and verification.
+//! Explicit DeNOC matrices (paper, Sections III–IV; docs/method.md §2–3) for teaching and verification.
 //!
 //! `t = N_l N_d q̇`, point velocities `V = D t`, `N = D N_l N_d`, `M = diag(m_ij 1₃)`:
 //! GIM `I = Nᵀ M N`, convective matrix `C = Nᵀ M Ṅ`, generalized forces `τ = Nᵀ f`.
@@ -107,6 +107,60 @@ fn chain(
     product(d, &product(nl, nd, what)?, what)
 }
 
+/// Link `i`'s rows of `D` (and `Ḋ`), its seven point masses and their world positions.
+#[allow(clippy::too_many_arguments)]
+fn fill_points(
+    model: &Model,
+    st: &[LinkState],
+    i: usize,
+    d: &mut DMatrix<f64>,
+    masses: &mut DVector<f64>,
+    points: &mut DMatrix<f64>,
+    dd: Option<&mut DMatrix<f64>>,
+) {
+    let offs = point_offsets(model, st, i);
+    let w = angular(&st[i].twist);
+    let mut dd = dd;
+    for (j, dij) in offs.iter().enumerate() {
+        let row = 21 * i + 3 * j;
+        d.view_mut((row, 6 * i), (3, 3)).copy_from(&(-skew(dij)));
+        d.view_mut((row, 6 * i + 3), (3, 3))
+            .copy_from(&Mat3::identity());
+        masses[7 * i + j] = model.links[i].points.masses[j];
+        let x = st[i].origin + dij;
+        for c in 0..3 {
+            points[(7 * i + j, c)] = x[c];
+        }
+        if let Some(dd) = dd.as_deref_mut() {
+            // d_ij is fixed in the body: ḋ = ω × d.
+            dd.view_mut((row, 6 * i), (3, 3))
+                .copy_from(&(-skew(&w.cross(dij))));
+        }
+    }
+}
+
+/// Link `i`'s block row of `N_l` (and `Ṅ_l`): the twist-propagation blocks from each
+/// ancestor `k` (and itself), `[[1, 0], [ã, 1]]` with `a = O_k − O_i`.
+fn fill_coupling(
+    model: &Model,
+    st: &[LinkState],
+    i: usize,
+    nl: &mut DMatrix<f64>,
+    nld: Option<&mut DMatrix<f64>>,
+) {
+    let mut nld = nld;
+    for k in ancestors_and_self(model, i) {
+        let a = st[k].origin - st[i].origin;
+        nl.view_mut((6 * i, 6 * k), (6, 6)).fill_with_identity();
+        nl.view_mut((6 * i + 3, 6 * k), (3, 3)).copy_from(&skew(&a));
+        if let Some(nld) = nld.as_deref_mut() {
+            let adot = linear(&st[k].twist) - linear(&st[i].twist);
+            nld.view_mut((6 * i + 3, 6 * k), (3, 3))
+                .copy_from(&skew(&adot));
+        }
+    }
+}
+
 fn assemble(
     model: &Model,
     st: &[LinkState],
@@ -143,34 +197,16 @@ fn assemble(
         )
     };
     for (i, l) in model.links.iter().enumerate() {
-        let offs = point_offsets(model, st, i);
-        let w = angular(&st[i].twist);
-        for (j, dij) in offs.iter().enumerate() {
-            let row = 21 * i + 3 * j;
-            d.view_mut((row, 6 * i), (3, 3)).copy_from(&(-skew(dij)));
-            d.view_mut((row, 6 * i + 3), (3, 3))
-                .copy_from(&Mat3::identity());
-            masses[7 * i + j] = l.points.masses[j];
-            let x = st[i].origin + dij;
-            for c in 0..3 {
-                points[(7 * i + j, c)] = x[c];
-            }
-            if rates {
-                // d_ij is fixed in the body: ḋ = ω × d.
-                dd.view_mut((row, 6 * i), (3, 3))
-                    .copy_from(&(-skew(&w.cross(dij))));
-            }
-        }
-        for k in ancestors_and_self(model, i) {
-            let a = st[k].origin - st[i].origin;
-            nl.view_mut((6 * i, 6 * k), (6, 6)).fill_with_identity();
-            nl.view_mut((6 * i + 3, 6 * k), (3, 3)).copy_from(&skew(&a));
-            if rates {
-                let adot = linear(&st[k].twist) - linear(&st[i].twist);
-                nld.view_mut((6 * i + 3, 6 * k), (3, 3))
-                    .copy_from(&skew(&adot));
-            }
-        }
+        fill_points(
+            model,
+            st,
+            i,
+            &mut d,
+            &mut masses,
+            &mut points,
+            rates.then_some(&mut dd),
+        );
+        fill_coupling(model, st, i, &mut nl, rates.then_some(&mut nld));
         let dof = l.joint.nv();
         for c in 0..dof {
             nd.view_mut((6 * i, l.v_index + c), (6, 1))
