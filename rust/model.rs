@@ -129,7 +129,7 @@ pub fn checked_rotation(r: &Mat3, arg: &str) -> Result<Mat3> {
 /// turn about coordinate axes, as URDF `rpy = (±π/2, 0, 0)` means) is taken as exactly that
 /// matrix. The decimal angle in a file cannot state π/2 exactly and leaves 6e-17 where the
 /// rotation has a zero; exact zeros are what the robot means, and they let the body-frame
-/// dynamics absorb the placement into the link frame (`recursive::forward_local`).
+/// dynamics absorb the placement into the link frame (`recursive::compiled`).
 fn snapped_signed_permutation(r: &Mat3) -> Option<Mat3> {
     const TOL: f64 = 4.0 * f64::EPSILON;
     let mut out = Mat3::zeros();

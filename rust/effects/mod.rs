@@ -10,7 +10,7 @@
 //! * [`ForceLaw`] is the one trait the engine calls. [`Effects::new`] resolves each declaration
 //!   against the model (joint names to coordinate slots, tables to their columns) into a
 //!   `Box<dyn ForceLaw>` with everything it needs preallocated, so evaluating it allocates
-//!   nothing. `simulate.rs` and the recursion do not change for a new effect.
+//!   nothing. `simulate/` and the recursions do not change for a new effect.
 //!
 //! Adding an effect type is a new file here (the declaration and its `Declaration`, the law,
 //! `from_toml`, tests), one variant of [`Effect`] (appended), one line in `each_effect!`, a row in
