@@ -74,6 +74,9 @@ pub enum Error {
     /// The equations cannot be solved at this state (singular mass matrix, Euler singularity).
     #[error("{0}")]
     Singular(String),
+    /// A loop that cannot be closed (or kept closed) from the given state; names the loop.
+    #[error("{0}")]
+    Closure(String),
     /// An integrator setting out of range (the message names it).
     #[error("{0}")]
     InvalidSetting(String),
@@ -153,6 +156,7 @@ impl Error {
         };
         match self {
             Error::Singular(m) => Error::Singular(tell(m)),
+            Error::Closure(m) => Error::Closure(tell(m)),
             Error::InvalidSetting(m) => Error::InvalidSetting(tell(m)),
             Error::Interrupted(m) => Error::Interrupted(tell(m)),
             named => named.map_arg(|inner| joined(outer, inner)),
@@ -194,9 +198,10 @@ impl Error {
                 },
                 message,
             },
-            unnamed @ (Error::Singular(_) | Error::InvalidSetting(_) | Error::Interrupted(_)) => {
-                unnamed
-            }
+            unnamed @ (Error::Singular(_)
+            | Error::Closure(_)
+            | Error::InvalidSetting(_)
+            | Error::Interrupted(_)) => unnamed,
         }
     }
 

@@ -55,6 +55,9 @@ pub struct Model {
     pub links: Vec<Link>,
     pub nq: usize,
     pub nv: usize,
+    /// Cut joints closing kinematic loops (`crate::loops`); empty for a tree.
+    #[serde(default)]
+    pub loops: Vec<crate::loops::LoopJoint>,
     /// Body index by name, kept by `add_body` (the only place bodies are added or named), so
     /// name lookups and duplicate checks cost O(1) and building a model is linear. Derived
     /// from `bodies`: not serialised, rebuilt when deserialising.
@@ -73,6 +76,8 @@ struct ModelData {
     links: Vec<Link>,
     nq: usize,
     nv: usize,
+    #[serde(default)]
+    loops: Vec<crate::loops::LoopJoint>,
 }
 
 impl TryFrom<ModelData> for Model {
@@ -89,10 +94,12 @@ impl TryFrom<ModelData> for Model {
             links: d.links,
             nq: d.nq,
             nv: d.nv,
+            loops: d.loops,
             names,
             compiled: OnceLock::new(),
         };
         m.check_structure()?;
+        m.check_loops()?;
         Ok(m)
     }
 }

@@ -12,6 +12,7 @@ from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEve
 from .errors import (
     InertiaError,
     InvalidInputError,
+    LoopClosureError,
     ModelStructureError,
     NumericalError,
     PointMassDynError,
@@ -80,6 +81,7 @@ __all__ = [
     "Joint",
     "JointFriction",
     "JointTorque",
+    "LoopClosureError",
     "Model",
     "ModelStructureError",
     "NumericalError",

@@ -182,7 +182,10 @@ class Model:
         method: _Method = "recursive",
     ) -> _Array:
         """Accelerations from ``I a + C v = τ + τ_g + τ_ext``, shape (nv,). ``external``:
-        one wrench [moment about the link origin; force] per moving link, shape (nlinks, 6)."""
+        one wrench [moment about the link origin; force] per moving link, shape (nlinks, 6).
+        With loops, ``I a + C v = τ + τ_g + τ_ext + Jᵀλ`` and ``J a + J̇ v = 0``: the
+        accelerations keep the loops closed (redundant constraints allowed); raises
+        ``SingularityError`` for a locked mechanism (no freedom of motion)."""
     def inverse_dynamics(
         self,
         q: ArrayLike,
@@ -191,14 +194,90 @@ class Model:
         gravity: ArrayLike | None = None,
         external: ArrayLike | None = None,
         method: _Method = "recursive",
+        actuated: Sequence[int | str] | None = None,
     ) -> _Array:
-        """Joint forces ``τ = I a + C v − τ_g − τ_ext``, shape (nv,)."""
+        """Joint forces ``τ = I a + C v − τ_g − τ_ext``, shape (nv,). With loops, ``actuated``
+        (v indices or body names) is required: the forces of those coordinates alone (zero
+        elsewhere) that, with the cut joints' forces, produce ``a`` (which must satisfy the
+        loops: see :meth:`assemble_acceleration`)."""
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy ``½ vᵀ I v`` (J)."""
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
         """Gravitational potential energy ``−Σ m_ij g·x_ij`` (J), zero at the world origin."""
     def velocity_to_qdot(self, q: ArrayLike, v: ArrayLike) -> _Array:
         """``q̇`` from ``v`` (differs from ``v`` only for quaternion joints), shape (nq,)."""
+    def add_loop(
+        self,
+        body_a: int | str | None,
+        body_b: int | str | None,
+        joint: Joint,
+        translation_a: ArrayLike | None = None,
+        translation_b: ArrayLike | None = None,
+        rotation_a: ArrayLike | None = None,
+        rotation_b: ArrayLike | None = None,
+        name: str | None = None,
+    ) -> int:
+        """Closes a kinematic loop with a cut joint (``Revolute``, ``Prismatic``, ``Spherical``
+        or ``Fixed``) between a frame on ``body_a`` and one on ``body_b`` (index or name; -1,
+        None or ``"world"`` for the ground). Each frame is ``(rotation, translation)`` in its
+        body's frame; the axis is in frame a. Returns the loop's index. Raises
+        ``ModelStructureError`` for unknown bodies or a loop joining a body to itself (or to
+        a body welded to it)."""
+    @property
+    def nloops(self) -> int:
+        """Number of cut joints (closed loops)."""
+    @property
+    def nconstraints(self) -> int:
+        """Scalar loop constraints: 3 per spherical, 5 per revolute or prismatic, 6 per fixed
+        cut joint (rows of :meth:`constraint_jacobian`)."""
+    @property
+    def loop_names(self) -> list[str]:
+        """The cut joints' names in order."""
+    def constraint_residual(self, q: ArrayLike) -> _Array:
+        """Position-level residual of every cut joint, shape (nconstraints,), in frame a's
+        axes: position rows (m), then orientation rows (rad); zero when the loops are closed."""
+    def constraint_jacobian(self, q: ArrayLike) -> _Array:
+        """Velocity-level constraint Jacobian ``J``, shape (nconstraints, nv): ``J v = 0``
+        keeps the loops closed. Rows of redundant constraints (a planar loop closed by a
+        spatial joint) are zero or dependent."""
+    def assemble(
+        self,
+        q_guess: ArrayLike,
+        fixed: Sequence[int | str] | int | str | None = None,
+        tol: float = 1e-12,
+        max_iterations: int = 50,
+    ) -> _Array:
+        """The closed configuration nearest ``q_guess`` (Gauss–Newton, minimum-norm steps)
+        with the coordinates in ``fixed`` held (q indices, or body names for all of a body's
+        joint coordinates). Raises ``LoopClosureError`` naming the loop that cannot close."""
+    def assemble_velocity(
+        self,
+        q: ArrayLike,
+        v_guess: ArrayLike,
+        fixed: Sequence[int | str] | int | str | None = None,
+    ) -> _Array:
+        """``v_guess`` projected onto ``J v = 0``, nearest to it with the ``fixed`` speeds held."""
+    def assemble_acceleration(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a_guess: ArrayLike,
+        fixed: Sequence[int | str] | int | str | None = None,
+    ) -> _Array:
+        """``a_guess`` projected onto ``J a + J̇ v = 0``, nearest to it with the ``fixed``
+        entries held (e.g. a prescribed crank acceleration)."""
+    def constraint_forces(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        tau: ArrayLike,
+        gravity: ArrayLike | None = None,
+        external: ArrayLike | None = None,
+    ) -> _Array:
+        """Per loop ``[fx, fy, fz, mx, my, mz]`` (shape (nloops, 6)): the force and moment
+        the cut joint applies to body b (minus those on body a) at frame b's origin, in frame
+        a's axes, under ``tau``. Components along the joint's free motion are zero; where
+        constraints are redundant the minimum-norm set (only their resultant is defined)."""
     @staticmethod
     def from_urdf(path: Any) -> Model:
         """A fixed-base robot from a URDF file (``path``: str or os.PathLike): root link welded to the world, revolute,

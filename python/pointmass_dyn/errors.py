@@ -22,6 +22,12 @@ class ModelStructureError(InvalidInputError):
     """A kinematic tree that cannot be built: unknown parent, duplicate name."""
 
 
+class LoopClosureError(InvalidInputError):
+    """A closed kinematic loop that cannot be closed from the given configuration (the bodies
+    cannot reach, or held coordinates ask for a position the mechanism cannot take); the
+    message names the loop."""
+
+
 class NumericalError(PointMassDynError, ArithmeticError):
     """Finite inputs gave a non-finite or meaningless result (overflow, singular matrix)."""
 
@@ -68,6 +74,7 @@ class UrdfWarning(UserWarning):
 __all__ = [
     "InertiaError",
     "InvalidInputError",
+    "LoopClosureError",
     "ModelStructureError",
     "NumericalError",
     "OutOfMemoryError",

@@ -150,6 +150,12 @@ class SimulationResult:
     #: Power ``τ_e · v`` (W) of each enabled effect at the output times, by effect name,
     #: when ``simulate(..., power=True)``.
     power: dict | None = None
+    #: Models with loops: the largest constraint residual of each output state (N,), after
+    #: the states were projected onto the constraint manifolds.
+    constraint_residual: np.ndarray | None = None
+    #: Models with loops: the largest residual any accepted step had before projection (the
+    #: integrator's drift, which the projection removed).
+    constraint_drift: float | None = None
 
     @property
     def nsteps(self) -> int:

@@ -35,9 +35,13 @@ pub trait OdeSystem {
     /// Fill `dydt`; an `Err` stops the integration with that message
     /// (status [`Status::RhsError`]) and the time reached.
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String>;
-    /// Called on each accepted state (e.g. to re-normalise quaternions); not on `y0`.
-    /// Contract: `rhs(t, project(y)) == rhs(t, y)`, so FSAL stays valid. Default: no-op.
-    fn project(&mut self, _y: &mut [f64]) {}
+    /// Called on each accepted state (re-normalising quaternions, closing kinematic loops);
+    /// not on `y0`. Returns whether `y` moved so far that `f(t, y)` must be evaluated again
+    /// (FSAL is kept only for `false`: quaternion normalisation, which the right-hand side
+    /// ignores); `Err` stops the run with that message. Default: no-op.
+    fn project(&mut self, _y: &mut [f64]) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -47,7 +51,7 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
         (**self).rhs(t, y, dydt)
     }
-    fn project(&mut self, y: &mut [f64]) {
+    fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
     }
 }
@@ -59,7 +63,7 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
         (**self).rhs(t, y, dydt)
     }
-    fn project(&mut self, y: &mut [f64]) {
+    fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
     }
 }

@@ -683,11 +683,31 @@ impl<S: OdeSystem> Stepper<S> {
         if self.stiffness_check != StiffnessCheck::Off {
             self.stiffness_test(t_new - t, t_new);
         }
-        self.sys.project(&mut self.y_new);
+        let moved = self
+            .sys
+            .project(&mut self.y_new)
+            .map_err(|message| Status::RhsError {
+                t,
+                at: t_new,
+                message,
+            })?;
         check_state(&self.y_new, t, t_new)?;
         std::mem::swap(&mut self.y_old, &mut self.y);
         std::mem::swap(&mut self.y, &mut self.y_new);
-        self.f.copy_from_slice(&self.k[N_STAGES * self.dim..]);
+        if moved {
+            // The projected state's own derivative starts the next step (FSAL's is the
+            // unprojected one); the interpolant keeps the step's stages.
+            call_rhs(
+                &mut self.sys,
+                &mut self.nfev,
+                t,
+                t_new,
+                &self.y,
+                &mut self.f,
+            )?;
+        } else {
+            self.f.copy_from_slice(&self.k[N_STAGES * self.dim..]);
+        }
         self.t_old = t;
         self.t = t_new;
         self.h_abs = h_abs;

@@ -5,6 +5,7 @@ mod dense;
 mod effects;
 mod errors;
 mod events;
+mod loops;
 mod model;
 mod options;
 mod pickle;

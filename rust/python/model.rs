@@ -13,6 +13,7 @@ use crate::alloc::try_zeros;
 use crate::denoc;
 use crate::joint::Joint;
 use crate::kinematics;
+use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::{self, Data};
 use crate::spatial::{Placement, Vec3, Vec6};
@@ -121,6 +122,8 @@ struct Workspace {
     v: Vec<f64>,
     x: Vec<f64>,
     out: Vec<f64>,
+    /// The closed-loop solver's buffers (models with loops only).
+    loops: Option<Box<LoopSolver>>,
 }
 
 impl Workspace {
@@ -133,6 +136,7 @@ impl Workspace {
             v: vec![0.0; nv],
             x: vec![0.0; nv],
             out: vec![0.0; nv],
+            loops: (!m.loops.is_empty()).then(|| Box::new(LoopSolver::new(m))),
             version,
         }
     }
@@ -255,8 +259,16 @@ impl PyModel {
                 v: vv,
                 x: xv,
                 out,
+                loops: solver,
             } = ws;
             let model: &Model = &version.model;
+            // With loops, the tree's accelerations are corrected by the cut joints' forces.
+            let mut close = |data: &mut Data, out: &mut [f64]| match (direction, solver.as_mut()) {
+                (Direction::Forward, Some(solver)) => {
+                    loops::constrained_forward_dynamics(model, data, solver, qv, vv, out).py(py)
+                }
+                _ => Ok(()),
+            };
             match method {
                 Method::Recursive => {
                     let mut run = || match direction {
@@ -290,6 +302,7 @@ impl PyModel {
                         run()
                     }
                     .py(py)?;
+                    close(data, out)?;
                     check_result(py, direction.name(), out)?;
                     Ok(to_array1(py, out).into_any())
                 }
@@ -302,10 +315,11 @@ impl PyModel {
                             "wrenches",
                         ));
                     }
-                    let out = detach_interruptible(py, || match direction {
+                    let mut out = detach_interruptible(py, || match direction {
                         Direction::Forward => denoc::forward_dynamics(model, qv, vv, xv, &g),
                         Direction::Inverse => denoc::inverse_dynamics(model, qv, vv, xv, &g),
                     })?;
+                    close(data, out.as_mut_slice())?;
                     check_result(py, direction.name(), out.as_slice())?;
                     Ok(to_array1(py, out.as_slice()).into_any())
                 }
@@ -748,8 +762,9 @@ impl PyModel {
         self.dynamics(py, Direction::Forward, q, v, tau, gravity, external, method)
     }
 
-    /// Joint forces `τ = I a + C v − τ_g − τ_ext`.
-    #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive"))]
+    /// Joint forces `τ = I a + C v − τ_g − τ_ext`. With loops, the forces of the `actuated`
+    /// coordinates alone (the cut joints carry the rest).
+    #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive", actuated=None))]
     #[allow(clippy::too_many_arguments)]
     fn inverse_dynamics<'py>(
         &self,
@@ -760,8 +775,226 @@ impl PyModel {
         gravity: Option<&Bound<'_, PyAny>>,
         external: Option<&Bound<'_, PyAny>>,
         method: &str,
+        actuated: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method)
+        let model = self.model();
+        let actuated = actuated.filter(|x| !x.is_none());
+        if model.loops.is_empty() {
+            if let Some(x) = actuated {
+                return Err(invalid(
+                    py,
+                    "actuated",
+                    "None for a model without loops (every joint is actuated)",
+                    x.repr()?.to_string(),
+                ));
+            }
+            return self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method);
+        }
+        let Some(actuated) = actuated else {
+            return Err(invalid(py, "actuated", format!("the actuated joints (v indices or body names) for a model with {} loop(s): the cut joints' forces are otherwise undetermined", model.loops.len()), "None"));
+        };
+        let actuated = super::loops::actuated_indices(&model, actuated)?;
+        let tree = self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method)?;
+        let tau_tree = super::convert::vector(&tree, "tau", Some(model.nv))?;
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, Some(v))?;
+            ws.load_x(py, a, "a")?;
+            let model: &Model = &ws.version.model;
+            let solver = ws
+                .loops
+                .get_or_insert_with(|| Box::new(LoopSolver::new(model)));
+            let (tau, _) =
+                loops::driving_forces(model, solver, &ws.q, &ws.v, &ws.x, &tau_tree, &actuated)
+                    .py(py)?;
+            check_result(py, "inverse_dynamics", &tau)?;
+            Ok(to_array1(py, &tau).into_any())
+        })
+    }
+
+    /// Adds a cut joint closing a kinematic loop; returns its index. See the package docs.
+    #[pyo3(signature = (body_a, body_b, joint, translation_a=None, translation_b=None, rotation_a=None, rotation_b=None, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_loop(
+        &self,
+        py: Python<'_>,
+        body_a: Option<&Bound<'_, PyAny>>,
+        body_b: Option<&Bound<'_, PyAny>>,
+        joint: PyRef<'_, PyJoint>,
+        translation_a: Option<&Bound<'_, PyAny>>,
+        translation_b: Option<&Bound<'_, PyAny>>,
+        rotation_a: Option<&Bound<'_, PyAny>>,
+        rotation_b: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<usize> {
+        let frame = |t: Option<&Bound<'_, PyAny>>,
+                     r: Option<&Bound<'_, PyAny>>,
+                     ta: &str,
+                     ra: &str|
+         -> PyResult<Placement> {
+            let t = match t.filter(|x| !x.is_none()) {
+                Some(t) => vec3(t, ta)?,
+                None => Vec3::zeros(),
+            };
+            let r = match r.filter(|x| !x.is_none()) {
+                Some(r) => mat3(r, ra)?,
+                None => crate::spatial::Mat3::identity(),
+            };
+            Ok(Placement::new(r, t))
+        };
+        let fa = frame(translation_a, rotation_a, "translation_a", "rotation_a")?;
+        let fb = frame(translation_b, rotation_b, "translation_b", "rotation_b")?;
+        let mut version = self.version();
+        let a = super::loops::body_ref(&version.model, body_a, "body_a")?;
+        let b = super::loops::body_ref(&version.model, body_b, "body_b")?;
+        let k = Arc::make_mut(&mut version.model)
+            .add_loop(a, b, joint.inner, fa, fb, name)
+            .py(py)?;
+        version.id = next_version();
+        self.current_id.store(version.id, Ordering::Release);
+        drop(version);
+        self.pool().clear();
+        Ok(k)
+    }
+
+    /// Number of cut joints (closed loops).
+    #[getter]
+    fn nloops(&self) -> usize {
+        self.model().nloops()
+    }
+
+    /// Number of scalar loop constraints (rows of `constraint_jacobian`).
+    #[getter]
+    fn nconstraints(&self) -> usize {
+        self.model().nconstraints()
+    }
+
+    #[getter]
+    fn loop_names(&self) -> Vec<String> {
+        self.model().loops.iter().map(|l| l.name.clone()).collect()
+    }
+
+    /// Position-level residual of every cut joint (frame a's axes; zero when closed).
+    fn constraint_residual<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q) = self.state_only(py, q)?;
+        let mut kin = loops::LoopKinematics::new(&model);
+        kin.positions(&model, &q);
+        let mut r = vec![0.0; model.nconstraints()];
+        loops::residual(&model, &kin, &mut r);
+        check_result(py, "constraint_residual", &r)?;
+        Ok(to_array1(py, &r).into_any())
+    }
+
+    /// Velocity-level constraint Jacobian `J` (nconstraints × nv): `J v = 0` keeps the loops.
+    fn constraint_jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q) = self.state_only(py, q)?;
+        let mut kin = loops::LoopKinematics::new(&model);
+        kin.positions(&model, &q);
+        let mut j = nalgebra::DMatrix::zeros(model.nconstraints(), model.nv);
+        loops::jacobian(&model, &kin, &mut j);
+        check_result(py, "constraint_jacobian", j.as_slice())?;
+        dmatrix_to_array(py, &j)
+    }
+
+    /// The closed configuration nearest `q_guess`, the coordinates in `fixed` held.
+    #[pyo3(signature = (q_guess, fixed=None, tol=1e-12, max_iterations=50))]
+    fn assemble<'py>(
+        &self,
+        py: Python<'py>,
+        q_guess: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+        tol: f64,
+        max_iterations: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q) = self
+            .state_only(py, q_guess)
+            .map_err(|e| rename(py, e, "q", "q_guess"))?;
+        if !(tol > 0.0 && tol.is_finite()) {
+            return Err(invalid(py, "tol", "a positive finite number", tol));
+        }
+        let mask = super::loops::fixed_mask(&model, fixed)?;
+        let q = py
+            .detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))
+            .py(py)?;
+        Ok(to_array1(py, &q).into_any())
+    }
+
+    /// `v_guess` projected onto `J v = 0` (nearest, the speeds in `fixed` held).
+    #[pyo3(signature = (q, v_guess, fixed=None))]
+    fn assemble_velocity<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v_guess: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q, mut v) = self
+            .state(py, q, v_guess)
+            .map_err(|e| rename(py, e, "v", "v_guess"))?;
+        let mask = super::loops::fixed_mask(&model, fixed)?;
+        loops::project_velocity_like(&model, &q, None, &mut v, &mask).py(py)?;
+        Ok(to_array1(py, &v).into_any())
+    }
+
+    /// `a_guess` projected onto `J a + J̇ v = 0` (nearest, the entries in `fixed` held).
+    #[pyo3(signature = (q, v, a_guess, fixed=None))]
+    fn assemble_acceleration<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a_guess: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q, v) = self.state(py, q, v)?;
+        let mut a = super::convert::vector(a_guess, "a_guess", Some(model.nv))?;
+        crate::error::check_finite("a_guess", &a).py(py)?;
+        let mask = super::loops::fixed_mask(&model, fixed)?;
+        loops::project_velocity_like(&model, &q, Some(&v), &mut a, &mask).py(py)?;
+        Ok(to_array1(py, &a).into_any())
+    }
+
+    /// Per loop `[force, moment]` the cut joint applies to body b (minus that on body a) at
+    /// frame b's origin, in frame a's axes, under the forces `tau` (shape (nloops, 6)).
+    #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
+    fn constraint_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let g = gravity_arg(py, gravity)?;
+        self.with_workspace(|ws| {
+            ws.load_state(py, q, Some(v))?;
+            ws.load_x(py, tau, "tau")?;
+            let ext = external_wrenches(ws.model(), external)?;
+            let Workspace {
+                version,
+                data,
+                q,
+                v,
+                x,
+                out,
+                loops: solver,
+            } = ws;
+            let model: &Model = &version.model;
+            recursive::forward_dynamics(model, data, q, v, x, &g, ext.as_deref(), out).py(py)?;
+            let solver = solver.get_or_insert_with(|| Box::new(LoopSolver::new(model)));
+            let w = loops::constraint_forces(model, data, solver, q, v, out).py(py)?;
+            let flat: Vec<f64> = w.iter().flatten().copied().collect();
+            check_result(py, "constraint_forces", &flat)?;
+            to_array(py, flat, &[w.len(), 6])
+        })
     }
 
     /// Kinetic energy `½ vᵀ I v`.
@@ -908,6 +1141,18 @@ impl PyModel {
         let v = super::convert::vector(v, "v", Some(model.nv))?;
         model.check_state(&q, Some(&v)).py(py)?;
         Ok((model, q, v))
+    }
+}
+
+/// An error about argument `from` renamed to `to` (`q` → `q_guess`).
+fn rename(py: Python<'_>, e: PyErr, from: &str, to: &str) -> PyErr {
+    let msg = e.value(py).to_string();
+    match msg.strip_prefix(&format!("{from}:")) {
+        Some(rest) => {
+            let ty = e.get_type(py);
+            PyErr::from_type(ty, (format!("{to}:{rest}"),))
+        }
+        None => e,
     }
 }
 

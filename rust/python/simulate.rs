@@ -169,6 +169,12 @@ fn trajectory_dict<'py>(
     d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
     d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
     d.set_item("energy", traj.energy.map(|e| to_array1(py, &e).into_any()))?;
+    d.set_item(
+        "constraint_residual",
+        traj.constraint_residual
+            .map(|r| to_array1(py, &r).into_any()),
+    )?;
+    d.set_item("constraint_drift", traj.constraint_drift)?;
     match &traj.power {
         Some(p) => d.set_item("power", power_dict(py, p, n, &traj.effect_labels)?)?,
         None => d.set_item("power", py.None())?,

@@ -4,6 +4,7 @@ use crate::effects::{Context, Disabled, Effect, Effects, Probe};
 use crate::error::Result;
 use crate::integrator::OdeSystem;
 use crate::kinematics;
+use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::{self, Data};
 use crate::spatial::Vec6;
@@ -21,6 +22,8 @@ pub struct Dynamics<'a> {
     pub(super) progress: Option<Progress<'a>>,
     calls: usize,
     probe: Option<Probe>,
+    /// The closed-loop solver (models with loops only).
+    pub loops: Option<Box<LoopSolver>>,
 }
 
 /// The effects' view of the state `(t, q, v)`.
@@ -55,6 +58,7 @@ impl<'a> Dynamics<'a> {
             progress: None,
             calls: 0,
             probe: None,
+            loops: (!model.loops.is_empty()).then(|| Box::new(LoopSolver::new(model))),
         }
     }
 
@@ -142,7 +146,14 @@ impl<'a> Dynamics<'a> {
             ext,
             a,
         )
-        .map_err(|e| e.to_string())
+        .map_err(|e| e.to_string())?;
+        match self.loops.as_mut() {
+            Some(solver) => {
+                loops::constrained_forward_dynamics(self.model, &mut self.data, solver, q, v, a)
+                    .map_err(|e| e.to_string())
+            }
+            None => Ok(()),
+        }
     }
 }
 
@@ -165,8 +176,13 @@ impl OdeSystem for Dynamics<'_> {
         self.accelerations(t, q, v, vdot)
     }
 
-    /// Unit quaternions; the right-hand side normalises them too, so FSAL stays valid.
-    fn project(&mut self, y: &mut [f64]) {
+    /// Unit quaternions (the right-hand side normalises them too, so FSAL stays valid);
+    /// with loops, the state back onto the position and velocity manifolds.
+    fn project(&mut self, y: &mut [f64]) -> std::result::Result<bool, String> {
         self.model.normalize(&mut y[..self.model.nq]);
+        match self.loops.as_mut() {
+            Some(solver) => loops::project_state(self.model, solver, y),
+            None => Ok(false),
+        }
     }
 }

@@ -46,6 +46,10 @@ pub struct Trajectory {
     /// Row-major N × nv.
     pub v: Vec<f64>,
     pub energy: Option<Vec<f64>>,
+    /// With loops: the largest constraint residual of each output state (after projection).
+    pub constraint_residual: Option<Vec<f64>>,
+    /// With loops: the largest residual an accepted step had before it was projected.
+    pub constraint_drift: Option<f64>,
     /// Output names of the enabled effects (the columns of `power`).
     pub effect_labels: Vec<String>,
     /// Row-major N × effect_labels.len().
@@ -83,7 +87,10 @@ pub fn simulate(
     model.check_state(q0, Some(v0))?;
     check_state_events(model, state_events)?;
     let mut sys = Dynamics::try_new(model, effects, disabled)?;
-    let y0 = initial_state(model, q0, v0);
+    let mut y0 = initial_state(model, q0, v0);
+    if let Some(solver) = sys.loops.as_mut() {
+        close_initial_state(model, solver, &mut y0)?;
+    }
     let mut events: Vec<Event<'_>> = state_events
         .iter()
         .map(|e| state_event(e, model.nq))
@@ -98,7 +105,14 @@ pub fn simulate(
     report_euler_singularity(model, &guarded, n_user, &mut sol);
     sol.t_events.truncate(n_user);
     sol.y_events.truncate(n_user);
-    let (q, v) = split_states(model, &sol);
+    let (mut q, mut v) = split_states(model, &sol);
+    let (constraint_residual, constraint_drift) = match sys.loops.as_mut() {
+        Some(solver) => {
+            let residual = close_outputs(model, solver, sol.t.len(), &mut q, &mut v);
+            (Some(residual), Some(solver.max_drift))
+        }
+        None => (None, None),
+    };
     let energy = record
         .energy
         .then(|| energies(&mut sys, sol.t.len(), &q, &v));
@@ -115,6 +129,8 @@ pub fn simulate(
         q,
         v,
         energy,
+        constraint_residual,
+        constraint_drift,
         effect_labels: labels,
         power,
         t_events: sol.t_events,
@@ -153,6 +169,79 @@ fn initial_state(model: &Model, q0: &[f64], v0: &[f64]) -> Vec<f64> {
     y0.extend_from_slice(v0);
     model.normalize(&mut y0[..model.nq]);
     y0
+}
+
+/// A model with loops starts on the constraint manifolds: `q0` must close every loop to
+/// 1e-8 and `v0` keep them closed (else an error pointing at `assemble`); what remains is
+/// projected away.
+fn close_initial_state(
+    model: &Model,
+    solver: &mut crate::loops::LoopSolver,
+    y0: &mut [f64],
+) -> Result<()> {
+    let (q0, v0) = y0.split_at(model.nq);
+    let mut kin = crate::loops::LoopKinematics::new(model);
+    kin.positions(model, q0);
+    let mut r = vec![0.0; model.nconstraints()];
+    crate::loops::residual(model, &kin, &mut r);
+    let name = |row: usize| {
+        let starts = model.constraint_rows();
+        let k = starts.windows(2).position(|w| row < w[1]).unwrap_or(0);
+        model.loops[k].name.clone()
+    };
+    if let Some((row, x)) = r.iter().enumerate().find(|(_, x)| x.abs() > 1e-8) {
+        return Err(Error::Closure(format!(
+            "q0: loop '{}' is open by {x:.3e} (constraint row {row}): close it first with model.assemble(q0, fixed=[...])",
+            name(row)
+        )));
+    }
+    let mut j = nalgebra::DMatrix::zeros(model.nconstraints(), model.nv);
+    crate::loops::jacobian(model, &kin, &mut j);
+    let jv = &j * nalgebra::DVector::from_column_slice(v0);
+    let scale = 1.0 + v0.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    if jv.amax() > 1e-8 * scale {
+        let row = jv.iamax();
+        return Err(Error::arg(
+            "v0",
+            "speeds that keep the loops closed (J v0 = 0; see model.assemble_velocity)",
+            format!("J v0 = {:.3e} in row {row} (loop '{}')", jv[row], name(row)),
+        ));
+    }
+    crate::loops::project_state(model, solver, y0).map_err(Error::Closure)?;
+    solver.max_drift = 0.0;
+    Ok(())
+}
+
+/// Projects each output state of a model with loops (dense output between steps is not
+/// projected by the integrator) and returns each one's largest residual afterwards.
+fn close_outputs(
+    model: &Model,
+    solver: &mut crate::loops::LoopSolver,
+    n: usize,
+    q: &mut [f64],
+    v: &mut [f64],
+) -> Vec<f64> {
+    let (nq, nv) = (model.nq, model.nv);
+    let drift = solver.max_drift;
+    let mut y = vec![0.0; nq + nv];
+    let mut r = vec![0.0; model.nconstraints()];
+    let mut kin = crate::loops::LoopKinematics::new(model);
+    let out = (0..n)
+        .map(|i| {
+            y[..nq].copy_from_slice(&q[row(i, nq)]);
+            y[nq..].copy_from_slice(&v[row(i, nv)]);
+            // A failed projection leaves the sample as the integrator gave it.
+            if crate::loops::project_state(model, solver, &mut y).is_ok() {
+                q[row(i, nq)].copy_from_slice(&y[..nq]);
+                v[row(i, nv)].copy_from_slice(&y[nq..]);
+            }
+            kin.positions(model, &q[row(i, nq)]);
+            crate::loops::residual(model, &kin, &mut r);
+            r.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+        })
+        .collect();
+    solver.max_drift = drift;
+    out
 }
 
 /// A state event as an integrator event on `y = [q; v]`.

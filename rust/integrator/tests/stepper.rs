@@ -188,11 +188,12 @@ fn projection_is_applied_to_each_accepted_state() {
             dy[1] = y[0];
             Ok(())
         }
-        fn project(&mut self, y: &mut [f64]) {
+        fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
             self.calls += 1;
             let r = (y[0] * y[0] + y[1] * y[1]).sqrt();
             y[0] /= r;
             y[1] /= r;
+            Ok(false)
         }
     }
     let mut st = Stepper::new(

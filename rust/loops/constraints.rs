@@ -1,0 +1,356 @@
+//! The cut joints' constraints at the position, velocity and acceleration levels, from the
+//! tree's world-frame kinematics (`kinematics::positions`/`velocities`).
+//!
+//! Each cut joint contributes rows, all in frame a's axes so that the multipliers are the
+//! joint's force and moment components in that frame:
+//! * position rows `eₖ·(p_b − p_a)` (`eₖ` frame a's axes; the two normal to the axis for a
+//!   prismatic joint);
+//! * orientation rows: the rotation vector `log(R_aᵀ R_b)` for fixed and prismatic joints
+//!   (velocity `eₖ·(ω_b − ω_a)`), and `uₖ·a_b` for a revolute joint (`uₖ` normal to the
+//!   axis in frame a, `a_b` the axis carried by frame b: zero when the axes are aligned).
+//!
+//! The velocity rows are the exact time derivatives of the position rows (of the rotation
+//! vector at closure), and `γ = J̇ q̇` is the derivative of the velocity rows at `q̈ = 0`.
+use nalgebra::{DMatrix, DVector, Rotation3};
+
+use super::{CutKind, LoopJoint};
+use crate::kinematics::{self, body_placement, LinkState};
+use crate::model::Model;
+use crate::spatial::{angular, linear, Mat3, Vec3, Vec6};
+
+/// The tree's world-frame kinematics for the constraints, reused across calls.
+pub struct LoopKinematics {
+    pub links: Vec<LinkState>,
+    /// Each link's twist rate at `q̈ = 0` (no gravity): `[ω̇; v̇ of the origin]`.
+    bias: Vec<Vec6>,
+}
+
+/// Residual, Jacobian (`m × nv`) and `γ = J̇ q̇` of all cut joints.
+pub struct Constraints {
+    pub residual: DVector<f64>,
+    pub jacobian: DMatrix<f64>,
+    pub gamma: DVector<f64>,
+}
+
+impl Constraints {
+    pub fn new(model: &Model) -> Self {
+        let m = model.nconstraints();
+        Constraints {
+            residual: DVector::zeros(m),
+            jacobian: DMatrix::zeros(m, model.nv),
+            gamma: DVector::zeros(m),
+        }
+    }
+}
+
+/// One end of a cut joint in the world: frame orientation and origin, the link carrying it
+/// (`None`: the ground), and that point's velocity and bias acceleration once known.
+#[derive(Clone, Copy)]
+struct End {
+    rotation: Mat3,
+    point: Vec3,
+    link: Option<usize>,
+}
+
+/// Velocity of an end's point and of its body, and their rates at `q̈ = 0`.
+#[derive(Clone, Copy, Default)]
+struct EndMotion {
+    w: Vec3,
+    v: Vec3,
+    bias_w: Vec3,
+    bias_a: Vec3,
+}
+
+impl LoopKinematics {
+    pub fn new(model: &Model) -> Self {
+        LoopKinematics {
+            links: vec![LinkState::default(); model.links.len()],
+            bias: vec![Vec6::zeros(); model.links.len()],
+        }
+    }
+
+    pub fn positions(&mut self, model: &Model, q: &[f64]) {
+        kinematics::positions(model, q, &mut self.links);
+    }
+
+    /// Twists and the velocity-product twist rates; needs `positions` first.
+    pub fn velocities(&mut self, model: &Model, q: &[f64], v: &[f64]) {
+        kinematics::velocities(model, q, v, &mut self.links);
+        for (i, l) in model.links.iter().enumerate() {
+            let parent = match l.parent {
+                Some(p) => {
+                    let (b, r) = (self.bias[p], self.links[i].origin - self.links[p].origin);
+                    let w = angular(&b);
+                    crate::spatial::stack(&w, &(linear(&b) + w.cross(&r)))
+                }
+                None => Vec6::zeros(),
+            };
+            self.bias[i] = parent + self.links[i].xi;
+        }
+    }
+
+    fn end(&self, model: &Model, body: Option<usize>, frame: &crate::spatial::Placement) -> End {
+        match body {
+            None => End {
+                rotation: frame.rotation,
+                point: frame.translation,
+                link: None,
+            },
+            Some(b) => {
+                let p = body_placement(model, &self.links, b).compose(frame);
+                End {
+                    rotation: p.rotation,
+                    point: p.translation,
+                    link: model.bodies[b].link,
+                }
+            }
+        }
+    }
+
+    fn motion(&self, end: &End) -> EndMotion {
+        let Some(l) = end.link else {
+            return EndMotion::default();
+        };
+        let s = &self.links[l];
+        let r = end.point - s.origin;
+        let (w, bw) = (angular(&s.twist), angular(&self.bias[l]));
+        EndMotion {
+            w,
+            v: linear(&s.twist) + w.cross(&r),
+            bias_w: bw,
+            bias_a: linear(&self.bias[l]) + bw.cross(&r) + w.cross(&w.cross(&r)),
+        }
+    }
+
+    /// Adds `lin · (velocity of point p)` + `ang · (angular velocity)` of `link`'s body, as
+    /// a function of `v`, to row `row` of `jac`.
+    fn add_to_row(
+        &self,
+        model: &Model,
+        jac: &mut DMatrix<f64>,
+        row: usize,
+        link: Option<usize>,
+        p: &Vec3,
+        lin: &Vec3,
+        ang: &Vec3,
+    ) {
+        let mut next = link;
+        while let Some(j) = next {
+            let l = &model.links[j];
+            let s = &self.links[j];
+            let r = p - s.origin;
+            for k in 0..l.joint.nv() {
+                let col = &s.s[k];
+                let w = angular(col);
+                let v = linear(col) + w.cross(&r);
+                jac[(row, l.v_index + k)] += lin.dot(&v) + ang.dot(&w);
+            }
+            next = l.parent;
+        }
+    }
+}
+
+/// Frame a's axes in the world, ordered so that the joint axis comes last: the two normals
+/// `u₁, u₂` (`u₁ × u₂ = axis`) and the axis for revolute and prismatic joints.
+fn row_axes(lp: &LoopJoint, rotation_a: &Mat3) -> [Vec3; 3] {
+    match lp.kind() {
+        CutKind::Revolute | CutKind::Prismatic => {
+            let a = lp.axis().normalize();
+            // The coordinate axis least aligned with `a` gives a well-conditioned normal.
+            let k = a.iamin();
+            let u1 = a.cross(&Vec3::ith(k, 1.0)).normalize();
+            let u2 = a.cross(&u1);
+            [rotation_a * u1, rotation_a * u2, rotation_a * a]
+        }
+        _ => [
+            rotation_a.column(0).into(),
+            rotation_a.column(1).into(),
+            rotation_a.column(2).into(),
+        ],
+    }
+}
+
+/// Rows of one loop: which ends, which directions.
+struct LoopRows {
+    a: End,
+    b: End,
+    axes: [Vec3; 3],
+    /// Number of position rows (the first ones): 3, or 2 for a prismatic joint.
+    npos: usize,
+}
+
+impl LoopRows {
+    fn new(kin: &LoopKinematics, model: &Model, lp: &LoopJoint) -> Self {
+        let a = kin.end(model, lp.body_a, &lp.frame_a);
+        let b = kin.end(model, lp.body_b, &lp.frame_b);
+        let axes = row_axes(lp, &a.rotation);
+        let npos = if lp.kind() == CutKind::Prismatic {
+            2
+        } else {
+            3
+        };
+        LoopRows { a, b, axes, npos }
+    }
+
+    /// Frame b's copy of the joint axis, in the world.
+    fn axis_b(&self, lp: &LoopJoint) -> Vec3 {
+        self.b.rotation * lp.axis().normalize()
+    }
+}
+
+/// Writes every loop's residual (length `nconstraints`); needs `kin.positions`.
+pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
+    let mut r = 0;
+    for lp in &model.loops {
+        let rows = LoopRows::new(kin, model, lp);
+        let d = rows.b.point - rows.a.point;
+        for e in &rows.axes[..rows.npos] {
+            out[r] = e.dot(&d);
+            r += 1;
+        }
+        match lp.kind() {
+            CutKind::Spherical => {}
+            CutKind::Revolute => {
+                let ab = rows.axis_b(lp);
+                for u in &rows.axes[..2] {
+                    out[r] = u.dot(&ab);
+                    r += 1;
+                }
+            }
+            CutKind::Prismatic | CutKind::Fixed => {
+                let rel = rows.a.rotation.transpose() * rows.b.rotation;
+                let log = Rotation3::from_matrix_unchecked(rel).scaled_axis();
+                // Components along frame a's axes, in the order of the position rows' axes
+                // (for a prismatic joint the axis is the last of the three).
+                let log_world = rows.a.rotation * log;
+                for e in &rows.axes {
+                    out[r] = e.dot(&log_world);
+                    r += 1;
+                }
+            }
+        }
+    }
+}
+
+/// Fills the velocity Jacobian (`nconstraints × nv`); needs `kin.positions`.
+pub fn jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
+    jac.fill(0.0);
+    let zero = Vec3::zeros();
+    let mut r = 0;
+    for lp in &model.loops {
+        let rows = LoopRows::new(kin, model, lp);
+        let (a, b) = (&rows.a, &rows.b);
+        let d = b.point - a.point;
+        for e in &rows.axes[..rows.npos] {
+            kin.add_to_row(model, jac, r, b.link, &b.point, e, &zero);
+            kin.add_to_row(model, jac, r, a.link, &a.point, &-e, &e.cross(&d));
+            r += 1;
+        }
+        let angular_dirs: &[Vec3] = match lp.kind() {
+            CutKind::Spherical => &[],
+            CutKind::Revolute => &[
+                rows.axis_b(lp).cross(&rows.axes[0]),
+                rows.axis_b(lp).cross(&rows.axes[1]),
+            ],
+            CutKind::Prismatic | CutKind::Fixed => &rows.axes,
+        };
+        for c in angular_dirs {
+            kin.add_to_row(model, jac, r, b.link, &b.point, &zero, c);
+            kin.add_to_row(model, jac, r, a.link, &a.point, &zero, &-c);
+            r += 1;
+        }
+    }
+}
+
+/// Writes `γ = J̇ q̇` (length `nconstraints`): `J q̈ + γ = 0` on the manifold. Needs
+/// `kin.positions` and `kin.velocities`.
+pub fn gamma(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
+    let mut r = 0;
+    for lp in &model.loops {
+        let rows = LoopRows::new(kin, model, lp);
+        let (ma, mb) = (kin.motion(&rows.a), kin.motion(&rows.b));
+        let d = rows.b.point - rows.a.point;
+        let (dv, dw) = (mb.v - ma.v, mb.w - ma.w);
+        let (da, dbw) = (mb.bias_a - ma.bias_a, mb.bias_w - ma.bias_w);
+        let wa = ma.w;
+        for e in &rows.axes[..rows.npos] {
+            let e_rate = wa.cross(e);
+            out[r] = 2.0 * e_rate.dot(&dv)
+                + e.dot(&da)
+                + (ma.bias_w.cross(e) + wa.cross(&e_rate)).dot(&d);
+            r += 1;
+        }
+        match lp.kind() {
+            CutKind::Spherical => {}
+            CutKind::Revolute => {
+                let ab = rows.axis_b(lp);
+                let ab_rate = mb.w.cross(&ab);
+                for u in &rows.axes[..2] {
+                    let c = ab.cross(u);
+                    let c_rate = ab_rate.cross(u) + ab.cross(&wa.cross(u));
+                    out[r] = dbw.dot(&c) + dw.dot(&c_rate);
+                    r += 1;
+                }
+            }
+            CutKind::Prismatic | CutKind::Fixed => {
+                for e in &rows.axes {
+                    out[r] = wa.cross(e).dot(&dw) + e.dot(&dbw);
+                    r += 1;
+                }
+            }
+        }
+    }
+}
+
+/// The cut joints' wrenches from the multipliers: per loop `[force; moment]` that the cut
+/// joint applies to body b (minus that on body a), in frame a's axes. Needs `positions`.
+pub fn wrenches(model: &Model, kin: &LoopKinematics, lambda: &[f64]) -> Vec<[f64; 6]> {
+    let mut out = Vec::with_capacity(model.loops.len());
+    let mut r = 0;
+    for lp in &model.loops {
+        let rows = LoopRows::new(kin, model, lp);
+        let mut force = Vec3::zeros();
+        for e in &rows.axes[..rows.npos] {
+            force += e * lambda[r];
+            r += 1;
+        }
+        let mut moment = Vec3::zeros();
+        match lp.kind() {
+            CutKind::Spherical => {}
+            CutKind::Revolute => {
+                let ab = rows.axis_b(lp);
+                for u in &rows.axes[..2] {
+                    moment += ab.cross(u) * lambda[r];
+                    r += 1;
+                }
+            }
+            CutKind::Prismatic | CutKind::Fixed => {
+                for e in &rows.axes {
+                    moment += e * lambda[r];
+                    r += 1;
+                }
+            }
+        }
+        let to_a = rows.a.rotation.transpose();
+        let (f, m) = (to_a * force, to_a * moment);
+        out.push([f.x, f.y, f.z, m.x, m.y, m.z]);
+    }
+    out
+}
+
+/// Index of the loop owning constraint row `row`.
+pub fn loop_of_row(model: &Model, row: usize) -> usize {
+    let starts = model.constraint_rows();
+    starts.windows(2).position(|w| row < w[1]).unwrap_or(0)
+}
+
+/// Whether each revolute cut joint's axes point the same way (`a_b · a_a > 0`): the axis
+/// rows vanish for anti-parallel axes too, a closure the joint cannot have.
+pub fn flipped_axis(model: &Model, kin: &LoopKinematics) -> Option<usize> {
+    model.loops.iter().position(|lp| {
+        lp.kind() == CutKind::Revolute && {
+            let rows = LoopRows::new(kin, model, lp);
+            rows.axis_b(lp).dot(&rows.axes[2]) <= 0.0
+        }
+    })
+}

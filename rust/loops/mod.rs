@@ -1,0 +1,207 @@
+//! Closed kinematic loops by cut joints (docs/loops.md). A mechanism with loops is modelled
+//! as its spanning tree plus one *cut joint* per loop: a joint between a frame on body a and
+//! a frame on body b that the tree does not contain. The cut joint's constraint wrench is
+//! carried as Lagrange multipliers, `I q̈ + C q̇ = τ + Jᵀλ`, `J q̈ = −J̇ q̇`, as the DeNOC
+//! school treats loops; the tree's dynamics is untouched.
+//!
+//! * [`constraints`]: the cut joints' residual, velocity Jacobian `J` and `J̇ q̇`, from the
+//!   world-frame kinematics of the tree.
+//! * [`solve`]: the constrained forward dynamics (redundant constraints included), the
+//!   constraint wrenches, the driving forces of chosen actuated joints, and the projections
+//!   onto the position, velocity and acceleration manifolds (`assemble`).
+mod constraints;
+mod factor;
+mod solve;
+#[cfg(test)]
+mod tests;
+
+pub use constraints::{gamma, jacobian, residual, wrenches, Constraints, LoopKinematics};
+pub use solve::{
+    assemble, constrained_forward_dynamics, constraint_forces, driving_forces, project_state,
+    project_velocity_like, LoopSolver,
+};
+
+use crate::error::{Error, Result};
+use crate::joint::Joint;
+use crate::model::Model;
+use crate::spatial::{Placement, Vec3};
+
+/// A cut joint closing one loop: `joint` between `frame_a` on body `body_a` and `frame_b` on
+/// body `body_b` (`None`: the world). The loop is closed when the two frames coincide up to
+/// the joint's motion (rotation about / sliding along `frame_a`'s axis; any rotation for a
+/// spherical joint; none for a fixed one).
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct LoopJoint {
+    pub name: String,
+    pub body_a: Option<usize>,
+    pub body_b: Option<usize>,
+    pub joint: Joint,
+    /// Frame a in body a's frame (the world frame for `None`).
+    pub frame_a: Placement,
+    /// Frame b in body b's frame.
+    pub frame_b: Placement,
+}
+
+/// Which relative motions a cut joint removes: `linear` position rows (3, or the 2 normal to
+/// a prismatic axis) and orientation rows (3 for fixed and prismatic, the 2 that keep a
+/// revolute axis aligned, none for a spherical joint).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CutKind {
+    Spherical,
+    Revolute,
+    Prismatic,
+    Fixed,
+}
+
+impl CutKind {
+    pub fn of(joint: &Joint) -> Option<CutKind> {
+        match joint {
+            Joint::Spherical => Some(CutKind::Spherical),
+            Joint::Revolute { .. } => Some(CutKind::Revolute),
+            Joint::Prismatic { .. } => Some(CutKind::Prismatic),
+            Joint::Fixed => Some(CutKind::Fixed),
+            _ => None,
+        }
+    }
+
+    /// Number of scalar constraints.
+    pub const fn rows(self) -> usize {
+        match self {
+            CutKind::Spherical => 3,
+            CutKind::Revolute | CutKind::Prismatic => 5,
+            CutKind::Fixed => 6,
+        }
+    }
+}
+
+impl LoopJoint {
+    pub fn kind(&self) -> CutKind {
+        // `add_loop` and deserialisation admit only the four cut-joint types.
+        CutKind::of(&self.joint).unwrap_or(CutKind::Fixed)
+    }
+
+    /// The joint axis in frame a (zero for spherical and fixed cut joints).
+    pub fn axis(&self) -> Vec3 {
+        match self.joint {
+            Joint::Revolute { axis } | Joint::Prismatic { axis } => axis,
+            _ => Vec3::zeros(),
+        }
+    }
+}
+
+impl Model {
+    /// Number of cut joints.
+    pub fn nloops(&self) -> usize {
+        self.loops.len()
+    }
+
+    /// Number of scalar constraints of all cut joints (rows of the constraint Jacobian).
+    pub fn nconstraints(&self) -> usize {
+        self.loops.iter().map(|l| l.kind().rows()).sum()
+    }
+
+    /// First constraint row of each loop, and the total.
+    pub fn constraint_rows(&self) -> Vec<usize> {
+        let mut rows = Vec::with_capacity(self.loops.len() + 1);
+        let mut r = 0;
+        for l in &self.loops {
+            rows.push(r);
+            r += l.kind().rows();
+        }
+        rows.push(r);
+        rows
+    }
+
+    /// Adds a cut joint closing a loop; returns its index. `frame_a`/`frame_b` place the cut
+    /// joint's frame on each body. Refuses unknown bodies, a loop from a body to itself (or
+    /// to a body rigidly welded to it: both in one link, or both fixed to the world), joint
+    /// types other than revolute, prismatic, spherical and fixed, and duplicate names.
+    pub fn add_loop(
+        &mut self,
+        body_a: Option<usize>,
+        body_b: Option<usize>,
+        joint: Joint,
+        frame_a: Placement,
+        frame_b: Placement,
+        name: Option<String>,
+    ) -> Result<usize> {
+        let n = self.bodies.len();
+        for (arg, b) in [("body_a", body_a), ("body_b", body_b)] {
+            if let Some(k) = b {
+                if k >= n {
+                    return Err(Error::model(
+                        arg,
+                        format!("no body with index {k}: the model has {n} bodies (indices 0..{n}), or -1 / 'world' for the ground"),
+                    ));
+                }
+            }
+        }
+        if CutKind::of(&joint).is_none() {
+            return Err(Error::arg(
+                "joint",
+                "a Revolute, Prismatic, Spherical or Fixed cut joint",
+                format!("a {} joint", joint.kind()),
+            ));
+        }
+        let link = |b: Option<usize>| b.and_then(|k| self.bodies[k].link);
+        if link(body_a) == link(body_b) {
+            let what = |b: Option<usize>| match b {
+                Some(k) => format!("body '{}'", self.bodies[k].name),
+                None => "the world".to_string(),
+            };
+            let reason = if body_a == body_b {
+                format!(
+                    "a loop must join two different bodies; both are {}",
+                    what(body_a)
+                )
+            } else {
+                format!(
+                    "{} and {} are welded together (fixed joints), so the loop would join a rigid body to itself",
+                    what(body_a),
+                    what(body_b)
+                )
+            };
+            return Err(Error::model("body_b", reason));
+        }
+        let mut frames = [frame_a, frame_b];
+        for (f, (rot, trans)) in frames.iter_mut().zip([
+            ("rotation_a", "translation_a"),
+            ("rotation_b", "translation_b"),
+        ]) {
+            crate::error::check_finite(trans, f.translation.as_slice())?;
+            f.rotation = crate::model::checked_rotation(&f.rotation, rot)?;
+        }
+        let index = self.loops.len();
+        let name = name.unwrap_or_else(|| format!("loop{index}"));
+        if self.loops.iter().any(|l| l.name == name) {
+            return Err(Error::model(
+                "name",
+                format!("a loop named '{name}' already exists"),
+            ));
+        }
+        self.loops.push(LoopJoint {
+            name,
+            body_a,
+            body_b,
+            joint,
+            frame_a: frames[0],
+            frame_b: frames[1],
+        });
+        Ok(index)
+    }
+
+    /// Checks the cut joints of a deserialised model (bodies in range, admitted types).
+    pub(crate) fn check_loops(&self) -> Result<()> {
+        let n = self.bodies.len();
+        for l in &self.loops {
+            let bad_body = [l.body_a, l.body_b].iter().flatten().any(|&k| k >= n);
+            if bad_body || CutKind::of(&l.joint).is_none() {
+                return Err(Error::model(
+                    "model",
+                    format!("loop '{}' names a body out of range or a joint type that cannot cut a loop", l.name),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
