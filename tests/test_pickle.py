@@ -356,7 +356,7 @@ def test_damaged_data_raises_our_error_never_a_panic():
     future = bytearray(data)
     future[3] += 1
     exc = loads_error(bytes(future))
-    assert isinstance(exc, UnpicklingError) and "format version 2" in str(exc)
+    assert isinstance(exc, UnpicklingError) and f"format version {future[3]}" in str(exc)
     # A pickle stream whose payload was altered fails the same way through pickle.loads.
     stream = pickle.dumps(pmd.RigidBody(1.0, [0, 0, 0], np.eye(3)))
     i = stream.index(b"PMD") + 6

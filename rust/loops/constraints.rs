@@ -11,7 +11,7 @@
 //!
 //! The velocity rows are the exact time derivatives of the position rows (of the rotation
 //! vector at closure), and `γ = J̇ q̇` is the derivative of the velocity rows at `q̈ = 0`.
-use nalgebra::{DMatrix, DVector, Rotation3};
+use nalgebra::{DMatrix, DVector};
 
 use super::{CutKind, LoopJoint};
 use crate::kinematics::{self, body_placement, LinkState};
@@ -198,6 +198,37 @@ impl LoopRows {
     }
 }
 
+/// The rotation vector (axis × angle) of `r`, accurate near the identity: from the skew part
+/// `sin θ · n` and the trace by `atan2` (an `acos` of the trace loses half the digits there).
+pub(super) fn rotation_vector(r: &Mat3) -> Vec3 {
+    let s = 0.5
+        * Vec3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let sin = s.norm();
+    let cos = 0.5 * (r.trace() - 1.0);
+    if sin < 1e-300 {
+        return s;
+    }
+    let angle = sin.atan2(cos);
+    if angle < std::f64::consts::PI - 1e-6 {
+        return s * (angle / sin);
+    }
+    // Near a half turn the skew part vanishes: the axis from the symmetric part.
+    let b = (r + r.transpose()) * 0.5 - Mat3::identity() * cos;
+    let k = (0..3)
+        .max_by(|&i, &j| b[(i, i)].total_cmp(&b[(j, j)]))
+        .unwrap_or(0);
+    let mut n: Vec3 = b.column(k).into();
+    n /= n.norm().max(1e-300);
+    if n.dot(&s) < 0.0 {
+        n = -n;
+    }
+    n * angle
+}
+
 /// Writes every loop's residual (length `nconstraints`); needs `kin.positions`.
 pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
     let mut r = 0;
@@ -219,7 +250,7 @@ pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
             }
             CutKind::Prismatic | CutKind::Fixed => {
                 let rel = rows.a.rotation.transpose() * rows.b.rotation;
-                let log = Rotation3::from_matrix_unchecked(rel).scaled_axis();
+                let log = rotation_vector(&rel);
                 // Components along frame a's axes, in the order of the position rows' axes
                 // (for a prismatic joint the axis is the last of the three).
                 let log_world = rows.a.rotation * log;

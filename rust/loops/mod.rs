@@ -17,8 +17,8 @@ mod tests;
 
 pub use constraints::{gamma, jacobian, residual, wrenches, Constraints, LoopKinematics};
 pub use solve::{
-    assemble, constrained_forward_dynamics, constraint_forces, driving_forces, project_state,
-    project_velocity_like, LoopSolver,
+    assemble, check_mobility, constrained_forward_dynamics, constraint_forces, driving_forces,
+    project_state, project_velocity_like, LoopSolver,
 };
 
 use crate::error::{Error, Result};

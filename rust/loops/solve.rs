@@ -385,6 +385,18 @@ pub fn project_velocity_like(
     Ok(())
 }
 
+/// Refuses a locked mechanism at `q` (the loops leave no freedom of motion): the check a run
+/// makes before it starts.
+pub fn check_mobility(model: &Model, solver: &mut LoopSolver, q: &[f64]) -> Result<()> {
+    solver.constraints_at(model, q, None);
+    solver.rhs.fill(0.0);
+    let rank = min_norm_step(solver);
+    if model.nv > 0 && rank >= model.nv {
+        return Err(locked(model, rank));
+    }
+    Ok(())
+}
+
 /// The integrator's projection of `y = [q; v]` onto the position and velocity manifolds
 /// (Newton to round-off, then the velocity's minimum-norm correction). Returns whether `y`
 /// changed; errors if the loops drifted beyond repair.

@@ -12,6 +12,7 @@ use crate::error::{Error, FileKind, Location, Result};
 use crate::model::Model;
 
 mod bodies;
+mod loops;
 
 /// Integrator settings a scene may carry; the caller's arguments override them.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -60,6 +61,9 @@ struct SceneFile {
     body: Vec<BodyFile>,
     #[serde(default)]
     effect: Vec<EffectFile>,
+    /// Cut joints closing kinematic loops (`loops.rs`).
+    #[serde(default, rename = "loop")]
+    loops: Vec<loops::LoopFile>,
     simulate: Option<SimulateFile>,
 }
 
@@ -68,6 +72,9 @@ struct SceneFile {
 struct InitialFile {
     q0: Option<Vec<f64>>,
     v0: Option<Vec<f64>>,
+    /// Bodies whose joint coordinates are held when the loops are closed at load time.
+    #[serde(default)]
+    fixed: Vec<String>,
 }
 
 #[derive(Deserialize)]
@@ -146,10 +153,17 @@ impl Scene {
         let mut q0 = model.neutral();
         let mut v0 = vec![0.0; model.nv];
         bodies::add_bodies(&ctx, &mut model, &sf.body, units, &mut q0, &mut v0)?;
+        loops::add_loops(&ctx, &mut model, &sf.loops, units)?;
         if let Some(init) = &sf.initial {
             initial_state(&ctx, &model, init, units, &mut q0, &mut v0)?;
         }
         model.normalize(&mut q0);
+        let fixed = sf
+            .initial
+            .as_ref()
+            .map(|i| i.fixed.as_slice())
+            .unwrap_or(&[]);
+        loops::close_initial_state(&ctx, &model, fixed, &mut q0, &mut v0)?;
         let effects = scene_effects(&ctx, &model, &sf.effect, urdf_effects)?;
         let settings = match sf.simulate {
             Some(s) => settings(&ctx, s)?,

@@ -208,6 +208,7 @@ fn close_initial_state(
         ));
     }
     crate::loops::project_state(model, solver, y0).map_err(Error::Closure)?;
+    crate::loops::check_mobility(model, solver, &y0[..model.nq])?;
     solver.max_drift = 0.0;
     Ok(())
 }
