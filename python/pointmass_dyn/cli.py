@@ -78,6 +78,9 @@ def cmd_simulate(args) -> int:
           f"{wall * 1e3:.1f} ms")
     print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J "
           f"({drift / max(kinetic, 1e-300):.2e} of the largest kinetic energy)")
+    if result.constraint_residual is not None and len(result.constraint_residual):
+        print(f"  loops: {model.nloops} closed, largest residual {result.constraint_residual.max():.3e} "
+              f"(drift before projection at most {result.constraint_drift:.3e})")
     if args.out:
         _write_trajectory(Path(args.out), result, model)
         print(f"  trajectory written to {args.out}")
