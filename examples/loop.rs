@@ -8,7 +8,8 @@
 //! ```
 //!
 //! `fd`, `id`, `gim` N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
-//! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model. Subtract a
+//! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
+//! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state. Subtract a
 //! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
 //! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::cpu`).
 use std::hint::black_box;
@@ -22,21 +23,30 @@ use pointmass_dyn::spatial::Vec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: loop (fd|id|gim) N ITERS | loop scene PATH ITERS";
+    let usage = "usage: loop (fd|id|gim) N ITERS | loop (scene|loops) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
     };
-    let model: Model = match what {
-        "scene" => (*Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?.model).clone(),
-        _ => chain(arg.parse()?),
+    let scene = match what {
+        "scene" | "loops" => Some(Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?),
+        _ => None,
+    };
+    let model: Model = match &scene {
+        Some(s) => (*s.model).clone(),
+        None => chain(arg.parse()?),
     };
     let nv = model.nv;
-    let q: Vec<f64> = match what {
-        "scene" => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
+    let q: Vec<f64> = match (what, &scene) {
+        ("loops", Some(s)) => s.q0.clone(),
+        ("scene", _) => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
         _ => vec![0.3; model.nq],
     };
-    let v: Vec<f64> = (0..nv).map(|k| (k as f64 * 0.7).sin()).collect();
+    let v: Vec<f64> = match (what, &scene) {
+        ("loops", Some(s)) => s.v0.clone(),
+        _ => (0..nv).map(|k| (k as f64 * 0.7).sin()).collect(),
+    };
+    let mut solver = pointmass_dyn::loops::LoopSolver::new(&model);
     let tau: Vec<f64> = (0..nv).map(|k| (k as f64 * 0.3).cos()).collect();
     let g = Vec3::new(0.0, 0.0, -9.81);
     let mut data = Data::new(&model);
@@ -54,6 +64,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 recursive::inverse_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)
             }
             "gim" => recursive::mass_matrix(&model, &mut data, black_box(&q), &mut gim),
+            "loops" => {
+                let q = black_box(&q);
+                recursive::forward_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)?;
+                pointmass_dyn::loops::constrained_forward_dynamics(
+                    &model,
+                    &mut data,
+                    &mut solver,
+                    q,
+                    &v,
+                    &mut out,
+                )?
+            }
             _ => return Err(usage.into()),
         }
     }

@@ -23,6 +23,8 @@ pub struct LoopKinematics {
     pub links: Vec<LinkState>,
     /// Each link's twist rate at `q̈ = 0` (no gravity): `[ω̇; v̇ of the origin]`.
     bias: Vec<Vec6>,
+    /// Each cut joint's ends and row directions at the last `positions`.
+    rows: Vec<LoopRows>,
 }
 
 /// Residual, Jacobian (`m × nv`) and `γ = J̇ q̇` of all cut joints.
@@ -66,11 +68,18 @@ impl LoopKinematics {
         LoopKinematics {
             links: vec![LinkState::default(); model.links.len()],
             bias: vec![Vec6::zeros(); model.links.len()],
+            rows: Vec::with_capacity(model.loops.len()),
         }
     }
 
+    /// The links' world poses and, from them, each cut joint's ends and row directions.
     pub fn positions(&mut self, model: &Model, q: &[f64]) {
         kinematics::positions(model, q, &mut self.links);
+        self.rows.clear();
+        for lp in &model.loops {
+            let rows = LoopRows::new(self, model, lp);
+            self.rows.push(rows);
+        }
     }
 
     /// Twists and the velocity-product twist rates; needs `positions` first.
@@ -171,6 +180,7 @@ fn row_axes(lp: &LoopJoint, rotation_a: &Mat3) -> [Vec3; 3] {
 }
 
 /// Rows of one loop: which ends, which directions.
+#[derive(Clone, Copy)]
 struct LoopRows {
     a: End,
     b: End,
@@ -232,8 +242,7 @@ pub(super) fn rotation_vector(r: &Mat3) -> Vec3 {
 /// Writes every loop's residual (length `nconstraints`); needs `kin.positions`.
 pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
     let mut r = 0;
-    for lp in &model.loops {
-        let rows = LoopRows::new(kin, model, lp);
+    for (lp, rows) in model.loops.iter().zip(&kin.rows) {
         let d = rows.b.point - rows.a.point;
         for e in &rows.axes[..rows.npos] {
             out[r] = e.dot(&d);
@@ -268,8 +277,7 @@ pub fn jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
     jac.fill(0.0);
     let zero = Vec3::zeros();
     let mut r = 0;
-    for lp in &model.loops {
-        let rows = LoopRows::new(kin, model, lp);
+    for (lp, rows) in model.loops.iter().zip(&kin.rows) {
         let (a, b) = (&rows.a, &rows.b);
         let d = b.point - a.point;
         for e in &rows.axes[..rows.npos] {
@@ -297,8 +305,7 @@ pub fn jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
 /// `kin.positions` and `kin.velocities`.
 pub fn gamma(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
     let mut r = 0;
-    for lp in &model.loops {
-        let rows = LoopRows::new(kin, model, lp);
+    for (lp, rows) in model.loops.iter().zip(&kin.rows) {
         let (ma, mb) = (kin.motion(&rows.a), kin.motion(&rows.b));
         let d = rows.b.point - rows.a.point;
         let (dv, dw) = (mb.v - ma.v, mb.w - ma.w);
@@ -338,8 +345,7 @@ pub fn gamma(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
 pub fn wrenches(model: &Model, kin: &LoopKinematics, lambda: &[f64]) -> Vec<[f64; 6]> {
     let mut out = Vec::with_capacity(model.loops.len());
     let mut r = 0;
-    for lp in &model.loops {
-        let rows = LoopRows::new(kin, model, lp);
+    for (lp, rows) in model.loops.iter().zip(&kin.rows) {
         let mut force = Vec3::zeros();
         for e in &rows.axes[..rows.npos] {
             force += e * lambda[r];
@@ -378,10 +384,7 @@ pub fn loop_of_row(model: &Model, row: usize) -> usize {
 /// Whether each revolute cut joint's axes point the same way (`a_b · a_a > 0`): the axis
 /// rows vanish for anti-parallel axes too, a closure the joint cannot have.
 pub fn flipped_axis(model: &Model, kin: &LoopKinematics) -> Option<usize> {
-    model.loops.iter().position(|lp| {
-        lp.kind() == CutKind::Revolute && {
-            let rows = LoopRows::new(kin, model, lp);
-            rows.axis_b(lp).dot(&rows.axes[2]) <= 0.0
-        }
+    model.loops.iter().zip(&kin.rows).position(|(lp, rows)| {
+        lp.kind() == CutKind::Revolute && rows.axis_b(lp).dot(&rows.axes[2]) <= 0.0
     })
 }

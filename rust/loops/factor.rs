@@ -80,9 +80,11 @@ pub fn solve_semidefinite(
         if !(a[(p, p)] > tol) {
             break;
         }
-        a.swap_rows(k, p);
-        a.swap_columns(k, p);
-        perm.swap(k, p);
+        if p != k {
+            a.swap_rows(k, p);
+            a.swap_columns(k, p);
+            perm.swap(k, p);
+        }
         let d = a[(k, k)].sqrt();
         a[(k, k)] = d;
         for i in k + 1..n {
