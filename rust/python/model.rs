@@ -1050,8 +1050,12 @@ impl PyModel {
 
     fn __repr__(&self) -> String {
         let m = self.model();
+        let loops = match m.nloops() {
+            0 => String::new(),
+            n => format!(", nloops={n}"),
+        };
         format!(
-            "Model(nbodies={}, nlinks={}, nq={}, nv={})",
+            "Model(nbodies={}, nlinks={}, nq={}, nv={}{loops})",
             m.nbodies(),
             m.links.len(),
             m.nq,
