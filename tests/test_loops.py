@@ -27,7 +27,9 @@ def fourbar():
     m.add_body(bar(L1), pmd.Revolute(Z), name="crank")
     m.add_body(bar(L2), pmd.Revolute(Z), parent=0, translation=[L1, 0, 0], name="coupler")
     m.add_body(bar(L3), pmd.Revolute(Z), translation=[L0, 0, 0], name="rocker")
-    m.add_loop("coupler", "rocker", pmd.Revolute(Z), translation_a=[L2, 0, 0], translation_b=[L3, 0, 0])
+    m.add_loop(
+        "coupler", "rocker", pmd.Revolute(Z), translation_a=[L2, 0, 0], translation_b=[L3, 0, 0]
+    )
     return m
 
 
@@ -46,7 +48,11 @@ def random_rotation(rng):
 
 def random_body(rng):
     d = rng.uniform(0.05, 0.3, size=3)
-    return pmd.RigidBody(rng.uniform(0.5, 2), rng.normal(scale=0.1, size=3), np.diag([d[1] + d[2], d[0] + d[2], d[0] + d[1]]) * 0.1)
+    return pmd.RigidBody(
+        rng.uniform(0.5, 2),
+        rng.normal(scale=0.1, size=3),
+        np.diag([d[1] + d[2], d[0] + d[2], d[0] + d[1]]) * 0.1,
+    )
 
 
 def random_joint(rng, kinds):
@@ -80,7 +86,13 @@ def closed_random_tree(seed, cut_kinds, n=6):
     m = pmd.Model()
     for k in range(n):
         parent = -1 if k == 0 else int(rng.integers(-1, k))
-        m.add_body(random_body(rng), random_joint(rng, "RPS"), parent=parent, translation=rng.normal(scale=0.3, size=3), rotation=random_rotation(rng))
+        m.add_body(
+            random_body(rng),
+            random_joint(rng, "RPS"),
+            parent=parent,
+            translation=rng.normal(scale=0.3, size=3),
+            rotation=random_rotation(rng),
+        )
     q, v = random_state(m, rng)
     for kind in cut_kinds:
         a, b = rng.choice(np.arange(-1, n), size=2, replace=False)
@@ -90,8 +102,21 @@ def closed_random_tree(seed, cut_kinds, n=6):
         # The cut frame in the world, then in body b's frame.
         f_r, f_t = ra_w @ fa_r, pa_w + ra_w @ fa_t
         fb_r, fb_t = rb_w.T @ f_r, rb_w.T @ (f_t - pb_w)
-        joint = {"R": pmd.Revolute(rng.normal(size=3)), "P": pmd.Prismatic(rng.normal(size=3)), "S": pmd.Spherical(), "F": pmd.Fixed()}[kind]
-        m.add_loop(int(a), int(b), joint, translation_a=fa_t, rotation_a=fa_r, translation_b=fb_t, rotation_b=fb_r)
+        joint = {
+            "R": pmd.Revolute(rng.normal(size=3)),
+            "P": pmd.Prismatic(rng.normal(size=3)),
+            "S": pmd.Spherical(),
+            "F": pmd.Fixed(),
+        }[kind]
+        m.add_loop(
+            int(a),
+            int(b),
+            joint,
+            translation_a=fa_t,
+            rotation_a=fa_r,
+            translation_b=fb_t,
+            rotation_b=fb_r,
+        )
     return m, q, v, rng
 
 
@@ -112,7 +137,14 @@ def kkt(m, q, v, tau, gravity):
     h = m.bias_forces(q, v, gravity=gravity)
     j = m.constraint_jacobian(q)
     eps = 1e-6
-    jdot_v = (m.constraint_jacobian(retract(m, q, eps * v)) - m.constraint_jacobian(retract(m, q, -eps * v))) @ v / (2 * eps)
+    jdot_v = (
+        (
+            m.constraint_jacobian(retract(m, q, eps * v))
+            - m.constraint_jacobian(retract(m, q, -eps * v))
+        )
+        @ v
+        / (2 * eps)
+    )
     nv, nc = m.nv, j.shape[0]
     k = np.block([[mm, -j.T], [j, np.zeros((nc, nc))]])
     rhs = np.concatenate([tau - h, -jdot_v])
@@ -130,7 +162,10 @@ def test_jacobian_is_the_derivative_of_the_residual(seed, cuts):
     assert np.abs(r0).max() < 1e-12
     j = m.constraint_jacobian(q)
     eps = 1e-6
-    fd = (m.constraint_residual(retract(m, q, eps * v)) - m.constraint_residual(retract(m, q, -eps * v))) / (2 * eps)
+    fd = (
+        m.constraint_residual(retract(m, q, eps * v))
+        - m.constraint_residual(retract(m, q, -eps * v))
+    ) / (2 * eps)
     np.testing.assert_allclose(j @ v, fd, atol=1e-7 * (1 + np.abs(fd).max()))
 
 
@@ -150,7 +185,9 @@ def test_forward_dynamics_solves_the_kkt_system(seed, cuts):
     assert forces.shape == (m.nloops, 6)
     # Inverse dynamics with every joint actuated gives τ back (no loop force needed beyond λ).
     tau_back = m.inverse_dynamics(q, v, a, gravity=G, actuated=list(range(m.nv)))
-    np.testing.assert_allclose(m.forward_dynamics(q, v, tau_back, gravity=G), a, atol=1e-8 * (1 + np.abs(a).max()))
+    np.testing.assert_allclose(
+        m.forward_dynamics(q, v, tau_back, gravity=G), a, atol=1e-8 * (1 + np.abs(a).max())
+    )
 
 
 def test_fourbar_is_redundant_in_space_and_moves_with_one_freedom():
@@ -200,8 +237,10 @@ def test_driving_torque_reproduces_the_prescribed_motion():
     np.testing.assert_allclose(m.forward_dynamics(q, v, tau, gravity=G), a, atol=1e-9)
     # Virtual work: the crank's power equals the rate of change of the mechanism's energy.
     h = 1e-6
+
     def energy(qq, vv):
         return m.kinetic_energy(qq, vv) + m.potential_energy(qq, G)
+
     q1, q2 = retract(m, q, h * v), retract(m, q, -h * v)
     v1 = m.assemble_velocity(q1, v + h * a, fixed=[0])
     v2 = m.assemble_velocity(q2, v - h * a, fixed=[0])
@@ -296,9 +335,15 @@ def test_unknown_bodies_and_joint_types_are_refused():
     m = fourbar()
     with pytest.raises(ModelStructureError, match="body_a: no body named 'nope'"):
         m.add_loop("nope", "rocker", pmd.Spherical())
-    with pytest.raises(ModelStructureError, match=r"body_b: expected -1 \(the world\) or a body index 0\.\.3, got 7"):
+    with pytest.raises(
+        ModelStructureError,
+        match=r"body_b: expected -1 \(the world\) or a body index 0\.\.3, got 7",
+    ):
         m.add_loop(0, 7, pmd.Spherical())
-    with pytest.raises(pmd.InvalidInputError, match="joint: expected a Revolute, Prismatic, Spherical or Fixed cut joint"):
+    with pytest.raises(
+        pmd.InvalidInputError,
+        match="joint: expected a Revolute, Prismatic, Spherical or Fixed cut joint",
+    ):
         m.add_loop(0, 2, pmd.SphericalZYZ())
     with pytest.raises(ModelStructureError, match="a loop named 'x' already exists"):
         m.add_loop(0, 2, pmd.Spherical(), name="x")
@@ -311,7 +356,14 @@ def test_a_loop_that_cannot_close_names_itself():
     m.add_body(bar(0.05), pmd.Revolute(Z), parent=0, translation=[L1, 0, 0], name="coupler")
     m.add_body(bar(0.2), pmd.Revolute(Z), translation=[L0, 0, 0], name="rocker")
     # Crank, coupler and rocker together (0.35) are shorter than the ground link (0.4).
-    m.add_loop("coupler", "rocker", pmd.Revolute(Z), translation_a=[0.05, 0, 0], translation_b=[0.2, 0, 0], name="short")
+    m.add_loop(
+        "coupler",
+        "rocker",
+        pmd.Revolute(Z),
+        translation_a=[0.05, 0, 0],
+        translation_b=[0.2, 0, 0],
+        name="short",
+    )
     with pytest.raises(LoopClosureError, match="loop 'short' cannot be closed from this guess"):
         m.assemble([0.0, 0.0, 2.0])
     # Reachable in general, but not with the crank held where the coupler cannot reach.
@@ -325,7 +377,9 @@ def test_locked_mechanism_is_a_clear_error():
     m = pmd.Model()
     m.add_body(bar(0.3), pmd.Revolute(Z), name="left")
     m.add_body(bar(0.3), pmd.Revolute(Z), parent=0, translation=[0.3, 0, 0], name="right")
-    m.add_loop("right", "world", pmd.Revolute(Z), translation_a=[0.3, 0, 0], translation_b=[0.4, 0, 0])
+    m.add_loop(
+        "right", "world", pmd.Revolute(Z), translation_a=[0.3, 0, 0], translation_b=[0.4, 0, 0]
+    )
     q = m.assemble([0.8, -1.6])
     with pytest.raises(SingularityError, match="no freedom of motion"):
         m.forward_dynamics(q, np.zeros(2), np.zeros(2), gravity=G)
@@ -339,9 +393,13 @@ def test_inverse_dynamics_with_loops_needs_the_actuated_joints():
     with pytest.raises(pmd.InvalidInputError, match="actuated: expected the actuated joints"):
         m.inverse_dynamics(q, np.zeros(3), np.zeros(3))
     a_bad = np.array([1.0, 0.0, 0.0])
-    with pytest.raises(pmd.InvalidInputError, match="a: expected accelerations that keep the loops closed"):
+    with pytest.raises(
+        pmd.InvalidInputError, match="a: expected accelerations that keep the loops closed"
+    ):
         m.inverse_dynamics(q, np.zeros(3), a_bad, actuated=[0])
-    with pytest.raises(pmd.InvalidInputError, match="actuated: expected v indices 0..3 or body names"):
+    with pytest.raises(
+        pmd.InvalidInputError, match="actuated: expected v indices 0..3 or body names"
+    ):
         m.inverse_dynamics(q, np.zeros(3), np.zeros(3), actuated=[5])
 
 
@@ -350,5 +408,7 @@ def test_simulate_refuses_an_open_or_inconsistent_initial_state():
     with pytest.raises(LoopClosureError, match="q0: loop 'loop0' is open"):
         pmd.simulate(pmd.Scene(m, q0=[0.5, 0.5, 1.5]), (0, 1))
     q = m.assemble([0.5, 0.5, 1.5], fixed=[0])
-    with pytest.raises(pmd.InvalidInputError, match=r"v0: expected speeds that keep the loops closed"):
+    with pytest.raises(
+        pmd.InvalidInputError, match=r"v0: expected speeds that keep the loops closed"
+    ):
         pmd.simulate(pmd.Scene(m, q0=q, v0=[1.0, 0, 0]), (0, 1))

@@ -97,11 +97,16 @@ def assert_same_model(a: pmd.Model, b: pmd.Model, what: str):
                 b.forward_dynamics(q, v, x, gravity=G, method=method),
                 what,
             )
-            same(
-                a.inverse_dynamics(q, v, x, gravity=G, method=method),
-                b.inverse_dynamics(q, v, x, gravity=G, method=method),
-                what,
-            )
+            if a.nloops == 0:  # with loops, inverse dynamics needs a consistent state
+                same(
+                    a.inverse_dynamics(q, v, x, gravity=G, method=method),
+                    b.inverse_dynamics(q, v, x, gravity=G, method=method),
+                    what,
+                )
+        if a.nloops:
+            assert a.loop_names == b.loop_names, what
+            same(a.constraint_residual(q), b.constraint_residual(q), what)
+            same(a.constraint_jacobian(q), b.constraint_jacobian(q), what)
         same_dict(a.denoc(q), b.denoc(q), what)
         for f in ("placements", "point_masses"):
             for xa, xb in zip(getattr(a, f)(q), getattr(b, f)(q)):

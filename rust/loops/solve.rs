@@ -299,7 +299,13 @@ pub fn assemble(
     let mut trial = q.clone();
     let mut res = solver.residual_at(model, &q);
     let mut iterations = 0;
-    while res > tol && iterations < max_iterations {
+    // Past `tol`, two more steps polish the closure to round-off (Newton converges
+    // quadratically; a step that does not improve ends the loop).
+    let mut polish = 2;
+    while (res > tol || polish > 0) && res > 0.0 && iterations < max_iterations {
+        if res <= tol {
+            polish -= 1;
+        }
         iterations += 1;
         solver.constraints_at(model, &q, None);
         zero_fixed(&mut solver.cons.jacobian, fixed);
