@@ -2,7 +2,7 @@
 //! side allocates nothing: Cholesky of the (positive definite) mass matrix, and Cholesky with
 //! diagonal pivoting of the (semi-definite) constraint-space matrices, which finds the rank
 //! of redundant constraints and solves for a basic solution.
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DMatrix;
 
 /// `m = L Lᵀ` in place (lower triangle; the upper is left as it was). `Err(k)` if the k-th
 /// pivot is not positive.
@@ -56,17 +56,18 @@ pub fn back_substitute(l: &DMatrix<f64>, x: &mut [f64]) {
 /// set (a mechanism near, not at, a singular position) leaves far more.
 pub const RANK_TOL: f64 = 1e-12;
 
-/// Pivoted Cholesky of a symmetric positive semi-definite `a` (overwritten) and a basic
-/// solution of `a x = b`: the unknowns of dependent rows are zero. `perm` and `work` are
-/// scratch of length n. Returns the rank.
+/// Pivoted Cholesky of the symmetric positive semi-definite leading `n × n` block of `a`
+/// (overwritten) and a basic solution of `a x = b` (`b`, `x` of length n): the unknowns of
+/// dependent rows are zero. `perm` and `work` are scratch of length ≥ n. Returns the rank.
 pub fn solve_semidefinite(
     a: &mut DMatrix<f64>,
-    b: &DVector<f64>,
-    x: &mut DVector<f64>,
+    n: usize,
+    b: &[f64],
+    x: &mut [f64],
     perm: &mut [usize],
     work: &mut [f64],
 ) -> usize {
-    let n = a.nrows();
+    let perm = &mut perm[..n];
     for (k, p) in perm.iter_mut().enumerate() {
         *p = k;
     }
@@ -81,8 +82,12 @@ pub fn solve_semidefinite(
             break;
         }
         if p != k {
-            a.swap_rows(k, p);
-            a.swap_columns(k, p);
+            for c in 0..n {
+                a.swap((k, c), (p, c));
+            }
+            for r in 0..n {
+                a.swap((r, k), (r, p));
+            }
             perm.swap(k, p);
         }
         let d = a[(k, k)].sqrt();
@@ -119,7 +124,7 @@ pub fn solve_semidefinite(
         }
         y[i] = s / l[(i, i)];
     }
-    x.fill(0.0);
+    x[..n].fill(0.0);
     for i in 0..rank {
         x[perm[i]] = y[i];
     }

@@ -28,6 +28,8 @@ pub struct LoopSolver {
     a: DMatrix<f64>,
     rhs: DVector<f64>,
     pub lambda: DVector<f64>,
+    /// Constraint rows with a non-zero Jacobian row at the last solve.
+    active: Vec<usize>,
     perm: Vec<usize>,
     work: Vec<f64>,
     /// nv-long scratch (a step in v, a column).
@@ -51,6 +53,7 @@ impl LoopSolver {
             a: DMatrix::zeros(m, m),
             rhs: DVector::zeros(m),
             lambda: DVector::zeros(m),
+            active: Vec::with_capacity(m),
             perm: vec![0; m],
             work: vec![0.0; m.max(n)],
             step: vec![0.0; n],
@@ -97,6 +100,14 @@ pub fn constrained_forward_dynamics(
             "the mass matrix is not positive definite (pivot {k}): a massless chain, or a body too slender"
         )));
     }
+    // Rows that vanish identically (a planar loop's out-of-plane rows) are left out: they
+    // carry no force and would only be dropped by the pivoting.
+    solver.active.clear();
+    for r in 0..m {
+        if (0..n).any(|c| solver.cons.jacobian[(r, c)] != 0.0) {
+            solver.active.push(r);
+        }
+    }
     let LoopSolver {
         cons,
         mass,
@@ -107,21 +118,29 @@ pub fn constrained_forward_dynamics(
         perm,
         work,
         step,
+        active,
         ..
     } = solver;
-    for r in 0..m {
+    let na = active.len();
+    for (k, &r) in active.iter().enumerate() {
         for c in 0..n {
             step[c] = cons.jacobian[(r, c)];
         }
         forward_substitute(mass, step);
-        y.column_mut(r).copy_from_slice(step);
+        y.column_mut(k).copy_from_slice(step);
     }
-    y.tr_mul_to(y, s);
-    for r in 0..m {
+    for i in 0..na {
+        for j in 0..=i {
+            let d = y.column(i).dot(&y.column(j));
+            s[(i, j)] = d;
+            s[(j, i)] = d;
+        }
+    }
+    for (k, &r) in active.iter().enumerate() {
         let ja: f64 = (0..n).map(|c| cons.jacobian[(r, c)] * a[c]).sum();
-        rhs[r] = -cons.gamma[r] - ja;
+        rhs[k] = -cons.gamma[r] - ja;
     }
-    let rank = solve_semidefinite(s, rhs, lambda, perm, work);
+    let rank = solve_semidefinite(s, na, rhs.as_slice(), work_lambda(lambda, na), perm, work);
     solver.rank = rank;
     if n > 0 && rank >= n {
         return Err(locked(model, rank));
@@ -131,16 +150,29 @@ pub fn constrained_forward_dynamics(
         y,
         lambda,
         step,
+        active,
+        work,
         ..
     } = solver;
     for (c, s) in step.iter_mut().enumerate() {
-        *s = (0..m).map(|r| y[(c, r)] * lambda[r]).sum();
+        *s = (0..na).map(|k| y[(c, k)] * lambda[k]).sum();
+    }
+    // λ by constraint row: the active rows' values, zero for the vanishing ones.
+    work[..na].copy_from_slice(&lambda.as_slice()[..na]);
+    lambda.fill(0.0);
+    for (k, &r) in active.iter().enumerate() {
+        lambda[r] = work[k];
     }
     back_substitute(mass, step);
     for (ai, si) in a.iter_mut().zip(step.iter()) {
         *ai += si;
     }
     Ok(())
+}
+
+/// The first `n` entries of the multipliers, as the solve's output slice.
+fn work_lambda(lambda: &mut DVector<f64>, n: usize) -> &mut [f64] {
+    &mut lambda.as_mut_slice()[..n]
 }
 
 fn locked(model: &Model, rank: usize) -> Error {
@@ -166,15 +198,25 @@ pub fn constraint_forces(
     let m = model.nconstraints();
     let a_tree = DVector::from_column_slice(a);
     constrained_forward_dynamics(model, data, solver, q, v, a)?;
-    // `J M⁻¹ Jᵀ λ = −γ − J a₀` again, solved by SVD for the minimum-norm λ (same q̈).
-    let jmj = solver.y.tr_mul(&solver.y);
-    let rhs = -&solver.cons.gamma - &solver.cons.jacobian * a_tree;
+    // `J M⁻¹ Jᵀ λ = −γ − J a₀` on the active rows again, solved by SVD for the minimum-norm λ
+    // (same q̈).
+    let na = solver.active.len();
+    let ya = solver.y.columns(0, na);
+    let jmj = ya.tr_mul(&ya);
+    let ja = &solver.cons.jacobian * a_tree;
+    let rhs = DVector::from_iterator(
+        na,
+        solver.active.iter().map(|&r| -solver.cons.gamma[r] - ja[r]),
+    );
     let largest = jmj.diagonal().amax();
-    let lambda = jmj
+    let solved = jmj
         .svd(true, true)
         .solve(&rhs, factor::RANK_TOL * largest.max(f64::MIN_POSITIVE))
         .map_err(|e| Error::Singular(format!("constraint forces: {e}")))?;
-    debug_assert_eq!(lambda.len(), m);
+    let mut lambda = DVector::zeros(m);
+    for (k, &r) in solver.active.iter().enumerate() {
+        lambda[r] = solved[k];
+    }
     Ok(constraints::wrenches(model, &solver.kin, lambda.as_slice()))
 }
 
@@ -268,7 +310,8 @@ fn min_norm_step(solver: &mut LoopSolver) -> usize {
             a[(c, r)] = s;
         }
     }
-    let rank = solve_semidefinite(a, rhs, lambda, perm, work);
+    let m = j.nrows();
+    let rank = solve_semidefinite(a, m, rhs.as_slice(), lambda.as_mut_slice(), perm, work);
     for (col, s) in step.iter_mut().enumerate() {
         *s = -(0..j.nrows()).map(|r| j[(r, col)] * lambda[r]).sum::<f64>();
     }

@@ -18,7 +18,14 @@ fn semidefinite_solve_finds_the_rank_and_solves_consistent_systems() {
     let mut a = a0.clone();
     let mut x = DVector::zeros(5);
     let (mut perm, mut work) = (vec![0; 5], vec![0.0; 5]);
-    let rank = solve_semidefinite(&mut a, &rhs, &mut x, &mut perm, &mut work);
+    let rank = solve_semidefinite(
+        &mut a,
+        5,
+        rhs.as_slice(),
+        x.as_mut_slice(),
+        &mut perm,
+        &mut work,
+    );
     assert_eq!(rank, 3);
     let miss = (&a0 * &x - &rhs).amax();
     assert!(miss < 1e-12 * rhs.amax(), "{miss}");
