@@ -24,7 +24,7 @@ impl Default for LinkState {
             rotation: Mat3::identity(),
             origin: Vec3::zeros(),
             joint_rotation: Mat3::identity(),
-            s: [Vec6::zeros(); 3],
+            s: [Vec6::zeros(); 6],
             twist: Vec6::zeros(),
             xi: Vec6::zeros(),
             inertia: BodyInertia::zero(),
@@ -51,7 +51,7 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
         s.joint_rotation = r_joint;
         s.rotation = r_joint * r_q;
         s.origin = o_parent + r_parent * l.placement.translation;
-        if let crate::joint::Joint::Prismatic { .. } = l.joint {
+        if let crate::joint::Joint::Prismatic { .. } | crate::joint::Joint::FreeFlyer = l.joint {
             s.origin += r_joint * t_q;
         }
         s.s = l.joint.subspace(qi, &r_joint, &s.rotation);

@@ -507,8 +507,8 @@ impl Model {
     /// Normalises the quaternions of `q` in place.
     pub fn normalize(&self, q: &mut [f64]) {
         for l in &self.links {
-            if let Joint::Spherical = l.joint {
-                let s = &mut q[l.q_index..l.q_index + 4];
+            if let Some(at) = l.joint.quaternion_at() {
+                let s = &mut q[l.q_index + at..l.q_index + at + 4];
                 let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
                 if n > 0.0 {
                     s.iter_mut().for_each(|x| *x /= n);

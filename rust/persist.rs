@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 2;
+pub const FORMAT_VERSION: u8 = 3;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
@@ -168,7 +168,8 @@ mod tests {
             env!("CARGO_MANIFEST_DIR"),
             "/python/pointmass_dyn/scenes/panda.urdf"
         );
-        let u = crate::urdf::load_urdf(std::path::Path::new(panda)).unwrap();
+        let u = crate::urdf::load_urdf(std::path::Path::new(panda), crate::urdf::RootJoint::Fixed)
+            .unwrap();
         let back: Model = decode(&encode(&u.model).unwrap()).unwrap();
         same_model(&u.model, &back);
         let joints: Vec<crate::urdf::UrdfJoint> = decode(&encode(&u.joints).unwrap()).unwrap();
@@ -275,6 +276,7 @@ mod tests {
             Joint::SphericalZYZ,
             Joint::Spherical,
             Joint::Fixed,
+            Joint::FreeFlyer,
         ];
         let points = EquimomentalSet {
             masses: [0.25, -0.5, 1.0, 0.0, 1.0, -0.5, 0.75],
@@ -422,7 +424,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (2, 1787, 0xe811_c808_e04d_6ce2),
+            (3, 1788, 0x4e8a_41fa_b98a_dd43),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

@@ -70,11 +70,19 @@ def Fixed() -> Joint:
     return Joint.fixed()
 
 
+def FreeFlyer() -> Joint:
+    """Six-dof joint (Pinocchio's JointModelFreeFlyer): q = (x, y, z, qx, qy, qz, qw), the body
+    origin in the joint frame then a unit quaternion; v = linear then angular velocity of the
+    body relative to the joint frame, both in the body frame. nq = 7, nv = 6."""
+    return Joint.free_flyer()
+
+
 __all__ = [
     "Damper",
     "Effect",
     "ExternalForce",
     "Fixed",
+    "FreeFlyer",
     "Gravity",
     "InertiaError",
     "InvalidInputError",

@@ -88,9 +88,13 @@ class Joint:
     @staticmethod
     def fixed() -> Joint:
         """Rigid attachment: the body is welded into its parent."""
+    @staticmethod
+    def free_flyer() -> Joint:
+        """Six dof: q = (x, y, z, qx, qy, qz, qw), v = (linear, angular) in the body frame."""
     @property
     def kind(self) -> str:
-        """``'Revolute'``, ``'Prismatic'``, ``'SphericalZYZ'``, ``'Spherical'`` or ``'Fixed'``."""
+        """``'Revolute'``, ``'Prismatic'``, ``'SphericalZYZ'``, ``'Spherical'``, ``'Fixed'`` or
+        ``'FreeFlyer'``."""
     @property
     def nq(self) -> int:
         """Number of configuration coordinates."""
@@ -279,10 +283,13 @@ class Model:
         a's axes, under ``tau``. Components along the joint's free motion are zero; where
         constraints are redundant the minimum-norm set (only their resultant is defined)."""
     @staticmethod
-    def from_urdf(path: Any) -> Model:
-        """A fixed-base robot from a URDF file (``path``: str or os.PathLike): root link welded to the world, revolute,
-        continuous (q = angle), prismatic and fixed joints; joint order and body (link) names
-        as Pinocchio's ``buildModelFromUrdf``. Raises
+    def from_urdf(path: Any, *, root_joint: Literal["fixed", "free"] | None = None) -> Model:
+        """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
+        (q = angle), prismatic and fixed joints; joint order and body (link) names as
+        Pinocchio's ``buildModelFromUrdf``. The root link is welded to the world
+        (``root_joint=None`` or ``"fixed"``) or moves on a :func:`FreeFlyer` joint named
+        ``"root_joint"``, first in q and v (``"free"``, as
+        ``buildModelFromUrdf(path, JointModelFreeFlyer())``). Raises
         :class:`pointmass_dyn.errors.UrdfError` naming the file and the element; warns with
         :class:`pointmass_dyn.errors.UrdfWarning` (mimic joints loaded as independent,
         ignored elements)."""

@@ -33,6 +33,10 @@ def coordinate_labels(model) -> tuple[list[str], list[str], list[bool]]:
             qlab += [f"{name} q{c}" for c in "xyzw"]
             vlab += [f"{name} ω{c}" for c in "xyz"]
             angular += [False] * 4
+        elif kind == "FreeFlyer":
+            qlab += [f"{name} {c}" for c in "xyz"] + [f"{name} q{c}" for c in "xyzw"]
+            vlab += [f"{name} v{c}" for c in "xyz"] + [f"{name} ω{c}" for c in "xyz"]
+            angular += [False] * 7
         else:
             qlab.append(f"{name} q")
             vlab.append(f"{name} dq/dt")

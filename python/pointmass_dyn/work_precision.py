@@ -82,7 +82,7 @@ def scene_rhs(scene) -> Callable[[float, np.ndarray], np.ndarray]:
                 continue
         others = True
     kinds = [model.body_info(i)[1] for i in range(model.nbodies)]
-    qdot_is_v = nq == nv and "Spherical" not in kinds
+    qdot_is_v = nq == nv and not {"Spherical", "FreeFlyer"} & set(kinds)
     zeros = np.zeros(nv)
 
     if not others:

@@ -81,6 +81,8 @@ impl Declaration for Friction {
         for (s, f) in slots.iter().zip(f) {
             match s.joint {
                 Joint::Spherical => law.ball.push((s.v_index, f)),
+                // Isotropic in the body's linear and in its angular velocity.
+                Joint::FreeFlyer => law.ball.extend([(s.v_index, f), (s.v_index + 3, f)]),
                 _ => law.scalar.extend(s.speeds().map(|i| (i, f))),
             }
         }

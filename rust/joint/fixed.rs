@@ -17,7 +17,7 @@ impl JointType for Fixed {
         (Mat3::identity(), Vec3::zeros())
     }
     fn subspace(&self, _q: &[f64], _r_joint: &Mat3, _r_body: &Mat3) -> Subspace {
-        [Vec6::zeros(); 3]
+        [Vec6::zeros(); 6]
     }
     fn subspace_rate(
         &self,
@@ -28,7 +28,7 @@ impl JointType for Fixed {
         _wp: &Vec3,
         _wb: &Vec3,
     ) -> Subspace {
-        [Vec6::zeros(); 3]
+        [Vec6::zeros(); 6]
     }
     fn local_columns(&self) -> [Vec3; 3] {
         [Vec3::zeros(); 3]

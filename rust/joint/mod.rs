@@ -9,12 +9,15 @@
 //! Coordinates follow Pinocchio so models compare one to one (docs/conventions.md): a
 //! revolute/prismatic `q` is the angle/displacement along the axis given in the joint frame;
 //! `Spherical` stores a unit quaternion `(x, y, z, w)` and its 3 speeds are the body's
-//! angular velocity relative to its parent, in the body frame; `SphericalZYZ` is the paper's
+//! angular velocity relative to its parent, in the body frame; `FreeFlyer` stores the body
+//! origin then such a quaternion, with the linear then angular velocity in body axes as its
+//! six speeds (Pinocchio's `JointModelFreeFlyer`); `SphericalZYZ` is the paper's
 //! Euler-angle joint with Euler rates as speeds (singular where sin θ = 0).
 //!
 //! Adding a joint type: a file here implementing [`JointType`] (with its tests), a variant
 //! of [`Joint`] and its line in `dispatch!`, and a constructor; docs/adding-a-joint.md.
 mod fixed;
+mod free_flyer;
 mod prismatic;
 mod revolute;
 pub mod rotation;
@@ -36,20 +39,24 @@ pub enum Joint {
     SphericalZYZ,
     Spherical,
     Fixed,
+    FreeFlyer,
 }
 
 /// Columns of `P` (world coordinates), `dof` of them in use.
-pub type Subspace = [Vec6; 3];
+pub type Subspace = [Vec6; 6];
 
 /// How a joint moves its body, as the body-frame recursions need to know: along one angular
-/// or one linear axis, about three angular axes, or not at all. Every joint's motion
-/// subspace is purely angular or purely linear (`P = [A; 0]` or `[0; A]`).
+/// or one linear axis, about three angular axes, freely (all six), or not at all. Every
+/// joint but the free flyer moves along a purely angular or purely linear subspace
+/// (`P = [A; 0]` or `[0; A]`); the free flyer's columns are the body's six unit twists.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum MotionClass {
     Rigid,
     Angular1,
     Linear1,
     Angular3,
+    /// Six speeds, linear (body axes) then angular (body axes): `S = 1₆`.
+    Free,
 }
 
 impl MotionClass {
@@ -58,11 +65,13 @@ impl MotionClass {
             MotionClass::Rigid => 0,
             MotionClass::Angular1 | MotionClass::Linear1 => 1,
             MotionClass::Angular3 => 3,
+            MotionClass::Free => 6,
         }
     }
-    /// Angular motion columns (`[A; 0]`); false only for linear motion.
+    /// Angular motion columns (`[A; 0]`); false for linear motion and for the free flyer,
+    /// whose columns are both (code that reads this handles `Free` first).
     pub const fn angular(self) -> bool {
-        !matches!(self, MotionClass::Linear1)
+        !matches!(self, MotionClass::Linear1 | MotionClass::Free)
     }
 }
 
@@ -140,7 +149,7 @@ pub trait JointType {
 /// Columns fixed in a frame turning at `w` change as `w ×` them (first `N` in use).
 #[inline]
 pub(crate) fn turn_columns<const N: usize>(s: &Subspace, w: &Vec3, angular_part: bool) -> Subspace {
-    let mut d = [Vec6::zeros(); 3];
+    let mut d = [Vec6::zeros(); 6];
     let z = Vec3::zeros();
     for k in 0..N {
         d[k] = if angular_part {
@@ -175,6 +184,10 @@ macro_rules! dispatch {
             }
             Joint::Fixed => {
                 let $j = fixed::Fixed;
+                $body
+            }
+            Joint::FreeFlyer => {
+                let $j = free_flyer::FreeFlyer;
                 $body
             }
         }
@@ -232,8 +245,8 @@ impl Joint {
     pub fn motion(&self) -> MotionClass {
         dispatch!(self, j => constants(&j).2)
     }
-    /// Whether the joint's motion subspace is purely angular (`P = [A; 0]`) rather than
-    /// purely linear (`[0; A]`): true for every joint but `Prismatic`.
+    /// Whether the joint's motion subspace is purely angular (`P = [A; 0]`): true for every
+    /// joint but `Prismatic` (purely linear) and `FreeFlyer` (both).
     #[inline]
     pub fn moves_angular(&self) -> bool {
         self.motion().angular()
@@ -245,10 +258,13 @@ impl Joint {
         k < self.nq() && dispatch!(self, j => j.q_is_angle(k))
     }
     /// Whether speed `k` of this joint is an angular rate (every speed of every joint
-    /// but `Prismatic`).
+    /// but `Prismatic`; the last three of a `FreeFlyer`).
     #[inline]
     pub fn v_is_angular(&self, k: usize) -> bool {
-        k < self.nv() && self.moves_angular()
+        match self.motion() {
+            MotionClass::Free => (3..6).contains(&k),
+            m => k < m.nv() && m.angular(),
+        }
     }
     pub fn neutral(&self, q: &mut [f64]) {
         dispatch!(self, j => j.neutral(q))
@@ -287,7 +303,16 @@ impl Joint {
     pub fn local_motion(&self, q: &[f64], v: &[f64]) -> LocalMotion {
         dispatch!(self, j => j.local_motion(q, v))
     }
-    /// `q̇` from the speeds `v` (they differ only for the quaternion joint).
+    /// Where this joint's unit quaternion starts in its `q`, if it has one.
+    #[inline]
+    pub fn quaternion_at(&self) -> Option<usize> {
+        match self {
+            Joint::Spherical => Some(0),
+            Joint::FreeFlyer => Some(3),
+            _ => None,
+        }
+    }
+    /// `q̇` from the speeds `v` (they differ only for the quaternion joints).
     pub fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
         dispatch!(self, j => j.velocity_to_qdot(q, v, qdot))
     }

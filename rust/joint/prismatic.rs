@@ -21,7 +21,7 @@ impl JointType for Prismatic {
     }
     #[inline]
     fn subspace(&self, _q: &[f64], r_joint: &Mat3, _r_body: &Mat3) -> Subspace {
-        let mut s = [Vec6::zeros(); 3];
+        let mut s = [Vec6::zeros(); 6];
         s[0] = stack(&Vec3::zeros(), &(r_joint * self.axis));
         s
     }

@@ -28,8 +28,8 @@ impl JointType for Spherical {
     }
     #[inline]
     fn subspace(&self, _q: &[f64], _r_joint: &Mat3, r_body: &Mat3) -> Subspace {
-        let mut s = [Vec6::zeros(); 3];
-        for (k, col) in s.iter_mut().enumerate() {
+        let mut s = [Vec6::zeros(); 6];
+        for (k, col) in s.iter_mut().take(3).enumerate() {
             *col = stack(&r_body.column(k).into_owned(), &Vec3::zeros());
         }
         s
@@ -58,27 +58,40 @@ impl JointType for Spherical {
             ..LocalMotion::default()
         }
     }
-    /// `q̇ = ½ q ⊗ (v, 0)`, with the quaternion normalised so `q̇` does not depend on |q|.
+    /// `q̇ = ½ q ⊗ (v, 0)`.
     fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
-        let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-        let (x, y, z, w) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
-        let (a, b, c) = (v[0], v[1], v[2]);
-        qdot[0] = 0.5 * (w * a + y * c - z * b);
-        qdot[1] = 0.5 * (w * b + z * a - x * c);
-        qdot[2] = 0.5 * (w * c + x * b - y * a);
-        qdot[3] = -0.5 * (x * a + y * b + z * c);
+        quaternion_rate(q, v, qdot);
     }
     /// Finite, and a quaternion of usable norm.
     fn check_configuration(&self, q: &[f64], arg: &str) -> Result<()> {
-        check_finite(arg, q)?;
-        let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
-        if !(n > 1e-8) {
-            return Err(Error::arg(
-                arg,
-                "a quaternion (x, y, z, w) of non-zero norm for a Spherical joint",
-                format!("[{}, {}, {}, {}] (norm {n:.3e})", q[0], q[1], q[2], q[3]),
-            ));
-        }
-        Ok(())
+        check_quaternion(q, 0, arg, Self::NAME)
     }
+}
+
+/// `q̇ = ½ q ⊗ (w, 0)` for a quaternion `(x, y, z, w)` and a body-axes angular velocity, with
+/// the quaternion normalised so `q̇` does not depend on |q|.
+pub(super) fn quaternion_rate(q: &[f64], v: &[f64], qdot: &mut [f64]) {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let (x, y, z, w) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    let (a, b, c) = (v[0], v[1], v[2]);
+    qdot[0] = 0.5 * (w * a + y * c - z * b);
+    qdot[1] = 0.5 * (w * b + z * a - x * c);
+    qdot[2] = 0.5 * (w * c + x * b - y * a);
+    qdot[3] = -0.5 * (x * a + y * b + z * c);
+}
+
+/// Checks a joint's coordinates `q`, finite, with a quaternion of usable norm at
+/// `q[at..at + 4]`.
+pub(super) fn check_quaternion(q: &[f64], at: usize, arg: &str, joint: &str) -> Result<()> {
+    check_finite(arg, q)?;
+    let h = &q[at..at + 4];
+    let n = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2] + h[3] * h[3]).sqrt();
+    if !(n > 1e-8) {
+        return Err(Error::arg(
+            arg,
+            format!("a quaternion (x, y, z, w) of non-zero norm for a {joint} joint"),
+            format!("[{}, {}, {}, {}] (norm {n:.3e})", h[0], h[1], h[2], h[3]),
+        ));
+    }
+    Ok(())
 }

@@ -42,3 +42,39 @@ fn bad_axis_and_quaternion_are_errors() {
         .check_configuration(&[0.0; 4], "q")
         .is_err());
 }
+
+#[test]
+fn free_flyer_rates_are_body_velocities() {
+    // Pinocchio's convention: ṗ = R v (v in body axes), ω̃_b = Rᵀ Ṙ, along a path.
+    let n = (0.3f64 * 0.3 + 0.1 * 0.1 + 0.5 * 0.5 + 0.8 * 0.8).sqrt();
+    let q = [0.4, -1.0, 2.5, 0.3 / n, -0.1 / n, 0.5 / n, 0.8 / n];
+    let v = [0.7, -0.2, 1.1, 0.3, -1.2, 0.6];
+    let mut qd = [0.0; 7];
+    Joint::FreeFlyer.velocity_to_qdot(&q, &v, &mut qd);
+    let h = 1e-6;
+    let at = |t: f64| -> Vec<f64> { q.iter().zip(&qd).map(|(a, b)| a + t * b).collect() };
+    let (rp, pp) = Joint::FreeFlyer.transform(&at(h));
+    let (rm, pm) = Joint::FreeFlyer.transform(&at(-h));
+    let (r, _) = Joint::FreeFlyer.transform(&q);
+    let lin = r.transpose() * (pp - pm) / (2.0 * h);
+    let wb = r.transpose() * (rp - rm) / (2.0 * h);
+    assert!((lin - Vec3::new(v[0], v[1], v[2])).norm() < 1e-8);
+    assert!(
+        (Vec3::new(wb[(2, 1)], wb[(0, 2)], wb[(1, 0)]) - Vec3::new(v[3], v[4], v[5])).norm() < 1e-8
+    );
+    // Its world columns give the same twist (at the body origin): Σ P_k v_k = [R ω; R v].
+    let s = Joint::FreeFlyer.subspace(&q, &Mat3::identity(), &r);
+    let twist: Vec6 = (0..6).map(|k| s[k] * v[k]).sum();
+    let expect = stack(
+        &(r * Vec3::new(v[3], v[4], v[5])),
+        &(r * Vec3::new(v[0], v[1], v[2])),
+    );
+    assert!((twist - expect).norm() < 1e-14);
+    assert_eq!((Joint::FreeFlyer.nq(), Joint::FreeFlyer.nv()), (7, 6));
+    assert!(Joint::FreeFlyer
+        .check_configuration(&[0.0; 7], "q")
+        .is_err());
+    assert!((0..6)
+        .map(|k| Joint::FreeFlyer.v_is_angular(k))
+        .eq([false, false, false, true, true, true]));
+}

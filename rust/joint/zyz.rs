@@ -36,8 +36,8 @@ impl JointType for SphericalZyz {
     #[inline]
     fn subspace(&self, q: &[f64], r_joint: &Mat3, _r_body: &Mat3) -> Subspace {
         let w = r_joint * zyz_rate_matrix(q[0], q[1]);
-        let mut s = [Vec6::zeros(); 3];
-        for (k, col) in s.iter_mut().enumerate() {
+        let mut s = [Vec6::zeros(); 6];
+        for (k, col) in s.iter_mut().take(3).enumerate() {
             *col = stack(&w.column(k).into_owned(), &Vec3::zeros());
         }
         s

@@ -60,6 +60,12 @@ impl PyJoint {
             inner: Joint::Fixed,
         }
     }
+    #[staticmethod]
+    fn free_flyer() -> Self {
+        PyJoint {
+            inner: Joint::FreeFlyer,
+        }
+    }
     #[getter]
     fn kind(&self) -> &'static str {
         self.inner.kind()
@@ -1063,12 +1069,32 @@ impl PyModel {
         )
     }
 
-    /// Loads a fixed-base robot from a URDF file (joint order and body names as Pinocchio's
-    /// `buildModelFromUrdf`). Raises `UrdfError`; warnings go through `warnings.warn` as
-    /// `UrdfWarning`.
+    /// Loads a robot from a URDF file (joint order and body names as Pinocchio's
+    /// `buildModelFromUrdf`), fixed-base or, with `root_joint="free"`, on a free flyer.
+    /// Raises `UrdfError`; warnings go through `warnings.warn` as `UrdfWarning`.
     #[staticmethod]
-    fn from_urdf(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        let urdf = crate::urdf::load_urdf(&path).py(py)?;
+    #[pyo3(signature = (path, *, root_joint=None))]
+    fn from_urdf(
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        root_joint: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let root = match root_joint {
+            None => crate::urdf::RootJoint::Fixed,
+            Some(r) => match r.extract::<String>().ok().as_deref() {
+                Some("fixed") => crate::urdf::RootJoint::Fixed,
+                Some("free") => crate::urdf::RootJoint::Free,
+                _ => {
+                    return Err(invalid(
+                        py,
+                        "root_joint",
+                        "None, \"fixed\" or \"free\"",
+                        r.repr().map_or_else(|_| "?".to_string(), |x| x.to_string()),
+                    ))
+                }
+            },
+        };
+        let urdf = crate::urdf::load_urdf(&path, root).py(py)?;
         if !urdf.warnings.is_empty() {
             let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
             let warnings = py.import("warnings")?;

@@ -139,6 +139,7 @@ fn backward_other(
         MotionClass::Angular1 => backward_1::<_, 3, true>(e, form, w, parent, start, tau[0]),
         MotionClass::Linear1 => backward_1::<_, 3, false>(e, form, w, parent, start, tau[0]),
         MotionClass::Angular3 => backward_3(form, w, parent, start, tau),
+        MotionClass::Free => backward_free(form, w, parent, start, tau),
         MotionClass::Rigid => {
             if let Some(p) = parent {
                 let m = w.inertia;
@@ -160,6 +161,7 @@ fn forward_other(c: &LinkConsts, w: &mut LinkWork, pacc: &Vec6, out: &mut [f64])
         MotionClass::Angular1 => out[0] = forward_1::<_, 3, true>(e, form, &r, w, pacc),
         MotionClass::Linear1 => out[0] = forward_1::<_, 3, false>(e, form, &r, w, pacc),
         MotionClass::Angular3 => forward_3(form, w, pacc, out),
+        MotionClass::Free => forward_free(form, w, pacc, out),
         MotionClass::Rigid => {
             let (ya, yl) = carry(e, form, &r, w, pacc);
             w.accel = six(&ya, &yl);
@@ -391,6 +393,36 @@ fn backward_3(
     true
 }
 
+/// A free-flyer joint inward. With `S = 1₆` the joint block is the whole articulated
+/// inertia, `D = U = M̂`: the body's acceleration is `z = M̂⁻¹ (τ − b̂)` whatever its parent
+/// does (kept in `u[0]`), `M^a = M̂ − M̂ M̂⁻¹ M̂ = 0`, and `b^a = b̂ + (τ − b̂) = τ`: the parent
+/// feels exactly the joint's wrench.
+#[inline(always)]
+fn backward_free(
+    form: OffsetForm,
+    cur: &mut LinkWork,
+    parent: Option<&mut LinkWork>,
+    start: Option<&LocalInertia>,
+    tau: &[f64],
+) -> bool {
+    // τ is (force, moment) in body axes; wrenches here are [moment; force].
+    let (ta, tl) = (
+        Vec3::new(tau[3], tau[4], tau[5]),
+        Vec3::new(tau[0], tau[1], tau[2]),
+    );
+    let Some(ch) = cur.inertia.to_mat6().cholesky() else {
+        return false;
+    };
+    cur.u[0] = ch.solve(&(six(&ta, &tl) - cur.bias));
+    if let Some(parent) = parent {
+        if let Some(s) = start {
+            parent.inertia = *s;
+        }
+        parent.bias += to_parent(General(cur.rot), &cur.offset, form, &ta, &tl);
+    }
+    true
+}
+
 /// `b^a = b̂ + M^a ξ + k` (`k = U D⁻¹ u`), then `M^a`, `b^a` carried to the parent (rotated
 /// by `E`, shifted by the offset) and added there.
 #[allow(clippy::too_many_arguments)]
@@ -445,6 +477,19 @@ fn forward_1<R: Rot, const AX: usize, const ANG: bool>(
     }
     cur.accel = six(&ya, &yl);
     qdd
+}
+
+/// A free-flyer joint's accelerations: the body's twist rate is `z` (see [`backward_free`]),
+/// the joint's the part of it the parent's does not carry.
+#[inline(always)]
+fn forward_free(form: OffsetForm, cur: &mut LinkWork, pacc: &Vec6, out: &mut [f64]) {
+    let (ya, yl) = carry(General(cur.rot), form, &cur.offset, cur, pacc);
+    let z = cur.u[0];
+    for k in 0..3 {
+        out[k] = z[3 + k] - yl[k];
+        out[3 + k] = z[k] - ya[k];
+    }
+    cur.accel = z;
 }
 
 #[inline(always)]

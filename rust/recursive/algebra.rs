@@ -71,6 +71,16 @@ pub struct LocalInertia {
 }
 
 impl LocalInertia {
+    /// The whole 6×6 matrix `[[P, Q], [Qᵀ, R]]`.
+    pub(super) fn to_mat6(&self) -> crate::spatial::Mat6 {
+        let mut m = crate::spatial::Mat6::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.p.to_mat());
+        m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.q);
+        m.fixed_view_mut::<3, 3>(3, 0)
+            .copy_from(&self.q.transpose());
+        m.fixed_view_mut::<3, 3>(3, 3).copy_from(&self.r.to_mat());
+        m
+    }
     /// The first moment `h` (mass times COM) from the block `Q = h̃`.
     #[inline(always)]
     pub(super) fn first_moment(&self) -> Vec3 {

@@ -230,7 +230,8 @@ pub(super) fn link_consts(l: &Link, frame_p: &Mat3) -> (LinkConsts, Mat3) {
         nv: motion.nv(),
         angular: motion.angular(),
         offset_form: match motion {
-            MotionClass::Linear1 => OffsetForm::Anywhere,
+            // The offset moves with q.
+            MotionClass::Linear1 | MotionClass::Free => OffsetForm::Anywhere,
             _ => OffsetForm::of(&offset),
         },
         sign: 1.0,

@@ -7,12 +7,14 @@
 //! O(n·depth); nothing allocated.
 use nalgebra::DMatrix;
 
-use super::algebra::{mul, tr_mul, v3, Rot};
+use super::algebra::{mul, tr_mul, v3, LocalInertia, Rot};
 use super::compiled::{match_axis_kind, with_rot, with_rot_arm, LinkConsts, LinkKind};
 use super::outward::{outward_other, plane_turns};
 use super::shift::{shift_add, to_parent, OffsetForm};
 use super::workspace::{Data, LinkWork};
+use crate::joint::MotionClass;
 use crate::model::Model;
+use crate::spatial::Vec3;
 
 crate::cpu::multiversion! {
     /// Fills `gim` (nv × nv, symmetric) at `q`. Runs its AVX2 copy where the CPU has it
@@ -109,19 +111,30 @@ fn columns(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
     for i in 0..n {
         let (c, w) = (&consts[i], &work[i]);
         let (nv, angular) = (c.nv, c.angular);
+        let free = c.motion == MotionClass::Free;
         let s_i = &w.s;
         let m = &w.inertia;
         for k in 0..nv {
             let col = c.v_index + k;
-            let s = &s_i[k];
-            let (mut fa, mut fl) = if angular {
-                (m.p.mul(s), tr_mul(&m.q, s))
+            let (mut fa, mut fl) = if free {
+                free_column(m, k)
             } else {
-                (mul(&m.q, s), m.r.mul(s))
+                let s = &s_i[k];
+                if angular {
+                    (m.p.mul(s), tr_mul(&m.q, s))
+                } else {
+                    (mul(&m.q, s), m.r.mul(s))
+                }
             };
-            let f = if angular { &fa } else { &fl };
-            for r in 0..nv {
-                g[c.v_index + r + col * dim] = s_i[r].dot(f);
+            if free {
+                for r in 0..6 {
+                    g[c.v_index + r + col * dim] = free_row(r, &fa, &fl);
+                }
+            } else {
+                let f = if angular { &fa } else { &fl };
+                for r in 0..nv {
+                    g[c.v_index + r + col * dim] = s_i[r].dot(f);
+                }
             }
             let mut j = i;
             while let Some(p) = consts[j].parent {
@@ -133,14 +146,44 @@ fn columns(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
                 let (cp, wp) = (&consts[p], &work[p]);
                 let (nvp, angular_p) = (cp.nv, cp.angular);
                 let vp = cp.v_index;
-                let f = if angular_p { &fa } else { &fl };
-                for r in 0..nvp {
-                    let x = wp.s[r].dot(f);
-                    g[vp + r + col * dim] = x;
-                    g[col + (vp + r) * dim] = x;
+                if cp.motion == MotionClass::Free {
+                    for r in 0..6 {
+                        let x = free_row(r, &fa, &fl);
+                        g[vp + r + col * dim] = x;
+                        g[col + (vp + r) * dim] = x;
+                    }
+                } else {
+                    let f = if angular_p { &fa } else { &fl };
+                    for r in 0..nvp {
+                        let x = wp.s[r].dot(f);
+                        g[vp + r + col * dim] = x;
+                        g[col + (vp + r) * dim] = x;
+                    }
                 }
                 j = p;
             }
         }
+    }
+}
+
+/// `I^c S_k` for a free flyer's speed `k` (`S = 1₆`, linear speeds first): a column of the
+/// composite inertia, as `(moment, force)`.
+#[inline(never)]
+fn free_column(m: &LocalInertia, k: usize) -> (Vec3, Vec3) {
+    let e = |j: usize| Vec3::ith(j, 1.0);
+    if k < 3 {
+        (mul(&m.q, &e(k)), m.r.mul(&e(k)))
+    } else {
+        (m.p.mul(&e(k - 3)), tr_mul(&m.q, &e(k - 3)))
+    }
+}
+
+/// `S_rᵀ [n; f]` for a free flyer's speed `r`: the force components, then the moment's.
+#[inline(always)]
+fn free_row(r: usize, n: &Vec3, f: &Vec3) -> f64 {
+    if r < 3 {
+        f[r]
+    } else {
+        n[r - 3]
     }
 }

@@ -6,12 +6,13 @@
 //! `w_λ += [E n + r × E f; E f]`). Because forward and inverse dynamics round the geometry
 //! identically, `inverse(forward(τ))` returns τ to the recursion's own rounding even on long
 //! chains.
-use super::algebra::{cross, six, v3};
+use super::algebra::{cross, six, v3, General};
 use super::base_accel;
 use super::compiled::{match_axis_kind, with_rot, with_rot_arm};
 use super::outward::{carry, outward_pass};
 use super::shift::{to_parent, OffsetForm};
 use super::workspace::Data;
+use crate::joint::MotionClass;
 use crate::model::Model;
 use crate::spatial::{Vec3, Vec6};
 
@@ -64,14 +65,21 @@ fn inverse_dynamics_body(
             None => &base,
         };
         let ai = &a[c.v_index..c.v_index + c.nv];
-        let (ya, yl) = with_rot!(c, w, e, r, s => {
+        let (ya, yl) = if c.motion == MotionClass::Free {
+            // S = 1₆: the joint's accelerations are (linear, angular) in body axes.
+            let (ya, yl) = carry(General(w.rot), c.offset_form, &w.offset, w, pacc);
+            let at = |k: usize| Vec3::new(ai[k], ai[k + 1], ai[k + 2]);
+            (ya + at(3), yl + at(0))
+        } else {
+            with_rot!(c, w, e, r, s => {
             let (mut ya, mut yl) = carry(e, c.offset_form, r, w, pacc);
             let y = if c.angular { &mut ya } else { &mut yl };
             for (s, x) in s.iter().zip(ai) {
                 *y += s * *x;
             }
             (ya, yl)
-        });
+            })
+        };
         w.accel = six(&ya, &yl);
         // M ṫ with M = [[I, h̃], [−h̃, m]] about the origin (in the recursion's link frame).
         let own = &c.inertia;
@@ -87,8 +95,17 @@ fn inverse_dynamics_body(
         let (head, tail) = work.split_at_mut(i);
         let w = &tail[0];
         let (wa, wl) = (v3(&w.bias, 0), v3(&w.bias, 3));
-        let wrench = if c.angular { &wa } else { &wl };
         let parent = c.parent.map(|p| &mut head[p]);
+        if c.motion == MotionClass::Free {
+            // τ = Sᵀ w = (force, moment) in body axes.
+            tau[c.v_index..c.v_index + 3].copy_from_slice(wl.as_slice());
+            tau[c.v_index + 3..c.v_index + 6].copy_from_slice(wa.as_slice());
+            if let Some(p) = parent {
+                p.bias += to_parent(General(w.rot), &w.offset, OffsetForm::Anywhere, &wa, &wl);
+            }
+            continue;
+        }
+        let wrench = if c.angular { &wa } else { &wl };
         with_rot!(c, w, e, r, s => {
             for k in 0..c.nv {
                 tau[c.v_index + k] = s[k].dot(wrench);

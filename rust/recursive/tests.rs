@@ -59,6 +59,8 @@ pub(crate) fn random_tree(seed: u64, n: usize) -> Model {
             _ => {
                 if k % 2 == 0 {
                     Joint::Fixed
+                } else if k % 3 == 0 {
+                    Joint::FreeFlyer
                 } else {
                     Joint::revolute(rng.vec3(1.0)).unwrap()
                 }
@@ -407,6 +409,7 @@ fn joint_pair_models(with_fixed: bool) -> Vec<(String, usize, Model)> {
         Joint::prismatic(Vec3::new(0.2, 0.9, -0.1)).unwrap(),
         Joint::Spherical,
         Joint::SphericalZYZ,
+        Joint::FreeFlyer,
     ];
     if with_fixed {
         joints.push(Joint::Fixed);

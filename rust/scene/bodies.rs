@@ -77,6 +77,7 @@ fn add_body(at: &At, model: &mut Model, b: &BodyFile, units: Units) -> Result<Jo
         JointFile::SphericalZYZ => Ok(Joint::SphericalZYZ),
         JointFile::Spherical => Ok(Joint::Spherical),
         JointFile::Fixed => Ok(Joint::Fixed),
+        JointFile::FreeFlyer => Ok(Joint::FreeFlyer),
     }
     .map_err(|e| at.core("joint.axis", e))?;
     let rotation = match (b.rotation, b.rpy) {

@@ -51,6 +51,9 @@ struct SceneFile {
     /// A URDF file, relative to the scene file's directory: its robot starts the model (at
     /// q = 0, v = 0); `[[body]]` entries follow and may name its links as parents.
     urdf: Option<String>,
+    /// How the URDF's root link is attached to the world: "fixed" (default) or "free" (a
+    /// `FreeFlyer` root joint, as Pinocchio's `JointModelFreeFlyer` root).
+    root_joint: Option<String>,
     /// Which of the URDF's `<dynamics>` attributes become effects: "damping" (a damper per
     /// joint) and/or "friction" (regularised Coulomb friction per joint).
     urdf_dynamics: Option<Vec<String>>,
@@ -104,6 +107,7 @@ enum JointFile {
     SphericalZYZ,
     Spherical,
     Fixed,
+    FreeFlyer,
 }
 
 /// One `[[effect]]` table, read by `Effect::from_toml` (so a new effect type needs no
@@ -252,10 +256,23 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
         if sf.urdf_dynamics.is_some() {
             return Err(ctx.err("urdf_dynamics", "needs a urdf key"));
         }
+        if sf.root_joint.is_some() {
+            return Err(ctx.err("root_joint", "needs a urdf key"));
+        }
         return Ok((Model::new(), Vec::new()));
     };
+    let root = match sf.root_joint.as_deref() {
+        None | Some("fixed") => crate::urdf::RootJoint::Fixed,
+        Some("free") => crate::urdf::RootJoint::Free,
+        Some(other) => {
+            return Err(ctx.err(
+                "root_joint",
+                format!("expected \"fixed\" or \"free\", got \"{other}\""),
+            ))
+        }
+    };
     // Its URDF warnings are not reported here.
-    let urdf = crate::urdf::load_urdf(&dir.join(rel)).map_err(|e| ctx.core("urdf", e))?;
+    let urdf = crate::urdf::load_urdf(&dir.join(rel), root).map_err(|e| ctx.core("urdf", e))?;
     let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
     Ok((urdf.model, effects))
 }

@@ -5,7 +5,7 @@ use std::collections::{BTreeMap, HashMap};
 
 use super::parse::{Ctx, Kind, LinkData, RobotData};
 use super::tree::Tree;
-use super::UrdfJoint;
+use super::{RootJoint, UrdfJoint, ROOT_JOINT_NAME};
 use crate::body::RigidBody;
 use crate::error::{Error, FileKind, Location, Result};
 use crate::joint::Joint;
@@ -20,8 +20,13 @@ pub(super) struct Built {
     pub warning: Option<String>,
 }
 
-pub(super) fn build_model(ctx: &Ctx, robot: &RobotData, tree: &Tree) -> Result<Built> {
-    let (mut model, body_of_link) = add_bodies(ctx, robot, tree)?;
+pub(super) fn build_model(
+    ctx: &Ctx,
+    robot: &RobotData,
+    tree: &Tree,
+    root: RootJoint,
+) -> Result<Built> {
+    let (mut model, body_of_link) = add_bodies(ctx, robot, tree, root)?;
     let warning = set_inertials(ctx, &mut model, robot, tree, &body_of_link)?;
     set_link_bodies(ctx, &mut model, robot, tree, &body_of_link)?;
     Ok(Built {
@@ -39,7 +44,12 @@ fn in_element(ctx: &Ctx, element: String, e: Error) -> Error {
 /// The tree, root first then depth first. `add_body` merges welded bodies as it goes and
 /// needs mass > 0; it gets a placeholder for massless links, and every link's body is set
 /// from the URDF inertials afterwards.
-fn add_bodies(ctx: &Ctx, robot: &RobotData, tree: &Tree) -> Result<(Model, Vec<usize>)> {
+fn add_bodies(
+    ctx: &Ctx,
+    robot: &RobotData,
+    tree: &Tree,
+    root: RootJoint,
+) -> Result<(Model, Vec<usize>)> {
     let placeholder = RigidBody {
         mass: 1.0,
         com: Vec3::zeros(),
@@ -59,7 +69,10 @@ fn add_bodies(ctx: &Ctx, robot: &RobotData, tree: &Tree) -> Result<(Model, Vec<u
     body_of_link[tree.root] = model
         .add_body(
             safe(r),
-            Joint::Fixed,
+            match root {
+                RootJoint::Fixed => Joint::Fixed,
+                RootJoint::Free => Joint::FreeFlyer,
+            },
             None,
             Placement::identity(),
             Some(r.name.clone()),
@@ -182,9 +195,24 @@ fn set_link_bodies(
 /// One record per joint, in the model's (depth-first) order.
 pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Vec<UrdfJoint> {
     let model = &built.model;
-    tree.order
-        .iter()
-        .map(|&j| {
+    let root_body = built.body_of_link[tree.root];
+    let root = model.bodies[root_body].link.map(|l| UrdfJoint {
+        name: ROOT_JOINT_NAME.to_string(),
+        kind: "floating",
+        parent: "world".to_string(),
+        child: robot.links[tree.root].name.clone(),
+        body: root_body,
+        link: Some(l),
+        q_index: Some(model.links[l].q_index),
+        v_index: Some(model.links[l].v_index),
+        axis: Vec3::x(),
+        limit: None,
+        damping: 0.0,
+        friction: 0.0,
+        mimic: None,
+    });
+    root.into_iter()
+        .chain(tree.order.iter().map(|&j| {
             let jd = &robot.joints[j];
             let body = built.body_of_link[tree.child_link[j]];
             let link = model.bodies[body].link;
@@ -207,7 +235,7 @@ pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Ve
                 friction: jd.friction,
                 mimic: jd.mimic.clone(),
             }
-        })
+        }))
         .collect()
 }
 

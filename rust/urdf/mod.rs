@@ -1,8 +1,10 @@
-//! URDF import: a fixed-base robot as a [`Model`] whose joint order, body names and
-//! coordinates equal Pinocchio's `buildModelFromUrdf(path)` (no root joint).
+//! URDF import: a robot as a [`Model`] whose joint order, body names and coordinates equal
+//! Pinocchio's `buildModelFromUrdf(path)` (fixed base) or, with [`RootJoint::Free`],
+//! `buildModelFromUrdf(path, JointModelFreeFlyer())` (floating base).
 //!
 //! * Tree and order. The root link (the one link that is no joint's child) is welded to the
-//!   world with a `Fixed` joint. The links are then added depth first, and the children of a
+//!   world with a `Fixed` joint, or moves on a `FreeFlyer` joint named `root_joint` (first in
+//!   q and v: position, quaternion; linear and angular velocity in the root link's frame). The links are then added depth first, and the children of a
 //!   link in the byte order of their joints' names: urdfdom, Pinocchio's parser, keeps joints
 //!   in a `std::map` by name, so that is Pinocchio's order (checked against `model.names` and
 //!   the order of its BODY frames). Bodies are named after the links, every link (fixed ones
@@ -62,11 +64,25 @@ pub struct Mimic {
     pub offset: f64,
 }
 
+/// How the URDF's root link is attached to the world.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum RootJoint {
+    /// Welded (a fixed-base robot).
+    #[default]
+    Fixed,
+    /// A free flyer named `root_joint` (a floating-base robot).
+    Free,
+}
+
+/// The name Pinocchio gives the root joint it adds.
+pub const ROOT_JOINT_NAME: &str = "root_joint";
+
 /// One URDF joint, in the model's order (depth first; the moving ones in q/v order).
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct UrdfJoint {
     pub name: String,
-    /// "revolute", "continuous", "prismatic" or "fixed".
+    /// "revolute", "continuous", "prismatic" or "fixed" (or "floating": the root joint a
+    /// floating-base load adds, which is no element of the file).
     pub kind: &'static str,
     /// Parent and child link names.
     pub parent: String,
@@ -117,7 +133,7 @@ impl<'de> serde::Deserialize<'de> for UrdfJoint {
 impl TryFrom<UrdfJointData> for UrdfJoint {
     type Error = String;
     fn try_from(j: UrdfJointData) -> std::result::Result<UrdfJoint, String> {
-        let kind = ["revolute", "continuous", "prismatic", "fixed"]
+        let kind = ["revolute", "continuous", "prismatic", "fixed", "floating"]
             .into_iter()
             .find(|k| *k == j.kind)
             .ok_or_else(|| format!("joint '{}': unknown kind '{}'", j.name, j.kind))?;
@@ -172,9 +188,14 @@ impl Urdf {
 /// Reads and loads a URDF file; errors name `path` as given.
 /// Only a regular file of at most [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a
 /// device is refused before it is opened); a path too long to show is shortened in messages.
-pub fn load_urdf(path: &Path) -> Result<Urdf> {
+pub fn load_urdf(path: &Path, root: RootJoint) -> Result<Urdf> {
     let text = crate::files::read_text(path, FileKind::Urdf)?;
-    model_from_urdf(&text, &crate::files::display_path(path), path.parent())
+    model_from_urdf(
+        &text,
+        &crate::files::display_path(path),
+        path.parent(),
+        root,
+    )
 }
 
 /// URDF roll-pitch-yaw: `Rz(yaw) Ry(pitch) Rx(roll)`.
@@ -186,11 +207,16 @@ pub fn rpy_matrix(rpy: &Vec3) -> Mat3 {
 /// relative resources would resolve against (kept in [`Urdf::base_dir`]). Errors are
 /// [`crate::error::Error::File`] of kind [`FileKind::Urdf`], naming the element and, where
 /// known, the line.
-pub fn model_from_urdf(text: &str, file: &str, base_dir: Option<&Path>) -> Result<Urdf> {
+pub fn model_from_urdf(
+    text: &str,
+    file: &str,
+    base_dir: Option<&Path>,
+    root: RootJoint,
+) -> Result<Urdf> {
     let ctx = Ctx::new(file, text);
     let robot = parse::parse_robot(&ctx, text)?;
     let tree = Tree::new(&ctx, &robot.links, &robot.joints)?;
-    let built = build::build_model(&ctx, &robot, &tree)?;
+    let built = build::build_model(&ctx, &robot, &tree, root)?;
     let joints = build::joint_records(&robot, &tree, &built);
     let warnings = built
         .warning

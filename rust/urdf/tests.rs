@@ -51,11 +51,11 @@ fn robot(parts: &[String]) -> String {
 }
 
 fn load(text: &str) -> Urdf {
-    model_from_urdf(text, "t.urdf", None).unwrap()
+    model_from_urdf(text, "t.urdf", None, RootJoint::Fixed).unwrap()
 }
 
 fn error(text: &str) -> String {
-    model_from_urdf(text, "t.urdf", None)
+    model_from_urdf(text, "t.urdf", None, RootJoint::Fixed)
         .unwrap_err()
         .to_string()
 }
@@ -452,10 +452,11 @@ fn errors_name_file_and_element() {
 #[test]
 fn errors_carry_their_location() {
     use crate::error::{Error, FileKind, Location};
-    let located = |text: &str| match model_from_urdf(text, "t.urdf", None).unwrap_err() {
-        Error::File { kind, at, .. } => (kind, at),
-        other => panic!("not a file error: {other}"),
-    };
+    let located =
+        |text: &str| match model_from_urdf(text, "t.urdf", None, RootJoint::Fixed).unwrap_err() {
+            Error::File { kind, at, .. } => (kind, at),
+            other => panic!("not a file error: {other}"),
+        };
     let (kind, at) = located("<robot name=\"r\">\n<link name=\"a\">\n</robot>\n");
     assert_eq!(kind, FileKind::Urdf);
     assert_eq!(

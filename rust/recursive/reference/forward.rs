@@ -1,14 +1,15 @@
 //! Recursive forward dynamics: the articulated-body recursion written with DeNOC twists
 //! about moving link origins (equivalent to Saha's UDUᵀ decomposition of the GIM). O(n), no
-//! n × n matrix, no allocation. Every joint moves along a purely angular or purely linear
-//! subspace (`P = [A; 0]` or `[0; A]`), so all products are 3×3 blocks.
+//! n × n matrix, no allocation. Every joint but the free flyer moves along a purely angular
+//! or purely linear subspace (`P = [A; 0]` or `[0; A]`), so its products are 3×3 blocks; the
+//! free flyer's six columns are taken whole.
 use super::Workspace;
 use crate::error::{Error, Result};
 use crate::kinematics;
 use crate::model::Model;
 use crate::recursive::{base_accel, singular_message};
 use crate::spatial::{
-    angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Vec3, Vec6,
+    angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Mat6, Vec3, Vec6,
 };
 
 /// Inverts the dof × dof block `D = Pᵀ M̂ P`; `None` if it is not positive definite.
@@ -85,28 +86,45 @@ fn inward_step(model: &Model, ws: &mut Workspace, i: usize, q: &[f64], tau: &[f6
     let m = ws.art_inertia[i];
     let b = ws.art_bias[i];
     let link = &ws.links[i];
-    let mut axes = [Vec3::zeros(); 3];
-    let mut u = [Vec6::zeros(); 3];
-    let mut d = Mat3::identity();
-    let mut ut = Vec3::zeros();
-    for k in 0..dof {
-        axes[k] = if ang {
-            angular(&link.s[k])
-        } else {
-            linear(&link.s[k])
-        };
-        u[k] = mul_axis(&m, &axes[k], ang);
-        ut[k] = tau[l.v_index + k] - dot_axis(&axes[k], &b, ang);
-    }
-    for r in 0..dof {
-        for c in r..dof {
-            let x = dot_axis(&axes[r], &u[c], ang);
-            d[(r, c)] = x;
-            d[(c, r)] = x;
+    let mut u = [Vec6::zeros(); 6];
+    let mut d_inv = Mat6::zeros();
+    let mut ut = Vec6::zeros();
+    let singular = || Error::Singular(singular_message(model, i, q));
+    if dof == 6 {
+        // The free flyer: P is the body's six unit twists.
+        let mut d = Mat6::zeros();
+        for k in 0..6 {
+            u[k] = m.mul_twist(&link.s[k]);
+            ut[k] = tau[l.v_index + k] - link.s[k].dot(&b);
         }
+        for r in 0..6 {
+            for c in 0..6 {
+                d[(r, c)] = link.s[r].dot(&u[c]);
+            }
+        }
+        d_inv = d.cholesky().ok_or_else(singular)?.inverse();
+    } else {
+        let mut axes = [Vec3::zeros(); 3];
+        let mut d = Mat3::identity();
+        for k in 0..dof {
+            axes[k] = if ang {
+                angular(&link.s[k])
+            } else {
+                linear(&link.s[k])
+            };
+            u[k] = mul_axis(&m, &axes[k], ang);
+            ut[k] = tau[l.v_index + k] - dot_axis(&axes[k], &b, ang);
+        }
+        for r in 0..dof {
+            for c in r..dof {
+                let x = dot_axis(&axes[r], &u[c], ang);
+                d[(r, c)] = x;
+                d[(c, r)] = x;
+            }
+        }
+        let small = invert_joint_inertia(&d, dof).ok_or_else(singular)?;
+        d_inv.fixed_view_mut::<3, 3>(0, 0).copy_from(&small);
     }
-    let d_inv = invert_joint_inertia(&d, dof)
-        .ok_or_else(|| Error::Singular(singular_message(model, i, q)))?;
     ws.u[i] = u;
     ws.d_inv[i] = d_inv;
     ws.u_tau[i] = ut;
@@ -149,7 +167,7 @@ fn accelerations(model: &Model, ws: &mut Workspace, g: &Vec3, a: &mut [f64]) {
             Some(p) => shift_twist(&ws.accel[p], &(s.origin - ws.links[p].origin)),
             None => base,
         } + s.xi;
-        let mut rhs = Vec3::zeros();
+        let mut rhs = Vec6::zeros();
         for k in 0..dof {
             rhs[k] = ws.u_tau[i][k] - ws.u[i][k].dot(&y);
         }

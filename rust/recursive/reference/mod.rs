@@ -10,7 +10,7 @@ pub mod mass_matrix;
 
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{ArticulatedInertia, BodyInertia, Mat3, Vec3, Vec6};
+use crate::spatial::{ArticulatedInertia, BodyInertia, Mat6, Vec6};
 
 pub use forward::forward_dynamics_world;
 pub use inverse::inverse_dynamics_world;
@@ -27,11 +27,11 @@ pub struct Workspace {
     pub art_inertia: Vec<ArticulatedInertia>,
     pub art_bias: Vec<Vec6>,
     /// `U = M̂ P` (columns).
-    pub u: Vec<[Vec6; 3]>,
-    /// `D⁻¹ = (Pᵀ M̂ P)⁻¹`, upper-left dof × dof block used.
-    pub d_inv: Vec<Mat3>,
-    /// `τ − Pᵀ b̂`.
-    pub u_tau: Vec<Vec3>,
+    pub u: Vec<[Vec6; 6]>,
+    /// `D⁻¹ = (Pᵀ M̂ P)⁻¹`, upper-left dof × dof block used (the rest zero).
+    pub d_inv: Vec<Mat6>,
+    /// `τ − Pᵀ b̂` (dof entries, the rest zero).
+    pub u_tau: Vec<Vec6>,
     pub composite: Vec<BodyInertia>,
 }
 
@@ -44,9 +44,9 @@ impl Workspace {
             wrench: vec![Vec6::zeros(); n],
             art_inertia: vec![ArticulatedInertia::zero(); n],
             art_bias: vec![Vec6::zeros(); n],
-            u: vec![[Vec6::zeros(); 3]; n],
-            d_inv: vec![Mat3::zeros(); n],
-            u_tau: vec![Vec3::zeros(); n],
+            u: vec![[Vec6::zeros(); 6]; n],
+            d_inv: vec![Mat6::zeros(); n],
+            u_tau: vec![Vec6::zeros(); n],
             composite: vec![BodyInertia::zero(); n],
         }
     }
