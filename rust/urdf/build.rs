@@ -163,31 +163,37 @@ fn set_link_bodies(
         .map(|&j| (body_of_link[tree.child_link[j]], j))
         .collect();
     for (l, body) in merged.into_iter().enumerate() {
-        let jd = &robot.joints[joint_of_body[&model.links[l].body]];
+        // The root link moves only on a free-flyer root joint, which is no element of the file.
+        let (child, kind, name, line) = match joint_of_body.get(&model.links[l].body) {
+            Some(&j) => {
+                let jd = &robot.joints[j];
+                (jd.child.as_str(), jd.kind.name(), jd.name.as_str(), Some(jd.line))
+            }
+            None => (robot.links[tree.root].name.as_str(), "floating", ROOT_JOINT_NAME, None),
+        };
+        let at = line.map(|n| format!(" (line {n})")).unwrap_or_default();
         let massless = body.mass <= 0.0; // masses are finite: parsed so
         if massless && body.inertia.abs().max() > 0.0 {
             return Err(ctx.located(
-                format!("link '{}'", jd.child),
-                Some(jd.line),
+                format!("link '{child}'"),
+                line,
                 format!(
-                    "zero mass with a non-zero rotational inertia on the {} joint '{}' (line {}): seven point masses cannot represent a body without mass; give it a mass > 0",
-                    jd.kind.name(), jd.name, jd.line
+                    "zero mass with a non-zero rotational inertia on the {kind} joint '{name}'{at}: seven point masses cannot represent a body without mass; give it a mass > 0"
                 ),
             ));
         }
         if massless && below[l] <= 0.0 {
             return Err(ctx.located(
-                format!("joint '{}'", jd.name),
-                Some(jd.line),
+                format!("joint '{name}'"),
+                line,
                 format!(
-                    "child link '{}' has no mass and no link with mass below it, so this {} joint moves nothing and its acceleration is undetermined (line {}); give the link an <inertial> with mass > 0 or make the joint fixed",
-                    jd.child, jd.kind.name(), jd.line
+                    "child link '{child}' has no mass and no link with mass below it, so this {kind} joint moves nothing and its acceleration is undetermined{at}; give the link an <inertial> with mass > 0 or make the joint fixed"
                 ),
             ));
         }
         model
             .set_link_body(l, body)
-            .map_err(|e| in_element(ctx, format!("link '{}'", jd.child), e))?;
+            .map_err(|e| in_element(ctx, format!("link '{child}'"), e))?;
     }
     Ok(())
 }
