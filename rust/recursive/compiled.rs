@@ -134,6 +134,8 @@ pub struct Compiled {
     /// `(link, q index)` of the revolute joints about a coordinate axis, whose sines and
     /// cosines the outward pass takes four at a time.
     pub axis_angles: Vec<(usize, usize)>,
+    /// Whether any link moves on a free flyer (the GIM's column walk then tests for them).
+    pub has_free_flyer: bool,
 }
 
 impl Compiled {
@@ -166,7 +168,12 @@ impl Compiled {
             .filter(|(_, (c, _))| c.kind != LinkKind::Other)
             .map(|(i, (_, link))| (i, link.q_index))
             .collect();
-        Compiled { links, axis_angles }
+        let has_free_flyer = links.iter().any(|l| l.motion == MotionClass::Free);
+        Compiled {
+            links,
+            axis_angles,
+            has_free_flyer,
+        }
     }
 }
 

@@ -35,7 +35,12 @@ fn mass_matrix_body(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix
     let work = &mut data.local[..n];
     positions(model, consts, work, &compiled.axis_angles, q, &data.zero_v);
     composites(consts, work);
-    columns(consts, work, gim);
+    // Models without a free flyer get a column walk with no free-flyer test in it.
+    if compiled.has_free_flyer {
+        columns::<true>(consts, work, gim);
+    } else {
+        columns::<false>(consts, work, gim);
+    }
 }
 
 /// Joint rotations and offsets: the plane turns' (cos, sin), the other joints' matrices
@@ -101,9 +106,10 @@ fn composites(consts: &[LinkConsts], work: &mut [LinkWork]) {
     }
 }
 
-/// Columns: F = I^c S, then up the chain as a wrench.
+/// Columns: F = I^c S, then up the chain as a wrench. `FREE`: the model may have free
+/// flyers.
 #[inline(always)]
-fn columns(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
+fn columns<const FREE: bool>(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
     let n = consts.len();
     let dim = gim.nrows();
     let g = gim.as_mut_slice();
@@ -111,7 +117,7 @@ fn columns(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
     for i in 0..n {
         let (c, w) = (&consts[i], &work[i]);
         let (nv, angular) = (c.nv, c.angular);
-        let free = c.motion == MotionClass::Free;
+        let free = FREE && c.motion == MotionClass::Free;
         let s_i = &w.s;
         let m = &w.inertia;
         for k in 0..nv {
@@ -146,7 +152,7 @@ fn columns(consts: &[LinkConsts], work: &[LinkWork], gim: &mut DMatrix<f64>) {
                 let (cp, wp) = (&consts[p], &work[p]);
                 let (nvp, angular_p) = (cp.nv, cp.angular);
                 let vp = cp.v_index;
-                if cp.motion == MotionClass::Free {
+                if FREE && cp.motion == MotionClass::Free {
                     for r in 0..6 {
                         let x = free_row(r, &fa, &fl);
                         g[vp + r + col * dim] = x;

@@ -167,9 +167,19 @@ fn set_link_bodies(
         let (child, kind, name, line) = match joint_of_body.get(&model.links[l].body) {
             Some(&j) => {
                 let jd = &robot.joints[j];
-                (jd.child.as_str(), jd.kind.name(), jd.name.as_str(), Some(jd.line))
+                (
+                    jd.child.as_str(),
+                    jd.kind.name(),
+                    jd.name.as_str(),
+                    Some(jd.line),
+                )
             }
-            None => (robot.links[tree.root].name.as_str(), "floating", ROOT_JOINT_NAME, None),
+            None => (
+                robot.links[tree.root].name.as_str(),
+                "floating",
+                ROOT_JOINT_NAME,
+                None,
+            ),
         };
         let at = line.map(|n| format!(" (line {n})")).unwrap_or_default();
         let massless = body.mass <= 0.0; // masses are finite: parsed so
