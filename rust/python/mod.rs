@@ -9,6 +9,7 @@ mod loops;
 mod model;
 mod options;
 mod pickle;
+mod reactions;
 mod rk45;
 mod scene;
 mod signals;

@@ -15,6 +15,7 @@ use crate::joint::Joint;
 use crate::kinematics;
 use crate::loops::{self, LoopSolver};
 use crate::model::Model;
+use crate::reactions;
 use crate::recursive::{self, Data};
 use crate::spatial::{Placement, Vec3, Vec6};
 
@@ -815,6 +816,194 @@ impl PyModel {
             check_result(py, "inverse_dynamics", &tau)?;
             Ok(to_array1(py, &tau).into_any())
         })
+    }
+
+    /// Every link's seven point masses in motion at `(q, v, a)`: dict with `masses` (n, 7),
+    /// `positions`, `velocities`, `accelerations` (n, 7, 3), world axes, no gravity.
+    fn point_motion<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let (count, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+        if count.is_some() {
+            return Err(invalid(
+                py,
+                "q",
+                format!("shape ({},): one state", model.nq),
+                "a stack of states",
+            ));
+        }
+        let mut ws = recursive::reference::Workspace::new(&model);
+        let mut pm = reactions::PointMotion::default();
+        reactions::point_motion(&model, &mut ws, &qs, &vs, &accs, &mut pm);
+        let n = model.links.len();
+        let flat = |x: &[Vec3]| x.iter().flat_map(|p| [p.x, p.y, p.z]).collect::<Vec<f64>>();
+        let d = PyDict::new(py);
+        d.set_item("masses", to_array(py, pm.masses.clone(), &[n, 7])?)?;
+        for (k, x) in [
+            ("positions", &pm.positions),
+            ("velocities", &pm.velocities),
+            ("accelerations", &pm.accelerations),
+        ] {
+            let f = flat(x);
+            check_result(py, &format!("point_motion['{k}']"), &f)?;
+            d.set_item(k, to_array(py, f, &[n, 7, 3])?)?;
+        }
+        Ok(d)
+    }
+
+    /// Shaking force and moment about `about` at one state (q (nq,), v, a (nv,)) or at N
+    /// (q (N, nq), v, a (N, nv)): `(force, moment)`, each (3,) or (N, 3).
+    #[pyo3(signature = (q, v, a, about=None))]
+    fn shaking<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        about: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let model = self.model();
+        let (count, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+        let about = match about.filter(|x| !x.is_none()) {
+            Some(o) => {
+                let o = vec3(o, "about")?;
+                crate::error::check_finite("about", o.as_slice()).py(py)?;
+                o
+            }
+            None => Vec3::zeros(),
+        };
+        let rows = count.unwrap_or(1);
+        let (nq, nv) = (model.nq, model.nv);
+        let (force, moment) = detach_interruptible(py, || {
+            let mut ws = recursive::reference::Workspace::new(&model);
+            let mut pm = reactions::PointMotion::default();
+            let (mut force, mut moment) =
+                (Vec::with_capacity(3 * rows), Vec::with_capacity(3 * rows));
+            for k in 0..rows {
+                crate::interrupt::check("shaking")?;
+                let (qk, vk, ak) = (
+                    &qs[k * nq..(k + 1) * nq],
+                    &vs[k * nv..(k + 1) * nv],
+                    &accs[k * nv..(k + 1) * nv],
+                );
+                reactions::point_motion(&model, &mut ws, qk, vk, ak, &mut pm);
+                let (f, m) = reactions::shaking(&pm, &about);
+                force.extend_from_slice(f.as_slice());
+                moment.extend_from_slice(m.as_slice());
+            }
+            Ok((force, moment))
+        })?;
+        check_result(py, "shaking", &force)?;
+        check_result(py, "shaking", &moment)?;
+        let shape: Vec<usize> = match count {
+            Some(n) => vec![n, 3],
+            None => vec![3],
+        };
+        Ok((to_array(py, force, &shape)?, to_array(py, moment, &shape)?))
+    }
+
+    /// The wrench every joint transmits at `(q, v, a)`: dict with `joints` (nlinks, 6),
+    /// `[force; moment]` that the parent applies to the link's subtree at the link origin, in
+    /// the link's axes (`frame="joint"`) or the world's; `loops` (nloops, 6), the cut joints'
+    /// wrenches as `constraint_forces` gives them; `tau` (nv,), the joint forces (the actuated
+    /// ones' for a model with loops, zero elsewhere).
+    #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
+    #[allow(clippy::too_many_arguments)]
+    fn bearing_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+        actuated: Option<&Bound<'_, PyAny>>,
+        frame: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let world = super::reactions::world_frame(py, frame)?;
+        let model = self.model();
+        let g = gravity_arg(py, gravity)?;
+        let (count, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+        if count.is_some() {
+            return Err(invalid(
+                py,
+                "q",
+                format!("shape ({},): one state", model.nq),
+                "a stack of states",
+            ));
+        }
+        let ext = external_wrenches(&model, external)?;
+        let mut cut: Vec<[f64; 6]> = Vec::new();
+        let actuated = actuated.filter(|x| !x.is_none());
+        if !model.loops.is_empty() {
+            // The actuators' forces and the cut joints' wrenches that produce this motion.
+            let Some(act) = actuated else {
+                return Err(invalid(py, "actuated", format!("the actuated joints (v indices or body names) for a model with {} loop(s): the cut joints' forces are otherwise undetermined", model.loops.len()), "None"));
+            };
+            let act = super::loops::actuated_indices(&model, act)?;
+            let mut data = Data::new(&model);
+            let mut tree = vec![0.0; model.nv];
+            recursive::inverse_dynamics(
+                &model,
+                &mut data,
+                &qs,
+                &vs,
+                &accs,
+                &g,
+                ext.as_deref(),
+                &mut tree,
+            );
+            let mut solver = LoopSolver::new(&model);
+            cut = loops::driving_forces(&model, &mut solver, &qs, &vs, &accs, &tree, &act)
+                .py(py)?
+                .1;
+        } else if let Some(x) = actuated {
+            return Err(invalid(
+                py,
+                "actuated",
+                "None for a model without loops (every joint is actuated)",
+                x.repr()?.to_string(),
+            ));
+        }
+        let mut ws = recursive::reference::Workspace::new(&model);
+        reactions::link_accelerations(&model, &mut ws, &qs, &vs, &accs);
+        let mut all_ext = ext.unwrap_or_else(|| vec![Vec6::zeros(); model.links.len()]);
+        reactions::add_cut_wrenches(&model, &ws, &cut, &mut all_ext);
+        let mut tau = vec![0.0; model.nv];
+        let wrenches = reactions::joint_wrenches(
+            &model,
+            &mut ws,
+            &qs,
+            &vs,
+            &accs,
+            &g,
+            Some(&all_ext),
+            &mut tau,
+        );
+        let joints: Vec<f64> = wrenches
+            .iter()
+            .zip(&ws.links)
+            .flat_map(|(w, s)| {
+                let rot = if world {
+                    nalgebra::Matrix3::identity()
+                } else {
+                    s.rotation
+                };
+                reactions::in_link_frame(&rot, w)
+            })
+            .collect();
+        check_result(py, "bearing_forces", &joints)?;
+        let d = PyDict::new(py);
+        d.set_item("joints", to_array(py, joints, &[model.links.len(), 6])?)?;
+        let flat: Vec<f64> = cut.iter().flatten().copied().collect();
+        d.set_item("loops", to_array(py, flat, &[cut.len(), 6])?)?;
+        d.set_item("tau", to_array1(py, &tau))?;
+        Ok(d)
     }
 
     /// Adds a cut joint closing a kinematic loop; returns its index. See the package docs.

@@ -1,0 +1,74 @@
+//! Arguments of the shaking-force and bearing-force methods of `Model` (crate::reactions).
+use pyo3::prelude::*;
+
+use super::convert::{array, shape_str};
+use super::errors::{invalid, IntoPyResult};
+use crate::model::Model;
+
+/// One state or a stack of them: `q` (nq,) or (N, nq), `v` and `a` (nv,) or (N, nv), the same
+/// N. Returns N (`None` for a single state) and the states row by row; every row checked.
+#[allow(clippy::type_complexity)]
+pub fn states(
+    model: &Model,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    a: &Bound<'_, PyAny>,
+) -> PyResult<(Option<usize>, Vec<f64>, Vec<f64>, Vec<f64>)> {
+    let py = q.py();
+    let (sq, q) = array(q, "q")?;
+    let (sv, vv) = array(v, "v")?;
+    let (sa, av) = array(a, "a")?;
+    let count = match sq.as_slice() {
+        [n] if *n == model.nq => None,
+        [rows, n] if *n == model.nq => Some(*rows),
+        _ => {
+            return Err(invalid(
+                py,
+                "q",
+                format!("shape ({0},) or (N, {0})", model.nq),
+                shape_str(&sq),
+            ))
+        }
+    };
+    for (arg, shape) in [("v", &sv), ("a", &sa)] {
+        let want: Vec<usize> = match count {
+            None => vec![model.nv],
+            Some(rows) => vec![rows, model.nv],
+        };
+        if *shape != want {
+            return Err(invalid(
+                py,
+                arg,
+                format!("shape {} (as q)", shape_str(&want)),
+                shape_str(shape),
+            ));
+        }
+    }
+    for k in 0..count.unwrap_or(1) {
+        let qk = &q[k * model.nq..(k + 1) * model.nq];
+        let vk = &vv[k * model.nv..(k + 1) * model.nv];
+        let row = |e: crate::error::Error| match count {
+            Some(_) => e.map_arg(|name| format!("{name}[{k}]")),
+            None => e,
+        };
+        model.check_state(qk, Some(vk)).map_err(row).py(py)?;
+        crate::error::check_finite("a", &av[k * model.nv..(k + 1) * model.nv])
+            .map_err(row)
+            .py(py)?;
+    }
+    Ok((count, q, vv, av))
+}
+
+/// `frame`: "joint" (each link's own axes) or "world".
+pub fn world_frame(py: Python<'_>, frame: &str) -> PyResult<bool> {
+    match frame {
+        "joint" => Ok(false),
+        "world" => Ok(true),
+        other => Err(invalid(
+            py,
+            "frame",
+            "\"joint\" or \"world\"",
+            format!("'{other}'"),
+        )),
+    }
+}
