@@ -341,6 +341,19 @@ impl Model {
         self.bodies[index].body = body;
     }
 
+    /// Replaces body `index`'s own rigid body and updates the link it belongs to (its merged
+    /// body and seven point masses); a body welded to the world changes no link.
+    pub fn replace_body(&mut self, index: usize, body: RigidBody) -> Result<()> {
+        self.set_body_inertial(index, body);
+        match self.bodies[index].link {
+            Some(l) => {
+                let merged = self.link_bodies().swap_remove(l);
+                self.set_link_body(l, merged)
+            }
+            None => Ok(()),
+        }
+    }
+
     /// Each link's body summed from the records of its bodies (its own and those welded to
     /// it), in the link frame. Unlike the merging `add_body` does, any or all of them may
     /// have zero mass (then the sum has mass 0, centre of mass 0).

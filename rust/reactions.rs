@@ -171,3 +171,26 @@ pub fn in_link_frame(rotation: &Mat3, w: &Vec6) -> [f64; 6] {
     let n = rotation.transpose() * angular(w);
     [f.x, f.y, f.z, n.x, n.y, n.z]
 }
+
+/// Adds `J_pᵀ f` to `out` (length nv): the joint forces of a world force `f` applied at the
+/// world point `point` of `link`, walking the joints from `link` to the root (world columns
+/// and origins from the last [`link_accelerations`] call).
+pub fn add_point_force(
+    model: &Model,
+    ws: &Workspace,
+    link: usize,
+    point: &Vec3,
+    f: &Vec3,
+    out: &mut [f64],
+) {
+    let mut k = Some(link);
+    while let Some(i) = k {
+        let l = &model.links[i];
+        let s = &ws.links[i];
+        let wrench = stack(&(point - s.origin).cross(f), f);
+        for c in 0..l.joint.nv() {
+            out[l.v_index + c] += s.s[c].dot(&wrench);
+        }
+        k = l.parent;
+    }
+}

@@ -9,6 +9,17 @@ from __future__ import annotations
 
 from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
+from .balancing import (
+    Balance,
+    Counterweight,
+    MotionAnalysis,
+    Shaking,
+    analyze_motion,
+    balance,
+    pareto_front,
+    prescribed_motion,
+    shaking,
+)
 from .errors import (
     InertiaError,
     InvalidInputError,
@@ -78,6 +89,8 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "Balance",
+    "Counterweight",
     "Damper",
     "Effect",
     "ExternalForce",
@@ -92,6 +105,7 @@ __all__ = [
     "LoopClosureError",
     "Model",
     "ModelStructureError",
+    "MotionAnalysis",
     "NumericalError",
     "OdeResult",
     "PDTorque",
@@ -102,6 +116,7 @@ __all__ = [
     "RigidBody",
     "Scene",
     "SceneError",
+    "Shaking",
     "SimulationError",
     "SimulationResult",
     "SingularityError",
@@ -113,13 +128,18 @@ __all__ = [
     "TorqueFunction",
     "WorkPrecision",
     "__version__",
+    "analyze_motion",
+    "balance",
     "builtin_scenes",
     "effect_forces",
     "effect_power",
     "energies",
     "errors",
     "load_scene",
+    "pareto_front",
+    "prescribed_motion",
     "rk45",
+    "shaking",
     "simulate",
     "work_precision",
 ]

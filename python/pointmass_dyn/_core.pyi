@@ -282,6 +282,44 @@ class Model:
         the cut joint applies to body b (minus those on body a) at frame b's origin, in frame
         a's axes, under ``tau``. Components along the joint's free motion are zero; where
         constraints are redundant the minimum-norm set (only their resultant is defined)."""
+    def body(self, body: int | str) -> RigidBody:
+        """Body ``body``'s own rigid body (mass, COM, inertia in its frame), as added."""
+    def with_body(self, body: int | str, rigid_body: RigidBody) -> Model:
+        """A copy with body ``body``'s rigid body replaced (joint, placement, loops, names
+        kept); this model is unchanged."""
+    def point_motion(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> dict[str, _Array]:
+        """Every link's seven point masses in motion: ``masses`` (n, 7), ``positions``,
+        ``velocities``, ``accelerations`` (n, 7, 3), world axes, no gravity."""
+    def shaking(
+        self, q: ArrayLike, v: ArrayLike, a: ArrayLike, about: ArrayLike | None = None
+    ) -> tuple[_Array, _Array]:
+        """Shaking force ``−Σ m a`` and moment ``−Σ m (r − about) × a`` over all point masses
+        (gravity excluded), at one state ((3,), (3,)) or at N ((N, 3), (N, 3))."""
+    def bearing_forces(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a: ArrayLike,
+        gravity: ArrayLike | None = None,
+        external: ArrayLike | None = None,
+        actuated: Any = None,
+        frame: Literal["joint", "world"] = "joint",
+    ) -> dict[str, _Array]:
+        """The wrench each joint transmits: ``joints`` (nlinks, 6), ``[force; moment]`` the
+        parent applies to the link's subtree at the link origin, link axes (or world);
+        ``loops`` (nloops, 6), the cut joints' wrenches (as ``constraint_forces``); ``tau``
+        (nv,), the joint (driving) forces. Loops need ``actuated``."""
+    def point_regressor(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a: ArrayLike,
+        points: Sequence[tuple[int | str, ArrayLike]] | None = None,
+        gravity: ArrayLike | None = None,
+    ) -> dict[str, _Array]:
+        """Per state and point: ``positions``, ``accelerations`` ((N,) P, 3) and
+        ``generalized`` ((N,) P, nv) ``= J_pᵀ (a_p − g)``. ``points``: None for all point
+        masses, or (body, point in its frame) pairs."""
     @staticmethod
     def from_urdf(path: Any, *, root_joint: Literal["fixed", "free"] | None = None) -> Model:
         """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
@@ -315,6 +353,10 @@ _Family: TypeAlias = Literal["gravity", "springs", "dampers", "friction", "torqu
 class Effect:
     """Something a scene applies to its model; build with the factories (``pmd.Gravity``,
     ``pmd.Spring``, ...). Each is computed only when declared; SI units, radians."""
+
+    @property
+    def g(self) -> _Array | None:
+        """A gravity effect's ``g`` (3,); None for other effects."""
 
     __hash__: ClassVar[None]  # type: ignore[assignment]
     @staticmethod

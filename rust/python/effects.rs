@@ -354,6 +354,15 @@ impl PyEffect {
     fn kind(&self) -> &'static str {
         self.inner.kind().name()
     }
+    /// A gravity effect's acceleration `g` (3,); `None` for other effects.
+    #[getter]
+    #[pyo3(name = "g")]
+    fn gravity_vector<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
+        match &self.inner {
+            Effect::Gravity { g } => Some(super::convert::to_array1(py, g.as_slice())),
+            _ => None,
+        }
+    }
     fn __repr__(&self) -> String {
         let label = match self.inner.label() {
             Some(l) => format!(", name='{l}'"),

@@ -818,6 +818,47 @@ impl PyModel {
         })
     }
 
+    /// Body `body`'s own rigid body (mass, COM and inertia in its frame), as added.
+    fn body(&self, py: Python<'_>, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
+        let model = self.model();
+        let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
+            invalid(
+                py,
+                "body",
+                "a body of the model (not the world)",
+                "the world",
+            )
+        })?;
+        Ok(PyRigidBody {
+            inner: model.bodies[b].body,
+        })
+    }
+
+    /// A copy of this model with body `body`'s own rigid body replaced by `rigid_body` (its
+    /// joint, placement, loops and names kept); this model is unchanged.
+    fn with_body(
+        &self,
+        py: Python<'_>,
+        body: &Bound<'_, PyAny>,
+        rigid_body: PyRef<'_, PyRigidBody>,
+    ) -> PyResult<Self> {
+        let ver = self.version().clone();
+        let b = super::loops::body_ref(&ver.model, Some(body), "body")?.ok_or_else(|| {
+            invalid(
+                py,
+                "body",
+                "a body of the model (not the world)",
+                "the world",
+            )
+        })?;
+        let mut model = (*ver.model).clone();
+        model.replace_body(b, rigid_body.inner).py(py)?;
+        Ok(PyModel::from_parts(
+            Arc::new(model),
+            ver.urdf_joints.clone(),
+        ))
+    }
+
     /// Every link's seven point masses in motion at `(q, v, a)`: dict with `masses` (n, 7),
     /// `positions`, `velocities`, `accelerations` (n, 7, 3), world axes, no gravity.
     fn point_motion<'py>(
@@ -853,6 +894,73 @@ impl PyModel {
             check_result(py, &format!("point_motion['{k}']"), &f)?;
             d.set_item(k, to_array(py, f, &[n, 7, 3])?)?;
         }
+        Ok(d)
+    }
+
+    /// Per point and state, what the balancing regressors need (`docs/balancing.md`): world
+    /// `positions` and `accelerations` (N, P, 3) and `generalized` (N, P, nv) `= J_pᵀ (a_p − g)`,
+    /// the joint forces that a unit mass at the point needs. `points`: None for every link's
+    /// seven point masses (P = 7 n, link by link), or `[(body, [x, y, z]), ...]` points given in
+    /// their bodies' frames. q (N, nq), v and a (N, nv), or one state (then N is dropped).
+    #[pyo3(signature = (q, v, a, points=None, gravity=None))]
+    fn point_regressor<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        points: Option<&Bound<'_, PyAny>>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let g = gravity_arg(py, gravity)?;
+        let (count, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+        let pts: Vec<(usize, Vec3)> = match points.filter(|p| !p.is_none()) {
+            None => model
+                .links
+                .iter()
+                .enumerate()
+                .flat_map(|(i, l)| l.points.positions.iter().map(move |p| (i, *p)))
+                .collect(),
+            Some(list) => super::reactions::body_points(&model, list)?,
+        };
+        let rows = count.unwrap_or(1);
+        let (nq, nv, np) = (model.nq, model.nv, pts.len());
+        let (pos, acc, gen) = detach_interruptible(py, || {
+            let mut ws = recursive::reference::Workspace::new(&model);
+            let mut pos = Vec::with_capacity(rows * np * 3);
+            let mut acc = Vec::with_capacity(rows * np * 3);
+            let mut gen = vec![0.0; rows * np * nv];
+            for k in 0..rows {
+                crate::interrupt::check("point_regressor")?;
+                let (qk, vk, ak) = (
+                    &qs[k * nq..(k + 1) * nq],
+                    &vs[k * nv..(k + 1) * nv],
+                    &accs[k * nv..(k + 1) * nv],
+                );
+                reactions::link_accelerations(&model, &mut ws, qk, vk, ak);
+                for (j, (r, _, ap)) in reactions::carried_points(&ws, &pts).iter().enumerate() {
+                    pos.extend_from_slice(r.as_slice());
+                    acc.extend_from_slice(ap.as_slice());
+                    let out = &mut gen[(k * np + j) * nv..(k * np + j + 1) * nv];
+                    reactions::add_point_force(&model, &ws, pts[j].0, r, &(ap - g), out);
+                }
+            }
+            Ok((pos, acc, gen))
+        })?;
+        for (k, x) in [
+            ("positions", &pos),
+            ("accelerations", &acc),
+            ("generalized", &gen),
+        ] {
+            check_result(py, &format!("point_regressor['{k}']"), x)?;
+        }
+        let lead: Vec<usize> = count.into_iter().collect();
+        let shape = |tail: &[usize]| [lead.as_slice(), tail].concat();
+        let d = PyDict::new(py);
+        d.set_item("positions", to_array(py, pos, &shape(&[np, 3]))?)?;
+        d.set_item("accelerations", to_array(py, acc, &shape(&[np, 3]))?)?;
+        d.set_item("generalized", to_array(py, gen, &shape(&[np, nv]))?)?;
         Ok(d)
     }
 

@@ -72,3 +72,41 @@ pub fn world_frame(py: Python<'_>, frame: &str) -> PyResult<bool> {
         )),
     }
 }
+
+/// `[(body, [x, y, z]), ...]`: points in their bodies' frames as `(link, offset in the link
+/// frame)`. A body welded to the world carries no moving point and is refused.
+pub fn body_points(
+    model: &Model,
+    list: &Bound<'_, PyAny>,
+) -> PyResult<Vec<(usize, crate::spatial::Vec3)>> {
+    let py = list.py();
+    let expected =
+        "a list of (body, [x, y, z]) pairs: a body index or name and a point in its frame";
+    let mut out = Vec::new();
+    for (k, item) in list.try_iter()?.enumerate() {
+        let item = item?;
+        let arg = format!("points[{k}]");
+        let (body, xyz): (Bound<'_, PyAny>, Bound<'_, PyAny>) = item.extract().map_err(|_| {
+            invalid(
+                py,
+                &arg,
+                expected,
+                item.repr().map_or("?".into(), |r| r.to_string()),
+            )
+        })?;
+        let b = super::loops::body_ref(model, Some(&body), &arg)?
+            .ok_or_else(|| invalid(py, &arg, "a body of the model (not the world)", "the world"))?;
+        let link = model.bodies[b].link.ok_or_else(|| {
+            invalid(
+                py,
+                &arg,
+                "a body that moves (not welded to the world)",
+                format!("'{}'", model.bodies[b].name),
+            )
+        })?;
+        let p = super::convert::vec3(&xyz, &arg)?;
+        crate::error::check_finite(&arg, p.as_slice()).py(py)?;
+        out.push((link, model.bodies[b].in_link.act_point(&p)));
+    }
+    Ok(out)
+}
