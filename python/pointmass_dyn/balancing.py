@@ -512,25 +512,55 @@ def _solve_qp(h, c, ce, de, lb, ub, x0):
     return x
 
 
+def _row_space(ce: np.ndarray, de: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Equalities ``Cₑ x = dₑ`` as an orthonormal basis of their row space (N instants give
+    many more rows than design variables), after checking they can be met at all."""
+    p = ce.shape[1]
+    if ce.shape[0] == 0:
+        return np.zeros((0, p)), np.zeros(0)
+    # Round-off entries (a planar mechanism's out-of-plane rows, ~1e-300 after scaling) are
+    # flushed: subnormal numbers slow LAPACK down a thousandfold.
+    big = np.abs(ce).max(initial=0.0)
+    ce = np.where(np.abs(ce) < 1e-15 * big, 0.0, ce)
+    # QR first: a tall SVD goes to multithreaded LAPACK, which a busy machine slows
+    # a thousandfold; the square factor's SVD does not.
+    if ce.shape[0] > ce.shape[1]:
+        qf, rf = np.linalg.qr(ce)
+        ur, sv, vt = np.linalg.svd(rf)
+        u = qf @ ur
+    else:
+        u, sv, vt = np.linalg.svd(ce, full_matrices=False)
+    r = int(np.sum(sv > 1e-12 * sv.max(initial=0.0)))
+    outside = de - u[:, :r] @ (u[:, :r].T @ de)
+    if np.abs(outside).max(initial=0.0) > 1e-9 * (1.0 + np.abs(de).max()):
+        raise InvalidInputError(
+            f"zero: no masses at the design points make {what} vanish at every instant "
+            f"(residual {np.abs(outside).max():.3e}); add counterweight candidates on other links"
+        )
+    return vt[:r], (u[:, :r].T @ de) / sv[:r]
+
+
 def balance(
     motion: MotionAnalysis,
     *,
     counterweights: Sequence[Counterweight] = (),
     links: Sequence[Any] = (),
+    link_mass: tuple[float, float] = (1.0, 1.0),
     objective: dict[str, float] | None = None,
     zero: Sequence[str] = (),
-    regularization: float = 1e-8,
+    regularization: float = 1e-3,
 ) -> Balance:
     """Balance a mechanism along a prescribed ``motion`` (from :func:`prescribed_motion`).
 
     Design variables are point masses at fixed body points: ``counterweights`` (masses ≥ 0 at
     candidate points) and/or ``links`` (bodies whose own seven equimomental point masses
-    are redesigned, kept ≥ 0 so the body stays physical). ``objective`` weights the RMS of
+    are redesigned, kept ≥ 0 so the body stays physical, their total within ``link_mass``
+    times the current mass: by default the mass is redistributed, not changed). ``objective`` weights the RMS of
     ``"force"`` (shaking force), ``"moment"`` (shaking moment about the motion's ``about``)
     and ``"torque"`` (driving force), each relative to its unbalanced RMS (default
     ``{"force": 1}``); ``zero`` lists those that must vanish at every instant (linear
     equalities, e.g. ``zero=("force",)`` for complete force balance). Among equal optima the
-    least added mass wins (a ``regularization`` term, relative to the objectives).
+    least added mass wins (then, by ``regularization``, the smallest masses).
 
     The quantities are linear in the design masses for the given motion, so the problem is a
     convex quadratic program, solved exactly; the balanced model is then analysed again along
@@ -549,60 +579,50 @@ def balance(
     x_now = np.array([d[2] for d in design])
     lb = np.array([d[3] for d in design])
     ub = np.array([d[4] for d in design])
-    p = len(design)
+    nd = len(design)
+    # A redesigned link's total mass is a bounded slack variable s with Σ x_link − s = 0.
+    lo, hi = (float(f) for f in link_mass)
+    if not 0.0 < lo <= hi:
+        raise InvalidInputError(f"link_mass: expected factors 0 < low <= high, got {link_mass}")
+    names = [b if isinstance(b, str) else model.body_names[int(b)] for b in links]
+    mass_rows = []
+    for k, name in enumerate(names):
+        row = np.zeros(nd + len(names))
+        row[[j for j, d in enumerate(design[: 7 * len(names)]) if d[0] == name]] = 1.0
+        row[nd + k] = -1.0
+        mass_rows.append(row)
+        m0 = model.body(name).mass
+        x_now = np.append(x_now, m0)
+        lb, ub = np.append(lb, lo * m0), np.append(ub, hi * m0)
+    p = nd + len(names)
+    pad = np.zeros((0, len(names)))
     h = np.zeros((p, p))
     c = np.zeros(p)
-    ce_rows, de_rows, lin = [], [], {}
-    for what in set(objective) | set(zero):
+    ce_rows, de_rows, lin, weighted = list(mass_rows), [np.zeros(len(names))], {}, []
+    for what in sorted(set(objective) | set(zero)):
         y0, a = _objective_rows(motion, reg, design, what, about)
+        a = np.hstack([a, np.zeros((a.shape[0], pad.shape[1]))])
         # y(x) = y0 + A (x − x_now): as a function of x, y = (y0 − A x_now) + A x.
         b = y0 - a @ x_now
         lin[what] = (a, b)
         w = objective.get(what, 0.0)
         if what in zero:
-            keep = np.abs(a).max(axis=1) + np.abs(b) > 0
-            ce_rows.append(a[keep])
-            de_rows.append(-b[keep])
+            ce_rows.append(a)
+            de_rows.append(-b)
         elif w > 0:
             scale = max(_rms(y0.reshape(len(motion.t), -1)), 1e-300) ** 2 * len(motion.t)
             h += (w / scale) * (a.T @ a)
             c += (w / scale) * (a.T @ b)
-    ce = np.vstack(ce_rows) if ce_rows else np.zeros((0, p))
-    de = np.concatenate(de_rows) if de_rows else np.zeros(0)
-    # N instants give many more equality rows than design variables: keep their row space
-    # (an orthonormal basis by SVD), after checking that they can be met at all.
-    if ce.size:
-        u, sv, vt = np.linalg.svd(ce, full_matrices=False)
-        r = int(np.sum(sv > 1e-12 * sv.max(initial=0.0)))
-        outside = de - u[:, :r] @ (u[:, :r].T @ de)
-        if np.abs(outside).max(initial=0.0) > 1e-9 * (1.0 + np.abs(de).max()):
-            raise InvalidInputError(
-                f"zero: no masses at the design points make {', '.join(zero)} vanish at every "
-                f"instant (residual {np.abs(outside).max():.3e}); add counterweight candidates "
-                f"on other links"
-            )
-        ce, de = sv[:r, None] * vt[:r], u[:, :r].T @ de
-        norms = np.linalg.norm(ce, axis=1)
-        ce, de = ce / norms[:, None], de / norms
-    # Ties (e.g. only equalities asked, or candidates that act alike) go to the least added
-    # mass, then to the smallest masses: an L1 term (the masses are ≥ 0) far above an L2 one
-    # that keeps the problem strictly convex; both far below the objectives.
-    base = np.trace(h) / p if np.trace(h) > 0 else 1.0
-    m_scale = model.total_mass / max(model.nlinks, 1)
-    h = h + regularization * 1e-4 * base / m_scale**2 * np.eye(p)
-    c = c + regularization * base / m_scale * np.ones(p)
+            weighted.append(np.sqrt(w / scale) * a)
+    ce, de = _row_space(
+        np.vstack(ce_rows) if ce_rows else np.zeros((0, p)),
+        np.concatenate(de_rows),
+        what=", ".join(zero) or "the link masses",
+    )
     # A feasible start: the bounded point nearest the equalities (phase 1), checked.
     x_start = np.clip(x_now, lb, ub)
     if ce.shape[0]:
-        x_start = _solve_qp(
-            ce.T @ ce + 1e-14 * np.eye(p),
-            -ce.T @ de,
-            np.zeros((0, p)),
-            np.zeros(0),
-            lb,
-            ub,
-            x_start,
-        )
+        x_start = _solve_qp(ce.T @ ce, -ce.T @ de, np.zeros((0, p)), np.zeros(0), lb, ub, x_start)
         miss = np.abs(ce @ x_start - de).max()
         if miss > 1e-9 * (1.0 + np.abs(de).max()):
             raise InvalidInputError(
@@ -610,10 +630,18 @@ def balance(
                 f"instant within their bounds (best residual {miss:.3e}); add counterweight "
                 f"candidates on other links, or relax the bounds"
             )
-        # Project onto the equalities exactly (the phase-1 optimum meets them to round-off).
-        x_start = x_start - np.linalg.lstsq(ce, ce @ x_start - de, rcond=1e-13)[0]
-        x_start = np.clip(x_start, lb, ub)
-    x = _solve_qp(h, c, ce, de, lb, ub, x_start)
+    # 1. The weighted objective (strictly convex in the objective's values A x).
+    base = np.trace(h) / p if np.trace(h) > 0 else 1.0
+    x = _solve_qp(h + 1e-14 * base * np.eye(p), c, ce, de, lb, ub, x_start)
+    # 2. Among its optima (all share A x), the least added mass: an L1 term (masses ≥ 0)
+    #    well above an L2 one that keeps the subproblems strictly convex.
+    if weighted:
+        face, at = _row_space(np.vstack(weighted), np.vstack(weighted) @ x, what="objective")
+        ce, de = np.vstack([ce, face]), np.concatenate([de, at])
+    m_scale = model.total_mass / max(model.nlinks, 1)
+    l1 = np.concatenate([np.ones(nd), np.zeros(p - nd)]) / m_scale
+    x = _solve_qp(regularization * np.eye(p) / m_scale**2, l1, ce, de, lb, ub, x)[:nd]
+    lb, ub = lb[:nd], ub[:nd]
     # Rebuild the changed bodies from their point masses and analyse the balanced model.
     groups: dict[str, list[int]] = {}
     for j, d in enumerate(design):
@@ -630,10 +658,10 @@ def balance(
         body = _core.RigidBody.from_point_masses(np.array(masses), np.array(positions))
         bodies[name] = body
         new_model = new_model.with_body(name, body)
-    largest = max(float(np.max(x)) if p else 0.0, 1e-300)
+    largest = max(float(np.max(x)), 1e-300)
     cws = [
         (design[j][0], design[j][1], float(x[j]))
-        for j in range(p)
+        for j in range(nd)
         if design[j][0] not in redesigned and x[j] > 1e-12 * largest
     ]
     after = analyze_motion(
@@ -646,7 +674,9 @@ def balance(
         gravity=motion.gravity,
         about=about,
     )
-    predicted = {what: (a @ x + b).reshape(len(motion.t), -1) for what, (a, b) in lin.items()}
+    predicted = {
+        what: (a[:, :nd] @ x + b).reshape(len(motion.t), -1) for what, (a, b) in lin.items()
+    }
     return Balance(
         masses=x,
         counterweights=cws,
@@ -671,6 +701,6 @@ def pareto_front(
     first, second = objectives
     out = []
     for s in np.linspace(0.0, 1.0, count):
-        w = {first: max(1.0 - s, 1e-6), second: max(s, 1e-6)}
+        w = {first: 1.0 - s, second: s}
         out.append(balance(motion, objective=w, **kwargs))
     return out
