@@ -6,9 +6,8 @@ weighted-sum Pareto front."""
 from __future__ import annotations
 
 import numpy as np
-import pytest
-
 import pointmass_dyn as pmd
+import pytest
 
 G = np.array([0.0, -9.81, 0.0])
 SPEED = 10.0
