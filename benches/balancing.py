@@ -10,7 +10,6 @@ import argparse
 import statistics
 import time
 
-
 import pointmass_dyn as pmd
 
 
