@@ -282,6 +282,32 @@ class Model:
         the cut joint applies to body b (minus those on body a) at frame b's origin, in frame
         a's axes, under ``tau``. Components along the joint's free motion are zero; where
         constraints are redundant the minimum-norm set (only their resultant is defined)."""
+    def point_motion(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> dict[str, _Array]:
+        """Every link's seven point masses in motion at one state: keys ``masses`` (nlinks,
+        7), ``positions``, ``velocities``, ``accelerations`` (nlinks, 7, 3), world axes, no
+        gravity."""
+    def shaking(
+        self, q: ArrayLike, v: ArrayLike, a: ArrayLike, about: ArrayLike | None = None
+    ) -> tuple[_Array, _Array]:
+        """Shaking force and moment ``(−Σ m a, −Σ m (r − O) × a)`` over every point mass,
+        gravity excluded, about ``about`` (world; default the origin): at one state (q (nq,),
+        v, a (nv,)) each (3,), or at N (q (N, nq), v, a (N, nv)) each (N, 3)."""
+    def bearing_forces(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a: ArrayLike,
+        gravity: ArrayLike | None = None,
+        external: ArrayLike | None = None,
+        actuated: Sequence[int | str] | None = None,
+        frame: Literal["joint", "world"] = "joint",
+    ) -> dict[str, _Array]:
+        """The wrench every joint transmits at one state: keys ``joints`` (nlinks, 6),
+        ``[force; moment]`` the parent applies to the link's subtree at the link origin, in
+        the link's axes (``frame="joint"``) or the world's; ``loops`` (nloops, 6), the cut
+        joints' wrenches as :meth:`constraint_forces` gives them; ``tau`` (nv,), the joint
+        forces (with loops the ``actuated`` ones, required as for
+        :meth:`inverse_dynamics`, zero elsewhere)."""
     @staticmethod
     def from_urdf(path: Any, *, root_joint: Literal["fixed", "free"] | None = None) -> Model:
         """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
