@@ -163,6 +163,8 @@ def make_joint(spec: BodySpec) -> pmd.Joint:
         return pmd.SphericalZYZ()
     if spec.kind == "Fixed":
         return pmd.Fixed()
+    if spec.kind == "FreeFlyer":
+        return pmd.FreeFlyer()
     raise AssertionError(spec.kind)
 
 
@@ -190,7 +192,7 @@ def build_pinocchio(tree: TreeSpec, gravity=None):
     """The same tree in Pinocchio.
 
     SphericalZYZ → revolute Z, Y, Z at the same placement with two massless bodies between;
-    Spherical → JointModelSpherical; Revolute/Prismatic with arbitrary axes → the Unaligned
+    Spherical → JointModelSpherical; FreeFlyer → JointModelFreeFlyer (the same convention); Revolute/Prismatic with arbitrary axes → the Unaligned
     joints; Fixed → the body's inertia appended to the joint that carries its parent.
     Returns (model, data)."""
     import pinocchio as pin
@@ -230,6 +232,8 @@ def build_pinocchio(tree: TreeSpec, gravity=None):
             )
         elif b.kind == "Spherical":
             jid = pm.addJoint(parent_joint, pin.JointModelSpherical(), placement, f"j{k}")
+        elif b.kind == "FreeFlyer":
+            jid = pm.addJoint(parent_joint, pin.JointModelFreeFlyer(), placement, f"j{k}")
         elif b.kind == "SphericalZYZ":
             j1 = pm.addJoint(parent_joint, pin.JointModelRZ(), placement, f"j{k}_z1")
             pm.appendBodyToJoint(j1, pin.Inertia.Zero(), pin.SE3.Identity())
@@ -318,6 +322,9 @@ def random_state(model: pmd.Model, rng: np.random.Generator, vscale: float = 1.0
     for kind, (iq, _, _, _) in zip(link_kinds, model.joint_slices()):
         if kind == "Spherical":
             q[iq : iq + 4] = random_unit_quat(rng)
+        elif kind == "FreeFlyer":
+            q[iq : iq + 3] = rng.uniform(-0.5, 0.5, size=3)
+            q[iq + 3 : iq + 7] = random_unit_quat(rng)
         elif kind == "SphericalZYZ":
             q[iq : iq + 3] = [
                 rng.uniform(-np.pi, np.pi),
@@ -338,6 +345,8 @@ def normalize_q(model: pmd.Model, q: np.ndarray) -> np.ndarray:
     for kind, (iq, _, _, _) in zip(moving_kinds(model), model.joint_slices()):
         if kind == "Spherical":
             q[iq : iq + 4] /= np.linalg.norm(q[iq : iq + 4])
+        elif kind == "FreeFlyer":
+            q[iq + 3 : iq + 7] /= np.linalg.norm(q[iq + 3 : iq + 7])
     return q
 
 

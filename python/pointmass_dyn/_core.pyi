@@ -288,13 +288,15 @@ class Model:
         """A copy with body ``body``'s rigid body replaced (joint, placement, loops, names
         kept); this model is unchanged."""
     def point_motion(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> dict[str, _Array]:
-        """Every link's seven point masses in motion: ``masses`` (n, 7), ``positions``,
-        ``velocities``, ``accelerations`` (n, 7, 3), world axes, no gravity."""
+        """Every link's seven point masses in motion at one state: keys ``masses`` (nlinks,
+        7), ``positions``, ``velocities``, ``accelerations`` (nlinks, 7, 3), world axes, no
+        gravity."""
     def shaking(
         self, q: ArrayLike, v: ArrayLike, a: ArrayLike, about: ArrayLike | None = None
     ) -> tuple[_Array, _Array]:
-        """Shaking force ``−Σ m a`` and moment ``−Σ m (r − about) × a`` over all point masses
-        (gravity excluded), at one state ((3,), (3,)) or at N ((N, 3), (N, 3))."""
+        """Shaking force and moment ``(−Σ m a, −Σ m (r − O) × a)`` over every point mass,
+        gravity excluded, about ``about`` (world; default the origin): at one state (q (nq,),
+        v, a (nv,)) each (3,), or at N (q (N, nq), v, a (N, nv)) each (N, 3)."""
     def bearing_forces(
         self,
         q: ArrayLike,
@@ -302,13 +304,15 @@ class Model:
         a: ArrayLike,
         gravity: ArrayLike | None = None,
         external: ArrayLike | None = None,
-        actuated: Any = None,
+        actuated: Sequence[int | str] | None = None,
         frame: Literal["joint", "world"] = "joint",
     ) -> dict[str, _Array]:
-        """The wrench each joint transmits: ``joints`` (nlinks, 6), ``[force; moment]`` the
-        parent applies to the link's subtree at the link origin, link axes (or world);
-        ``loops`` (nloops, 6), the cut joints' wrenches (as ``constraint_forces``); ``tau``
-        (nv,), the joint (driving) forces. Loops need ``actuated``."""
+        """The wrench every joint transmits at one state: keys ``joints`` (nlinks, 6),
+        ``[force; moment]`` the parent applies to the link's subtree at the link origin, in
+        the link's axes (``frame="joint"``) or the world's; ``loops`` (nloops, 6), the cut
+        joints' wrenches as :meth:`constraint_forces` gives them; ``tau`` (nv,), the joint
+        forces (with loops the ``actuated`` ones, required as for
+        :meth:`inverse_dynamics`, zero elsewhere)."""
     def point_regressor(
         self,
         q: ArrayLike,

@@ -1047,6 +1047,7 @@ impl PyModel {
         }
         let ext = external_wrenches(&model, external)?;
         let mut cut: Vec<[f64; 6]> = Vec::new();
+        let mut tau_loops: Option<Vec<f64>> = None;
         let actuated = actuated.filter(|x| !x.is_none());
         if !model.loops.is_empty() {
             // The actuators' forces and the cut joints' wrenches that produce this motion.
@@ -1067,9 +1068,9 @@ impl PyModel {
                 &mut tree,
             );
             let mut solver = LoopSolver::new(&model);
-            cut = loops::driving_forces(&model, &mut solver, &qs, &vs, &accs, &tree, &act)
-                .py(py)?
-                .1;
+            let (tau_act, c) =
+                loops::driving_forces(&model, &mut solver, &qs, &vs, &accs, &tree, &act).py(py)?;
+            (cut, tau_loops) = (c, Some(tau_act));
         } else if let Some(x) = actuated {
             return Err(invalid(
                 py,
@@ -1110,7 +1111,9 @@ impl PyModel {
         d.set_item("joints", to_array(py, joints, &[model.links.len(), 6])?)?;
         let flat: Vec<f64> = cut.iter().flatten().copied().collect();
         d.set_item("loops", to_array(py, flat, &[cut.len(), 6])?)?;
-        d.set_item("tau", to_array1(py, &tau))?;
+        // With loops, the actuators' forces as solved (exact zeros at the passive joints, as
+        // inverse_dynamics), not the joint wrenches' projections (zero only to round-off).
+        d.set_item("tau", to_array1(py, tau_loops.as_deref().unwrap_or(&tau)))?;
         Ok(d)
     }
 

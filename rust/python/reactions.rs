@@ -39,7 +39,7 @@ pub fn states(
             return Err(invalid(
                 py,
                 arg,
-                format!("shape {} (as q)", shape_str(&want)),
+                format!("{} (as q)", shape_str(&want)),
                 shape_str(shape),
             ));
         }
