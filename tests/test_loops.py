@@ -403,6 +403,32 @@ def test_inverse_dynamics_with_loops_needs_the_actuated_joints():
         m.inverse_dynamics(q, np.zeros(3), np.zeros(3), actuated=[5])
 
 
+
+def test_inverse_dynamics_splits_redundant_actuation_and_refuses_an_impossible_one():
+    """Crank and slider both actuated: the forces are the least-norm solution of
+    [S_a | Jᵀ] (τ_a, λ) = M a + h, as NumPy's lstsq (SVD) finds it from the model's own M, h
+    and J. The slider alone cannot turn the crank at the dead centre (crank and rod in line):
+    an error that names the imbalance."""
+    scene = pmd.load_scene("slider_crank")
+    m = scene.model
+    q = m.assemble([1.0, *scene.q0[1:]], fixed=[0])
+    v = m.assemble_velocity(q, [30.0, 0.0, 0.0], fixed=[0])
+    a = m.assemble_acceleration(q, v, [-200.0, 0.0, 0.0], fixed=[0])
+    tau = m.inverse_dynamics(q, v, a, gravity=G, actuated=["crank", "slider"])
+    system = np.hstack([np.eye(3)[:, [0, 2]], m.constraint_jacobian(q).T])
+    rhs = m.mass_matrix(q) @ a + m.bias_forces(q, v, gravity=G)
+    ref = np.linalg.lstsq(system, rhs, rcond=1e-12)[0]
+    assert tau[1] == 0.0
+    np.testing.assert_allclose(tau[[0, 2]], ref[:2], rtol=0, atol=1e-14 * np.abs(ref).max())
+    # Dead centre: the slider's force passes through the crank's pivot.
+    crank, rod = 0.04, 0.12
+    offset = scene.model.placements(q)[1][m.body_names.index("slider")][1]
+    q = m.assemble([np.arcsin(offset / (crank + rod)), 0.0, crank + rod], fixed=[0])
+    a = m.assemble_acceleration(q, np.zeros(3), [1.0, 0.0, 0.0], fixed=[0])
+    m.inverse_dynamics(q, np.zeros(3), a, gravity=G, actuated=["crank"])
+    with pytest.raises(SingularityError, match=r"actuated coordinates \[2\] cannot produce"):
+        m.inverse_dynamics(q, np.zeros(3), a, gravity=G, actuated=["slider"])
+
 def test_simulate_refuses_an_open_or_inconsistent_initial_state():
     m = fourbar()
     with pytest.raises(LoopClosureError, match="q0: loop 'loop0' is open"):

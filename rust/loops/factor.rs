@@ -1,8 +1,10 @@
 //! Small dense factorizations done in place on reused buffers, so the constrained right-hand
 //! side allocates nothing: Cholesky of the (positive definite) mass matrix, and Cholesky with
 //! diagonal pivoting of the (semi-definite) constraint-space matrices, which finds the rank
-//! of redundant constraints and solves for a basic solution.
-use nalgebra::DMatrix;
+//! of redundant constraints and solves for a basic solution. Off the simulation path, the
+//! minimum-norm solutions (constraint forces, driving forces) use a complete orthogonal
+//! decomposition ([`min_norm_solve`]).
+use nalgebra::{DMatrix, DMatrixViewMut};
 
 /// `m = L Lᵀ` in place (lower triangle; the upper is left as it was). `Err(k)` if the k-th
 /// pivot is not positive.
@@ -129,4 +131,127 @@ pub fn solve_semidefinite(
         x[perm[i]] = y[i];
     }
     rank
+}
+
+/// The Householder reflector `H = I − τ u uᵀ`, `u = (1, t / s)`, with `H (x0, t) = (β, 0)` for
+/// a vector `(x0, t)` whose tail `t` has norm `tail_norm`: returns `(β, τ, 1/s)`; the caller
+/// scales the tail by `1/s` to store `u`. The identity (`τ = 0`) for a zero vector.
+fn reflector(x0: f64, tail_norm: f64) -> (f64, f64, f64) {
+    let norm = x0.hypot(tail_norm);
+    if norm == 0.0 {
+        return (0.0, 0.0, 0.0);
+    }
+    // β of the sign opposite to x0: `x0 − β` does not cancel.
+    let beta = if x0 >= 0.0 { -norm } else { norm };
+    (beta, (beta - x0) / beta, 1.0 / (x0 - beta))
+}
+
+/// The minimum-norm least-squares solution `x = A⁺ b` of a small dense system, `A` (r × c)
+/// overwritten, `b` (length r) overwritten by `Qᵀ b`, `x` of length c; `pivots` and `work`
+/// are scratch of length ≥ c. Returns the numerical rank: columns whose remaining norm falls
+/// to `rel_tol` of the largest column's are taken as dependent.
+///
+/// A complete orthogonal decomposition, as LAPACK's `xGELSY`: Householder QR with column
+/// pivoting (the column of largest remaining norm first, so the diagonal of R decreases and
+/// reveals the rank), `A P = Q [R₁₁ R₁₂; 0 ≈0]`, then reflectors from the right that fold
+/// `R₁₂` into `R₁₁`, `[R₁₁ R₁₂] = [T 0] Z`; `x = P Zᵀ [T⁻¹ (Qᵀb)₁; 0]`. Orthogonal steps
+/// only: backward stable, errors of round-off times the condition number. (nalgebra's SVD
+/// loses up to 1e-9 on well-conditioned 3 × 3 systems: its 2 × 2 kernel cancels when an
+/// off-diagonal entry is small; its `col_piv_qr` pivots on the largest entry, not the
+/// largest column, so its R does not reveal the rank.)
+pub fn min_norm_solve(
+    mut a: DMatrixViewMut<'_, f64>,
+    b: &mut [f64],
+    x: &mut [f64],
+    pivots: &mut [usize],
+    work: &mut [f64],
+    rel_tol: f64,
+) -> usize {
+    let (rows, cols) = a.shape();
+    let norms = &mut work[..cols];
+    let mut tol = 0.0;
+    let mut rank = 0;
+    for k in 0..rows.min(cols) {
+        // Exact column norms each step (no downdating): the matrices are a few columns wide.
+        for (j, nj) in norms.iter_mut().enumerate().skip(k) {
+            *nj = a.view((k, j), (rows - k, 1)).norm();
+        }
+        let p = (k..cols)
+            .max_by(|&i, &j| norms[i].total_cmp(&norms[j]))
+            .unwrap_or(k);
+        if k == 0 {
+            tol = rel_tol * norms[p];
+        }
+        // A NaN stops here too (the callers check their residual).
+        if norms[p].is_nan() || norms[p] <= tol {
+            break;
+        }
+        a.swap_columns(k, p);
+        pivots[k] = p;
+        let tail_norm = a.view((k + 1, k), (rows - k - 1, 1)).norm();
+        let (beta, tau, inv) = reflector(a[(k, k)], tail_norm);
+        a[(k, k)] = beta;
+        // u = (1, tail · inv) kept below the diagonal while it is applied, then cleared.
+        for i in k + 1..rows {
+            a[(i, k)] *= inv;
+        }
+        for j in k + 1..cols {
+            let s = tau * (a[(k, j)] + (k + 1..rows).map(|i| a[(i, k)] * a[(i, j)]).sum::<f64>());
+            a[(k, j)] -= s;
+            for i in k + 1..rows {
+                a[(i, j)] -= s * a[(i, k)];
+            }
+        }
+        let s = tau * (b[k] + (k + 1..rows).map(|i| a[(i, k)] * b[i]).sum::<f64>());
+        b[k] -= s;
+        for i in k + 1..rows {
+            b[i] -= s * a[(i, k)];
+            a[(i, k)] = 0.0;
+        }
+        rank += 1;
+    }
+    let r = rank;
+    // `[R₁₁ R₁₂] H_{r−1} ⋯ H₀ = [T 0]`, so Z = H₀ ⋯ H_{r−1}: H_k acts on coordinates k and
+    // r.., zeroes row k of R₁₂ and leaves the rows below k alone (they are zero in column k
+    // and in R₁₂ by then). H_k's vector is kept in row k of R₁₂, its τ in `work[k]`.
+    let taus = &mut work[..r];
+    if r < cols {
+        for k in (0..r).rev() {
+            let tail_norm = a.view((k, r), (1, cols - r)).norm();
+            let (beta, tau, inv) = reflector(a[(k, k)], tail_norm);
+            taus[k] = tau;
+            a[(k, k)] = beta;
+            for j in r..cols {
+                a[(k, j)] *= inv;
+            }
+            for i in 0..k {
+                let s = tau * (a[(i, k)] + (r..cols).map(|j| a[(i, j)] * a[(k, j)]).sum::<f64>());
+                a[(i, k)] -= s;
+                for j in r..cols {
+                    a[(i, j)] -= s * a[(k, j)];
+                }
+            }
+        }
+    }
+    // T u = (Qᵀb)₁; the free components (Z x)₂ are zero for the minimum norm.
+    x[..cols].fill(0.0);
+    for i in (0..r).rev() {
+        let s = b[i] - (i + 1..r).map(|j| a[(i, j)] * x[j]).sum::<f64>();
+        x[i] = s / a[(i, i)];
+    }
+    // Zᵀ = H_{r−1} ⋯ H₀: H₀ applied first.
+    if r < cols {
+        for k in 0..r {
+            let s = taus[k] * (x[k] + (r..cols).map(|j| a[(k, j)] * x[j]).sum::<f64>());
+            x[k] -= s;
+            for j in r..cols {
+                x[j] -= s * a[(k, j)];
+            }
+        }
+    }
+    // x = P y, P the column swaps in the order made: undo them last to first.
+    for k in (0..r).rev() {
+        x.swap(k, pivots[k]);
+    }
+    r
 }

@@ -195,29 +195,50 @@ pub fn constraint_forces(
     v: &[f64],
     a: &mut [f64],
 ) -> Result<Vec<[f64; 6]>> {
-    let m = model.nconstraints();
+    let n = model.nv;
     let a_tree = DVector::from_column_slice(a);
     constrained_forward_dynamics(model, data, solver, q, v, a)?;
-    // `J M⁻¹ Jᵀ λ = −γ − J a₀` on the active rows again, solved by SVD for the minimum-norm λ
-    // (same q̈).
-    let na = solver.active.len();
-    let ya = solver.y.columns(0, na);
-    let jmj = ya.tr_mul(&ya);
-    let ja = &solver.cons.jacobian * a_tree;
-    let rhs = DVector::from_iterator(
-        na,
-        solver.active.iter().map(|&r| -solver.cons.gamma[r] - ja[r]),
-    );
-    let largest = jmj.diagonal().amax();
-    let solved = jmj
-        .svd(true, true)
-        .solve(&rhs, factor::RANK_TOL * largest.max(f64::MIN_POSITIVE))
-        .map_err(|e| Error::Singular(format!("constraint forces: {e}")))?;
-    let mut lambda = DVector::zeros(m);
-    for (k, &r) in solver.active.iter().enumerate() {
-        lambda[r] = solved[k];
+    // `J M⁻¹ Jᵀ λ = −γ − J a₀` on the active rows again (`YᵀY` in the constraint-space
+    // buffer), now for the minimum-norm λ (same q̈): a complete orthogonal decomposition.
+    let LoopSolver {
+        kin,
+        cons,
+        y,
+        a: s,
+        rhs,
+        lambda,
+        perm,
+        work,
+        active,
+        ..
+    } = solver;
+    let na = active.len();
+    for i in 0..na {
+        for j in 0..=i {
+            let d = y.column(i).dot(&y.column(j));
+            s[(i, j)] = d;
+            s[(j, i)] = d;
+        }
     }
-    Ok(constraints::wrenches(model, &solver.kin, lambda.as_slice()))
+    for (k, &r) in active.iter().enumerate() {
+        let ja: f64 = (0..n).map(|c| cons.jacobian[(r, c)] * a_tree[c]).sum();
+        rhs[k] = -cons.gamma[r] - ja;
+    }
+    factor::min_norm_solve(
+        s.view_mut((0, 0), (na, na)),
+        &mut rhs.as_mut_slice()[..na],
+        work_lambda(lambda, na),
+        perm,
+        work,
+        factor::RANK_TOL,
+    );
+    // λ by constraint row, zero for the vanishing ones.
+    work[..na].copy_from_slice(&lambda.as_slice()[..na]);
+    lambda.fill(0.0);
+    for (k, &r) in active.iter().enumerate() {
+        lambda[r] = work[k];
+    }
+    Ok(constraints::wrenches(model, kin, lambda.as_slice()))
 }
 
 /// Forces of the `actuated` joint coordinates (v indices) that drive the mechanism with
@@ -251,31 +272,46 @@ pub fn driving_forces(
             ),
         ));
     }
-    let mut sys = DMatrix::zeros(n, na + m);
+    // `[S_a | Jᵀ] x = τ_tree` for the minimum-norm x = (τ_a, λ).
+    let cols = na + m;
+    let mut sys = DMatrix::zeros(n, cols);
     for (k, &c) in actuated.iter().enumerate() {
         sys[(c, k)] = 1.0;
     }
-    sys.view_mut((0, na), (n, m))
-        .copy_from(&cons.jacobian.transpose());
-    let b = DVector::from_column_slice(tau_tree);
-    let smax = sys.amax().max(f64::MIN_POSITIVE);
-    let x = sys
-        .clone()
-        .svd(true, true)
-        .solve(&b, 1e-12 * smax)
-        .map_err(|e| Error::Singular(format!("driving forces: {e}")))?;
-    let miss = (&sys * &x - &b).amax();
-    if miss > 1e-9 * (1.0 + b.amax()) {
-        return Err(Error::Singular(format!(
-            "the actuated coordinates {actuated:?} cannot produce these accelerations: the forces they and the loops can exert leave {miss:.3e} of the required joint forces unbalanced (an under-actuated choice: actuate a joint that moves the mechanism)"
-        )));
-    }
+    sys.view_mut((0, na), (n, m)).tr_copy_from(&cons.jacobian);
+    let mut b = tau_tree.to_vec();
+    let mut x = vec![0.0; cols];
+    let (mut pivots, mut work) = (vec![0; cols], vec![0.0; cols]);
+    factor::min_norm_solve(
+        sys.view_mut((0, 0), (n, cols)),
+        &mut b,
+        &mut x,
+        &mut pivots,
+        &mut work,
+        factor::RANK_TOL,
+    );
     let mut tau = vec![0.0; n];
     for (k, &c) in actuated.iter().enumerate() {
         tau[c] += x[k];
     }
-    let lambda: Vec<f64> = x.as_slice()[na..].to_vec();
-    Ok((tau, constraints::wrenches(model, &solver.kin, &lambda)))
+    // What the actuators and the loops leave unbalanced, from J itself (the factorization
+    // overwrote `sys`); NaN counts as unbalanced.
+    let lambda = &x[na..];
+    for (c, r) in b.iter_mut().enumerate() {
+        *r = tau_tree[c]
+            - tau[c]
+            - (0..m)
+                .map(|k| cons.jacobian[(k, c)] * lambda[k])
+                .sum::<f64>();
+    }
+    let required = tau_tree.iter().fold(0.0_f64, |acc, t| acc.max(t.abs()));
+    if !b.iter().all(|r| r.abs() <= 1e-9 * (1.0 + required)) {
+        let miss = b.iter().fold(0.0_f64, |acc, r| acc.max(r.abs()));
+        return Err(Error::Singular(format!(
+            "the actuated coordinates {actuated:?} cannot produce these accelerations: the forces they and the loops can exert leave {miss:.3e} of the required joint forces unbalanced (an under-actuated choice: actuate a joint that moves the mechanism)"
+        )));
+    }
+    Ok((tau, constraints::wrenches(model, &solver.kin, lambda)))
 }
 
 /// `q ⊕ δ`: each joint's coordinates moved by the speeds `δ` for unit time, quaternions

@@ -1,6 +1,6 @@
 use nalgebra::{DMatrix, DVector};
 
-use super::factor::{cholesky, solve_semidefinite};
+use super::factor::{cholesky, min_norm_solve, solve_semidefinite, RANK_TOL};
 use crate::body::RigidBody;
 use crate::joint::Joint;
 use crate::model::Model;
@@ -87,4 +87,92 @@ fn deserialised_loops_are_checked() {
     bad["loops"][0]["body_a"] = toml::Value::Integer(5);
     let back: Result<Model, _> = bad.try_into();
     assert!(back.is_err());
+}
+
+/// `min_norm_solve` on a copy of `a`: the solution and the rank.
+fn min_norm(a: &DMatrix<f64>, b: &DVector<f64>) -> (DVector<f64>, usize) {
+    let (mut a, mut b) = (a.clone(), b.clone());
+    let cols = a.ncols();
+    let mut x = DVector::zeros(cols);
+    let (mut pivots, mut work) = (vec![0; cols], vec![0.0; cols]);
+    let rank = min_norm_solve(
+        a.view_mut((0, 0), (a.nrows(), cols)),
+        b.as_mut_slice(),
+        x.as_mut_slice(),
+        &mut pivots,
+        &mut work,
+        RANK_TOL,
+    );
+    (x, rank)
+}
+
+#[test]
+fn min_norm_solve_keeps_round_off_where_the_svd_loses_digits() {
+    // Upper triangular with a small off-diagonal and |a11| < |a22|: nalgebra's 2 × 2 SVD
+    // kernel cancels here (its ‖UΣVᵀ − A‖ is ~1e-9 of ‖A‖, the error of the slider-crank's
+    // driving torque). Dyadic entries: b = A x* is exact, and so is x* = (1, −3). Zero
+    // columns beside it, as the vanishing rows of a planar loop leave in [S_a | Jᵀ], must get
+    // zero.
+    let eps = f64::EPSILON;
+    let a = DMatrix::from_row_slice(2, 4, &[0.5, 0.0, 2f64.powi(-24), 0.0, 0.0, 0.0, 0.875, 0.0]);
+    let x_true = DVector::from_row_slice(&[1.0, 0.0, -3.0, 0.0]);
+    let (x, rank) = min_norm(&a, &(&a * &x_true));
+    assert_eq!(rank, 2);
+    assert!((&x - &x_true).amax() <= 4.0 * eps * 3.0, "{x}");
+}
+
+#[test]
+fn min_norm_solve_gives_the_minimum_norm_solution_of_badly_scaled_redundant_systems() {
+    // Integers, one row the sum of two others (rank 3, as redundant cut-joint rows), columns
+    // scaled by 2^-8 … 2^8 (meters against radians, and worse). Every x* = Bᵀw solves
+    // B x = B x* with the least norm (x* lies in B's row space, the orthogonal complement of
+    // its null space), and here both are exact in floating point.
+    let ints = DMatrix::from_row_slice(
+        4,
+        6,
+        &[
+            3.0, -1.0, 4.0, 1.0, -5.0, 9.0, //
+            2.0, 6.0, -5.0, 3.0, 5.0, -8.0, //
+            9.0, -7.0, 9.0, 3.0, -2.0, 3.0, //
+            5.0, 5.0, -1.0, 4.0, 0.0, 1.0, // row 0 + row 1
+        ],
+    );
+    let scales = [-8, 0, 5, -3, 8, 1];
+    let b_mat = DMatrix::from_fn(4, 6, |i, j| ints[(i, j)] * 2f64.powi(scales[j]));
+    for w in [
+        [1.0, -2.0, 3.0, 0.0],
+        [0.0, 0.0, 1.0, -7.0],
+        [4.0, 1.0, 0.0, 2.0],
+    ] {
+        let x_true = b_mat.transpose() * DVector::from_row_slice(&w);
+        let (x, rank) = min_norm(&b_mat, &(&b_mat * &x_true));
+        assert_eq!(rank, 3);
+        let err = (&x - &x_true).amax() / x_true.amax();
+        assert!(err < 1e-13, "{err:e}: {x} against {x_true}");
+    }
+    // The square semi-definite case of the constraint forces, G = C Cᵀ (C: the integers, rank
+    // 3): λ* = C z is in G's range, so it is the least-norm solution of G λ = G λ*.
+    let g = &ints * ints.transpose();
+    for z in [
+        [1.0, 0.0, -1.0, 2.0, 0.0, 1.0],
+        [0.0, 3.0, 1.0, -1.0, 2.0, 0.0],
+    ] {
+        let lam_true = &ints * DVector::from_row_slice(&z);
+        let (lam, rank) = min_norm(&g, &(&g * &lam_true));
+        assert_eq!(rank, 3);
+        let err = (&lam - &lam_true).amax() / lam_true.amax();
+        assert!(err < 1e-13, "{err:e}: {lam} against {lam_true}");
+    }
+}
+
+#[test]
+fn min_norm_solve_fits_inconsistent_systems_in_least_squares_and_zero_ones_with_zero() {
+    // b = A (1, 2) + 5 e₃, the residual orthogonal to A's range: x = (1, 2).
+    let a = DMatrix::from_row_slice(3, 2, &[0.0, 2.0, 1.0, 0.0, 0.0, 0.0]);
+    let (x, rank) = min_norm(&a, &DVector::from_row_slice(&[4.0, 1.0, 5.0]));
+    assert_eq!(rank, 2);
+    assert_eq!(x.as_slice(), &[1.0, 2.0]);
+    let (x, rank) = min_norm(&DMatrix::zeros(2, 3), &DVector::from_row_slice(&[1.0, 2.0]));
+    assert_eq!(rank, 0);
+    assert_eq!(x.as_slice(), &[0.0; 3]);
 }
