@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidInputError, PointMassDynError
+from .errors import InertiaError, InvalidInputError, PointMassDynError
 from .scenes import builtin_scenes, load_scene, resolve_scene_path
 from .simulation import simulate
 
@@ -454,7 +454,16 @@ def cmd_balance(args) -> int:
             print(f"plot written to {args.plot}")
         return 0
 
-    b = balance(motion, objective=weights, **kwargs)
+    try:
+        b = balance(motion, objective=weights, **kwargs)
+    except InertiaError as exc:
+        if not args.redesign:
+            raise
+        raise InvalidInputError(
+            f"--redesign: a redesigned body cannot be rebuilt from the point masses the "
+            f"balance chose ({exc}): the optimum empties it; add counterweights, or ask less "
+            f"(fewer --zero, other --weight)"
+        ) from exc
     goal = ", ".join([f"zero {z}" for z in b.zero] + [
         f"{k}×{w:g}" for k, w in b.objective.items() if k not in b.zero and w > 0])
     print(f"balanced ({goal}; RMS relative to the unbalanced ones)")
