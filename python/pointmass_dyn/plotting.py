@@ -121,14 +121,22 @@ def _force_plane(*vectors) -> tuple[int, int, int | None]:
 
 def _driver_axis(analysis):
     """x values, axis label and the unit of the driving force for an analysis: the input
-    angle in degrees (a revolute driver), its position (prismatic) or the time."""
+    angle in degrees (a revolute driver), its position (prismatic) or, for an input that
+    goes back and forth or none, the time."""
     model = analysis.model
-    if analysis.input is not None and analysis.input_name is not None:
+    x = None if analysis.input is None else np.asarray(analysis.input, dtype=float)
+    steps = np.diff(x) if x is not None else np.zeros(0)
+    monotonic = x is not None and (np.all(steps > 0) or np.all(steps < 0))
+    if monotonic and analysis.input_name is not None:
         kind = model.body_info(model.body_names.index(analysis.input_name))[1]
         if kind == "Revolute":
             return (np.degrees(analysis.input), f"{analysis.input_name} angle (deg)", "N·m")
         return np.asarray(analysis.input), f"{analysis.input_name} position (m)", "N"
-    return np.asarray(analysis.t), "t (s)", "N or N·m"
+    unit = "N or N·m"
+    if analysis.input_name is not None:
+        kind = model.body_info(model.body_names.index(analysis.input_name))[1]
+        unit = "N·m" if kind == "Revolute" else "N"
+    return np.asarray(analysis.t), "t (s)", unit
 
 
 def _driven_columns(analysis) -> list[tuple[int, str]]:
@@ -193,12 +201,13 @@ def balance_caption(balance) -> str:
     return "\n".join(lines)
 
 
-def _polar_panel(ax, series, x_deg, plane, revolute: bool):
-    """The locus of the shaking force vector's tip (F_j against F_i) over the cycle."""
+def _polar_panel(ax, series, x_deg, plane, revolute: bool, closed: bool):
+    """The locus of the shaking force vector's tip (F_j against F_i) over the motion, closed
+    over a whole cycle."""
     i, j, off = plane
     for f, color, style, label in series:
-        fi = np.append(f[:, i], f[:1, i])
-        fj = np.append(f[:, j], f[:1, j])
+        fi = np.append(f[:, i], f[:1, i]) if closed else f[:, i]
+        fj = np.append(f[:, j], f[:1, j]) if closed else f[:, j]
         ax.plot(fi, fj, style, color=color, lw=1.6, label=label)
     f0, color = series[0][0], series[0][1]
     size0 = max(np.ptp(f0[:, i]), np.ptp(f0[:, j]))
@@ -241,7 +250,11 @@ def _balance_figure(analyses, labels, colors, title, caption, path):
     plt = _pyplot()
     first = analyses[0]
     x, xlabel, tau_unit = _driver_axis(first)
-    revolute = tau_unit == "N·m" and first.input is not None
+    revolute = xlabel.endswith("(deg)")
+    # A whole number of turns sampled with the end left out: the locus closes.
+    step = float(np.median(np.abs(np.diff(x)))) if revolute and len(x) > 1 else 0.0
+    turns = (np.ptp(x) + step) / 360.0 if revolute else 0.0
+    closed = revolute and turns >= 0.999 and abs(turns - round(turns)) < 1e-6
     forces = [a.shaking.force for a in analyses]
     moments = [a.shaking.moment for a in analyses]
     styles = ["-", "--"]
@@ -253,7 +266,7 @@ def _balance_figure(analyses, labels, colors, title, caption, path):
         (f, c, s, f"{lab} (RMS {_g(_rms_of(f))} N)")
         for f, c, s, lab in zip(forces, colors, styles, labels)
     ]
-    _polar_panel(ax_a, series, x, _force_plane(*forces), revolute)
+    _polar_panel(ax_a, series, x, _force_plane(*forces), revolute, closed)
 
     # (b) shaking moment: its one component for a planar mechanism, else its magnitude.
     axis = _planar_axis(*moments)
