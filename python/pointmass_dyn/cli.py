@@ -464,9 +464,11 @@ def cmd_balance(args) -> int:
             f"balance chose ({exc}): the optimum empties it; add counterweights, or ask less "
             f"(fewer --zero, other --weight)"
         ) from exc
-    goal = ", ".join([f"zero {z}" for z in b.zero] + [
-        f"{k}×{w:g}" for k, w in b.objective.items() if k not in b.zero and w > 0])
-    print(f"balanced ({goal}; RMS relative to the unbalanced ones)")
+    weighed = [f"{k}×{w:g}" for k, w in b.objective.items() if k not in b.zero and w > 0]
+    goal = ", ".join([f"zero {z}" for z in b.zero] + weighed)
+    print(f"balanced: {', '.join(f'zero {z}' for z in b.zero) or 'nothing made zero'}"
+          + (f"; minimising the weighted RMS {', '.join(weighed)} (each relative to its "
+             f"unbalanced RMS)" if weighed else "; least mass added"))
     print(b.table())
     if b.counterweights:
         print("\ncounterweights placed (positions in the body's frame)")
