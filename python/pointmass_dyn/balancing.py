@@ -72,6 +72,8 @@ class Shaking:
 
 def _gravity_of(scene) -> np.ndarray | None:
     """The sum of a scene's gravity effects (None without one)."""
+    if "gravity" in (scene.disable or ()):
+        return None
     gs = [np.asarray(e.g) for e in scene.effects if e.g is not None]
     return np.sum(gs, axis=0) if gs else None
 
@@ -240,7 +242,9 @@ def _driver_slot(model, driver) -> tuple[str, int, int]:
     else:
         body = int(driver)
         if not 0 <= body < len(names):
-            raise InvalidInputError(f"driver: expected a body index 0..{len(names)}, got {body}")
+            raise InvalidInputError(
+                f"driver: expected a body index 0..{len(names) - 1}, got {body}"
+            )
     link = model.body_info(body)[3]
     if link < 0 or model.link_names[link] != names[body]:
         raise InvalidInputError(f"driver: expected a body on a moving joint, got '{names[body]}'")
@@ -273,9 +277,16 @@ def prescribed_motion(
 
     Each instant's state is closed by ``assemble`` with the driver held, continuing from the
     previous instant (from ``q_guess``, default the model's closed guess: a scene's
-    ``q0``), so the mechanism stays on one assembly branch. Returns a
-    :class:`MotionAnalysis`."""
+    ``q0``), so the mechanism stays on one assembly branch. Freedoms the driver leaves
+    (the idle spin of an RSSR's coupler) take minimum-norm speeds and the accelerations the
+    dynamics gives them. Returns a :class:`MotionAnalysis`."""
     name, iq, iv = _driver_slot(model, driver)
+    kind = model.body_info(model.body_names.index(name))[1]
+    if input is None and kind != "Revolute":
+        raise InvalidInputError(
+            f"input: a {kind} driver ('{name}') has no revolution to sample; give its motion "
+            f"as input=(t, position, rate, acceleration)"
+        )
     q0 = np.asarray(model.neutral() if q_guess is None else q_guess, dtype=float).copy()
     if input is not None:
         t, pos, rate, acc = (np.asarray(x, dtype=float).reshape(-1) for x in input)
@@ -300,6 +311,18 @@ def prescribed_motion(
     a = np.empty((n, model.nv))
     guess = q0
     loops = model.nloops > 0
+    # Freedoms the driver does not set (an RSSR coupler's spin about its own axis) move as
+    # the dynamics says: their speeds are taken at minimum norm, their accelerations from
+    # forward dynamics under the driver force that gives the prescribed acceleration.
+    idle = (
+        loops
+        and model.nv
+        - np.linalg.matrix_rank(
+            model.constraint_jacobian(model.assemble(q0, fixed=[name])), tol=1e-9
+        )
+        > 1
+    )
+    g = None if gravity is None else np.asarray(gravity, dtype=float)
     for k in range(n):
         guess = guess.copy()
         guess[iq] = pos[k]
@@ -310,7 +333,16 @@ def prescribed_motion(
         if loops:
             guess = model.assemble(guess, fixed=[name])
             vk = model.assemble_velocity(guess, vk, fixed=[name])
-            ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
+            if idle:
+                zero = np.zeros(model.nv)
+                a0 = model.forward_dynamics(guess, vk, zero, gravity=g)
+                unit = zero.copy()
+                unit[iv] = 1.0
+                per_unit = model.forward_dynamics(guess, vk, unit, gravity=g) - a0
+                ak = a0 + per_unit * ((acc[k] - a0[iv]) / per_unit[iv])
+                ak[iv] = acc[k]
+            else:
+                ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
         elif model.nv != 1:
             raise InvalidInputError(
                 f"driver: a model without loops moves with one input only if it has one degree "
@@ -704,6 +736,11 @@ def pareto_front(
 ) -> list[Balance]:
     """Balances trading two objectives: weights ``(1 − s, s)`` for ``s`` from 0 to 1 in
     ``count`` steps (each a :func:`balance` with those weights; other arguments passed on)."""
+    if "objective" in kwargs:
+        raise InvalidInputError(
+            "objective: pareto_front sets the weights itself; give the two objectives as "
+            "`objectives` (and equalities as `zero`)"
+        )
     first, second = objectives
     out = []
     for s in np.linspace(0.0, 1.0, count):
