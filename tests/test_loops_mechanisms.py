@@ -260,7 +260,7 @@ def test_fourbar_crank_torque_equals_the_sympy_lagrangian(alpha):
         got.append(tau[0])
         ref.append(tau_ref(q[0], omega, alpha))
     got, ref = np.array(got), np.array(ref)
-    assert np.abs(got - ref).max() < 1e-9 * np.abs(ref).max(), np.abs(got - ref).max()
+    assert np.abs(got - ref).max() < 1e-13 * np.abs(ref).max(), np.abs(got - ref).max()
     assert np.ptp(ref) > 0.5 * np.abs(ref).max()  # a torque that varies over the revolution
 
 
@@ -306,14 +306,14 @@ def test_fourbar_cut_joint_force_balances_the_rocker_and_the_coupler():
         lhs = i_o * kin["rocker"][2][2](*state)
         rhs = cross(pin_b - pivot, force) + cross(com("rocker", 0) - pivot, rk["mass"] * g[:2])
         scale = abs(cross(pin_b - pivot, force)) + abs(lhs)
-        assert abs(lhs - rhs) < 1e-9 * scale, (lhs, rhs)
+        assert abs(lhs - rhs) < 1e-13 * scale, (lhs, rhs)
         r_g = com("coupler", 0) - pin_a
         lhs = cross(pin_b - pin_a, -force) + cross(r_g, cp["mass"] * g[:2])
         rhs = cp["inertia_diag"][2] * kin["coupler"][2][2](*state) + cross(
             r_g, cp["mass"] * com("coupler", 2)
         )
         scale = abs(cross(pin_b - pin_a, force)) + abs(rhs)
-        assert abs(lhs - rhs) < 1e-9 * scale, (lhs, rhs)
+        assert abs(lhs - rhs) < 1e-13 * scale, (lhs, rhs)
 
 
 # --------------------------------------------------------------------------------------------
