@@ -814,8 +814,20 @@ fn point_spring_on_a_body_welded_to_the_world_acts_at_its_world_point() {
         0.5,
     );
     let on_world = point_spring(None, w.into(), Some("arm"), [0.3, 0.0, 0.1], 9.0, 0.1, 0.5);
-    let a = forces(&m, &mut effects(&m, &[on_post.clone()]), 0.0, &q, &v);
-    let b = forces(&m, &mut effects(&m, &[on_world.clone()]), 0.0, &q, &v);
+    let a = forces(
+        &m,
+        &mut effects(&m, std::slice::from_ref(&on_post)),
+        0.0,
+        &q,
+        &v,
+    );
+    let b = forces(
+        &m,
+        &mut effects(&m, std::slice::from_ref(&on_world)),
+        0.0,
+        &q,
+        &v,
+    );
     assert!(
         a[0].abs() > 1e-2 && (a[0] - b[0]).abs() < 1e-14,
         "{a:?} {b:?}"
@@ -962,7 +974,7 @@ fn point_spring_tables_parse_and_refuse() {
     assert_eq!((s.rest_length, s.damping), (0.0, 0.5));
     let full = "type = \"point_spring\"\nbody_a = \"a\"\npoint_a = [0, 0, 0]\nbody_b = \"b\"\npoint_b = [0, 0, 1]\n";
     for (text, key) in [
-        (format!("{full}"), "stiffness"),
+        (full.to_string(), "stiffness"),
         (format!("{full}stiffness = -1"), "stiffness"),
         (format!("{full}stiffness = 1\nrest_length = -0.1"), "rest_length"),
         (format!("{full}stiffness = 1\ndamping = \"lots\""), "damping"),
