@@ -16,12 +16,14 @@ TIGHT = dict(rtol=1e-12, atol=1e-12)
 
 
 def retract(m, q, dv):
-    """q moved by the speeds dv for unit time (first order), quaternions renormalised: enough
-    for central differences, whose error stays O(h²)."""
+    """q moved by the speeds dv for unit time (first order), quaternions renormalised (a
+    Spherical's q, a FreeFlyer's last four): enough for central differences, whose error
+    stays O(h²)."""
     out = q + m.velocity_to_qdot(q, dv)
     for iq, _iv, nq, _nv in m.joint_slices():
-        if nq == 4:
-            out[iq : iq + 4] /= np.linalg.norm(out[iq : iq + 4])
+        if nq in (4, 7):
+            quat = slice(iq + nq - 4, iq + nq)
+            out[quat] /= np.linalg.norm(out[quat])
     return out
 
 
@@ -93,6 +95,29 @@ def test_force_is_minus_the_gradient_of_the_potential_on_random_trees(seed):
         worst = max(worst, err)
         assert err <= 1e-7, (seed, i, forces[name], want)
     record("point spring: |τ + ∂V/∂q| / |∂V/∂q| (random trees)", worst)
+
+
+def test_force_is_minus_the_gradient_on_a_free_flyer():
+    # A free body (translation and quaternion coordinates) with an arm on a revolute joint:
+    # springs from the world to each, and between them across the joint.
+    m = pmd.Model()
+    body = pmd.RigidBody(2.0, [0.05, -0.02, 0.1], np.diag([0.02, 0.03, 0.04]))
+    m.add_body(body, pmd.FreeFlyer(), name="hull")
+    m.add_body(body, pmd.Revolute([0, 1, 1]), parent=0, translation=[0.3, 0, 0], name="arm")
+    springs = [
+        (-1, np.array([0.5, 0.2, -0.3]), 0, np.array([0.1, 0.2, 0.0]), 30.0, 0.2, 0.0),
+        (0, np.array([-0.2, 0.1, 0.1]), 1, np.array([0.2, 0.0, 0.1]), 12.0, 0.0, 0.0),
+        (1, np.array([0.3, 0.0, 0.0]), -1, np.array([0.0, 0.0, 1.0]), 20.0, 0.4, 0.0),
+    ]
+    scene = pmd.Scene(m, effects=effects_of(springs))
+    rng = np.random.default_rng(5)
+    q = np.concatenate([rng.normal(scale=0.3, size=3), [0.1, -0.3, 0.2, 0.9], [0.7]])
+    q[3:7] /= np.linalg.norm(q[3:7])
+    forces = pmd.effect_forces(scene, 0.0, q, rng.normal(size=m.nv))
+    for i, s in enumerate(springs):
+        want = -gradient(m, q, lambda x, s=s: potential(m, x, s))
+        assert np.abs(want).max() > 1e-2
+        np.testing.assert_allclose(forces[f"ps{i}"], want, rtol=0, atol=1e-7 * np.abs(want).max())
 
 
 @pytest.mark.parametrize("seed", range(3))
