@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
-from conftest import build_model, random_state, random_tree, record
+from conftest import KINDS, build_model, random_state, random_tree, record
 from scipy.integrate import cumulative_simpson
 
 TIGHT = dict(rtol=1e-12, atol=1e-12)
@@ -78,7 +78,7 @@ def effects_of(springs):
 @pytest.mark.parametrize("seed", range(6))
 def test_force_is_minus_the_gradient_of_the_potential_on_random_trees(seed):
     rng = np.random.default_rng(100 + seed)
-    m = build_model(random_tree(seed, n=9))
+    m = build_model(random_tree(seed, n=9, kinds=(*KINDS, "FreeFlyer")))
     springs = random_springs(m, rng)
     scene = pmd.Scene(m, effects=effects_of(springs))
     q, v = random_state(m, rng)
@@ -98,7 +98,7 @@ def test_force_is_minus_the_gradient_of_the_potential_on_random_trees(seed):
 
 
 def test_force_is_minus_the_gradient_on_a_free_flyer():
-    # A free body (translation and quaternion coordinates) with an arm on a revolute joint:
+    # A free body at the root (translation and quaternion coordinates) with an arm on a revolute joint:
     # springs from the world to each, and between them across the joint.
     m = pmd.Model()
     body = pmd.RigidBody(2.0, [0.05, -0.02, 0.1], np.diag([0.02, 0.03, 0.04]))
@@ -150,7 +150,7 @@ def swinging_scene(seed, damping):
     """A random tree without Euler-angle joints (no singularity stops the run), under
     gravity, with point springs between random bodies and the world."""
     rng = np.random.default_rng(300 + seed)
-    kinds = ("Revolute", "Prismatic", "Spherical", "Fixed")
+    kinds = ("Revolute", "Prismatic", "Spherical", "Fixed", "FreeFlyer")
     m = build_model(random_tree(seed, n=6, kinds=kinds))
     springs = random_springs(m, rng, n=3, damping=damping)
     q, v = random_state(m, rng, vscale=0.5)
