@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 3;
+pub const FORMAT_VERSION: u8 = 4;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
@@ -359,6 +359,19 @@ mod tests {
                 )
                 .unwrap(),
             ),
+            Effect::PointSpring(
+                crate::effects::PointSpring::new(
+                    Some("p".into()),
+                    Some(JointRef::Index(0)),
+                    v(1.0),
+                    None,
+                    v(2.0),
+                    4.5,
+                    0.25,
+                    0.5,
+                )
+                .unwrap(),
+            ),
         ];
         let scene = Scene {
             name: "n".into(),
@@ -424,7 +437,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (3, 1788, 0x4e8a_41fa_b98a_dd43),
+            (4, 1868, 0x62ec_b0aa_93bd_f050),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

@@ -54,12 +54,6 @@ def test_constraint_jacobian_spans_the_published_one(scene):
     assert np.linalg.matrix_rank(both, tol=1e-10) == 6
 
 
-def spring_torque(t, q, v):
-    f = ref.applied_forces(q[INV])
-    f[0] = 0.0  # the drive is the scene's own torque effect
-    return f[PERM]
-
-
 def test_initial_accelerations_and_multipliers_equal_the_published_ones(scene):
     m = scene.model
     tau = ref.applied_forces(ref.Q0)[PERM]
@@ -76,15 +70,31 @@ def test_initial_accelerations_and_multipliers_equal_the_published_ones(scene):
     np.testing.assert_allclose(forces[1:, :2], 0.0, atol=1e-10)
 
 
-def test_solution_at_t_003_has_eight_significant_digits(scene):
-    sc = pmd.Scene(
-        scene.model,
-        q0=scene.q0,
-        v0=scene.v0,
-        effects=[pmd.JointTorque(["K1"], ref.P["mom"]), pmd.TorqueFunction(spring_torque)],
+@pytest.mark.parametrize("seed", range(5))
+def test_scene_spring_is_the_published_one(scene, seed):
+    # The scene's point spring (D on K3 to the ground point C) against the paper's
+    # generalized force and its potential ½ c0 (l − l0)², at random configurations.
+    rng = np.random.default_rng(seed)
+    q, v = rng.uniform(-np.pi, np.pi, 7), rng.normal(scale=300.0, size=7)
+    forces = pmd.effect_forces(scene, 0.0, q[PERM], v[PERM])
+    assert set(forces) == {"drive", "spring"}
+    want = ref.applied_forces(q)
+    want[0] = 0.0  # the drive
+    np.testing.assert_allclose(
+        forces["spring"], want[PERM], rtol=0, atol=1e-13 * np.abs(want).max()
     )
-    res = pmd.simulate(sc, (0.0, ref.T_END), rtol=1e-10, atol=1e-10)
+    p = ref.P
+    length = np.hypot(*(ref.spring_point(q) - [p["xc"], p["yc"]]))
+    energy = pmd.energies(scene, q[PERM], v[PERM])["spring"]
+    assert energy == pytest.approx(0.5 * p["c0"] * (length - p["l0"]) ** 2, rel=1e-13)
+
+
+def test_solution_at_t_003_has_eight_significant_digits(scene):
+    # The bundled scene as loaded: its own drive and spring, tolerances and end time.
+    assert [e.name for e in scene.effects] == ["drive", "spring"]
+    res = pmd.simulate(scene)
     assert res.success, res.message
+    assert res.t[-1] == ref.T_END
     q, v = res.q[-1][INV], res.v[-1][INV]
     # The reference itself carries about 1e-9 rad of error: 8 digits is the bar.
     np.testing.assert_allclose(q, ref.Q_END, rtol=1e-8)

@@ -1,5 +1,5 @@
 """Effects a scene declares (gravity, springs, dampers, friction, joint torques, external
-forces), checked against things the engine does not compute itself: closed-form motions, the
+forces; point springs in test_point_spring.py), checked against things the engine does not compute itself: closed-form motions, the
 energy balance d(T + V)/dt = Σ non-conservative power, numpy.interp, virtual work of a force
 at a point; plus the disable switch, declared-only evaluation and the errors."""
 
@@ -484,6 +484,15 @@ time = [0, 1]
 force = [[0, 0, 0], [1, 0, 0]]
 moment = [[0, 0, 0], [0, 0.1, 0]]
 
+[[effect]]
+type = "point_spring"
+body_a = "world"
+point_a = [0.5, 0, 0.2]
+body_b = "cart"
+point_b = [0, 0, 0.1]
+stiffness = 20
+rest_length = 0.1
+
 [simulate]
 t_end = 1.0
 disable = ["friction"]
@@ -499,12 +508,13 @@ def write(tmp_path: Path, text: str, name: str = "scene.toml") -> Path:
 def test_scene_file_declares_every_effect(tmp_path):
     scene = pmd.load_scene(write(tmp_path, SCENE))
     assert [e.kind for e in scene.effects] == [
-        "gravity", "springs", "dampers", "friction", "torques", "torques", "torques", "external", "external"]
+        "gravity", "springs", "dampers", "friction", "torques", "torques", "torques", "external", "external",
+        "springs"]
     assert scene.disable == ["friction"]
     assert scene.effects[3].name == "rail"
     forces = pmd.effect_forces(scene, 0.5, scene.q0, [0.1, -0.2])
     assert list(forces) == ["gravity", "springs", "dampers", "torques", "torques_2", "torques_3",
-                            "external", "external_2"]  # friction switched off by the scene
+                            "external", "external_2", "springs_2"]  # friction switched off by the scene
     assert forces["springs"] == pytest.approx([-3.0 * 0.3, -40 * 0.05])
     assert forces["torques"] == pytest.approx([0.25, 0.0])
     assert forces["torques_2"] == pytest.approx([0.0, 10 * (0.025 - 0.05) + 1 * (0.05 + 0.2)])
@@ -534,6 +544,8 @@ def test_scene_file_declares_every_effect(tmp_path):
         ("v_eps = 0.01", "v_eps = -1", "effect[3].v_eps", ["> 0"]),
         ('disable = ["friction"]', 'disable = ["friction", "air"]', "simulate.disable[1]", ['"air"']),
         ('name = "rail"', 'name = "total"', "effect[3].name", ["'total'"]),
+        ('body_b = "cart"', 'body_b = "carts"', "effect[9].body_b", ["'carts'", "'base'"]),
+        ("rest_length = 0.1", "rest_length = -0.1", "effect[9].rest_length", [">= 0", "-0.1"]),
     ],
 )
 def test_scene_file_effect_errors_name_file_and_key(tmp_path, old, new, key, words):
@@ -608,5 +620,11 @@ def test_effect_objects_describe_themselves():
     assert pmd.Damper(None, 0.1).name == "dampers"
     assert repr(pmd.ExternalForce(1, [0, 0, 1])) == "ExternalForce(body=1, point=[0, 0, 0], frame='world')"
     assert pmd.Spring("a", 1.0) == pmd.Spring("a", 1.0) and pmd.Spring("a", 1.0) != pmd.Spring("a", 2.0)
+    p = pmd.PointSpring(2, [0.5, 0, 0], -1, [0, 1, 0], 10.0, damping=0.5)
+    assert (p.kind, p.name) == ("springs", "springs")
+    assert repr(p) == ("PointSpring(body_a=2, point_a=[0.5, 0, 0], body_b='world', point_b=[0, 1, 0], "
+                       "stiffness=10, rest_length=0, damping=0.5)")
+    assert p == pmd.PointSpring(2, [0.5, 0, 0], None, [0, 1, 0], 10.0, 0.0, 0.5) and p != pmd.PointSpring(
+        2, [0.5, 0, 0], -1, [0, 1, 0], 10.0)
     f = pmd.TorqueFunction(lambda t, q, v: q)
     assert f == f and f != pmd.TorqueFunction(lambda t, q, v: q) and f.kind == "torques"

@@ -214,6 +214,8 @@ def every_effect() -> list[pmd.Effect]:
         pmd.ExternalForce("wrist", force=(0, 0, -5), point=(0.1, 0, 0), frame="world"),
         pmd.ExternalForce("bracket", force=[[0, 0, 1], [0, 1, 0], [1, 0, 0]], moment=[[0, 0, 0.1]] * 3, time=t, frame="body", name="thrust"),
         pmd.TorqueFunction(torque, name="motor"),
+        pmd.PointSpring("wrist", (0.1, 0, 0), "world", (0, 0.5, -0.5), 30.0, rest_length=0.2, damping=0.5),
+        pmd.PointSpring("base", (0, 0, 0.1), 1, (0.2, 0, 0), 12.0, name="tendon"),
     ]
 
 

@@ -415,6 +415,19 @@ class Effect:
     ) -> Effect:
         """A force at a body-fixed ``point`` plus a ``moment``, constant (3,) or tabulated
         ((N, 3) with ``time`` (N,)), in world or body axes."""
+    @staticmethod
+    def point_spring(
+        body_a: str | int | None,
+        point_a: ArrayLike,
+        body_b: str | int | None,
+        point_b: ArrayLike,
+        stiffness: float,
+        rest_length: float | None = None,
+        damping: float | None = None,
+        name: str | None = None,
+    ) -> Effect:
+        """A spring–damper ``k (l − l0) + c l̇`` along the line between a point of body a and
+        one of body b (each in its body's frame; ``"world"``/-1/None: the ground)."""
     @property
     def name(self) -> str:
         """The effect's name: the one given, else its family's, e.g. ``'gravity'``."""

@@ -18,6 +18,8 @@ factory                family       law
 ``TorqueFunction``     torques      ``f(t, q, v) -> τ`` (a Python call per evaluation)
 ``ExternalForce``      external     force at a body-fixed point (+ moment), constant
                                     or tabulated, world or body axes
+``PointSpring``        springs      ``k (l − l0) + c l̇`` along the line between a
+                                    point of body a and one of body b (or the world)
 =====================  ===========  ================================================
 
 ``joints`` selects joints by body name or body index (as ``Model.add_body`` returns), one or
@@ -125,6 +127,32 @@ def ExternalForce(
     or with ``time`` (N,) tables ``force``/``moment`` (N, 3), linear between rows and held
     outside. Bodies on Fixed joints are welded into their link; the force acts there."""
     return Effect.external_force(body, force, point, moment, time, frame, name)
+
+
+def PointSpring(
+    body_a: Any,
+    point_a: Any,
+    body_b: Any,
+    point_b: Any,
+    stiffness: float,
+    rest_length: float = 0.0,
+    damping: float = 0.0,
+    *,
+    name: str | None = None,
+) -> Effect:
+    """A linear spring–damper between ``point_a`` of ``body_a`` and ``point_b`` of ``body_b``
+    (each point in its body's frame; a body by name or index, or the ground as ``"world"``,
+    ``-1`` or ``None``, whose points are world coordinates); family ``springs``.
+
+    The force ``k (l − l0) + c l̇`` (``l`` the distance between the points) acts along the
+    line between them, pulling them together when stretched; ``stiffness`` k, ``rest_length``
+    l0 and ``damping`` c are ≥ 0. Potential ``½ k (l − l0)²`` (in ``energies``); the damping
+    makes it dissipative: its power is ``−dV/dt − c l̇²``. A run stops with an error where the
+    two points coincide (the force's direction is undefined there), except for ``l0 = 0``
+    and ``c = 0``, whose force ``−k (p_b − p_a)`` is defined everywhere."""
+    return Effect.point_spring(
+        body_a, point_a, body_b, point_b, stiffness, rest_length, damping, name
+    )
 
 
 @dataclass
@@ -353,6 +381,7 @@ __all__ = [
     "JointTorque",
     "OdeResult",
     "PDTorque",
+    "PointSpring",
     "SimulationResult",
     "Spring",
     "StateEvent",

@@ -29,7 +29,8 @@
 //!
 //! Energy: gravity and springs are conservative ([`ForceLaw::potential_energy`]); for every
 //! effect `e` its power is `P_e = τ_e · v`, so along any motion
-//! `d(T + V_gravity + V_springs)/dt = Σ_{e non-conservative} P_e`.
+//! `d(T + V_gravity + V_springs)/dt = Σ_{e non-conservative} P_e`. A point spring with
+//! damping `c` has a potential and a power `P_e = −dV_e/dt − c l̇²`: it adds `−c l̇²` there.
 //!
 //! Scene files: one `[[effect]]` table per effect, `type` selecting it; every type but
 //! gravity takes an optional `name` (its output key; default the family's name, numbered
@@ -46,12 +47,14 @@
 //! | `tabulated_torque` | `joints`, `time = [...]`, `values` (list, or rows per time) |
 //! | `pd_torque`        | `joints`, `kp`, `kd`, `time`, `reference` (rows per time)   |
 //! | `external`         | `body`, `point`, `frame` ("world"/"body"), `force`, `moment`; with `time`, `force`/`moment` are rows per time |
+//! | `point_spring`     | `body_a`, `point_a`, `body_b`, `point_b` (a body name or index, or "world"/-1; each point in its body's frame), `stiffness`, `rest_length` (default 0), `damping` (default 0) |
 //!
 //! `[simulate] disable = ["gravity", "springs"]` switches families off.
 pub mod damper;
 pub mod external;
 pub mod friction;
 pub mod gravity;
+pub mod point_spring;
 pub mod spring;
 pub mod table;
 pub mod torque;
@@ -66,6 +69,7 @@ use crate::spatial::{Vec3, Vec6};
 pub use damper::Damper;
 pub use external::{External, ExternalLoad, Frame};
 pub use friction::Friction;
+pub use point_spring::PointSpring;
 pub use spring::Spring;
 pub use table::Table;
 pub use torque::{Torque, TorqueFunction, TorqueLaw, TorqueSource};
@@ -86,6 +90,7 @@ pub enum Effect {
     Friction(Friction),
     Torque(Torque),
     External(External),
+    PointSpring(PointSpring),
 }
 
 /// What each declared effect type implements, in its own file: the declaration's family,
@@ -113,6 +118,7 @@ macro_rules! each_effect {
             Effect::Friction($e) => $each,
             Effect::Torque($e) => $each,
             Effect::External($e) => $each,
+            Effect::PointSpring($e) => $each,
         }
     };
 }
@@ -195,6 +201,9 @@ const TOML_TYPES: &[(&str, &[&str], ParseToml)] = &[
     }),
     ("external", external::KEYS, |_, f| {
         Ok(Effect::External(External::from_toml(f)?))
+    }),
+    ("point_spring", point_spring::KEYS, |_, f| {
+        Ok(Effect::PointSpring(PointSpring::from_toml(f)?))
     }),
 ];
 

@@ -613,7 +613,7 @@ fn toml_tables_parse_and_refuse() {
 fn error_messages_list_every_type_and_family() {
     let parse = |s: &str| Effect::from_toml(&s.parse::<toml::Table>().unwrap());
     let types = "one of \"gravity\", \"spring\", \"damper\", \"friction\", \"torque\", \
-\"tabulated_torque\", \"pd_torque\", \"external\"";
+\"tabulated_torque\", \"pd_torque\", \"external\", \"point_spring\"";
     for (text, got) in [
         ("type = \"springs\"", "\"springs\""),
         ("g = [0, 0, 1]", "nothing"),
@@ -651,4 +651,345 @@ fn error_messages_list_every_type_and_family() {
         assert_eq!(Kind::parse(name), Some(kind), "{name}");
     }
     assert_eq!(Kind::parse("frictions"), None);
+}
+
+fn point_spring(
+    a: Option<&str>,
+    pa: [f64; 3],
+    b: Option<&str>,
+    pb: [f64; 3],
+    k: f64,
+    rest: f64,
+    c: f64,
+) -> Effect {
+    let r = |x: Option<&str>| x.map(|n| JointRef::Name(n.into()));
+    Effect::PointSpring(
+        PointSpring::new(None, r(a), Vec3::from(pa), r(b), Vec3::from(pb), k, rest, c).unwrap(),
+    )
+}
+
+/// World position of point `p` of body `b` (`None`: the world) at `q`, by the full
+/// kinematics (not the law's own path walk).
+fn world_point(m: &Model, q: &[f64], b: Option<&str>, p: [f64; 3]) -> Vec3 {
+    match b {
+        None => Vec3::from(p),
+        Some(n) => point(m, q, m.body_index(n).unwrap(), &Vec3::from(p)).0,
+    }
+}
+
+#[test]
+fn point_springs_forces_are_minus_the_gradient_of_their_potential() {
+    let m = model();
+    let (q, v) = state(&m);
+    // Ends on a prismatic, a welded and a quaternion body, on the world, nested (slider
+    // below ball), with and without rest length.
+    let specs = [
+        point_spring(
+            None,
+            [0.3, -0.2, 0.4],
+            Some("slider"),
+            [0.05, 0.1, -0.02],
+            40.0,
+            0.0,
+            0.0,
+        ),
+        point_spring(
+            Some("plate"),
+            [0.1, 0.0, 0.05],
+            Some("base"),
+            [-0.1, 0.2, 0.0],
+            25.0,
+            0.07,
+            0.0,
+        ),
+        point_spring(
+            Some("ball"),
+            [0.0, 0.1, 0.2],
+            Some("slider"),
+            [0.02, 0.0, 0.0],
+            13.0,
+            0.3,
+            0.0,
+        ),
+    ];
+    for spec in specs {
+        let mut e = effects(&m, std::slice::from_ref(&spec));
+        let tau = forces(&m, &mut e, 0.0, &q, &v);
+        assert!(tau.iter().any(|x| x.abs() > 1e-2), "{tau:?}");
+        let h = 1e-6;
+        for k in 0..m.nv {
+            let dv = (potential(&m, &e, &step(&m, &q, k, h))
+                - potential(&m, &e, &step(&m, &q, k, -h)))
+                / (2.0 * h);
+            assert!(
+                (dv + tau[k]).abs() < 1e-7 * (1.0 + dv.abs()),
+                "{spec:?} dof {k}: dV = {dv}, tau = {}",
+                tau[k]
+            );
+        }
+    }
+}
+
+#[test]
+fn point_spring_law_is_k_stretch_plus_c_rate_along_the_line() {
+    let m = model();
+    let (q, v) = state(&m);
+    let (pa, pb) = ([0.1, 0.0, 0.05], [0.02, 0.03, -0.01]);
+    let (k, l0, c) = (30.0, 0.2, 1.7);
+    let spec = point_spring(Some("plate"), pa, Some("slider"), pb, k, l0, c);
+    let mut e = effects(&m, &[spec]);
+    let tau = forces(&m, &mut e, 0.0, &q, &v);
+    // Independently: positions from the full kinematics, the Jacobians and l̇ by central
+    // differences along each speed, the force by its formula.
+    let at = |q: &[f64]| {
+        (
+            world_point(&m, q, Some("plate"), pa),
+            world_point(&m, q, Some("slider"), pb),
+        )
+    };
+    let (xa, xb) = at(&q);
+    let d = xb - xa;
+    let (l, u) = (d.norm(), d / d.norm());
+    let h = 1e-6;
+    let mut ja = Vec::new();
+    let mut jb = Vec::new();
+    for s in 0..m.nv {
+        let (ap, bp) = at(&step(&m, &q, s, h));
+        let (am, bm) = at(&step(&m, &q, s, -h));
+        ja.push((ap - am) / (2.0 * h));
+        jb.push((bp - bm) / (2.0 * h));
+    }
+    let l_dot: f64 = (0..m.nv).map(|s| u.dot(&(jb[s] - ja[s])) * v[s]).sum();
+    let f_b = -(k * (l - l0) + c * l_dot) * u;
+    for s in 0..m.nv {
+        let want = f_b.dot(&jb[s]) - f_b.dot(&ja[s]);
+        assert!(
+            (tau[s] - want).abs() < 1e-8 * (1.0 + want.abs()),
+            "dof {s}: {} vs {want}",
+            tau[s]
+        );
+    }
+    // Its power is −k (l − l₀) l̇ − c l̇²: positive damping takes energy out.
+    let p: f64 = tau.iter().zip(&v).map(|(a, b)| a * b).sum();
+    let want = -(k * (l - l0) + c * l_dot) * l_dot;
+    assert!(
+        (p - want).abs() < 1e-8 * (1.0 + want.abs()),
+        "{p} vs {want}"
+    );
+}
+
+#[test]
+fn point_spring_on_a_body_welded_to_the_world_acts_at_its_world_point() {
+    // A body fixed to the world at a rotated placement: the spring's end there is a fixed
+    // world point, the same as declaring it on the world.
+    let mut m = Model::new();
+    m.add_body(
+        body(1.0, [0.0; 3], [0.1, 0.1, 0.1]),
+        Joint::Fixed,
+        None,
+        Placement::new(rot_z(0.9), Vec3::new(0.2, -0.1, 0.3)),
+        Some("post".into()),
+        None,
+    )
+    .unwrap();
+    m.add_body(
+        body(1.0, [0.1, 0.0, 0.0], [0.01, 0.02, 0.02]),
+        Joint::revolute(Vec3::new(0.3, 0.0, 1.0)).unwrap(),
+        None,
+        Placement::identity(),
+        Some("arm".into()),
+        None,
+    )
+    .unwrap();
+    let p = Vec3::new(0.05, 0.1, 0.0);
+    let w = rot_z(0.9) * p + Vec3::new(0.2, -0.1, 0.3);
+    let (q, v) = (vec![0.4], vec![1.3]);
+    let on_post = point_spring(
+        Some("post"),
+        p.into(),
+        Some("arm"),
+        [0.3, 0.0, 0.1],
+        9.0,
+        0.1,
+        0.5,
+    );
+    let on_world = point_spring(None, w.into(), Some("arm"), [0.3, 0.0, 0.1], 9.0, 0.1, 0.5);
+    let a = forces(
+        &m,
+        &mut effects(&m, std::slice::from_ref(&on_post)),
+        0.0,
+        &q,
+        &v,
+    );
+    let b = forces(
+        &m,
+        &mut effects(&m, std::slice::from_ref(&on_world)),
+        0.0,
+        &q,
+        &v,
+    );
+    assert!(
+        a[0].abs() > 1e-2 && (a[0] - b[0]).abs() < 1e-14,
+        "{a:?} {b:?}"
+    );
+    let va = potential(&m, &effects(&m, &[on_post]), &q);
+    let vb = potential(&m, &effects(&m, &[on_world]), &q);
+    assert!(va > 1e-3 && (va - vb).abs() < 1e-15, "{va} {vb}");
+}
+
+#[test]
+fn point_spring_stops_where_its_points_coincide() {
+    let m = model();
+    let (q, v) = state(&m);
+    // A point on the base's axis (z through the origin) stays exactly where it is.
+    let on_axis = [0.0, 0.0, 0.3];
+    let cx = Context {
+        model: &m,
+        t: 0.0,
+        q: &q,
+        v: &v,
+    };
+    let mut tau = vec![0.0; m.nv];
+    for (rest, c) in [(0.1, 0.0), (0.0, 0.5), (0.1, 0.5)] {
+        let spec = point_spring(None, on_axis, Some("base"), on_axis, 10.0, rest, c);
+        let mut e = effects(&m, &[spec]);
+        let err = match e.apply(&cx, &mut tau, &mut []) {
+            Err(msg) => msg,
+            Ok(_) => panic!("rest {rest} c {c}: no error, tau = {tau:?}"),
+        };
+        assert!(
+            err.contains("coincide") && err.contains("'base'") && err.contains("world"),
+            "{err}"
+        );
+        assert!(tau.iter().all(|t| t.is_finite()));
+    }
+    // l₀ = 0 and no damping: −k d is defined there (zero).
+    let spec = point_spring(None, on_axis, Some("base"), on_axis, 10.0, 0.0, 0.0);
+    let mut e = effects(&m, &[spec]);
+    tau.fill(0.0);
+    e.apply(&cx, &mut tau, &mut []).unwrap();
+    assert!(tau.iter().all(|t| *t == 0.0), "{tau:?}");
+}
+
+#[test]
+fn point_spring_refusals_name_the_argument() {
+    let m = model();
+    let name = |n: &str| Some(JointRef::Name(n.into()));
+    let new = |a: Option<JointRef>, b: Option<JointRef>, p: Vec3, k: f64, l0: f64, c: f64| {
+        PointSpring::new(None, a, p, b, Vec3::zeros(), k, l0, c)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    let ok = Vec3::zeros();
+    for (e, arg) in [
+        (
+            new(None, name("ball"), ok, -1.0, 0.0, 0.0),
+            "stiffness: expected a finite number >= 0, got -1",
+        ),
+        (
+            new(None, name("ball"), ok, f64::NAN, 0.0, 0.0),
+            "stiffness:",
+        ),
+        (new(None, name("ball"), ok, 1.0, -0.5, 0.0), "rest_length:"),
+        (
+            new(None, name("ball"), ok, 1.0, 0.0, f64::INFINITY),
+            "damping:",
+        ),
+        (
+            new(
+                None,
+                name("ball"),
+                Vec3::new(0.0, f64::NAN, 0.0),
+                1.0,
+                0.0,
+                0.0,
+            ),
+            "point_a:",
+        ),
+        (
+            new(None, None, ok, 1.0, 0.0, 0.0),
+            "body_b: expected a body other than body_a",
+        ),
+        (
+            new(name("ball"), name("ball"), ok, 1.0, 0.0, 0.0),
+            "body_b:",
+        ),
+    ] {
+        assert!(e.starts_with(arg), "{e}");
+    }
+    let bad = |a: Option<JointRef>, b: Option<JointRef>| {
+        let spec =
+            Effect::PointSpring(PointSpring::new(None, a, ok, b, ok, 1.0, 0.0, 0.0).unwrap());
+        Effects::new(&m, &[spec], Disabled::none(), "effects")
+            .err()
+            .unwrap()
+            .to_string()
+    };
+    let e = bad(None, name("elbow"));
+    assert!(
+        e.starts_with("effects[0].body_b:") && e.contains("'elbow'"),
+        "{e}"
+    );
+    let e = bad(Some(JointRef::Index(9)), None);
+    assert!(
+        e.starts_with("effects[0].body_a:") && e.contains("0..4"),
+        "{e}"
+    );
+    // The plate is welded to the ball: one rigid link.
+    let e = bad(name("ball"), name("plate"));
+    assert!(
+        e.starts_with("effects[0].body_b:") && e.contains("'plate'") && e.contains("welded"),
+        "{e}"
+    );
+}
+
+#[test]
+fn point_spring_tables_parse_and_refuse() {
+    let parse = |s: &str| Effect::from_toml(&s.parse::<toml::Table>().unwrap());
+    let e = parse(
+        "type = \"point_spring\"\nbody_a = \"K3\"\npoint_a = [0.02, -0.018, 0]\nbody_b = \"world\"\n\
+         point_b = [0.014, 0.072, 0]\nstiffness = 4530\nrest_length = 0.07785\nname = \"c0\"",
+    )
+    .unwrap();
+    assert_eq!(
+        e,
+        Effect::PointSpring(PointSpring {
+            name: Some("c0".into()),
+            body_a: Some(JointRef::Name("K3".into())),
+            point_a: Vec3::new(0.02, -0.018, 0.0),
+            body_b: None,
+            point_b: Vec3::new(0.014, 0.072, 0.0),
+            stiffness: 4530.0,
+            rest_length: 0.07785,
+            damping: 0.0,
+        })
+    );
+    let e = parse(
+        "type = \"point_spring\"\nbody_a = -1\npoint_a = [0, 0, 0]\nbody_b = 2\npoint_b = [1, 0, 0]\nstiffness = 1\ndamping = 0.5",
+    )
+    .unwrap();
+    let Effect::PointSpring(s) = e else { panic!() };
+    assert_eq!((s.body_a, s.body_b), (None, Some(JointRef::Index(2))));
+    assert_eq!((s.rest_length, s.damping), (0.0, 0.5));
+    let full = "type = \"point_spring\"\nbody_a = \"a\"\npoint_a = [0, 0, 0]\nbody_b = \"b\"\npoint_b = [0, 0, 1]\n";
+    for (text, key) in [
+        (full.to_string(), "stiffness"),
+        (format!("{full}stiffness = -1"), "stiffness"),
+        (format!("{full}stiffness = 1\nrest_length = -0.1"), "rest_length"),
+        (format!("{full}stiffness = 1\ndamping = \"lots\""), "damping"),
+        (format!("{full}stiffness = 1\nrest = 0.1"), "rest"),
+        ("type = \"point_spring\"\nbody_a = -2".into(), "body_a"),
+        ("type = \"point_spring\"\nbody_a = 1.5".into(), "body_a"),
+        ("type = \"point_spring\"\nbody_a = \"a\"\nbody_b = \"b\"\npoint_b = [0, 0, 1]\nstiffness = 1".into(), "point_a"),
+        ("type = \"point_spring\"\npoint_a = [0, 0, 0]\nbody_b = \"b\"\npoint_b = [0, 0, 1]\nstiffness = 1".into(), "body_a"),
+        ("type = \"point_spring\"\nbody_a = \"a\"\npoint_a = [0, 0]\nbody_b = \"b\"\npoint_b = [0, 0, 1]\nstiffness = 1".into(), "point_a"),
+        ("type = \"point_spring\"\nbody_a = \"world\"\npoint_a = [0, 0, 0]\nbody_b = -1\npoint_b = [0, 0, 1]\nstiffness = 1".into(), "body_b"),
+    ] {
+        let err = parse(&text).unwrap_err();
+        let Error::InvalidArgument { arg, .. } = &err else {
+            panic!("{err}")
+        };
+        assert_eq!(arg, key, "{text}: {err}");
+    }
 }

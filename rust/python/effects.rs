@@ -6,12 +6,12 @@ use std::sync::Arc;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use super::convert::{array, opt_real, shape_str, vec3, vector};
+use super::convert::{array, int_arg, opt_real, real, shape_str, vec3, vector};
 use super::errors::{invalid, IntoPyResult};
 use super::options::given;
 use crate::effects::{
-    Damper, Effect, External, ExternalLoad, Frame, Friction, JointRef, Matrix, PerJoint, Spring,
-    Table, Torque, TorqueFunction, TorqueLaw,
+    Damper, Effect, External, ExternalLoad, Frame, Friction, JointRef, Matrix, PerJoint,
+    PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLaw,
 };
 
 #[pyclass(
@@ -63,6 +63,25 @@ pub(super) fn joint_ref(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<JointRef>
         "a body name (str) or body index (int >= 0)",
         repr_of(obj),
     ))
+}
+
+/// A body name or index, or the world (`"world"`, −1 or `None`): `None` for the world.
+fn body_or_world(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Option<JointRef>> {
+    const EXPECTED: &str =
+        "a body name (str) or index (int >= 0), or 'world' / -1 / None for the ground";
+    if obj.is_none() {
+        return Ok(None);
+    }
+    if let Ok(s) = obj.extract::<String>() {
+        return Ok((s != "world").then_some(JointRef::Name(s)));
+    }
+    if obj.is_instance_of::<pyo3::types::PyBool>() || obj.extract::<i64>().is_err() {
+        return Err(invalid(obj.py(), arg, EXPECTED, repr_of(obj)));
+    }
+    match int_arg(obj, arg, -1, i64::MAX, EXPECTED)? {
+        -1 => Ok(None),
+        i => Ok(Some(JointRef::Index(i as usize))),
+    }
 }
 
 /// `None` (every moving joint), one body name or index, or a sequence of them.
@@ -344,6 +363,33 @@ impl PyEffect {
         Ok(Effect::External(inner).into())
     }
 
+    /// A linear spring–damper between a point of body a and a point of body b (each in its
+    /// body's frame; the world: `"world"`, −1 or `None`).
+    #[staticmethod]
+    #[pyo3(signature = (body_a, point_a, body_b, point_b, stiffness, rest_length=None, damping=None, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn point_spring(
+        py: Python<'_>,
+        body_a: &Bound<'_, PyAny>,
+        point_a: &Bound<'_, PyAny>,
+        body_b: &Bound<'_, PyAny>,
+        point_b: &Bound<'_, PyAny>,
+        stiffness: &Bound<'_, PyAny>,
+        rest_length: Option<&Bound<'_, PyAny>>,
+        damping: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let body_a = body_or_world(body_a, "body_a")?;
+        let point_a = vec3(point_a, "point_a")?;
+        let body_b = body_or_world(body_b, "body_b")?;
+        let point_b = vec3(point_b, "point_b")?;
+        let k = real(stiffness, "stiffness")?;
+        let rest = opt_real(rest_length, "rest_length")?.unwrap_or(0.0);
+        let c = opt_real(damping, "damping")?.unwrap_or(0.0);
+        let inner = PointSpring::new(name, body_a, point_a, body_b, point_b, k, rest, c).py(py)?;
+        Ok(Effect::PointSpring(inner).into())
+    }
+
     /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).
     #[getter]
     fn name(&self) -> String {
@@ -418,6 +464,23 @@ impl PyEffect {
                     ExternalLoad::Tabulated(t) => format!(", {} rows", t.len()),
                 }
             ),
+            Effect::PointSpring(e) => {
+                let body = |b: &Option<JointRef>| match b {
+                    Some(r) => r.to_string(),
+                    None => "'world'".to_string(),
+                };
+                let p = |x: &crate::spatial::Vec3| format!("[{}, {}, {}]", x.x, x.y, x.z);
+                format!(
+                    "PointSpring(body_a={}, point_a={}, body_b={}, point_b={}, stiffness={}, rest_length={}, damping={}{label})",
+                    body(&e.body_a),
+                    p(&e.point_a),
+                    body(&e.body_b),
+                    p(&e.point_b),
+                    e.stiffness,
+                    e.rest_length,
+                    e.damping
+                )
+            }
         }
     }
     fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {

@@ -1,0 +1,354 @@
+//! Point-to-point spring–dampers, family `springs`: a linear spring (and optional viscous
+//! damper) between point `a` fixed in body a and point `b` fixed in body b, either of which
+//! may be the world (the point then has world coordinates). With `d = p_b − p_a`, length
+//! `l = |d|` and `u = d / l`, the force on b is `f_b = −(k (l − l₀) + c l̇) u` (pulling the
+//! points together when stretched) and `f_a = −f_b`; `l̇ = u · (ṗ_b − ṗ_a)`.
+//!
+//! Generalized forces `τ = J_bᵀ f_b + J_aᵀ f_a` through the points' Jacobians, column by
+//! column along each body's path from the root (`j = v_O + ω × (p − O)` per speed), so a
+//! spring costs O(depth of its two bodies) and writes no link wrench. Potential
+//! `V = ½ k (l − l₀)²`; power `−k (l − l₀) l̇ − c l̇²`, so with damping the effect is not
+//! conservative: along a motion `P + dV/dt = −c l̇²`.
+//!
+//! The direction `u` is undefined where the points coincide (`l = 0`): the run stops there
+//! with an error, unless `l₀ = 0` and `c = 0`, where the force is `−k d` (smooth through 0).
+use super::{resolve_body, Context, Declaration, Fields, ForceLaw, JointRef, Kind};
+use crate::error::{check_finite, Error, Result};
+use crate::kinematics::{body_placement, LinkState};
+use crate::model::Model;
+use crate::spatial::{angular, linear, Mat3, Vec3, Vec6};
+
+/// Keys of a `type = "point_spring"` table.
+pub(super) const KEYS: &[&str] = &[
+    "name",
+    "body_a",
+    "point_a",
+    "body_b",
+    "point_b",
+    "stiffness",
+    "rest_length",
+    "damping",
+];
+
+/// What a body argument of a point spring may be (for the errors).
+const BODY_EXPECTED: &str = "a body name or index (>= 0), or \"world\" / -1 for the ground";
+
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PointSpring {
+    pub name: Option<String>,
+    /// `None`: the world.
+    pub body_a: Option<JointRef>,
+    /// In body a's frame (world coordinates for the world).
+    pub point_a: Vec3,
+    pub body_b: Option<JointRef>,
+    pub point_b: Vec3,
+    /// N/m, ≥ 0.
+    pub stiffness: f64,
+    /// m, ≥ 0.
+    pub rest_length: f64,
+    /// N·s/m, ≥ 0.
+    pub damping: f64,
+}
+
+impl PointSpring {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        name: Option<String>,
+        body_a: Option<JointRef>,
+        point_a: Vec3,
+        body_b: Option<JointRef>,
+        point_b: Vec3,
+        stiffness: f64,
+        rest_length: f64,
+        damping: f64,
+    ) -> Result<PointSpring> {
+        check_finite("point_a", point_a.as_slice())?;
+        check_finite("point_b", point_b.as_slice())?;
+        for (arg, x) in [
+            ("stiffness", stiffness),
+            ("rest_length", rest_length),
+            ("damping", damping),
+        ] {
+            if !(x.is_finite() && x >= 0.0) {
+                return Err(Error::arg(arg, "a finite number >= 0", x.to_string()));
+            }
+        }
+        if body_a == body_b {
+            return Err(Error::arg(
+                "body_b",
+                "a body other than body_a (a spring within one rigid body does nothing)",
+                match &body_a {
+                    Some(r) => format!("{r} for both"),
+                    None => "the world for both".to_string(),
+                },
+            ));
+        }
+        Ok(PointSpring {
+            name,
+            body_a,
+            point_a,
+            body_b,
+            point_b,
+            stiffness,
+            rest_length,
+            damping,
+        })
+    }
+
+    pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<PointSpring> {
+        let name = f.string("name")?;
+        let body_a = body_or_world(f, "body_a")?;
+        let point_a = f.vec3("point_a")?;
+        let body_b = body_or_world(f, "body_b")?;
+        let point_b = f.vec3("point_b")?;
+        let stiffness = f.number("stiffness")?;
+        let rest_length = f.number("rest_length")?;
+        let damping = f.number("damping")?;
+        let body_a = super::required(body_a, "body_a", BODY_EXPECTED)?;
+        let point_a = super::required(point_a, "point_a", "a 3-vector in body_a's frame")?;
+        let body_b = super::required(body_b, "body_b", BODY_EXPECTED)?;
+        let point_b = super::required(point_b, "point_b", "a 3-vector in body_b's frame")?;
+        let stiffness = super::required(stiffness, "stiffness", "a number >= 0 (N/m)")?;
+        PointSpring::new(
+            name,
+            body_a,
+            point_a,
+            body_b,
+            point_b,
+            stiffness,
+            rest_length.unwrap_or(0.0),
+            damping.unwrap_or(0.0),
+        )
+    }
+}
+
+/// A body name or index, or the world (`"world"` or −1): `Some(None)` for the world.
+fn body_or_world(f: &mut Fields<'_>, key: &'static str) -> Result<Option<Option<JointRef>>> {
+    f.typed(key, BODY_EXPECTED, |v| match v {
+        toml::Value::String(s) if s == "world" => Some(None),
+        toml::Value::String(s) => Some(Some(JointRef::Name(s.clone()))),
+        toml::Value::Integer(-1) => Some(None),
+        toml::Value::Integer(i) if *i >= 0 => Some(Some(JointRef::Index(*i as usize))),
+        _ => None,
+    })
+}
+
+impl Declaration for PointSpring {
+    fn kind(&self) -> Kind {
+        Kind::Springs
+    }
+    fn label(&self) -> Option<&str> {
+        self.name.as_deref()
+    }
+    fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
+        let a = End::resolve(model, &self.body_a, &self.point_a, "body_a")?;
+        let b = End::resolve(model, &self.body_b, &self.point_b, "body_b")?;
+        if a.link == b.link {
+            return Err(Error::arg(
+                "body_b",
+                "a body that moves relative to body_a (a spring within one rigid body does nothing)",
+                format!("{} and {}, welded together", a.what, b.what),
+            ));
+        }
+        let coincide = format!(
+            "the point spring{} between {} and {} has its two points coincide (length 0), where the direction of its force is undefined",
+            self.name.as_ref().map(|n| format!(" '{n}'")).unwrap_or_default(),
+            a.what,
+            b.what
+        );
+        Ok(Box::new(PointSpringLaw {
+            a,
+            b,
+            k: self.stiffness,
+            rest: self.rest_length,
+            c: self.damping,
+            coincide,
+        }))
+    }
+}
+
+/// One speed's column along an end's path: the joint-motion column `s = [ω; v_O]` (world
+/// axes, about the link origin `O`) and, once the point is known, the point's velocity per
+/// unit speed `j = v_O + ω × (p − O)`.
+#[derive(Clone, Copy)]
+struct Column {
+    v: usize,
+    origin: Vec3,
+    s: Vec6,
+    j: Vec3,
+}
+
+/// One end of the spring, resolved: the link carrying it (`None`: fixed in the world), the
+/// links from the root to it, and the point in that link's frame (world for `None`).
+struct End {
+    link: Option<usize>,
+    path: Vec<usize>,
+    point: Vec3,
+    /// One per speed of the path's joints; rewritten at every evaluation.
+    columns: Vec<Column>,
+    /// "body 'K3' point [..]" or "the world point [..]", for the errors.
+    what: String,
+}
+
+impl End {
+    fn resolve(model: &Model, body: &Option<JointRef>, point: &Vec3, arg: &str) -> Result<End> {
+        let shown = format!("[{}, {}, {}]", point.x, point.y, point.z);
+        let Some(r) = body else {
+            return Ok(End {
+                link: None,
+                path: Vec::new(),
+                point: *point,
+                columns: Vec::new(),
+                what: format!("the world point {shown}"),
+            });
+        };
+        let b = resolve_body(model, r, arg)?;
+        let rec = &model.bodies[b];
+        let what = format!("body '{}' point {shown}", rec.name);
+        let Some(link) = rec.link else {
+            // Welded to the world: a fixed world point (its placement needs no link state).
+            return Ok(End {
+                link: None,
+                path: Vec::new(),
+                point: body_placement(model, &[], b).act_point(point),
+                columns: Vec::new(),
+                what,
+            });
+        };
+        let mut path = Vec::new();
+        let mut l = Some(link);
+        while let Some(i) = l {
+            path.push(i);
+            l = model.links[i].parent;
+        }
+        path.reverse();
+        let n: usize = path.iter().map(|&i| model.links[i].joint.nv()).sum();
+        let zero = Column {
+            v: 0,
+            origin: Vec3::zeros(),
+            s: Vec6::zeros(),
+            j: Vec3::zeros(),
+        };
+        Ok(End {
+            link: Some(link),
+            path,
+            point: rec.in_link.act_point(point),
+            columns: vec![zero; n],
+            what,
+        })
+    }
+
+    /// The point's world position at `q`, its path's columns filled in. The poses follow
+    /// `kinematics::positions` (`O_i = O_λ + R_λ t_i + R_joint t_q`), along one path only.
+    #[inline]
+    fn place(&mut self, model: &Model, q: &[f64]) -> Vec3 {
+        let mut r = Mat3::identity();
+        let mut o = Vec3::zeros();
+        let mut c = 0;
+        for &i in &self.path {
+            let l = &model.links[i];
+            let qi = &q[l.q_index..l.q_index + l.joint.nq()];
+            let r_joint = if l.placement_rotated {
+                r * l.placement.rotation
+            } else {
+                r
+            };
+            let (r_q, t_q) = l.joint.transform(qi);
+            o += r * l.placement.translation + r_joint * t_q;
+            r = r_joint * r_q;
+            let s = l.joint.subspace(qi, &r_joint, &r);
+            for (k, s) in s.iter().take(l.joint.nv()).enumerate() {
+                let col = &mut self.columns[c];
+                col.v = l.v_index + k;
+                col.origin = o;
+                col.s = *s;
+                c += 1;
+            }
+        }
+        let p = match self.link {
+            Some(_) => o + r * self.point,
+            None => self.point,
+        };
+        for col in &mut self.columns {
+            let w = angular(&col.s);
+            col.j = linear(&col.s) + w.cross(&(p - col.origin));
+        }
+        p
+    }
+
+    /// The point's velocity `J v` (after `place`).
+    #[inline]
+    fn velocity(&self, v: &[f64]) -> Vec3 {
+        self.columns
+            .iter()
+            .fold(Vec3::zeros(), |acc, col| acc + col.j * v[col.v])
+    }
+
+    /// Adds `Jᵀ f` to `tau` (after `place`).
+    #[inline]
+    fn add_force(&self, f: &Vec3, tau: &mut [f64]) {
+        for col in &self.columns {
+            tau[col.v] += col.j.dot(f);
+        }
+    }
+
+    /// The point's world position from the links' poses.
+    fn position(&self, links: &[LinkState]) -> Vec3 {
+        match self.link {
+            Some(l) => links[l].origin + links[l].rotation * self.point,
+            None => self.point,
+        }
+    }
+}
+
+pub struct PointSpringLaw {
+    a: End,
+    b: End,
+    k: f64,
+    rest: f64,
+    c: f64,
+    /// The error when the points coincide (built once: the run stops on it).
+    coincide: String,
+}
+
+impl ForceLaw for PointSpringLaw {
+    #[inline]
+    fn apply(
+        &mut self,
+        cx: &Context<'_>,
+        tau: &mut [f64],
+        _wrenches: &mut [Vec6],
+    ) -> std::result::Result<bool, String> {
+        let d = self.b.place(cx.model, cx.q) - self.a.place(cx.model, cx.q);
+        let f_b = if self.rest == 0.0 && self.c == 0.0 {
+            // −k d needs no direction: defined (and smooth) where the points meet.
+            -self.k * d
+        } else {
+            let l = d.norm();
+            if l == 0.0 {
+                return Err(self.coincide.clone());
+            }
+            let u = d / l;
+            let mut magnitude = self.k * (l - self.rest);
+            if self.c > 0.0 {
+                let l_dot = u.dot(&(self.b.velocity(cx.v) - self.a.velocity(cx.v)));
+                magnitude += self.c * l_dot;
+            }
+            -magnitude * u
+        };
+        self.b.add_force(&f_b, tau);
+        self.a.add_force(&-f_b, tau);
+        Ok(false)
+    }
+
+    fn potential_energy(&self, _cx: &Context<'_>, links: &[LinkState]) -> Option<f64> {
+        let d = self.b.position(links) - self.a.position(links);
+        let stretch2 = if self.rest > 0.0 {
+            let s = d.norm() - self.rest;
+            s * s
+        } else {
+            d.norm_squared()
+        };
+        Some(0.5 * self.k * stretch2)
+    }
+}
