@@ -129,17 +129,7 @@ pub fn constrained_forward_dynamics(
         forward_substitute(mass, step);
         y.column_mut(k).copy_from_slice(step);
     }
-    for i in 0..na {
-        for j in 0..=i {
-            let d = y.column(i).dot(&y.column(j));
-            s[(i, j)] = d;
-            s[(j, i)] = d;
-        }
-    }
-    for (k, &r) in active.iter().enumerate() {
-        let ja: f64 = (0..n).map(|c| cons.jacobian[(r, c)] * a[c]).sum();
-        rhs[k] = -cons.gamma[r] - ja;
-    }
+    constraint_system(y, active, cons, a, s, rhs);
     let rank = solve_semidefinite(s, na, rhs.as_slice(), work_lambda(lambda, na), perm, work);
     solver.rank = rank;
     if n > 0 && rank >= n {
@@ -183,6 +173,34 @@ fn locked(model: &Model, rank: usize) -> Error {
     ))
 }
 
+/// The multipliers' system on the active rows: `YᵀY` (`= J M⁻¹ Jᵀ`) into `s` and
+/// `−γ − J a` into `rhs`.
+fn constraint_system(
+    y: &DMatrix<f64>,
+    active: &[usize],
+    cons: &Constraints,
+    a: &[f64],
+    s: &mut DMatrix<f64>,
+    rhs: &mut DVector<f64>,
+) {
+    let na = active.len();
+    for i in 0..na {
+        for j in 0..=i {
+            let d = y.column(i).dot(&y.column(j));
+            s[(i, j)] = d;
+            s[(j, i)] = d;
+        }
+    }
+    for (k, &r) in active.iter().enumerate() {
+        let ja: f64 = a
+            .iter()
+            .enumerate()
+            .map(|(c, x)| cons.jacobian[(r, c)] * x)
+            .sum();
+        rhs[k] = -cons.gamma[r] - ja;
+    }
+}
+
 /// The cut joints' wrenches at a state: per loop `[force; moment]` on body b in frame a's
 /// axes (see [`constraints::wrenches`]), the minimum-norm multipliers where constraints are
 /// redundant (statically indeterminate: only their resultant on the mechanism is defined).
@@ -195,7 +213,6 @@ pub fn constraint_forces(
     v: &[f64],
     a: &mut [f64],
 ) -> Result<Vec<[f64; 6]>> {
-    let n = model.nv;
     let a_tree = DVector::from_column_slice(a);
     constrained_forward_dynamics(model, data, solver, q, v, a)?;
     // `J M⁻¹ Jᵀ λ = −γ − J a₀` on the active rows again (`YᵀY` in the constraint-space
@@ -213,17 +230,7 @@ pub fn constraint_forces(
         ..
     } = solver;
     let na = active.len();
-    for i in 0..na {
-        for j in 0..=i {
-            let d = y.column(i).dot(&y.column(j));
-            s[(i, j)] = d;
-            s[(j, i)] = d;
-        }
-    }
-    for (k, &r) in active.iter().enumerate() {
-        let ja: f64 = (0..n).map(|c| cons.jacobian[(r, c)] * a_tree[c]).sum();
-        rhs[k] = -cons.gamma[r] - ja;
-    }
+    constraint_system(y, active, cons, a_tree.as_slice(), s, rhs);
     factor::min_norm_solve(
         s.view_mut((0, 0), (na, na)),
         &mut rhs.as_mut_slice()[..na],

@@ -135,6 +135,33 @@ pub fn fixed_mask(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec
     Ok(mask)
 }
 
+/// The actuated joints a call needs: `None` for a model without loops (every joint is
+/// actuated, and naming some is an error), their v indices for a model with loops (where
+/// they are required: the cut joints' forces are otherwise undetermined).
+pub fn loop_actuation(
+    py: Python<'_>,
+    model: &Model,
+    actuated: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<Vec<usize>>> {
+    let actuated = actuated.filter(|x| !x.is_none());
+    match (model.loops.is_empty(), actuated) {
+        (true, None) => Ok(None),
+        (true, Some(x)) => Err(invalid(
+            x.py(),
+            "actuated",
+            "None for a model without loops (every joint is actuated)",
+            x.repr()?.to_string(),
+        )),
+        (false, Some(x)) => actuated_indices(model, x).map(Some),
+        (false, None) => Err(invalid(
+            py,
+            "actuated",
+            format!("the actuated joints (v indices or body names) for a model with {} loop(s): the cut joints' forces are otherwise undetermined", model.loops.len()),
+            "None",
+        )),
+    }
+}
+
 /// `actuated` as sorted v indices: ints are v indices, names all of that body's joint speeds.
 pub fn actuated_indices(model: &Model, obj: &Bound<'_, PyAny>) -> PyResult<Vec<usize>> {
     let nv = model.nv;

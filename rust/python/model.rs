@@ -785,22 +785,9 @@ impl PyModel {
         actuated: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model();
-        let actuated = actuated.filter(|x| !x.is_none());
-        if model.loops.is_empty() {
-            if let Some(x) = actuated {
-                return Err(invalid(
-                    py,
-                    "actuated",
-                    "None for a model without loops (every joint is actuated)",
-                    x.repr()?.to_string(),
-                ));
-            }
+        let Some(actuated) = super::loops::loop_actuation(py, &model, actuated)? else {
             return self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method);
-        }
-        let Some(actuated) = actuated else {
-            return Err(invalid(py, "actuated", format!("the actuated joints (v indices or body names) for a model with {} loop(s): the cut joints' forces are otherwise undetermined", model.loops.len()), "None"));
         };
-        let actuated = super::loops::actuated_indices(&model, actuated)?;
         let tree = self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method)?;
         let tau_tree = super::convert::vector(&tree, "tau", Some(model.nv))?;
         self.with_workspace(|ws| {
@@ -1048,13 +1035,8 @@ impl PyModel {
         let ext = external_wrenches(&model, external)?;
         let mut cut: Vec<[f64; 6]> = Vec::new();
         let mut tau_loops: Option<Vec<f64>> = None;
-        let actuated = actuated.filter(|x| !x.is_none());
-        if !model.loops.is_empty() {
+        if let Some(act) = super::loops::loop_actuation(py, &model, actuated)? {
             // The actuators' forces and the cut joints' wrenches that produce this motion.
-            let Some(act) = actuated else {
-                return Err(invalid(py, "actuated", format!("the actuated joints (v indices or body names) for a model with {} loop(s): the cut joints' forces are otherwise undetermined", model.loops.len()), "None"));
-            };
-            let act = super::loops::actuated_indices(&model, act)?;
             let mut data = Data::new(&model);
             let mut tree = vec![0.0; model.nv];
             recursive::inverse_dynamics(
@@ -1071,13 +1053,6 @@ impl PyModel {
             let (tau_act, c) =
                 loops::driving_forces(&model, &mut solver, &qs, &vs, &accs, &tree, &act).py(py)?;
             (cut, tau_loops) = (c, Some(tau_act));
-        } else if let Some(x) = actuated {
-            return Err(invalid(
-                py,
-                "actuated",
-                "None for a model without loops (every joint is actuated)",
-                x.repr()?.to_string(),
-            ));
         }
         let mut ws = recursive::reference::Workspace::new(&model);
         reactions::link_accelerations(&model, &mut ws, &qs, &vs, &accs);
