@@ -51,6 +51,7 @@ from .simulation import (
     rk45,
     simulate,
 )
+from .batch import BatchResult, simulate_batch
 from .work_precision import WorkPrecision, work_precision
 
 
@@ -91,6 +92,7 @@ def FreeFlyer() -> Joint:
 
 __all__ = [
     "Balance",
+    "BatchResult",
     "Counterweight",
     "Damper",
     "Effect",
@@ -143,5 +145,6 @@ __all__ = [
     "rk45",
     "shaking",
     "simulate",
+    "simulate_batch",
     "work_precision",
 ]

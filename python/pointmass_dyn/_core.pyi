@@ -358,6 +358,10 @@ class Effect:
     """Something a scene applies to its model; build with the factories (``pmd.Gravity``,
     ``pmd.Spring``, ...). Each is computed only when declared; SI units, radians."""
 
+    def with_parameter(self, name: str, value: ArrayLike) -> Effect:
+        """A copy with one parameter replaced and checked: gravity ``g``; a spring's
+        ``stiffness``, ``rest``; a damper's ``damping``; friction's ``friction``, ``v_eps``;
+        a point spring's ``stiffness``, ``rest_length``, ``damping``."""
     @property
     def g(self) -> _Array | None:
         """A gravity effect's ``g`` (3,); None for other effects."""
@@ -477,6 +481,11 @@ class Scene:
         """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
         ``effects`` act (none: no gravity); joint and body names and table widths are checked
         against the model here. ``disable``: families switched off by default."""
+    def replace(
+        self, model: Model | None = None, effects: Sequence[Effect] | None = None
+    ) -> Scene:
+        """A copy with its model (of the same sizes) and/or effects replaced, every other
+        setting kept."""
     @staticmethod
     def from_toml(text: str, file: str = "<string>") -> Scene:
         """Parses a scene from TOML text; raises :class:`pointmass_dyn.errors.SceneError`
@@ -552,6 +561,27 @@ def simulate_scene(
     ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``n_accepted``, ``n_rejected``,
     ``status``, ``message``, ``success``, ``t_reached``) and ``error``: ``None``, or the
     exception a Python callback raised (Ctrl-C included), for the caller to re-raise."""
+
+def simulate_batch(
+    scenes: Sequence[Scene],
+    q0: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    t_span: ArrayLike | None = None,
+    rtol: ArrayLike | None = None,
+    atol: ArrayLike | None = None,
+    t_eval: ArrayLike | None = None,
+    events: Sequence[StateEvent] | None = None,
+    first_step: float | None = None,
+    max_step: float | None = None,
+    max_steps: int | None = None,
+    energy: bool = False,
+    disable: _Family | Sequence[_Family] | None = None,
+    threads: int | None = None,
+    progress: Callable[[int, int], Any] | None = None,
+) -> list[dict[str, Any]]:
+    """Runs B scenes (or one scene from B initial states ``q0`` (B, nq), ``v0`` (B, nv)) on
+    ``threads`` threads, the GIL released once; one dict per run as ``simulate_scene``
+    returns, or ``{"error": exception}`` for a run whose input was refused."""
 
 def effect_forces(
     scene: Scene,

@@ -124,6 +124,76 @@ macro_rules! each_effect {
 }
 
 impl Effect {
+    /// A copy with one parameter replaced, checked as the effect's constructor checks it
+    /// (per-run parameters of a batch): gravity `g`; a spring's `stiffness` and `rest`; a
+    /// damper's `damping`; friction's `friction` and `v_eps`; a point spring's `stiffness`,
+    /// `rest_length` and `damping`. A per-joint parameter takes one value (every joint) or
+    /// one per joint.
+    pub fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
+        let per_joint = || match values {
+            [x] => PerJoint::All(*x),
+            xs => PerJoint::Each(xs.to_vec()),
+        };
+        let scalar = || match values {
+            [x] => Ok(*x),
+            xs => Err(Error::arg(key, "one number", format!("{} values", xs.len()))),
+        };
+        Ok(match (self, key) {
+            (Effect::Gravity { .. }, "g") => match values {
+                [x, y, z] => Effect::gravity(Vec3::new(*x, *y, *z))?,
+                xs => return Err(Error::arg("g", "3 values", format!("{} values", xs.len()))),
+            },
+            (Effect::Spring(e), "stiffness") => Effect::Spring(Spring::new(
+                e.name.clone(),
+                e.joints.clone(),
+                per_joint(),
+                Some(e.rest.clone()),
+            )?),
+            (Effect::Spring(e), "rest") => Effect::Spring(Spring::new(
+                e.name.clone(),
+                e.joints.clone(),
+                e.stiffness.clone(),
+                Some(per_joint()),
+            )?),
+            (Effect::Damper(e), "damping") => {
+                Effect::Damper(Damper::new(e.name.clone(), e.joints.clone(), per_joint())?)
+            }
+            (Effect::Friction(e), "friction") => Effect::Friction(Friction::new(
+                e.name.clone(),
+                e.joints.clone(),
+                per_joint(),
+                Some(e.v_eps),
+            )?),
+            (Effect::Friction(e), "v_eps") => Effect::Friction(Friction::new(
+                e.name.clone(),
+                e.joints.clone(),
+                e.friction.clone(),
+                Some(scalar()?),
+            )?),
+            (Effect::PointSpring(e), "stiffness" | "rest_length" | "damping") => {
+                let x = scalar()?;
+                let pick = |k: &str, now: f64| if k == key { x } else { now };
+                Effect::PointSpring(PointSpring::new(
+                    e.name.clone(),
+                    e.body_a.clone(),
+                    e.point_a,
+                    e.body_b.clone(),
+                    e.point_b,
+                    pick("stiffness", e.stiffness),
+                    pick("rest_length", e.rest_length),
+                    pick("damping", e.damping),
+                )?)
+            }
+            (e, key) => {
+                return Err(Error::arg(
+                    "parameter",
+                    "g (gravity), stiffness or rest (spring), damping (damper), friction or v_eps (friction), stiffness, rest_length or damping (point_spring)",
+                    format!("'{key}' for a {} effect", e.kind().name()),
+                ))
+            }
+        })
+    }
+
     pub fn gravity(g: Vec3) -> Result<Effect> {
         check_finite("gravity", g.as_slice())?;
         Ok(Effect::Gravity { g })

@@ -400,6 +400,13 @@ impl PyEffect {
     fn kind(&self) -> &'static str {
         self.inner.kind().name()
     }
+    /// A copy with one parameter replaced (checked as the factory checks it): gravity `g`;
+    /// a spring's `stiffness`, `rest`; a damper's `damping`; friction's `friction`, `v_eps`;
+    /// a point spring's `stiffness`, `rest_length`, `damping`.
+    fn with_parameter(&self, py: Python<'_>, name: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
+        let (_, values) = super::convert::array(value, name)?;
+        Ok(self.inner.with_parameter(name, &values).py(py)?.into())
+    }
     /// A gravity effect's acceleration `g` (3,); `None` for other effects.
     #[getter]
     #[pyo3(name = "g")]

@@ -94,6 +94,36 @@ impl PyScene {
         })
     }
 
+    /// A copy with its model and/or effects replaced, every other setting kept (the
+    /// per-run variants of a batch). The model must have this scene's sizes; the effects
+    /// are checked against it as the constructor checks them.
+    #[pyo3(signature = (model=None, effects=None))]
+    fn replace(
+        &self,
+        py: Python<'_>,
+        model: Option<PyRef<'_, PyModel>>,
+        effects: Option<Vec<PyRef<'_, PyEffect>>>,
+    ) -> PyResult<Self> {
+        let mut inner = self.inner.clone();
+        if let Some(m) = model {
+            let m = m.model();
+            if (m.nq, m.nv) != (inner.model.nq, inner.model.nv) {
+                return Err(invalid(
+                    py,
+                    "model",
+                    format!("a model with nq = {}, nv = {} (this scene's)", inner.model.nq, inner.model.nv),
+                    format!("nq = {}, nv = {}", m.nq, m.nv),
+                ));
+            }
+            inner.model = m;
+        }
+        if let Some(list) = effects {
+            inner.effects = list.iter().map(|e| e.inner.clone()).collect();
+        }
+        Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").py(py)?;
+        Ok(PyScene { inner })
+    }
+
     /// Parses a scene from TOML text; `file` names it in error messages.
     #[staticmethod]
     #[pyo3(signature = (text, file="<string>"))]

@@ -319,3 +319,178 @@ pub fn energies<'py>(
     d.set_item("total", total)?;
     Ok(d)
 }
+
+/// Runs many scenes (or one scene from many initial states) on a pool of threads, the GIL
+/// released once: a list of dicts as `simulate_scene` returns them, in the runs' order. A
+/// run that could not start (bad input) has its exception in `"error"`. Every run is
+/// exactly the `simulate` call it stands for.
+#[pyfunction]
+#[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, disable=None, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+pub fn simulate_batch<'py>(
+    py: Python<'py>,
+    scenes: Vec<PyRef<'_, PyScene>>,
+    q0: Option<&Bound<'_, PyAny>>,
+    v0: Option<&Bound<'_, PyAny>>,
+    t_span: Option<&Bound<'_, PyAny>>,
+    rtol: Option<&Bound<'_, PyAny>>,
+    atol: Option<&Bound<'_, PyAny>>,
+    t_eval: Option<&Bound<'_, PyAny>>,
+    events: Option<&Bound<'_, PyAny>>,
+    first_step: Option<&Bound<'_, PyAny>>,
+    max_step: Option<&Bound<'_, PyAny>>,
+    max_steps: Option<&Bound<'_, PyAny>>,
+    energy: bool,
+    disable: Option<&Bound<'_, PyAny>>,
+    threads: Option<&Bound<'_, PyAny>>,
+    progress: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    use crate::simulate::batch::{run_batch, Control, Run};
+    if scenes.is_empty() {
+        return Err(invalid(py, "scenes", "at least one Scene", "none"));
+    }
+    let scenes: Vec<Scene> = scenes.iter().map(|s| s.inner.clone()).collect();
+    let q0s = batch_states("q0", q0, scenes[0].model.nq)?;
+    let v0s = batch_states("v0", v0, scenes[0].model.nv)?;
+    if (q0s.is_some() || v0s.is_some())
+        && scenes
+            .iter()
+            .any(|s| (s.model.nq, s.model.nv) != (scenes[0].model.nq, scenes[0].model.nv))
+    {
+        return Err(invalid(
+            py,
+            "q0, v0",
+            "scenes of one model size when initial states are given",
+            "scenes of different sizes",
+        ));
+    }
+    let rows = |x: &Option<BatchStates>| x.as_ref().map_or(1, |b| b.rows);
+    let count = rows(&q0s).max(rows(&v0s)).max(scenes.len());
+    for (arg, n) in [("q0", rows(&q0s)), ("v0", rows(&v0s)), ("scenes", scenes.len())] {
+        if n != 1 && n != count {
+            return Err(invalid(
+                py,
+                arg,
+                format!("1 or {count} runs (as the other batch arguments)"),
+                format!("{n}"),
+            ));
+        }
+    }
+    let events = SceneEvents::parse(py, events)?;
+    if !events.python.is_empty() {
+        return Err(invalid(
+            py,
+            "events",
+            "StateEvent objects only (Python callables cannot run on the batch's threads)",
+            "a callable",
+        ));
+    }
+    let threads = super::convert::opt_count(threads, "threads", "a thread count >= 1 (or None: one per core)")?
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+        .max(1);
+    // Settings per scene (each resolves the caller's arguments against its own file's).
+    let mut resolved = Vec::with_capacity(scenes.len());
+    for s in &scenes {
+        let mut requested = step_args(first_step, max_step, max_steps)?;
+        requested.disable = disable_arg(py, disable)?;
+        requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
+        let dim = s.model.nq + s.model.nv;
+        let base = options(py, dim, &mut requested, rtol, atol, t_eval, false, "standard", "warn")?;
+        resolved.push(requested.resolve(&s.settings, base).py(py)?);
+    }
+    let pick = |k: usize, n: usize| if n == 1 { 0 } else { k };
+    let runs: Vec<Run<'_>> = (0..count)
+        .map(|k| {
+            let s = &scenes[pick(k, scenes.len())];
+            let r = &resolved[pick(k, scenes.len())];
+            Run {
+                model: &s.model,
+                effects: &s.effects,
+                disabled: r.disabled,
+                q0: q0s.as_ref().map_or(&s.q0[..], |b| b.row(pick(k, b.rows))),
+                v0: v0s.as_ref().map_or(&s.v0[..], |b| b.row(pick(k, b.rows))),
+                t_span: r.t_span,
+                opts: &r.opts,
+            }
+        })
+        .collect();
+    let control = Control::default();
+    let mut raised: Option<PyErr> = None;
+    take_callback_error();
+    let results = py.detach(|| {
+        std::thread::scope(|sc| {
+            let handle = sc.spawn(|| {
+                run_batch(&runs, &events.state, Record { energy, power: false }, threads, &control)
+            });
+            // Ctrl-C and the caller's progress from this thread, every 50 ms.
+            while !handle.is_finished() {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                if raised.is_some() {
+                    continue;
+                }
+                let done = control.done.load(std::sync::atomic::Ordering::Relaxed);
+                let polled = Python::attach(|py| {
+                    py.check_signals()?;
+                    match &progress {
+                        Some(cb) => cb.bind(py).call1((done, count)).map(|_| ()),
+                        None => Ok(()),
+                    }
+                });
+                if let Err(e) = polled {
+                    raised = Some(e);
+                    control.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                }
+            }
+            handle.join()
+        })
+    });
+    if let Some(e) = raised.or(take_callback_error()) {
+        return Err(e);
+    }
+    let results = results.map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
+    let out = PyList::empty(py);
+    for result in results {
+        match result {
+            Ok(traj) => out.append(trajectory_dict(py, traj, None, &events)?)?,
+            Err(e) => {
+                let d = PyDict::new(py);
+                d.set_item("error", super::errors::to_py(py, e).into_value(py))?;
+                out.append(d)?;
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Per-run initial states: one (1-D) for every run, or a row per run (2-D `(B, width)`).
+struct BatchStates {
+    rows: usize,
+    width: usize,
+    data: Vec<f64>,
+}
+
+impl BatchStates {
+    fn row(&self, k: usize) -> &[f64] {
+        &self.data[k * self.width..(k + 1) * self.width]
+    }
+}
+
+fn batch_states(arg: &str, obj: Option<&Bound<'_, PyAny>>, width: usize) -> PyResult<Option<BatchStates>> {
+    let Some(obj) = given(obj) else {
+        return Ok(None);
+    };
+    let (shape, data) = super::convert::array(obj, arg)?;
+    let rows = match shape.as_slice() {
+        [w] if *w == width => 1,
+        [b, w] if *w == width && *b >= 1 => *b,
+        _ => {
+            return Err(invalid(
+                obj.py(),
+                arg,
+                format!("shape ({width},) or (B, {width})"),
+                super::convert::shape_str(&shape),
+            ))
+        }
+    };
+    Ok(Some(BatchStates { rows, width, data }))
+}

@@ -4,6 +4,7 @@
 //! The right-hand side asks the effects for joint forces and link wrenches only when the
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
 //! effects runs the bare forward dynamics.
+pub mod batch;
 mod dynamics;
 mod settings;
 

@@ -1,0 +1,226 @@
+"""Many simulations of one mechanism: :func:`simulate_batch` runs them on a pool of threads
+in Rust with the GIL released once, each run bit for bit the :func:`simulate` call it stands
+for, whatever the thread count (docs/batch.md).
+
+Runs differ by their initial states (``q0``, ``v0`` with one row per run) and by
+``params``, a dict of per-run values::
+
+    "gravity"                    (B, 3)   every gravity effect's g
+    "<effect>.<parameter>"       (B,) or (B, k)   an effect's parameter by its name (or
+                                          family): spring stiffness/rest, damper damping,
+                                          friction friction/v_eps, point_spring
+                                          stiffness/rest_length/damping
+    "<body>.mass" / ".com" / ".inertia"   (B,), (B, 3), (B, 3, 3)   a body's inertial
+                                          (the model's structure is kept)
+
+or by giving a list of scenes (one per run).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from . import _core
+from ._core import Scene
+from .errors import InvalidInputError
+from .simulation import SimulationResult
+
+
+@dataclass
+class BatchResult:
+    """B runs. ``results``: each run's :class:`SimulationResult` (a run that could not start
+    has ``success=False``, an empty trajectory and the reason as its message). With
+    ``t_eval``: ``t`` (T,), ``q`` (B, T, nq), ``v`` (B, T, nv), NaN past a failed run's
+    end. Per run: ``success``, ``status``, ``message``, ``t_reached``, ``nfev``."""
+
+    results: list[SimulationResult]
+    t: np.ndarray | None
+    q: np.ndarray | None
+    v: np.ndarray | None
+    success: np.ndarray
+    status: np.ndarray
+    message: list[str]
+    t_reached: np.ndarray
+    nfev: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.results)
+
+
+def _rows(name: str, value: Any, count: int | None, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as B rows of ``shape`` (B from the first such argument)."""
+    arr = np.asarray(value, dtype=float)
+    if arr.ndim == len(shape):
+        arr = arr[None]
+    if arr.shape[1:] != shape or (count is not None and arr.shape[0] != count):
+        want = f"({'B' if count is None else count}, {', '.join(map(str, shape))})".replace(
+            ", )", ")"
+        )
+        raise InvalidInputError(f"params['{name}']: expected shape {want}, got {arr.shape}")
+    return arr
+
+
+def _effect_param(effects: list, name: str, parameter: str, value: np.ndarray) -> list:
+    hits = [k for k, e in enumerate(effects) if name in (e.name, e.kind)]
+    if not hits:
+        names = sorted({e.name for e in effects} | {e.kind for e in effects})
+        raise InvalidInputError(
+            f"params: no effect named '{name}' in the scene (effects: {names}); a body "
+            f"parameter is '<body>.mass', '.com' or '.inertia'"
+        )
+    out = list(effects)
+    for k in hits:
+        out[k] = out[k].with_parameter(parameter, np.atleast_1d(value))
+    return out
+
+
+def _scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
+    """One scene per run, from ``scene`` with the per-run ``params``."""
+    model = scene.model
+    count = None
+    per = {}
+    for key, value in params.items():
+        arr = np.asarray(value, dtype=float)
+        if arr.ndim == 0:
+            raise InvalidInputError(f"params['{key}']: expected one value per run, got a scalar")
+        if count is None:
+            count = arr.shape[0]
+        elif arr.shape[0] != count:
+            raise InvalidInputError(
+                f"params['{key}']: expected {count} runs (as the other params), got {arr.shape[0]}"
+            )
+        per[key] = arr
+    bodies = set(model.body_names)
+    out = []
+    for b in range(count or 0):
+        m = model
+        effects = list(scene.effects)
+        for key, arr in per.items():
+            if key == "gravity":
+                g = _rows(key, arr, count, (3,))[b]
+                grav = [k for k, e in enumerate(effects) if e.g is not None]
+                if grav:
+                    for k in grav:
+                        effects[k] = effects[k].with_parameter("g", g)
+                else:
+                    effects.append(_core.Effect.gravity(g))
+                continue
+            head, _, tail = key.rpartition(".")
+            if head in bodies and tail in ("mass", "com", "inertia"):
+                body = m.body(head)
+                mass, com, inertia = body.mass, np.asarray(body.com), np.asarray(body.inertia)
+                if tail == "mass":
+                    mass = float(_rows(key, arr, count, ())[b])
+                elif tail == "com":
+                    com = _rows(key, arr, count, (3,))[b]
+                else:
+                    inertia = _rows(key, arr, count, (3, 3))[b]
+                m = m.with_body(head, _core.RigidBody(mass, com=com, inertia=inertia))
+            elif head:
+                effects = _effect_param(effects, head, tail, arr[b])
+            else:
+                raise InvalidInputError(
+                    f"params: expected 'gravity', '<effect>.<parameter>' or '<body>.mass'/"
+                    f"'.com'/'.inertia', got '{key}'"
+                )
+        out.append(scene.replace(model=m, effects=effects))
+    return out
+
+
+def simulate_batch(
+    scene: Scene | Sequence[Scene],
+    t_span: Sequence[float] | None = None,
+    *,
+    q0: Any = None,
+    v0: Any = None,
+    params: dict[str, Any] | None = None,
+    t_eval: Any = None,
+    rtol: Any = None,
+    atol: Any = None,
+    events: Sequence[Any] | None = None,
+    first_step: float | None = None,
+    max_step: float | None = None,
+    max_steps: int | None = None,
+    energy: bool = False,
+    disable: Any = None,
+    threads: int | None = None,
+    progress: Callable[[int, int], Any] | None = None,
+) -> BatchResult:
+    """B simulations of one scene (or of a list of scenes), on ``threads`` threads (default:
+    one per core), the GIL released once for the whole batch.
+
+    ``q0`` (B, nq) and ``v0`` (B, nv) give per-run initial states (one row: every run);
+    ``params`` per-run parameters (see the module docs); the other arguments are
+    :func:`simulate`'s, for every run (events: :class:`StateEvent` only). ``progress(done,
+    B)`` is called every 50 ms from the calling thread, which also watches for Ctrl-C (a
+    ``KeyboardInterrupt`` stops the batch). Each run gives exactly what the same
+    :func:`simulate` call gives; one failing run (a NaN force, a singularity) is reported in
+    its own result while the others finish."""
+    scenes = [scene] if isinstance(scene, Scene) else list(scene)
+    if not scenes or not all(isinstance(s, Scene) for s in scenes):
+        raise InvalidInputError("scene: expected a Scene or a non-empty list of Scenes")
+    if params:
+        if len(scenes) != 1:
+            raise InvalidInputError("params: give one scene with params, or a list of scenes")
+        scenes = _scenes_from_params(scenes[0], dict(params))
+    out = _core.simulate_batch(
+        scenes, q0, v0, t_span, rtol, atol, t_eval, events, first_step, max_step, max_steps,
+        energy, disable, threads, progress,
+    )
+    names = [s.name for s in scenes]
+    results = []
+    for k, d in enumerate(out):
+        name = names[0] if len(names) == 1 else names[k]
+        error = d.pop("error")
+        if "t" not in d:
+            results.append(_failed(name, error))
+        else:
+            results.append(SimulationResult(scene=name, **d))
+    success = np.array([r.success for r in results], dtype=bool)
+    t = q = v = None
+    if t_eval is not None:
+        t = np.asarray(t_eval, dtype=float).reshape(-1)
+        nq = scenes[0].model.nq
+        nv = scenes[0].model.nv
+        q = np.full((len(results), len(t), nq), np.nan)
+        v = np.full((len(results), len(t), nv), np.nan)
+        for k, r in enumerate(results):
+            n = len(r.t)
+            if n and r.q.shape[1] == nq:
+                q[k, :n], v[k, :n] = r.q, r.v
+    return BatchResult(
+        results=results,
+        t=t,
+        q=q,
+        v=v,
+        success=success,
+        status=np.array([r.status for r in results]),
+        message=[r.message for r in results],
+        t_reached=np.array([r.t_reached for r in results], dtype=float),
+        nfev=np.array([r.nfev for r in results], dtype=int),
+    )
+
+
+def _failed(name: str, error: BaseException) -> SimulationResult:
+    """The result of a run that could not start (its input was refused)."""
+    return SimulationResult(
+        t=np.zeros(0),
+        q=np.zeros((0, 0)),
+        v=np.zeros((0, 0)),
+        energy=None,
+        t_events=[],
+        q_events=[],
+        v_events=[],
+        nfev=0,
+        n_accepted=0,
+        n_rejected=0,
+        status=-1,
+        message=f"{type(error).__name__}: {error}",
+        success=False,
+        t_reached=float("nan"),
+        scene=name,
+    )
