@@ -20,6 +20,7 @@ from .balancing import (
     prescribed_motion,
     shaking,
 )
+from .batch import BatchResult, simulate_batch
 from .errors import (
     InertiaError,
     InvalidInputError,
@@ -51,7 +52,6 @@ from .simulation import (
     rk45,
     simulate,
 )
-from .batch import BatchResult, simulate_batch
 from .work_precision import WorkPrecision, work_precision
 
 

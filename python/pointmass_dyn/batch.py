@@ -168,8 +168,21 @@ def simulate_batch(
             raise InvalidInputError("params: give one scene with params, or a list of scenes")
         scenes = _scenes_from_params(scenes[0], dict(params))
     out = _core.simulate_batch(
-        scenes, q0, v0, t_span, rtol, atol, t_eval, events, first_step, max_step, max_steps,
-        energy, disable, threads, progress,
+        scenes,
+        q0,
+        v0,
+        t_span,
+        rtol,
+        atol,
+        t_eval,
+        events,
+        first_step,
+        max_step,
+        max_steps,
+        energy,
+        disable,
+        threads,
+        progress,
     )
     names = [s.name for s in scenes]
     results = []
