@@ -72,7 +72,7 @@ pub struct LocalInertia {
 
 impl LocalInertia {
     /// The whole 6×6 matrix `[[P, Q], [Qᵀ, R]]`.
-    pub(super) fn to_mat6(&self) -> crate::spatial::Mat6 {
+    pub(super) fn to_mat6(self) -> crate::spatial::Mat6 {
         let mut m = crate::spatial::Mat6::zeros();
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.p.to_mat());
         m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.q);
