@@ -20,6 +20,7 @@ from .balancing import (
     prescribed_motion,
     shaking,
 )
+from .batch import BatchResult, simulate_batch
 from .errors import (
     InertiaError,
     InvalidInputError,
@@ -51,7 +52,7 @@ from .simulation import (
     rk45,
     simulate,
 )
-from .batch import BatchResult, simulate_batch
+from .sweep import sweep
 from .work_precision import WorkPrecision, work_precision
 
 
@@ -146,5 +147,6 @@ __all__ = [
     "shaking",
     "simulate",
     "simulate_batch",
+    "sweep",
     "work_precision",
 ]
