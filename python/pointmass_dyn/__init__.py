@@ -52,6 +52,7 @@ from .simulation import (
     rk45,
     simulate,
 )
+from .sweep import sweep
 from .work_precision import WorkPrecision, work_precision
 
 
@@ -146,5 +147,6 @@ __all__ = [
     "shaking",
     "simulate",
     "simulate_batch",
+    "sweep",
     "work_precision",
 ]
