@@ -1,5 +1,6 @@
 """``pointmass-dyn``: simulate a scene, print its point masses, list the bundled scenes,
-measure work–precision, analyse and balance a mechanism's shaking forces."""
+measure work–precision, analyse and balance a mechanism's shaking forces, sweep parameters
+and initial states over many runs (sweep_cli.py)."""
 
 from __future__ import annotations
 
@@ -575,6 +576,9 @@ def build_parser() -> argparse.ArgumentParser:
                          "bearing forces; or the Pareto front")
     bl.add_argument("--out", default=None, help="write the table to a .csv file")
     bl.set_defaults(func=cmd_balance)
+    from .sweep_cli import add_parser as add_sweep_parser
+
+    add_sweep_parser(sub)
     return p
 
 

@@ -415,3 +415,103 @@ def plot_pareto(front, objectives=("force", "moment"), path: str | Path | None =
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
+
+
+# --------------------------------------------------------------------------------------------
+# Sweeps (pointmass-dyn sweep)
+# --------------------------------------------------------------------------------------------
+def plot_sweep(t, q, success, q_labels, angular, param_names, param_values, coord: int,
+               path: str | Path | None = None, title: str = ""):
+    """A sweep's runs: coordinate ``coord`` against time over the successful runs (median,
+    25–75 % and 5–95 % bands, a few runs drawn), its final value against the first swept
+    parameter (coloured by the second, if any; a histogram when nothing was swept), and
+    the spread of every coordinate's final value. Angles in degrees. Saves to ``path``."""
+    plt = _pyplot()
+    q = np.asarray(q, dtype=float)[np.asarray(success, dtype=bool)]
+    values = np.asarray(param_values, dtype=float).reshape(len(success), -1)
+    values = values[np.asarray(success, dtype=bool)]
+    scale = np.where(np.asarray(angular, dtype=bool), 180.0 / np.pi, 1.0)
+    q = q * scale
+    last = q_labels[coord].split()[-1]
+    unit = "deg" if angular[coord] else ("-" if last in ("qx", "qy", "qz", "qw") else "m")
+    fig = plt.figure(figsize=(11, 7.2))
+    grid = fig.add_gridspec(2, 2, height_ratios=(1.15, 1.0))
+    fan = fig.add_subplot(grid[0, :])
+    final_ax = fig.add_subplot(grid[1, 0])
+    box = fig.add_subplot(grid[1, 1])
+    y = q[:, :, coord]
+    if len(y):
+        lo5, lo25, med, hi75, hi95 = np.percentile(y, [5, 25, 50, 75, 95], axis=0)
+        fan.fill_between(t, lo5, hi95, color=_BEFORE, alpha=0.18, lw=0, label="5–95 %")
+        fan.fill_between(t, lo25, hi75, color=_BEFORE, alpha=0.38, lw=0, label="25–75 %")
+        pick = np.linspace(0, len(y) - 1, min(len(y), 12)).astype(int)
+        pick = np.unique(pick)
+        for n, k in enumerate(pick):
+            fan.plot(t, y[k], color="0.35", lw=0.5, alpha=0.6,
+                     label=f"{len(pick)} of the runs" if n == 0 else None)
+        fan.plot(t, med, color=_AFTER, lw=1.8, label="median")
+        fan.legend(loc="upper left", fontsize=8, ncol=4)
+    else:
+        fan.text(0.5, 0.5, "no successful run", ha="center", va="center",
+                 transform=fan.transAxes)
+    fan.set_xlabel("t (s)")
+    fan.set_ylabel(f"q[{coord}] {q_labels[coord]} ({unit})")
+    fan.set_xlim(t[0], t[-1])
+    fan.grid(alpha=0.3)
+    fan.set_title(f"q[{coord}] ({q_labels[coord]}) over {len(y)} successful runs", fontsize=9)
+
+    final = y[:, -1] if len(y) else np.zeros(0)
+    if param_names and len(final):
+        x = values[:, 0]
+        second = np.unique(values[:, 1]) if len(param_names) > 1 else None
+        if second is not None and len(second) <= 8:
+            # One line (the median over the runs at each value) per value of the second.
+            colors = plt.get_cmap("viridis")(np.linspace(0.0, 0.85, len(second)))
+            for u, c in zip(second, colors):
+                on = values[:, 1] == u
+                xs = np.unique(x[on])
+                final_ax.plot(x[on], final[on], "o", color=c, ms=4, alpha=0.6)
+                final_ax.plot(xs, [np.median(final[on][x[on] == w]) for w in xs], "-",
+                              color=c, lw=1.4, label=f"{param_names[1]} = {u:g}")
+            final_ax.legend(fontsize=7)
+        elif second is not None:
+            sc = final_ax.scatter(x, final, c=values[:, 1], cmap="viridis", s=18,
+                                  edgecolors="none")
+            fig.colorbar(sc, ax=final_ax, label=param_names[1])
+        else:
+            final_ax.plot(x, final, "o", color=_BEFORE, ms=4, alpha=0.7)
+            xs = np.unique(x)
+            if len(xs) > 1:
+                meds = [np.median(final[x == u]) for u in xs]
+                final_ax.plot(xs, meds, "-", color=_AFTER, lw=1.4, label="median")
+                final_ax.legend(fontsize=8)
+        final_ax.set_xlabel(param_names[0])
+        final_ax.set_ylabel(f"final q[{coord}] ({unit})")
+        final_ax.set_title(f"q[{coord}] at t = {t[-1]:g} s against {param_names[0]}",
+                           fontsize=9)
+    elif len(final):
+        final_ax.hist(final, bins=min(30, max(5, len(final) // 4)), color=_BEFORE, alpha=0.8)
+        final_ax.set_xlabel(f"final q[{coord}] ({unit})")
+        final_ax.set_ylabel("runs")
+        final_ax.set_title(f"q[{coord}] at t = {t[-1]:g} s", fontsize=9)
+    final_ax.grid(alpha=0.3)
+
+    if len(q):
+        nq = q.shape[2]
+        box.boxplot([q[:, -1, k] for k in range(nq)], whis=(5, 95), showfliers=True,
+                    flierprops={"markersize": 2}, medianprops={"color": _AFTER})
+        box.set_xticks(range(1, nq + 1))
+        box.set_xticklabels([f"{k}" for k in range(nq)], fontsize=8)
+        if nq <= 10:
+            box.set_xticklabels([lab.removesuffix(" q").replace(" ", "\n") for lab in q_labels],
+                                fontsize=7)
+    box.set_ylabel("final q (deg for angles)")
+    box.set_title(f"every coordinate at t = {t[-1]:g} s (box 25–75 %, whiskers 5–95 %)",
+                  fontsize=9)
+    box.grid(alpha=0.3, axis="y")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    if path is not None:
+        fig.savefig(path, dpi=120)
+        plt.close(fig)
+    return fig
