@@ -295,7 +295,7 @@ def _progress_bar(total: int, stream, always: bool):
             draw(done)
 
     def finish(done: int) -> None:
-        if state["shown"]:
+        if state["shown"] or always:
             draw(done)
             stream.write("\n")
             stream.flush()
