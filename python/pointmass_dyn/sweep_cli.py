@@ -294,9 +294,10 @@ def _progress_bar(total: int, stream, always: bool):
         if always or time.perf_counter() - start >= 0.5:
             draw(done)
 
-    def finish(done: int) -> None:
+    def finish(done: int | None = None) -> None:
+        """Ends the bar at ``done`` runs (None: the last count reported)."""
         if state["shown"] or always:
-            draw(done)
+            draw(state["done"] if done is None else done)
             stream.write("\n")
             stream.flush()
 
@@ -407,7 +408,7 @@ def cmd_sweep(args) -> int:
             progress=report if show else None,
         )
     except KeyboardInterrupt:
-        finish(0)
+        finish()
         print("pointmass-dyn: interrupted", file=sys.stderr)
         return 130
     wall = time.perf_counter() - start
