@@ -136,7 +136,11 @@ impl Effect {
         };
         let scalar = || match values {
             [x] => Ok(*x),
-            xs => Err(Error::arg(key, "one number", format!("{} values", xs.len()))),
+            xs => Err(Error::arg(
+                key,
+                "one number",
+                format!("{} values", xs.len()),
+            )),
         };
         Ok(match (self, key) {
             (Effect::Gravity { .. }, "g") => match values {

@@ -403,7 +403,12 @@ impl PyEffect {
     /// A copy with one parameter replaced (checked as the factory checks it): gravity `g`;
     /// a spring's `stiffness`, `rest`; a damper's `damping`; friction's `friction`, `v_eps`;
     /// a point spring's `stiffness`, `rest_length`, `damping`.
-    fn with_parameter(&self, py: Python<'_>, name: &str, value: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn with_parameter(
+        &self,
+        py: Python<'_>,
+        name: &str,
+        value: &Bound<'_, PyAny>,
+    ) -> PyResult<Self> {
         let (_, values) = super::convert::array(value, name)?;
         Ok(self.inner.with_parameter(name, &values).py(py)?.into())
     }

@@ -111,7 +111,10 @@ impl PyScene {
                 return Err(invalid(
                     py,
                     "model",
-                    format!("a model with nq = {}, nv = {} (this scene's)", inner.model.nq, inner.model.nv),
+                    format!(
+                        "a model with nq = {}, nv = {} (this scene's)",
+                        inner.model.nq, inner.model.nv
+                    ),
                     format!("nq = {}, nv = {}", m.nq, m.nv),
                 ));
             }

@@ -366,7 +366,11 @@ pub fn simulate_batch<'py>(
     }
     let rows = |x: &Option<BatchStates>| x.as_ref().map_or(1, |b| b.rows);
     let count = rows(&q0s).max(rows(&v0s)).max(scenes.len());
-    for (arg, n) in [("q0", rows(&q0s)), ("v0", rows(&v0s)), ("scenes", scenes.len())] {
+    for (arg, n) in [
+        ("q0", rows(&q0s)),
+        ("v0", rows(&v0s)),
+        ("scenes", scenes.len()),
+    ] {
         if n != 1 && n != count {
             return Err(invalid(
                 py,
@@ -385,9 +389,13 @@ pub fn simulate_batch<'py>(
             "a callable",
         ));
     }
-    let threads = super::convert::opt_count(threads, "threads", "a thread count >= 1 (or None: one per core)")?
-        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-        .max(1);
+    let threads = super::convert::opt_count(
+        threads,
+        "threads",
+        "a thread count >= 1 (or None: one per core)",
+    )?
+    .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+    .max(1);
     // Settings per scene (each resolves the caller's arguments against its own file's).
     let mut resolved = Vec::with_capacity(scenes.len());
     for s in &scenes {
@@ -395,7 +403,17 @@ pub fn simulate_batch<'py>(
         requested.disable = disable_arg(py, disable)?;
         requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
         let dim = s.model.nq + s.model.nv;
-        let base = options(py, dim, &mut requested, rtol, atol, t_eval, false, "standard", "warn")?;
+        let base = options(
+            py,
+            dim,
+            &mut requested,
+            rtol,
+            atol,
+            t_eval,
+            false,
+            "standard",
+            "warn",
+        )?;
         resolved.push(requested.resolve(&s.settings, base).py(py)?);
     }
     let pick = |k: usize, n: usize| if n == 1 { 0 } else { k };
@@ -452,7 +470,9 @@ pub fn simulate_batch<'py>(
                 });
                 if let Err(e) = polled {
                     raised = Some(e);
-                    control.stop.store(true, std::sync::atomic::Ordering::Relaxed);
+                    control
+                        .stop
+                        .store(true, std::sync::atomic::Ordering::Relaxed);
                 }
             }
             handle.join()
@@ -461,7 +481,8 @@ pub fn simulate_batch<'py>(
     if let Some(e) = raised.or(take_callback_error()) {
         return Err(e);
     }
-    let results = results.map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
+    let results = results
+        .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
     let out = PyList::empty(py);
     for result in results {
         match result {
@@ -489,7 +510,11 @@ impl BatchStates {
     }
 }
 
-fn batch_states(arg: &str, obj: Option<&Bound<'_, PyAny>>, width: usize) -> PyResult<Option<BatchStates>> {
+fn batch_states(
+    arg: &str,
+    obj: Option<&Bound<'_, PyAny>>,
+    width: usize,
+) -> PyResult<Option<BatchStates>> {
     let Some(obj) = given(obj) else {
         return Ok(None);
     };

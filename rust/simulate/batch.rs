@@ -50,7 +50,9 @@ pub fn run_batch(
             break;
         };
         let result = if control.stop.load(Ordering::Relaxed) {
-            Err(Error::Interrupted("the batch was stopped before this run started".into()))
+            Err(Error::Interrupted(
+                "the batch was stopped before this run started".into(),
+            ))
         } else {
             let keep_going: super::Progress<'_> =
                 Box::new(|_t| !control.stop.load(Ordering::Relaxed));
