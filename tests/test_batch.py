@@ -145,6 +145,7 @@ def test_progress_is_called_and_its_exception_stops_the_batch(chain7):
     )
     assert batch.success.all()
     assert seen and all(total == 64 and 0 <= done <= 64 for done, total in seen)
+    assert seen[-1] == (64, 64)  # the last report is the end
 
     def stop(done, total):
         raise RuntimeError("cancelled")

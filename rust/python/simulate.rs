@@ -481,6 +481,10 @@ pub fn simulate_batch<'py>(
     if let Some(e) = raised.or(take_callback_error()) {
         return Err(e);
     }
+    // A last report at the end, so a caller's progress bar always reaches B.
+    if let Some(cb) = &progress {
+        cb.bind(py).call1((count, count))?;
+    }
     let results = results
         .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
     let out = PyList::empty(py);
