@@ -181,3 +181,38 @@ def test_bad_batch_input_is_a_clear_error(chain7):
     batch = pmd.simulate_batch(fourbar, (0, 0.01), q0=open_q0, v0=np.zeros((2, 3)))
     assert list(batch.success) == [True, False]
     assert "loop" in batch.message[1]
+
+
+def test_torque_parameters_per_run_are_the_scenes_they_describe():
+    """A tabulated drive's values and a constant torque per run, against hand-built scenes."""
+    scene = pmd.load_scene("pendulum_planar")
+    nv = scene.model.nv
+    times = [0.0, 0.5, 1.0]
+    drive = pmd.TabulatedTorque(None, times, np.zeros((3, nv)), name="drive")
+    bias = pmd.JointTorque(None, 0.0, name="bias")
+    base = scene.replace(effects=[*scene.effects, drive, bias])
+    values = np.array(
+        [np.zeros((3, nv)), np.full((3, nv), 0.3), np.linspace(-1, 1, 3 * nv).reshape(3, nv)]
+    )
+    tau = np.array([0.0, -0.2, 0.5])
+    batch = pmd.simulate_batch(
+        base,
+        (0, 1),
+        params={"drive.values": values.reshape(3, -1), "bias.tau": tau},
+        t_eval=T_EVAL,
+        rtol=1e-9,
+        atol=1e-11,
+    )
+    for k in range(3):
+        effects = [
+            *scene.effects,
+            pmd.TabulatedTorque(None, times, values[k], name="drive"),
+            pmd.JointTorque(None, tau[k], name="bias"),
+        ]
+        one = pmd.simulate(
+            scene.replace(effects=effects), (0, 1), t_eval=T_EVAL, rtol=1e-9, atol=1e-11
+        )
+        assert_same_run(batch.results[k], one)
+    assert not np.array_equal(batch.q[0], batch.q[2])
+    with pytest.raises(pmd.errors.InvalidInputError, match="values"):
+        pmd.simulate_batch(base, (0, 1), params={"drive.values": np.zeros((2, 5))})

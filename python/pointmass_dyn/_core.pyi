@@ -361,7 +361,8 @@ class Effect:
     def with_parameter(self, name: str, value: ArrayLike) -> Effect:
         """A copy with one parameter replaced and checked: gravity ``g``; a spring's
         ``stiffness``, ``rest``; a damper's ``damping``; friction's ``friction``, ``v_eps``;
-        a point spring's ``stiffness``, ``rest_length``, ``damping``."""
+        a point spring's ``stiffness``, ``rest_length``, ``damping``; a constant torque's
+        ``tau``, a tabulated torque's ``values`` (same times), a PD torque's ``kp``, ``kd``."""
     @property
     def g(self) -> _Array | None:
         """A gravity effect's ``g`` (3,); None for other effects."""

@@ -9,7 +9,8 @@ Runs differ by their initial states (``q0``, ``v0`` with one row per run) and by
     "<effect>.<parameter>"       (B,) or (B, k)   an effect's parameter by its name (or
                                           family): spring stiffness/rest, damper damping,
                                           friction friction/v_eps, point_spring
-                                          stiffness/rest_length/damping
+                                          stiffness/rest_length/damping, torque tau,
+                                          tabulated_torque values, pd_torque kp/kd
     "<body>.mass" / ".com" / ".inertia"   (B,), (B, 3), (B, 3, 3)   a body's inertial
                                           (the model's structure is kept)
 

@@ -127,8 +127,9 @@ impl Effect {
     /// A copy with one parameter replaced, checked as the effect's constructor checks it
     /// (per-run parameters of a batch): gravity `g`; a spring's `stiffness` and `rest`; a
     /// damper's `damping`; friction's `friction` and `v_eps`; a point spring's `stiffness`,
-    /// `rest_length` and `damping`. A per-joint parameter takes one value (every joint) or
-    /// one per joint.
+    /// `rest_length` and `damping`; a constant torque's `tau`, a tabulated torque's `values`
+    /// (same times), a PD torque's `kp` and `kd`. A per-joint parameter takes one value
+    /// (every joint) or one per joint.
     pub fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
         let per_joint = || match values {
             [x] => PerJoint::All(*x),
@@ -188,10 +189,64 @@ impl Effect {
                     pick("damping", e.damping),
                 )?)
             }
+            (Effect::Torque(e), key) => {
+                let law = match (&e.law, key) {
+                    (TorqueLaw::Constant(_), "tau") => {
+                        return Ok(Effect::Torque(Torque::constant(
+                            e.name.clone(),
+                            e.joints.clone(),
+                            per_joint(),
+                        )?))
+                    }
+                    // The same times, new values (row-major, one row per time).
+                    (TorqueLaw::Tabulated(t), "values") => {
+                        let (rows, cols) = (t.time().len(), t.cols());
+                        if values.len() != rows * cols {
+                            return Err(Error::arg(
+                                "values",
+                                format!("{rows} × {cols} values (the table's times × columns)"),
+                                format!("{} values", values.len()),
+                            ));
+                        }
+                        let m = Matrix {
+                            values: values.to_vec(),
+                            rows,
+                            cols,
+                            one_d: cols == 1,
+                        };
+                        TorqueLaw::Tabulated(Table::new(t.time().to_vec(), m, "time", "values")?)
+                    }
+                    (TorqueLaw::Pd { kp, kd, reference }, "kp" | "kd") => {
+                        let (kp, kd) = match key {
+                            "kp" => (per_joint(), kd.clone()),
+                            _ => (kp.clone(), per_joint()),
+                        };
+                        return Ok(Effect::Torque(Torque::pd(
+                            e.name.clone(),
+                            e.joints.clone(),
+                            kp,
+                            kd,
+                            reference.clone(),
+                        )?));
+                    }
+                    _ => {
+                        return Err(Error::arg(
+                            "parameter",
+                            "tau (constant torque), values (tabulated torque), kp or kd (PD torque)",
+                            format!("'{key}' for this torque effect"),
+                        ))
+                    }
+                };
+                Effect::Torque(Torque {
+                    name: e.name.clone(),
+                    joints: e.joints.clone(),
+                    law,
+                })
+            }
             (e, key) => {
                 return Err(Error::arg(
                     "parameter",
-                    "g (gravity), stiffness or rest (spring), damping (damper), friction or v_eps (friction), stiffness, rest_length or damping (point_spring)",
+                    "g (gravity), stiffness or rest (spring), damping (damper), friction or v_eps (friction), stiffness, rest_length or damping (point_spring), tau, values, kp or kd (torques)",
                     format!("'{key}' for a {} effect", e.kind().name()),
                 ))
             }
