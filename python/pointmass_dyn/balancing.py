@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .errors import InvalidInputError
+from .errors import InvalidInputError, NumericalError
 
 OBJECTIVES = ("force", "moment", "torque")
 
@@ -427,7 +427,7 @@ class Balance:
         return "\n".join(rows)
 
 
-def _objective_rows(motion: MotionAnalysis, reg: dict, design: list, what: str, about):
+def _objective_rows(motion: MotionAnalysis, reg: dict, what: str, about):
     """The linear model of one objective quantity: its current value y0 (N·k,) and the change
     per unit mass at each design point A (N·k, P)."""
     pos, acc, gen = reg["positions"], reg["accelerations"], reg["generalized"]
@@ -541,7 +541,10 @@ def _solve_qp(h, c, ce, de, lb, ub, x0):
         if worst is None:
             return x
         del fixed[worst]
-    return x
+    raise NumericalError(
+        f"balance: the active-set solve did not settle in {10 * n + 50} iterations "
+        f"({n} design masses); the problem may be badly scaled"
+    )
 
 
 def _row_space(ce: np.ndarray, de: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -638,7 +641,7 @@ def balance(
     c = np.zeros(p)
     ce_rows, de_rows, lin, weighted = list(mass_rows), [np.zeros(len(names))], {}, []
     for what in sorted(set(objective) | set(zero)):
-        y0, a = _objective_rows(motion, reg, design, what, about)
+        y0, a = _objective_rows(motion, reg, what, about)
         a = np.hstack([a, np.zeros((a.shape[0], pad.shape[1]))])
         # y(x) = y0 + A (x − x_now): as a function of x, y = (y0 − A x_now) + A x.
         b = y0 - a @ x_now
