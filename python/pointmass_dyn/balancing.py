@@ -484,67 +484,138 @@ def _design_points(model, links, counterweights):
     return out
 
 
-def _solve_qp(h, c, ce, de, lb, ub, x0):
-    """min ½ xᵀ H x + cᵀ x  s.t.  Cₑ x = dₑ, lb ≤ x ≤ ub, by a primal active set on the bounds
-    (equalities always active), from a point ``x0`` feasible for the bounds and equalities."""
-    n = len(c)
-    x = x0.copy()
-    fixed = {}  # index -> bound value
-    for i in range(n):
-        if x[i] <= lb[i]:
-            fixed[i] = lb[i]
-        elif x[i] >= ub[i]:
-            fixed[i] = ub[i]
-    for _ in range(10 * n + 50):
-        free = [i for i in range(n) if i not in fixed]
-        # Equality-constrained subproblem on the free variables (KKT, minimum norm).
-        xf = np.array([fixed.get(i, 0.0) for i in range(n)])
-        hf = h[np.ix_(free, free)]
-        cf = c[free] + h[np.ix_(free, list(fixed))] @ xf[list(fixed)] if fixed else c[free]
-        m = ce.shape[0]
-        kkt = np.zeros((len(free) + m, len(free) + m))
-        kkt[: len(free), : len(free)] = hf
-        kkt[: len(free), len(free) :] = ce[:, free].T
-        kkt[len(free) :, : len(free)] = ce[:, free]
-        rhs = np.concatenate([-cf, de - (ce[:, list(fixed)] @ xf[list(fixed)] if fixed else 0.0)])
-        sol = np.linalg.lstsq(kkt, rhs, rcond=1e-13)[0]
-        target = xf.copy()
-        target[free] = sol[: len(free)]
-        step = target - x
-        # Largest step along the free variables that keeps them within their bounds.
-        alpha, block = 1.0, None
-        for i in free:
-            if step[i] < 0 and x[i] + step[i] < lb[i]:
-                r = (lb[i] - x[i]) / step[i]
-                if r < alpha:
-                    alpha, block = r, (i, lb[i])
-            elif step[i] > 0 and x[i] + step[i] > ub[i]:
-                r = (ub[i] - x[i]) / step[i]
-                if r < alpha:
-                    alpha, block = r, (i, ub[i])
-        x = x + alpha * step
-        if block is not None:
-            x[block[0]] = block[1]
-            fixed[block[0]] = block[1]
-            continue
-        # At the subproblem's optimum: release a bound whose multiplier has the wrong sign.
-        grad = h @ x + c
-        lam_e = sol[len(free) :]
-        mult = {i: grad[i] + ce[:, i] @ lam_e for i in fixed}
-        scale = 1e-12 * (1.0 + np.abs(grad).max())
-        worst, worst_val = None, 0.0
-        for i, g in mult.items():
-            # At a lower bound the gradient must point up (g ≥ 0), at an upper bound down.
-            viol = -g if fixed[i] == lb[i] else g
-            if viol > scale and viol > worst_val:
-                worst, worst_val = i, viol
-        if worst is None:
-            return x
-        del fixed[worst]
-    raise NumericalError(
-        f"balance: the active-set solve did not settle in {10 * n + 50} iterations "
-        f"({n} design masses); the problem may be badly scaled"
+def _solve_qp(h, c, ce, de, lb, ub, x0=None):
+    """min ½ xᵀ H x + cᵀ x  s.t.  Cₑ x = dₑ (independent rows), lb ≤ x ≤ ub (lb finite).
+
+    A primal–dual interior-point method (Mehrotra's predictor–corrector), which degenerate
+    problems — many masses at zero, more equalities than free masses — do not trouble, then
+    a polish: the bounds it finds active are fixed and the equality-constrained problem on
+    the others is solved exactly, kept if it is feasible and no worse. Variables with
+    equal bounds are substituted first."""
+    pinned = lb >= ub
+    if pinned.any():
+        keep = ~pinned
+        xp = np.where(pinned, lb, 0.0)
+        sub = _solve_qp(
+            h[np.ix_(keep, keep)],
+            c[keep] + h[np.ix_(keep, pinned)] @ xp[pinned],
+            ce[:, keep],
+            de - ce[:, pinned] @ xp[pinned],
+            lb[keep],
+            ub[keep],
+            None if x0 is None else x0[keep],
+        )
+        xp[keep] = sub
+        return xp
+    n, m = len(c), ce.shape[0]
+    finite_ub = np.isfinite(ub)
+    span = np.where(finite_ub, ub - lb, 1.0)
+    x = lb + np.where(finite_ub, 0.5 * span, 1.0)
+    if x0 is not None:
+        x = np.clip(x0, lb + 1e-3 * span, np.where(finite_ub, ub - 1e-3 * span, np.inf))
+    y = np.zeros(m)
+    zl = np.ones(n)
+    zu = np.where(finite_ub, 1.0, 0.0)
+    scale = 1.0 + max(np.abs(h).max(initial=0.0), np.abs(c).max(initial=0.0))
+    for _ in range(100):
+        sl = x - lb
+        su = np.where(finite_ub, ub - x, 1.0)
+        r_dual = h @ x + c + ce.T @ y - zl + zu
+        r_prim = ce @ x - de
+        mu = (sl @ zl + (su * zu)[finite_ub].sum()) / (n + finite_ub.sum())
+        # The polish below makes the answer exact; the interior point needs only to find
+        # the active bounds (its residuals stall near 1e-11 as gaps reach 1e-20).
+        if (
+            np.abs(r_dual).max(initial=0.0) < 1e-10 * scale
+            and np.abs(r_prim).max(initial=0.0) < 1e-11 * (1.0 + np.abs(de).max(initial=0.0))
+            and mu < 1e-13 * scale
+        ):
+            break
+        d = zl / sl + np.where(finite_ub, zu / su, 0.0)
+        kkt = np.zeros((n + m, n + m))
+        kkt[:n, :n] = h + np.diag(d)
+        kkt[:n, n:] = ce.T
+        kkt[n:, :n] = ce
+
+        def direction(sigma_mu, dx_aff=None, dzl_aff=None, dzu_aff=None):
+            # Complementarity targets sl·zl = σμ (− the predictor's second-order term).
+            cl = sigma_mu - sl * zl
+            cu = np.where(finite_ub, sigma_mu - su * zu, 0.0)
+            if dx_aff is not None:
+                cl = cl - dx_aff * dzl_aff
+                cu = cu + np.where(finite_ub, dx_aff * dzu_aff, 0.0)
+            rhs = np.concatenate([-r_dual + cl / sl - np.where(finite_ub, cu / su, 0.0), -r_prim])
+            try:
+                sol = np.linalg.solve(kkt, rhs)
+            except np.linalg.LinAlgError:
+                sol = np.linalg.lstsq(kkt, rhs, rcond=1e-14)[0]
+            dx = sol[:n]
+            dzl = (cl - zl * dx) / sl
+            dzu = np.where(finite_ub, (cu + zu * dx) / su, 0.0)
+            return dx, sol[n:], dzl, dzu
+
+        def longest(dx, dzl, dzu):
+            steps = [1.0]
+            for v, dv in ((sl, dx), (zl, dzl)):
+                neg = dv < 0
+                if neg.any():
+                    steps.append(np.min(-v[neg] / dv[neg]))
+            for v, dv in ((su, -dx), (zu, dzu)):
+                neg = finite_ub & (dv < 0)
+                if neg.any():
+                    steps.append(np.min(-v[neg] / dv[neg]))
+            return min(steps)
+
+        dx, dy, dzl, dzu = direction(0.0)
+        a_aff = longest(dx, dzl, dzu)
+        sl_a, zl_a = sl + a_aff * dx, zl + a_aff * dzl
+        su_a, zu_a = su - a_aff * dx, zu + a_aff * dzu
+        mu_aff = (sl_a @ zl_a + (su_a * zu_a)[finite_ub].sum()) / (n + finite_ub.sum())
+        sigma = (mu_aff / mu) ** 3 if mu > 0 else 0.0
+        dx, dy, dzl, dzu = direction(sigma * mu, dx, dzl, dzu)
+        alpha = 0.99 * longest(dx, dzl, dzu)
+        x, y = x + alpha * dx, y + alpha * dy
+        zl, zu = zl + alpha * dzl, np.where(finite_ub, zu + alpha * dzu, 0.0)
+    else:
+        raise NumericalError(
+            f"balance: the quadratic program did not converge ({n} design masses); the "
+            f"problem may be badly scaled"
+        )
+    return _polish(h, c, ce, de, lb, ub, x, zl, zu)
+
+
+def _polish(h, c, ce, de, lb, ub, x, zl, zu):
+    """The exact solution on the active set the interior point found (bounds whose
+    multiplier exceeds their gap), if it is feasible and no worse; else ``x``."""
+    at_lb = (x - lb) < zl
+    at_ub = np.isfinite(ub) & ((ub - x) < zu)
+    fixed = at_lb | at_ub
+    free = np.flatnonzero(~fixed)
+    xf = np.where(at_lb, lb, np.where(at_ub, ub, 0.0))
+    m = ce.shape[0]
+    k = len(free)
+    kkt = np.zeros((k + m, k + m))
+    kkt[:k, :k] = h[np.ix_(free, free)]
+    kkt[:k, k:] = ce[:, free].T
+    kkt[k:, :k] = ce[:, free]
+    rhs = np.concatenate([-(c[free] + h[free] @ xf), de - ce @ xf])
+    sol = np.linalg.lstsq(kkt, rhs, rcond=1e-14)[0]
+    polished = xf.copy()
+    polished[free] = sol[:k]
+    feasible = (
+        np.all(polished >= lb - 1e-12 * (1 + np.abs(lb)))
+        and np.all(polished <= ub + 1e-12 * (1 + np.abs(ub)))
+        and np.abs(ce @ polished - de).max(initial=0.0)
+        <= max(1e-12 * (1.0 + np.abs(de).max(initial=0.0)), np.abs(ce @ x - de).max(initial=0.0))
     )
+    if not feasible:
+        return x
+    polished = np.clip(polished, lb, ub)
+
+    def cost(v):
+        return 0.5 * v @ h @ v + c @ v
+
+    return polished if cost(polished) <= cost(x) + 1e-12 * (1 + abs(cost(x))) else x
 
 
 def _row_space(ce: np.ndarray, de: np.ndarray, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -676,12 +747,32 @@ def balance(
     x = _solve_qp(h + 1e-14 * base * np.eye(p), c, ce, de, lb, ub, x_start)
     # 2. Among its optima (all share A x), the least added mass: an L1 term (masses ≥ 0)
     #    well above an L2 one that keeps the subproblems strictly convex.
-    if weighted:
-        face, at = _row_space(np.vstack(weighted), np.vstack(weighted) @ x, what="objective")
-        ce, de = np.vstack([ce, face]), np.concatenate([de, at])
+    #    The optimal values A x are unique; where the bounds do not decide them they are
+    #    those of the equality-constrained least squares, exactly (the interior point gives
+    #    them to ~1e-10 only): try those first.
     m_scale = model.total_mass / max(model.nlinks, 1)
     l1 = np.concatenate([np.ones(nd), np.zeros(p - nd)]) / m_scale
-    x = _solve_qp(regularization * np.eye(p) / m_scale**2, l1, ce, de, lb, ub, x)[:nd]
+    h2 = regularization * np.eye(p) / m_scale**2
+    if weighted:
+        w = np.vstack(weighted)
+        k = ce.shape[0]
+        kkt = np.block([[h, ce.T], [ce, np.zeros((k, k))]])
+        free_opt = np.linalg.lstsq(kkt, np.concatenate([-c, de]), rcond=1e-13)[0][:p]
+        tries = [w @ free_opt, w @ x]
+        for target in tries:
+            try:
+                ce2, de2 = _row_space(
+                    np.vstack([ce, w]), np.concatenate([de, target]), what="objective"
+                )
+                x2 = _solve_qp(h2, l1, ce2, de2, lb, ub, x)
+            except (InvalidInputError, NumericalError):
+                continue
+            if np.abs(ce2 @ x2 - de2).max() <= 1e-9 * (1.0 + np.abs(de2).max()):
+                x = x2
+                break
+        x = x[:nd]
+    else:
+        x = _solve_qp(h2, l1, ce, de, lb, ub, x)[:nd]
     lb, ub = lb[:nd], ub[:nd]
     # Rebuild the changed bodies from their point masses and analyse the balanced model.
     groups: dict[str, list[int]] = {}
