@@ -45,7 +45,6 @@ G = np.array([0.0, 0.0, -9.81])
 
 def mjcf_from_scene(scene, timestep: float, integrator: str = "RK4") -> str:
     """MJCF of a revolute chain scene, from the scene's own bodies."""
-    model = scene.model
     bodies = model_bodies(scene)
     xml = [f'<mujoco model="{scene.name}">',
            f'  <option gravity="{G[0]} {G[1]} {G[2]}" integrator="{integrator}" '
@@ -73,8 +72,9 @@ def fmt(v) -> str:
 
 def model_bodies(scene):
     """chain7's bodies from its TOML (a serial chain: each body's parent is the previous)."""
-    import tomllib
     from importlib import resources
+
+    import tomllib
     path = resources.files("pointmass_dyn") / "scenes" / f"{scene.name}.toml"
     spec = tomllib.loads(path.read_text())
     bodies = []

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pointmass_dyn as pmd
+import pytest
 
 G = np.array([0.0, 0.0, -9.81])
 
@@ -369,3 +370,47 @@ def _hypothesis_home():
 
 
 _hypothesis_home()
+
+
+# Floating-base robots of example-robot-data (two humanoids, two quadrupeds), loaded both
+# ways: ours with root_joint="free", Pinocchio's with JointModelFreeFlyer.
+FLOATING = {
+    "talos": "talos_data/robots/talos_full_v2.urdf",
+    "g1": "g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf",
+    "solo12": "solo_description/robots/solo12.urdf",
+    "a1": "a1_description/urdf/a1.urdf",
+}
+
+
+def robots_dir():
+    """example-robot-data's robots folder (the cmeel wheel has no Python module to ask)."""
+    import importlib.metadata
+    from pathlib import Path
+
+    try:
+        dist = importlib.metadata.distribution("example-robot-data")
+    except importlib.metadata.PackageNotFoundError:
+        return None
+    d = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
+    return d if d.is_dir() else None
+
+
+@pytest.fixture(scope="module", params=sorted(FLOATING))
+def floating_robot(request):
+    """(name, our model, Pinocchio's model with gravity (0, 0, -9.81)), joint names equal."""
+    import warnings
+
+    import pinocchio as pin
+
+    root = robots_dir()
+    if root is None:
+        pytest.skip("example-robot-data not installed")
+    path = str(root / FLOATING[request.param])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
+        model = pmd.Model.from_urdf(path, root_joint="free")
+    pm = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
+    pm.gravity.linear = np.array([0.0, 0.0, -9.81])
+    assert model.joint_names == list(pm.names)[1:]
+    return request.param, model, pm
+

@@ -5,10 +5,7 @@ loops, pickling and the CLI."""
 
 from __future__ import annotations
 
-import importlib.metadata
 import pickle
-import warnings
-from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -19,24 +16,6 @@ from scipy.spatial.transform import Rotation
 
 TOL = 1e-9
 G = np.array([0.0, 0.0, -9.81])
-
-
-def robots_dir() -> Path | None:
-    try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
-        return None
-    d = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-    return d if d.is_dir() else None
-
-
-# Floating-base robots: two humanoids and two quadrupeds.
-FLOATING = {
-    "talos": "talos_data/robots/talos_full_v2.urdf",
-    "g1": "g1_description/urdf/g1_29dof_with_hand_rev_1_0.urdf",
-    "solo12": "solo_description/robots/solo12.urdf",
-    "a1": "a1_description/urdf/a1.urdf",
-}
 
 
 def rel(ours, theirs):
@@ -50,19 +29,6 @@ def random_state(nq, nv, rng):
     q[3:7] = quat / np.linalg.norm(quat)
     q[7:] = rng.uniform(-1.5, 1.5, nq - 7)
     return q, rng.normal(size=nv), rng.normal(size=nv), rng.normal(size=nv)
-
-
-@pytest.fixture(scope="module", params=sorted(FLOATING))
-def floating_robot(request):
-    root = robots_dir()
-    if root is None:
-        pytest.skip("example-robot-data not installed")
-    path = str(root / FLOATING[request.param])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
-        model = pmd.Model.from_urdf(path, root_joint="free")
-    pm = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
-    return request.param, model, pm
 
 
 def test_floating_robot_names_and_sizes_equal_pinocchios(floating_robot):

@@ -10,7 +10,7 @@ that do not come from our code:
   wrenches);
 * loops (the bundled fourbar, slider_crank, rssr scenes and a four-bar cut at a ground
   pivot): invariants — no wrench along a passive joint's motion, Newton–Euler of every link
-  from its own point masses, the shaking force and moment from the ground bearings;
+  by its own point masses, the shaking force and moment from the ground bearings;
 * the slider-crank's shaking force and moment in closed form (exact offset kinematics
   differentiated by SymPy) and its Fourier series against the textbook primary and
   secondary forces of the reciprocating mass;
@@ -21,7 +21,6 @@ Shaking (gravity excluded): F = −Σ m a, M_O = −Σ m (r − O) × a over eve
 from __future__ import annotations
 
 import functools
-import warnings
 
 import numpy as np
 import pointmass_dyn as pmd
@@ -42,7 +41,6 @@ from conftest import (
 pin = pytest.importorskip("pinocchio")
 sp = pytest.importorskip("sympy")
 
-from test_free_flyer import FLOATING, robots_dir  # noqa: E402
 from test_loops_mechanisms import (  # noqa: E402
     THETA,
     SliderCrank,
@@ -244,21 +242,6 @@ def test_bearing_forces_are_pinocchios_rnea_joint_wrenches(seed, free_root):
         q, v = random_state(model, rng)
         a = rng.normal(size=model.nv)
         compare_bearing(model, pm, pd, q, v, a, jids, external, "random trees")
-
-
-@pytest.fixture(scope="module", params=sorted(FLOATING))
-def floating_robot(request):
-    root = robots_dir()
-    if root is None:
-        pytest.skip("example-robot-data not installed")
-    path = str(root / FLOATING[request.param])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
-        model = pmd.Model.from_urdf(path, root_joint="free")
-    pm = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
-    pm.gravity.linear = G
-    assert model.joint_names == list(pm.names)[1:]
-    return request.param, model, pm
 
 
 def test_floating_robot_shaking_and_bearing_forces_equal_pinocchios(floating_robot):
