@@ -32,6 +32,7 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .mjcf import to_mjcf
 from .scenes import builtin_scenes, load_scene
 from .simulation import (
     Damper,
@@ -148,5 +149,6 @@ __all__ = [
     "simulate",
     "simulate_batch",
     "sweep",
+    "to_mjcf",
     "work_precision",
 ]

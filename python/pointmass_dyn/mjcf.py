@@ -1,0 +1,579 @@
+"""Our models and scenes as MuJoCo MJCF, and states between the two coordinate conventions.
+
+    xml = pmd.to_mjcf(scene, timestep=1e-3, integrator="RK4")
+    m = mujoco.MjModel.from_xml_string(xml)          # optional peer: pip install 'pointmass-dyn[mujoco]'
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = pmd.mjcf.to_mujoco_state(scene.model, q, v)
+    mujoco.mj_forward(m, d)
+    d.qacc == pmd.mjcf.to_mujoco_acceleration(scene.model, q, v, a)   # a: our forward dynamics
+
+Writing the MJCF needs no MuJoCo; only loading it does. The conversion, joint by joint:
+
+============== ============================ =========================================
+ours           MJCF                          state (ours → MuJoCo)
+============== ============================ =========================================
+Revolute       ``hinge``, same axis          same q, v
+Prismatic      ``slide``, same axis          same q, v
+Spherical      ``ball``                      quaternion (x, y, z, w) → (w, x, y, z); v same
+                                             (angular velocity in the body frame)
+SphericalZYZ   ``ball``                      q → the quaternion of Rz(φ) Ry(θ) Rz(ψ);
+                                             Euler rates → body angular velocity Rᵀ L q̇
+FreeFlyer      ``free`` (below the world     position and orientation in the world;
+               only)                         linear velocity in world axes (ours: body
+                                             axes), angular in body axes (same)
+Fixed          a body without a joint        —
+============== ============================ =========================================
+
+MuJoCo refuses massless moving bodies, so a ZYZ joint becomes one ball joint (not three
+hinges with massless bodies between them) and the state conversion carries the Euler rates.
+Bodies keep their placements (``pos``/``quat`` from the model's joint frames), mass, COM and
+full inertia tensor (``fullinertia``, same sign convention). MuJoCo orders joints by a
+depth-first walk of the tree; the helpers here permute accordingly.
+
+Scene effects: gravity (summed), joint springs on revolute/prismatic joints (``stiffness``,
+``springref``) and on quaternion joints resting at the identity (MuJoCo's ball spring), and
+dampers (``damping``) on every joint but ZYZ ones (ours damp Euler rates, MuJoCo the angular
+velocity). Parameters are read back by probing :func:`pointmass_dyn.effect_forces`, so
+whatever the scene declares is what MuJoCo gets. Any other effect, closed loops and FreeFlyer
+joints below a moving body (MuJoCo allows free joints only at the top level) are refused with
+:class:`~pointmass_dyn.errors.InvalidInputError`. Contact is disabled; nothing else of
+MuJoCo's (armature, friction loss, limits) is added.
+
+Accuracy: MuJoCo's ``mj_forward`` ``qacc`` equals our forward dynamics to ~1e-13 relative
+on the bundled scenes and on random trees (``tests/test_mjcf.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from . import _core
+from .errors import InvalidInputError, ModelStructureError
+
+#: MuJoCo's integrators, as ``<option integrator=...>`` names them.
+MUJOCO_INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
+
+_MOVING = ("Revolute", "Prismatic", "Spherical", "SphericalZYZ", "FreeFlyer")
+
+
+@dataclass(frozen=True)
+class _Joint:
+    body: int
+    kind: str
+    q: int          # our q index
+    v: int          # our v index
+    qpos: int       # MuJoCo qpos address
+    dof: int        # MuJoCo dof address
+    rot0: np.ndarray  # joint frame in the parent's frame (for FreeFlyer: in the world)
+    pos0: np.ndarray
+
+
+@dataclass(frozen=True)
+class MujocoLayout:
+    """Where each of our joints lives in MuJoCo's ``qpos``/``qvel``; see :func:`layout`."""
+
+    nq: int
+    nv: int
+    joints: tuple[_Joint, ...]
+    #: bodies in the order the MJCF lists them (depth first, children by our index)
+    order: tuple[int, ...]
+
+
+# ----------------------------------------------------------------------------- rotations
+
+
+def _quat_wxyz_of(r: np.ndarray) -> np.ndarray:
+    """Unit quaternion (w, x, y, z) of one rotation matrix (Shepperd's method)."""
+    t = np.trace(r)
+    if t > 0:
+        s = 2.0 * math.sqrt(1.0 + t)
+        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
+    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
+        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
+    elif r[1, 1] > r[2, 2]:
+        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
+        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
+    else:
+        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
+        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
+    q = np.array(q)
+    return q / np.linalg.norm(q)
+
+
+def _rot_of_wxyz(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of quaternions (..., 4) in (w, x, y, z) order."""
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    w, x, y, z = np.moveaxis(q, -1, 0)
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+    ], -2)
+
+
+def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Hamilton product of (w, x, y, z) quaternions, broadcasting."""
+    aw, ax, ay, az = np.moveaxis(a, -1, 0)
+    bw, bx, by, bz = np.moveaxis(b, -1, 0)
+    return np.stack([aw * bw - ax * bx - ay * by - az * bz,
+                     aw * bx + ax * bw + ay * bz - az * by,
+                     aw * by - ax * bz + ay * bw + az * bx,
+                     aw * bz + ax * by - ay * bx + az * bw], -1)
+
+
+def _zyz_quat(e: np.ndarray) -> np.ndarray:
+    """(w, x, y, z) of Rz(φ) Ry(θ) Rz(ψ), for e (..., 3)."""
+    phi, th, psi = np.moveaxis(e, -1, 0)
+    c, s = np.cos(th / 2), np.sin(th / 2)
+    return np.stack([c * np.cos((phi + psi) / 2), -s * np.sin((phi - psi) / 2),
+                     s * np.cos((phi - psi) / 2), c * np.sin((phi + psi) / 2)], -1)
+
+
+def _zyz_rate(e: np.ndarray) -> np.ndarray:
+    """L(φ, θ) (..., 3, 3): relative angular velocity in the joint frame = L · Euler rates."""
+    phi, th = e[..., 0], e[..., 1]
+    z, o = np.zeros_like(phi), np.ones_like(phi)
+    sp, cp, st, ct = np.sin(phi), np.cos(phi), np.sin(th), np.cos(th)
+    return np.stack([np.stack([z, -sp, cp * st], -1), np.stack([z, cp, sp * st], -1),
+                     np.stack([o, z, ct], -1)], -2)
+
+
+def _zyz_rate_dot(e: np.ndarray, ed: np.ndarray) -> np.ndarray:
+    """dL/dt for Euler rates ed."""
+    phi, th = e[..., 0], e[..., 1]
+    dp, dt = ed[..., 0], ed[..., 1]
+    z = np.zeros_like(phi)
+    sp, cp, st, ct = np.sin(phi), np.cos(phi), np.sin(th), np.cos(th)
+    return np.stack([
+        np.stack([z, -cp * dp, -sp * st * dp + cp * ct * dt], -1),
+        np.stack([z, -sp * dp, cp * st * dp + sp * ct * dt], -1),
+        np.stack([z, z, -st * dt], -1)], -2)
+
+
+def _wrap_near(x: np.ndarray, like: np.ndarray) -> np.ndarray:
+    return x + 2 * np.pi * np.round((like - x) / (2 * np.pi))
+
+
+def _zyz_of_rot(r: np.ndarray, like: np.ndarray | None) -> np.ndarray:
+    """Euler angles of rotations r (..., 3, 3); of the two branches (θ > 0 or θ < 0) and the
+    2π-shifts the one nearest ``like`` (default θ ∈ [0, π], φ, ψ ∈ (−π, π])."""
+    th = np.arccos(np.clip(r[..., 2, 2], -1.0, 1.0))
+    phi = np.arctan2(r[..., 1, 2], r[..., 0, 2])
+    psi = np.arctan2(r[..., 2, 1], -r[..., 2, 0])
+    if like is None:
+        return np.stack([phi, th, psi], -1)
+    a = np.stack([_wrap_near(phi, like[..., 0]), _wrap_near(th, like[..., 1]),
+                  _wrap_near(psi, like[..., 2])], -1)
+    b = np.stack([_wrap_near(phi + np.pi, like[..., 0]), _wrap_near(-th, like[..., 1]),
+                  _wrap_near(psi + np.pi, like[..., 2])], -1)
+    pick_b = np.sum((b - like) ** 2, -1) < np.sum((a - like) ** 2, -1)
+    return np.where(pick_b[..., None], b, a)
+
+
+def _axis_of(d: np.ndarray, angle: float) -> np.ndarray:
+    a = np.array([d[2, 1] - d[1, 2], d[0, 2] - d[2, 0], d[1, 0] - d[0, 1]]) / (2 * math.sin(angle))
+    return a / np.linalg.norm(a)
+
+
+# ----------------------------------------------------------------------------- structure
+
+
+def _model_of(model_or_scene: Any) -> tuple[Any, Any]:
+    if isinstance(model_or_scene, _core.Scene):
+        return model_or_scene.model, model_or_scene
+    if isinstance(model_or_scene, _core.Model):
+        return model_or_scene, None
+    raise InvalidInputError(
+        f"model_or_scene: expected a pointmass_dyn Model or Scene, got "
+        f"{type(model_or_scene).__name__}")
+
+
+def _tree(model) -> tuple[list[tuple[str, str, int, int]], list[list[int]], list[int]]:
+    """Body infos, children lists and the depth-first order the MJCF writes the bodies in."""
+    if model.nloops:
+        raise ModelStructureError(
+            f"model: MJCF export handles kinematic trees; this model has {model.nloops} closed "
+            f"loop(s) ({', '.join(model.loop_names)}), which MuJoCo would need as equality "
+            f"constraints: not supported")
+    infos = [model.body_info(i) for i in range(model.nbodies)]
+    children: list[list[int]] = [[] for _ in infos]
+    roots = []
+    for i, (_, _, parent, _) in enumerate(infos):
+        (roots if parent < 0 else children[parent]).append(i)
+    order: list[int] = []
+    stack = list(reversed(roots))
+    while stack:
+        i = stack.pop()
+        order.append(i)
+        stack.extend(reversed(children[i]))
+    return infos, children, order
+
+
+def layout(model) -> MujocoLayout:
+    """Addresses of our joints in the qpos/qvel of :func:`to_mjcf`'s MuJoCo model (MuJoCo
+    orders joints depth first through the tree), with each joint frame's placement."""
+    model, _ = _model_of(model)
+    infos, _, order = _tree(model)
+    rots, origins = model.placements(model.neutral())
+    slices = model.joint_slices()
+    joints = []
+    qpos = dof = 0
+    for b in order:
+        _, kind, parent, link = infos[b]
+        if kind == "Fixed":
+            continue
+        if kind not in _MOVING:
+            raise ModelStructureError(f"model: body {infos[b][0]!r} has a joint of kind {kind!r}, "
+                                      f"which the MJCF export does not know")
+        rp, op = (np.eye(3), np.zeros(3)) if parent < 0 else (rots[parent], origins[parent])
+        qi, vi, _, _ = slices[link]
+        joints.append(_Joint(b, kind, qi, vi, qpos, dof, rp.T @ rots[b], rp.T @ (origins[b] - op)))
+        nq, nv = {"Revolute": (1, 1), "Prismatic": (1, 1), "Spherical": (4, 3),
+                  "SphericalZYZ": (4, 3), "FreeFlyer": (7, 6)}[kind]
+        qpos += nq
+        dof += nv
+    return MujocoLayout(nq=qpos, nv=dof, joints=tuple(joints), order=tuple(order))
+
+
+def _fmt(v) -> str:
+    return " ".join(repr(float(x)) for x in np.ravel(v))
+
+
+def _probe_effects(scene, model, lay: MujocoLayout):
+    """Gravity, per-dof spring stiffness/rest and damping of the scene's enabled effects,
+    read back through ``effect_forces`` and checked to be laws MuJoCo has."""
+    disabled = set(scene.disable or ())
+    gravity = np.zeros(3)
+    springs, dampers = [], []
+    for e in scene.effects:
+        if e.kind in disabled:
+            continue
+        r = repr(e)
+        if r.startswith("Gravity("):
+            gravity += np.asarray(e.g)
+        elif r.startswith("Spring("):
+            springs.append(e)
+        elif r.startswith("Damper("):
+            dampers.append(e)
+        else:
+            raise InvalidInputError(
+                f"scene: effect {r} has no MuJoCo counterpart in the MJCF export (supported: "
+                f"Gravity, Spring, Damper); leave it out or disable its family "
+                f"({e.kind!r}) to convert the rest")
+    nv = model.nv
+    stiff, rest, damp = np.zeros(nv), np.zeros(nv), np.zeros(nv)
+
+    def forces(effects, q, v):
+        sub = _core.Scene(model, effects=effects)
+        out = _core.effect_forces(sub, 0.0, np.asarray(q, float), np.asarray(v, float), None)
+        return np.sum(list(out.values()), axis=0) if out else np.zeros(nv)
+
+    def bad(what, j, detail):
+        name = model.body_info(j.body)[0]
+        return InvalidInputError(
+            f"scene: the {what} on {j.kind} joint {name!r} has no MuJoCo counterpart ({detail})")
+
+    if springs:
+        qn = model.neutral()
+        q1, q2 = qn.copy(), qn.copy()
+        for j in lay.joints:
+            if j.kind in ("Revolute", "Prismatic"):
+                q1[j.q], q2[j.q] = 1.0, -0.7
+            elif j.kind == "Spherical":    # 0.5 rad about x, then about y
+                q1[j.q:j.q + 4] = [math.sin(0.25), 0, 0, math.cos(0.25)]
+                q2[j.q:j.q + 4] = [0, math.sin(0.25), 0, math.cos(0.25)]
+        zero = np.zeros(nv)
+        t0, t1, t2 = (forces(springs, q, zero) for q in (qn, q1, q2))
+        scale = 1e-9 * (1.0 + np.max(np.abs([t0, t1, t2])))
+        for j in lay.joints:
+            if j.kind in ("Revolute", "Prismatic"):
+                k = t0[j.v] - t1[j.v]
+                r0 = t0[j.v] / k if k != 0 else 0.0
+                if abs(t2[j.v] + k * (-0.7 - r0)) > scale:
+                    raise bad("spring", j, "its force is not linear in q")
+                stiff[j.v], rest[j.v] = k, r0
+            elif j.kind == "Spherical":
+                k = -t1[j.v] / 0.5
+                want1 = np.array([-0.5 * k, 0, 0])
+                want2 = np.array([0, -0.5 * k, 0])
+                if np.max(np.abs(t0[j.v:j.v + 3])) > scale:
+                    raise bad("spring", j, "MuJoCo's ball spring rests at the identity; this "
+                                           "one rests elsewhere")
+                if (np.max(np.abs(t1[j.v:j.v + 3] - want1)) > scale
+                        or np.max(np.abs(t2[j.v:j.v + 3] - want2)) > scale):
+                    raise bad("spring", j, "not an isotropic rotation-vector spring")
+                stiff[j.v:j.v + 3] = k
+            elif np.max(np.abs(np.r_[t0, t1, t2][[j.v, nv + j.v, 2 * nv + j.v]])) > scale:
+                raise bad("spring", j, "not supported on this joint")
+    if dampers:
+        rng = np.random.default_rng(0)
+        q = model.neutral()
+        ones, vr = np.ones(nv), rng.uniform(-1, 1, nv)
+        c = -forces(dampers, q, ones)
+        tr = forces(dampers, q, vr)
+        if np.max(np.abs(tr + c * vr)) > 1e-9 * (1 + np.max(np.abs(c))):
+            raise InvalidInputError("scene: a damper whose force is not -c v per speed has no "
+                                    "MuJoCo counterpart")
+        for j in lay.joints:
+            cj = c[j.v:j.v + (6 if j.kind == "FreeFlyer" else 3 if "Spher" in j.kind else 1)]
+            if j.kind == "SphericalZYZ" and np.any(cj != 0):
+                raise bad("damper", j, "ours damps the Euler rates, MuJoCo's ball joint the "
+                                       "angular velocity; use the quaternion joint Spherical")
+            if np.ptp(cj) > 1e-12 * (1 + np.max(np.abs(cj))):
+                raise bad("damper", j, "MuJoCo damps all speeds of a joint alike")
+        damp = c
+    return gravity, stiff, rest, damp
+
+
+def to_mjcf(
+    model_or_scene: Any,
+    *,
+    timestep: float = 0.002,
+    integrator: str = "RK4",
+    gravity: Any = None,
+    name: str | None = None,
+) -> str:
+    """MJCF text of a :class:`Model` or :class:`Scene` (see the module docstring for the
+    mapping). ``timestep`` and ``integrator`` (``"Euler"``, ``"RK4"``, ``"implicit"``,
+    ``"implicitfast"``) go into ``<option>``; ``gravity`` (3,) only for a bare model (a
+    scene's comes from its effects). Joint ``j_<body>`` and body names are ours."""
+    model, scene = _model_of(model_or_scene)
+    if integrator not in MUJOCO_INTEGRATORS:
+        raise InvalidInputError(f"integrator: expected one of {MUJOCO_INTEGRATORS}, got "
+                                f"{integrator!r}")
+    if isinstance(timestep, (bool, str)) or not (float(timestep) > 0
+                                                 and math.isfinite(float(timestep))):
+        raise InvalidInputError(f"timestep: expected a finite number > 0, got {timestep!r}")
+    lay = layout(model)
+    infos, children, _ = _tree(model)
+    nv = model.nv
+    if scene is not None:
+        if gravity is not None:
+            raise InvalidInputError("gravity: give it only with a Model; a Scene's gravity is "
+                                    "its Gravity effect")
+        g, stiff, rest, damp = _probe_effects(scene, model, lay)
+        name = name or scene.name
+    else:
+        g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise InvalidInputError(f"gravity: expected 3 finite numbers, got {gravity!r}")
+        stiff, rest, damp = np.zeros(nv), np.zeros(nv), np.zeros(nv)
+    by_body = {j.body: j for j in lay.joints}
+    rots, origins = model.placements(model.neutral())
+
+    # Joint axes, read back from the placements with every 1-dof joint at q = π/2.
+    q_turn = model.neutral()
+    for j in lay.joints:
+        if j.kind in ("Revolute", "Prismatic"):
+            q_turn[j.q] = math.pi / 2
+    rt, ot = model.placements(q_turn)
+
+    for j in lay.joints:
+        if j.kind == "FreeFlyer" and infos[j.body][2] >= 0:
+            raise ModelStructureError(
+                f"model: the FreeFlyer joint of body {infos[j.body][0]!r} is below body "
+                f"{infos[infos[j.body][2]][0]!r}; MuJoCo allows free joints only on bodies of "
+                f"the world")
+
+    xml = [f"<mujoco model={quoteattr(name or 'pointmass_dyn')}>",
+           '  <compiler angle="radian" autolimits="true"/>',
+           f'  <option gravity="{_fmt(g)}" integrator="{integrator}" '
+           f'timestep="{float(timestep)!r}">',
+           '    <flag contact="disable"/>',
+           "  </option>",
+           "  <worldbody>"]
+
+    def write(b: int, depth: int) -> None:
+        bname, kind, parent, _ = infos[b]
+        pad = "  " * depth
+        if parent < 0:
+            rp, op = np.eye(3), np.zeros(3)
+        else:
+            rp, op = rots[parent], origins[parent]
+        r0 = rp.T @ rots[b]
+        p0 = rp.T @ (origins[b] - op)
+        xml.append(f"{pad}<body name={quoteattr(bname)} pos=\"{_fmt(p0)}\" "
+                   f"quat=\"{_fmt(_quat_wxyz_of(r0))}\">")
+        j = by_body.get(b)
+        if j is not None:
+            attrs = ""
+            if kind in ("Revolute", "Prismatic"):
+                rpt = np.eye(3) if parent < 0 else rt[parent]
+                opt = np.zeros(3) if parent < 0 else ot[parent]
+                if kind == "Revolute":
+                    axis = _axis_of(r0.T @ (rpt.T @ rt[b]), math.pi / 2)
+                else:
+                    axis = r0.T @ (rpt.T @ (ot[b] - opt) - p0) / (math.pi / 2)
+                    axis = axis / np.linalg.norm(axis)
+                mj = "hinge" if kind == "Revolute" else "slide"
+                attrs = f' type="{mj}" axis="{_fmt(axis)}"'
+                if stiff[j.v]:
+                    attrs += f' stiffness="{float(stiff[j.v])!r}" springref="{float(rest[j.v])!r}"'
+            elif kind in ("Spherical", "SphericalZYZ"):
+                attrs = ' type="ball"'
+                if stiff[j.v]:
+                    attrs += f' stiffness="{float(stiff[j.v])!r}"'
+            else:
+                attrs = ' type="free"'
+            if damp[j.v]:
+                attrs += f' damping="{float(damp[j.v])!r}"'
+            xml.append(f"{pad}  <joint name={quoteattr('j_' + bname)}{attrs}/>")
+        body = model.body(b)
+        mass = float(body.mass)
+        inertia = np.asarray(body.inertia)
+        if mass > 0:
+            if np.count_nonzero(inertia - np.diag(np.diag(inertia))) == 0:
+                iner = f'diaginertia="{_fmt(np.diag(inertia))}"'
+            else:
+                iner = (f'fullinertia="{_fmt([inertia[0, 0], inertia[1, 1], inertia[2, 2]])} '
+                        f'{_fmt([inertia[0, 1], inertia[0, 2], inertia[1, 2]])}"')
+            xml.append(f"{pad}  <inertial mass=\"{mass!r}\" pos=\"{_fmt(body.com)}\" {iner}/>")
+        for c in children[b]:
+            write(c, depth + 1)
+        xml.append(f"{pad}</body>")
+
+    for b in range(model.nbodies):
+        if infos[b][2] < 0:
+            write(b, 2)
+    xml += ["  </worldbody>", "</mujoco>"]
+    return "\n".join(xml) + "\n"
+
+
+# ----------------------------------------------------------------------------- states
+
+
+def _states(model, q, v, what=("q", "v")):
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    if q.shape[-1:] != (model.nq,) or v.shape[-1:] != (model.nv,) or q.shape[:-1] != v.shape[:-1]:
+        raise InvalidInputError(
+            f"{what[0]}, {what[1]}: expected shapes (..., {model.nq}) and (..., {model.nv}) "
+            f"with the same leading shape, got {q.shape} and {v.shape}")
+    return q, v
+
+
+def to_mujoco_state(model, q, v) -> tuple[np.ndarray, np.ndarray]:
+    """(qpos, qvel) of :func:`to_mjcf`'s model for our (q, v); one state (nq,), (nv,) or many
+    (N, nq), (N, nv)."""
+    model, _ = _model_of(model)
+    lay = layout(model)
+    q, v = _states(model, q, v)
+    lead = q.shape[:-1]
+    qpos, qvel = np.empty(lead + (lay.nq,)), np.empty(lead + (lay.nv,))
+    for j in lay.joints:
+        a, b, p, d = j.q, j.v, j.qpos, j.dof
+        if j.kind in ("Revolute", "Prismatic"):
+            qpos[..., p], qvel[..., d] = q[..., a], v[..., b]
+        elif j.kind == "Spherical":
+            qpos[..., p:p + 4] = q[..., [a + 3, a, a + 1, a + 2]]
+            qvel[..., d:d + 3] = v[..., b:b + 3]
+        elif j.kind == "SphericalZYZ":
+            e, ed = q[..., a:a + 3], v[..., b:b + 3]
+            qpos[..., p:p + 4] = _zyz_quat(e)
+            w_joint = np.einsum("...ij,...j->...i", _zyz_rate(e), ed)
+            qvel[..., d:d + 3] = np.einsum("...ji,...j->...i", _rot_of_wxyz(_zyz_quat(e)),
+                                           w_joint)
+        else:  # FreeFlyer below the world
+            quat = _qmul(_quat_wxyz_of(j.rot0), q[..., [a + 6, a + 3, a + 4, a + 5]])
+            qpos[..., p:p + 3] = j.pos0 + q[..., a:a + 3] @ j.rot0.T
+            qpos[..., p + 3:p + 7] = quat
+            qvel[..., d:d + 3] = np.einsum("...ij,...j->...i", _rot_of_wxyz(quat),
+                                           v[..., b:b + 3])
+            qvel[..., d + 3:d + 6] = v[..., b + 3:b + 6]
+    return qpos, qvel
+
+
+def from_mujoco_state(model, qpos, qvel, q_like=None) -> tuple[np.ndarray, np.ndarray]:
+    """Our (q, v) from MuJoCo's (qpos, qvel), the inverse of :func:`to_mujoco_state`. A
+    rotation has two quaternions and (ZYZ) two Euler branches and 2π-shifts: ``q_like``
+    (same shape as q, e.g. a reference trajectory) picks the nearest; by default quaternions
+    keep MuJoCo's sign and Euler angles take θ ∈ [0, π], φ, ψ ∈ (−π, π]."""
+    model, _ = _model_of(model)
+    lay = layout(model)
+    qpos = np.asarray(qpos, dtype=float)
+    qvel = np.asarray(qvel, dtype=float)
+    if (qpos.shape[-1:] != (lay.nq,) or qvel.shape[-1:] != (lay.nv,)
+            or qpos.shape[:-1] != qvel.shape[:-1]):
+        raise InvalidInputError(
+            f"qpos, qvel: expected shapes (..., {lay.nq}) and (..., {lay.nv}), got "
+            f"{qpos.shape} and {qvel.shape}")
+    lead = qpos.shape[:-1]
+    like = None if q_like is None else np.broadcast_to(np.asarray(q_like, float),
+                                                       lead + (model.nq,))
+    q, v = np.empty(lead + (model.nq,)), np.empty(lead + (model.nv,))
+
+    def near_sign(quat_xyzw, a):
+        if like is None:
+            return quat_xyzw
+        flip = np.sum(quat_xyzw * like[..., a:a + 4], -1) < 0
+        return np.where(flip[..., None], -quat_xyzw, quat_xyzw)
+
+    for j in lay.joints:
+        a, b, p, d = j.q, j.v, j.qpos, j.dof
+        if j.kind in ("Revolute", "Prismatic"):
+            q[..., a], v[..., b] = qpos[..., p], qvel[..., d]
+        elif j.kind == "Spherical":
+            q[..., a:a + 4] = near_sign(qpos[..., [p + 1, p + 2, p + 3, p]], a)
+            v[..., b:b + 3] = qvel[..., d:d + 3]
+        elif j.kind == "SphericalZYZ":
+            r = _rot_of_wxyz(qpos[..., p:p + 4])
+            e = _zyz_of_rot(r, None if like is None else like[..., a:a + 3])
+            w_joint = np.einsum("...ij,...j->...i", r, qvel[..., d:d + 3])
+            q[..., a:a + 3] = e
+            v[..., b:b + 3] = np.linalg.solve(_zyz_rate(e), w_joint[..., None])[..., 0]
+        else:
+            r_w = _rot_of_wxyz(qpos[..., p + 3:p + 7])
+            rel = _qmul(_quat_wxyz_of(j.rot0.T), qpos[..., p + 3:p + 7])
+            q[..., a:a + 3] = (qpos[..., p:p + 3] - j.pos0) @ j.rot0
+            q[..., a + 3:a + 7] = near_sign(rel[..., [1, 2, 3, 0]], a + 3)
+            v[..., b:b + 3] = np.einsum("...ji,...j->...i", r_w, qvel[..., d:d + 3])
+            v[..., b + 3:b + 6] = qvel[..., d + 3:d + 6]
+    return q, v
+
+
+def to_mujoco_acceleration(model, q, v, a) -> np.ndarray:
+    """MuJoCo's ``qacc`` for our state (q, v) and acceleration ``a`` (as
+    ``forward_dynamics`` returns it): the rate of :func:`to_mujoco_state`'s ``qvel``."""
+    model, _ = _model_of(model)
+    lay = layout(model)
+    q, v = _states(model, q, v)
+    a = np.asarray(a, dtype=float)
+    if a.shape != v.shape:
+        raise InvalidInputError(f"a: expected the shape of v, {v.shape}, got {a.shape}")
+    qacc = np.empty(q.shape[:-1] + (lay.nv,))
+    for j in lay.joints:
+        i, b, d = j.q, j.v, j.dof
+        if j.kind in ("Revolute", "Prismatic"):
+            qacc[..., d] = a[..., b]
+        elif j.kind == "Spherical":
+            qacc[..., d:d + 3] = a[..., b:b + 3]
+        elif j.kind == "SphericalZYZ":
+            # ω_b = Rᵀ L ė, and d(Rᵀ)/dt ω_joint = 0, so ω̇_b = Rᵀ (L ë + L̇ ė).
+            e, ed, edd = q[..., i:i + 3], v[..., b:b + 3], a[..., b:b + 3]
+            wdot = (np.einsum("...ij,...j->...i", _zyz_rate(e), edd)
+                    + np.einsum("...ij,...j->...i", _zyz_rate_dot(e, ed), ed))
+            qacc[..., d:d + 3] = np.einsum("...ji,...j->...i", _rot_of_wxyz(_zyz_quat(e)), wdot)
+        else:
+            # world linear velocity R v_lin: its rate is R (a_lin + ω × v_lin)
+            quat = _qmul(_quat_wxyz_of(j.rot0), q[..., [i + 6, i + 3, i + 4, i + 5]])
+            lin = a[..., b:b + 3] + np.cross(v[..., b + 3:b + 6], v[..., b:b + 3])
+            qacc[..., d:d + 3] = np.einsum("...ij,...j->...i", _rot_of_wxyz(quat), lin)
+            qacc[..., d + 3:d + 6] = a[..., b + 3:b + 6]
+    return qacc
+
+
+__all__ = [
+    "MUJOCO_INTEGRATORS",
+    "MujocoLayout",
+    "from_mujoco_state",
+    "layout",
+    "to_mjcf",
+    "to_mujoco_acceleration",
+    "to_mujoco_state",
+]
