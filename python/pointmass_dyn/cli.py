@@ -135,15 +135,22 @@ def cmd_work_precision(args) -> int:
         res = work_precision(
             name, tols, t_end=args.t_end, repeats=args.repeats, scipy=not args.no_scipy,
             scipy_repeats=args.scipy_repeats, rk4=not args.no_rk4, progress=say,
+            methods=args.methods, dts=args.dt,
         )
         results.append(res)
-        print(res.table())
+        print(res.table() if args.methods is None else
+              res.methods_table() + "\n\n" + res.cheapest_table())
         print()
+    writer, plotter = write_csv, plot_work_precision
+    if args.methods is not None:
+        from .work_precision_methods import plot_methods, write_methods_csv
+
+        writer, plotter = write_methods_csv, plot_methods
     if args.out:
-        write_csv(results, args.out)
+        writer(results, args.out)
         print(f"table written to {args.out}")
     if args.plot:
-        plot_work_precision(results, args.plot)
+        plotter(results, args.plot)
         print(f"plot written to {args.plot}")
     return 0
 
@@ -538,6 +545,13 @@ def build_parser() -> argparse.ArgumentParser:
     wp.add_argument("--scipy-repeats", type=int, default=2, help="timing runs of SciPy RK45")
     wp.add_argument("--no-scipy", action="store_true", help="skip SciPy RK45 (the slow part)")
     wp.add_argument("--no-rk4", action="store_true", help="skip the fixed-step RK4 line")
+    wp.add_argument("--methods", nargs="+", default=None,
+                    help="compare methods instead: 'all' or names among RK45 DOP853 Radau "
+                         "auto RK4 Euler scipy:RK45 scipy:DOP853 scipy:Radau mujoco:RK4 "
+                         "mujoco:Euler mujoco:implicitfast numpy:RK4; prints the cheapest "
+                         "method per accuracy decade")
+    wp.add_argument("--dt", type=float, nargs="+", default=None,
+                    help="fixed steps for RK4/Euler/MuJoCo (default: a sweep per method)")
     wp.add_argument("-v", "--verbose", action="store_true", help="report progress on stderr")
     wp.set_defaults(func=cmd_work_precision)
     bl = sub.add_parser(

@@ -150,6 +150,27 @@ class WorkPrecision:
     rows: list[dict] = field(default_factory=list)
     #: How the reference was computed and how well it agrees with ``simulate`` at 1e-13.
     reference_check: dict = field(default_factory=dict)
+    #: ``work_precision(..., methods=...)``: one dict per method and setting (see
+    #: :mod:`pointmass_dyn.work_precision_methods`).
+    method_rows: list[dict] = field(default_factory=list)
+
+    def methods_table(self) -> str:
+        """Every method's rows (``methods=``), as text."""
+        from .work_precision_methods import methods_text
+
+        return methods_text(self.scene, self.method_rows)
+
+    def cheapest(self, decades: Sequence[float] | None = None) -> list[dict]:
+        """The cheapest method per accuracy decade (``methods=``); see
+        :func:`pointmass_dyn.work_precision_methods.cheapest`."""
+        from .work_precision_methods import DECADES, cheapest
+
+        return cheapest(self.method_rows, DECADES if decades is None else decades)
+
+    def cheapest_table(self) -> str:
+        from .work_precision_methods import cheapest_text
+
+        return cheapest_text(self.scene, self.method_rows)
 
     COLUMNS = (
         "tol", "nfev", "steps", "rejected", "time", "err_final", "err_dense", "err_energy",
@@ -244,12 +265,21 @@ def work_precision(
     n_dense: int = 1001,
     reference_check: bool = True,
     progress: Callable[[str], Any] | None = None,
+    methods: Any = None,
+    dts: Sequence[float] | None = None,
 ) -> WorkPrecision:
     """Measures ``simulate`` on ``scene`` (a :class:`Scene`, a scene file or a bundled name)
     at ``rtol = atol = tol`` for each tolerance; see the module docstring for the
     definitions. ``t_end`` overrides the scene's end time (default: the scene's, else 10 s).
     ``scipy`` / ``rk4`` switch the comparison lines off (they cost Python time, up to
-    seconds per tolerance). ``progress(msg)`` is called before each measurement."""
+    seconds per tolerance). ``progress(msg)`` is called before each measurement.
+
+    ``methods`` (``"all"`` or names such as ``["RK45", "Radau", "scipy:DOP853",
+    "mujoco:RK4"]``) measures those methods instead, into ``method_rows`` (the per-tolerance
+    ``rows`` above are then not measured): adaptive ones over ``tolerances``, fixed-step ones
+    over ``dts`` (default :func:`~pointmass_dyn.work_precision_methods.default_dts`); see
+    :mod:`pointmass_dyn.work_precision_methods` for the definitions, and
+    ``cheapest_table()`` for the cheapest method per accuracy decade."""
     try:
         from scipy.integrate import solve_ivp
     except ImportError as exc:
@@ -260,6 +290,14 @@ def work_precision(
 
     sc = _scene_of(scene)
     tolerances = _tolerances_arg(tolerances)
+    if methods is not None:
+        from .work_precision_methods import parse_methods
+
+        methods = parse_methods(methods)
+        if dts is not None:
+            dts = _tolerances_arg(dts) if np.ndim(dts) else None
+            if dts is None:
+                raise InvalidInputError("dts: expected a sequence of steps in (0, 1) s")
     t0, t1 = sc.t_span or (0.0, 10.0)
     if t_end is not None:
         if isinstance(t_end, (str, bytes, complex)) or not np.isrealobj(t_end):
@@ -298,6 +336,12 @@ def work_precision(
             err_dense=_rel(y_ours - y_ref_grid, y_ref_grid),
             ours_nfev=int(ours.nfev),
         )
+    if methods is not None:
+        from .work_precision_methods import measure
+
+        out.method_rows = measure(sc, span, ref.sol, methods, tolerances, dts, repeats,
+                                  scipy_repeats, say)
+        return out
 
     for tol in tolerances:
         row: dict[str, Any] = {"tol": float(tol)}
