@@ -166,3 +166,201 @@ def test_cli_subcommand(tmp_path, capsys):
 def test_cli_unknown_scene_is_a_clean_error(capsys):
     assert main(["work-precision", "no_such_scene", "--repeats", "1"]) == 2
     assert "no such scene" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------------
+# Across methods (issue 15): ours, SciPy's and MuJoCo's on one scene, one reference
+# --------------------------------------------------------------------------------------------
+from pointmass_dyn import work_precision_methods as wpm  # noqa: E402
+
+PLANAR_METHODS = ["RK45", "DOP853", "Radau", "RK4", "scipy:RK45", "scipy:DOP853",
+                  "scipy:Radau", "mujoco:RK4", "mujoco:implicitfast", "numpy:RK4"]
+M_T_END = 1.0
+M_DTS = (0.01, 0.0025)
+
+
+def simulate_has(method: str) -> bool:
+    scene = pmd.load_scene("pendulum_planar")
+    try:
+        if method in ("RK4", "Euler"):
+            pmd.simulate(scene, (0.0, 0.01), method=method, dt=0.005)
+        else:
+            pmd.simulate(scene, (0.0, 0.01), method=method)
+    except (TypeError, pmd.InvalidInputError):
+        return False
+    return True
+
+
+@pytest.fixture(scope="module")
+def planar_methods():
+    return pmd.work_precision("pendulum_planar", (1e-4, 1e-7), t_end=M_T_END, repeats=1,
+                              scipy_repeats=1, methods=PLANAR_METHODS, dts=M_DTS)
+
+
+def test_methods_rows_and_errors_against_the_exact_pendulum(planar_methods):
+    """Every method has its rows, and each reported error is the error against the exact
+    (elliptic-function) solution at the 21 check times, measured here independently from a
+    rerun of the same method."""
+    pytest.importorskip("mujoco")
+    wp = planar_methods
+    by = {}
+    for r in wp.method_rows:
+        by.setdefault(r["method"], []).append(r)
+    assert set(by) == set(PLANAR_METHODS)
+    grid = np.linspace(0.0, M_T_END, wpm.N_CHECK + 1)
+    psi, psid = planar_exact(grid)
+    scene = pmd.load_scene("pendulum_planar")
+    exact = np.zeros((grid.size, 6))
+    exact[:, :2] = scene.q0[:2]
+    exact[:, 2], exact[:, 5] = psi, psid
+    scale = np.max(np.abs(exact))
+    for m, rows in by.items():
+        if rows[0]["note"].startswith("not available"):
+            assert m in ("DOP853", "Radau", "RK4") and not simulate_has(m)
+            continue
+        fixed = m in ("RK4", "mujoco:RK4", "mujoco:implicitfast", "numpy:RK4")
+        assert [r["dt" if fixed else "tol"] for r in rows] == list(M_DTS if fixed else
+                                                                     (1e-4, 1e-7))
+        for r in rows:
+            assert r["time"] > 0 and r["nfev"] > 0
+            if m == "RK45" or m == "scipy:RK45":
+                y = pmd.simulate(scene, (0, M_T_END), rtol=r["tol"], atol=r["tol"], t_eval=grid)
+                y = np.hstack([y.q, y.v])
+            elif m == "numpy:RK4" or m == "mujoco:RK4":
+                n = int(round(M_T_END / r["dt"]))
+                _, ys = rk4_fixed(scene_rhs(scene), (0, M_T_END), np.r_[scene.q0, scene.v0], n)
+                y = ys[:: n // wpm.N_CHECK]
+            else:
+                continue   # checked through the reference below
+            err = np.max(np.abs(y - exact)) / scale
+            assert r["err"] == pytest.approx(err, rel=1e-3, abs=1e-12), (m, r)
+        for r in rows:   # every method: the error is what the reference says, > its floor
+            assert 1e-13 < r["err"] < 1e-1, (m, r)
+
+
+def test_mujoco_rk4_is_classical_rk4_on_our_dynamics(planar_methods):
+    """MuJoCo's RK4 on the converted model and NumPy's RK4 on our right-hand side take the
+    same steps of the same ODE: their errors agree to round-off."""
+    pytest.importorskip("mujoco")
+    rows = planar_methods.method_rows
+    mj = [r for r in rows if r["method"] == "mujoco:RK4"]
+    npy = [r for r in rows if r["method"] == "numpy:RK4"]
+    assert [r["dt"] for r in mj] == [r["dt"] for r in npy] and mj
+    for a, b in zip(mj, npy):
+        assert a["nfev"] == b["nfev"]
+        record("work-precision: |err MuJoCo RK4 - err NumPy RK4| / err",
+               abs(a["err"] - b["err"]) / b["err"])
+        assert a["err"] == pytest.approx(b["err"], rel=1e-6)
+        assert a["err_final"] == pytest.approx(b["err_final"], rel=1e-6)
+
+
+def test_our_rk45_and_scipys_take_the_same_steps(planar_methods):
+    rows = planar_methods.method_rows
+    ours = [r for r in rows if r["method"] == "RK45"]
+    sp = [r for r in rows if r["method"] == "scipy:RK45"]
+    for a, b in zip(ours, sp):
+        assert a["nfev"] == b["nfev"]
+        assert a["err"] == pytest.approx(b["err"], rel=1e-6)
+
+
+def test_time_to_reach_interpolates_in_log_log():
+    rows = [dict(method="A", time=1e-3, err=1e-2), dict(method="A", time=1e-2, err=1e-6),
+            dict(method="A", time=1e-1, err=1e-8)]
+    # 1e-4 is halfway between 1e-2 and 1e-6 in log error: halfway in log time.
+    assert wpm.time_to_reach(rows, 1e-4) == pytest.approx(math.sqrt(1e-3 * 1e-2))
+    assert wpm.time_to_reach(rows, 1e-2) == pytest.approx(1e-3)
+    assert wpm.time_to_reach(rows, 1.0) == pytest.approx(1e-3)     # already below
+    assert math.isnan(wpm.time_to_reach(rows, 1e-9))               # never reached
+    # A slower setting that is less accurate does not hide a cheaper one below e.
+    noisy = rows + [dict(method="A", time=1.0, err=1e-3)]
+    assert wpm.time_to_reach(noisy, 1e-4) == pytest.approx(math.sqrt(1e-3 * 1e-2))
+    # Diverged or failed settings (inf error) are ignored.
+    assert wpm.time_to_reach(rows + [dict(method="A", time=1e-4, err=math.inf)], 1e-2) == \
+        pytest.approx(1e-3)
+
+
+def test_cheapest_and_ratio_tables():
+    rows = [dict(method="RK45", time=1e-4, err=1e-3), dict(method="RK45", time=1e-3, err=1e-9),
+            dict(method="mujoco:RK4", time=1e-3, err=1e-3),
+            dict(method="mujoco:RK4", time=1e-2, err=1e-10),
+            dict(method="scipy:DOP853", time=1e-2, err=1e-4),
+            dict(method="scipy:DOP853", time=2e-2, err=1e-11)]
+    c = wpm.cheapest(rows, (1e-3, 1e-6, 1e-10))
+    assert [x["method"] for x in c] == ["RK45", "RK45", "mujoco:RK4"]
+    assert c[0]["time"] == pytest.approx(1e-4)
+    assert c[1]["time"] == pytest.approx(math.sqrt(1e-4 * 1e-3))
+    r = wpm.ratio_table(rows, (1e-3, 1e-10))
+    assert r[0]["ours"] == "RK45" and r[0]["vs_mujoco_rk4"] == pytest.approx(10.0)
+    assert r[0]["scipy"] == "scipy:DOP853" and r[0]["vs_scipy"] == pytest.approx(100.0)
+    assert r[1]["ours"] is None and math.isnan(r[1]["vs_mujoco_rk4"])
+    text = wpm.cheapest_text("x", rows, (1e-3,))
+    assert "RK45" in text and "10.0" in text and "100.0" in text
+
+
+def test_methods_argument_errors():
+    assert wpm.parse_methods("all") == list(wpm.DEFAULT_METHODS)
+    assert wpm.parse_methods(["RK45", "all"])[0] == "RK45"
+    assert wpm.parse_methods("RK45,scipy:Radau") == ["RK45", "scipy:Radau"]
+    for bad, words in [(["RK46"], "RK46"), ([], "at least one"), (3, "sequence")]:
+        with pytest.raises(pmd.InvalidInputError, match=words):
+            pmd.work_precision("pendulum_planar", (1e-4,), t_end=0.1, methods=bad)
+    with pytest.raises(pmd.InvalidInputError, match="dt"):
+        pmd.work_precision("pendulum_planar", (1e-4,), t_end=0.1, methods=["mujoco:RK4"],
+                           dts=[0.03])
+
+
+def test_default_dts_divide_the_check_grid():
+    dts = wpm.default_dts((0.0, 2.0), "mujoco:RK4")
+    assert dts[0] == pytest.approx(2.0 / 100) and len(dts) > 8
+    for dt in dts:
+        n = 2.0 / dt
+        assert abs(n - round(n)) < 1e-6 and round(n) % wpm.N_CHECK == 0
+    assert max(2.0 / d for d in wpm.default_dts((0.0, 2.0), "Euler")) <= 200_000
+
+
+def test_chain_stiff_is_stiff():
+    """The bundled stiff scene: the linearised dynamics have eigenvalues from ~1e2 to ~3e4 /s
+    beside slow ones of ~2 /s (its TOML comments), RK45's stiffness test fires, and an
+    implicit method (SciPy's Radau) needs over 10x fewer evaluations for a smaller error."""
+    scene = pmd.load_scene("chain_stiff")
+    rhs = scene_rhs(scene)
+    y0 = np.concatenate([scene.q0, scene.v0])
+    n = y0.size
+    jac = np.empty((n, n))
+    for i in range(n):
+        e = np.zeros(n)
+        e[i] = 1e-6
+        jac[:, i] = (rhs(0.0, y0 + e) - rhs(0.0, y0 - e)) / 2e-6
+    lam = np.linalg.eigvals(jac)
+    fast = np.sort(np.abs(lam.real))[::-1]
+    assert 1e4 < fast[0] < 1e5 and fast[0] == pytest.approx(2.89e4, rel=0.02)
+    assert np.all(lam.real < 1e-9)
+    slow = lam[np.abs(lam) < 10]
+    assert len(slow) == 6 and np.max(np.abs(slow)) < 3      # the swing and the creep
+    ours = pmd.simulate(scene, rtol=1e-6, atol=1e-6)
+    assert ours.success and "stiff" in ours.message
+    radau = solve_ivp(rhs, scene.t_span, y0, method="Radau", rtol=1e-6, atol=1e-6)
+    ref = solve_ivp(rhs, scene.t_span, y0, method="Radau", rtol=1e-11, atol=1e-11)
+    y_ours = np.concatenate([ours.q[-1], ours.v[-1]])
+    err_ours = np.max(np.abs(y_ours - ref.y[:, -1]))
+    err_radau = np.max(np.abs(radau.y[:, -1] - ref.y[:, -1]))
+    assert err_radau <= err_ours
+    assert 10 * (radau.nfev + n * radau.njev) < ours.nfev
+    # The slow motion is visible: the chain swings through more than 1.5 rad, the bends relax.
+    full = pmd.simulate(scene, rtol=1e-6, atol=1e-6, t_eval=np.linspace(0, 3, 61))
+    assert np.ptp(full.q[:, 0]) > 1.5 and np.all(np.abs(full.q[-1, 1:]) < 0.01)
+
+
+def test_cli_methods(tmp_path, capsys):
+    pytest.importorskip("mujoco")
+    out = tmp_path / "m.csv"
+    code = main(["work-precision", "pendulum_planar", "--t-end", "1", "--tolerances", "1e-4",
+                 "1e-6", "--methods", "RK45", "mujoco:RK4", "--dt", "0.01", "0.005",
+                 "--repeats", "1", "--out", str(out)])
+    assert code == 0
+    text = capsys.readouterr().out
+    assert "cheapest method per accuracy" in text and "mujoco:RK4" in text
+    with open(out) as fh:
+        rows = list(csv.DictReader(fh))
+    assert [r["method"] for r in rows] == ["RK45", "RK45", "mujoco:RK4", "mujoco:RK4"]
+    assert all(float(r["err"]) < 1e-2 and r["scene"] == "pendulum_planar" for r in rows)
