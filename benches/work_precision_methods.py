@@ -1,0 +1,104 @@
+"""Work–precision across methods on the bundled scenes (issue 15): every method of ours, SciPy's
+on our right-hand side and MuJoCo's own engine, error against one reference, and the ratios
+behind the targets:
+
+* at equal error, our best method ≥ 5× faster than MuJoCo's RK4, and
+* ≥ 20× faster than SciPy's best method on our right-hand side,
+
+at every accuracy decade from 1e-3 to 1e-10 (times read off each method's time–error curve by
+log–log interpolation, ``pointmass_dyn.work_precision_methods``).
+
+    pip install mujoco              # optional peer
+    python benches/work_precision_methods.py                      # ~5 min on 2 cores
+    python benches/work_precision_methods.py --scenes chain7 --quick
+    python benches/work_precision_methods.py --plot docs/work_precision.png \\
+        --out docs/work_precision.csv
+
+Spans: chain7 2 s (chaotic: at 10 s the reference itself is not converged), panda 1 s (its
+scene's), pendulum_spatial 10 s (the paper's), chain_stiff 3 s (its scene's). Ratios from one
+run on a shared machine: compare ratios, not milliseconds across runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+
+import numpy as np
+import pointmass_dyn as pmd
+from pointmass_dyn import work_precision_methods as wpm
+from pointmass_dyn.work_precision import DEFAULT_TOLERANCES
+
+SPANS = {"chain7": 2.0, "panda": 1.0, "pendulum_spatial": 10.0, "chain_stiff": 3.0}
+TARGET_MUJOCO, TARGET_SCIPY = 5.0, 20.0
+
+
+def fmt(x, spec=".1f"):
+    return format(x, spec) if np.isfinite(x) else "-"
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--scenes", nargs="+", default=list(SPANS))
+    ap.add_argument("--methods", nargs="+", default=["all"])
+    ap.add_argument("--quick", action="store_true", help="4 tolerances, 1 repeat")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--plot", default=None)
+    ap.add_argument("--out", default=None)
+    args = ap.parse_args()
+    tols = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11) if args.quick else DEFAULT_TOLERANCES
+    repeats = 1 if args.quick else args.repeats
+    try:
+        import mujoco
+        mj = mujoco.__version__
+    except ImportError:
+        mj = "not installed"
+    import scipy
+
+    load = os.getloadavg()
+    print(f"pointmass_dyn {pmd.__version__}, mujoco {mj}, scipy {scipy.__version__}, "
+          f"{os.cpu_count()} cores, load average {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}; "
+          f"best of {repeats} (SciPy: 1)")
+    results, summary = [], []
+    t_all = time.perf_counter()
+    for name in args.scenes:
+        t0 = time.perf_counter()
+        res = pmd.work_precision(name, tols, t_end=SPANS.get(name), repeats=repeats,
+                                 scipy_repeats=1, methods=args.methods)
+        results.append(res)
+        print()
+        print(res.methods_table())
+        print()
+        print(res.cheapest_table())
+        print(f"({time.perf_counter() - t0:.0f} s; reference floor: ours at 1e-13 against "
+              f"DOP853 {res.reference_check.get('err_dense', math.nan):.1e})")
+        for r in wpm.ratio_table(res.method_rows):
+            summary.append((name, r))
+    print(f"\nall scenes: {time.perf_counter() - t_all:.0f} s\n")
+    print("Targets: ours best >= 5x MuJoCo RK4 and >= 20x SciPy best, at equal error")
+    print(f"{'scene':<18}{'err':>7}  {'ours best':<10}{'x MuJoCo RK4':>13}{'x SciPy best':>13}"
+          f"  {'SciPy best':<14}{'met?':>6}")
+    for name, r in summary:
+        ok_mj = r["vs_mujoco_rk4"] >= TARGET_MUJOCO
+        ok_sp = r["vs_scipy"] >= TARGET_SCIPY
+        met = ("yes" if ok_mj and ok_sp else
+               "MJ" if ok_sp else "SP" if ok_mj else "no")
+        if not np.isfinite(r["t_ours"]):
+            met = "n/a"
+        print(f"{name:<18}{r['err']:>7.0e}  {r['ours'] or '-':<10}"
+              f"{fmt(r['vs_mujoco_rk4']):>13}{fmt(r['vs_scipy']):>13}  "
+              f"{r['scipy'] or '-':<14}{met:>6}")
+    print("met?: yes = both targets; MJ = the MuJoCo target missed; SP = the SciPy target "
+          "missed; n/a = no method of ours reaches that error")
+    if args.out:
+        wpm.write_methods_csv(results, args.out)
+        print(f"rows written to {args.out}")
+    if args.plot:
+        wpm.plot_methods(results, args.plot)
+        print(f"figure written to {args.plot}")
+
+
+if __name__ == "__main__":
+    main()
