@@ -131,6 +131,8 @@ struct Workspace {
     out: Vec<f64>,
     /// The closed-loop solver's buffers (models with loops only).
     loops: Option<Box<LoopSolver>>,
+    /// The derivatives' buffers (built on the first derivative call).
+    deriv: Option<Box<recursive::DerivativeData>>,
 }
 
 impl Workspace {
@@ -144,6 +146,7 @@ impl Workspace {
             x: vec![0.0; nv],
             out: vec![0.0; nv],
             loops: (!m.loops.is_empty()).then(|| Box::new(LoopSolver::new(m))),
+            deriv: None,
             version,
         }
     }
@@ -267,6 +270,7 @@ impl PyModel {
                 x: xv,
                 out,
                 loops: solver,
+                ..
             } = ws;
             let model: &Model = &version.model;
             // With loops, the tree's accelerations are corrected by the cut joints' forces.
@@ -331,6 +335,75 @@ impl PyModel {
                     Ok(to_array1(py, out.as_slice()).into_any())
                 }
             }
+        })
+    }
+
+    /// Forward or inverse dynamics derivatives: validates, runs (GIL released for large
+    /// models) and returns the three nv × nv matrices.
+    #[allow(clippy::too_many_arguments)]
+    fn derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        direction: Direction,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        x: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let g = gravity_arg(py, gravity)?;
+        let name = match direction {
+            Direction::Forward => "forward_dynamics_derivatives",
+            Direction::Inverse => "inverse_dynamics_derivatives",
+        };
+        self.with_workspace(|ws| {
+            if !ws.model().loops.is_empty() {
+                return Err(invalid(
+                    py,
+                    "model",
+                    format!("a tree for {name} (closed loops are not differentiated)"),
+                    format!("a model with {} loop(s)", ws.model().loops.len()),
+                ));
+            }
+            ws.load_state(py, q, Some(v))?;
+            ws.load_x(py, x, direction.input())?;
+            let Workspace {
+                version,
+                data,
+                q: qv,
+                v: vv,
+                x: xv,
+                deriv,
+                ..
+            } = ws;
+            let model: &Model = &version.model;
+            let dd = deriv.get_or_insert_with(|| Box::new(recursive::DerivativeData::new(model)));
+            let mut run = || match direction {
+                Direction::Forward => {
+                    recursive::forward_dynamics_derivatives(model, data, dd, qv, vv, xv, &g)
+                }
+                Direction::Inverse => {
+                    recursive::inverse_dynamics_derivatives(model, data, dd, qv, vv, xv, &g);
+                    Ok(())
+                }
+            };
+            if model.links.len() >= DETACH_LINKS {
+                py.detach(run)
+            } else {
+                run()
+            }
+            .py(py)?;
+            let (a, b, c) = match direction {
+                Direction::Forward => (&dd.ddq_dq, &dd.ddq_dv, &dd.minv),
+                Direction::Inverse => (&dd.dtau_dq, &dd.dtau_dv, &dd.mass),
+            };
+            for m in [a, b, c] {
+                check_result(py, name, m.as_slice())?;
+            }
+            Ok((
+                dmatrix_to_array(py, a)?,
+                dmatrix_to_array(py, b)?,
+                dmatrix_to_array(py, c)?,
+            ))
         })
     }
 
@@ -805,6 +878,34 @@ impl PyModel {
         })
     }
 
+    /// `(∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M)` of the inverse dynamics at `(q, v, a)`, each nv × nv;
+    /// `q` is perturbed in the tangent space (`q ⊕ δ`, docs/derivatives.md).
+    #[pyo3(signature = (q, v, a, gravity=None))]
+    fn inverse_dynamics_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        self.derivatives(py, Direction::Inverse, q, v, a, gravity)
+    }
+
+    /// `(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)` of the forward dynamics at `(q, v, τ)`, each nv × nv;
+    /// `q` is perturbed in the tangent space (`q ⊕ δ`, docs/derivatives.md).
+    #[pyo3(signature = (q, v, tau, gravity=None))]
+    fn forward_dynamics_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        self.derivatives(py, Direction::Forward, q, v, tau, gravity)
+    }
+
     /// Body `body`'s own rigid body (mass, COM and inertia in its frame), as added.
     fn body(&self, py: Python<'_>, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
         let model = self.model();
@@ -1267,6 +1368,7 @@ impl PyModel {
                 x,
                 out,
                 loops: solver,
+                ..
             } = ws;
             let model: &Model = &version.model;
             recursive::forward_dynamics(model, data, q, v, x, &g, ext.as_deref(), out).py(py)?;

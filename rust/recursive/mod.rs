@@ -8,6 +8,8 @@
 //!   hold everything else to them.
 //! * [`aba`], [`rnea`], [`crba`]: the default forward dynamics, inverse dynamics and mass
 //!   matrix, in body frames; [`outward`] is the kinematic pass they share.
+//! * [`rnea_derivatives`], [`aba_derivatives`]: analytic derivatives of the inverse and
+//!   forward dynamics (world frame, tangent space; docs/derivatives.md).
 //! * [`compiled`]: the model's constants for them (built once per model, [`Model::compiled`]);
 //!   [`workspace`]: their per-call values ([`Data`]).
 //! * [`algebra`] and [`shift`]: the 3×3 block algebra and the carrying of inertias and
@@ -15,12 +17,14 @@
 //!
 //! Nothing here allocates: `Data` is the workspace, sized once per model.
 pub mod aba;
+pub mod aba_derivatives;
 pub(crate) mod algebra;
 pub mod compiled;
 pub mod crba;
 mod outward;
 pub mod reference;
 pub mod rnea;
+pub mod rnea_derivatives;
 pub(crate) mod shift;
 #[cfg(test)]
 mod tests;
@@ -33,7 +37,9 @@ pub use aba::forward_dynamics_local;
 pub use compiled::Compiled;
 pub use crba::mass_matrix_local;
 pub use rnea::inverse_dynamics_local;
-pub use workspace::Data;
+pub use aba_derivatives::forward_dynamics_derivatives;
+pub use rnea_derivatives::inverse_dynamics_derivatives;
+pub use workspace::{Data, DerivativeData};
 
 /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`: the body-frame articulated-body
 /// recursion ([`forward_dynamics_local`]). `external`: one wrench per link,

@@ -6,6 +6,7 @@ use super::algebra::LocalInertia;
 use crate::kinematics::LinkState;
 use crate::model::Model;
 use crate::spatial::{Mat3, Vec3, Vec6};
+use nalgebra::DMatrix;
 
 /// One link's per-call values, in the link's (recursion) frame, about its origin.
 #[derive(Debug, Clone, Copy)]
@@ -89,5 +90,96 @@ impl Data {
             && self.links.len() == model.links.len()
             && self.zero_v.len() == model.nv
             && self.nq == model.nq
+    }
+}
+
+/// One link's values in the derivative recursions ([`super::rnea_derivatives`]), world axes
+/// about the world origin.
+#[derive(Debug, Clone, Copy)]
+pub struct DerivLinkWork {
+    /// Spatial velocity and acceleration (gravity included as the base's `[0; −g]`).
+    pub v: Vec6,
+    pub a: Vec6,
+    /// Inertia, then the composite inertia of the subtree.
+    pub y: crate::spatial::BodyInertia,
+    /// `B = [[B_aa, 0], [B_la, 0]]` (see the module), then its subtree sum.
+    pub baa: Mat3,
+    pub bla: Mat3,
+    /// The body's wrench, then the subtree's.
+    pub f: Vec6,
+}
+
+impl Default for DerivLinkWork {
+    fn default() -> Self {
+        DerivLinkWork {
+            v: Vec6::zeros(),
+            a: Vec6::zeros(),
+            y: crate::spatial::BodyInertia::zero(),
+            baa: Mat3::zeros(),
+            bla: Mat3::zeros(),
+            f: Vec6::zeros(),
+        }
+    }
+}
+
+/// One speed direction's values in the derivative recursions.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct DofWork {
+    /// The joint column `S_k` (world axes, about the world origin).
+    pub s: Vec6,
+    /// `dV_k`, `dA_k`, `dAv_k` (see [`super::rnea_derivatives`]).
+    pub dv: Vec6,
+    pub da: Vec6,
+    pub dav: Vec6,
+    /// `Y S_k` and `Bᵀ S_k` (its angular part; the linear part is zero) of the subtree.
+    pub ys: Vec6,
+    pub bts: Vec3,
+    /// `∂F/∂q_k` and `∂F/∂v_k` of the subtree's wrench.
+    pub g: Vec6,
+    pub gv: Vec6,
+}
+
+/// The workspace and results of the dynamics derivatives
+/// ([`super::rnea_derivatives::inverse_dynamics_derivatives`],
+/// [`super::aba_derivatives::forward_dynamics_derivatives`]) for models of one size.
+#[derive(Debug, Clone)]
+pub struct DerivativeData {
+    pub links: Vec<DerivLinkWork>,
+    pub dofs: Vec<DofWork>,
+    /// `∂τ/∂q`, `∂τ/∂v`, `M = ∂τ/∂a` (nv × nv).
+    pub dtau_dq: DMatrix<f64>,
+    pub dtau_dv: DMatrix<f64>,
+    pub mass: DMatrix<f64>,
+    /// `∂q̈/∂q`, `∂q̈/∂v`, `M⁻¹ = ∂q̈/∂τ` (forward dynamics only).
+    pub ddq_dq: DMatrix<f64>,
+    pub ddq_dv: DMatrix<f64>,
+    pub minv: DMatrix<f64>,
+    /// `τ` of the inverse dynamics pass (its `a` is `q̈` after the forward derivatives).
+    pub tau: Vec<f64>,
+    /// `q̈` of the forward derivatives.
+    pub qdd: Vec<f64>,
+}
+
+impl DerivativeData {
+    pub fn new(model: &Model) -> Self {
+        let (n, nv) = (model.links.len(), model.nv);
+        let z = || DMatrix::zeros(nv, nv);
+        DerivativeData {
+            links: vec![DerivLinkWork::default(); n],
+            dofs: vec![DofWork::default(); nv],
+            dtau_dq: z(),
+            dtau_dv: z(),
+            mass: z(),
+            ddq_dq: z(),
+            ddq_dv: z(),
+            minv: z(),
+            tau: vec![0.0; nv],
+            qdd: vec![0.0; nv],
+        }
+    }
+
+    /// Whether this workspace serves `model` (sizes only, as [`Data::fits`]).
+    pub fn fits(&self, model: &Model) -> bool {
+        self.links.len() == model.links.len() && self.dofs.len() == model.nv
     }
 }

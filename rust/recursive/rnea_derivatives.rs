@@ -1,0 +1,194 @@
+//! Analytic derivatives of the inverse dynamics `τ = ID(q, v, a)` (Carpentier & Mansard,
+//! "Analytical derivatives of rigid body dynamics algorithms", RSS 2018; Pinocchio's
+//! `computeRNEADerivatives`): `∂τ/∂q`, `∂τ/∂v` and `∂τ/∂a = M`, in O(nv · depth), with the
+//! configuration perturbed in the tangent space (`q ⊕ δ`: a quaternion joint turns its body
+//! by `R exp(δ)`, the other joints add `δ` to their coordinates). docs/derivatives.md.
+//!
+//! Everything is in world axes about the world origin (Plücker coordinates), where a joint
+//! column `S_k` is carried rigidly by the bodies it moves: perturbing speed direction `k`
+//! turns every quantity attached to the bodies downstream of it by `S_k ×`. With
+//! `v⁻_k`, `a⁻_k` the velocity and acceleration of the frame the column is fixed in (the
+//! parent's for every joint; for the ZYZ joint, a chain of three revolutes, the frame after
+//! the joint's earlier angles), and for a body `i` moved by `k`:
+//!
+//! * `∂v_i/∂q_k = S_k × v_i + dV_k`, `dV_k = v⁻_k × S_k`;
+//! * `∂a_i/∂q_k = S_k × a_i + dV_k × v_i + dA_k`, `dA_k = a⁻_k × S_k + v⁻_k × dV_k`;
+//! * `∂v_i/∂v_k = S_k`, `∂a_i/∂v_k = S_k × v_i + dAv_k`, `dAv_k = (v⁻_k + v_b) × S_k`
+//!   (`v_b`: the velocity of the column's body).
+//!
+//! The body wrench `f_i = Y_i a_i + v_i ×* Y_i v_i` then changes by its rigid turn plus
+//! `Y_i dA_k + B_i dV_k` (q) or `Y_i dAv_k + B_i S_k` (v), where `B_i x = −Y_i(v_i × x) +
+//! x ×* Y_i v_i + v_i ×* Y_i x` is linear in the angular part of `x` only (Galilean
+//! invariance). Composite sums `Y`, `B`, `F` over each subtree give, for `τ_j = S_jᵀ F_j`:
+//! `∂τ_j/∂q_k = S_jᵀ g_k` with `g_k = S_k ×* F_k + Y_k dA_k + B_k dV_k` when `j` is upstream
+//! of `k` (`S_j` does not move), and `(Y_j S_j)ᵀ dA_k + (B_jᵀ S_j)ᵀ dV_k` when `k` moves `j`
+//! (the rigid turns of `S_j` and `F_j` cancel in the pairing); the same with `dAv_k`, `S_k`
+//! for `∂τ/∂v`.
+use super::base_accel;
+use super::workspace::{Data, DerivativeData};
+use crate::joint::Joint;
+use crate::kinematics;
+use crate::model::Model;
+use crate::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
+
+/// Spatial motion cross product `a × b` (angular part first).
+#[inline(always)]
+pub(crate) fn cross_motion(a: &Vec6, b: &Vec6) -> Vec6 {
+    let (wa, va, wb, vb) = (angular(a), linear(a), angular(b), linear(b));
+    stack(&wa.cross(&wb), &(wa.cross(&vb) + va.cross(&wb)))
+}
+
+/// Spatial force cross product `a ×* f` (moment part first).
+#[inline(always)]
+pub(crate) fn cross_force(a: &Vec6, f: &Vec6) -> Vec6 {
+    let (wa, va, n, fl) = (angular(a), linear(a), angular(f), linear(f));
+    stack(&(wa.cross(&n) + va.cross(&fl)), &wa.cross(&fl))
+}
+
+/// `B x = [B_aa x_a; B_la x_a]`.
+#[inline(always)]
+fn b_mul(baa: &Mat3, bla: &Mat3, x: &Vec6) -> Vec6 {
+    let xa = angular(x);
+    stack(&(baa * xa), &(bla * xa))
+}
+
+/// `∂τ/∂q`, `∂τ/∂v` and `M = ∂τ/∂a` of `τ = ID(q, v, a)` (gravity `g`, no external
+/// wrenches) into `dd.dtau_dq`, `dd.dtau_dv`, `dd.mass`; `τ` itself into `dd.tau`. Columns
+/// are tangent directions (nv of them). `data.links` is overwritten with the positions at
+/// `q`. No allocation.
+#[allow(clippy::too_many_arguments)]
+pub fn inverse_dynamics_derivatives(
+    model: &Model,
+    data: &mut Data,
+    dd: &mut DerivativeData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+) {
+    let n = model.links.len();
+    kinematics::positions(model, q, &mut data.links);
+    let base = base_accel(g);
+    let z6 = Vec6::zeros();
+
+    // Outward: velocities, accelerations, the dof directions and each body's wrench.
+    for i in 0..n {
+        let l = &model.links[i];
+        let st = &data.links[i];
+        let p = st.origin;
+        let (vp, ap) = match l.parent {
+            Some(pi) => (dd.links[pi].v, dd.links[pi].a),
+            None => (z6, base),
+        };
+        let nv = l.joint.nv();
+        let (vi, ai) = (&v[l.v_index..l.v_index + nv], &a[l.v_index..l.v_index + nv]);
+        // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
+        // before it; every other joint's columns are fixed in the parent (one column) or in
+        // the body (the quaternion joints), and all of them move together.
+        let chain = matches!(l.joint, Joint::SphericalZYZ);
+        let (mut vc, mut ac) = (vp, ap);
+        let (mut vd, mut ad) = (z6, z6);
+        for k in 0..nv {
+            let sk = st.s[k];
+            let sa = angular(&sk);
+            let s = stack(&sa, &(linear(&sk) + p.cross(&sa)));
+            let d = &mut dd.dofs[l.v_index + k];
+            d.s = s;
+            d.dv = cross_motion(&vc, &s);
+            d.da = cross_motion(&ac, &s) + cross_motion(&vc, &d.dv);
+            if chain {
+                d.dav = d.dv * 2.0;
+                ac += s * ai[k] + d.dv * vi[k];
+                vc += s * vi[k];
+            } else {
+                vd += s * vi[k];
+                ad += s * ai[k];
+            }
+        }
+        if !chain {
+            vc = vp + vd;
+            ac = ap + ad + cross_motion(&vp, &vd);
+            let vsum = vp + vc;
+            for d in &mut dd.dofs[l.v_index..l.v_index + nv] {
+                d.dav = cross_motion(&vsum, &d.s);
+            }
+        }
+        let y = st.inertia.shifted(&p);
+        let yv = y.mul_twist(&vc);
+        let w = angular(&vc);
+        let u = linear(&vc);
+        let iw = y.rotational * w;
+        let (sw, sh) = (skew(&w), skew(&y.first_moment));
+        let lk = &mut dd.links[i];
+        lk.v = vc;
+        lk.a = ac;
+        lk.f = y.mul_twist(&ac) + cross_force(&vc, &yv);
+        lk.baa = sw * y.rotational - y.rotational * sw - skew(&iw) - sh * skew(&u) * 2.0;
+        lk.bla = skew(&(u * y.mass - y.first_moment.cross(&w))) * -2.0;
+        lk.y = y;
+    }
+
+    dd.dtau_dq.fill(0.0);
+    dd.dtau_dv.fill(0.0);
+    dd.mass.fill(0.0);
+
+    // Inward: composite sums, then the entries of each dof with its upstream dofs.
+    for i in (0..n).rev() {
+        let l = &model.links[i];
+        let nv = l.joint.nv();
+        let lk = dd.links[i];
+        let chain = matches!(l.joint, Joint::SphericalZYZ);
+        let r = l.v_index..l.v_index + nv;
+        for j in r.clone() {
+            let d = &mut dd.dofs[j];
+            let s = d.s;
+            d.ys = lk.y.mul_twist(&s);
+            d.bts = lk.baa.transpose() * angular(&s) + lk.bla.transpose() * linear(&s);
+            d.g = cross_force(&s, &lk.f) + lk.y.mul_twist(&d.da) + b_mul(&lk.baa, &lk.bla, &d.dv);
+            d.gv = lk.y.mul_twist(&d.dav) + b_mul(&lk.baa, &lk.bla, &s);
+            dd.tau[j] = s.dot(&lk.f);
+        }
+        // `k` moves `j`: `(Y S_j)ᵀ dA_k + (Bᵀ S_j)ᵀ dV_k`.
+        let moved_q = |dj: &super::workspace::DofWork, dk: &super::workspace::DofWork| {
+            dj.ys.dot(&dk.da) + dj.bts.dot(&angular(&dk.dv))
+        };
+        let moved_v = |dj: &super::workspace::DofWork, dk: &super::workspace::DofWork| {
+            dj.ys.dot(&dk.dav) + dj.bts.dot(&angular(&dk.s))
+        };
+        for j in r.clone() {
+            let dj = &dd.dofs[j];
+            for k in r.clone() {
+                let dk = &dd.dofs[k];
+                dd.dtau_dq[(j, k)] = if chain && k > j {
+                    dj.s.dot(&dk.g)
+                } else {
+                    moved_q(dj, dk)
+                };
+                dd.dtau_dv[(j, k)] = moved_v(dj, dk);
+                dd.mass[(j, k)] = dj.s.dot(&dk.ys);
+            }
+            let mut up = l.parent;
+            while let Some(pa) = up {
+                let la = &model.links[pa];
+                for k in la.v_index..la.v_index + la.joint.nv() {
+                    let dk = &dd.dofs[k];
+                    dd.dtau_dq[(k, j)] = dk.s.dot(&dj.g);
+                    dd.dtau_dq[(j, k)] = moved_q(dj, dk);
+                    dd.dtau_dv[(k, j)] = dk.s.dot(&dj.gv);
+                    dd.dtau_dv[(j, k)] = moved_v(dj, dk);
+                    let m = dk.s.dot(&dj.ys);
+                    dd.mass[(k, j)] = m;
+                    dd.mass[(j, k)] = m;
+                }
+                up = la.parent;
+            }
+        }
+        if let Some(pa) = l.parent {
+            let parent = &mut dd.links[pa];
+            parent.y.add(&lk.y);
+            parent.baa += lk.baa;
+            parent.bla += lk.bla;
+            parent.f += lk.f;
+        }
+    }
+}
