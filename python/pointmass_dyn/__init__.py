@@ -52,6 +52,7 @@ from .simulation import (
     energies,
     rk45,
     simulate,
+    solve_ivp,
 )
 from .sweep import sweep
 from .work_precision import WorkPrecision, work_precision
@@ -148,6 +149,7 @@ __all__ = [
     "shaking",
     "simulate",
     "simulate_batch",
+    "solve_ivp",
     "sweep",
     "to_mjcf",
     "work_precision",
