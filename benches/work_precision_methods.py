@@ -45,11 +45,13 @@ def main():
     ap.add_argument("--methods", nargs="+", default=["all"])
     ap.add_argument("--quick", action="store_true", help="4 tolerances, 1 repeat")
     ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--scipy-repeats", type=int, default=2)
     ap.add_argument("--plot", default=None)
     ap.add_argument("--out", default=None)
     args = ap.parse_args()
     tols = (1e-3, 1e-5, 1e-7, 1e-9, 1e-11) if args.quick else DEFAULT_TOLERANCES
     repeats = 1 if args.quick else args.repeats
+    scipy_repeats = 1 if args.quick else args.scipy_repeats
     try:
         import mujoco
         mj = mujoco.__version__
@@ -60,13 +62,13 @@ def main():
     load = os.getloadavg()
     print(f"pointmass_dyn {pmd.__version__}, mujoco {mj}, scipy {scipy.__version__}, "
           f"{os.cpu_count()} cores, load average {load[0]:.1f} {load[1]:.1f} {load[2]:.1f}; "
-          f"best of {repeats} (SciPy: 1)")
+          f"best of {repeats} (SciPy: {scipy_repeats})")
     results, summary = [], []
     t_all = time.perf_counter()
     for name in args.scenes:
         t0 = time.perf_counter()
         res = pmd.work_precision(name, tols, t_end=SPANS.get(name), repeats=repeats,
-                                 scipy_repeats=1, methods=args.methods)
+                                 scipy_repeats=scipy_repeats, methods=args.methods)
         results.append(res)
         print()
         print(res.methods_table())

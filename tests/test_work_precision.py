@@ -386,3 +386,24 @@ def test_analytic_jacobian_with_springs_and_dampers():
     assert np.max(np.abs(jac(0.0, y) - fd)) <= 1e-7 * np.max(np.abs(fd))
     # Models whose q is not v (quaternions) fall back to finite differences.
     assert wpm.analytic_jacobian(pmd.load_scene("satellite")) is None
+
+
+def test_our_fixed_step_methods_are_mujocos():
+    """On chain7 (hinges: MuJoCo's coordinates are ours), our RK4 and semi-implicit Euler and
+    MuJoCo's take the same steps of the same ODE: equal errors at every dt."""
+    pytest.importorskip("mujoco")
+    if not simulate_has("RK4"):
+        pytest.skip("this build has no fixed-step methods")
+    wp = pmd.work_precision("chain7", (1e-6,), t_end=0.4, repeats=1,
+                            methods=["RK4", "Euler", "mujoco:RK4", "mujoco:Euler"],
+                            dts=(0.02, 0.002))
+    by = {}
+    for r in wp.method_rows:
+        by.setdefault(r["method"], []).append(r)
+    for ours, theirs in (("RK4", "mujoco:RK4"), ("Euler", "mujoco:Euler")):
+        assert len(by[ours]) == len(by[theirs]) == 2
+        for a, b in zip(by[ours], by[theirs]):
+            assert a["dt"] == pytest.approx(b["dt"]) and a["steps"] == b["steps"]
+            record(f"work-precision: |err ours {ours} - err MuJoCo| / err",
+                   abs(a["err"] - b["err"]) / b["err"])
+            assert a["err"] == pytest.approx(b["err"], rel=1e-6)
