@@ -19,11 +19,15 @@
 mod dense;
 mod driver;
 mod events;
+mod lu;
+mod num_jac;
+mod radau;
 mod stepper;
 
 pub use dense::{eval_segment, DenseOutput};
 pub use driver::rk45;
 pub use events::{Event, EventDirection, EventFn};
+pub use radau::{eval_radau_segment, JacobianSource, Radau, NEWTON_MAXITER};
 pub use stepper::{StepOutcome, Stepper};
 
 use thiserror::Error;
@@ -42,6 +46,12 @@ pub trait OdeSystem {
     fn project(&mut self, _y: &mut [f64]) -> Result<bool, String> {
         Ok(false)
     }
+    /// Analytic Jacobian `∂f/∂y` at `(t, y)` into `jac` (row-major `dim × dim`, entry
+    /// `(i, j)` = `∂f_i/∂y_j`); returns `true` when filled. Default: none (`false`), and the
+    /// implicit methods use finite differences.
+    fn jacobian(&mut self, _t: f64, _y: &[f64], _jac: &mut [f64]) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -54,6 +64,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
     }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        (**self).jacobian(t, y, jac)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
@@ -65,6 +78,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     }
     fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        (**self).jacobian(t, y, jac)
     }
 }
 
@@ -311,6 +327,12 @@ pub enum InputError {
     },
     #[error("t_eval: values must be strictly {order} (direction of integration); index {index} breaks it")]
     TEvalNotSorted { index: usize, order: &'static str },
+    #[error(
+        "jac: a constant Jacobian must have dim × dim = {expected} × {expected} entries, got {got}"
+    )]
+    JacobianShape { expected: usize, got: usize },
+    #[error("jac: entry {index} (row-major) is not finite ({value})")]
+    JacobianNonFinite { index: usize, value: f64 },
 }
 
 impl InputError {
@@ -331,6 +353,7 @@ impl InputError {
             InputError::TEvalOutsideSpan { .. }
             | InputError::TEvalNotSorted { .. }
             | InputError::OutputTooLarge { .. } => "t_eval",
+            InputError::JacobianShape { .. } | InputError::JacobianNonFinite { .. } => "jac",
         }
     }
 }

@@ -1,0 +1,474 @@
+//! Tests of Radau IIA against SciPy 1.17's `solve_ivp(method="Radau")` (counts pinned from it),
+//! published reference values (Hairer's test set) and exact solutions.
+use super::*;
+use crate::integrator::{FnSystem, Rk45Options};
+
+type Counts = (usize, usize, usize, usize);
+
+/// Van der Pol in Hairer's scaled form `y1' = y2`, `y2' = ((1 − y1²) y2 − y1)/ε`, ε = 1/μ².
+struct VdP {
+    eps: f64,
+    analytic: bool,
+}
+
+impl OdeSystem for VdP {
+    fn dim(&self) -> usize {
+        2
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+        dy[0] = y[1];
+        dy[1] = ((1.0 - y[0] * y[0]) * y[1] - y[0]) / self.eps;
+        Ok(())
+    }
+    fn jacobian(&mut self, _t: f64, y: &[f64], j: &mut [f64]) -> Result<bool, String> {
+        if !self.analytic {
+            return Ok(false);
+        }
+        j.copy_from_slice(&[
+            0.0,
+            1.0,
+            (-2.0 * y[0] * y[1] - 1.0) / self.eps,
+            (1.0 - y[0] * y[0]) / self.eps,
+        ]);
+        Ok(true)
+    }
+}
+
+/// Robertson's chemical kinetics.
+struct Robertson {
+    analytic: bool,
+}
+
+impl OdeSystem for Robertson {
+    fn dim(&self) -> usize {
+        3
+    }
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+        dy[0] = -0.04 * y[0] + 1e4 * y[1] * y[2];
+        dy[1] = 0.04 * y[0] - 1e4 * y[1] * y[2] - 3e7 * y[1] * y[1];
+        dy[2] = 3e7 * y[1] * y[1];
+        Ok(())
+    }
+    fn jacobian(&mut self, _t: f64, y: &[f64], j: &mut [f64]) -> Result<bool, String> {
+        if !self.analytic {
+            return Ok(false);
+        }
+        j.copy_from_slice(&[
+            -0.04,
+            1e4 * y[2],
+            1e4 * y[1],
+            0.04,
+            -1e4 * y[2] - 6e7 * y[1],
+            -1e4 * y[1],
+            0.0,
+            6e7 * y[1],
+            0.0,
+        ]);
+        Ok(true)
+    }
+}
+
+fn opts(rtol: f64, atol: f64) -> Rk45Options {
+    Rk45Options {
+        rtol: rtol.into(),
+        atol: atol.into(),
+        ..Default::default()
+    }
+}
+
+/// Steps to the end; ((steps, nfev, njev, nlu), y_end).
+fn run<S: OdeSystem>(mut r: Radau<S>) -> (Counts, Vec<f64>) {
+    loop {
+        match r.step() {
+            Ok(StepOutcome::Finished) => break,
+            Ok(StepOutcome::Accepted) => {}
+            Err(s) => panic!("{}", s.describe(r.t())),
+        }
+    }
+    (
+        (r.n_accepted(), r.nfev(), r.njev(), r.nlu()),
+        r.y().to_vec(),
+    )
+}
+
+fn vdp(eps: f64, analytic: bool, tol: f64) -> Radau<VdP> {
+    Radau::new(
+        VdP { eps, analytic },
+        0.0,
+        &[2.0, 0.0],
+        2.0,
+        &opts(tol, tol),
+        JacobianSource::Auto,
+    )
+    .unwrap()
+}
+
+fn robertson(analytic: bool, tol: f64) -> Radau<Robertson> {
+    Radau::new(
+        Robertson { analytic },
+        0.0,
+        &[1.0, 0.0, 0.0],
+        1e11,
+        &opts(tol, tol * 1e-3),
+        JacobianSource::Auto,
+    )
+    .unwrap()
+}
+
+fn close(a: &[f64], b: &[f64], rel: f64) -> bool {
+    a.iter()
+        .zip(b)
+        .all(|(x, y)| (x - y).abs() <= rel * y.abs().max(1e-300))
+}
+
+/// SciPy 1.17 `solve_ivp(vdp, (0, 2), [2, 0], method="Radau", rtol=tol, atol=tol,
+/// jac=None | analytic)`, ε = 1e-6 (μ = 1e3): (analytic, tol, (steps, nfev, njev, nlu), y(2)).
+const SCIPY_VDP_1E6: [(bool, f64, Counts, [f64; 2]); 4] = [
+    (
+        false,
+        1e-3,
+        (186, 1844, 62, 272),
+        [1.7061747339238742, -0.8927384287259668],
+    ),
+    (
+        true,
+        1e-3,
+        (186, 1841, 62, 272),
+        [1.706176322477885, -0.8927316200037034],
+    ),
+    (
+        false,
+        1e-6,
+        (879, 7392, 205, 608),
+        [1.7061677250385054, -0.8928097047327269],
+    ),
+    (
+        true,
+        1e-6,
+        (874, 7336, 207, 602),
+        [1.7061677264562052, -0.8928097067951752],
+    ),
+];
+
+/// As above for Robertson on (0, 1e11), rtol = tol, atol = 1e-3 tol.
+const SCIPY_ROBERTSON: [(bool, f64, Counts, [f64; 3]); 3] = [
+    (
+        true,
+        1e-3,
+        (78, 857, 44, 214),
+        [
+            1.8514835168293258e-08,
+            7.405934391244861e-14,
+            0.9999999814850921,
+        ],
+    ),
+    (
+        false,
+        1e-6,
+        (316, 2484, 77, 356),
+        [
+            2.0832824747326362e-08,
+            8.333130037800223e-14,
+            0.9999999791670915,
+        ],
+    ),
+    (
+        true,
+        1e-6,
+        (316, 2484, 77, 356),
+        [
+            2.0832822472295478e-08,
+            8.333129160453338e-14,
+            0.999999979167095,
+        ],
+    ),
+];
+
+#[test]
+fn van_der_pol_mu_1e3_is_scipys_step_for_step() {
+    for (analytic, tol, counts, y_end) in SCIPY_VDP_1E6 {
+        let (c, y) = run(vdp(1e-6, analytic, tol));
+        assert_eq!(c, counts, "analytic {analytic}, tol {tol}");
+        // Same steps; the Newton solves round differently (LAPACK vs ours).
+        assert!(close(&y, &y_end, 1e-5), "{y:?} vs {y_end:?}");
+    }
+}
+
+#[test]
+fn robertson_is_scipys_step_for_step() {
+    for (analytic, tol, counts, y_end) in SCIPY_ROBERTSON {
+        let (c, y) = run(robertson(analytic, tol));
+        assert_eq!(c, counts, "analytic {analytic}, tol {tol}");
+        assert!(close(&y, &y_end, 1e-4), "{y:?} vs {y_end:?}");
+    }
+}
+
+/// μ = 1e6 (ε = 1e-12): the Newton matrices have entries ~1e12, rounding differences of 1e-15
+/// in the first steps grow and the step sequences part after ~17 steps; the work stays SciPy's
+/// within a few per cent and the accuracy the same.
+#[test]
+fn van_der_pol_mu_1e6_costs_what_scipy_does() {
+    // SciPy: (analytic, tol, steps, nfev, y(2)).
+    let scipy = [
+        (
+            false,
+            1e-3,
+            322,
+            3258,
+            [1.7055391862787772, -0.8933889408853906],
+        ),
+        (
+            true,
+            1e-3,
+            338,
+            3409,
+            [1.7055408170916004, -0.8933825016200553],
+        ),
+        (
+            false,
+            1e-6,
+            1610,
+            13979,
+            [1.7055462061432116, -0.8934763721221453],
+        ),
+        (
+            true,
+            1e-6,
+            1606,
+            13834,
+            [1.7055462075727337, -0.8934763706247363],
+        ),
+    ];
+    for (analytic, tol, steps, nfev, y_end) in scipy {
+        let (c, y) = run(vdp(1e-12, analytic, tol));
+        let ratio = c.1 as f64 / nfev as f64;
+        assert!((0.9..1.1).contains(&ratio), "nfev {} vs SciPy {nfev}", c.1);
+        let sr = c.0 as f64 / steps as f64;
+        assert!((0.9..1.1).contains(&sr), "steps {} vs SciPy {steps}", c.0);
+        // Both within the tolerance's reach of each other.
+        assert!(close(&y, &y_end, 50.0 * tol), "{y:?} vs {y_end:?}");
+    }
+}
+
+/// Hairer's test set (VDPOL, ε = 1e-6): y(2) = (1.706167732170483, −0.8928097010247975).
+#[test]
+fn van_der_pol_matches_the_published_reference() {
+    let reference = [1.706_167_732_170_483, -0.892_809_701_024_797_5];
+    for tol in [1e-6, 1e-9] {
+        let (_, y) = run(vdp(1e-6, true, tol));
+        let err = (y[0] - reference[0]).abs().max((y[1] - reference[1]).abs());
+        assert!(err < 100.0 * tol, "tol {tol}: error {err}");
+    }
+}
+
+/// `y' = A y`, `A` with eigenvalues −1 and −1e4 (stiff, linear): exact `exp(At) y0`.
+struct Linear;
+const LAMBDA: [f64; 2] = [-1.0, -1e4];
+impl OdeSystem for Linear {
+    fn dim(&self) -> usize {
+        2
+    }
+    // A = V diag(λ) V⁻¹ with V = [[1, 1], [1, −1]] / √2 (symmetric).
+    fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+        let (a, b) = (0.5 * (LAMBDA[0] + LAMBDA[1]), 0.5 * (LAMBDA[0] - LAMBDA[1]));
+        dy[0] = a * y[0] + b * y[1];
+        dy[1] = b * y[0] + a * y[1];
+        Ok(())
+    }
+}
+fn linear_exact(t: f64, y0: [f64; 2]) -> [f64; 2] {
+    let u = 0.5 * (y0[0] + y0[1]) * (LAMBDA[0] * t).exp();
+    let v = 0.5 * (y0[0] - y0[1]) * (LAMBDA[1] * t).exp();
+    [u + v, u - v]
+}
+fn linear_matrix() -> Vec<f64> {
+    let (a, b) = (0.5 * (LAMBDA[0] + LAMBDA[1]), 0.5 * (LAMBDA[0] - LAMBDA[1]));
+    vec![a, b, b, a]
+}
+
+#[test]
+fn stiff_linear_system_is_accurate_in_few_steps_and_between_them() {
+    let y0 = [1.0, 0.0];
+    let tol = 1e-8;
+    let mut r = Radau::new(
+        Linear,
+        0.0,
+        &y0,
+        3.0,
+        &opts(tol, tol),
+        JacobianSource::Constant(linear_matrix()),
+    )
+    .unwrap();
+    let mut out = [0.0; 2];
+    let mut worst_dense: f64 = 0.0;
+    loop {
+        let o = r.step().unwrap();
+        // The collocation cubic between the steps (order 3 on the step, error well below
+        // the step's size times the tolerance's order).
+        for k in 1..4 {
+            let t = r.t_old() + (r.t() - r.t_old()) * k as f64 / 4.0;
+            assert!(r.dense_eval(t, &mut out));
+            let e = linear_exact(t, y0);
+            worst_dense = worst_dense.max((out[0] - e[0]).abs().max((out[1] - e[1]).abs()));
+        }
+        if o == StepOutcome::Finished {
+            break;
+        }
+    }
+    let e = linear_exact(3.0, y0);
+    let err = (r.y()[0] - e[0]).abs().max((r.y()[1] - e[1]).abs());
+    assert!(err < 1e-7, "end error {err}");
+    assert!(worst_dense < 1e-5, "dense error {worst_dense}");
+    // An explicit method needs ~|λ| T / 3.3 = 9000 steps; the implicit one a handful.
+    assert!(r.n_accepted() < 200, "{} steps", r.n_accepted());
+    // A constant Jacobian is never re-evaluated.
+    assert_eq!(r.njev(), 0);
+    assert!(!r.analytic_jacobian());
+}
+
+/// Finite differences agree with the analytic Jacobian: same steps on Robertson (tol 1e-6,
+/// pinned above), and their evaluations are counted apart from nfev.
+#[test]
+fn finite_difference_jacobian_evaluations_are_counted_apart() {
+    let mut r = robertson(false, 1e-6);
+    while r.step().unwrap() != StepOutcome::Finished {}
+    assert!(!r.analytic_jacobian());
+    // One evaluation per column and Jacobian, plus SciPy's retries of columns lost in
+    // round-off (at most one more per column).
+    assert!(r.jac_evaluations() >= 3 * r.njev() && r.jac_evaluations() <= 6 * r.njev());
+    let mut a = robertson(true, 1e-6);
+    while a.step().unwrap() != StepOutcome::Finished {}
+    assert!(a.analytic_jacobian());
+    assert_eq!(a.jac_evaluations(), 0);
+}
+
+/// A wrong (zero) constant Jacobian: simplified Newton is a fixed-point iteration that only
+/// contracts for |h λ| small, so attempts fail and the step is halved until it does; the result
+/// is still right.
+#[test]
+fn newton_failures_halve_the_step() {
+    let y0 = [1.0, 0.0];
+    let mut r = Radau::new(
+        Linear,
+        0.0,
+        &y0,
+        0.01,
+        &opts(1e-6, 1e-6),
+        JacobianSource::Constant(vec![0.0; 4]),
+    )
+    .unwrap();
+    while r.step().unwrap() != StepOutcome::Finished {}
+    assert!(r.n_newton_failures() > 0);
+    let e = linear_exact(0.01, y0);
+    assert!((r.y()[0] - e[0]).abs() < 1e-5 && (r.y()[1] - e[1]).abs() < 1e-5);
+}
+
+/// `y' = y²`, `y(0) = 1` blows up at t = 1: the step size falls below the minimum there and
+/// the failure names the time reached.
+#[test]
+fn blow_up_fails_with_step_too_small_and_the_time_reached() {
+    let sys = FnSystem::new(1, |_t, y: &[f64], dy: &mut [f64]| {
+        dy[0] = y[0] * y[0];
+        Ok(())
+    });
+    let mut r = Radau::new(
+        sys,
+        0.0,
+        &[1.0],
+        2.0,
+        &opts(1e-6, 1e-6),
+        JacobianSource::Auto,
+    )
+    .unwrap();
+    let status = loop {
+        match r.step() {
+            Ok(StepOutcome::Accepted) => {}
+            Ok(StepOutcome::Finished) => panic!("passed the singularity"),
+            Err(s) => break s,
+        }
+    };
+    let t = match status {
+        Status::StepTooSmall { t, .. } => t,
+        ref other => panic!("{other:?}"),
+    };
+    assert!((t - 1.0).abs() < 1e-3, "stopped at {t}");
+    assert!(status.describe(r.t()).contains(&format!("{t}")));
+    // Every later call reports the same failure.
+    assert_eq!(r.step(), Err(status));
+}
+
+#[test]
+fn jacobian_errors_and_bad_constant_jacobians() {
+    struct Failing;
+    impl OdeSystem for Failing {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn rhs(&mut self, _t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+            dy[0] = -y[0];
+            Ok(())
+        }
+        fn jacobian(&mut self, _t: f64, _y: &[f64], _j: &mut [f64]) -> Result<bool, String> {
+            Err("no Jacobian today".into())
+        }
+    }
+    let mut r = Radau::new(
+        Failing,
+        0.0,
+        &[1.0],
+        1.0,
+        &opts(1e-3, 1e-6),
+        JacobianSource::Auto,
+    )
+    .unwrap();
+    match r.step() {
+        Err(Status::RhsError { message, .. }) => {
+            assert!(message.contains("jacobian: no Jacobian today"), "{message}")
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = Radau::new(
+        Linear,
+        0.0,
+        &[1.0, 0.0],
+        1.0,
+        &opts(1e-3, 1e-6),
+        JacobianSource::Constant(vec![0.0; 3]),
+    )
+    .err()
+    .unwrap();
+    assert_eq!(e.argument(), "jac");
+    assert!(e.to_string().contains("got 3"));
+    let e = Radau::new(
+        Linear,
+        0.0,
+        &[1.0, 0.0],
+        1.0,
+        &opts(1e-3, 1e-6),
+        JacobianSource::Constant(vec![0.0, f64::NAN, 0.0, 0.0]),
+    )
+    .err()
+    .unwrap();
+    assert_eq!(e.argument(), "jac");
+}
+
+/// Backwards in time on the linear system (from its exact state at t = 1 back to t = 0.5).
+#[test]
+fn integrates_backwards() {
+    let y1 = linear_exact(1.0, [1.0, 0.0]);
+    let (_, y) = run(Radau::new(
+        Linear,
+        1.0,
+        &y1,
+        0.5,
+        &opts(1e-10, 1e-12),
+        JacobianSource::Constant(linear_matrix()),
+    )
+    .unwrap());
+    // Backwards, the stiff mode grows: only the smooth one is present (it was damped).
+    let e = linear_exact(0.5, [1.0, 0.0]);
+    assert!(
+        (y[0] - e[0]).abs() < 1e-8 && (y[1] - e[1]).abs() < 1e-8,
+        "{y:?} vs {e:?}"
+    );
+}
