@@ -7,6 +7,8 @@
 //! above its round-off (`EPS |f|`): a column whose difference is lost in round-off is retried
 //! once with a 10× larger step (one more evaluation each). One evaluation per column, plus the
 //! retries: SciPy does not count these in `nfev`, nor do we (see [`NumJac::evaluations`]).
+// Index loops over parallel arrays, as SciPy's vector expressions read.
+#![allow(clippy::needless_range_loop)]
 
 use super::{NonFiniteKind, OdeSystem, Status};
 

@@ -30,6 +30,8 @@
 //! non-finite derivative at an accepted state or in a Jacobian ends the run with
 //! [`Status::NonFinite`]. Per-component `rtol` (which SciPy's Radau does not accept) sets
 //! `newton_tol` from its smallest entry.
+// Index loops over parallel arrays read as SciPy's formulas; T and TI are SciPy's digits verbatim.
+#![allow(clippy::needless_range_loop, clippy::excessive_precision)]
 
 use nalgebra::Complex;
 
@@ -279,10 +281,21 @@ pub fn eval_radau_segment(t_old: f64, h: f64, y_old: &[f64], q: &[f64], t: f64, 
 }
 
 impl<S: OdeSystem> Radau<S> {
-    /// Validate the inputs and allocate all workspaces (no rhs call yet). Of `opts`, `rtol`,
-    /// `atol`, `first_step`, `max_step` and `max_steps` apply (`controller`, `stiffness`,
-    /// `dense`, `t_eval` belong to the explicit stepper or the driver).
+    /// Validate the inputs and allocate all workspaces (no rhs call yet), with the system's
+    /// Jacobian or finite differences ([`JacobianSource::Auto`]). Of `opts`, `rtol`, `atol`,
+    /// `first_step`, `max_step` and `max_steps` apply (`dense`, `t_eval` are the driver's).
     pub fn new(
+        sys: S,
+        t0: f64,
+        y0: &[f64],
+        t_bound: f64,
+        opts: &Rk45Options,
+    ) -> Result<Self, InputError> {
+        Self::with_jacobian(sys, t0, y0, t_bound, opts, JacobianSource::Auto)
+    }
+
+    /// As [`Radau::new`] with the Jacobian from `jacobian`.
+    pub fn with_jacobian(
         sys: S,
         t0: f64,
         y0: &[f64],
@@ -816,6 +829,8 @@ impl<S: OdeSystem> Radau<S> {
             if rejected && error_norm > 1.0 {
                 error_norm = self.filtered_error_norm(t)?;
             }
+            // Written so that a NaN norm rejects.
+            #[allow(clippy::neg_cmp_op_on_partial_ord)]
             if !(error_norm <= 1.0) {
                 let factor = predict_factor(h_abs, h_abs_old, error_norm, error_norm_old);
                 h_abs *= MIN_FACTOR.max(safety * factor);

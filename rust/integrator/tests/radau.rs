@@ -92,7 +92,7 @@ fn run<S: OdeSystem>(mut r: Radau<S>) -> (Counts, Vec<f64>) {
 }
 
 fn vdp(eps: f64, analytic: bool, tol: f64) -> Radau<VdP> {
-    Radau::new(
+    Radau::with_jacobian(
         VdP { eps, analytic },
         0.0,
         &[2.0, 0.0],
@@ -104,7 +104,7 @@ fn vdp(eps: f64, analytic: bool, tol: f64) -> Radau<VdP> {
 }
 
 fn robertson(analytic: bool, tol: f64) -> Radau<Robertson> {
-    Radau::new(
+    Radau::with_jacobian(
         Robertson { analytic },
         0.0,
         &[1.0, 0.0, 0.0],
@@ -290,7 +290,7 @@ fn linear_matrix() -> Vec<f64> {
 fn stiff_linear_system_is_accurate_in_few_steps_and_between_them() {
     let y0 = [1.0, 0.0];
     let tol = 1e-8;
-    let mut r = Radau::new(
+    let mut r = Radau::with_jacobian(
         Linear,
         0.0,
         &y0,
@@ -348,7 +348,7 @@ fn finite_difference_jacobian_evaluations_are_counted_apart() {
 #[test]
 fn newton_failures_halve_the_step() {
     let y0 = [1.0, 0.0];
-    let mut r = Radau::new(
+    let mut r = Radau::with_jacobian(
         Linear,
         0.0,
         &y0,
@@ -371,7 +371,7 @@ fn blow_up_fails_with_step_too_small_and_the_time_reached() {
         dy[0] = y[0] * y[0];
         Ok(())
     });
-    let mut r = Radau::new(
+    let mut r = Radau::with_jacobian(
         sys,
         0.0,
         &[1.0],
@@ -412,7 +412,7 @@ fn jacobian_errors_and_bad_constant_jacobians() {
             Err("no Jacobian today".into())
         }
     }
-    let mut r = Radau::new(
+    let mut r = Radau::with_jacobian(
         Failing,
         0.0,
         &[1.0],
@@ -427,7 +427,7 @@ fn jacobian_errors_and_bad_constant_jacobians() {
         }
         other => panic!("{other:?}"),
     }
-    let e = Radau::new(
+    let e = Radau::with_jacobian(
         Linear,
         0.0,
         &[1.0, 0.0],
@@ -439,7 +439,7 @@ fn jacobian_errors_and_bad_constant_jacobians() {
     .unwrap();
     assert_eq!(e.argument(), "jac");
     assert!(e.to_string().contains("got 3"));
-    let e = Radau::new(
+    let e = Radau::with_jacobian(
         Linear,
         0.0,
         &[1.0, 0.0],
@@ -456,7 +456,7 @@ fn jacobian_errors_and_bad_constant_jacobians() {
 #[test]
 fn integrates_backwards() {
     let y1 = linear_exact(1.0, [1.0, 0.0]);
-    let (_, y) = run(Radau::new(
+    let (_, y) = run(Radau::with_jacobian(
         Linear,
         1.0,
         &y1,
