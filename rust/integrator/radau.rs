@@ -35,9 +35,14 @@
 
 use nalgebra::Complex;
 
+use super::dense::Interpolant;
 use super::lu::Lu;
+use super::method::{Counts, Integrator};
 use super::num_jac::NumJac;
-use super::{InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, StepOutcome, Tol};
+use super::stepper::{
+    check_start, check_step_options, next_toward, rms_norm as rms, select_initial_step, Start,
+};
+use super::{Controller, InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, StepOutcome};
 
 const S6: f64 = 2.449_489_742_783_178; // √6
 /// Collocation nodes.
@@ -205,51 +210,6 @@ pub struct Radau<S: OdeSystem> {
     state: State,
 }
 
-fn expand_tol(tol: &Tol, name: &'static str, dim: usize) -> Result<Vec<f64>, InputError> {
-    let v = match tol {
-        Tol::Scalar(x) => vec![*x; dim],
-        Tol::PerComponent(v) if v.len() == dim => v.clone(),
-        Tol::PerComponent(v) => {
-            return Err(InputError::TolLength {
-                name,
-                expected: dim,
-                got: v.len(),
-            })
-        }
-    };
-    if let Some((index, &value)) = v
-        .iter()
-        .enumerate()
-        .find(|(_, x)| !(x.is_finite() && **x >= 0.0))
-    {
-        return Err(InputError::TolInvalid { name, index, value });
-    }
-    Ok(v)
-}
-
-/// RMS norm, `np.linalg.norm(x) / x.size ** 0.5`.
-fn rms(it: impl Iterator<Item = f64>, n: usize) -> f64 {
-    let mut sq = 0.0;
-    for v in it {
-        sq += v * v;
-    }
-    sq.sqrt() / (n as f64).sqrt()
-}
-
-/// `np.nextafter(x, dir * inf)` for finite `x`.
-fn next_toward(x: f64, dir: f64) -> f64 {
-    if x == 0.0 {
-        let tiny = f64::from_bits(1);
-        return if dir > 0.0 { tiny } else { -tiny };
-    }
-    let bits = x.to_bits();
-    if (x > 0.0) == (dir > 0.0) {
-        f64::from_bits(bits + 1)
-    } else {
-        f64::from_bits(bits - 1)
-    }
-}
-
 /// SciPy `predict_factor` (Gustafsson's predictive controller, Hairer & Wanner IV.8).
 fn predict_factor(
     h_abs: f64,
@@ -265,19 +225,6 @@ fn predict_factor(
     };
     // Python's min(1, nan) is 1, like f64::min.
     1f64.min(multiplier) * error_norm.powf(-0.25)
-}
-
-/// Evaluate a Radau step's interpolant `y_old + Q (x, x², x³)`, `x = (t − t_old)/h`
-/// (SciPy `RadauDenseOutput`; `h` signed, `q[3 i + j]`).
-pub fn eval_radau_segment(t_old: f64, h: f64, y_old: &[f64], q: &[f64], t: f64, out: &mut [f64]) {
-    let x = (t - t_old) / h;
-    let p1 = x;
-    let p2 = p1 * x;
-    let p3 = p2 * x;
-    for (i, o) in out.iter_mut().enumerate() {
-        let qi = &q[3 * i..3 * i + 3];
-        *o = (qi[0] * p1 + qi[1] * p2 + qi[2] * p3) + y_old[i];
-    }
 }
 
 impl<S: OdeSystem> Radau<S> {
@@ -304,44 +251,13 @@ impl<S: OdeSystem> Radau<S> {
         jacobian: JacobianSource,
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
-        if dim == 0 {
-            return Err(InputError::EmptyState);
+        check_start(dim, y0, t0, t_bound)?;
+        check_step_options(opts, (t_bound - t0).abs())?;
+        if opts.controller != Controller::Standard {
+            return Err(InputError::ControllerUnsupported { method: "Radau" });
         }
-        if y0.len() != dim {
-            return Err(InputError::Y0Length {
-                expected: dim,
-                got: y0.len(),
-            });
-        }
-        if let Some((index, &value)) = y0.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(InputError::Y0NonFinite { index, value });
-        }
-        if !(t0.is_finite() && t_bound.is_finite()) {
-            return Err(InputError::TSpanNonFinite { t0, t_end: t_bound });
-        }
-        if t0 == t_bound {
-            return Err(InputError::TSpanEmpty(t0));
-        }
-        let mut rtol = expand_tol(&opts.rtol, "rtol", dim)?;
-        let atol = expand_tol(&opts.atol, "atol", dim)?;
-        if opts.max_step.is_nan() || opts.max_step <= 0.0 {
-            return Err(InputError::MaxStep(opts.max_step));
-        }
-        if opts.max_steps == 0 {
-            return Err(InputError::MaxSteps);
-        }
-        let span = (t_bound - t0).abs();
-        if let Some(h) = opts.first_step {
-            if !(h > 0.0 && h.is_finite()) {
-                return Err(InputError::FirstStepNotPositive(h));
-            }
-            if h > span {
-                return Err(InputError::FirstStepBeyondSpan {
-                    first_step: h,
-                    span,
-                });
-            }
-        }
+        let mut rtol = super::stepper::expand_tol(&opts.rtol, "rtol", dim)?;
+        let atol = super::stepper::expand_tol(&opts.atol, "atol", dim)?;
         if let JacobianSource::Constant(m) = &jacobian {
             if m.len() != dim * dim {
                 return Err(InputError::JacobianShape {
@@ -476,46 +392,22 @@ impl<S: OdeSystem> Radau<S> {
 
     /// SciPy `select_initial_step` with the error estimator's order 3.
     fn select_initial_step(&mut self) -> Result<f64, Status> {
-        let (t0, dir, n) = (self.t, self.direction, self.dim);
-        let interval_length = (self.t_bound - t0).abs();
-        for i in 0..n {
-            self.scale[i] = self.atol[i] + self.y[i].abs() * self.rtol[i];
-        }
-        let d0 = rms((0..n).map(|i| self.y[i] / self.scale[i]), n);
-        let d1 = rms((0..n).map(|i| self.f[i] / self.scale[i]), n);
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
-            1e-6
-        } else {
-            0.01 * d0 / d1
+        let start = Start {
+            t0: self.t,
+            y0: &self.y,
+            f0: &self.f,
+            t_bound: self.t_bound,
+            direction: self.direction,
         };
-        h0 = h0.min(interval_length);
-        let hd = h0 * dir;
-        for i in 0..n {
-            self.y_stage[i] = self.y[i] + hd * self.f[i];
-        }
-        let t1 = t0 + h0 * dir;
-        self.nfev += 1;
-        self.sys
-            .rhs(t1, &self.y_stage, &mut self.err)
-            .map_err(|message| Status::RhsError {
-                t: t0,
-                at: t1,
-                message,
-            })?;
-        if !self.err.iter().all(|v| v.is_finite()) {
-            return Err(Status::NonFinite {
-                t: t0,
-                at: t1,
-                what: NonFiniteKind::Derivative,
-            });
-        }
-        let d2 = rms((0..n).map(|i| (self.err[i] - self.f[i]) / self.scale[i]), n) / h0;
-        let h1 = if d1 <= 1e-15 && d2 <= 1e-15 {
-            (1e-6f64).max(h0 * 1e-3)
-        } else {
-            (0.01 / d1.max(d2)).powf(1.0 / 4.0)
-        };
-        Ok((100.0 * h0).min(h1).min(interval_length).min(self.max_step))
+        select_initial_step(
+            &mut self.sys,
+            &mut self.nfev,
+            start,
+            (&self.atol, &self.rtol),
+            self.max_step,
+            3,
+            (&mut self.scale, &mut self.y_stage, &mut self.err),
+        )
     }
 
     /// `f(at, y)` into `self.f` (`y` the current state); a non-finite value ends the run.
@@ -932,7 +824,7 @@ impl<S: OdeSystem> Radau<S> {
     }
 
     /// Interpolant coefficients `Q = Zᵀ P` of the last accepted step (`3 · dim`, `q[3 i + j]`)
-    /// for [`eval_radau_segment`]`(t_old(), t() - t_old(), y_old(), q, t, out)`.
+    /// for [`Interpolant::Radau`]`.eval(t_old(), t() - t_old(), y_old(), q, t, out)`.
     /// Returns false (leaving `q` untouched) before the first step.
     pub fn fill_dense_q(&self, q: &mut [f64]) -> bool {
         if self.n_accepted == 0 {
@@ -947,7 +839,7 @@ impl<S: OdeSystem> Radau<S> {
         if self.n_accepted == 0 {
             return false;
         }
-        eval_radau_segment(
+        Interpolant::Radau.eval(
             self.t_old,
             self.t - self.t_old,
             &self.y_old,
@@ -1043,6 +935,64 @@ impl<S: OdeSystem> Radau<S> {
         &mut self.sys
     }
     pub fn into_system(self) -> S {
+        self.sys
+    }
+}
+
+impl<S: OdeSystem> Integrator for Radau<S> {
+    type System = S;
+    fn step(&mut self) -> Result<StepOutcome, Status> {
+        Radau::step(self)
+    }
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn t_old(&self) -> f64 {
+        self.t_old
+    }
+    fn t_bound(&self) -> f64 {
+        self.t_bound
+    }
+    fn direction(&self) -> f64 {
+        self.direction
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn y_old(&self) -> &[f64] {
+        &self.y_old
+    }
+    /// `nfev` as SciPy counts it: without the finite-difference Jacobians' evaluations
+    /// ([`Radau::jac_evaluations`]).
+    fn counts(&self) -> Counts {
+        Counts {
+            nfev: self.nfev,
+            njev: self.njev,
+            nlu: self.nlu,
+            n_accepted: self.n_accepted,
+            n_rejected: self.n_rejected,
+        }
+    }
+    fn rtol_clamped(&self) -> bool {
+        self.rtol_clamped
+    }
+    fn h_next(&self) -> f64 {
+        self.h_abs
+    }
+    fn interpolant(&self) -> Interpolant {
+        Interpolant::Radau
+    }
+    fn dense_coefficients(&mut self, q: &mut [f64]) -> Result<(), Status> {
+        self.fill_dense_q(q);
+        Ok(())
+    }
+    fn system_mut(&mut self) -> &mut S {
+        &mut self.sys
+    }
+    fn into_system(self) -> S {
         self.sys
     }
 }

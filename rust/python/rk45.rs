@@ -69,7 +69,7 @@ pub fn rk45<'py>(
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let sys = python_system(py, fun, dim, &rhs_failure);
     let sol =
-        integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
+        integrator::solve(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
     drop(evs);
     // An exception from `fun` or an event (Ctrl-C included) is re-raised by
     // `pointmass_dyn.rk45` with the solution computed so far attached.

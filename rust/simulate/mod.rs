@@ -101,7 +101,7 @@ pub fn simulate(
     let guarded = push_euler_guards(model, &mut events);
     sys.progress = progress;
     let mut sol =
-        integrator::rk45(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
+        integrator::solve(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
     drop(events);
     report_euler_singularity(model, &guarded, n_user, &mut sol);
     sol.t_events.truncate(n_user);

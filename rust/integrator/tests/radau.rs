@@ -472,3 +472,120 @@ fn integrates_backwards() {
         "{y:?} vs {e:?}"
     );
 }
+
+fn radau_opts(tol: f64) -> Rk45Options {
+    Rk45Options {
+        method: crate::integrator::Method::Radau,
+        ..opts(tol, tol)
+    }
+}
+
+/// Through the generic driver: an event located on Radau's interpolant, `t_eval` values and the
+/// dense output, against the exact solution of the stiff linear system.
+#[test]
+fn driver_events_t_eval_and_dense_output() {
+    use crate::integrator::{solve, Event, EventDirection};
+    let y0 = [1.0, 0.0];
+    let tol = 1e-9;
+    // y[0] = u + v with u = e^(−t)/2 and v = e^(−1e4 t)/2 (~e^(−6931) at the root): 1/4 at ln 2.
+    let mut events = [Event::new(|_t, y: &[f64]| y[0] - 0.25)
+        .direction(EventDirection::Falling)
+        .terminal(1)];
+    let t_eval: Vec<f64> = (1..=10).map(|k| 0.05 * k as f64).collect();
+    let sol = solve(
+        Linear,
+        (0.0, 2.0),
+        &y0,
+        &Rk45Options {
+            dense: true,
+            t_eval: Some(t_eval.clone()),
+            ..radau_opts(tol)
+        },
+        &mut events,
+    )
+    .unwrap();
+    assert_eq!(
+        sol.status,
+        Status::TerminalEvent {
+            event: 0,
+            t: sol.t_events[0][0]
+        }
+    );
+    let te = sol.t_events[0][0];
+    assert!((te - std::f64::consts::LN_2).abs() < 1e-7, "event at {te}");
+    assert_eq!(sol.t, t_eval[..sol.t.len()].to_vec());
+    assert_eq!(sol.t.len(), 10); // 0.05 .. 0.5 < ln 2
+    for (i, &t) in sol.t.iter().enumerate() {
+        let e = linear_exact(t, y0);
+        let y = sol.state(i);
+        assert!(
+            (y[0] - e[0]).abs() < 1e-7 && (y[1] - e[1]).abs() < 1e-7,
+            "t = {t}"
+        );
+    }
+    for k in 0..50 {
+        let t = 0.01 + 0.0135 * k as f64;
+        let y = sol.dense_eval(t).unwrap();
+        let e = linear_exact(t, y0);
+        assert!((y[0] - e[0]).abs() < 1e-7, "dense at {t}: {y:?} vs {e:?}");
+    }
+    assert_eq!(sol.method, crate::integrator::Method::Radau);
+    assert!(sol.njev >= 1 && sol.nlu >= 2);
+}
+
+/// `auto` on Van der Pol μ = 1e3: RK45 until its stiffness test fires, then Radau; the end
+/// state agrees with Radau's alone within the tolerance, for far fewer evaluations than RK45.
+#[test]
+fn auto_switches_to_radau_on_van_der_pol() {
+    use crate::integrator::{solve, Method};
+    let tol = 1e-6;
+    let run_with = |method| {
+        solve(
+            VdP {
+                eps: 1e-6,
+                analytic: true,
+            },
+            (0.0, 2.0),
+            &[2.0, 0.0],
+            &Rk45Options {
+                method,
+                ..opts(tol, tol)
+            },
+            &mut [],
+        )
+        .unwrap()
+    };
+    let auto = run_with(Method::Auto);
+    let radau = run_with(Method::Radau);
+    assert!(auto.success() && radau.success());
+    assert_eq!(auto.switched_to, Some(Method::Radau));
+    let t_switch = auto.t_switch.unwrap();
+    assert!(t_switch > 0.0 && t_switch < 2.0);
+    let (a, r) = (auto.state(auto.t.len() - 1), radau.state(radau.t.len() - 1));
+    assert!(
+        (a[0] - r[0]).abs() < 1e-4 && (a[1] - r[1]).abs() < 1e-4,
+        "{a:?} vs {r:?}"
+    );
+    // Radau alone: SciPy's counts (pinned above).
+    assert_eq!(
+        (radau.n_accepted, radau.nfev, radau.njev, radau.nlu),
+        (874, 7336, 207, 602)
+    );
+}
+
+#[test]
+fn radau_refuses_a_pi_controller() {
+    let e = Radau::new(
+        Linear,
+        0.0,
+        &[1.0, 0.0],
+        1.0,
+        &Rk45Options {
+            controller: crate::integrator::Controller::hairer_pi(),
+            ..opts(1e-3, 1e-6)
+        },
+    )
+    .err()
+    .unwrap();
+    assert_eq!(e.argument(), "controller");
+}
