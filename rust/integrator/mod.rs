@@ -38,7 +38,7 @@ pub use driver::{rk45, solve};
 pub use events::{Event, EventDirection, EventFn};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
 pub use method::{radau_available, Counts, Integrator, Method};
-pub use radau::{JacobianSource, Radau, NEWTON_MAXITER};
+pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
 pub use stepper::{StepOutcome, Stepper};
 
 use thiserror::Error;

@@ -939,6 +939,21 @@ impl<S: OdeSystem> Radau<S> {
     }
 }
 
+/// `solve(..)` with `method = Radau` and the Jacobian from `jacobian` (e.g. a constant matrix,
+/// SciPy's `jac=array`): the same driver, events and outputs.
+pub fn radau_solve<S: OdeSystem>(
+    sys: S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    opts: &Rk45Options,
+    events: &mut [super::Event<'_>],
+    jacobian: JacobianSource,
+) -> Result<super::Solution, InputError> {
+    let (t0, t_end) = t_span;
+    let st = Radau::with_jacobian(sys, t0, y0, t_end, opts, jacobian)?;
+    super::driver::drive(st, opts, events, super::Method::Radau)
+}
+
 impl<S: OdeSystem> Integrator for Radau<S> {
     type System = S;
     fn step(&mut self) -> Result<StepOutcome, Status> {
