@@ -388,6 +388,8 @@ mod tests {
                 max_steps: Some(1000),
                 first_step: None,
                 disable: Some(Disabled::none().with(Kind::Springs)),
+                method: Some(crate::integrator::Method::Dop853),
+                dt: Some(1e-3),
             },
         };
         let event = StateEvent {

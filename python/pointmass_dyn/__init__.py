@@ -51,6 +51,7 @@ from .simulation import (
     energies,
     rk45,
     simulate,
+    solve_ivp,
 )
 from .sweep import sweep
 from .work_precision import WorkPrecision, work_precision
@@ -147,6 +148,7 @@ __all__ = [
     "shaking",
     "simulate",
     "simulate_batch",
+    "solve_ivp",
     "sweep",
     "work_precision",
 ]

@@ -1,9 +1,10 @@
 //! Fixed-step methods: [`Rk4`] (classical Runge–Kutta) and [`Euler`] (semi-implicit, as
 //! MuJoCo's `mjINT_EULER`), stepped by [`FixedStep`] at `dt` with no error control.
 //!
-//! Time grid: step `k` ends at `t0 + k·dt·dir`; the step whose end would reach or pass
-//! `t_end − 1e-9·dt` ends at `t_end` exactly (the last step is shortened, or stretched by at
-//! most 1e-9·dt instead of leaving a sliver). Each step's interpolant is the cubic Hermite
+//! Time grid: every step is exactly `h = dt·dir` and step `k` ends at `t0 + k·dt·dir`. The
+//! last step ends at `t_end` exactly: a grid point within 1e-9·dt of `t_end` is taken as
+//! `t_end` (the step keeps `h = dt`), else the step that would pass `t_end` is shortened
+//! to `h = t_end − t`. Each step's interpolant is the cubic Hermite
 //! through its end states and derivatives ([`Interpolant::Hermite`]); the derivative at the
 //! end is the next step's first evaluation, so dense output costs nothing extra but at the
 //! very last step.
@@ -193,14 +194,20 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
         Ok(())
     }
 
-    /// The end of the next step on the grid (`t_end` for the last).
-    fn next_time(&self) -> f64 {
+    /// The end of the next step and its signed size: `dt·dir` to the next grid point,
+    /// except for the last step, which ends at `t_end` (of size `dt` still when the grid
+    /// point is within 1e-9·dt of `t_end`, else `t_end − t`).
+    fn next_step(&self) -> (f64, f64) {
         let dir = self.direction;
-        let t_new = self.t0 + (self.n_accepted + 1) as f64 * (self.dt * dir);
-        if dir * (t_new - self.t_bound) >= -1e-9 * self.dt {
-            self.t_bound
+        let h = self.dt * dir;
+        let t_grid = self.t0 + (self.n_accepted + 1) as f64 * h;
+        let tol = 1e-9 * self.dt;
+        if (t_grid - self.t_bound).abs() <= tol {
+            (self.t_bound, h)
+        } else if dir * (t_grid - self.t_bound) > 0.0 {
+            (self.t_bound, self.t_bound - self.t)
         } else {
-            t_new
+            (t_grid, h)
         }
     }
 
@@ -213,8 +220,7 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
             });
         }
         self.ensure_f()?;
-        let t_new = self.next_time();
-        let h = t_new - t;
+        let (t_new, h) = self.next_step();
         M::advance(&mut self.w, t, h)?;
         let w = &mut self.w;
         w.sys

@@ -79,7 +79,7 @@ pub trait Integrator {
 }
 
 /// The integration method of a run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum Method {
     /// Dormand–Prince 5(4), SciPy's `RK45` step for step (default).
     #[default]

@@ -34,6 +34,8 @@ mod stepper;
 
 pub use dense::{eval_segment, DenseOutput, Interpolant};
 pub use dop853::Dop853;
+#[cfg(test)]
+pub(crate) use driver::auto as driver_auto;
 pub use driver::{rk45, solve};
 pub use events::{Event, EventDirection, EventFn};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
