@@ -346,3 +346,82 @@ def test_rk45_alias_and_default_method():
     assert a.method == b.method == "RK45"
     assert a.nfev == b.nfev == ref.nfev
     np.testing.assert_array_equal(a.y, b.y)
+
+
+# --------------------------------------------------------------------------------------------
+# Outputs, events and statuses with every method
+# --------------------------------------------------------------------------------------------
+EXPLICIT = [
+    dict(method="RK45"),
+    dict(method="DOP853"),
+    dict(method="RK4", dt=0.01),
+    dict(method="Euler", dt=1e-3),
+]
+
+
+@pytest.mark.parametrize("kw", EXPLICIT, ids=lambda kw: kw["method"])
+def test_t_eval_events_and_dense_output_with_every_method(kw):
+    """The oscillator (sin t, cos t): t_eval values, the falling zero of y0 at π as a terminal
+    event, and a pickled dense output that evaluates as before."""
+    import pickle
+
+    def f(t, y):
+        return np.array([y[1], -y[0]])
+
+    def zero(t, y):
+        return y[0]
+
+    zero.terminal = True
+    zero.direction = -1
+    t_eval = np.linspace(0.0, 3.0, 7)
+    acc = 1e-2 if kw["method"] == "Euler" else 1e-5
+    r = pmd.solve_ivp(f, (0.0, 10.0), [0.0, 1.0], t_eval=t_eval, events=zero, dense_output=True,
+                      rtol=1e-8, atol=1e-8, **kw)
+    assert r.status == 1 and r.method == kw["method"], r.message
+    np.testing.assert_array_equal(r.t, t_eval)
+    np.testing.assert_allclose(r.y[0], np.sin(t_eval), atol=acc)
+    assert abs(r.t_events[0][0] - np.pi) < acc
+    assert r.t_reached == r.t_events[0][0]
+    back = pickle.loads(pickle.dumps(r.sol))
+    ts = np.linspace(0.0, 3.0, 13)
+    np.testing.assert_array_equal(back(ts), r.sol(ts))
+    np.testing.assert_allclose(r.sol(ts)[1], np.cos(ts), atol=acc)
+
+
+@pytest.mark.parametrize("kw", EXPLICIT, ids=lambda kw: kw["method"])
+def test_failures_report_reason_and_time_with_every_method(kw):
+    """A right-hand side that turns NaN at t > 0.5, one that raises, and max_steps."""
+
+    def nan_late(t, y):
+        return np.array([np.nan if t > 0.5 else 1.0])
+
+    r = pmd.solve_ivp(nan_late, (0.0, 1.0), [0.0], **kw)
+    assert r.status == -1 and not r.success
+    # The time reached is the last accepted state (Euler evaluates at the start of its step).
+    assert "non-finite" in r.message and 0.0 < r.t_reached <= 0.5 + 2e-3, r.message
+
+    class Boom(RuntimeError):
+        pass
+
+    def boom(t, y):
+        if t > 0.25:
+            raise Boom("no")
+        return np.array([1.0])
+
+    with pytest.raises(Boom) as exc:
+        pmd.solve_ivp(boom, (0.0, 1.0), [0.0], **kw)
+    assert 0.0 < exc.value.result.t_reached <= 0.25 + 2e-3
+
+    r = pmd.solve_ivp(lambda t, y: -y, (0.0, 50.0), [1.0], max_steps=3, **kw)
+    assert r.status == -1 and "maximum number of steps (3)" in r.message
+    assert r.n_accepted == 3
+
+
+def test_energy_and_power_with_fixed_steps(chain7):
+    """Gravity only (conservative): RK4's energy drift falls as dt⁴."""
+    drifts = []
+    for dt in (4e-3, 2e-3):
+        r = pmd.simulate(chain7, (0.0, 0.4), method="RK4", dt=dt, energy=True, power=True)
+        assert r.energy.shape == r.t.shape and "gravity" in r.power
+        drifts.append(np.max(np.abs(r.energy - r.energy[0])))
+    assert 8 < drifts[0] / drifts[1] < 32, drifts
