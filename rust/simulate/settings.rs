@@ -51,6 +51,7 @@ impl Requested {
 
     /// `base` with the tolerances and step limits resolved (all but `t_span` and `disable`).
     pub fn options(self, scene: &Settings, base: Rk45Options) -> Rk45Options {
+        let method = self.method.or(scene.method).unwrap_or(base.method);
         Rk45Options {
             rtol: self
                 .rtol
@@ -63,8 +64,13 @@ impl Requested {
             first_step: self.first_step.or(scene.first_step).or(base.first_step),
             max_step: self.max_step.or(scene.max_step).unwrap_or(base.max_step),
             max_steps: self.max_steps.or(scene.max_steps).unwrap_or(base.max_steps),
-            method: self.method.or(scene.method).unwrap_or(base.method),
-            dt: self.dt.or(scene.dt).or(base.dt),
+            method,
+            // The scene's dt belongs to its fixed-step method: a caller who picks an
+            // adaptive one leaves it out (a dt of the caller's own is checked by the driver).
+            dt: self
+                .dt
+                .or(base.dt)
+                .or(scene.dt.filter(|_| method.is_fixed_step())),
             ..base
         }
     }
