@@ -177,13 +177,24 @@ def _ours(sc, span, ref: _Reference, method, settings, repeats, say) -> list[dic
 
 
 def analytic_jacobian(sc) -> Callable[[float, np.ndarray], np.ndarray] | None:
-    """``J(t, y)`` of :func:`scene_rhs` from ``Model.forward_dynamics_derivatives`` for
-    models whose q is v (revolute/prismatic joints) and scenes of gravity, springs and
-    dampers; ``None`` when that is not available."""
+    """``J(t, y)`` of :func:`scene_rhs` for models whose q is v (no quaternion joints):
+    ``Scene.state_jacobian`` where this build has it, else ``Model.forward_dynamics_derivatives``
+    plus the springs' and dampers' terms (scenes of gravity, springs and dampers only);
+    ``None`` when neither applies."""
     from .mjcf import _probe_effects, layout
 
     model = sc.model
-    if not hasattr(model, "forward_dynamics_derivatives") or model.nq != model.nv:
+    if model.nq != model.nv:
+        return None
+    if hasattr(sc, "state_jacobian"):       # the scene's own: every effect included
+        n2 = model.nq + model.nv
+        try:
+            ok = np.shape(sc.state_jacobian(np.concatenate([sc.q0, sc.v0]), t=0.0)) == (n2, n2)
+        except Exception:
+            ok = False
+        if ok:
+            return lambda t, y: np.asarray(sc.state_jacobian(np.asarray(y, float), t=float(t)))
+    if not hasattr(model, "forward_dynamics_derivatives"):
         return None
     try:
         g, stiff, _, damp = _probe_effects(sc, model, layout(model))
