@@ -207,6 +207,17 @@ class Model:
         (v indices or body names) is required: the forces of those coordinates alone (zero
         elsewhere) that, with the cut joints' forces, produce ``a`` (which must satisfy the
         loops: see :meth:`assemble_acceleration`)."""
+    def inverse_dynamics_derivatives(
+        self, q: ArrayLike, v: ArrayLike, a: ArrayLike, gravity: ArrayLike | None = None
+    ) -> tuple[_Array, _Array, _Array]:
+        """``(∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M)``, each (nv, nv); q perturbed in the tangent space
+        (``q ⊕ δ``, as Pinocchio's ``computeRNEADerivatives``; docs/derivatives.md). Trees
+        only."""
+    def forward_dynamics_derivatives(
+        self, q: ArrayLike, v: ArrayLike, tau: ArrayLike, gravity: ArrayLike | None = None
+    ) -> tuple[_Array, _Array, _Array]:
+        """``(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)``, each (nv, nv), as Pinocchio's
+        ``computeABADerivatives`` (docs/derivatives.md). Trees only."""
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy ``½ vᵀ I v`` (J)."""
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
