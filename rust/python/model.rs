@@ -584,6 +584,74 @@ impl PyModel {
         })
     }
 
+    /// Everything a viewer draws, at one configuration (q (nq,)) or N (q (N, nq)): dict of
+    /// world-frame arrays `rotations` ((N,) nbodies, 3, 3), `origins`, `joint_origins`,
+    /// `joint_axes` ((N,) nbodies, 3), `points` ((N,) nlinks, 7, 3) and per cut joint
+    /// `loop_a`, `loop_b`, `loop_axes` ((N,) nloops, 3). (docs/visualisation.md §2)
+    fn body_poses<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let (sq, qs) = super::convert::array(q, "q")?;
+        let count = match sq.as_slice() {
+            [n] if *n == model.nq => None,
+            [rows, n] if *n == model.nq => Some(*rows),
+            _ => {
+                return Err(invalid(
+                    py,
+                    "q",
+                    format!("shape ({0},) or (N, {0})", model.nq),
+                    super::convert::shape_str(&sq),
+                ))
+            }
+        };
+        let rows = count.unwrap_or(1);
+        for k in 0..rows {
+            let qk = &qs[k * model.nq..(k + 1) * model.nq];
+            model
+                .check_state(qk, None)
+                .map_err(|e| match count {
+                    Some(_) => e.map_arg(|name| format!("{name}[{k}]")),
+                    None => e,
+                })
+                .py(py)?;
+        }
+        let poses = detach_interruptible(py, || {
+            let mut poses = crate::poses::Poses::new(&model, rows)?;
+            for k in 0..rows {
+                crate::interrupt::check("body_poses")?;
+                poses.fill(&model, k, &qs[k * model.nq..(k + 1) * model.nq]);
+            }
+            Ok(poses)
+        })?;
+        let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
+        let shape = |tail: &[usize]| -> Vec<usize> {
+            count
+                .map(|n| vec![n])
+                .unwrap_or_default()
+                .into_iter()
+                .chain(tail.iter().copied())
+                .collect()
+        };
+        let d = PyDict::new(py);
+        for (key, buf, tail) in [
+            ("rotations", poses.rotations, vec![nb, 3, 3]),
+            ("origins", poses.origins, vec![nb, 3]),
+            ("joint_origins", poses.joint_origins, vec![nb, 3]),
+            ("joint_axes", poses.joint_axes, vec![nb, 3]),
+            ("points", poses.points, vec![nl, 7, 3]),
+            ("loop_a", poses.loop_a, vec![nc, 3]),
+            ("loop_b", poses.loop_b, vec![nc, 3]),
+            ("loop_axes", poses.loop_axes, vec![nc, 3]),
+        ] {
+            check_result(py, &format!("body_poses['{key}']"), &buf)?;
+            d.set_item(key, to_array(py, buf, &shape(&tail))?)?;
+        }
+        Ok(d)
+    }
+
     /// The seven point masses of every moving link: (masses (nlinks, 7), world positions
     /// (nlinks, 7, 3)) at `q`.
     fn point_masses<'py>(
