@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
+from .animation import AnimationInfo, animate
 from .balancing import (
     Balance,
     Counterweight,
@@ -92,6 +93,8 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "AnimationInfo",
+    "animate",
     "Balance",
     "BatchResult",
     "Counterweight",

@@ -276,8 +276,15 @@ def build_drawing(
     pts = poses["points"].reshape(nf, -1, 3)
     m = np.asarray(masses, dtype=float).reshape(-1)
 
-    lo = np.min(np.concatenate([pts.reshape(-1, 3), links.reshape(-1, 3), np.zeros((1, 3))]), 0)
-    hi = np.max(np.concatenate([pts.reshape(-1, 3), links.reshape(-1, 3), np.zeros((1, 3))]), 0)
+    specs = _trail_specs(model, trails)
+    trail = np.zeros((nf, len(specs), 3))
+    for k, (b, p, _c) in enumerate(specs):
+        trail[:, k] = origins[:, b] + rot[:, b] @ p
+    trail_colour = np.array([c for _b, _p, c in specs]).reshape(-1, 3)
+
+    everything = np.concatenate([pts.reshape(-1, 3), links.reshape(-1, 3),
+                                 trail.reshape(-1, 3), np.zeros((1, 3))])
+    lo, hi = everything.min(axis=0), everything.max(axis=0)
     size = max(float(np.linalg.norm(hi - lo)), 1e-3)
 
     # Radius ∝ |m|^(1/3) (a sphere of uniform density), the heaviest 2.5 % of the scene size.
@@ -289,7 +296,7 @@ def build_drawing(
         for x in m
     ]).reshape(-1, 3)
 
-    axis_len = 0.12 * size
+    axis_len = 0.06 * size
     axes = []
     ja = poses["joint_axes"]
     for b in range(nb):
@@ -303,12 +310,6 @@ def build_drawing(
             axes.append(np.stack([la[:, c] - axis_len * lax[:, c],
                                   la[:, c] + axis_len * lax[:, c]], axis=1))
     axes = np.stack(axes, axis=1) if axes else np.zeros((nf, 0, 2, 3))
-
-    specs = _trail_specs(model, trails)
-    trail = np.zeros((nf, len(specs), 3))
-    for k, (b, p, _c) in enumerate(specs):
-        trail[:, k] = origins[:, b] + rot[:, b] @ p
-    trail_colour = np.array([c for _b, _p, c in specs]).reshape(-1, 3)
 
     arrow = None
     if shaking is not None:
@@ -375,6 +376,54 @@ def _trajectory(result) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     return t, q, (None if v is None else np.asarray(v, dtype=float))
 
 
+def prepare(
+    result: Any,
+    model_or_scene: Any,
+    *,
+    fps: float = 30.0,
+    frames: int | None = None,
+    duration: float | None = None,
+    trails: Any = None,
+    shaking: bool = False,
+    title: str | None = None,
+) -> Drawing:
+    """The :class:`Drawing` :func:`animate` writes (same arguments)."""
+    scene = model_or_scene if isinstance(model_or_scene, _core.Scene) else None
+    model = scene.model if scene is not None else model_or_scene
+    if not isinstance(model, _core.Model):
+        raise InvalidInputError(
+            f"model_or_scene: expected a Model or a Scene, got {type(model_or_scene).__name__}"
+        )
+    for name, val in (("fps", fps), ("duration", duration)):
+        if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
+                                    and val > 0):
+            raise InvalidInputError(f"{name}: expected a positive number, got {val!r}")
+    if frames is not None and not (isinstance(frames, (int, np.integer)) and frames >= 1):
+        raise InvalidInputError(f"frames: expected an integer >= 1, got {frames!r}")
+    t, q, v = _trajectory(result)
+    if q.shape[1] != model.nq:
+        raise InvalidInputError(
+            f"result.q: expected (N, {model.nq}) for this model, got {q.shape}"
+        )
+    times = frame_times(t, fps, frames, duration)
+    qf = sample(t, q, times, _quaternion_slices(model))
+    force = None
+    if shaking:
+        if scene is None:
+            raise InvalidInputError(
+                "shaking: needs the Scene the result came from (its effects give the "
+                "accelerations), got a Model"
+            )
+        if v is None:
+            raise InvalidInputError("shaking: needs the result's speeds v, got none")
+        from .balancing import shaking as shaking_of
+
+        force = np.asarray(shaking_of(scene, _Sampled(times, qf, sample(t, v, times))).force)
+    if title is None:
+        title = scene.name if scene is not None and scene.name else "pointmass_dyn"
+    return build_drawing(model, times, qf, trails=trails, shaking=force, title=title)
+
+
 def animate(
     result: Any,
     model_or_scene: Any,
@@ -395,61 +444,29 @@ def animate(
 
     ``result``: a :class:`SimulationResult` or ``(t, q[, v])``. ``model_or_scene``: the
     :class:`Model` or the :class:`Scene` it came from (a scene is needed for ``shaking``).
-    The trajectory is sampled at ``fps`` (``frames`` frames if given, else
-    ``round(duration·fps)`` with ``duration`` the result's time span by default), so a long
-    result costs only its frames. ``size``: frame size in pixels (width, height).
-    ``trails``: points whose path is drawn — body names/indices (their origin) or
-    ``(body, point_in_body[, colour])``. ``shaking``: draw the shaking force
-    ``−Σ m a`` (docs/balancing.md) as an arrow at the world origin. Returns
-    :class:`AnimationInfo`."""
+    The trajectory is sampled at ``fps``: ``frames`` frames if given, else
+    ``round(duration·fps)``, ``duration`` being the result's time span unless given, so a
+    long result costs only its frames. ``size``: GIF/MP4 frame size in pixels (width,
+    height); the page fills its window. ``trails``: points whose path is drawn — body
+    names/indices (their origin) or ``(body, point_in_body[, colour])``. ``shaking``: draw
+    the shaking force ``−Σ m a`` (docs/balancing.md) as an arrow at the world origin.
+    Returns :class:`AnimationInfo`. Raises :class:`~pointmass_dyn.errors.AnimationWriterError`
+    for a format this machine cannot write (MP4 without ffmpeg)."""
     path = Path(path)
-    scene = model_or_scene if isinstance(model_or_scene, _core.Scene) else None
-    model = scene.model if scene is not None else model_or_scene
-    if not isinstance(model, _core.Model):
-        raise InvalidInputError(
-            f"model_or_scene: expected a Model or a Scene, got {type(model_or_scene).__name__}"
-        )
     kind = path.suffix.lower()
     if kind not in (".html", ".gif", ".mp4"):
         raise InvalidInputError(
             f"path: expected a file name ending in .html, .gif or .mp4, got '{path}'"
         )
-    for name, val in (("fps", fps), ("duration", duration)):
-        if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
-                                    and val > 0):
-            raise InvalidInputError(f"{name}: expected a positive number, got {val!r}")
-    if frames is not None and not (isinstance(frames, (int, np.integer)) and frames >= 1):
-        raise InvalidInputError(f"frames: expected an integer >= 1, got {frames!r}")
     if not (isinstance(size, (tuple, list)) and len(size) == 2
             and all(isinstance(s, (int, np.integer)) and 16 <= s <= 8192 for s in size)):
         raise InvalidInputError(
             f"size: expected (width, height) in pixels, integers 16..8192, got {size!r}"
         )
-    t, q, v = _trajectory(result)
-    if q.shape[1] != model.nq:
-        raise InvalidInputError(
-            f"result.q: expected (N, {model.nq}) for this model, got {q.shape}"
-        )
-    times = frame_times(t, fps, frames, duration)
-    quats = _quaternion_slices(model)
-    qf = sample(t, q, times, quats)
-    force = None
-    if shaking:
-        if scene is None:
-            raise InvalidInputError(
-                "shaking: needs the Scene the result came from (its effects give the "
-                "accelerations), got a Model"
-            )
-        if v is None:
-            raise InvalidInputError("shaking: needs the result's speeds v, got none")
-        from .balancing import shaking as shaking_of
-
-        vf = sample(t, v, times)
-        sub = _Sampled(times, qf, vf)
-        force = np.asarray(shaking_of(scene, sub).force)
-    if title is None:
-        title = scene.name if scene is not None and scene.name else "pointmass_dyn"
-    drawing = build_drawing(model, times, qf, trails=trails, shaking=force, title=title)
+    if not (isinstance(dpi, (int, np.integer)) and 10 <= dpi <= 1000):
+        raise InvalidInputError(f"dpi: expected an integer 10..1000, got {dpi!r}")
+    drawing = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
+                      trails=trails, shaking=shaking, title=title)
     width, height = int(size[0]), int(size[1])
     if kind == ".html":
         from .viewer_html import write_html
@@ -458,7 +475,7 @@ def animate(
     else:
         from .viewer_video import write_video
 
-        write_video(drawing, path, fps=fps, size=(width, height), dpi=dpi)
+        write_video(drawing, path, fps=fps, size=(width, height), dpi=int(dpi))
     return AnimationInfo(path=path, frames=drawing.nframes, times=drawing.times,
                          size=(width, height), camera=drawing.camera,
                          bytes=path.stat().st_size)

@@ -67,11 +67,17 @@ class UnpicklingError(PointMassDynError, pickle.UnpicklingError):
     it), or written by a version of pointmass_dyn with another serialisation format."""
 
 
+class AnimationWriterError(PointMassDynError, RuntimeError):
+    """An animation format this machine cannot write (MP4 without ffmpeg, video without
+    matplotlib or Pillow); the message says what to install or which format works instead."""
+
+
 class UrdfWarning(UserWarning):
     """A URDF loaded differently from what it says (mimic joints, ignored elements)."""
 
 
 __all__ = [
+    "AnimationWriterError",
     "InertiaError",
     "InvalidInputError",
     "LoopClosureError",

@@ -20,6 +20,14 @@
   const CU = f32(D.cuts.pos), NC = D.cuts.count;
   const TR = f32(D.trails.pos), NT = D.trails.colour.length;
   const AR = D.arrow ? f32(D.arrow) : null;
+  // A page whose data do not fit together fails loudly, not with a blank canvas.
+  const check = (ok, what) => { if (!ok) throw new Error("pmd-data: " + what); };
+  check(Number.isInteger(F) && F >= 1, "nframes must be an integer >= 1");
+  check(T.length === F, "times: " + T.length + " values for " + F + " frames");
+  check(SP.length === 3 * F * NS, "spheres.pos: wrong length");
+  check(LK.length === 6 * F * NL && AX.length === 6 * F * NA && CU.length === 6 * F * NC,
+    "segments: wrong length");
+  check(TR.length === 3 * F * NT && (!AR || AR.length === 6 * F), "trails/arrow: wrong length");
 
   const canvas = $("c");
   const gl = canvas.getContext("webgl", { antialias: true, preserveDrawingBuffer: true });
@@ -238,15 +246,18 @@
       const o = (frame * NC + i) * 6;
       drawMesh(SPHERE, sphereMatrix(CU[o], CU[o + 1], CU[o + 2], D.cuts.radius * 2.2), D.colours.cut, true);
     }
-    // Trail heads: flat colour (a marker of exactly that colour on screen).
-    for (let j = 0; j < NT; j++) {
-      const o = (frame * NT + j) * 3;
-      drawMesh(SPHERE, sphereMatrix(TR[o], TR[o + 1], TR[o + 2], D.trails.radius), D.trails.colour[j], false);
-    }
     if (shaft) {
       bindMesh(CONE);
       const m = tubeMatrix(shaft[0], shaft[1], D.links.radius * 3);
       if (m) drawMesh(CONE, m, D.colours.shaking, true);
+    }
+    // Trail heads last, over everything, in flat colour: a tracked point stays visible (and
+    // is a disc of exactly that colour on screen).
+    gl.disable(gl.DEPTH_TEST);
+    bindMesh(SPHERE);
+    for (let j = 0; j < NT; j++) {
+      const o = (frame * NT + j) * 3;
+      drawMesh(SPHERE, sphereMatrix(TR[o], TR[o + 1], TR[o + 2], D.trails.radius), D.trails.colour[j], false);
     }
     $("time").textContent = "t = " + T[frame].toFixed(3) + " s";
     $("frame").textContent = frame + 1 + " / " + F;

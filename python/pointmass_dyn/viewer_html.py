@@ -61,7 +61,8 @@ def _b64(a: np.ndarray) -> str:
 
 
 def _legend(d: Drawing) -> str:
-    hexc = {k: "#%02x%02x%02x" % tuple(int(round(255 * c)) for c in v) for k, v in COLOURS.items()}
+    hexc = {k: "#" + "".join(f"{int(round(255 * c)):02x}" for c in v)
+            for k, v in COLOURS.items()}
     items = [f'<span style="color:{hexc["positive"]}">●</span> m &gt; 0']
     if np.any(d.sphere_mass < 0):
         items.append(f'<span style="color:{hexc["negative"]}">●</span> m &lt; 0')
