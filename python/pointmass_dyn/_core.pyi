@@ -160,6 +160,13 @@ class Model:
         """World placements of every body: rotations (nbodies, 3, 3), origins (nbodies, 3)."""
     def point_masses(self, q: ArrayLike) -> tuple[_Array, _Array]:
         """Masses (nlinks, 7) and world positions (nlinks, 7, 3) of every link's points."""
+    def body_poses(self, q: ArrayLike) -> dict[str, _Array]:
+        """World poses of everything a viewer draws, at one configuration (q (nq,)) or N
+        (q (N, nq), a leading N axis on every array): ``rotations`` (nbodies, 3, 3),
+        ``origins``, ``joint_origins`` (each joint frame's origin), ``joint_axes`` (unit axis of
+        revolute and prismatic joints, zero otherwise) (nbodies, 3), ``points`` (nlinks, 7, 3)
+        and per cut joint ``loop_a``, ``loop_b`` (its two frames' origins), ``loop_axes``
+        (nloops, 3)."""
     def denoc(self, q: ArrayLike) -> dict[str, _Array]:
         """The DeNOC matrices at ``q``: keys ``D``, ``Nl``, ``Nd``, ``N``, ``masses`` (7n,)
         and ``points`` (7n, 3)."""

@@ -61,6 +61,8 @@ class Drawing:
     grid: dict
     camera: dict
     size: float
+    #: Largest side of the box holding the motion.
+    extent: float = 0.0
     title: str = ""
     labels: dict = field(default_factory=dict)
 
@@ -346,6 +348,7 @@ def build_drawing(
         grid=grid,
         camera=default_camera(lo, hi),
         size=size,
+        extent=max(float(np.max(hi - lo)), 1e-3),
         title=title,
         labels={"links": model.link_names, "loops": model.loop_names},
     )

@@ -42,7 +42,8 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     ax.set_axis_off()
     cam = d.camera
     target = np.asarray(cam["target"], dtype=float)
-    half = d.size / 2
+    # A cube around the motion (equal scales), a little larger than its largest extent.
+    half = 0.55 * d.extent
     ax.set_xlim(target[0] - half, target[0] + half)
     ax.set_ylim(target[1] - half, target[1] + half)
     ax.set_zlim(target[2] - half, target[2] + half)
@@ -88,6 +89,15 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     clock = ax.text2D(0.02, 0.96, "", transform=ax.transAxes, family="monospace", fontsize=11)
     if d.title:
         ax.text2D(0.02, 0.91, d.title, transform=ax.transAxes, color="0.35", fontsize=9)
+    legend = [("● m > 0", COLOURS["positive"])]
+    if np.any(d.sphere_mass < 0):
+        legend.append(("● m < 0", COLOURS["negative"]))
+    if np.any(d.sphere_mass == 0):
+        legend.append(("● m = 0", COLOURS["zero"]))
+    legend.append(("disc ∝ |m|^(1/3)", (0.35, 0.35, 0.35)))
+    for k, (text, colour) in enumerate(reversed(legend)):
+        ax.text2D(0.98, 0.03 + 0.05 * k, text, transform=ax.transAxes, color=colour,
+                  fontsize=8, ha="right")
 
     def update(k: int):
         for line, seg in zip(links, d.links[k]):
