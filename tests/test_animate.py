@@ -287,21 +287,28 @@ def test_gif_frames_size_and_point_masses(pendulum, tmp_path):
     import matplotlib.pyplot as plt
 
     plt.close(fig)
+    ys, xs = np.mgrid[: size[1], : size[0]]
+
+    def around(centre, radius=30):
+        """The frame with everything farther than ``radius`` px from ``centre`` white (the
+        legend's coloured bullets are elsewhere)."""
+        img = first.copy()
+        img[np.hypot(xs + 0.5 - centre[0], ys + 0.5 - centre[1]) > radius] = 255
+        return img
+
     # Pixels: the negative masses (red discs, smaller than their positive neighbours and so
     # drawn on top) are centred on their projection.
     red = tuple(int(round(255 * c)) for c in animation.COLOURS["negative"])
-    got, count = _marker_centroid(first, red, tol=30)
+    centre = want[m < 0].mean(axis=0)
+    got, count = _marker_centroid(around(centre), red, tol=30)
     assert count > 20
-    np.testing.assert_allclose(got, want[m < 0].mean(axis=0), atol=1.0)
+    np.testing.assert_allclose(got, centre, atol=1.0)
     # The two heaviest (blue) discs at the rod's near end, around the small m = 0 one between
     # them: the blue pixels there are centred on the pair's projections.
     blue = tuple(int(round(255 * c)) for c in animation.COLOURS["positive"])
     heavy = m > 1.0
     centre = want[heavy].mean(axis=0)
-    near = first.copy()
-    ys, xs = np.mgrid[: size[1], : size[0]]
-    near[np.hypot(xs + 0.5 - centre[0], ys + 0.5 - centre[1]) > 30] = 255
-    got, count = _marker_centroid(near, blue, tol=30)
+    got, count = _marker_centroid(around(centre), blue, tol=30)
     assert count > 20
     np.testing.assert_allclose(got, centre, atol=1.5)
 

@@ -31,6 +31,7 @@ COLOURS = {
     "cut": (0.80, 0.10, 0.80),  # cut joints closing loops
     "shaking": (0.85, 0.05, 0.45),
     "grid": (0.78, 0.78, 0.80),
+    "box": (0.55, 0.62, 0.78),  # edges of each link's point-mass box
 }
 #: Trail colours in order (a trail may also name its own).
 TRAIL_COLOURS = [(0.0, 0.75, 0.25), (0.10, 0.60, 0.95), (0.95, 0.50, 0.0), (0.55, 0.20, 0.85)]
@@ -41,7 +42,8 @@ class Drawing:
     """Everything both writers draw, world frame, per frame ``F`` (arrays float64).
 
     ``spheres``: point masses, (F, P, 3) centres with ``sphere_radius`` (P,) and
-    ``sphere_colour`` (P, 3). ``links``: (F, L, 2, 3) segments, ``axes``: (F, A, 2, 3) joint
+    ``sphere_colour`` (P, 3). ``links``: (F, L, 2, 3) segments, ``boxes``: (F, 12·nlinks,
+    2, 3) edges of each link's point-mass box, ``axes``: (F, A, 2, 3) joint
     axis segments, ``cuts``: (F, C, 2, 3) the two ends of each cut joint (plus its axis as
     an ``axes`` segment). ``trails``: (F, T, 3) with ``trail_colour`` (T, 3). ``arrow``:
     (F, 2, 3) shaking-force arrow (tail, head) or None. ``camera``: the initial view."""
@@ -52,6 +54,7 @@ class Drawing:
     sphere_colour: np.ndarray
     sphere_mass: np.ndarray
     links: np.ndarray
+    boxes: np.ndarray
     link_radius: float
     axes: np.ndarray
     cuts: np.ndarray
@@ -240,6 +243,27 @@ def _colour(c, what: str) -> tuple:
     raise InvalidInputError(f"{what}: expected '#rrggbb' or 3 numbers in [0, 1], got {c!r}")
 
 
+#: The 12 edges of a box, as pairs of corners numbered by their (x, y, z) sign bits.
+_EDGES = [(a, a | bit) for bit in (1, 2, 4) for a in range(8) if not a & bit]
+
+
+def _boxes(model, poses) -> np.ndarray:
+    """Each link's point-mass box (the seven points are seven of its eight corners,
+    docs/method.md §1) as 12 edges per link: (F, 12·nlinks, 2, 3)."""
+    nf = poses["points"].shape[0]
+    out = []
+    for i, name in enumerate(model.link_names):
+        b = model.body_names.index(name)
+        rot, org = poses["rotations"][:, b], poses["origins"][:, b]
+        # The points in the link's frame (constant in time: read at frame 0).
+        local = (poses["points"][0, i] - org[0]) @ rot[0]
+        lo, hi = local.min(axis=0), local.max(axis=0)
+        corners = np.array([[(hi if c >> k & 1 else lo)[k] for k in range(3)] for c in range(8)])
+        world = org[:, None, :] + np.einsum("fij,cj->fci", rot, corners)
+        out += [np.stack([world[:, a], world[:, c]], axis=1) for a, c in _EDGES]
+    return np.stack(out, axis=1) if out else np.zeros((nf, 0, 2, 3))
+
+
 def build_drawing(
     model,
     times: np.ndarray,
@@ -277,6 +301,7 @@ def build_drawing(
     masses, _ = model.point_masses(q[0])
     pts = poses["points"].reshape(nf, -1, 3)
     m = np.asarray(masses, dtype=float).reshape(-1)
+    boxes = _boxes(model, poses)
 
     specs = _trail_specs(model, trails)
     trail = np.zeros((nf, len(specs), 3))
@@ -339,6 +364,7 @@ def build_drawing(
         sphere_colour=colour,
         sphere_mass=m,
         links=links,
+        boxes=boxes,
         link_radius=0.008 * size,
         axes=axes,
         cuts=cuts,

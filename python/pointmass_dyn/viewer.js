@@ -17,6 +17,7 @@
   const SP = f32(D.spheres.pos), NS = D.spheres.radius.length;
   const LK = f32(D.links.pos), NL = D.links.count;
   const AX = f32(D.axes.pos), NA = D.axes.count;
+  const BX = f32(D.boxes.pos), NB = D.boxes.count;
   const CU = f32(D.cuts.pos), NC = D.cuts.count;
   const TR = f32(D.trails.pos), NT = D.trails.colour.length;
   const AR = D.arrow ? f32(D.arrow) : null;
@@ -27,6 +28,7 @@
   check(SP.length === 3 * F * NS, "spheres.pos: wrong length");
   check(LK.length === 6 * F * NL && AX.length === 6 * F * NA && CU.length === 6 * F * NC,
     "segments: wrong length");
+  check(BX.length === 6 * F * NB, "boxes: wrong length");
   check(TR.length === 3 * F * NT && (!AR || AR.length === 6 * F), "trails/arrow: wrong length");
 
   const canvas = $("c");
@@ -212,6 +214,7 @@
     for (const [pts, col] of FRAME) drawLines(pts, col, gl.LINES);
     for (let j = 0; j < NT; j++)
       if (frame > 0) drawLines(TRAILS[j].subarray(0, 3 * (frame + 1)), D.trails.colour[j], gl.LINE_STRIP);
+    if (NB) drawLines(BX.subarray(6 * NB * frame, 6 * NB * (frame + 1)), D.colours.box, gl.LINES);
     bindMesh(CYL);
     for (let i = 0; i < NL; i++) {
       const o = (frame * NL + i) * 6;

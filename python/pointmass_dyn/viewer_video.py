@@ -63,6 +63,8 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
         ax.plot([0, w * axis[0]], [0, w * axis[1]], [0, w * axis[2]], color=c, lw=1.2, zorder=1)
 
     trails = [ax.plot([], [], [], color=c, lw=1.2, zorder=1.5)[0] for c in d.trail_colour]
+    boxes = [ax.plot([], [], [], color=COLOURS["box"], lw=0.7, zorder=1.8)[0]
+             for _ in range(d.boxes.shape[1] // 12)]
     links = [ax.plot([], [], [], color=COLOURS["link"], lw=3.5, solid_capstyle="round",
                      zorder=2)[0]
              for _ in range(d.links.shape[1])]
@@ -72,7 +74,8 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
              if d.arrow is not None else None)
     # Disc diameter in points ∝ sphere radius / scene size.
     diam = 2 * d.sphere_radius / d.size * min(width, height) * 1.2 * 72 / dpi
-    # Drawing order by zorder (computed_zorder is off): grid, frame, trails, links, axes,
+    # Drawing order by zorder (computed_zorder is off): grid, frame, trails, point-mass
+    # boxes, links, axes,
     # point masses, cut joints, trail heads.
     # One artist per point mass, largest first: a smaller disc (often a negative mass
     # beside a larger positive one, 2·half-side away) is never hidden behind a larger one.
@@ -100,6 +103,11 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
                   fontsize=8, ha="right")
 
     def update(k: int):
+        for i, line in enumerate(boxes):
+            # A link's 12 edges as one line, NaN-separated.
+            e = d.boxes[k, 12 * i:12 * (i + 1)]
+            path = np.concatenate([e, np.full((12, 1, 3), np.nan)], axis=1).reshape(-1, 3)
+            line.set_data_3d(path[:, 0], path[:, 1], path[:, 2])
         for line, seg in zip(links, d.links[k]):
             line.set_data_3d(seg[:, 0], seg[:, 1], seg[:, 2])
         for line, seg in zip(axes, d.axes[k]):
