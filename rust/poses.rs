@@ -116,9 +116,7 @@ mod tests {
         let rod = RigidBody::new(1.0, Vec3::new(0.5, 0.0, 0.0), Mat3::identity() * 0.1).unwrap();
         let z = Joint::revolute(Vec3::z()).unwrap();
         let p = Placement::identity();
-        let a = m
-            .add_body(rod.clone(), z.clone(), None, p, None, None)
-            .unwrap();
+        let a = m.add_body(rod, z, None, p, None, None).unwrap();
         let p1 = Placement::new(Mat3::identity(), Vec3::new(1.0, 0.0, 0.0));
         m.add_body(rod, z, Some(a), p1, None, None).unwrap();
         let (t1, t2) = (0.3_f64, -0.7_f64);

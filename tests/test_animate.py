@@ -254,6 +254,24 @@ def test_page_with_loops_and_shaking_arrow_and_its_error_report(tmp_path):
             assert browser.evaluate("window.__errors.length") >= 1
 
 
+@needs_chromium
+def test_every_bundled_scene_loads_without_error(tmp_path):
+    pages = {}
+    for name in pmd.builtin_scenes():
+        scene = pmd.load_scene(name)
+        result = pmd.simulate(scene, (0.0, 0.1))
+        pages[name] = tmp_path / f"{name}.html"
+        pmd.animate(result, scene, pages[name], fps=50, trails=[scene.model.body_names[-1]],
+                    shaking=scene.model.nloops > 0)
+    with chromium_driver.Browser(480, 360) as browser:
+        for name, path in pages.items():
+            browser.load(path.as_uri() + "#frame=4", 'document.title.startsWith("pmd ")')
+            assert browser.evaluate("document.title").startswith("pmd ok frame=4"), name
+            assert browser.evaluate("window.__errors") == [], name
+            img = _png(browser.screenshot())
+            assert np.any(img < 235, axis=-1).mean() > 0.01, name
+
+
 # ---------------------------------------------------------------- GIF and MP4
 
 
