@@ -212,8 +212,13 @@ def test_page_draws_the_body_where_forward_kinematics_puts_it(pendulum, tmp_path
             got, count = _marker_centroid(img, (0, 255, 255))
             assert count > 30, "marker not found"
             assert np.linalg.norm(got - want) < 1.5, (got, want)
-            # And the heaviest point mass (blue, lit) is drawn at its projection.
+            # The point-mass box the page computes (from the link's pose) has the seven
+            # points at seven of its corners.
             m, x = scene.model.point_masses(result.q[frame])
+            corners = np.array(browser.evaluate("window.__pmd.boxEdges()")).reshape(-1, 3)
+            gap = np.linalg.norm(x[0][:, None, :] - corners[None], axis=-1).min(axis=1)
+            assert np.all(gap < 1e-5), gap
+            # And the heaviest point mass (blue, lit) is drawn at its projection.
             j = int(np.argmax(m[0]))
             px = np.round(animation.project(info.camera, width, height, x[0, j])).astype(int)
             patch = img[px[1] - 2:px[1] + 3, px[0] - 2:px[0] + 3].reshape(-1, 3).astype(int)

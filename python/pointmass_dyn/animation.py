@@ -43,7 +43,8 @@ class Drawing:
 
     ``spheres``: point masses, (F, P, 3) centres with ``sphere_radius`` (P,) and
     ``sphere_colour`` (P, 3). ``links``: (F, L, 2, 3) segments, ``boxes``: (F, 12·nlinks,
-    2, 3) edges of each link's point-mass box, ``axes``: (F, A, 2, 3) joint
+    2, 3) edges of each link's point-mass box (also as ``box_pose`` (F, nlinks, 12) and
+    ``box_corners`` (nlinks, 2, 3), lowest and highest corner in the link frame), ``axes``: (F, A, 2, 3) joint
     axis segments, ``cuts``: (F, C, 2, 3) the two ends of each cut joint (plus its axis as
     an ``axes`` segment). ``trails``: (F, T, 3) with ``trail_colour`` (T, 3). ``arrow``:
     (F, 2, 3) shaking-force arrow (tail, head) or None. ``camera``: the initial view."""
@@ -55,6 +56,8 @@ class Drawing:
     sphere_mass: np.ndarray
     links: np.ndarray
     boxes: np.ndarray
+    box_pose: np.ndarray
+    box_corners: np.ndarray
     link_radius: float
     axes: np.ndarray
     cuts: np.ndarray
@@ -247,11 +250,13 @@ def _colour(c, what: str) -> tuple:
 _EDGES = [(a, a | bit) for bit in (1, 2, 4) for a in range(8) if not a & bit]
 
 
-def _boxes(model, poses) -> np.ndarray:
+def _boxes(model, poses) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each link's point-mass box (the seven points are seven of its eight corners,
-    docs/method.md §1) as 12 edges per link: (F, 12·nlinks, 2, 3)."""
+    docs/method.md §1): its 12 edges (F, 12·nlinks, 2, 3), and compactly the link poses
+    (F, nlinks, 12: rotation row-major, origin) with the box's corners ``lo``, ``hi``
+    (nlinks, 3) in the link frame."""
     nf = poses["points"].shape[0]
-    out = []
+    edges, pose, los, his = [], [], [], []
     for i, name in enumerate(model.link_names):
         b = model.body_names.index(name)
         rot, org = poses["rotations"][:, b], poses["origins"][:, b]
@@ -260,8 +265,14 @@ def _boxes(model, poses) -> np.ndarray:
         lo, hi = local.min(axis=0), local.max(axis=0)
         corners = np.array([[(hi if c >> k & 1 else lo)[k] for k in range(3)] for c in range(8)])
         world = org[:, None, :] + np.einsum("fij,cj->fci", rot, corners)
-        out += [np.stack([world[:, a], world[:, c]], axis=1) for a, c in _EDGES]
-    return np.stack(out, axis=1) if out else np.zeros((nf, 0, 2, 3))
+        edges += [np.stack([world[:, a], world[:, c]], axis=1) for a, c in _EDGES]
+        pose.append(np.concatenate([rot.reshape(nf, 9), org], axis=1))
+        los.append(lo)
+        his.append(hi)
+    if not edges:
+        return np.zeros((nf, 0, 2, 3)), np.zeros((nf, 0, 12)), np.zeros((0, 3))
+    return (np.stack(edges, axis=1), np.stack(pose, axis=1),
+            np.stack([np.array(los), np.array(his)], axis=1))
 
 
 def build_drawing(
@@ -301,7 +312,7 @@ def build_drawing(
     masses, _ = model.point_masses(q[0])
     pts = poses["points"].reshape(nf, -1, 3)
     m = np.asarray(masses, dtype=float).reshape(-1)
-    boxes = _boxes(model, poses)
+    boxes, box_pose, box_corners = _boxes(model, poses)
 
     specs = _trail_specs(model, trails)
     trail = np.zeros((nf, len(specs), 3))
@@ -365,6 +376,8 @@ def build_drawing(
         sphere_mass=m,
         links=links,
         boxes=boxes,
+        box_pose=box_pose,
+        box_corners=box_corners,
         link_radius=0.008 * size,
         axes=axes,
         cuts=cuts,

@@ -17,7 +17,7 @@
   const SP = f32(D.spheres.pos), NS = D.spheres.radius.length;
   const LK = f32(D.links.pos), NL = D.links.count;
   const AX = f32(D.axes.pos), NA = D.axes.count;
-  const BX = f32(D.boxes.pos), NB = D.boxes.count;
+  const BP = f32(D.boxes.pose), NB = D.boxes.corners.length;
   const CU = f32(D.cuts.pos), NC = D.cuts.count;
   const TR = f32(D.trails.pos), NT = D.trails.colour.length;
   const AR = D.arrow ? f32(D.arrow) : null;
@@ -28,7 +28,7 @@
   check(SP.length === 3 * F * NS, "spheres.pos: wrong length");
   check(LK.length === 6 * F * NL && AX.length === 6 * F * NA && CU.length === 6 * F * NC,
     "segments: wrong length");
-  check(BX.length === 6 * F * NB, "boxes: wrong length");
+  check(BP.length === 12 * F * NB, "boxes: wrong length");
   check(TR.length === 3 * F * NT && (!AR || AR.length === 6 * F), "trails/arrow: wrong length");
 
   const canvas = $("c");
@@ -199,6 +199,28 @@
     return out;
   }
 
+  // Each link's point-mass box: corner c has bit k set where it takes the high value on
+  // axis k; its 12 edges join corners differing in one bit.
+  const EDGES = [];
+  for (const bit of [1, 2, 4]) for (let a = 0; a < 8; a++) if (!(a & bit)) EDGES.push([a, a | bit]);
+  const BOXES = new Float32Array(NB * 12 * 6);
+  function boxEdges() {
+    const w = new Float32Array(24);
+    for (let i = 0; i < NB; i++) {
+      const o = (frame * NB + i) * 12, [lo, hi] = D.boxes.corners[i];
+      for (let c = 0; c < 8; c++) {
+        const x = [(c & 1 ? hi : lo)[0], (c & 2 ? hi : lo)[1], (c & 4 ? hi : lo)[2]];
+        for (let r = 0; r < 3; r++)
+          w[3 * c + r] = BP[o + 9 + r] + BP[o + 3 * r] * x[0] + BP[o + 3 * r + 1] * x[1] + BP[o + 3 * r + 2] * x[2];
+      }
+      EDGES.forEach(([a, b], e) => {
+        BOXES.set(w.subarray(3 * a, 3 * a + 3), (i * 12 + e) * 6);
+        BOXES.set(w.subarray(3 * b, 3 * b + 3), (i * 12 + e) * 6 + 3);
+      });
+    }
+    return BOXES;
+  }
+
   // ---- drawing one frame
   let frame = 0;
   const c3 = (arr, i) => [arr[i], arr[i + 1], arr[i + 2]];
@@ -214,7 +236,7 @@
     for (const [pts, col] of FRAME) drawLines(pts, col, gl.LINES);
     for (let j = 0; j < NT; j++)
       if (frame > 0) drawLines(TRAILS[j].subarray(0, 3 * (frame + 1)), D.trails.colour[j], gl.LINE_STRIP);
-    if (NB) drawLines(BX.subarray(6 * NB * frame, 6 * NB * (frame + 1)), D.colours.box, gl.LINES);
+    if (NB) drawLines(boxEdges(), D.colours.box, gl.LINES);
     bindMesh(CYL);
     for (let i = 0; i < NL; i++) {
       const o = (frame * NL + i) * 6;
@@ -317,6 +339,8 @@
   const err = gl.getError();
   if (err !== gl.NO_ERROR) throw new Error("WebGL error " + err);
   window.__firstFrame = frame;
+  // For tests and the console: the frame shown and the box edges the page draws for it.
+  window.__pmd = { frame: () => frame, boxEdges: () => Array.from(boxEdges()) };
   window.__status = "ok";
   $("status").textContent = window.__errors.length ? "error: " + window.__errors.join("; ") : "";
   document.title = (window.__errors.length ? "pmd error: " + window.__errors.join("; ") : "pmd ok") +

@@ -90,7 +90,8 @@ def page(d: Drawing, fps: float) -> str:
             "colour": np.round(d.sphere_colour, 4).tolist(),
         },
         "links": {"pos": _b64(d.links), "count": d.links.shape[1], "radius": d.link_radius},
-        "boxes": {"pos": _b64(d.boxes), "count": d.boxes.shape[1]},
+        # Boxes are rigid: the link poses (12 floats) per frame, the corners once.
+        "boxes": {"pose": _b64(d.box_pose), "corners": np.round(d.box_corners, 9).tolist()},
         "axes": {"pos": _b64(d.axes), "count": d.axes.shape[1], "radius": 0.45 * d.link_radius},
         "cuts": {"pos": _b64(d.cuts), "count": d.cuts.shape[1], "radius": 0.6 * d.link_radius},
         "trails": {
