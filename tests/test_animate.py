@@ -7,6 +7,7 @@ from __future__ import annotations
 import base64
 import json
 import re
+import time
 
 import chromium_driver
 import numpy as np
@@ -244,6 +245,9 @@ def test_page_with_loops_and_shaking_arrow_and_its_error_report(tmp_path):
     cos = np.sum(d * force, axis=1) / np.linalg.norm(d, axis=1) / np.linalg.norm(force, axis=1)
     np.testing.assert_allclose(cos, 1.0, atol=1e-5)
     # Two broken pages: data that do not fit together, and undecodable base64.
+    slow = tmp_path / "slow.html"  # 10 frames over 2 s of playback
+    slow_info = pmd.animate(result, scene, slow, fps=5, duration=2.0)
+    assert slow_info.frames == 10
     broken = [tmp_path / "broken1.html", tmp_path / "broken2.html"]
     broken[0].write_text(path.read_text().replace('"nframes":10', '"nframes":11'))
     broken[1].write_text(path.read_text().replace('"times":"', '"times":"A'))
@@ -253,6 +257,18 @@ def test_page_with_loops_and_shaking_arrow_and_its_error_report(tmp_path):
         assert browser.evaluate("window.__errors") == []
         assert np.any(_png(browser.screenshot()) < 200)
         # A page whose script fails says so: the test above can fail.
+        # Playing: frames advance by themselves; pause holds; the slider scrubs.
+        browser.load(slow.as_uri(), "window.__pmd && window.__pmd.frame() >= 3", timeout=30)
+        browser.evaluate('document.getElementById("play").click()')
+        held = browser.evaluate("window.__pmd.frame()")
+        time.sleep(0.5)
+        assert browser.evaluate("window.__pmd.frame()") == held
+        browser.evaluate('var s = document.getElementById("slider"); s.value = "7"; '
+                         's.dispatchEvent(new Event("input"))')
+        assert browser.evaluate("window.__pmd.frame()") == 7
+        assert browser.evaluate('document.getElementById("time").textContent') == (
+            f"t = {slow_info.times[7]:.3f} s")
+        assert browser.evaluate("window.__errors") == []
         for page in broken:
             browser.load(page.as_uri(), 'document.title.startsWith("pmd ")')
             assert browser.evaluate("document.title").startswith("pmd error")

@@ -328,7 +328,8 @@
   window.addEventListener("resize", () => { if (!playing) draw(); });
   function tick(now) {
     if (!playing) return;
-    frame = Math.floor(((now - start) / 1000) * D.fps) % F;
+    // rAF's timestamp may precede the performance.now() that set `start`: clamp at 0.
+    frame = Math.floor(Math.max(0, (now - start) / 1000) * D.fps) % F;
     draw();
     requestAnimationFrame(tick);
   }
