@@ -361,6 +361,42 @@ def test_mp4_without_ffmpeg_says_so(pendulum, tmp_path, monkeypatch):
         pmd.animate(result, scene, tmp_path / "a.mp4", frames=3)
 
 
+class _Recorder:
+    """A Meshcat window that keeps the commands it is sent (no server, no browser)."""
+
+    def __init__(self):
+        self.commands = []
+
+    def send(self, command):
+        self.commands.append(command.lower())
+
+
+def test_meshcat_view_sends_the_point_masses_and_one_animation(pendulum):
+    meshcat = pytest.importorskip("meshcat")
+    scene, result = pendulum
+    window = _Recorder()
+    vis = pmd.show_meshcat(result, scene, meshcat.Visualizer(window=window), frames=61,
+                           trails=["rod"])
+    assert vis.window is window
+    objects = {c["path"]: c for c in window.commands if c["type"] == "set_object"}
+    masses = sorted(p for p in objects if p.startswith("/meshcat/pointmass_dyn/masses/"))
+    assert len(masses) == 7
+    (anim,) = [c for c in window.commands if c["type"] == "set_animation"]
+    clips = {a["path"]: a["clip"] for a in anim["animations"]}
+    m, x = scene.model.point_masses(result.q[40])
+    for j in range(7):
+        (track,) = [t for t in clips[f"/meshcat/pointmass_dyn/masses/{j}"]["tracks"]
+                    if t["name"] == ".position"]
+        assert len(track["keys"]) == 61
+        key = track["keys"][40]
+        assert key["time"] == 40
+        np.testing.assert_allclose(key["value"], x[0, j], atol=1e-12)
+    # The rod (the leaf's segment, origin to twice the COM) spans its length: scale y = 1 m.
+    scales = [t for c, clip in clips.items() if "/links/" in c for t in clip["tracks"]
+              if t["name"] == ".scale"]
+    assert any(np.isclose(t["keys"][0]["value"][1], 1.0) for t in scales)
+
+
 # ---------------------------------------------------------------- errors and CLI
 
 

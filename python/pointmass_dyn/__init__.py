@@ -54,6 +54,7 @@ from .simulation import (
     simulate,
 )
 from .sweep import sweep
+from .viewer_meshcat import show as show_meshcat
 from .work_precision import WorkPrecision, work_precision
 
 
@@ -148,6 +149,7 @@ __all__ = [
     "prescribed_motion",
     "rk45",
     "shaking",
+    "show_meshcat",
     "simulate",
     "simulate_batch",
     "sweep",
