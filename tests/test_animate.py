@@ -7,6 +7,8 @@ from __future__ import annotations
 import base64
 import json
 import re
+import shutil
+import subprocess
 import time
 
 import chromium_driver
@@ -350,6 +352,22 @@ def test_gif_frames_size_and_point_masses(pendulum, tmp_path):
     got, count = _marker_centroid(around(centre), blue, tol=30)
     assert count > 20
     np.testing.assert_allclose(got, centre, atol=1.5)
+
+
+@pytest.mark.skipif(shutil.which("ffmpeg") is None or shutil.which("ffprobe") is None,
+                    reason="ffmpeg/ffprobe not installed (MP4 is optional)")
+def test_mp4_frames_and_size(pendulum, tmp_path):
+    scene, result = pendulum
+    path = tmp_path / "p.mp4"
+    pmd.animate(result, scene, path, frames=9, size=(320, 240), fps=10)
+    out = subprocess.run(
+        ["ffprobe", "-v", "error", "-count_frames", "-select_streams", "v:0", "-show_entries",
+         "stream=nb_read_frames,width,height", "-of", "json", str(path)],
+        capture_output=True, text=True, check=True).stdout
+    stream = json.loads(out)["streams"][0]
+    assert (int(stream["nb_read_frames"]), stream["width"], stream["height"]) == (9, 320, 240)
+    with pytest.raises(AnimationWriterError, match="even"):
+        pmd.animate(result, scene, tmp_path / "odd.mp4", frames=2, size=(321, 240))
 
 
 def test_mp4_without_ffmpeg_says_so(pendulum, tmp_path, monkeypatch):
