@@ -138,17 +138,27 @@ def sample(t, x, times, quaternions=()) -> np.ndarray:
 # ---------------------------------------------------------------- camera
 
 
+#: (azimuth, elevation) in degrees: the general view (matplotlib's default 3-D view), and for
+#: a motion flat across x, y or z a view about 30° off that axis, so its plane is seen nearly
+#: face on rather than at a grazing angle.
+VIEWS = {None: (-60.0, 25.0), 0: (-20.0, 20.0), 1: (-70.0, 20.0), 2: (-60.0, 60.0)}
+
+
 def default_camera(lo: np.ndarray, hi: np.ndarray) -> dict:
-    """A view of the box ``[lo, hi]`` from azimuth −60°, elevation 25° (matplotlib's default
-    3-D view), field of view 35°, far enough that the bounding sphere fits."""
+    """A view of the box ``[lo, hi]`` (azimuth and elevation from :data:`VIEWS`; flat: an
+    extent under 15 % of the largest), field of view 35°, far enough that the bounding
+    sphere fits."""
     centre = (lo + hi) / 2
-    radius = max(float(np.linalg.norm(hi - lo)) / 2, 1e-3)
+    extent = hi - lo
+    radius = max(float(np.linalg.norm(extent)) / 2, 1e-3)
+    flat = int(np.argmin(extent)) if extent.min() < 0.15 * extent.max() else None
+    azimuth, elevation = VIEWS[flat]
     fov = 35.0
     return {
         "target": centre.tolist(),
         "distance": radius / math.sin(math.radians(fov / 2)) * 1.05,
-        "azimuth": -60.0,
-        "elevation": 25.0,
+        "azimuth": azimuth,
+        "elevation": elevation,
         "fov": fov,
     }
 
