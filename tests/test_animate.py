@@ -136,6 +136,9 @@ def test_long_result_is_subsampled_to_the_frame_rate(tmp_path):
     np.testing.assert_allclose(times, np.linspace(0, 10, 300), atol=1e-5)
     assert _f32(data["spheres"]["pos"]).size == 300 * 7 * 3
     assert info.bytes < 200_000
+    # Self-contained: nothing fetched (no URL, no src=, no link element).
+    text = (tmp_path / "long.html").read_text()
+    assert not re.search(r"https?://|src=|<link", text)
     # Frames between output samples: linear interpolation (as NumPy's, column by column).
     qs = animation.sample(result.t, result.q, info.times)
     want = np.stack([np.interp(info.times, result.t, c) for c in result.q.T], axis=1)
