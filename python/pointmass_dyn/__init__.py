@@ -32,6 +32,7 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .importers import InertiaRepair, from_mujoco, from_pinocchio
 from .scenes import builtin_scenes, load_scene
 from .simulation import (
     Damper,
@@ -102,6 +103,7 @@ __all__ = [
     "FreeFlyer",
     "Gravity",
     "InertiaError",
+    "InertiaRepair",
     "InvalidInputError",
     "Joint",
     "JointFriction",
@@ -138,6 +140,8 @@ __all__ = [
     "builtin_scenes",
     "effect_forces",
     "effect_power",
+    "from_mujoco",
+    "from_pinocchio",
     "energies",
     "errors",
     "load_scene",
