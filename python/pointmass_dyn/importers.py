@@ -202,14 +202,12 @@ def _pin_joint(jm) -> tuple[Joint, bool]:
         return Joint.prismatic(np.asarray(jm.extract().axis)), False
     if s == "JointModelSpherical":
         return Joint.spherical(), False
-    if s == "JointModelSphericalZYZ":
-        return Joint.spherical_zyz(), False
     if s == "JointModelFreeFlyer":
         return Joint.free_flyer(), False
     raise InvalidInputError(
         f"pin_model: joint type {s} is not supported (supported: RX/RY/RZ, RUBX/RUBY/RUBZ, "
         "RevoluteUnaligned, RevoluteUnboundedUnaligned, PX/PY/PZ, PrismaticUnaligned, "
-        "Spherical, SphericalZYZ, FreeFlyer)"
+        "Spherical, FreeFlyer)"
     )
 
 
