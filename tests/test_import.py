@@ -87,9 +87,23 @@ def mjcf_files():
     spec = importlib.util.find_spec("dm_control")
     if spec is not None and spec.origin:
         suite = Path(spec.origin).parent / "suite"
-        out += [suite / f"{n}.xml" for n in ("acrobot", "cheetah", "dog", "finger", "fish",
-                                               "humanoid", "humanoid_CMU", "manipulator",
-                                               "quadruped", "stacker", "swimmer", "walker")]
+        out += [
+            suite / f"{n}.xml"
+            for n in (
+                "acrobot",
+                "cheetah",
+                "dog",
+                "finger",
+                "fish",
+                "humanoid",
+                "humanoid_CMU",
+                "manipulator",
+                "quadruped",
+                "stacker",
+                "swimmer",
+                "walker",
+            )
+        ]
     return [p for p in out if p.is_file()]
 
 
@@ -246,7 +260,7 @@ def mujoco_urdf(text: str, compiler: str = "", free: bool = False) -> str:
     link (MuJoCo's URDF reader makes it a free joint)."""
     text = re.sub(r"<(visual|collision)\b.*?</\1\s*>", "", text, flags=re.S)
     text = re.sub(r"<(visual|collision)\b[^>]*/>", "", text)
-    extra = f'<mujoco><compiler {compiler}/></mujoco>'
+    extra = f"<mujoco><compiler {compiler}/></mujoco>"
     if free:
         root = root_link(text)
         extra += (

@@ -83,9 +83,13 @@ def from_mujoco(mj_model: Any) -> Model:
     try:
         import mujoco
     except ImportError as e:  # pragma: no cover - optional dependency
-        raise ImportError("from_mujoco needs the optional dependency mujoco (pip install 'pointmass_dyn[mujoco]')") from e
+        raise ImportError(
+            "from_mujoco needs the optional dependency mujoco (pip install 'pointmass_dyn[mujoco]')"
+        ) from e
     if not isinstance(mj_model, mujoco.MjModel):
-        raise InvalidInputError(f"mj_model: expected a mujoco.MjModel, got {type(mj_model).__name__}")
+        raise InvalidInputError(
+            f"mj_model: expected a mujoco.MjModel, got {type(mj_model).__name__}"
+        )
     m = mj_model
     J = mujoco.mjtJoint
     parts: list[tuple] = []
@@ -117,7 +121,9 @@ def from_mujoco(mj_model: Any) -> Model:
             ref = float(m.qpos0[m.jnt_qposadr[j]])
             if jtype == J.mjJNT_FREE:
                 if len(jids) != 1 or pb != 0:
-                    raise InvalidInputError(f"mj_model: free joint '{jname}' must be the only joint of a child of the world")
+                    raise InvalidInputError(
+                        f"mj_model: free joint '{jname}' must be the only joint of a child of the world"
+                    )
                 joint, anchor = Joint.free_flyer(), np.zeros(3)
                 # qpos is the body's world pose: the joint frame is the world frame.
                 trans, rot = np.zeros(3), np.eye(3)
@@ -219,13 +225,21 @@ def from_pinocchio(pin_model: Any) -> Model:
     try:
         import pinocchio as pin
     except ImportError as e:  # pragma: no cover - optional dependency
-        raise ImportError("from_pinocchio needs the optional dependency pinocchio (pip install pin)") from e
+        raise ImportError(
+            "from_pinocchio needs the optional dependency pinocchio (pip install pin)"
+        ) from e
     if not isinstance(pin_model, pin.Model):
-        raise InvalidInputError(f"pin_model: expected a pinocchio.Model, got {type(pin_model).__name__}")
+        raise InvalidInputError(
+            f"pin_model: expected a pinocchio.Model, got {type(pin_model).__name__}"
+        )
     pm = pin_model
     body_name = {}
     for f in pm.frames:
-        if f.type == pin.FrameType.BODY and f.parentJoint not in body_name and f.placement.isIdentity():
+        if (
+            f.type == pin.FrameType.BODY
+            and f.parentJoint not in body_name
+            and f.placement.isIdentity()
+        ):
             body_name[f.parentJoint] = f.name
     parts = []
     for j in range(1, pm.njoints):
