@@ -92,7 +92,6 @@ def mjcf_files():
             for n in (
                 "acrobot",
                 "cheetah",
-                "dog",
                 "finger",
                 "fish",
                 "humanoid",
@@ -121,7 +120,7 @@ def test_from_mujoco_equals_mujoco(path):
 
 def test_from_mujoco_joint_kinds_ref_and_warning():
     """Hinge and slide with `ref`, off-centre anchors, a ball, several joints in one body, a
-    free body, an equality constraint and armature (warned about)."""
+    free body, a connect constraint (a loop) and armature (warned about)."""
     xml = """<mujoco><option gravity="0.3 -0.2 -9.81"/>
       <worldbody>
         <body name="a" pos="0.1 0.2 0.3" quat="0.9 0.1 0.3 0.2">
@@ -146,11 +145,57 @@ def test_from_mujoco_joint_kinds_ref_and_warning():
       <equality><connect body1="c" body2="world" anchor="0 0 0"/></equality>
     </mujoco>"""
     m = mujoco.MjModel.from_xml_string(xml)
-    with pytest.warns(pmd.errors.ModelImportWarning, match="armature.*equality"):
+    with pytest.warns(pmd.errors.ModelImportWarning, match="not imported: dof_armature"):
         model = pmd.from_mujoco(m)
+    assert model.nloops == 1
     assert model.joint_names == ["h1", "s1", "ball", "h2", "root", "h3"]
     assert "a" in model.body_names and "a/h1" in model.body_names
     check_against_mujoco("kinds", model, m, seeds=(0, 1, 2))
+
+
+LOOPS_XML = """<mujoco><worldbody>
+  <body name="a" pos="0 0 1"><joint name="h1" axis="0 1 0" pos="0 0 0.1"/>
+    <geom type="box" size=".1 .02 .02" pos=".1 0 0"/>
+    <body name="b" pos="0.2 0 0"><joint name="h2" axis="0 1 0" pos="0.05 0 0"/>
+      <joint name="h2b" axis="1 0 0" pos="0.02 0.01 0"/>
+      <geom type="box" size=".1 .02 .02" pos=".1 0 0"/></body></body>
+  <body name="c" pos="0.4 0 1" euler="0 30 0"><joint name="h3" axis="0 1 0" pos="0.01 0 0.02"/>
+    <geom type="box" size=".1 .02 .02" pos=".1 0 0"/></body>
+  </worldbody>
+  <equality><connect body1="b" body2="c" anchor="0.2 0 0"/>
+    <weld body1="a" body2="c" anchor="0.1 0.05 0" relpose="0.1 0.2 0.3 0.9 0.1 0.2 0.3"/>
+    <weld body1="b" body2="world"/><joint joint1="h1" joint2="h3"/></equality>
+</mujoco>"""
+
+
+def test_from_mujoco_equalities_become_loops():
+    """connect → Spherical cut joint, weld → Fixed cut joint: the position rows have the
+    norm of MuJoCo's (efc_pos, world axes where ours are in frame a's) and the same Gram
+    matrix JᵀJ; the orientation rows vanish where MuJoCo's do; a joint equality is warned
+    about (not imported)."""
+    m = mujoco.MjModel.from_xml_string(LOOPS_XML)
+    with pytest.warns(pmd.errors.ModelImportWarning, match="1 joint equality constraint"):
+        model = pmd.from_mujoco(m)
+    assert model.nloops == 3 and model.nconstraints == 15
+    d = mujoco.MjData(m)
+    rows = {"connect": slice(0, 3), "weld a-c": slice(3, 6), "weld b-world": slice(9, 12)}
+    for k, qpos in enumerate([m.qpos0.copy(), np.random.default_rng(0).uniform(-1, 1, m.nq)]):
+        d.qpos[:] = qpos
+        mujoco.mj_forward(m, d)
+        q, _ = mujoco_state(m, qpos, np.zeros(m.nv))
+        res, jac = model.constraint_residual(q), model.constraint_jacobian(q)
+        jac_mj = d.efc_J.reshape(d.nefc, m.nv)
+        for what, r in rows.items():
+            e = abs(np.linalg.norm(res[r]) - np.linalg.norm(d.efc_pos[r]))
+            record(f"mujoco loops: {what} residual norm", e)
+            assert e <= 1e-12, (what, res[r], d.efc_pos[r])
+            if np.linalg.norm(res[r]) <= 1e-12:
+                # At closure the rows differ by a rotation only (frame a vs world axes);
+                # apart, ours also carry the rotation of frame a's axes.
+                gram, gram_mj = jac[r].T @ jac[r], jac_mj[r].T @ jac_mj[r]
+                assert rel_err(gram, gram_mj) <= TOL, what
+        if k == 0:  # at qpos0 the welds MuJoCo computed relpose for are closed
+            assert np.abs(res[12:15]).max() <= 1e-12 and np.abs(d.efc_pos[12:15]).max() <= 1e-12
 
 
 def test_from_mujoco_refuses_other_objects():

@@ -79,7 +79,9 @@ def from_mujoco(mj_model: Any) -> Model:
     quat xyzw)`` and its linear speed is in the body frame where MuJoCo's ``qvel`` has it in
     the world frame (:func:`mujoco_state` converts). Only the mass matrix and bias forces are
     MuJoCo's: ``dof_armature``, passive forces, contacts, actuators and equality constraints
-    are not imported (a :class:`ModelImportWarning` names those present)."""
+    are not imported (a :class:`ModelImportWarning` names those present), but for
+    ``<equality connect>`` and ``<equality weld>`` between bodies, which become loops
+    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md)."""
     try:
         import mujoco
     except ImportError as e:  # pragma: no cover - optional dependency
@@ -153,8 +155,7 @@ def from_mujoco(mj_model: Any) -> Model:
     ignored = []
     if np.any(np.asarray(m.dof_armature) != 0):
         ignored.append("dof_armature (added to MuJoCo's mass matrix)")
-    if m.neq:
-        ignored.append(f"{m.neq} equality constraint(s)")
+    ignored += _mujoco_loops(m, model, parts, last_of_body, anchor_of_body)
     if ignored:
         warnings.warn(
             "from_mujoco: not imported: " + "; ".join(ignored),
@@ -162,6 +163,55 @@ def from_mujoco(mj_model: Any) -> Model:
             stacklevel=2,
         )
     return model
+
+
+def _mujoco_loops(m, model, parts, last_of_body, anchor_of_body) -> list[str]:
+    """Active body-to-body ``<equality connect>`` and ``<equality weld>`` as cut joints
+    (docs/loops.md): connect → ``Spherical`` between its two anchors, weld → ``Fixed``
+    between a frame at MuJoCo's ``relpose`` on body 1 and body 2's anchor. Returns what was not imported."""
+    import mujoco
+
+    skipped: dict[str, int] = {}
+    for e in range(m.neq):
+        kind = int(m.eq_type[e])
+        name = _name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e, f"equality{e}")
+        spatial = kind in (mujoco.mjtEq.mjEQ_CONNECT, mujoco.mjtEq.mjEQ_WELD)
+        by_body = int(m.eq_objtype[e]) == mujoco.mjtObj.mjOBJ_BODY
+        if not (spatial and by_body):
+            what = mujoco.mjtEq(kind).name.removeprefix("mjEQ_").lower()
+            key = f"{what} equality constraint(s)" + (" between sites" if spatial else "")
+            skipped[key] = skipped.get(key, 0) + 1
+            continue
+        if not m.eq_active0[e]:
+            skipped["inactive equality constraint(s)"] = (
+                skipped.get("inactive equality constraint(s)", 0) + 1
+            )
+            continue
+        b1, b2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+        data = np.asarray(m.eq_data[e], float)
+        ours = [None if b == 0 else last_of_body[b] for b in (b1, b2)]
+        shift = [anchor_of_body[b1], anchor_of_body[b2]]
+        if kind == mujoco.mjtEq.mjEQ_CONNECT:
+            joint, rot_a = Joint.spherical(), np.eye(3)
+            t_a, t_b = data[0:3] - shift[0], data[3:6] - shift[1]
+        else:
+            rot_a = _quat_wxyz_to_matrix(data[6:10])
+            joint = Joint.fixed()
+            # MuJoCo's rows: body 2's anchor at body 1's relpos point, and body 2's
+            # orientation body 1's times relquat (engine_core_constraint.c).
+            t_a = data[3:6] - shift[0]
+            t_b = data[0:3] - shift[1]
+        model.add_loop(
+            -1 if ours[0] is None else ours[0],
+            -1 if ours[1] is None else ours[1],
+            joint,
+            translation_a=t_a,
+            translation_b=t_b,
+            rotation_a=rot_a,
+            rotation_b=np.eye(3),
+            name=name,
+        )
+    return [f"{n} {k}" for k, n in skipped.items()]
 
 
 def mujoco_state(mj_model: Any, qpos, qvel) -> tuple[np.ndarray, np.ndarray]:
