@@ -10,6 +10,7 @@ import pickle
 import re
 import warnings
 import xml.etree.ElementTree as ET
+from pathlib import Path
 
 import numpy as np
 import pointmass_dyn as pmd
@@ -382,3 +383,25 @@ def test_namespace_mention_is_not_mistaken(tmp_path):
         warnings.simplefilter("always")
         pmd.Model.from_urdf(path)
     assert not any("undeclared" in str(w.message) for w in caught)
+
+
+def test_scene_urdf_repair_key(tmp_path):
+    """`urdf_repair = true` in a scene loads the URDF as `from_urdf(..., repair=True)`."""
+    path = ROOT / "pr2_description/urdf/pr2.urdf"
+    scene_file = tmp_path / "s.toml"
+    scene_file.write_text(f'urdf = "{path}"\n')
+    with pytest.raises(pmd.errors.SceneError, match="repair=True"):
+        pmd.load_scene(scene_file)
+    scene_file.write_text(f'urdf = "{path}"\nurdf_repair = true\n')
+    scene = pmd.load_scene(scene_file)
+    model, _ = load(path, repair=True)
+    q = np.random.default_rng(0).uniform(-1, 1, model.nq)
+    assert np.array_equal(scene.model.mass_matrix(q), model.mass_matrix(q))
+    bad = tmp_path / "bad.toml"
+    bundled = scene_file.parent / "pendulum.toml"
+    bundled.write_text(
+        (Path(pmd.__file__).with_name("scenes") / "pendulum_planar.toml").read_text()
+    )
+    bad.write_text("urdf_repair = true\n" + bundled.read_text())
+    with pytest.raises(pmd.errors.SceneError, match="urdf_repair: needs a urdf key"):
+        pmd.load_scene(bad)
