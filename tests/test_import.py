@@ -20,6 +20,20 @@ TOL = 1e-9
 mujoco = pytest.importorskip("mujoco")
 
 
+def mj_compile(xml: str | None = None, path: Path | None = None):
+    """MuJoCo's model of `xml` (or the file `path`); its compiler warnings (deprecated
+    attributes, URDF mimic joints it makes equalities) are dropped instead of appended to
+    MUJOCO_LOG.TXT in the working directory."""
+    old = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(lambda _msg: None)
+    try:
+        if path is not None:
+            return mujoco.MjModel.from_xml_path(str(path))
+        return mujoco.MjModel.from_xml_string(xml)
+    finally:
+        mujoco.set_mju_user_warning(old)
+
+
 def mj_random_state(m, rng):
     qpos = m.qpos0.copy()
     for j in range(m.njnt):
@@ -108,7 +122,7 @@ def mjcf_files():
 
 @pytest.mark.parametrize("path", mjcf_files(), ids=lambda p: f"{p.parent.name}/{p.stem}")
 def test_from_mujoco_equals_mujoco(path):
-    m = mujoco.MjModel.from_xml_path(str(path))
+    m = mj_compile(path=path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pmd.errors.ModelImportWarning)
         model = pmd.from_mujoco(m)
@@ -144,7 +158,7 @@ def test_from_mujoco_joint_kinds_ref_and_warning():
       </worldbody>
       <equality><connect body1="c" body2="world" anchor="0 0 0"/></equality>
     </mujoco>"""
-    m = mujoco.MjModel.from_xml_string(xml)
+    m = mj_compile(xml)
     with pytest.warns(pmd.errors.ModelImportWarning, match="not imported: dof_armature"):
         model = pmd.from_mujoco(m)
     assert model.nloops == 1
@@ -173,7 +187,7 @@ def test_from_mujoco_equalities_become_loops():
     norm of MuJoCo's (efc_pos, world axes where ours are in frame a's) and the same Gram
     matrix JᵀJ; the orientation rows vanish where MuJoCo's do; a joint equality is warned
     about (not imported)."""
-    m = mujoco.MjModel.from_xml_string(LOOPS_XML)
+    m = mj_compile(LOOPS_XML)
     with pytest.warns(pmd.errors.ModelImportWarning, match="1 joint equality constraint"):
         model = pmd.from_mujoco(m)
     assert model.nloops == 3 and model.nconstraints == 15
@@ -341,7 +355,7 @@ def test_free_root_equals_mujoco_free_joint_and_pinocchio_free_flyer(name):
     pm = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
     pm.gravity.linear = np.array([0.0, 0.0, -9.81])
     check_against_pinocchio(f"{name} free", model, pm)
-    m = mujoco.MjModel.from_xml_string(mujoco_urdf(path.read_text(), free=True))
+    m = mj_compile(mujoco_urdf(path.read_text(), free=True))
     names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(m.njnt)]
     # MuJoCo orders the joints its own way: compare through a permutation by name.
     check_free_against_mujoco(name, model, m, names)

@@ -234,10 +234,10 @@ def test_repaired_equals_pinocchio_on_the_numpy_repaired_file(rel, root_joint, t
 
 
 def mujoco_model(text, compiler):
-    mujoco = pytest.importorskip("mujoco")
-    from test_import import mujoco_urdf
+    pytest.importorskip("mujoco")
+    from test_import import mj_compile, mujoco_urdf
 
-    return mujoco.MjModel.from_xml_string(mujoco_urdf(text, compiler))
+    return mj_compile(mujoco_urdf(text, compiler))
 
 
 # (file, our repair, MuJoCo's compiler options): files MuJoCo compiles with those options
