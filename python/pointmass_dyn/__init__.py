@@ -33,6 +33,7 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .importers import InertiaRepair, from_mujoco, from_pinocchio
 from .scenes import builtin_scenes, load_scene
 from .simulation import (
     Damper,
@@ -106,6 +107,7 @@ __all__ = [
     "FreeFlyer",
     "Gravity",
     "InertiaError",
+    "InertiaRepair",
     "InvalidInputError",
     "Joint",
     "JointFriction",
@@ -142,6 +144,8 @@ __all__ = [
     "builtin_scenes",
     "effect_forces",
     "effect_power",
+    "from_mujoco",
+    "from_pinocchio",
     "energies",
     "errors",
     "load_scene",

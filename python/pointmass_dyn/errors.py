@@ -76,6 +76,16 @@ class UrdfWarning(UserWarning):
     """A URDF loaded differently from what it says (mimic joints, ignored elements)."""
 
 
+class UrdfRepairWarning(UrdfWarning):
+    """Inertials changed by ``Model.from_urdf(..., repair=...)``: one warning per load,
+    listing each link (before → after); ``model.repairs`` holds the same records."""
+
+
+class ModelImportWarning(UserWarning):
+    """A model imported from MuJoCo or Pinocchio differs from its source in something that
+    does not enter the mass matrix or bias forces (equality constraints, limits, ...)."""
+
+
 __all__ = [
     "AnimationWriterError",
     "InertiaError",
@@ -91,4 +101,6 @@ __all__ = [
     "UnpicklingError",
     "UrdfError",
     "UrdfWarning",
+    "UrdfRepairWarning",
+    "ModelImportWarning",
 ]
