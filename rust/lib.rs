@@ -18,6 +18,7 @@ pub mod loops;
 pub mod model;
 pub mod persist;
 pub mod point_masses;
+pub mod poses;
 pub mod reactions;
 pub mod recursive;
 pub mod scene;

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
+from .animation import AnimationInfo, animate
 from .balancing import (
     Balance,
     Counterweight,
@@ -32,6 +33,7 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .importers import InertiaRepair, from_mujoco, from_pinocchio
 from .mjcf import to_mjcf
 from .scenes import builtin_scenes, load_scene
 from .simulation import (
@@ -55,6 +57,7 @@ from .simulation import (
     solve_ivp,
 )
 from .sweep import sweep
+from .viewer_meshcat import show as show_meshcat
 from .work_precision import WorkPrecision, work_precision
 
 
@@ -94,6 +97,8 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "AnimationInfo",
+    "animate",
     "Balance",
     "BatchResult",
     "Counterweight",
@@ -104,6 +109,7 @@ __all__ = [
     "FreeFlyer",
     "Gravity",
     "InertiaError",
+    "InertiaRepair",
     "InvalidInputError",
     "Joint",
     "JointFriction",
@@ -140,6 +146,8 @@ __all__ = [
     "builtin_scenes",
     "effect_forces",
     "effect_power",
+    "from_mujoco",
+    "from_pinocchio",
     "energies",
     "errors",
     "load_scene",
@@ -147,6 +155,7 @@ __all__ = [
     "prescribed_motion",
     "rk45",
     "shaking",
+    "show_meshcat",
     "simulate",
     "simulate_batch",
     "solve_ivp",

@@ -163,6 +163,13 @@ class Model:
         """World placements of every body: rotations (nbodies, 3, 3), origins (nbodies, 3)."""
     def point_masses(self, q: ArrayLike) -> tuple[_Array, _Array]:
         """Masses (nlinks, 7) and world positions (nlinks, 7, 3) of every link's points."""
+    def body_poses(self, q: ArrayLike) -> dict[str, _Array]:
+        """World poses of everything a viewer draws, at one configuration (q (nq,)) or N
+        (q (N, nq), a leading N axis on every array): ``rotations`` (nbodies, 3, 3),
+        ``origins``, ``joint_origins`` (each joint frame's origin), ``joint_axes`` (unit axis of
+        revolute and prismatic joints, zero otherwise) (nbodies, 3), ``points`` (nlinks, 7, 3)
+        and per cut joint ``loop_a``, ``loop_b`` (its two frames' origins), ``loop_axes``
+        (nloops, 3)."""
     def denoc(self, q: ArrayLike) -> dict[str, _Array]:
         """The DeNOC matrices at ``q``: keys ``D``, ``Nl``, ``Nd``, ``N``, ``masses`` (7n,)
         and ``points`` (7n, 3)."""
@@ -339,7 +346,12 @@ class Model:
         ``generalized`` ((N,) P, nv) ``= J_pᵀ (a_p − g)``. ``points``: None for all point
         masses, or (body, point in its frame) pairs."""
     @staticmethod
-    def from_urdf(path: Any, *, root_joint: Literal["fixed", "free"] | None = None) -> Model:
+    def from_urdf(
+        path: Any,
+        *,
+        root_joint: Literal["fixed", "free"] | None = None,
+        repair: bool | dict[str, Any] | Any | None = None,
+    ) -> Model:
         """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
         (q = angle), prismatic and fixed joints; joint order and body (link) names as
         Pinocchio's ``buildModelFromUrdf``. The root link is welded to the world
@@ -348,7 +360,22 @@ class Model:
         ``buildModelFromUrdf(path, JointModelFreeFlyer())``). Raises
         :class:`pointmass_dyn.errors.UrdfError` naming the file and the element; warns with
         :class:`pointmass_dyn.errors.UrdfWarning` (mimic joints loaded as independent,
-        ignored elements)."""
+        ignored elements, undeclared namespace prefixes).
+
+        ``repair`` (``True``, a dict or :class:`pointmass_dyn.InertiaRepair`) allows
+        MuJoCo-style repairs of non-physical inertials (``balance_inertia``, ``bound_mass``,
+        ``bound_inertia``) and welds moving joints that move no mass (``weld_massless``);
+        every change is listed in one :class:`pointmass_dyn.errors.UrdfRepairWarning` and in
+        :attr:`repairs` (docs/robots.md)."""
+    @property
+    def repairs(self) -> list[dict[str, Any]]:
+        """What ``from_urdf(..., repair=...)`` changed: one dict per link or welded joint
+        (``link``, ``joint``, ``rules``, ``mass`` and ``principal_moments`` as (before,
+        after), ``joint_type`` (before, after) for welds). Empty otherwise."""
+    @staticmethod
+    def _from_parts(parts: list[tuple[Any, ...]]) -> Model:
+        """For :mod:`pointmass_dyn.importers`: bodies in tree order, each ``(name, parent,
+        joint, translation, rotation, joint_name, mass, com, inertia)``."""
     @property
     def joint_names(self) -> list[str]:
         """Names of the moving joints in q/v order (URDF joint names; for models built with

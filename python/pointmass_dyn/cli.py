@@ -95,6 +95,10 @@ def cmd_simulate(args) -> int:
 
         plot_trajectory(result, model, args.plot, title=f"{scene.name}: {result.message}")
         print(f"  plot written to {args.plot}")
+    if args.animate:
+        from .animate_cli import write as write_animation
+
+        write_animation(args, result, scene, args.animate)
     return 0 if result.success else 1
 
 
@@ -530,6 +534,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--dt", type=float, default=None, help="fixed step (s) of RK4 and Euler")
     s.add_argument("--out", default=None, help="write the trajectory to a .csv or .npz file")
     s.add_argument("--plot", default=None, help="write a plot of q and v against time (PNG)")
+    s.add_argument("--animate", default=None, metavar="PATH",
+                   help="write a 3-D animation (.html, .gif or .mp4; options as 'animate')")
+    from .animate_cli import add_options as add_animate_options
+    from .animate_cli import add_parser as add_animate_parser
+
+    add_animate_options(s)
     s.set_defaults(func=cmd_simulate)
     pm = sub.add_parser("point-masses", help="print each body's seven point masses")
     pm.add_argument("scene")
@@ -599,6 +609,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .sweep_cli import add_parser as add_sweep_parser
 
     add_sweep_parser(sub)
+    add_animate_parser(sub)
     return p
 
 

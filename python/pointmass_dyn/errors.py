@@ -67,11 +67,27 @@ class UnpicklingError(PointMassDynError, pickle.UnpicklingError):
     it), or written by a version of pointmass_dyn with another serialisation format."""
 
 
+class AnimationWriterError(PointMassDynError, RuntimeError):
+    """An animation format this machine cannot write (MP4 without ffmpeg, video without
+    matplotlib or Pillow); the message says what to install or which format works instead."""
+
+
 class UrdfWarning(UserWarning):
     """A URDF loaded differently from what it says (mimic joints, ignored elements)."""
 
 
+class UrdfRepairWarning(UrdfWarning):
+    """Inertials changed by ``Model.from_urdf(..., repair=...)``: one warning per load,
+    listing each link (before → after); ``model.repairs`` holds the same records."""
+
+
+class ModelImportWarning(UserWarning):
+    """A model imported from MuJoCo or Pinocchio differs from its source in something that
+    does not enter the mass matrix or bias forces (equality constraints, limits, ...)."""
+
+
 __all__ = [
+    "AnimationWriterError",
     "InertiaError",
     "InvalidInputError",
     "LoopClosureError",
@@ -85,4 +101,6 @@ __all__ = [
     "UnpicklingError",
     "UrdfError",
     "UrdfWarning",
+    "UrdfRepairWarning",
+    "ModelImportWarning",
 ]

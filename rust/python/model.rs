@@ -111,6 +111,8 @@ pub struct Version {
     pub model: Arc<Model>,
     /// The URDF joints (names, limits, damping, friction) of a model from `from_urdf`.
     pub urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>,
+    /// What `from_urdf(..., repair=...)` changed (empty otherwise).
+    pub repairs: Arc<Vec<crate::urdf::RepairRecord>>,
     id: u64,
 }
 
@@ -414,11 +416,21 @@ impl PyModel {
     /// A model sharing `model` (a scene's, another model's): nothing is copied until one of
     /// them adds a body.
     pub fn from_parts(model: Arc<Model>, urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>) -> Self {
+        Self::from_parts_repaired(model, urdf_joints, Arc::new(Vec::new()))
+    }
+
+    /// [`PyModel::from_parts`] with the repairs a URDF load made.
+    pub fn from_parts_repaired(
+        model: Arc<Model>,
+        urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>,
+        repairs: Arc<Vec<crate::urdf::RepairRecord>>,
+    ) -> Self {
         let id = next_version();
         PyModel {
             current: Mutex::new(Version {
                 model,
                 urdf_joints,
+                repairs,
                 id,
             }),
             current_id: AtomicU64::new(id),
@@ -434,6 +446,11 @@ impl PyModel {
     /// The URDF joints of a model from `from_urdf` (empty otherwise).
     pub fn urdf_joints(&self) -> Arc<Vec<crate::urdf::UrdfJoint>> {
         self.version().urdf_joints.clone()
+    }
+
+    /// The repairs of a model from `from_urdf(..., repair=...)` (empty otherwise).
+    pub fn repair_records(&self) -> Arc<Vec<crate::urdf::RepairRecord>> {
+        self.version().repairs.clone()
     }
 
     fn version(&self) -> MutexGuard<'_, Version> {
@@ -655,6 +672,74 @@ impl PyModel {
                 to_array(py, origins, &[nb, 3])?,
             ))
         })
+    }
+
+    /// Everything a viewer draws, at one configuration (q (nq,)) or N (q (N, nq)): dict of
+    /// world-frame arrays `rotations` ((N,) nbodies, 3, 3), `origins`, `joint_origins`,
+    /// `joint_axes` ((N,) nbodies, 3), `points` ((N,) nlinks, 7, 3) and per cut joint
+    /// `loop_a`, `loop_b`, `loop_axes` ((N,) nloops, 3). (docs/visualisation.md §2)
+    fn body_poses<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let (sq, qs) = super::convert::array(q, "q")?;
+        let count = match sq.as_slice() {
+            [n] if *n == model.nq => None,
+            [rows, n] if *n == model.nq => Some(*rows),
+            _ => {
+                return Err(invalid(
+                    py,
+                    "q",
+                    format!("shape ({0},) or (N, {0})", model.nq),
+                    super::convert::shape_str(&sq),
+                ))
+            }
+        };
+        let rows = count.unwrap_or(1);
+        for k in 0..rows {
+            let qk = &qs[k * model.nq..(k + 1) * model.nq];
+            model
+                .check_state(qk, None)
+                .map_err(|e| match count {
+                    Some(_) => e.map_arg(|name| format!("{name}[{k}]")),
+                    None => e,
+                })
+                .py(py)?;
+        }
+        let poses = detach_interruptible(py, || {
+            let mut poses = crate::poses::Poses::new(&model, rows)?;
+            for k in 0..rows {
+                crate::interrupt::check("body_poses")?;
+                poses.fill(&model, k, &qs[k * model.nq..(k + 1) * model.nq]);
+            }
+            Ok(poses)
+        })?;
+        let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
+        let shape = |tail: &[usize]| -> Vec<usize> {
+            count
+                .map(|n| vec![n])
+                .unwrap_or_default()
+                .into_iter()
+                .chain(tail.iter().copied())
+                .collect()
+        };
+        let d = PyDict::new(py);
+        for (key, buf, tail) in [
+            ("rotations", poses.rotations, vec![nb, 3, 3]),
+            ("origins", poses.origins, vec![nb, 3]),
+            ("joint_origins", poses.joint_origins, vec![nb, 3]),
+            ("joint_axes", poses.joint_axes, vec![nb, 3]),
+            ("points", poses.points, vec![nl, 7, 3]),
+            ("loop_a", poses.loop_a, vec![nc, 3]),
+            ("loop_b", poses.loop_b, vec![nc, 3]),
+            ("loop_axes", poses.loop_axes, vec![nc, 3]),
+        ] {
+            check_result(py, &format!("body_poses['{key}']"), &buf)?;
+            d.set_item(key, to_array(py, buf, &shape(&tail))?)?;
+        }
+        Ok(d)
     }
 
     /// The seven point masses of every moving link: (masses (nlinks, 7), world positions
@@ -941,9 +1026,10 @@ impl PyModel {
         })?;
         let mut model = (*ver.model).clone();
         model.replace_body(b, rigid_body.inner).py(py)?;
-        Ok(PyModel::from_parts(
+        Ok(PyModel::from_parts_repaired(
             Arc::new(model),
             ver.urdf_joints.clone(),
+            ver.repairs.clone(),
         ))
     }
 
@@ -1448,13 +1534,17 @@ impl PyModel {
 
     /// Loads a robot from a URDF file (joint order and body names as Pinocchio's
     /// `buildModelFromUrdf`), fixed-base or, with `root_joint="free"`, on a free flyer.
-    /// Raises `UrdfError`; warnings go through `warnings.warn` as `UrdfWarning`.
+    /// `repair` (None/False, True, a dict or `pmd.InertiaRepair`) allows MuJoCo-style
+    /// inertia repairs (docs/robots.md); each change is listed in one `UrdfRepairWarning` and
+    /// in `model.repairs`. Raises `UrdfError`; warnings go through `warnings.warn` as
+    /// `UrdfWarning`.
     #[staticmethod]
-    #[pyo3(signature = (path, *, root_joint=None))]
+    #[pyo3(signature = (path, *, root_joint=None, repair=None))]
     fn from_urdf(
         py: Python<'_>,
         path: std::path::PathBuf,
         root_joint: Option<&Bound<'_, PyAny>>,
+        repair: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let root = match root_joint {
             None => crate::urdf::RootJoint::Fixed,
@@ -1471,18 +1561,123 @@ impl PyModel {
                 }
             },
         };
-        let urdf = crate::urdf::load_urdf(&path, root).py(py)?;
+        let repair = repair_options(py, repair)?;
+        let urdf = crate::urdf::load_urdf_with(&path, root, repair.as_ref()).py(py)?;
+        let warnings = py.import("warnings")?;
         if !urdf.warnings.is_empty() {
             let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
-            let warnings = py.import("warnings")?;
             for w in &urdf.warnings {
                 warnings.call_method1("warn", (w.as_str(), &category, 1))?;
             }
         }
-        Ok(PyModel::from_parts(
+        if !urdf.repairs.is_empty() {
+            let category = py
+                .import("pointmass_dyn.errors")?
+                .getattr("UrdfRepairWarning")?;
+            let lines: Vec<String> = urdf.repairs.iter().map(|r| r.describe()).collect();
+            let message = format!(
+                "{}: repaired {} link(s)/joint(s) (model.repairs lists them):\n  {}",
+                crate::files::display_path(&path),
+                urdf.repairs.len(),
+                lines.join("\n  ")
+            );
+            warnings.call_method1("warn", (message, &category, 1))?;
+        }
+        Ok(PyModel::from_parts_repaired(
             Arc::new(urdf.model),
             Arc::new(urdf.joints),
+            Arc::new(urdf.repairs),
         ))
+    }
+
+    /// For the importers (python/pointmass_dyn/importers.py): a model from bodies in tree
+    /// order, each `(name, parent, joint, translation, rotation, joint_name, mass, com,
+    /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body.
+    #[staticmethod]
+    fn _from_parts(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+        let mut out = Vec::with_capacity(parts.len());
+        for (k, p) in parts.iter().enumerate() {
+            #[allow(clippy::type_complexity)]
+            let (name, parent, joint, t, r, joint_name, mass, com, inertia): (
+                String,
+                i64,
+                PyRef<'_, PyJoint>,
+                Bound<'_, PyAny>,
+                Bound<'_, PyAny>,
+                String,
+                f64,
+                Bound<'_, PyAny>,
+                Bound<'_, PyAny>,
+            ) = p.extract().map_err(|_| {
+                invalid(
+                    py,
+                    &format!("parts[{k}]"),
+                    "(name, parent, joint, translation, rotation, joint_name, mass, com, inertia)",
+                    p.repr().map_or_else(|_| "?".to_string(), |x| x.to_string()),
+                )
+            })?;
+            let parent = match parent {
+                -1 => None,
+                q if q >= 0 && (q as usize) < k => Some(q as usize),
+                q => {
+                    return Err(invalid(
+                        py,
+                        &format!("parts[{k}].parent"),
+                        format!("-1 or an earlier part's index 0..{k}"),
+                        q,
+                    ))
+                }
+            };
+            out.push(crate::urdf::Part {
+                name,
+                parent,
+                placement: Placement::new(mat3(&r, "rotation")?, vec3(&t, "translation")?),
+                joint: joint.inner,
+                joint_name,
+                mass,
+                com: vec3(&com, "com")?,
+                inertia: mat3(&inertia, "inertia")?,
+            });
+        }
+        let built = crate::urdf::model_from_parts(&out).py(py)?;
+        Ok(PyModel::from_parts(
+            Arc::new(built.model),
+            Arc::new(built.joints),
+        ))
+    }
+
+    /// What `from_urdf(..., repair=...)` changed: one dict per link or welded joint with
+    /// `link`, `joint` (the welded joint, else None), `rules`, `mass` (before, after),
+    /// `principal_moments` (before, after; ascending) and `joint_type` (before, after; welds
+    /// only). Empty for a model loaded without repairs.
+    #[getter]
+    fn repairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        let out = pyo3::types::PyList::empty(py);
+        for r in self.repair_records().iter() {
+            let d = PyDict::new(py);
+            d.set_item("link", &r.link)?;
+            d.set_item("joint", &r.joint)?;
+            d.set_item("rules", &r.rules)?;
+            d.set_item("mass", r.mass)?;
+            d.set_item(
+                "principal_moments",
+                (
+                    (
+                        r.principal_moments.0[0],
+                        r.principal_moments.0[1],
+                        r.principal_moments.0[2],
+                    ),
+                    (
+                        r.principal_moments.1[0],
+                        r.principal_moments.1[1],
+                        r.principal_moments.1[2],
+                    ),
+                ),
+            )?;
+            d.set_item("joint_type", &r.joint_type)?;
+            out.append(d)?;
+        }
+        Ok(out)
     }
 
     /// Names of the moving joints in q/v order: the URDF joint names for a model from
@@ -1549,6 +1744,82 @@ impl PyModel {
         model.check_state(&q, Some(&v)).py(py)?;
         Ok((model, q, v))
     }
+}
+
+/// `repair=`: None/False (no repairs), True (the defaults), a dict of the fields, or an
+/// object with them as attributes (`pmd.InertiaRepair`).
+fn repair_options(
+    py: Python<'_>,
+    repair: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<crate::urdf::Repair>> {
+    const FIELDS: [&str; 4] = [
+        "balance_inertia",
+        "bound_mass",
+        "bound_inertia",
+        "weld_massless",
+    ];
+    let expected = "None, False, True, a dict with keys balance_inertia, bound_mass, bound_inertia, weld_massless, or pmd.InertiaRepair(...)";
+    let shown = |x: &Bound<'_, PyAny>| x.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+    let Some(r) = repair else { return Ok(None) };
+    if r.is_none() {
+        return Ok(None);
+    }
+    if let Ok(b) = r.cast::<pyo3::types::PyBool>() {
+        return Ok(b.is_true().then(crate::urdf::Repair::default));
+    }
+    let get = |name: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
+        if let Ok(d) = r.cast::<PyDict>() {
+            d.get_item(name)
+        } else if r.hasattr(name)? {
+            Ok(Some(r.getattr(name)?))
+        } else {
+            Err(invalid(py, "repair", expected, shown(r)))
+        }
+    };
+    if let Ok(d) = r.cast::<PyDict>() {
+        for k in d.keys() {
+            let key: Option<String> = k.extract().ok();
+            if !key.as_deref().is_some_and(|k| FIELDS.contains(&k)) {
+                return Err(invalid(
+                    py,
+                    "repair",
+                    expected,
+                    format!("a dict with key {}", shown(&k)),
+                ));
+            }
+        }
+    }
+    let mut out = crate::urdf::Repair::default();
+    for name in FIELDS {
+        let Some(v) = get(name)? else { continue };
+        let arg = format!("repair.{name}");
+        match name {
+            "balance_inertia" | "weld_massless" => {
+                let b = v
+                    .cast::<pyo3::types::PyBool>()
+                    .map_err(|_| invalid(py, &arg, "True or False", shown(&v)))?
+                    .is_true();
+                if name == "balance_inertia" {
+                    out.balance_inertia = b;
+                } else {
+                    out.weld_massless = b;
+                }
+            }
+            _ => {
+                let x: f64 = v
+                    .extract()
+                    .ok()
+                    .filter(|x: &f64| x.is_finite() && *x >= 0.0)
+                    .ok_or_else(|| invalid(py, &arg, "a finite number >= 0", shown(&v)))?;
+                if name == "bound_mass" {
+                    out.bound_mass = x;
+                } else {
+                    out.bound_inertia = x;
+                }
+            }
+        }
+    }
+    Ok(Some(out))
 }
 
 /// An error about argument `from` renamed to `to` (`q` → `q_guess`).

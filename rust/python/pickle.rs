@@ -45,6 +45,12 @@ enum Payload {
     StateEvent(StateEvent),
     Scene(Scene),
     DenseSolution(DenseOutput),
+    /// A model from `from_urdf(..., repair=...)` with the repairs it made.
+    RepairedModel {
+        model: std::sync::Arc<Model>,
+        urdf_joints: std::sync::Arc<Vec<UrdfJoint>>,
+        repairs: std::sync::Arc<Vec<crate::urdf::RepairRecord>>,
+    },
 }
 
 fn unpickling_error(py: Python<'_>, message: impl std::fmt::Display) -> PyErr {
@@ -120,9 +126,18 @@ pub fn _dumps<'py>(
         Payload::Joint(x.get().inner)
     } else if let Ok(x) = obj.cast::<PyModel>() {
         let m = x.get();
-        Payload::Model {
-            model: m.model(),
-            urdf_joints: m.urdf_joints(),
+        let repairs = m.repair_records();
+        if repairs.is_empty() {
+            Payload::Model {
+                model: m.model(),
+                urdf_joints: m.urdf_joints(),
+            }
+        } else {
+            Payload::RepairedModel {
+                model: m.model(),
+                urdf_joints: m.urdf_joints(),
+                repairs,
+            }
         }
     } else if let Ok(x) = obj.cast::<PyEffect>() {
         let e = x.get().inner.clone();
@@ -173,6 +188,15 @@ pub fn _loads(
         Payload::Model { model, urdf_joints } => {
             Py::new(py, PyModel::from_parts(model, urdf_joints))?.into_any()
         }
+        Payload::RepairedModel {
+            model,
+            urdf_joints,
+            repairs,
+        } => Py::new(
+            py,
+            PyModel::from_parts_repaired(model, urdf_joints, repairs),
+        )?
+        .into_any(),
         Payload::Effect(mut inner) => {
             restore(py, std::slice::from_mut(&mut inner), callables)?;
             Py::new(py, PyEffect { inner })?.into_any()

@@ -61,6 +61,9 @@ struct SceneFile {
     /// Which of the URDF's `<dynamics>` attributes become effects: "damping" (a damper per
     /// joint) and/or "friction" (regularised Coulomb friction per joint).
     urdf_dynamics: Option<Vec<String>>,
+    /// `true`: load the URDF with the default repairs of `Model.from_urdf(..., repair=True)`
+    /// (docs/robots.md); the scene is then its author's statement that they are wanted.
+    urdf_repair: Option<bool>,
     /// Initial state of the whole model (overrides per-body q0/v0): `q0` (nq values) and
     /// `v0` (nv values), angular entries in the file's units.
     initial: Option<InitialFile>,
@@ -267,6 +270,9 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
         if sf.root_joint.is_some() {
             return Err(ctx.err("root_joint", "needs a urdf key"));
         }
+        if sf.urdf_repair.is_some() {
+            return Err(ctx.err("urdf_repair", "needs a urdf key"));
+        }
         return Ok((Model::new(), Vec::new()));
     };
     let root = match sf.root_joint.as_deref() {
@@ -280,7 +286,12 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
         }
     };
     // Its URDF warnings are not reported here.
-    let urdf = crate::urdf::load_urdf(&dir.join(rel), root).map_err(|e| ctx.core("urdf", e))?;
+    let repair = sf
+        .urdf_repair
+        .unwrap_or(false)
+        .then(crate::urdf::Repair::default);
+    let urdf = crate::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref())
+        .map_err(|e| ctx.core("urdf", e))?;
     let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
     Ok((urdf.model, effects))
 }

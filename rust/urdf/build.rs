@@ -197,7 +197,7 @@ fn set_link_bodies(
                 format!("joint '{name}'"),
                 line,
                 format!(
-                    "child link '{child}' has no mass and no link with mass below it, so this {kind} joint moves nothing and its acceleration is undetermined{at}; give the link an <inertial> with mass > 0 or make the joint fixed"
+                    "child link '{child}' has no mass and no link with mass below it, so this {kind} joint moves nothing and its acceleration is undetermined{at}; give the link an <inertial> with mass > 0 or make the joint fixed (Model.from_urdf(..., repair=True) makes it fixed)"
                 ),
             ));
         }

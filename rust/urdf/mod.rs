@@ -42,7 +42,12 @@ use crate::spatial::{Mat3, Vec3};
 
 mod build;
 mod parse;
+mod parts;
+mod repair;
 mod tree;
+
+pub use parts::{model_from_parts, Part};
+pub use repair::{Repair, RepairRecord};
 
 use parse::Ctx;
 use tree::Tree;
@@ -133,10 +138,18 @@ impl<'de> serde::Deserialize<'de> for UrdfJoint {
 impl TryFrom<UrdfJointData> for UrdfJoint {
     type Error = String;
     fn try_from(j: UrdfJointData) -> std::result::Result<UrdfJoint, String> {
-        let kind = ["revolute", "continuous", "prismatic", "fixed", "floating"]
-            .into_iter()
-            .find(|k| *k == j.kind)
-            .ok_or_else(|| format!("joint '{}': unknown kind '{}'", j.name, j.kind))?;
+        let kind = [
+            "revolute",
+            "continuous",
+            "prismatic",
+            "fixed",
+            "floating",
+            "spherical",
+            "spherical_zyz",
+        ]
+        .into_iter()
+        .find(|k| *k == j.kind)
+        .ok_or_else(|| format!("joint '{}': unknown kind '{}'", j.name, j.kind))?;
         Ok(UrdfJoint {
             name: j.name,
             kind,
@@ -170,6 +183,8 @@ pub struct Urdf {
     pub joints: Vec<UrdfJoint>,
     /// Things loaded differently from what the file says (mimic joints, ignored elements).
     pub warnings: Vec<String>,
+    /// What a `repair` changed, one record per link or welded joint (empty without repair).
+    pub repairs: Vec<RepairRecord>,
     /// Directory the file's relative resources would be resolved against (the geometry is
     /// not loaded, so nothing is resolved yet).
     pub base_dir: Option<PathBuf>,
@@ -189,12 +204,18 @@ impl Urdf {
 /// Only a regular file of at most [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a
 /// device is refused before it is opened); a path too long to show is shortened in messages.
 pub fn load_urdf(path: &Path, root: RootJoint) -> Result<Urdf> {
+    load_urdf_with(path, root, None)
+}
+
+/// [`load_urdf`] with the given repairs (`None`: none; invalid inertials are errors).
+pub fn load_urdf_with(path: &Path, root: RootJoint, repair: Option<&Repair>) -> Result<Urdf> {
     let text = crate::files::read_text(path, FileKind::Urdf)?;
-    model_from_urdf(
+    model_from_urdf_with(
         &text,
         &crate::files::display_path(path),
         path.parent(),
         root,
+        repair,
     )
 }
 
@@ -213,14 +234,29 @@ pub fn model_from_urdf(
     base_dir: Option<&Path>,
     root: RootJoint,
 ) -> Result<Urdf> {
+    model_from_urdf_with(text, file, base_dir, root, None)
+}
+
+/// [`model_from_urdf`] with the given repairs.
+pub fn model_from_urdf_with(
+    text: &str,
+    file: &str,
+    base_dir: Option<&Path>,
+    root: RootJoint,
+    repair: Option<&Repair>,
+) -> Result<Urdf> {
     let ctx = Ctx::new(file, text);
-    let robot = parse::parse_robot(&ctx, text)?;
+    let mut robot = parse::parse_robot(&ctx, text, repair)?;
     let tree = Tree::new(&ctx, &robot.links, &robot.joints)?;
+    let mut repairs = std::mem::take(&mut robot.repairs);
+    if repair.is_some_and(|r| r.weld_massless) {
+        repairs.extend(repair::weld_massless(&mut robot, &tree));
+    }
     let built = build::build_model(&ctx, &robot, &tree, root)?;
     let joints = build::joint_records(&robot, &tree, &built);
-    let warnings = built
-        .warning
+    let warnings = std::mem::take(&mut robot.notes)
         .into_iter()
+        .chain(built.warning)
         .chain(build::joint_warnings(file, &joints, &robot.ignored))
         .collect();
     Ok(Urdf {
@@ -228,6 +264,7 @@ pub fn model_from_urdf(
         model: built.model,
         joints,
         warnings,
+        repairs,
         base_dir: base_dir.map(Path::to_path_buf),
     })
 }

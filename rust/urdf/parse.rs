@@ -4,6 +4,7 @@ use std::collections::BTreeMap;
 
 use roxmltree::{Document, Node, ParsingOptions};
 
+use super::repair::{repair_inertial, Repair, RepairRecord};
 use super::{rpy_matrix, Limit, Mimic};
 use crate::body::RigidBody;
 use crate::error::{Error, FileKind, Location, Result};
@@ -83,6 +84,10 @@ pub(super) struct RobotData {
     pub links: Vec<LinkData>,
     pub joints: Vec<JointData>,
     pub ignored: BTreeMap<String, usize>,
+    /// The links whose inertials a `repair` changed, in file order.
+    pub repairs: Vec<RepairRecord>,
+    /// Leniencies the reader allowed itself (undeclared namespace prefixes).
+    pub notes: Vec<String>,
 }
 
 /// Error builder bound to one file.
@@ -206,12 +211,43 @@ impl<'a> Ctx<'a> {
 
 /// Parses the text's `<robot>`: every `<link>` and `<joint>` (each checked on its own; how
 /// they connect is [`super::tree`]'s business).
-pub(super) fn parse_robot(ctx: &Ctx, text: &str) -> Result<RobotData> {
-    let options = ParsingOptions {
-        allow_dtd: true,
-        ..ParsingOptions::default()
-    };
-    let doc = Document::parse_with_options(text, options).map_err(|e| malformed(ctx, text, e))?;
+pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Result<RobotData> {
+    // Real files use namespace prefixes they never declare (`drake:`, `gazebo:`), which
+    // urdfdom (TinyXML) reads; declare each one on the root element (same line: the line
+    // numbers stay) and say so.
+    let mut undeclared: Vec<String> = Vec::new();
+    let mut declared = text.to_string();
+    loop {
+        let outcome = Document::parse_with_options(&declared, opts()).map(|_| ());
+        match outcome {
+            Ok(()) => break,
+            Err(roxmltree::Error::UnknownNamespace(prefix, _))
+                if undeclared.len() < 64 && !undeclared.contains(&prefix) =>
+            {
+                let Some(at) = root_name_end(text) else {
+                    return Err(ctx.err("", "no root element"));
+                };
+                undeclared.push(prefix);
+                let decls: String = undeclared
+                    .iter()
+                    .map(|p| format!(" xmlns:{p}=\"urn:pointmass-dyn:undeclared:{p}\""))
+                    .collect();
+                declared = format!("{}{decls}{}", &text[..at], &text[at..]);
+            }
+            Err(e) => return Err(malformed(ctx, text, e)),
+        }
+    }
+    let doc =
+        Document::parse_with_options(&declared, opts()).map_err(|e| malformed(ctx, text, e))?;
+    let mut notes = Vec::new();
+    if !undeclared.is_empty() {
+        let names: Vec<String> = undeclared.iter().map(|p| format!("'{p}:'")).collect();
+        notes.push(format!(
+            "{}: undeclared XML namespace prefix(es) {} accepted (their elements and attributes are not URDF and are ignored)",
+            ctx.file,
+            names.join(", ")
+        ));
+    }
     let robot = doc.root_element();
     if robot.tag_name().name() != "robot" {
         return Err(ctx.at(
@@ -226,9 +262,14 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str) -> Result<RobotData> {
     let mut ignored: BTreeMap<String, usize> = BTreeMap::new();
     let mut links: Vec<LinkData> = Vec::new();
     let mut joints: Vec<JointData> = Vec::new();
+    let mut repairs = Vec::new();
     for c in robot.children().filter(|c| c.is_element()) {
+        if let Some(q) = foreign(c) {
+            count(&mut ignored, format!("<{q}>"));
+            continue;
+        }
         match c.tag_name().name() {
-            "link" => links.push(parse_link(ctx, c, &mut ignored)?),
+            "link" => links.push(parse_link(ctx, c, &mut ignored, repair, &mut repairs)?),
             "joint" => joints.push(parse_joint(ctx, c, &mut ignored)?),
             "material" => {}
             other => count(&mut ignored, format!("<{other}>")),
@@ -242,7 +283,44 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str) -> Result<RobotData> {
         links,
         joints,
         ignored,
+        repairs,
+        notes,
     })
+}
+
+fn opts<'a>() -> ParsingOptions<'a> {
+    ParsingOptions {
+        allow_dtd: true,
+        ..ParsingOptions::default()
+    }
+}
+
+/// Byte offset just after the root element's name (where declarations can be added).
+fn root_name_end(text: &str) -> Option<usize> {
+    let b = text.as_bytes();
+    let mut i = 0;
+    while i + 1 < b.len() {
+        if b[i] == b'<' && (b[i + 1].is_ascii_alphabetic() || b[i + 1] == b'_') {
+            let mut k = i + 1;
+            while k < b.len() && !(b[k].is_ascii_whitespace() || b[k] == b'>' || b[k] == b'/') {
+                k += 1;
+            }
+            return Some(k);
+        }
+        if text[i..].starts_with("<!--") {
+            i += text[i..].find("-->").map_or(b.len(), |e| e + 3);
+        } else {
+            i += 1;
+        }
+    }
+    None
+}
+
+/// `prefix:name` of an element in a namespace (no URDF element is in one), else `None`.
+fn foreign(node: Node) -> Option<String> {
+    let ns = node.tag_name().namespace()?;
+    let prefix = node.lookup_prefix(ns).unwrap_or("?");
+    Some(format!("{prefix}:{}", node.tag_name().name()))
 }
 
 /// Text that is no XML document: the line and column (at the end of the text when it
@@ -265,7 +343,7 @@ fn malformed(ctx: &Ctx, text: &str, e: roxmltree::Error) -> Error {
 
 fn child<'a, 'i>(node: Node<'a, 'i>, tag: &str) -> Option<Node<'a, 'i>> {
     node.children()
-        .find(|c| c.is_element() && c.tag_name().name() == tag)
+        .find(|c| c.is_element() && c.tag_name().name() == tag && foreign(*c).is_none())
 }
 
 fn count(ignored: &mut BTreeMap<String, usize>, key: String) {
@@ -275,6 +353,10 @@ fn count(ignored: &mut BTreeMap<String, usize>, key: String) {
 /// Counts the children of `node` whose tag is not in `known` as ignored `<parent><tag>`.
 fn count_unknown(node: Node, parent: &str, known: &[&str], ignored: &mut BTreeMap<String, usize>) {
     for c in node.children().filter(|c| c.is_element()) {
+        if let Some(q) = foreign(c) {
+            count(ignored, format!("<{parent}><{q}>"));
+            continue;
+        }
         let tag = c.tag_name().name();
         if !known.contains(&tag) {
             count(ignored, format!("<{parent}><{tag}>"));
@@ -291,22 +373,44 @@ fn named(ctx: &Ctx, node: Node, tag: &str) -> Result<(String, String)> {
     Ok((name.to_string(), format!("{tag} '{name}'")))
 }
 
-fn parse_link(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> Result<LinkData> {
+fn parse_link(
+    ctx: &Ctx,
+    node: Node,
+    ignored: &mut BTreeMap<String, usize>,
+    repair: Option<&Repair>,
+    repairs: &mut Vec<RepairRecord>,
+) -> Result<LinkData> {
     let (name, element) = named(ctx, node, "link")?;
     let mut inertial = Inertial::none();
-    let mut invalid = None;
+    let mut line = ctx.line(node);
     let mut seen_inertial = false;
     for c in node.children().filter(|c| c.is_element()) {
+        if let Some(q) = foreign(c) {
+            count(ignored, format!("<link><{q}>"));
+            continue;
+        }
         match c.tag_name().name() {
             "inertial" if !seen_inertial => {
                 seen_inertial = true;
                 count_unknown(c, "inertial", &["origin", "mass", "inertia"], ignored);
-                (inertial, invalid) = parse_inertial(ctx, &element, c)?;
+                inertial = parse_inertial(ctx, &element, c)?;
+                line = ctx.line(c);
             }
             "visual" | "collision" => {}
             other => count(ignored, format!("<link><{other}>")),
         }
     }
+    // MuJoCo bounds every body, those without <inertial> too.
+    if let Some((fixed, record)) = repair.and_then(|r| repair_inertial(&name, &inertial, r)) {
+        inertial = fixed;
+        repairs.push(record);
+    }
+    let (inertial, invalid) = if seen_inertial || inertial.mass > 0.0 {
+        let (i, m) = validated(inertial, line, repair.is_some());
+        (i, m.map(|message| (line, message)))
+    } else {
+        (inertial, None)
+    };
     Ok(LinkData {
         name,
         line: ctx.line(node),
@@ -317,11 +421,7 @@ fn parse_link(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> R
 
 /// `<inertial>`: the link's own body in the link frame, and why it is no rigid body's (if it
 /// is not; that is an error only on a moving link, decided once the tree is known).
-fn parse_inertial(
-    ctx: &Ctx,
-    element: &str,
-    node: Node,
-) -> Result<(Inertial, Option<(u32, String)>)> {
+fn parse_inertial(ctx: &Ctx, element: &str, node: Node) -> Result<Inertial> {
     let origin = ctx.origin(element, child(node, "origin"))?;
     let mass_node = child(node, "mass")
         .ok_or_else(|| ctx.at(element, node, "<inertial> has no <mass value=...>"))?;
@@ -343,15 +443,15 @@ fn parse_inertial(
     let i = Mat3::new(v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5]);
     let r = origin.rotation;
     let rotated = r * i * r.transpose();
-    let inertial = Inertial {
+    Ok(Inertial {
         mass,
         com: origin.translation,
         inertia: (rotated + rotated.transpose()) * 0.5,
-    };
-    let line = ctx.line(node);
-    let (inertial, invalid) = validated(inertial, line);
-    Ok((inertial, invalid.map(|message| (line, message))))
+    })
 }
+
+/// What `repair` would do about an invalid inertia, for the error of a load without it.
+const REPAIR_HINT: &str = "Model.from_urdf(..., repair=True) loads it as MuJoCo's compiler options balanceinertia/boundinertia would (docs/robots.md)";
 
 /// Validates a link's own body with our RigidBody's rules and messages. Mass 0 is a massless
 /// link (checked later against the tree); its tensor must still be physical. Tolerances
@@ -360,7 +460,12 @@ fn parse_inertial(
 /// at the scale the link enters the dynamics. A tensor accepted only at that scale is
 /// replaced by the nearest physical one (a change of that rounding size), since the
 /// point-mass solver must not see a non-physical tensor.
-fn validated(inertial: Inertial, line: u32) -> (Inertial, Option<String>) {
+fn validated(inertial: Inertial, line: u32, repaired: bool) -> (Inertial, Option<String>) {
+    let hint = if repaired {
+        String::new()
+    } else {
+        format!("; {REPAIR_HINT}")
+    };
     let Inertial { mass, com, inertia } = inertial;
     let (check_mass, scale) = if mass == 0.0 {
         (1.0, 0.0)
@@ -382,7 +487,10 @@ fn validated(inertial: Inertial, line: u32) -> (Inertial, Option<String>) {
             inertial,
             Some(format!("<inertial><mass value>: {reason} (line {line})")),
         ),
-        Err(e) => (inertial, Some(format!("<inertial>: {e} (line {line})"))),
+        Err(e) => (
+            inertial,
+            Some(format!("<inertial>: {e} (line {line}){hint}")),
+        ),
     }
 }
 

@@ -467,3 +467,117 @@ fn errors_carry_their_location() {
     let (_, at) = located(&base_and_a(r#"<axis xyz="0 0 0"/>"#));
     assert_eq!(at, Location::new("t.urdf", "joint 'j'").at_line(5));
 }
+
+fn load_repaired(text: &str, r: &Repair) -> Result<Urdf> {
+    model_from_urdf_with(text, "t.urdf", None, RootJoint::Fixed, Some(r))
+}
+
+#[test]
+fn triangle_violation_refused_with_the_option_named_then_balanced() {
+    let bad = robot(&[
+        link("base", 1.0),
+        format!(
+            r#"<link name="a">{}</link>"#,
+            inertial(2.0, "0.1 0 0", "0.3 0.2 0.1", [1e-3, 1e-3, 1e-2])
+        ),
+        revolute("j", "base", "a"),
+    ]);
+    let e = error(&bad);
+    assert!(e.contains("triangle") && e.contains("repair=True"), "{e}");
+    let u = load_repaired(&bad, &Repair::default()).unwrap();
+    assert_eq!(u.repairs.len(), 1);
+    assert_eq!(u.repairs[0].rules, ["balance_inertia"]);
+    // MuJoCo's rule: all three principal moments become their mean, 4e-3, about the COM.
+    let body = u.model.link_bodies()[0];
+    assert!((body.inertia - Mat3::identity() * 4e-3).abs().max() < 1e-17);
+    assert_eq!(body.mass, 2.0);
+}
+
+#[test]
+fn massless_leaf_welded_and_recorded() {
+    let text = robot(&[
+        link("base", 1.0),
+        link("a", 1.0),
+        r#"<link name="tip"/>"#.to_string(),
+        revolute("j", "base", "a"),
+        revolute("k", "a", "tip"),
+    ]);
+    assert!(error(&text).contains("repair=True"));
+    let u = load_repaired(&text, &Repair::default()).unwrap();
+    assert_eq!(u.model.nv, 1);
+    assert_eq!(u.joint("k").unwrap().kind, "fixed");
+    let r = &u.repairs[0];
+    assert_eq!(r.joint.as_deref(), Some("k"));
+    assert_eq!(
+        r.joint_type,
+        Some(("revolute".to_string(), "fixed".to_string()))
+    );
+    // Without welding, MuJoCo's bounds give it a tiny body instead.
+    let bounded = Repair {
+        bound_mass: 1e-6,
+        bound_inertia: 1e-9,
+        weld_massless: false,
+        ..Repair::default()
+    };
+    let u = load_repaired(&text, &bounded).unwrap();
+    assert_eq!(u.model.nv, 2);
+    assert_eq!(u.model.link_bodies()[1].mass, 1e-6);
+}
+
+#[test]
+fn undeclared_prefix_accepted_and_its_elements_ignored() {
+    let text = robot(&[
+        link("base", 1.0),
+        r#"<link name="a" drake:x="1"><drake:joint name="q"/></link>"#.to_string(),
+        revolute("j", "base", "a"),
+        r#"<drake:joint name="z" type="planar"/>"#.to_string(),
+    ])
+    .replace(
+        r#"<link name="a" drake:x="1">"#,
+        &format!(
+            r#"<link name="a" drake:x="1">{}"#,
+            inertial(1.0, "0 0 0", "0 0 0", [1.0, 1.0, 1.0])
+        ),
+    );
+    let u = load(&text);
+    assert_eq!(u.model.nv, 1);
+    assert!(
+        u.warnings.iter().any(|w| w.contains("'drake:'")),
+        "{:?}",
+        u.warnings
+    );
+    assert!(
+        u.warnings.iter().any(|w| w.contains("<drake:joint>")),
+        "{:?}",
+        u.warnings
+    );
+}
+
+#[test]
+fn parts_keep_order_and_allow_massless_intermediates() {
+    let part = |name: &str, parent: Option<usize>, joint: Joint, mass: f64| Part {
+        name: name.to_string(),
+        parent,
+        placement: crate::spatial::Placement::identity(),
+        joint,
+        joint_name: format!("{name}_j"),
+        mass,
+        com: Vec3::new(0.1, 0.0, 0.0),
+        inertia: Mat3::identity() * mass * 0.01,
+    };
+    let x = Joint::revolute(Vec3::x()).unwrap();
+    let z = Joint::revolute(Vec3::z()).unwrap();
+    let u = model_from_parts(&[
+        part("b/h1", None, x, 0.0),
+        part("b", Some(0), z, 2.0),
+        part("c", None, Joint::Spherical, 1.0),
+    ])
+    .unwrap();
+    assert_eq!(u.model.nv, 5);
+    let names: Vec<&str> = u.joints.iter().map(|j| j.name.as_str()).collect();
+    assert_eq!(names, ["b/h1_j", "b_j", "c_j"]);
+    assert_eq!(u.joints[2].kind, "spherical");
+    // A massless body that moves nothing is refused.
+    let e = model_from_parts(&[part("lonely", None, x, 0.0)]).unwrap_err();
+    assert!(e.to_string().contains("moves nothing"), "{e}");
+}

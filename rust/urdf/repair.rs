@@ -1,0 +1,234 @@
+//! Opt-in repairs of a URDF's inertials (docs/robots.md §Repairs): MuJoCo's compiler
+//! options `boundmass`, `boundinertia` and `balanceinertia`, applied as MuJoCo applies them
+//! (per link, to the link's own `<inertial>`, before the fixed joints merge links into
+//! bodies), and the welding of moving joints that move no mass. Every change is recorded.
+use super::parse::{Inertial, Kind, RobotData};
+use super::tree::Tree;
+use crate::spatial::{Mat3, Vec3};
+
+/// Which repairs a load may make (`Model.from_urdf(..., repair=...)`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Repair {
+    /// MuJoCo `balanceinertia`: principal moments violating `A + B ≥ C` all become their mean.
+    pub balance_inertia: bool,
+    /// MuJoCo `boundmass`: every link's mass is raised to at least this (kg).
+    pub bound_mass: f64,
+    /// MuJoCo `boundinertia`: every link's principal moments are raised to at least this
+    /// (kg m²); with 0, negative moments are raised to 0.
+    pub bound_inertia: f64,
+    /// A moving joint whose child link and everything below it have no mass moves nothing:
+    /// it is made fixed.
+    pub weld_massless: bool,
+}
+
+impl Default for Repair {
+    fn default() -> Self {
+        Repair {
+            balance_inertia: true,
+            bound_mass: 0.0,
+            bound_inertia: 0.0,
+            weld_massless: true,
+        }
+    }
+}
+
+/// One link changed by a repair.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct RepairRecord {
+    /// The link whose `<inertial>` changed, or the child link of a welded joint.
+    pub link: String,
+    /// The welded joint (`weld_massless`), else `None`.
+    pub joint: Option<String>,
+    /// The rules that changed it: "bound_mass", "bound_inertia", "balance_inertia",
+    /// "weld_massless".
+    pub rules: Vec<String>,
+    /// Mass before and after (kg); equal when only the tensor changed.
+    pub mass: (f64, f64),
+    /// Principal moments about the COM before and after, ascending (kg m²).
+    pub principal_moments: ([f64; 3], [f64; 3]),
+    /// Joint type before and after (`weld_massless` only).
+    pub joint_type: Option<(String, String)>,
+}
+
+impl RepairRecord {
+    /// One line of the warning: `link 'x': balance_inertia: mass …; moments (…) → (…)`.
+    pub fn describe(&self) -> String {
+        if let (Some(j), Some((from, to))) = (&self.joint, &self.joint_type) {
+            return format!(
+                "joint '{j}' (child link '{}'): {}: {from} → {to} (it moves no mass)",
+                self.link,
+                self.rules.join(", ")
+            );
+        }
+        let (m0, m1) = self.mass;
+        let (a, b) = self.principal_moments;
+        let mass = if m0 == m1 {
+            format!("mass {m0:e}")
+        } else {
+            format!("mass {m0:e} → {m1:e}")
+        };
+        format!(
+            "link '{}': {}: {mass}; principal moments ({:.6e}, {:.6e}, {:.6e}) → ({:.6e}, {:.6e}, {:.6e})",
+            self.link,
+            self.rules.join(", "),
+            a[0],
+            a[1],
+            a[2],
+            b[0],
+            b[1],
+            b[2]
+        )
+    }
+}
+
+/// Ascending principal moments and their axes (columns).
+fn principal(i: &Mat3) -> ([f64; 3], Mat3) {
+    let eig = i.symmetric_eigen();
+    let mut idx = [0usize, 1, 2];
+    idx.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let l = [
+        eig.eigenvalues[idx[0]],
+        eig.eigenvalues[idx[1]],
+        eig.eigenvalues[idx[2]],
+    ];
+    let v = Mat3::from_columns(&[
+        eig.eigenvectors.column(idx[0]).into_owned(),
+        eig.eigenvectors.column(idx[1]).into_owned(),
+        eig.eigenvectors.column(idx[2]).into_owned(),
+    ]);
+    (l, v)
+}
+
+/// The link's own inertial under `r`, MuJoCo's order (user_objects.cc, mjCBody::Compile):
+/// mass bound, principal-moment bound, then balance if `A + B < C` for any ordering (exact
+/// comparison, as MuJoCo's). `None`: nothing changed (the tensor is kept bit for bit).
+pub(super) fn repair_inertial(
+    link: &str,
+    inertial: &Inertial,
+    r: &Repair,
+) -> Option<(Inertial, RepairRecord)> {
+    let mut rules = Vec::new();
+    let mass = if inertial.mass < r.bound_mass {
+        rules.push("bound_mass".to_string());
+        r.bound_mass
+    } else {
+        inertial.mass
+    };
+    let (before, axes) = principal(&inertial.inertia);
+    let mut after = before;
+    if after.iter().any(|&l| l < r.bound_inertia) {
+        rules.push("bound_inertia".to_string());
+        for l in after.iter_mut() {
+            *l = l.max(r.bound_inertia);
+        }
+    }
+    let [a, b, c] = after;
+    if r.balance_inertia && (a + b < c || a + c < b || b + c < a) {
+        rules.push("balance_inertia".to_string());
+        after = [(a + b + c) / 3.0; 3];
+    }
+    if rules.is_empty() {
+        return None;
+    }
+    let inertia = if after == before {
+        inertial.inertia
+    } else {
+        let t = axes * Mat3::from_diagonal(&Vec3::from(after)) * axes.transpose();
+        (t + t.transpose()) * 0.5
+    };
+    Some((
+        Inertial {
+            mass,
+            com: inertial.com,
+            inertia,
+        },
+        RepairRecord {
+            link: link.to_string(),
+            joint: None,
+            rules,
+            mass: (inertial.mass, mass),
+            principal_moments: (before, after),
+            joint_type: None,
+        },
+    ))
+}
+
+/// Makes fixed every moving joint whose child link and all links below it have no mass (they
+/// move nothing: the joint's acceleration is undetermined), from the leaves up.
+pub(super) fn weld_massless(robot: &mut RobotData, tree: &Tree) -> Vec<RepairRecord> {
+    let mut below = vec![0.0; robot.links.len()];
+    for (l, link) in robot.links.iter().enumerate() {
+        below[l] = link.inertial.mass;
+    }
+    for &j in tree.order.iter().rev() {
+        below[tree.parent_link[j]] += below[tree.child_link[j]];
+    }
+    let mut records = Vec::new();
+    for &j in &tree.order {
+        let jd = &mut robot.joints[j];
+        if jd.kind != Kind::Fixed && below[tree.child_link[j]] <= 0.0 {
+            let m = robot.links[tree.child_link[j]].inertial.mass;
+            let moments = principal(&robot.links[tree.child_link[j]].inertial.inertia).0;
+            records.push(RepairRecord {
+                link: jd.child.clone(),
+                joint: Some(jd.name.clone()),
+                rules: vec!["weld_massless".to_string()],
+                mass: (m, m),
+                principal_moments: (moments, moments),
+                joint_type: Some((jd.kind.name().to_string(), "fixed".to_string())),
+            });
+            jd.kind = Kind::Fixed;
+            jd.limit = None;
+        }
+    }
+    records
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn inertial(mass: f64, d: [f64; 3]) -> Inertial {
+        Inertial {
+            mass,
+            com: Vec3::new(0.1, 0.0, 0.0),
+            inertia: Mat3::from_diagonal(&Vec3::from(d)),
+        }
+    }
+
+    #[test]
+    fn balance_sets_the_mean_as_mujoco() {
+        // PR2's sensor_mount_link: 1e-3, 1e-3, 1e-2 violates A + B >= C.
+        let (out, rec) =
+            repair_inertial("s", &inertial(0.05, [1e-3, 1e-3, 1e-2]), &Repair::default()).unwrap();
+        let m = 4e-3;
+        assert!((out.inertia - Mat3::identity() * m).abs().max() < 1e-18);
+        assert_eq!(rec.rules, ["balance_inertia"]);
+        assert_eq!(out.com, Vec3::new(0.1, 0.0, 0.0));
+    }
+
+    #[test]
+    fn valid_inertial_untouched() {
+        assert!(
+            repair_inertial("s", &inertial(1.0, [1.0, 2.0, 2.5]), &Repair::default()).is_none()
+        );
+    }
+
+    #[test]
+    fn bounds_apply_before_balance() {
+        let r = Repair {
+            bound_mass: 1e-6,
+            bound_inertia: 1e-9,
+            ..Repair::default()
+        };
+        let (out, rec) = repair_inertial("s", &inertial(0.0, [0.0; 3]), &r).unwrap();
+        assert_eq!(out.mass, 1e-6);
+        assert_eq!(out.inertia, Mat3::identity() * 1e-9);
+        assert_eq!(rec.rules, ["bound_mass", "bound_inertia"]);
+        // A negative moment is raised to the bound, then the triangle is balanced.
+        let (out, rec) =
+            repair_inertial("s", &inertial(1.0, [-1e-3, 4e-2, 5e-2]), &Repair::default()).unwrap();
+        assert_eq!(rec.rules, ["bound_inertia", "balance_inertia"]);
+        assert!((out.inertia.trace() - 9e-2).abs() < 1e-15);
+    }
+}
