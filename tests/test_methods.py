@@ -453,7 +453,10 @@ def test_auto_switches_to_radau_where_rk45_finds_the_problem_stiff():
     np.testing.assert_array_equal(r.t[: len(stop.t)], stop.t)
     ref = solve_ivp(f, (0.0, 2.0), [0.0], method="Radau", rtol=1e-10, atol=1e-12)
     assert abs(r.y[0, -1] - ref.y[0, -1]) < 1e-5
-    assert abs(r.sol(1.5)[0] - (np.cos(1.5) + 1e-4 * np.sin(1.5))) < 1e-5
+    # The dense output passes through every step's state; between Radau's long steps (~0.9)
+    # its cubic collocation polynomial is accurate to O(h⁴), not to the tolerance (as SciPy's).
+    np.testing.assert_allclose(r.sol(r.t)[0], r.y[0], rtol=0, atol=1e-12)
+    assert abs(r.sol(1.5)[0] - (np.cos(1.5) + 1e-4 * np.sin(1.5))) < 5e-4
     alone = pmd.solve_ivp(f, (0.0, 2.0), [0.0], **opts)
     assert r.nfev < alone.nfev / 5 and r.njev >= 1 and r.nlu >= 1
     # The scene route: simulate(method="auto") on a non-stiff scene never switches.
