@@ -9,7 +9,9 @@
 //!
 //! `fd`, `id`, `gim` N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
 //! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
-//! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state. Subtract a
+//! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state;
+//! `sim` N ITERS: ITERS runs of `simulate` (RK45, rtol 1e-6, t in (0, 1)) of the chain, gravity
+//! on (the integrator's whole loop: stages, error norm, output). Subtract a
 //! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
 //! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::cpu`).
 use std::hint::black_box;
@@ -23,7 +25,7 @@ use pointmass_dyn::spatial::Vec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: loop (fd|id|gim) N ITERS | loop (scene|loops) PATH ITERS";
+    let usage = "usage: loop (fd|id|gim|sim) N ITERS | loop (scene|loops) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
@@ -64,6 +66,27 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 recursive::inverse_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)
             }
             "gim" => recursive::mass_matrix(&model, &mut data, black_box(&q), &mut gim),
+            "sim" => {
+                let opts = pointmass_dyn::integrator::Rk45Options {
+                    rtol: 1e-6.into(),
+                    atol: 1e-8.into(),
+                    ..Default::default()
+                };
+                let tr = pointmass_dyn::simulate::simulate(
+                    &model,
+                    &[],
+                    Default::default(),
+                    black_box(&q),
+                    &v,
+                    (0.0, 1.0),
+                    &opts,
+                    &[],
+                    Vec::new(),
+                    Default::default(),
+                    None,
+                )?;
+                out[0] = tr.q[tr.q.len() - 1];
+            }
             "loops" => {
                 let q = black_box(&q);
                 recursive::forward_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)?;

@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 4;
+pub const FORMAT_VERSION: u8 = 5;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
@@ -388,6 +388,8 @@ mod tests {
                 max_steps: Some(1000),
                 first_step: None,
                 disable: Some(Disabled::none().with(Kind::Springs)),
+                method: Some(crate::integrator::Method::Dop853),
+                dt: Some(1e-3),
             },
         };
         let event = StateEvent {
@@ -437,7 +439,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (4, 1868, 0x62ec_b0aa_93bd_f050),
+            (5, 1881, 0x96c4_1f8b_dda5_beb2),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

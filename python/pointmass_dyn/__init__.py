@@ -53,6 +53,7 @@ from .simulation import (
     energies,
     rk45,
     simulate,
+    solve_ivp,
 )
 from .sweep import sweep
 from .viewer_meshcat import show as show_meshcat
@@ -156,6 +157,7 @@ __all__ = [
     "show_meshcat",
     "simulate",
     "simulate_batch",
+    "solve_ivp",
     "sweep",
     "work_precision",
 ]

@@ -20,6 +20,9 @@ __version__: str
 _Array: TypeAlias = NDArray[np.float64]
 #: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).
 _Method = str
+#: Integration method: ``"RK45"``, ``"DOP853"``, ``"Radau"``, ``"RK4"``, ``"Euler"``, ``"auto"``
+#: (case-insensitive).
+_Integrator = str
 #: ``"standard"`` (SciPy's step-size controller, also ``"scipy"``) or ``"pi"`` (Hairer's PI).
 _Controller = str
 #: A Python event: ``f(t, q, v) -> float`` (``simulate_scene``) or ``f(t, y) -> float``
@@ -553,6 +556,12 @@ class Scene:
     @property
     def first_step(self) -> float | None: ...
     @property
+    def method(self) -> str | None:
+        """Integration method of the scene's ``[simulate]`` table, or ``None``."""
+    @property
+    def dt(self) -> float | None:
+        """Fixed step (``[simulate] dt``) of RK4 and Euler, or ``None``."""
+    @property
     def disable(self) -> list[str] | None:
         """Effect families the scene switches off (``[simulate] disable``), or ``None``."""
 
@@ -583,11 +592,14 @@ def simulate_scene(
     power: bool = False,
     stiffness: Literal["warn", "stop", "off"] = "warn",
     progress_interval: float | None = None,
+    method: _Integrator | None = None,
+    dt: float | None = None,
 ) -> dict[str, Any]:
     """Integrates a scene in Rust (GIL released); returns the fields of
     ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``power``,
-    ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``n_accepted``, ``n_rejected``,
-    ``status``, ``message``, ``success``, ``t_reached``) and ``error``: ``None``, or the
+    ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
+    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``method``,
+    ``switched_to``, ``t_switch``) and ``error``: ``None``, or the
     exception a Python callback raised (Ctrl-C included), for the caller to re-raise."""
 
 def simulate_batch(
@@ -606,6 +618,8 @@ def simulate_batch(
     disable: _Family | Sequence[_Family] | None = None,
     threads: int | None = None,
     progress: Callable[[int, int], Any] | None = None,
+    method: _Integrator | None = None,
+    dt: float | None = None,
 ) -> list[dict[str, Any]]:
     """Runs B scenes (or one scene from B initial states ``q0`` (B, nq), ``v0`` (B, nv)) on
     ``threads`` threads, the GIL released once; one dict per run as ``simulate_scene``
@@ -642,11 +656,15 @@ def rk45(
     dense_output: bool = False,
     controller: _Controller = "standard",
     stiffness: Literal["warn", "stop", "off"] = "warn",
+    method: _Integrator | None = None,
+    dt: float | None = None,
 ) -> dict[str, Any]:
-    """Dormand–Prince 5(4) on ``fun(t, y)``, step for step SciPy's ``solve_ivp(RK45)``;
+    """Our integrators on ``fun(t, y)`` (``method``: RK45 by default; RK45 and DOP853 step for
+    step SciPy's ``solve_ivp``, RK4/Euler at the fixed step ``dt``);
     returns ``t``, ``y`` (n, N), ``sol`` (:class:`DenseSolution` or ``None``),
     ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
-    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``stiff``:
+    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``method``,
+    ``switched_to``, ``t_switch``, ``stiff``:
     ``None`` or the first stiffness detection ``{"t", "h_lambda", "h", "lambda"}``, and
     ``error``: ``None`` or the exception ``fun`` or an event raised, to re-raise.
     ``stiffness``: ``"warn"`` detects and reports (steps unchanged), ``"stop"`` ends the

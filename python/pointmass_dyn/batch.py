@@ -150,6 +150,8 @@ def simulate_batch(
     disable: Any = None,
     threads: int | None = None,
     progress: Callable[[int, int], Any] | None = None,
+    method: str | None = None,
+    dt: float | None = None,
 ) -> BatchResult:
     """B simulations of one scene (or of a list of scenes), on ``threads`` threads (default:
     one per core), the GIL released once for the whole batch.
@@ -184,6 +186,8 @@ def simulate_batch(
         disable,
         threads,
         progress,
+        method,
+        dt,
     )
     names = [s.name for s in scenes]
     results = []

@@ -67,7 +67,8 @@ def cmd_simulate(args) -> int:
         t_span = (t_span[0], args.t_end)
     report, finish = _progress_printer(t_span[0], t_span[1], sys.stderr)
     start = time.perf_counter()
-    result = simulate(scene, t_span, rtol=args.rtol, atol=args.atol, energy=True, progress=report)
+    result = simulate(scene, t_span, rtol=args.rtol, atol=args.atol, energy=True, progress=report,
+                      method=args.method, dt=args.dt)
     wall = time.perf_counter() - start
     finish()
     model = scene.model
@@ -77,6 +78,8 @@ def cmd_simulate(args) -> int:
     kinetic = max(model.kinetic_energy(q, v) for q, v in zip(result.q, result.v))
     drift = np.max(np.abs(e - e[0]))
     print(f"{scene.name}: {result.message}")
+    print(f"  method {result.method}"
+          + (f" (switched to {result.switched_to} at t = {result.t_switch:g})" if result.switched_to else ""))
     print(f"  {result.n_accepted} steps ({result.n_rejected} rejected), {result.nfev} evaluations, "
           f"{wall * 1e3:.1f} ms")
     print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J "
@@ -519,6 +522,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--t-end", type=float, default=None, help="end time (s); default: the scene's")
     s.add_argument("--rtol", type=float, default=None)
     s.add_argument("--atol", type=float, default=None)
+    s.add_argument("--method", default=None,
+                   help="RK45 (default), DOP853, Radau, RK4, Euler or auto; default: the scene's")
+    s.add_argument("--dt", type=float, default=None, help="fixed step (s) of RK4 and Euler")
     s.add_argument("--out", default=None, help="write the trajectory to a .csv or .npz file")
     s.add_argument("--plot", default=None, help="write a plot of q and v against time (PNG)")
     s.add_argument("--animate", default=None, metavar="PATH",

@@ -1,5 +1,5 @@
 """``simulate`` (a whole scene in Rust, GIL released), the effects a scene declares, their
-per-effect generalized forces, power and energies, and ``rk45`` (our Dormand–Prince on any
+per-effect generalized forces, power and energies, and ``solve_ivp`` (``rk45``: our integrators on any
 Python right-hand side, SciPy-like).
 
 Effects (each declared per scene, each computed only when declared; SI units, radians):
@@ -184,6 +184,14 @@ class SimulationResult:
     #: Models with loops: the largest residual any accepted step had before projection (the
     #: integrator's drift, which the projection removed).
     constraint_drift: float | None = None
+    #: The integration method ("RK45", "DOP853", "Radau", "RK4", "Euler" or "auto").
+    method: str = "RK45"
+    #: Jacobian evaluations and LU decompositions (implicit methods; 0 otherwise).
+    njev: int = 0
+    nlu: int = 0
+    #: ``method="auto"``: the method it switched to once the problem was found stiff, and when.
+    switched_to: str | None = None
+    t_switch: float | None = None
 
     @property
     def nsteps(self) -> int:
@@ -214,8 +222,16 @@ def simulate(
     power: bool = False,
     stiffness: str = "warn",
     progress_interval: float | None = None,
+    method: str | None = None,
+    dt: float | None = None,
 ) -> SimulationResult:
-    """Integrates a scene with our adaptive RK45, entirely in Rust with the GIL released.
+    """Integrates a scene, entirely in Rust with the GIL released.
+
+    ``method``: ``"RK45"`` (default; SciPy's, step for step), ``"DOP853"`` (SciPy's, step for
+    step; better at tight tolerances), ``"RK4"`` or ``"Euler"`` (semi-implicit, MuJoCo's) at
+    the fixed step ``dt`` (required by these two only), ``"Radau"`` (implicit) or ``"auto"``
+    (RK45, then Radau from where the stiffness test fires; ``.switched_to``, ``.t_switch``).
+    ``None`` takes the scene's ``[simulate] method``/``dt``. See docs/integrators.md.
 
     Settings not given here come from the scene (its ``[simulate]`` table), then SciPy's
     defaults (rtol 1e-3, atol 1e-6). ``events`` holds :class:`StateEvent` objects (a joint
@@ -263,6 +279,8 @@ def simulate(
         power,
         stiffness,
         progress_interval,
+        method,
+        dt,
     )
     error = out.pop("error")
     result = SimulationResult(scene=scene.name, **out)
@@ -326,11 +344,13 @@ class OdeResult(dict):
         return f"OdeResult({keys})"
 
 
-def rk45(
+def solve_ivp(
     fun: Callable[[float, np.ndarray], Any],
     t_span: Sequence[float],
     y0: Any,
     *,
+    method: str = "RK45",
+    dt: float | None = None,
     rtol: Any = 1e-3,
     atol: Any = 1e-6,
     t_eval: Any = None,
@@ -342,14 +362,18 @@ def rk45(
     controller: str = "standard",
     stiffness: str = "warn",
 ) -> OdeResult:
-    """Our Dormand–Prince 5(4) on ``fun(t, y)``, step for step SciPy's
-    ``solve_ivp(fun, t_span, y0, method="RK45")`` with the same options.
+    """Our integrators on ``fun(t, y)``, as SciPy's ``solve_ivp(fun, t_span, y0, method=...)``:
+    ``"RK45"`` (default) and ``"DOP853"`` step for step SciPy's with the same options (same
+    steps, ``nfev``, dense output); ``"RK4"`` and ``"Euler"`` (explicit Euler here: a plain
+    ``fun`` has no ``[q; v]`` split) at the fixed step ``dt``, their dense output the cubic
+    Hermite of each step; ``"Radau"`` and ``"auto"`` see docs/integrators.md.
 
     Returns a SciPy-like result: ``t``, ``y`` (n, N), ``sol`` (when ``dense_output``),
     ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``status`` (0 end reached,
     1 terminal event, -1 failure), ``message``, ``success``; plus ``n_accepted``,
-    ``n_rejected`` and ``t_reached``. An exception raised by ``fun`` or an event (Ctrl-C
-    included) propagates with the partial result attached as ``.result``.
+    ``n_rejected``, ``t_reached``, ``method``, ``switched_to`` and ``t_switch``. An exception
+    raised by ``fun`` or an event (Ctrl-C included) propagates with the partial result
+    attached as ``.result``.
     """
     out = _core.rk45(
         fun,
@@ -365,12 +389,25 @@ def rk45(
         dense_output,
         controller,
         stiffness,
+        method,
+        dt,
     )
     error = out.pop("error")
     result = OdeResult(out)
     if error is not None:
         raise _with_partial_result(error, result)
     return result
+
+
+def rk45(
+    fun: Callable[[float, np.ndarray], Any],
+    t_span: Sequence[float],
+    y0: Any,
+    **options: Any,
+) -> OdeResult:
+    """:func:`solve_ivp` (``method="RK45"`` unless given): our Dormand–Prince 5(4), step for
+    step SciPy's ``solve_ivp(fun, t_span, y0, method="RK45")`` with the same options."""
+    return solve_ivp(fun, t_span, y0, **options)
 
 
 __all__ = [
@@ -392,4 +429,5 @@ __all__ = [
     "energies",
     "rk45",
     "simulate",
+    "solve_ivp",
 ]

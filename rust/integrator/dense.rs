@@ -1,5 +1,67 @@
-//! SciPy RK45's dense output: per step the quartic `y(t) = y_old + h · Q p(x)`, with
-//! `x = (t - t_old) / h`, `p = (x, x², x³, x⁴)` and `Q = Kᵀ P` (Shampine 1986, optimal c6).
+//! Dense output: per accepted step an interpolant of one of several kinds ([`Interpolant`]),
+//! evaluated exactly as SciPy evaluates it, and the piecewise [`DenseOutput`] over a run
+//! (its segments may be of different kinds, e.g. RK45 then Radau after a method switch).
+//!
+//! RK45's is SciPy's quartic `y(t) = y_old + h · Q p(x)`, with `x = (t - t_old) / h`,
+//! `p = (x, x², x³, x⁴)` and `Q = Kᵀ P` (Shampine 1986, optimal c6).
+
+/// How a step's coefficients `q` (`n_coef()` per component; component `i` at
+/// `q[n_coef·i ..]`) give the state at `t`, with `x = (t - t_old) / h`, `h = t - t_old` signed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub enum Interpolant {
+    /// SciPy `RkDenseOutput` of RK45: `y_old + h · (q0 x + q1 x² + q2 x³ + q3 x⁴)`.
+    Rk45,
+    /// SciPy `Dop853DenseOutput`, `F = (q0 … q6)`: `y = 0; for i, f in enumerate(reversed(F)):
+    /// y += f; y *= x if i is even else (1 − x)`, then `y + y_old`.
+    Dop853,
+    /// SciPy `RadauDenseOutput`: `y_old + (q0 x + q1 x² + q2 x³)` (no factor h).
+    Radau,
+    /// Cubic Hermite through `(y_old, f_old)` and `(y, f)` of a fixed step, in the Radau form
+    /// `y_old + (q0 x + q1 x² + q2 x³)` with `q0 = h f_old`, `q1 = 3Δ − 2h f_old − h f`,
+    /// `q2 = h f_old + h f − 2Δ`, `Δ = y − y_old`.
+    Hermite,
+}
+
+impl Interpolant {
+    /// Coefficients per component.
+    pub const fn n_coef(self) -> usize {
+        match self {
+            Interpolant::Rk45 => 4,
+            Interpolant::Dop853 => 7,
+            Interpolant::Radau | Interpolant::Hermite => 3,
+        }
+    }
+
+    /// The interpolant at `t` into `out` (length `dim`, `y_old` and `q` of that dimension).
+    #[inline]
+    pub fn eval(self, t_old: f64, h: f64, y_old: &[f64], q: &[f64], t: f64, out: &mut [f64]) {
+        match self {
+            Interpolant::Rk45 => eval_segment(t_old, h, y_old, q, t, out),
+            Interpolant::Dop853 => {
+                let x = (t - t_old) / h;
+                let xm = 1.0 - x;
+                for (i, o) in out.iter_mut().enumerate() {
+                    let f = &q[7 * i..7 * i + 7];
+                    let mut y = 0.0;
+                    for (k, fk) in f.iter().rev().enumerate() {
+                        y += fk;
+                        y *= if k % 2 == 0 { x } else { xm };
+                    }
+                    *o = y + y_old[i];
+                }
+            }
+            Interpolant::Radau | Interpolant::Hermite => {
+                let x = (t - t_old) / h;
+                let (p1, p2) = (x, x * x);
+                let p3 = p2 * x;
+                for (i, o) in out.iter_mut().enumerate() {
+                    let qi = &q[3 * i..3 * i + 3];
+                    *o = (qi[0] * p1 + qi[1] * p2 + qi[2] * p3) + y_old[i];
+                }
+            }
+        }
+    }
+}
 
 /// SciPy's `RK45.P` (7 stages × 4 powers).
 pub(crate) const P: [[f64; 4]; 7] = [
@@ -84,7 +146,13 @@ pub struct DenseOutput {
     t_old: Vec<f64>,
     h: Vec<f64>,
     y_old: Vec<f64>,
+    /// Every segment's coefficients, one after the other.
     q: Vec<f64>,
+    /// Each segment's interpolant.
+    kind: Vec<Interpolant>,
+    /// Where each segment's coefficients start in `q` (derived from `kind`).
+    #[serde(skip)]
+    offset: Vec<usize>,
 }
 
 /// A deserialised dense output, its lengths checked before use.
@@ -96,22 +164,31 @@ struct DenseData {
     h: Vec<f64>,
     y_old: Vec<f64>,
     q: Vec<f64>,
+    kind: Vec<Interpolant>,
 }
 
 impl TryFrom<DenseData> for DenseOutput {
     type Error = String;
     fn try_from(d: DenseData) -> Result<Self, String> {
         let n = d.t_old.len();
+        let mut offset = Vec::with_capacity(d.kind.len());
+        let mut total = Some(0usize);
+        for k in &d.kind {
+            offset.push(total.unwrap_or(0));
+            total = total.and_then(|t| t.checked_add(k.n_coef().checked_mul(d.dim)?));
+        }
         let consistent = d.ts.len() == n + 1
             && d.h.len() == n
+            && d.kind.len() == n
             && Some(d.y_old.len()) == n.checked_mul(d.dim)
-            && Some(d.q.len()) == n.checked_mul(d.dim).and_then(|x| x.checked_mul(4));
+            && Some(d.q.len()) == total;
         if !consistent {
             return Err(format!(
-                "inconsistent dense output: {n} segments of dimension {}, {} breakpoints, {} steps, {} states, {} coefficients",
+                "inconsistent dense output: {n} segments of dimension {}, {} breakpoints, {} steps, {} kinds, {} states, {} coefficients",
                 d.dim,
                 d.ts.len(),
                 d.h.len(),
+                d.kind.len(),
                 d.y_old.len(),
                 d.q.len()
             ));
@@ -123,6 +200,8 @@ impl TryFrom<DenseData> for DenseOutput {
             h: d.h,
             y_old: d.y_old,
             q: d.q,
+            kind: d.kind,
+            offset,
         })
     }
 }
@@ -136,14 +215,25 @@ impl DenseOutput {
             h: Vec::new(),
             y_old: Vec::new(),
             q: Vec::new(),
+            kind: Vec::new(),
+            offset: Vec::new(),
         }
     }
 
-    /// Append a step's interpolant; its breakpoint follows via `push_breakpoint`.
+    /// Append an RK45 step's interpolant; its breakpoint follows via `push_breakpoint`.
+    #[cfg(test)]
     pub(crate) fn push_segment(&mut self, t_old: f64, h: f64, y_old: &[f64], q: &[f64]) {
+        self.push(Interpolant::Rk45, t_old, h, y_old, q);
+    }
+
+    /// Append a step's interpolant of kind `kind` (`q`: `kind.n_coef() · dim` values).
+    pub(crate) fn push(&mut self, kind: Interpolant, t_old: f64, h: f64, y_old: &[f64], q: &[f64]) {
+        debug_assert_eq!(q.len(), kind.n_coef() * self.dim);
         self.t_old.push(t_old);
         self.h.push(h);
         self.y_old.extend_from_slice(y_old);
+        self.offset.push(self.q.len());
+        self.kind.push(kind);
         self.q.extend_from_slice(q);
     }
 
@@ -156,7 +246,14 @@ impl DenseOutput {
         self.t_old.truncate(n);
         self.h.truncate(n);
         self.y_old.truncate(n * self.dim);
-        self.q.truncate(4 * n * self.dim);
+        self.q.truncate(self.offset[n]);
+        self.kind.truncate(n);
+        self.offset.truncate(n);
+    }
+
+    /// The interpolant kind of segment `i`.
+    pub fn kind(&self, i: usize) -> Interpolant {
+        self.kind[i]
     }
 
     pub fn dim(&self) -> usize {
@@ -193,11 +290,13 @@ impl DenseOutput {
     pub fn eval_into(&self, t: f64, out: &mut [f64]) {
         let s = self.segment_index(t);
         let d = self.dim;
-        eval_segment(
+        let kind = self.kind[s];
+        let q0 = self.offset[s];
+        kind.eval(
             self.t_old[s],
             self.h[s],
             &self.y_old[s * d..(s + 1) * d],
-            &self.q[4 * s * d..4 * (s + 1) * d],
+            &self.q[q0..q0 + kind.n_coef() * d],
             t,
             out,
         );

@@ -1,14 +1,18 @@
-//! The [`rk45`] driver: SciPy's `solve_ivp` loop around the [`Stepper`]. Each accepted step
-//! goes through the events ([`EventTracker`]) and into the output ([`Output`]); both
-//! allocate their buffers once, before the first step.
-use super::dense::{eval_segment, DenseOutput};
+//! The generic driver: SciPy's `solve_ivp` loop around any [`Integrator`]. Each accepted
+//! step goes through the events ([`EventTracker`]) and into the output ([`Output`]); both
+//! allocate their buffers once, before the first step. [`solve`] picks the method,
+//! [`rk45`] is the RK45 entry of old.
+use super::dense::{DenseOutput, Interpolant};
+use super::dop853::Dop853;
 use super::events::{self, Event};
+use super::fixed_step::{Euler, FixedStep, Rk4};
+use super::method::{radau_available, Counts, Integrator, Method};
 use super::stepper::{StepOutcome, Stepper};
-use super::{InputError, OdeSystem, Rk45Options, Solution, Status};
+use super::{fmt_time, InputError, OdeSystem, Rk45Options, Solution, Status, StiffnessCheck};
 
 /// Integrate `sys` over `t_span = (t0, t_end)` (backwards if `t_end < t0`) from `y0`,
-/// exactly as SciPy's `solve_ivp(..., method="RK45")`. Runtime failures are reported
-/// in `Solution::status`; only invalid input gives `Err`.
+/// exactly as SciPy's `solve_ivp(..., method="RK45")` (whatever `opts.method` says).
+/// Runtime failures are reported in `Solution::status`; only invalid input gives `Err`.
 pub fn rk45<S: OdeSystem>(
     sys: S,
     t_span: (f64, f64),
@@ -17,14 +21,135 @@ pub fn rk45<S: OdeSystem>(
     events: &mut [Event<'_>],
 ) -> Result<Solution, InputError> {
     let (t0, t_end) = t_span;
-    let mut st = Stepper::new(sys, t0, y0, t_end, opts)?;
+    let st = Stepper::new(sys, t0, y0, t_end, opts)?;
+    drive(st, opts, events, Method::Rk45)
+}
+
+/// Integrate `sys` with the method `opts.method` (SciPy's `solve_ivp`): RK45 and DOP853 step
+/// for step as SciPy's, RK4 and Euler at the fixed step `opts.dt`, `Auto` RK45 then Radau
+/// once the problem is found stiff.
+pub fn solve<S: OdeSystem>(
+    sys: S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    opts: &Rk45Options,
+    events: &mut [Event<'_>],
+) -> Result<Solution, InputError> {
+    let (t0, t_end) = t_span;
+    if !opts.method.is_fixed_step() {
+        if let Some(dt) = opts.dt {
+            return Err(InputError::DtNotUsed {
+                method: opts.method.name(),
+                dt,
+            });
+        }
+    }
+    match opts.method {
+        Method::Rk45 => rk45(sys, t_span, y0, opts, events),
+        Method::Dop853 => drive(
+            Dop853::new(sys, t0, y0, t_end, opts)?,
+            opts,
+            events,
+            Method::Dop853,
+        ),
+        Method::Rk4 => drive(
+            FixedStep::<_, Rk4>::new(sys, t0, y0, t_end, opts)?,
+            opts,
+            events,
+            Method::Rk4,
+        ),
+        Method::Euler => drive(
+            FixedStep::<_, Euler>::new(sys, t0, y0, t_end, opts)?,
+            opts,
+            events,
+            Method::Euler,
+        ),
+        // Radau plugs in here: `drive(Radau::new(sys, t0, y0, t_end, opts)?, opts, events,
+        // Method::Radau)`, and in `stiff_target` below; then `radau_available()` returns true.
+        Method::Radau => Err(InputError::MethodUnavailable("Radau")),
+        Method::Auto => {
+            if !radau_available() {
+                return Err(InputError::MethodUnavailable("auto (it switches to Radau)"));
+            }
+            auto(sys, t_span, y0, opts, events, stiff_target::<S>)
+        }
+    }
+}
+
+/// The implicit method `auto` continues with: Radau from `(t, y)` to `t_end`.
+type StiffTarget<S, J> = fn(S, f64, &[f64], f64, &Rk45Options) -> Result<J, InputError>;
+
+/// Radau from `(t, y)` (placeholder until `radau.rs` is merged: replace the body by
+/// `Radau::new(sys, t, y, t_end, opts)` and the return type by `Radau<S>`).
+fn stiff_target<S: OdeSystem>(
+    sys: S,
+    _t: f64,
+    _y: &[f64],
+    _t_end: f64,
+    _opts: &Rk45Options,
+) -> Result<Stepper<S>, InputError> {
+    drop(sys);
+    Err(InputError::MethodUnavailable("Radau"))
+}
+
+/// `auto`: RK45 with Hairer's stiffness test stopping it; from the state where it fired, the
+/// rest of the interval with the method `target` builds (Radau), same events and output.
+pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
+    sys: S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    opts: &Rk45Options,
+    events: &mut [Event<'_>],
+    target: StiffTarget<S, J>,
+) -> Result<Solution, InputError> {
+    let (t0, t_end) = t_span;
+    let first = Rk45Options {
+        stiffness: StiffnessCheck::Stop,
+        ..opts.clone()
+    };
+    let mut st = Stepper::new(sys, t0, y0, t_end, &first)?;
     if let Some(te) = &opts.t_eval {
         validate_t_eval(te, t0, t_end)?;
     }
     let mut out = Output::new(opts, t0, y0)?;
     let mut tracker = EventTracker::new(events, t0, y0);
     let status = run(&mut st, events, &mut tracker, &mut out);
-    Ok(solution(st, status, out, tracker))
+    let Status::Stiff { t: t_switch, .. } = status else {
+        let info = RunInfo::of(&st, Method::Auto);
+        return Ok(solution(info, status, out, tracker));
+    };
+    let mut info = RunInfo::of(&st, Method::Auto);
+    let y = st.y().to_vec();
+    let second = Rk45Options {
+        first_step: None,
+        ..opts.clone()
+    };
+    let mut st2 = target(st.into_system(), t_switch, &y, t_end, &second)?;
+    let status = run(&mut st2, events, &mut tracker, &mut out);
+    let info2 = RunInfo::of(&st2, Method::Radau);
+    info.counts = info.counts + info2.counts;
+    info.t = info2.t;
+    info.rtol_clamped |= info2.rtol_clamped;
+    info.switched = Some((Method::Radau, t_switch));
+    Ok(solution(info, status, out, tracker))
+}
+
+/// Run `st` to the end with the driver's outputs and events.
+pub(crate) fn drive<I: Integrator>(
+    mut st: I,
+    opts: &Rk45Options,
+    events: &mut [Event<'_>],
+    method: Method,
+) -> Result<Solution, InputError> {
+    let (t0, t_end) = (st.t(), st.t_bound());
+    if let Some(te) = &opts.t_eval {
+        validate_t_eval(te, t0, t_end)?;
+    }
+    let y0 = st.y().to_vec();
+    let mut out = Output::new(opts, t0, &y0)?;
+    let mut tracker = EventTracker::new(events, t0, &y0);
+    let status = run(&mut st, events, &mut tracker, &mut out);
+    Ok(solution(RunInfo::of(&st, method), status, out, tracker))
 }
 
 fn validate_t_eval(t_eval: &[f64], t0: f64, t_end: f64) -> Result<(), InputError> {
@@ -51,9 +176,14 @@ fn validate_t_eval(t_eval: &[f64], t0: f64, t_end: f64) -> Result<(), InputError
     Ok(())
 }
 
+/// The most coefficients any interpolant has per component.
+const MAX_COEF: usize = 7;
+
 /// The step loop: steps until the end, a terminal event or a failure, which it returns.
-fn run<S: OdeSystem>(
-    st: &mut Stepper<S>,
+/// The interpolant of a step is computed only when needed (dense output, an event's sign
+/// change, a `t_eval` value within the step), as in SciPy (DOP853's costs 3 evaluations).
+fn run<I: Integrator>(
+    st: &mut I,
     events: &mut [Event<'_>],
     tracker: &mut EventTracker,
     out: &mut Output<'_>,
@@ -63,29 +193,28 @@ fn run<S: OdeSystem>(
     if let Some(s) = nan_event(&tracker.g, st.t(), st.t()) {
         return s;
     }
-    let mut q = vec![0.0; 4 * dim]; // interpolant coefficients of the current step
+    let mut q = vec![0.0; MAX_COEF * dim]; // interpolant coefficients of the current step
     let mut y_term = vec![0.0; dim];
-    // The interpolant is needed for dense output, events and t_eval; it is cheap (28·dim flops).
-    let need_q = out.dense.is_some() || !events.is_empty() || out.t_eval.is_some();
     loop {
         let outcome = match st.step() {
             Ok(o) => o,
             Err(s) => return s, // SciPy stores nothing from a failed step
         };
-        if need_q {
-            st.fill_dense_q(&mut q);
+        let kind = st.interpolant();
+        let q = &mut q[..kind.n_coef() * dim];
+        let (t, dir) = (st.t(), st.direction());
+        let mut have_q = false;
+        if out.dense.is_some() {
+            if let Err(s) = st.dense_coefficients(q) {
+                return s;
+            }
+            have_q = true;
+            if let Some(d) = out.dense.as_mut() {
+                d.push(kind, st.t_old(), t - st.t_old(), st.y_old(), q);
+            }
         }
-        let seg = Segment {
-            t_old: st.t_old(),
-            h: st.t() - st.t_old(),
-            y_old: st.y_old(),
-            q: &q,
-        };
-        if let Some(d) = out.dense.as_mut() {
-            d.push_segment(seg.t_old, seg.h, seg.y_old, seg.q);
-        }
-        let terminal = match tracker.step(events, &seg, st.t(), st.y(), st.direction()) {
-            Ok(terminal) => terminal,
+        let active = match tracker.evaluate(events, st.t_old(), t, st.y()) {
+            Ok(active) => active,
             Err(s) => {
                 // Nothing of this step is kept (its state, output or dense segment).
                 if let Some(d) = out.dense.as_mut() {
@@ -94,13 +223,30 @@ fn run<S: OdeSystem>(
                 return s;
             }
         };
+        if !have_q && (active || out.wants_interpolant(t, dir)) {
+            if let Err(s) = st.dense_coefficients(q) {
+                return s;
+            }
+        }
+        let seg = Segment {
+            kind,
+            t_old: st.t_old(),
+            h: t - st.t_old(),
+            y_old: st.y_old(),
+            q,
+        };
+        let terminal = if active {
+            tracker.roots(events, &seg, t, dir)
+        } else {
+            None
+        };
         match terminal {
             Some((event, te)) => {
                 seg.eval(te, &mut y_term);
-                out.record(&seg, te, &y_term, st.direction());
+                out.record(&seg, te, &y_term, dir);
                 return Status::TerminalEvent { event, t: te };
             }
-            None => out.record(&seg, st.t(), st.y(), st.direction()),
+            None => out.record(&seg, t, st.y(), dir),
         }
         if outcome == StepOutcome::Finished {
             return Status::Success;
@@ -108,44 +254,81 @@ fn run<S: OdeSystem>(
     }
 }
 
+/// What a run's `Solution` takes from its integrator(s).
+struct RunInfo {
+    dim: usize,
+    t: f64,
+    counts: Counts,
+    rtol_clamped: bool,
+    stiffness: Option<super::Stiffness>,
+    method: Method,
+    /// `auto`: the method it switched to and when.
+    switched: Option<(Method, f64)>,
+}
+
+impl RunInfo {
+    fn of<I: Integrator>(st: &I, method: Method) -> Self {
+        RunInfo {
+            dim: st.dim(),
+            t: st.t(),
+            counts: st.counts(),
+            rtol_clamped: st.rtol_clamped(),
+            stiffness: st.stiffness(),
+            method,
+            switched: None,
+        }
+    }
+}
+
 /// The run's `Solution`: the outputs, events, counts and the message.
-fn solution<S: OdeSystem>(
-    st: Stepper<S>,
-    status: Status,
-    out: Output<'_>,
-    tracker: EventTracker,
-) -> Solution {
+fn solution(info: RunInfo, status: Status, out: Output<'_>, tracker: EventTracker) -> Solution {
     let t_reached = match &status {
         Status::TerminalEvent { t, .. } | Status::EventNaN { t, .. } => *t,
-        _ => st.t(),
+        _ => info.t,
     };
-    let stiffness = st.stiffness();
+    let stiffness = info.stiffness;
     let mut message = status.describe(t_reached);
-    if let (Some(s), false) = (stiffness, matches!(status, Status::Stiff { .. })) {
-        message.push_str("; ");
-        message.push_str(&s.warning());
+    match info.switched {
+        Some((to, t)) => {
+            message.push_str(&format!(
+                "; switched from RK45 to {to} at t = {} (stiffness detected)",
+                fmt_time(t)
+            ));
+        }
+        None => {
+            if let (Some(s), false) = (stiffness, matches!(status, Status::Stiff { .. })) {
+                message.push_str("; ");
+                message.push_str(&s.warning());
+            }
+        }
     }
+    let c = info.counts;
     Solution {
-        dim: st.dim(),
+        dim: info.dim,
         t: out.t,
         y: out.y,
         t_events: tracker.t_events,
         y_events: tracker.y_events,
-        nfev: st.nfev(),
-        njev: 0,
-        n_accepted: st.n_accepted(),
-        n_rejected: st.n_rejected(),
+        nfev: c.nfev,
+        njev: c.njev,
+        nlu: c.nlu,
+        n_accepted: c.n_accepted,
+        n_rejected: c.n_rejected,
         message,
         status,
         t_reached,
-        rtol_clamped: st.rtol_clamped(),
+        rtol_clamped: info.rtol_clamped,
         dense: out.dense,
         stiffness,
+        method: info.method,
+        switched_to: info.switched.map(|s| s.0),
+        t_switch: info.switched.map(|s| s.1),
     }
 }
 
-/// The accepted step from `t_old` over `h`: its start and interpolant coefficients.
+/// The accepted step from `t_old` over `h`: its start and interpolant.
 struct Segment<'s> {
+    kind: Interpolant,
     t_old: f64,
     h: f64,
     y_old: &'s [f64],
@@ -156,7 +339,8 @@ impl Segment<'_> {
     /// The interpolant at `t` into `out`.
     #[inline]
     fn eval(&self, t: f64, out: &mut [f64]) {
-        eval_segment(self.t_old, self.h, self.y_old, self.q, t, out);
+        self.kind
+            .eval(self.t_old, self.h, self.y_old, self.q, t, out);
     }
 }
 
@@ -198,26 +382,43 @@ impl EventTracker {
         }
     }
 
-    /// After the step `seg` to `(t, y)`: records the roots of the events in it, up to the
-    /// first that terminates the run, and returns that one `(event, time)`. An event that
-    /// is NaN at `t` is the run's end (`Err`); the step's roots are not looked for then.
-    fn step(
+    /// After the step from `t_old` to `(t, y)`: the events' new values, and whether some
+    /// changed sign (then [`EventTracker::roots`] must follow). An event that is NaN at `t`
+    /// is the run's end (`Err`).
+    fn evaluate(
         &mut self,
         events: &mut [Event<'_>],
-        seg: &Segment<'_>,
+        t_old: f64,
         t: f64,
         y: &[f64],
-        dir: f64,
-    ) -> Result<Option<(usize, f64)>, Status> {
+    ) -> Result<bool, Status> {
         if events.is_empty() {
-            return Ok(None);
+            return Ok(false);
         }
         for (e, gn) in events.iter_mut().zip(self.g_new.iter_mut()) {
             *gn = (e.func)(t, y);
         }
-        if let Some(s) = nan_event(&self.g_new, seg.t_old, t) {
+        if let Some(s) = nan_event(&self.g_new, t_old, t) {
             return Err(s);
         }
+        let active = (0..events.len())
+            .any(|i| events::is_active(self.g[i], self.g_new[i], events[i].direction));
+        if !active {
+            std::mem::swap(&mut self.g, &mut self.g_new);
+        }
+        Ok(active)
+    }
+
+    /// After [`EventTracker::evaluate`] found sign changes over the step `seg` ending at `t`:
+    /// records the roots of the events in it, up to the first that terminates the run, and
+    /// returns that one `(event, time)`.
+    fn roots(
+        &mut self,
+        events: &mut [Event<'_>],
+        seg: &Segment<'_>,
+        t: f64,
+        dir: f64,
+    ) -> Option<(usize, f64)> {
         self.find_roots(events, seg, t);
         let terminal = self.keep_roots_to_terminal(events, dir);
         for &(i, te) in self.roots.iter() {
@@ -226,7 +427,7 @@ impl EventTracker {
             self.y_events[i].extend_from_slice(&self.ybuf);
         }
         std::mem::swap(&mut self.g, &mut self.g_new);
-        Ok(terminal.then(|| *self.roots.last().expect("non-empty")))
+        terminal.then(|| *self.roots.last().expect("non-empty"))
     }
 
     /// The events whose sign changed over the step (counted), each with its root.
@@ -310,6 +511,16 @@ impl<'o> Output<'o> {
             }
         }
         Ok(out)
+    }
+
+    /// Whether recording a step ending at `t` evaluates the interpolant (a `t_eval` value
+    /// up to `t`).
+    #[inline]
+    fn wants_interpolant(&self, t: f64, dir: f64) -> bool {
+        match self.t_eval {
+            None => false,
+            Some(te) => self.next < te.len() && dir * (te[self.next] - t) <= 0.0,
+        }
     }
 
     /// The step `seg`, ending at `(t, y)` (the step's end, or a terminal event's).

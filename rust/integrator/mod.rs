@@ -1,11 +1,15 @@
-//! Adaptive Dormand–Prince 5(4) integrator that reproduces SciPy's
-//! `solve_ivp(method="RK45")` step for step.
+//! Integration methods behind one driver, SciPy's `solve_ivp` loop: adaptive Dormand–Prince
+//! 5(4) (`RK45`) and 8(5,3) (`DOP853`) that reproduce SciPy step for step, fixed-step `RK4`
+//! and semi-implicit `Euler`, and `auto` (RK45, then Radau once stiff). See docs/integrators.md.
 //!
-//! * `stepper.rs` – Butcher tableau, error norm, step-size control, [`Stepper`].
-//! * `dense.rs`   – SciPy's quartic interpolant and the piecewise [`DenseOutput`].
-//! * `events.rs`  – [`Event`] functions and SciPy's `brentq` root finder.
-//! * `driver.rs`  – the [`rk45`] driver (SciPy's `solve_ivp` loop): outputs and events.
-//! * this file    – the public types.
+//! * `method.rs`     – the [`Integrator`] trait every method implements, [`Method`] names.
+//! * `stepper.rs`    – RK45: Butcher tableau, error norm, step-size control, [`Stepper`].
+//! * `dop853.rs`     – DOP853 ([`Dop853`]), its tableau in `dop853_tableau.rs`.
+//! * `fixed_step.rs` – the fixed-step methods ([`FixedStep`] with [`Rk4`] or [`Euler`]).
+//! * `dense.rs`      – the interpolants ([`Interpolant`]) and the piecewise [`DenseOutput`].
+//! * `events.rs`     – [`Event`] functions and SciPy's `brentq` root finder.
+//! * `driver.rs`     – the generic driver ([`solve`], [`rk45`]): outputs, events, `auto`.
+//! * this file       – the public types.
 //!
 //! Stiffness detection ([`StiffnessCheck`], Hairer's DOPRI5 test) only observes the accepted
 //! steps: with `Off` or `Warn` the steps are exactly SciPy's; `Stop` ends the run early.
@@ -17,13 +21,22 @@
 //! SciPy's own do between CPUs); values at fixed times (t_end, t_eval, events) agree to ~1e-14.
 
 mod dense;
+mod dop853;
+mod dop853_tableau;
 mod driver;
 mod events;
+mod fixed_step;
+mod method;
 mod stepper;
 
-pub use dense::{eval_segment, DenseOutput};
-pub use driver::rk45;
+pub use dense::{eval_segment, DenseOutput, Interpolant};
+pub use dop853::Dop853;
+#[cfg(test)]
+pub(crate) use driver::auto as driver_auto;
+pub use driver::{rk45, solve};
 pub use events::{Event, EventDirection, EventFn};
+pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
+pub use method::{radau_available, Counts, Integrator, Method};
 pub use stepper::{StepOutcome, Stepper};
 
 use thiserror::Error;
@@ -42,6 +55,24 @@ pub trait OdeSystem {
     fn project(&mut self, _y: &mut [f64]) -> Result<bool, String> {
         Ok(false)
     }
+    /// Analytic Jacobian `∂f/∂y` at `(t, y)`, row-major `dim × dim` into `jac`; returns
+    /// `Ok(true)` when it filled it. Default: not provided (`Ok(false)`; implicit methods
+    /// then use finite differences).
+    fn jacobian(&mut self, _t: f64, _y: &[f64], _jac: &mut [f64]) -> Result<bool, String> {
+        Ok(false)
+    }
+    /// `Some(nq)` when the state is `y = [q; v]` with `q̇` a function of `(q, v)` only and
+    /// `v̇` the rest (a mechanical system): the semi-implicit Euler then updates `v` first
+    /// and `q` with the new `v`. Default `None` (Euler is then explicit Euler).
+    fn split(&self) -> Option<usize> {
+        None
+    }
+    /// With [`OdeSystem::split`]: `q̇` at `y = [q; v]` into `qdot` (length `nq`), without
+    /// the accelerations; returns `Ok(true)` when provided. Default `Ok(false)`: Euler then
+    /// takes `q̇` from a full `rhs` call (counted in `nfev`).
+    fn position_rate(&mut self, _y: &[f64], _qdot: &mut [f64]) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -54,6 +85,15 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
     }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        (**self).jacobian(t, y, jac)
+    }
+    fn split(&self) -> Option<usize> {
+        (**self).split()
+    }
+    fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
+        (**self).position_rate(y, qdot)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
@@ -65,6 +105,15 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     }
     fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        (**self).jacobian(t, y, jac)
+    }
+    fn split(&self) -> Option<usize> {
+        (**self).split()
+    }
+    fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
+        (**self).position_rate(y, qdot)
     }
 }
 
@@ -217,9 +266,15 @@ pub fn fmt_time(t: f64) -> String {
     }
 }
 
-/// Integration options. Defaults equal SciPy's RK45 defaults.
+/// Integration options (of every method; the name is historical). Defaults equal SciPy's
+/// RK45 defaults.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rk45Options {
+    /// The method [`solve`] uses (default RK45; [`rk45`] ignores it).
+    pub method: Method,
+    /// Fixed step of `RK4` and `Euler` (required by them, refused by the others). The last
+    /// step is shortened to land on `t_end` exactly.
+    pub dt: Option<f64>,
     /// Relative tolerance (default 1e-3). Values below `100 * f64::EPSILON` are raised to it
     /// (as SciPy does) and `Solution::rtol_clamped` / `Stepper::rtol_clamped` is set.
     pub rtol: Tol,
@@ -246,6 +301,8 @@ pub struct Rk45Options {
 impl Default for Rk45Options {
     fn default() -> Self {
         Self {
+            method: Method::Rk45,
+            dt: None,
             rtol: Tol::Scalar(1e-3),
             atol: Tol::Scalar(1e-6),
             first_step: None,
@@ -311,6 +368,20 @@ pub enum InputError {
     },
     #[error("t_eval: values must be strictly {order} (direction of integration); index {index} breaks it")]
     TEvalNotSorted { index: usize, order: &'static str },
+    #[error(
+        "method: expected one of 'RK45', 'DOP853', 'Radau', 'RK4', 'Euler' or 'auto', got '{0}'"
+    )]
+    UnknownMethod(String),
+    #[error("method: {0} is not available in this build (the Radau solver is not built in yet); use 'RK45', 'DOP853', 'RK4' or 'Euler'")]
+    MethodUnavailable(&'static str),
+    #[error("dt: method '{method}' takes a fixed step size dt > 0, got none")]
+    DtMissing { method: &'static str },
+    #[error("controller: method '{method}' has SciPy's controller only ('standard')")]
+    ControllerUnsupported { method: &'static str },
+    #[error("dt: must be positive and finite, got {0}")]
+    DtInvalid(f64),
+    #[error("dt: only the fixed-step methods 'RK4' and 'Euler' take dt; method '{method}' chooses its own steps (got dt = {dt}; use first_step/max_step instead)")]
+    DtNotUsed { method: &'static str, dt: f64 },
 }
 
 impl InputError {
@@ -327,10 +398,16 @@ impl InputError {
             InputError::FirstStepNotPositive(_) | InputError::FirstStepBeyondSpan { .. } => {
                 "first_step"
             }
-            InputError::Controller { .. } => "controller",
+            InputError::Controller { .. } | InputError::ControllerUnsupported { .. } => {
+                "controller"
+            }
             InputError::TEvalOutsideSpan { .. }
             | InputError::TEvalNotSorted { .. }
             | InputError::OutputTooLarge { .. } => "t_eval",
+            InputError::UnknownMethod(_) | InputError::MethodUnavailable(_) => "method",
+            InputError::DtMissing { .. }
+            | InputError::DtInvalid(_)
+            | InputError::DtNotUsed { .. } => "dt",
         }
     }
 }
@@ -459,8 +536,10 @@ pub struct Solution {
     pub y_events: Vec<Vec<f64>>,
     /// Right-hand-side evaluations (SciPy's count: events do not call it).
     pub nfev: usize,
-    /// Always 0 (explicit method).
+    /// Jacobian evaluations (0 for the explicit methods).
     pub njev: usize,
+    /// LU decompositions (0 for the explicit methods).
+    pub nlu: usize,
     pub n_accepted: usize,
     pub n_rejected: usize,
     pub status: Status,
@@ -474,6 +553,11 @@ pub struct Solution {
     pub dense: Option<DenseOutput>,
     /// First stiffness detection (`None` if none, or if the check was off).
     pub stiffness: Option<Stiffness>,
+    /// The method asked for.
+    pub method: Method,
+    /// `auto`: the method it switched to (Radau), if it did, and when.
+    pub switched_to: Option<Method>,
+    pub t_switch: Option<f64>,
 }
 
 impl Solution {

@@ -3,6 +3,7 @@
 //! (scipy/integrate/_ivp/rk.py, common.py). Arithmetic is kept in NumPy's order so the
 //! accept/reject decisions, and hence the step counts, match SciPy.
 
+use super::method::{Counts, Integrator};
 use super::{
     dense, Controller, InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, Stiffness,
     StiffnessCheck, Tol, NONSTIFF_RESET, STIFF_H_LAMBDA, STIFF_STEPS,
@@ -53,6 +54,8 @@ pub(crate) const E: [f64; N_STAGES + 1] = [
 pub(crate) const SAFETY: f64 = 0.9;
 pub(crate) const MIN_FACTOR: f64 = 0.2;
 pub(crate) const MAX_FACTOR: f64 = 10.0;
+/// SciPy's `RK45.error_estimator_order`.
+const ERROR_ESTIMATOR_ORDER: u32 = 4;
 /// -1 / (error_estimator_order + 1), evaluated as SciPy does.
 const ERROR_EXPONENT: f64 = -1.0 / 5.0;
 /// Floor of the previous error in the PI controller (Hairer's `facold` start value).
@@ -68,7 +71,7 @@ pub enum StepOutcome {
 }
 
 #[derive(Debug, Clone, PartialEq)]
-enum State {
+pub(crate) enum State {
     Uninitialised,
     Running,
     Finished,
@@ -124,7 +127,11 @@ pub struct Stepper<S: OdeSystem> {
     stop: Option<Status>,
 }
 
-fn expand_tol(tol: &Tol, name: &'static str, dim: usize) -> Result<Vec<f64>, InputError> {
+pub(crate) fn expand_tol(
+    tol: &Tol,
+    name: &'static str,
+    dim: usize,
+) -> Result<Vec<f64>, InputError> {
     let v = match tol {
         Tol::Scalar(x) => vec![*x; dim],
         Tol::PerComponent(v) if v.len() == dim => v.clone(),
@@ -147,13 +154,13 @@ fn expand_tol(tol: &Tol, name: &'static str, dim: usize) -> Result<Vec<f64>, Inp
 }
 
 /// RMS norm, as `np.linalg.norm(x) / x.size ** 0.5`.
-fn rms_norm(it: impl Iterator<Item = f64>, n: usize) -> f64 {
+pub(crate) fn rms_norm(it: impl Iterator<Item = f64>, n: usize) -> f64 {
     let sq: f64 = it.map(|v| v * v).sum();
     sq.sqrt() / (n as f64).sqrt()
 }
 
 /// `np.nextafter(x, dir * inf)` for finite `x`.
-fn next_toward(x: f64, dir: f64) -> f64 {
+pub(crate) fn next_toward(x: f64, dir: f64) -> f64 {
     if x == 0.0 {
         let tiny = f64::from_bits(1);
         return if dir > 0.0 { tiny } else { -tiny };
@@ -168,7 +175,7 @@ fn next_toward(x: f64, dir: f64) -> f64 {
 }
 
 /// One rhs evaluation with the NonFinite / RhsError checks.
-fn call_rhs<S: OdeSystem>(
+pub(crate) fn call_rhs<S: OdeSystem>(
     sys: &mut S,
     nfev: &mut usize,
     t_reached: f64,
@@ -197,7 +204,7 @@ fn call_rhs<S: OdeSystem>(
 /// always are: `0 · v` is ±0 for a finite `v` and NaN for ±inf or NaN, NaN survives the sums,
 /// and four independent sums vectorise.
 #[inline]
-fn all_finite(y: &[f64]) -> bool {
+pub(crate) fn all_finite(y: &[f64]) -> bool {
     let mut acc = [0.0f64; 4];
     let mut chunks = y.chunks_exact(4);
     for c in &mut chunks {
@@ -209,7 +216,7 @@ fn all_finite(y: &[f64]) -> bool {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + rest == 0.0
 }
 
-fn check_state(y: &[f64], t_reached: f64, at: f64) -> Result<(), Status> {
+pub(crate) fn check_state(y: &[f64], t_reached: f64, at: f64) -> Result<(), Status> {
     if all_finite(y) {
         Ok(())
     } else {
@@ -223,7 +230,7 @@ fn check_state(y: &[f64], t_reached: f64, at: f64) -> Result<(), Status> {
 
 /// The first `S` entries of a tableau row.
 #[inline(always)]
-fn first<const S: usize>(row: &[f64; 5]) -> [f64; S] {
+pub(crate) fn first<const S: usize>(row: &[f64; 5]) -> [f64; S] {
     std::array::from_fn(|j| row[j])
 }
 
@@ -232,7 +239,7 @@ crate::cpu::multiversion! {
     /// entry, the products summed left to right with every coefficient (zeros too), which is
     /// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the
     /// CPU has it (`crate::cpu`; same arithmetic, packed lanes).
-    fn combine / combine_avx2 / combine_baseline [const S: usize] (
+    pub(crate) fn combine / combine_avx2 / combine_baseline [const S: usize] (
         out: &mut [f64],
         y: &[f64],
         k: &[f64],
@@ -290,8 +297,57 @@ fn scaled_errors_body(
     }
 }
 
+/// The start of a run: `f0 = f(t0, y0)`.
+pub(crate) struct Start<'a> {
+    pub t0: f64,
+    pub y0: &'a [f64],
+    pub f0: &'a [f64],
+    pub t_bound: f64,
+    pub direction: f64,
+}
+
+/// SciPy `select_initial_step` (Hairer, Nørsett & Wanner, Sec. II.4) for an error estimator
+/// of order `order`; `scratch` = three buffers of `dim` (scale, y1, f1). One rhs call.
+pub(crate) fn select_initial_step<S: OdeSystem>(
+    sys: &mut S,
+    nfev: &mut usize,
+    st: Start<'_>,
+    (atol, rtol): (&[f64], &[f64]),
+    max_step: f64,
+    order: u32,
+    scratch: (&mut [f64], &mut [f64], &mut [f64]),
+) -> Result<f64, Status> {
+    let (scale, y1, f1) = scratch;
+    let (t0, dir, y0, f0) = (st.t0, st.direction, st.y0, st.f0);
+    let n = y0.len();
+    let interval_length = (st.t_bound - t0).abs();
+    for i in 0..n {
+        scale[i] = atol[i] + y0[i].abs() * rtol[i];
+    }
+    let d0 = rms_norm((0..n).map(|i| y0[i] / scale[i]), n);
+    let d1 = rms_norm((0..n).map(|i| f0[i] / scale[i]), n);
+    let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
+        1e-6
+    } else {
+        0.01 * d0 / d1
+    };
+    h0 = h0.min(interval_length);
+    let hd = h0 * dir;
+    for i in 0..n {
+        y1[i] = y0[i] + hd * f0[i];
+    }
+    call_rhs(sys, nfev, t0, t0 + h0 * dir, y1, f1)?;
+    let d2 = rms_norm((0..n).map(|i| (f1[i] - f0[i]) / scale[i]), n) / h0;
+    let h1 = if d1 <= 1e-15 && d2 <= 1e-15 {
+        (1e-6f64).max(h0 * 1e-3)
+    } else {
+        (0.01 / if d1 >= d2 { d1 } else { d2 }).powf(1.0 / (order + 1) as f64)
+    };
+    Ok((100.0 * h0).min(h1).min(interval_length).min(max_step))
+}
+
 /// The initial state and the interval: `dim` finite components, two different finite times.
-fn check_start(dim: usize, y0: &[f64], t0: f64, t_bound: f64) -> Result<(), InputError> {
+pub(crate) fn check_start(dim: usize, y0: &[f64], t0: f64, t_bound: f64) -> Result<(), InputError> {
     if dim == 0 {
         return Err(InputError::EmptyState);
     }
@@ -314,7 +370,10 @@ fn check_start(dim: usize, y0: &[f64], t0: f64, t_bound: f64) -> Result<(), Inpu
 }
 
 /// `rtol` and `atol` per component, and whether some rtol was raised to `100 EPS`.
-fn tolerances(opts: &Rk45Options, dim: usize) -> Result<(Vec<f64>, Vec<f64>, bool), InputError> {
+pub(crate) fn tolerances(
+    opts: &Rk45Options,
+    dim: usize,
+) -> Result<(Vec<f64>, Vec<f64>, bool), InputError> {
     let mut rtol = expand_tol(&opts.rtol, "rtol", dim)?;
     let atol = expand_tol(&opts.atol, "atol", dim)?;
     // SciPy: rtol = max(rtol, 100 EPS) with a warning; we set a flag instead.
@@ -328,7 +387,7 @@ fn tolerances(opts: &Rk45Options, dim: usize) -> Result<(Vec<f64>, Vec<f64>, boo
 
 /// `max_step`, `max_steps`, `first_step` (within the interval's length `span`) and the
 /// controller's parameters.
-fn check_step_options(opts: &Rk45Options, span: f64) -> Result<(), InputError> {
+pub(crate) fn check_step_options(opts: &Rk45Options, span: f64) -> Result<(), InputError> {
     if opts.max_step.is_nan() || opts.max_step <= 0.0 {
         return Err(InputError::MaxStep(opts.max_step));
     }
@@ -432,42 +491,22 @@ impl<S: OdeSystem> Stepper<S> {
 
     /// SciPy `select_initial_step` (Hairer, Nørsett & Wanner, Sec. II.4), order 4.
     fn select_initial_step(&mut self) -> Result<f64, Status> {
-        let (t0, dir, n) = (self.t, self.direction, self.dim);
-        let interval_length = (self.t_bound - t0).abs();
-        // scale = atol + |y0| rtol, kept in y_new as scratch.
-        for i in 0..n {
-            self.y_new[i] = self.atol[i] + self.y[i].abs() * self.rtol[i];
-        }
-        let scale = &self.y_new;
-        let d0 = rms_norm((0..n).map(|i| self.y[i] / scale[i]), n);
-        let d1 = rms_norm((0..n).map(|i| self.f[i] / scale[i]), n);
-        let mut h0 = if d0 < 1e-5 || d1 < 1e-5 {
-            1e-6
-        } else {
-            0.01 * d0 / d1
-        };
-        h0 = h0.min(interval_length);
-        let hd = h0 * dir;
-        for i in 0..n {
-            self.y_stage[i] = self.y[i] + hd * self.f[i];
-        }
-        let f1 = &mut self.k[n..2 * n]; // scratch
-        call_rhs(
+        let n = self.dim;
+        select_initial_step(
             &mut self.sys,
             &mut self.nfev,
-            t0,
-            t0 + h0 * dir,
-            &self.y_stage,
-            f1,
-        )?;
-        let scale = &self.y_new;
-        let d2 = rms_norm((0..n).map(|i| (f1[i] - self.f[i]) / scale[i]), n) / h0;
-        let h1 = if d1 <= 1e-15 && d2 <= 1e-15 {
-            (1e-6f64).max(h0 * 1e-3)
-        } else {
-            (0.01 / if d1 >= d2 { d1 } else { d2 }).powf(1.0 / 5.0)
-        };
-        Ok((100.0 * h0).min(h1).min(interval_length).min(self.max_step))
+            Start {
+                t0: self.t,
+                y0: &self.y,
+                f0: &self.f,
+                t_bound: self.t_bound,
+                direction: self.direction,
+            },
+            (&self.atol, &self.rtol),
+            self.max_step,
+            ERROR_ESTIMATOR_ORDER,
+            (&mut self.y_new, &mut self.y_stage, &mut self.k[n..2 * n]),
+        )
     }
 
     /// SciPy `rk_step`: the six stages, `y_new` and `k[6] = f(t + h, y_new)`.
@@ -805,6 +844,66 @@ impl<S: OdeSystem> Stepper<S> {
         &mut self.sys
     }
     pub fn into_system(self) -> S {
+        self.sys
+    }
+}
+
+impl<S: OdeSystem> Integrator for Stepper<S> {
+    type System = S;
+    #[inline]
+    fn step(&mut self) -> Result<StepOutcome, Status> {
+        Stepper::step(self)
+    }
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn t(&self) -> f64 {
+        self.t
+    }
+    fn t_old(&self) -> f64 {
+        self.t_old
+    }
+    fn t_bound(&self) -> f64 {
+        self.t_bound
+    }
+    fn direction(&self) -> f64 {
+        self.direction
+    }
+    fn y(&self) -> &[f64] {
+        &self.y
+    }
+    fn y_old(&self) -> &[f64] {
+        &self.y_old
+    }
+    fn counts(&self) -> Counts {
+        Counts {
+            nfev: self.nfev,
+            njev: 0,
+            nlu: 0,
+            n_accepted: self.n_accepted,
+            n_rejected: self.n_rejected,
+        }
+    }
+    fn stiffness(&self) -> Option<Stiffness> {
+        self.stiffness
+    }
+    fn rtol_clamped(&self) -> bool {
+        self.rtol_clamped
+    }
+    fn h_next(&self) -> f64 {
+        self.h_abs
+    }
+    fn interpolant(&self) -> dense::Interpolant {
+        dense::Interpolant::Rk45
+    }
+    fn dense_coefficients(&mut self, q: &mut [f64]) -> Result<(), Status> {
+        self.fill_dense_q(q);
+        Ok(())
+    }
+    fn system_mut(&mut self) -> &mut S {
+        &mut self.sys
+    }
+    fn into_system(self) -> S {
         self.sys
     }
 }

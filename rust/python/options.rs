@@ -69,6 +69,43 @@ pub(super) fn step_args(
     })
 }
 
+/// `method` (a name, case-insensitive; `None`: not given) and the fixed step `dt` into
+/// `requested`.
+pub(super) fn method_args(
+    py: Python<'_>,
+    requested: &mut Requested,
+    method: Option<&str>,
+    dt: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    if let Some(name) = method {
+        requested.method = Some(integrator::Method::parse(name).ok_or_else(|| {
+            invalid(
+                py,
+                "method",
+                format!("one of {}", integrator::Method::NAMES),
+                format!("'{name}'"),
+            )
+        })?);
+    }
+    requested.dt = opt_real(dt, "dt")?;
+    Ok(())
+}
+
+/// The run's method, evaluation counts and switch (`auto`) as result entries.
+pub(super) fn set_method(
+    d: &Bound<'_, PyDict>,
+    method: integrator::Method,
+    counts: (usize, usize),
+    switched_to: Option<integrator::Method>,
+    t_switch: Option<f64>,
+) -> PyResult<()> {
+    d.set_item("method", method.name())?;
+    d.set_item("njev", counts.0)?;
+    d.set_item("nlu", counts.1)?;
+    d.set_item("switched_to", switched_to.map(|m| m.name()))?;
+    d.set_item("t_switch", t_switch)
+}
+
 /// The caller's other integration arguments (common to `rk45` and `simulate`): the
 /// tolerances into `requested` (a scene's may stand in for them), the rest into the options
 /// no scene sets. The step limits come from `step_args`; `Requested` resolves them all.

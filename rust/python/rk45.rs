@@ -1,4 +1,4 @@
-//! `rk45`: the generic Dormand–Prince 5(4) on a Python right-hand side.
+//! `rk45` (`solve_ivp`): our integrators (RK45 by default) on a Python right-hand side.
 use std::sync::Mutex;
 
 use numpy::PyArray1;
@@ -10,14 +10,14 @@ use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
-use super::options::{options, set_outcome, step_args, t_span_arg};
+use super::options::{method_args, options, set_method, set_outcome, step_args, t_span_arg};
 use crate::integrator::{self, Event, FnSystem, OdeSystem};
 use crate::scene::Settings;
 
-/// Generic Dormand–Prince 5(4) on a Python right-hand side `fun(t, y) -> array`;
-/// step for step SciPy's `solve_ivp(method="RK45")`.
+/// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
+/// (default) and "DOP853" step for step SciPy's `solve_ivp`, "RK4"/"Euler" at the fixed `dt`.
 #[pyfunction]
-#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn"))]
+#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn", method=None, dt=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn rk45<'py>(
     py: Python<'py>,
@@ -34,6 +34,8 @@ pub fn rk45<'py>(
     dense_output: bool,
     controller: &str,
     stiffness: &str,
+    method: Option<&str>,
+    dt: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !fun.is_callable() {
         return Err(invalid(
@@ -47,6 +49,7 @@ pub fn rk45<'py>(
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
     let mut requested = step_args(first_step, max_step, max_steps)?;
+    method_args(py, &mut requested, method, dt)?;
     let base = options(
         py,
         dim,
@@ -69,7 +72,7 @@ pub fn rk45<'py>(
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let sys = python_system(py, fun, dim, &rhs_failure);
     let sol =
-        integrator::rk45(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
+        integrator::solve(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
     drop(evs);
     // An exception from `fun` or an event (Ctrl-C included) is re-raised by
     // `pointmass_dyn.rk45` with the solution computed so far attached.
@@ -153,8 +156,13 @@ fn solution_dict<'py>(
     d.set_item("t_events", if with_events { te.into_any() } else { none() })?;
     d.set_item("y_events", if with_events { ye.into_any() } else { none() })?;
     d.set_item("nfev", sol.nfev)?;
-    d.set_item("njev", 0)?;
-    d.set_item("nlu", 0)?;
+    set_method(
+        &d,
+        sol.method,
+        (sol.njev, sol.nlu),
+        sol.switched_to,
+        sol.t_switch,
+    )?;
     set_outcome(
         &d,
         &sol.status,

@@ -199,6 +199,16 @@ impl PyScene {
     fn first_step(&self) -> Option<f64> {
         self.inner.settings.first_step
     }
+    /// Integration method of the scene's `[simulate]` table (`None`: not set).
+    #[getter]
+    fn method(&self) -> Option<&'static str> {
+        self.inner.settings.method.map(|m| m.name())
+    }
+    /// Fixed step of the scene's `[simulate]` table (RK4, Euler).
+    #[getter]
+    fn dt(&self) -> Option<f64> {
+        self.inner.settings.dt
+    }
     /// Effect families the scene switches off (`None`: the scene says nothing).
     #[getter]
     fn disable(&self) -> Option<Vec<&'static str>> {

@@ -8,7 +8,7 @@ use super::convert::{real, to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
-use super::options::{given, options, set_outcome, step_args, t_span_arg};
+use super::options::{given, method_args, options, set_method, set_outcome, step_args, t_span_arg};
 use super::scene::{disable_arg, PyScene};
 use super::signals::Watch;
 use crate::integrator::Event;
@@ -17,7 +17,7 @@ use crate::simulate::{simulate, Dynamics, Progress, Record, StateEvent, Trajecto
 
 /// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
-#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None, disable=None, power=false, stiffness="warn", progress_interval=None))]
+#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None, disable=None, power=false, stiffness="warn", progress_interval=None, method=None, dt=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_scene<'py>(
     py: Python<'py>,
@@ -37,10 +37,13 @@ pub fn simulate_scene<'py>(
     power: bool,
     stiffness: &str,
     progress_interval: Option<f64>,
+    method: Option<&str>,
+    dt: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
     let (nq, nv) = (s.model.nq, s.model.nv);
     let mut requested = step_args(first_step, max_step, max_steps)?;
+    method_args(py, &mut requested, method, dt)?;
     let mut watch = watch_arg(py, progress_interval)?;
     requested.disable = disable_arg(py, disable)?;
     requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
@@ -199,6 +202,13 @@ fn trajectory_dict<'py>(
     d.set_item("q_events", qe)?;
     d.set_item("v_events", ve)?;
     d.set_item("nfev", traj.nfev)?;
+    set_method(
+        &d,
+        traj.method,
+        (traj.njev, traj.nlu),
+        traj.switched_to,
+        traj.t_switch,
+    )?;
     set_outcome(
         &d,
         &traj.status,
@@ -325,7 +335,7 @@ pub fn energies<'py>(
 /// run that could not start (bad input) has its exception in `"error"`. Every run is
 /// exactly the `simulate` call it stands for.
 #[pyfunction]
-#[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, disable=None, threads=None, progress=None))]
+#[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, disable=None, threads=None, progress=None, method=None, dt=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_batch<'py>(
     py: Python<'py>,
@@ -344,6 +354,8 @@ pub fn simulate_batch<'py>(
     disable: Option<&Bound<'_, PyAny>>,
     threads: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
+    method: Option<&str>,
+    dt: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     use crate::simulate::batch::{run_batch, Control, Run};
     if scenes.is_empty() {
@@ -400,6 +412,7 @@ pub fn simulate_batch<'py>(
     let mut resolved = Vec::with_capacity(scenes.len());
     for s in &scenes {
         let mut requested = step_args(first_step, max_step, max_steps)?;
+        method_args(py, &mut requested, method, dt)?;
         requested.disable = disable_arg(py, disable)?;
         requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
         let dim = s.model.nq + s.model.nv;

@@ -25,6 +25,10 @@ pub struct Settings {
     pub first_step: Option<f64>,
     /// Effect families to leave out (`[simulate] disable = [...]`).
     pub disable: Option<Disabled>,
+    /// Integration method (`[simulate] method = "DOP853"`).
+    pub method: Option<crate::integrator::Method>,
+    /// Fixed step of the methods RK4 and Euler (`[simulate] dt = 1e-3`).
+    pub dt: Option<f64>,
 }
 
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
@@ -129,6 +133,10 @@ struct SimulateFile {
     first_step: Option<f64>,
     /// Effect families switched off without editing the scene ("gravity", "springs", ...).
     disable: Option<Vec<String>>,
+    /// "RK45" (default), "DOP853", "Radau", "RK4", "Euler" or "auto".
+    method: Option<String>,
+    /// Fixed step of RK4 and Euler.
+    dt: Option<f64>,
 }
 
 impl Scene {
@@ -373,6 +381,7 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
         ("atol", s.atol),
         ("max_step", s.max_step),
         ("first_step", s.first_step),
+        ("dt", s.dt),
     ] {
         if let Some(x) = x {
             if x <= 0.0 || !x.is_finite() {
@@ -389,7 +398,21 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
         }
         None => None,
     };
+    let method = match &s.method {
+        Some(name) => Some(crate::integrator::Method::parse(name).ok_or_else(|| {
+            ctx.err(
+                "simulate.method",
+                format!(
+                    "expected one of {}, got '{name}'",
+                    crate::integrator::Method::NAMES
+                ),
+            )
+        })?),
+        None => None,
+    };
     Ok(Settings {
+        method,
+        dt: s.dt,
         t_span,
         rtol: s.rtol,
         atol: s.atol,

@@ -176,6 +176,18 @@ impl OdeSystem for Dynamics<'_> {
         self.accelerations(t, q, v, vdot)
     }
 
+    /// `y = [q; v]`: the semi-implicit Euler updates `v`, then `q` with the new `v`.
+    fn split(&self) -> Option<usize> {
+        Some(self.model.nq)
+    }
+
+    /// `q̇(q, v)` alone (no dynamics), for the semi-implicit Euler.
+    fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> std::result::Result<bool, String> {
+        let (q, v) = y.split_at(self.model.nq);
+        self.model.velocity_to_qdot(q, v, qdot);
+        Ok(true)
+    }
+
     /// Unit quaternions (the right-hand side normalises them too, so FSAL stays valid);
     /// with loops, the state back onto the position and velocity manifolds.
     fn project(&mut self, y: &mut [f64]) -> std::result::Result<bool, String> {

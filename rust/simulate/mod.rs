@@ -1,5 +1,6 @@
 //! The simulate loop, entirely in Rust: state `y = [q; v]`, `q̇` from `v`, `v̇` from the
-//! recursive forward dynamics with the scene's declared effects, integrated by our RK45.
+//! recursive forward dynamics with the scene's declared effects, integrated by the method of
+//! the run's options (RK45 by default; see `integrator::Method`).
 //!
 //! The right-hand side asks the effects for joint forces and link wrenches only when the
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
@@ -59,8 +60,14 @@ pub struct Trajectory {
     /// Per event, row-major states `[q; v]` at the event times.
     pub y_events: Vec<Vec<f64>>,
     pub nfev: usize,
+    pub njev: usize,
+    pub nlu: usize,
     pub n_accepted: usize,
     pub n_rejected: usize,
+    /// The method asked for, and for `auto` the one it switched to and when.
+    pub method: integrator::Method,
+    pub switched_to: Option<integrator::Method>,
+    pub t_switch: Option<f64>,
     pub status: Status,
     pub message: String,
     pub t_reached: f64,
@@ -101,7 +108,7 @@ pub fn simulate(
     let guarded = push_euler_guards(model, &mut events);
     sys.progress = progress;
     let mut sol =
-        integrator::rk45(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
+        integrator::solve(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
     drop(events);
     report_euler_singularity(model, &guarded, n_user, &mut sol);
     sol.t_events.truncate(n_user);
@@ -137,6 +144,11 @@ pub fn simulate(
         t_events: sol.t_events,
         y_events: sol.y_events,
         nfev: sol.nfev,
+        njev: sol.njev,
+        nlu: sol.nlu,
+        method: sol.method,
+        switched_to: sol.switched_to,
+        t_switch: sol.t_switch,
         n_accepted: sol.n_accepted,
         n_rejected: sol.n_rejected,
         message: sol.message,

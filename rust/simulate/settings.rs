@@ -16,6 +16,8 @@ pub struct Requested {
     pub max_step: Option<f64>,
     pub max_steps: Option<usize>,
     pub disable: Option<Disabled>,
+    pub method: Option<crate::integrator::Method>,
+    pub dt: Option<f64>,
 }
 
 /// The settings a run uses.
@@ -49,6 +51,7 @@ impl Requested {
 
     /// `base` with the tolerances and step limits resolved (all but `t_span` and `disable`).
     pub fn options(self, scene: &Settings, base: Rk45Options) -> Rk45Options {
+        let method = self.method.or(scene.method).unwrap_or(base.method);
         Rk45Options {
             rtol: self
                 .rtol
@@ -61,6 +64,13 @@ impl Requested {
             first_step: self.first_step.or(scene.first_step).or(base.first_step),
             max_step: self.max_step.or(scene.max_step).unwrap_or(base.max_step),
             max_steps: self.max_steps.or(scene.max_steps).unwrap_or(base.max_steps),
+            method,
+            // The scene's dt belongs to its fixed-step method: a caller who picks an
+            // adaptive one leaves it out (a dt of the caller's own is checked by the driver).
+            dt: self
+                .dt
+                .or(base.dt)
+                .or(scene.dt.filter(|_| method.is_fixed_step())),
             ..base
         }
     }
@@ -80,6 +90,7 @@ mod tests {
             max_steps: Some(50),
             first_step: Some(1e-3),
             disable: Some(Disabled::none().with(Kind::Gravity)),
+            ..Default::default()
         }
     }
 
@@ -93,6 +104,7 @@ mod tests {
             max_step: Some(0.2),
             max_steps: Some(7),
             disable: Some(Disabled::none()),
+            ..Default::default()
         };
         let r = caller.resolve(&scene(), Rk45Options::default()).unwrap();
         assert_eq!(r.t_span, (1.0, 0.0));

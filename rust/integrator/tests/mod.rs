@@ -2,5 +2,6 @@
 //! `events.rs` and `stepper.rs` are the test modules of the files of the same name (included
 //! there, so they see those files' private items); `fixtures.rs` holds what they share.
 pub(super) mod fixtures;
+mod methods;
 mod rk45;
 mod stiffness;
