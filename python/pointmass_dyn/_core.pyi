@@ -658,6 +658,7 @@ def rk45(
     stiffness: Literal["warn", "stop", "off"] = "warn",
     method: _Integrator | None = None,
     dt: float | None = None,
+    jac: Callable[[float, _Array], Any] | ArrayLike | None = None,
 ) -> dict[str, Any]:
     """Our integrators on ``fun(t, y)`` (``method``: RK45 by default; RK45 and DOP853 step for
     step SciPy's ``solve_ivp``, RK4/Euler at the fixed step ``dt``);
@@ -668,7 +669,8 @@ def rk45(
     ``None`` or the first stiffness detection ``{"t", "h_lambda", "h", "lambda"}``, and
     ``error``: ``None`` or the exception ``fun`` or an event raised, to re-raise.
     ``stiffness``: ``"warn"`` detects and reports (steps unchanged), ``"stop"`` ends the
-    run at the detection (status -1), ``"off"`` skips the test."""
+    run at the detection (status -1), ``"off"`` skips the test. ``jac`` (Radau, auto):
+    ``jac(t, y) -> (n, n)`` or a constant (n, n) array; ``None``: finite differences."""
 
 # Pickling (``pointmass_dyn/_pickle.py`` registers these with ``copyreg``).
 _Pickled: TypeAlias = (

@@ -361,6 +361,7 @@ def solve_ivp(
     dense_output: bool = False,
     controller: str = "standard",
     stiffness: str = "warn",
+    jac: Any = None,
 ) -> OdeResult:
     """Our integrators on ``fun(t, y)``, as SciPy's ``solve_ivp(fun, t_span, y0, method=...)``:
     ``"RK45"`` (default) and ``"DOP853"`` step for step SciPy's with the same options (same
@@ -374,6 +375,11 @@ def solve_ivp(
     ``n_rejected``, ``t_reached``, ``method``, ``switched_to`` and ``t_switch``. An exception
     raised by ``fun`` or an event (Ctrl-C included) propagates with the partial result
     attached as ``.result``.
+
+    ``jac`` (``"Radau"`` and ``"auto"`` only, as SciPy's): a callable ``jac(t, y)``
+    returning the (n, n) Jacobian ``∂f_i/∂y_j`` (an array-like or a SciPy sparse matrix),
+    or a constant (n, n) array; ``None`` (default): finite differences (SciPy's
+    ``num_jac``, whose evaluations SciPy does not count in ``nfev``, nor do we).
     """
     out = _core.rk45(
         fun,
@@ -391,6 +397,7 @@ def solve_ivp(
         stiffness,
         method,
         dt,
+        jac,
     )
     error = out.pop("error")
     result = OdeResult(out)

@@ -7,6 +7,7 @@ use super::dop853::Dop853;
 use super::events::{self, Event};
 use super::fixed_step::{Euler, FixedStep, Rk4};
 use super::method::{radau_available, Counts, Integrator, Method};
+use super::radau::Radau;
 use super::stepper::{StepOutcome, Stepper};
 use super::{fmt_time, InputError, OdeSystem, Rk45Options, Solution, Status, StiffnessCheck};
 
@@ -64,9 +65,12 @@ pub fn solve<S: OdeSystem>(
             events,
             Method::Euler,
         ),
-        // Radau plugs in here: `drive(Radau::new(sys, t0, y0, t_end, opts)?, opts, events,
-        // Method::Radau)`, and in `stiff_target` below; then `radau_available()` returns true.
-        Method::Radau => Err(InputError::MethodUnavailable("Radau")),
+        Method::Radau => drive(
+            Radau::new(sys, t0, y0, t_end, opts)?,
+            opts,
+            events,
+            Method::Radau,
+        ),
         Method::Auto => {
             if !radau_available() {
                 return Err(InputError::MethodUnavailable("auto (it switches to Radau)"));
@@ -79,17 +83,19 @@ pub fn solve<S: OdeSystem>(
 /// The implicit method `auto` continues with: Radau from `(t, y)` to `t_end`.
 type StiffTarget<S, J> = fn(S, f64, &[f64], f64, &Rk45Options) -> Result<J, InputError>;
 
-/// Radau from `(t, y)` (placeholder until `radau.rs` is merged: replace the body by
-/// `Radau::new(sys, t, y, t_end, opts)` and the return type by `Radau<S>`).
+/// Radau from `(t, y)`, with SciPy's controller (a PI controller asked for is RK45's).
 fn stiff_target<S: OdeSystem>(
     sys: S,
-    _t: f64,
-    _y: &[f64],
-    _t_end: f64,
-    _opts: &Rk45Options,
-) -> Result<Stepper<S>, InputError> {
-    drop(sys);
-    Err(InputError::MethodUnavailable("Radau"))
+    t: f64,
+    y: &[f64],
+    t_end: f64,
+    opts: &Rk45Options,
+) -> Result<Radau<S>, InputError> {
+    let opts = Rk45Options {
+        controller: super::Controller::Standard,
+        ..opts.clone()
+    };
+    Radau::new(sys, t, y, t_end, &opts)
 }
 
 /// `auto`: RK45 with Hairer's stiffness test stopping it; from the state where it fired, the

@@ -101,7 +101,7 @@ pub enum Method {
 /// Whether `Method::Radau` (and the stiff half of `Method::Auto`) is built in. The single
 /// dispatch point for Radau is `driver::solve` (and `driver::stiff_target`).
 pub const fn radau_available() -> bool {
-    false
+    true
 }
 
 impl Method {

@@ -26,7 +26,10 @@ mod dop853_tableau;
 mod driver;
 mod events;
 mod fixed_step;
+mod lu;
 mod method;
+mod num_jac;
+mod radau;
 mod stepper;
 
 pub use dense::{eval_segment, DenseOutput, Interpolant};
@@ -37,6 +40,7 @@ pub use driver::{rk45, solve};
 pub use events::{Event, EventDirection, EventFn};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
 pub use method::{radau_available, Counts, Integrator, Method};
+pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
 pub use stepper::{StepOutcome, Stepper};
 
 use thiserror::Error;
@@ -382,6 +386,12 @@ pub enum InputError {
     DtInvalid(f64),
     #[error("dt: only the fixed-step methods 'RK4' and 'Euler' take dt; method '{method}' chooses its own steps (got dt = {dt}; use first_step/max_step instead)")]
     DtNotUsed { method: &'static str, dt: f64 },
+    #[error(
+        "jac: a constant Jacobian must have dim × dim = {expected} × {expected} entries, got {got}"
+    )]
+    JacobianShape { expected: usize, got: usize },
+    #[error("jac: entry {index} (row-major) is not finite ({value})")]
+    JacobianNonFinite { index: usize, value: f64 },
 }
 
 impl InputError {
@@ -408,6 +418,7 @@ impl InputError {
             InputError::DtMissing { .. }
             | InputError::DtInvalid(_)
             | InputError::DtNotUsed { .. } => "dt",
+            InputError::JacobianShape { .. } | InputError::JacobianNonFinite { .. } => "jac",
         }
     }
 }

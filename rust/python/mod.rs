@@ -5,6 +5,7 @@ mod dense;
 mod effects;
 mod errors;
 mod events;
+mod jac;
 mod loops;
 mod model;
 mod options;

@@ -10,14 +10,15 @@ use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
+use super::jac::{jac_arg, JacArg, Source, WithJacobian};
 use super::options::{method_args, options, set_method, set_outcome, step_args, t_span_arg};
-use crate::integrator::{self, Event, FnSystem, OdeSystem};
+use crate::integrator::{self, Event, FnSystem, JacobianSource, Method, OdeSystem};
 use crate::scene::Settings;
 
 /// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
 /// (default) and "DOP853" step for step SciPy's `solve_ivp`, "RK4"/"Euler" at the fixed `dt`.
 #[pyfunction]
-#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn", method=None, dt=None))]
+#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn", method=None, dt=None, jac=None))]
 #[allow(clippy::too_many_arguments)]
 pub fn rk45<'py>(
     py: Python<'py>,
@@ -36,6 +37,7 @@ pub fn rk45<'py>(
     stiffness: &str,
     method: Option<&str>,
     dt: Option<&Bound<'_, PyAny>>,
+    jac: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !fun.is_callable() {
         return Err(invalid(
@@ -63,6 +65,7 @@ pub fn rk45<'py>(
     )?;
     // No scene: the caller's settings, else the defaults.
     let opts = requested.options(&Settings::default(), base);
+    let jac = jac_arg(py, jac, dim, opts.method)?;
     let specs = event_specs(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let mut evs: Vec<Event<'_>> = specs
@@ -71,8 +74,31 @@ pub fn rk45<'py>(
         .collect();
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let sys = python_system(py, fun, dim, &rhs_failure);
-    let sol =
-        integrator::solve(sys, t_span, &y0, &opts, &mut evs).map_err(|e| invalid_setting(py, e))?;
+    let failure_slot = &rhs_failure;
+    let with = |inner, source| WithJacobian {
+        inner,
+        source,
+        failure: failure_slot,
+    };
+    let sol = match jac {
+        JacArg::None => integrator::solve(sys, t_span, &y0, &opts, &mut evs),
+        JacArg::Callable(f) => {
+            integrator::solve(with(sys, Source::Callable(f)), t_span, &y0, &opts, &mut evs)
+        }
+        // SciPy's constant Jacobian: never re-evaluated.
+        JacArg::Constant(m) if opts.method == Method::Radau => integrator::radau_solve(
+            sys,
+            t_span,
+            &y0,
+            &opts,
+            &mut evs,
+            JacobianSource::Constant(m),
+        ),
+        JacArg::Constant(m) => {
+            integrator::solve(with(sys, Source::Constant(m)), t_span, &y0, &opts, &mut evs)
+        }
+    }
+    .map_err(|e| invalid_setting(py, e))?;
     drop(evs);
     // An exception from `fun` or an event (Ctrl-C included) is re-raised by
     // `pointmass_dyn.rk45` with the solution computed so far attached.

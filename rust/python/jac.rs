@@ -1,0 +1,128 @@
+//! `solve_ivp(..., jac=...)`: the Jacobian of a Python right-hand side for the implicit
+//! method (Radau, and `auto` once it switches), as SciPy takes it: a callable
+//! `jac(t, y) -> (n, n)` (an array-like or a SciPy sparse matrix), or a constant `(n, n)`
+//! array-like.
+use std::sync::Mutex;
+
+use numpy::PyArray1;
+use pyo3::prelude::*;
+
+use super::convert::{array, shape_str};
+use super::errors::invalid;
+use crate::integrator::{Method, OdeSystem};
+
+/// The `jac` argument.
+pub(super) enum JacArg<'a> {
+    None,
+    Callable(&'a Bound<'a, PyAny>),
+    /// Row-major `dim × dim`.
+    Constant(Vec<f64>),
+}
+
+/// A dense `(dim, dim)` matrix from an array-like or anything with `toarray()` (SciPy sparse).
+fn matrix(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Vec<f64>> {
+    let dense;
+    let obj = if obj.hasattr("toarray")? {
+        dense = obj.call_method0("toarray")?;
+        &dense
+    } else {
+        obj
+    };
+    let (shape, data) = array(obj, arg)?;
+    if shape != [dim, dim] {
+        return Err(invalid(
+            obj.py(),
+            arg,
+            format!("shape ({dim}, {dim})"),
+            shape_str(&shape),
+        ));
+    }
+    Ok(data)
+}
+
+/// Check `jac` for a system of `dim` components integrated with `method`: only the implicit
+/// methods use a Jacobian, so one given to another method is refused rather than ignored.
+pub(super) fn jac_arg<'a>(
+    py: Python<'_>,
+    jac: Option<&'a Bound<'a, PyAny>>,
+    dim: usize,
+    method: Method,
+) -> PyResult<JacArg<'a>> {
+    let Some(jac) = jac.filter(|j| !j.is_none()) else {
+        return Ok(JacArg::None);
+    };
+    if !matches!(method, Method::Radau | Method::Auto) {
+        return Err(invalid(
+            py,
+            "jac",
+            format!("None with method '{method}' (only 'Radau' and 'auto' use a Jacobian)"),
+            "a Jacobian",
+        ));
+    }
+    if jac.is_callable() {
+        return Ok(JacArg::Callable(jac));
+    }
+    let m = matrix(jac, "jac", dim)?;
+    if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(invalid(
+            py,
+            "jac",
+            "finite entries",
+            format!("{v} at ({}, {})", i / dim, i % dim),
+        ));
+    }
+    Ok(JacArg::Constant(m))
+}
+
+/// Where [`WithJacobian`] gets the Jacobian.
+pub(super) enum Source<'a> {
+    Callable(&'a Bound<'a, PyAny>),
+    Constant(Vec<f64>),
+}
+
+/// A system with the Jacobian from Python; an exception from `jac` is kept in `failure`
+/// (the run stops with its message, and the caller re-raises it).
+pub(super) struct WithJacobian<'a, S> {
+    pub inner: S,
+    pub source: Source<'a>,
+    pub failure: &'a Mutex<Option<PyErr>>,
+}
+
+impl<S: OdeSystem> OdeSystem for WithJacobian<'_, S> {
+    fn dim(&self) -> usize {
+        self.inner.dim()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+        self.inner.rhs(t, y, dydt)
+    }
+    fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
+        self.inner.project(y)
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        let f = match &self.source {
+            Source::Constant(m) => {
+                jac.copy_from_slice(m);
+                return Ok(true);
+            }
+            Source::Callable(f) => *f,
+        };
+        let dim = y.len();
+        let py = f.py();
+        let out = f
+            .call1((t, PyArray1::from_slice(py, y)))
+            .and_then(|out| matrix(&out, "jac(t, y)", dim));
+        match out {
+            Ok(m) => {
+                jac.copy_from_slice(&m);
+                Ok(true)
+            }
+            Err(e) => {
+                let msg = e.to_string();
+                if let Ok(mut slot) = self.failure.lock() {
+                    slot.get_or_insert(e);
+                }
+                Err(msg)
+            }
+        }
+    }
+}
