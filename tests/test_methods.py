@@ -425,3 +425,54 @@ def test_energy_and_power_with_fixed_steps(chain7):
         assert r.energy.shape == r.t.shape and "gravity" in r.power
         drifts.append(np.max(np.abs(r.energy - r.energy[0])))
     assert 8 < drifts[0] / drifts[1] < 32, drifts
+
+
+def _radau_built_in() -> bool:
+    try:
+        pmd.solve_ivp(lambda t, y: -y, (0.0, 0.1), [1.0], method="Radau")
+    except pmd.errors.InvalidInputError:
+        return False
+    return True
+
+
+@pytest.mark.skipif(not _radau_built_in(), reason="the Radau solver is not built in yet")
+def test_auto_switches_to_radau_where_rk45_finds_the_problem_stiff():
+    """y' = −1e4 (y − cos t): RK45 until Hairer's test fires, Radau from there. The switch
+    time is where RK45 alone (stiffness="stop") stops; the end state matches SciPy's Radau
+    to the tolerance; far fewer evaluations than RK45 alone."""
+
+    def f(t, y):
+        return np.array([-1e4 * (y[0] - np.cos(t))])
+
+    opts = dict(rtol=1e-6, atol=1e-9)
+    r = pmd.solve_ivp(f, (0.0, 2.0), [0.0], method="auto", dense_output=True, **opts)
+    assert r.success and r.method == "auto" and r.switched_to == "Radau", r.message
+    stop = pmd.solve_ivp(f, (0.0, 2.0), [0.0], stiffness="stop", **opts)
+    assert stop.status == -1 and r.t_switch == stop.t_reached
+    assert "switched from RK45 to Radau" in r.message
+    np.testing.assert_array_equal(r.t[: len(stop.t)], stop.t)
+    ref = solve_ivp(f, (0.0, 2.0), [0.0], method="Radau", rtol=1e-10, atol=1e-12)
+    assert abs(r.y[0, -1] - ref.y[0, -1]) < 1e-5
+    # The dense output passes through every step's state; between Radau's long steps (~0.9)
+    # its cubic collocation polynomial is accurate to O(h⁴), not to the tolerance (as SciPy's).
+    np.testing.assert_allclose(r.sol(r.t)[0], r.y[0], rtol=0, atol=1e-12)
+    assert abs(r.sol(1.5)[0] - (np.cos(1.5) + 1e-4 * np.sin(1.5))) < 5e-4
+    alone = pmd.solve_ivp(f, (0.0, 2.0), [0.0], **opts)
+    assert r.nfev < alone.nfev / 5 and r.njev >= 1 and r.nlu >= 1
+    # The scene route: simulate(method="auto") on a non-stiff scene never switches.
+    s = pmd.simulate(pmd.load_scene("chain7"), (0.0, 0.5), method="auto")
+    assert s.success and s.switched_to is None and s.t_switch is None
+
+
+def test_fixed_steps_on_a_closed_loop_converge_at_their_order():
+    """fourbar (a closed loop, projected after every step): halving dt divides the error
+    against a DOP853 reference by ~16 for RK4 and ~2 for Euler; the loop stays closed."""
+    scene = pmd.load_scene("fourbar")
+    ref = pmd.simulate(scene, (0.0, 0.5), rtol=1e-12, atol=1e-12, method="DOP853")
+    for method, dts, lo, hi in [("RK4", (2e-3, 1e-3), 12, 80), ("Euler", (2e-4, 1e-4), 1.8, 2.2)]:
+        errs = []
+        for dt in dts:
+            r = pmd.simulate(scene, (0.0, 0.5), method=method, dt=dt)
+            assert r.success and r.constraint_residual.max() < 1e-12
+            errs.append(np.max(np.abs(r.q[-1] - ref.q[-1])))
+        assert lo < errs[0] / errs[1] < hi, (method, errs)

@@ -63,8 +63,8 @@ impl Scheme for Rk4 {
         for (s, &(a, c)) in stages.iter().enumerate() {
             let (prev, rest) = w.k.split_at_mut((s + 1) * n);
             let kp = &prev[s * n..];
-            for i in 0..n {
-                w.y_stage[i] = w.y[i] + a * kp[i];
+            for ((ys, y), k) in w.y_stage.iter_mut().zip(&w.y).zip(kp) {
+                *ys = y + a * k;
             }
             let at = t + c * h;
             check_state(&w.y_stage, t, at)?;
@@ -107,8 +107,8 @@ impl Scheme for Euler {
         if !provided {
             call_rhs(&mut w.sys, &mut w.nfev, t, t, &w.y_stage, &mut k1[..n])?;
         }
-        for i in 0..nq {
-            w.y_new[i] = w.y[i] + h * k1[i];
+        for ((yn, y), qd) in w.y_new[..nq].iter_mut().zip(&w.y).zip(&k1[..nq]) {
+            *yn = y + h * qd;
         }
         Ok(())
     }

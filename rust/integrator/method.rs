@@ -7,7 +7,8 @@ use super::{InputError, OdeSystem, Status, StepOutcome, Stiffness};
 /// The evaluation counts of a run (SciPy's `nfev`, `njev`, `nlu`) and its steps.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Counts {
-    /// Right-hand-side evaluations (finite-difference Jacobian columns included).
+    /// Right-hand-side evaluations, as SciPy counts them (the evaluations of
+    /// finite-difference Jacobians are not included).
     pub nfev: usize,
     /// Jacobian evaluations (analytic or by finite differences).
     pub njev: usize,

@@ -442,15 +442,18 @@ impl<S: OdeSystem> Radau<S> {
                     .sys
                     .jacobian(t, &self.y, &mut self.jac)
                     .map_err(|m| jacobian_error(t, m))?;
-                if !filled {
-                    return Err(Status::RhsError {
-                        t,
-                        at: t,
-                        message: "jacobian: the system provided a Jacobian at t0 but not here"
-                            .to_string(),
-                    });
+                if filled {
+                    return self.check_jacobian();
                 }
-                self.check_jacobian()
+                // Not provided here (though it was at t0): differences this time.
+                self.num_jac.compute(
+                    &mut self.sys,
+                    t,
+                    &self.y,
+                    &self.f,
+                    &self.atol,
+                    &mut self.jac,
+                )
             }
             JacMode::FiniteDifference => self.num_jac.compute(
                 &mut self.sys,

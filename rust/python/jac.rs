@@ -55,9 +55,7 @@ pub(super) fn jac_arg<'a>(
         return Err(invalid(
             py,
             "jac",
-            format!(
-                "None with method '{method}' (only 'Radau' and 'auto' use a Jacobian)"
-            ),
+            format!("None with method '{method}' (only 'Radau' and 'auto' use a Jacobian)"),
             "a Jacobian",
         ));
     }

@@ -10,8 +10,8 @@ use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
-use super::options::{method_args, options, set_method, set_outcome, step_args, t_span_arg};
 use super::jac::{jac_arg, JacArg, Source, WithJacobian};
+use super::options::{method_args, options, set_method, set_outcome, step_args, t_span_arg};
 use crate::integrator::{self, Event, FnSystem, JacobianSource, Method, OdeSystem};
 use crate::scene::Settings;
 
@@ -82,7 +82,9 @@ pub fn rk45<'py>(
     };
     let sol = match jac {
         JacArg::None => integrator::solve(sys, t_span, &y0, &opts, &mut evs),
-        JacArg::Callable(f) => integrator::solve(with(sys, Source::Callable(f)), t_span, &y0, &opts, &mut evs),
+        JacArg::Callable(f) => {
+            integrator::solve(with(sys, Source::Callable(f)), t_span, &y0, &opts, &mut evs)
+        }
         // SciPy's constant Jacobian: never re-evaluated.
         JacArg::Constant(m) if opts.method == Method::Radau => integrator::radau_solve(
             sys,
@@ -92,7 +94,9 @@ pub fn rk45<'py>(
             &mut evs,
             JacobianSource::Constant(m),
         ),
-        JacArg::Constant(m) => integrator::solve(with(sys, Source::Constant(m)), t_span, &y0, &opts, &mut evs),
+        JacArg::Constant(m) => {
+            integrator::solve(with(sys, Source::Constant(m)), t_span, &y0, &opts, &mut evs)
+        }
     }
     .map_err(|e| invalid_setting(py, e))?;
     drop(evs);

@@ -671,3 +671,34 @@ fn stiff_chain_radau_needs_ten_times_fewer_evaluations_than_rk45() {
         );
     }
 }
+
+/// A system whose analytic Jacobian is available at t0 only: the later Jacobians fall back to
+/// finite differences, and the run matches the all-analytic one to the tolerance.
+#[test]
+fn analytic_jacobian_missing_later_falls_back_to_differences() {
+    struct Sometimes(VdP);
+    impl OdeSystem for Sometimes {
+        fn dim(&self) -> usize {
+            2
+        }
+        fn rhs(&mut self, t: f64, y: &[f64], dy: &mut [f64]) -> Result<(), String> {
+            self.0.rhs(t, y, dy)
+        }
+        fn jacobian(&mut self, t: f64, y: &[f64], j: &mut [f64]) -> Result<bool, String> {
+            if t == 0.0 {
+                self.0.jacobian(t, y, j)
+            } else {
+                Ok(false)
+            }
+        }
+    }
+    let sys = Sometimes(VdP {
+        eps: 1e-6,
+        analytic: true,
+    });
+    let r = Radau::new(sys, 0.0, &[2.0, 0.0], 2.0, &opts(1e-6, 1e-6)).unwrap();
+    let (c, y) = run(r);
+    assert!(c.2 > 1);
+    let (_, y_ref) = run(vdp(1e-6, true, 1e-6));
+    assert!((y[0] - y_ref[0]).abs() < 1e-5 && (y[1] - y_ref[1]).abs() < 1e-5);
+}
