@@ -34,10 +34,10 @@ use crate::model::Model;
 use crate::spatial::{Vec3, Vec6};
 
 pub use aba::forward_dynamics_local;
+pub use aba_derivatives::forward_dynamics_derivatives;
 pub use compiled::Compiled;
 pub use crba::mass_matrix_local;
 pub use rnea::inverse_dynamics_local;
-pub use aba_derivatives::forward_dynamics_derivatives;
 pub use rnea_derivatives::inverse_dynamics_derivatives;
 pub use workspace::{Data, DerivativeData};
 
