@@ -42,6 +42,11 @@ pub trait OdeSystem {
     fn project(&mut self, _y: &mut [f64]) -> Result<bool, String> {
         Ok(false)
     }
+    /// The Jacobian `∂f/∂y` at `(t, y)`, row-major `dim × dim`, into `jac`; `Ok(true)` when
+    /// filled, `Ok(false)` when the system has none (the caller differentiates numerically).
+    fn jacobian(&mut self, _t: f64, _y: &[f64], _jac: &mut [f64]) -> Result<bool, String> {
+        Ok(false)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -54,6 +59,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
     }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        (**self).jacobian(t, y, jac)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
@@ -65,6 +73,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     }
     fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
         (**self).project(y)
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        (**self).jacobian(t, y, jac)
     }
 }
 

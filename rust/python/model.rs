@@ -400,9 +400,9 @@ impl PyModel {
                 check_result(py, name, m.as_slice())?;
             }
             Ok((
-                dmatrix_to_array(py, a)?,
-                dmatrix_to_array(py, b)?,
-                dmatrix_to_array(py, c)?,
+                square_to_array(py, a).into_any(),
+                square_to_array(py, b).into_any(),
+                square_to_array(py, c).into_any(),
             ))
         })
     }
@@ -463,6 +463,28 @@ impl PyModel {
             }
         }
         result
+    }
+}
+
+/// A C-ordered NumPy copy of a (column-major) matrix, written in one pass.
+fn square_to_array<'py>(
+    py: Python<'py>,
+    m: &nalgebra::DMatrix<f64>,
+) -> Bound<'py, numpy::PyArray2<f64>> {
+    use numpy::{PyArray2, PyArrayMethods};
+    let (r, c) = (m.nrows(), m.ncols());
+    // SAFETY: a new C-contiguous array of exactly r × c elements, every one written before
+    // it is handed to Python.
+    unsafe {
+        let arr = PyArray2::<f64>::new(py, [r, c], false);
+        let out = std::slice::from_raw_parts_mut(arr.data(), r * c);
+        let src = m.as_slice();
+        for j in 0..c {
+            for i in 0..r {
+                out[i * c + j] = src[j * r + i];
+            }
+        }
+        arr
     }
 }
 

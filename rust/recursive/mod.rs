@@ -25,6 +25,7 @@ mod outward;
 pub mod reference;
 pub mod rnea;
 pub mod rnea_derivatives;
+pub mod tangent;
 pub(crate) mod shift;
 #[cfg(test)]
 mod tests;

@@ -155,30 +155,39 @@ pub fn inverse_dynamics_derivatives(
         let moved_v = |dj: &super::workspace::DofWork, dk: &super::workspace::DofWork| {
             dj.ys.dot(&dk.dav) + dj.bts.dot(&angular(&dk.s))
         };
+        let nvt = model.nv;
+        let (dq, dv, mm) = (
+            dd.dtau_dq.as_mut_slice(),
+            dd.dtau_dv.as_mut_slice(),
+            dd.mass.as_mut_slice(),
+        );
+        // Column-major: entry (row, col) at `col · nv + row`.
         for j in r.clone() {
             let dj = &dd.dofs[j];
             for k in r.clone() {
                 let dk = &dd.dofs[k];
-                dd.dtau_dq[(j, k)] = if chain && k > j {
+                let at = k * nvt + j;
+                dq[at] = if chain && k > j {
                     dj.s.dot(&dk.g)
                 } else {
                     moved_q(dj, dk)
                 };
-                dd.dtau_dv[(j, k)] = moved_v(dj, dk);
-                dd.mass[(j, k)] = dj.s.dot(&dk.ys);
+                dv[at] = moved_v(dj, dk);
+                mm[at] = dj.s.dot(&dk.ys);
             }
             let mut up = l.parent;
             while let Some(pa) = up {
                 let la = &model.links[pa];
                 for k in la.v_index..la.v_index + la.joint.nv() {
                     let dk = &dd.dofs[k];
-                    dd.dtau_dq[(k, j)] = dk.s.dot(&dj.g);
-                    dd.dtau_dq[(j, k)] = moved_q(dj, dk);
-                    dd.dtau_dv[(k, j)] = dk.s.dot(&dj.gv);
-                    dd.dtau_dv[(j, k)] = moved_v(dj, dk);
+                    let (col, row) = (j * nvt + k, k * nvt + j);
+                    dq[col] = dk.s.dot(&dj.g);
+                    dq[row] = moved_q(dj, dk);
+                    dv[col] = dk.s.dot(&dj.gv);
+                    dv[row] = moved_v(dj, dk);
                     let m = dk.s.dot(&dj.ys);
-                    dd.mass[(k, j)] = m;
-                    dd.mass[(j, k)] = m;
+                    mm[col] = m;
+                    mm[row] = m;
                 }
                 up = la.parent;
             }
