@@ -70,7 +70,9 @@ def test_random_trees_match_pinocchio(seed):
     compare(model, pm, q, v, a, tau, G, "random trees")
 
 
-@pytest.mark.parametrize("kind", ["Revolute", "Prismatic", "Spherical", "SphericalZYZ", "FreeFlyer"])
+@pytest.mark.parametrize(
+    "kind", ["Revolute", "Prismatic", "Spherical", "SphericalZYZ", "FreeFlyer"]
+)
 def test_single_kind_chains_match_pinocchio(kind):
     """Every joint kind on its own (ZYZ: configuration-dependent columns, mirrored as
     revolutes Z, Y, Z), the base joint included."""
@@ -183,7 +185,10 @@ def test_velocity_derivatives_and_inverse_mass_matrix():
     _, dv, m = model.inverse_dynamics_derivatives(q, v, a, G)
     num = np.column_stack(
         [
-            (model.inverse_dynamics(q, v + h * e, a, G) - model.inverse_dynamics(q, v - h * e, a, G))
+            (
+                model.inverse_dynamics(q, v + h * e, a, G)
+                - model.inverse_dynamics(q, v - h * e, a, G)
+            )
             / (2 * h)
             for e in np.eye(model.nv)
         ]
@@ -194,7 +199,10 @@ def test_velocity_derivatives_and_inverse_mass_matrix():
     assert rel_err(minv @ model.mass_matrix(q), np.eye(model.nv)) < 1e-10
     num = np.column_stack(
         [
-            (model.forward_dynamics(q, v + h * e, tau, G) - model.forward_dynamics(q, v - h * e, tau, G))
+            (
+                model.forward_dynamics(q, v + h * e, tau, G)
+                - model.forward_dynamics(q, v - h * e, tau, G)
+            )
             / (2 * h)
             for e in np.eye(model.nv)
         ]
@@ -210,7 +218,9 @@ E = pmd.Effect
 
 
 def effect_scene(with_numerical=True):
-    tree = random_tree(3, 8, kinds=("Revolute", "Prismatic", "Spherical", "SphericalZYZ", "FreeFlyer"))
+    tree = random_tree(
+        3, 8, kinds=("Revolute", "Prismatic", "Spherical", "SphericalZYZ", "FreeFlyer")
+    )
     model = build_model(tree)
     names, kinds = model.body_names, tree.kinds()
     sph = [names[i] for i, k in enumerate(kinds) if k == "Spherical"]

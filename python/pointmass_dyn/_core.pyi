@@ -204,6 +204,17 @@ class Model:
         (v indices or body names) is required: the forces of those coordinates alone (zero
         elsewhere) that, with the cut joints' forces, produce ``a`` (which must satisfy the
         loops: see :meth:`assemble_acceleration`)."""
+    def inverse_dynamics_derivatives(
+        self, q: ArrayLike, v: ArrayLike, a: ArrayLike, gravity: ArrayLike | None = None
+    ) -> tuple[_Array, _Array, _Array]:
+        """``(∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M)``, each (nv, nv); q perturbed in the tangent space
+        (``q ⊕ δ``, as Pinocchio's ``computeRNEADerivatives``; docs/derivatives.md). Trees
+        only."""
+    def forward_dynamics_derivatives(
+        self, q: ArrayLike, v: ArrayLike, tau: ArrayLike, gravity: ArrayLike | None = None
+    ) -> tuple[_Array, _Array, _Array]:
+        """``(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)``, each (nv, nv), as Pinocchio's
+        ``computeABADerivatives`` (docs/derivatives.md). Trees only."""
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy ``½ vᵀ I v`` (J)."""
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
@@ -482,6 +493,32 @@ class Scene:
         """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
         ``effects`` act (none: no gravity); joint and body names and table widths are checked
         against the model here. ``disable``: families switched off by default."""
+    def forward_dynamics_derivatives(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        tau: ArrayLike | None = None,
+        t: float = 0.0,
+        disable: _Family | Sequence[_Family] | None = None,
+    ) -> dict[str, Any]:
+        """``{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [names]}`` of the scene's
+        accelerations with its enabled effects (plus ``tau``); ``numerical`` names the effects
+        differentiated by central differences (callbacks, external loads, point springs).
+        Scenes without loops (docs/derivatives.md)."""
+    def inverse_dynamics_derivatives(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a: ArrayLike,
+        t: float = 0.0,
+        disable: _Family | Sequence[_Family] | None = None,
+    ) -> dict[str, Any]:
+        """``{"dq", "dv", "da", "numerical"}`` of ``τ = ID(q, v, a) − τ_effects(t, q, v)``."""
+    def state_jacobian(
+        self, y: ArrayLike, t: float = 0.0, disable: _Family | Sequence[_Family] | None = None
+    ) -> _Array | None:
+        """``∂ẏ/∂y`` of ``y = [q; v]`` (q's own coordinates), shape (nq+nv, nq+nv), as the
+        implicit integrators use it; ``None`` for a scene with closed loops."""
     def replace(
         self, model: Model | None = None, effects: Sequence[Effect] | None = None
     ) -> Scene:

@@ -7,7 +7,6 @@
 use super::rnea_derivatives::inverse_dynamics_derivatives;
 use super::workspace::{Data, DerivativeData};
 use crate::error::{Error, Result};
-use crate::loops::factor::cholesky;
 use crate::model::Model;
 use crate::spatial::Vec3;
 use nalgebra::DMatrix;
@@ -33,8 +32,8 @@ pub fn forward_dynamics_derivatives(
     }
     dd.qdd = qdd;
     done?;
-    dd.minv.copy_from(&dd.mass);
-    spd_inverse(&mut dd.minv).map_err(|k| {
+    dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
+    spd_inverse(&mut dd.minv, &mut dd.scratch).map_err(|k| {
         Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
         ))
@@ -44,37 +43,73 @@ pub fn forward_dynamics_derivatives(
     Ok(())
 }
 
-/// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `L⁻¹`, then
-/// `M⁻¹ = L⁻ᵀ L⁻¹`. `Err(k)` at a non-positive pivot `k`.
-pub(crate) fn spd_inverse(m: &mut DMatrix<f64>) -> std::result::Result<(), usize> {
+/// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`, then
+/// `M⁻¹ = Xᵀ X`, every inner loop along a (contiguous) column. `diag`: scratch of length n.
+/// `Err(k)` at a non-positive pivot `k`.
+pub(crate) fn spd_inverse(
+    m: &mut DMatrix<f64>,
+    diag: &mut [f64],
+) -> std::result::Result<(), usize> {
     let n = m.nrows();
-    cholesky(m)?;
-    // L⁻¹ by columns, left to right: column j reads only L's columns > j, not yet overwritten.
+    let a = m.as_mut_slice();
+    // Cholesky, left-looking: column j −= L_jk · column k (rows j..n), k < j.
     for j in 0..n {
-        let djj = 1.0 / m[(j, j)];
-        for i in j + 1..n {
-            let mut s = m[(i, j)] * djj;
-            for k in j + 1..i {
-                s += m[(i, k)] * m[(k, j)];
+        let (done, rest) = a.split_at_mut(j * n);
+        let cj = &mut rest[..n];
+        for k in 0..j {
+            let ck = &done[k * n..(k + 1) * n];
+            let l = ck[j];
+            for (x, y) in cj[j..].iter_mut().zip(&ck[j..]) {
+                *x -= l * y;
             }
-            m[(i, j)] = -s / m[(i, i)];
         }
-        m[(j, j)] = djj;
+        let d = cj[j];
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(j);
+        }
+        let d = d.sqrt();
+        cj[j] = d;
+        let inv = 1.0 / d;
+        for x in &mut cj[j + 1..] {
+            *x *= inv;
+        }
     }
-    // (L⁻ᵀ L⁻¹)_ij = Σ_{k ≥ i} L⁻¹_ki L⁻¹_kj (j ≤ i), rows top to bottom: entry (i, j) is the
-    // last reader of L⁻¹_ij, and later rows read only rows below them.
-    for i in 0..n {
-        for j in 0..=i {
-            let mut s = 0.0;
-            for k in i..n {
-                s += m[(k, i)] * m[(k, j)];
+    // X = L⁻¹ by columns, left to right: column j is L x = e_j by column-oriented forward
+    // substitution, reading only L's columns > j (not yet overwritten).
+    for j in 0..n {
+        let (head, tail) = a.split_at_mut((j + 1) * n);
+        let cj = &mut head[j * n..];
+        let xj = 1.0 / cj[j];
+        cj[j] = xj;
+        for x in &mut cj[j + 1..] {
+            *x *= -xj;
+        }
+        for k in j + 1..n {
+            let ck = &tail[(k - j - 1) * n..(k - j) * n];
+            let xk = cj[k] / ck[k];
+            cj[k] = xk;
+            for (x, y) in cj[k + 1..].iter_mut().zip(&ck[k + 1..]) {
+                *x -= xk * y;
             }
-            m[(i, j)] = s;
         }
     }
+    // (Xᵀ X)_ij = column i · column j over rows ≥ max(i, j): off-diagonals into the (free)
+    // upper triangle, diagonals aside, then mirrored down over X.
     for j in 0..n {
         for i in 0..j {
-            m[(i, j)] = m[(j, i)];
+            let s: f64 = a[i * n + j..(i + 1) * n]
+                .iter()
+                .zip(&a[j * n + j..(j + 1) * n])
+                .map(|(x, y)| x * y)
+                .sum();
+            a[j * n + i] = s;
+        }
+        diag[j] = a[j * n + j..(j + 1) * n].iter().map(|x| x * x).sum();
+    }
+    for j in 0..n {
+        a[j * n + j] = diag[j];
+        for i in j + 1..n {
+            a[j * n + i] = a[i * n + j];
         }
     }
     Ok(())

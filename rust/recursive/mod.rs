@@ -21,12 +21,14 @@ pub mod aba_derivatives;
 pub(crate) mod algebra;
 pub mod compiled;
 pub mod crba;
+#[cfg(test)]
+mod derivative_tests;
 mod outward;
 pub mod reference;
 pub mod rnea;
 pub mod rnea_derivatives;
-pub mod tangent;
 pub(crate) mod shift;
+pub mod tangent;
 #[cfg(test)]
 mod tests;
 pub mod workspace;
@@ -35,10 +37,10 @@ use crate::model::Model;
 use crate::spatial::{Vec3, Vec6};
 
 pub use aba::forward_dynamics_local;
+pub use aba_derivatives::forward_dynamics_derivatives;
 pub use compiled::Compiled;
 pub use crba::mass_matrix_local;
 pub use rnea::inverse_dynamics_local;
-pub use aba_derivatives::forward_dynamics_derivatives;
 pub use rnea_derivatives::inverse_dynamics_derivatives;
 pub use workspace::{Data, DerivativeData};
 

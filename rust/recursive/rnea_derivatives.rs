@@ -128,9 +128,9 @@ pub fn inverse_dynamics_derivatives(
         lk.y = y;
     }
 
-    dd.dtau_dq.fill(0.0);
-    dd.dtau_dv.fill(0.0);
-    dd.mass.fill(0.0);
+    dd.dtau_dq.as_mut_slice().fill(0.0);
+    dd.dtau_dv.as_mut_slice().fill(0.0);
+    dd.mass.as_mut_slice().fill(0.0);
 
     // Inward: composite sums, then the entries of each dof with its upstream dofs.
     for i in (0..n).rev() {

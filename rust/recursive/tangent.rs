@@ -46,7 +46,11 @@ pub fn integrate(model: &Model, q: &[f64], delta: &[f64], out: &mut [f64]) {
                 for k in 0..3 {
                     out[iq + k] = q[iq + k] + p[k];
                 }
-                quat_step(&q[iq + 3..iq + 7], &delta[iv + 3..iv + 6], &mut out[iq + 3..iq + 7]);
+                quat_step(
+                    &q[iq + 3..iq + 7],
+                    &delta[iv + 3..iv + 6],
+                    &mut out[iq + 3..iq + 7],
+                );
             }
             j => {
                 for k in 0..j.nv() {
@@ -74,7 +78,7 @@ fn quat_tangent(q: &[f64]) -> [[f64; 4]; 3] {
 /// `T = ∂δ/∂q` (nv × nq) at `q`: the identity for every coordinate but the quaternions' (and a
 /// free flyer's origin, `Rᵀ`). Writes all of `t`.
 pub fn tangent_map(model: &Model, q: &[f64], t: &mut DMatrix<f64>) {
-    t.fill(0.0);
+    t.as_mut_slice().fill(0.0);
     for l in &model.links {
         let (iq, iv) = (l.q_index, l.v_index);
         match l.joint {
@@ -120,7 +124,15 @@ fn omega(a: f64, b: f64, c: f64) -> [[f64; 4]; 4] {
 
 /// Adds the quaternion block of `∂q̇/∂q` (`Ω(ω)/2 · (1 − q̂q̂ᵀ)/|q|`) and of `∂q̇/∂ω` at rows
 /// `row` of the row-major `dim × dim` `jac`, columns `cq` (quaternion) and `cv` (ω).
-fn quat_rate_blocks(q: &[f64], w: &[f64], jac: &mut [f64], dim: usize, row: usize, cq: usize, cv: usize) {
+fn quat_rate_blocks(
+    q: &[f64],
+    w: &[f64],
+    jac: &mut [f64],
+    dim: usize,
+    row: usize,
+    cq: usize,
+    cv: usize,
+) {
     let (u, n) = unit(q);
     let om = omega(w[0], w[1], w[2]);
     for r in 0..4 {
@@ -133,12 +145,7 @@ fn quat_rate_blocks(q: &[f64], w: &[f64], jac: &mut [f64], dim: usize, row: usiz
         }
     }
     let (x, y, z, ww) = (u[0], u[1], u[2], u[3]);
-    let dv = [
-        [ww, -z, y],
-        [z, ww, -x],
-        [-y, x, ww],
-        [-x, -y, -z],
-    ];
+    let dv = [[ww, -z, y], [z, ww, -x], [-y, x, ww], [-x, -y, -z]];
     for r in 0..4 {
         for c in 0..3 {
             jac[(row + r) * dim + cv + c] = 0.5 * dv[r][c];
@@ -174,7 +181,15 @@ pub fn qdot_jacobian(model: &Model, q: &[f64], v: &[f64], jac: &mut [f64]) {
                             (0..3).map(|k| rv[(r, k)] * t[k][c]).sum::<f64>();
                     }
                 }
-                quat_rate_blocks(qq, &v[iv + 3..iv + 6], jac, dim, iq + 3, iq + 3, nq + iv + 3);
+                quat_rate_blocks(
+                    qq,
+                    &v[iv + 3..iv + 6],
+                    jac,
+                    dim,
+                    iq + 3,
+                    iq + 3,
+                    nq + iv + 3,
+                );
             }
             j => {
                 for k in 0..j.nv() {

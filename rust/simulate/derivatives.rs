@@ -84,20 +84,25 @@ impl Dynamics<'_> {
         let g = self.effects.gravity;
         let dd = &mut w.dd;
         let mut qdd = std::mem::take(&mut dd.qdd);
-        let fd = recursive::forward_dynamics(model, &mut self.data, q, v, &w.tau, &g, ext, &mut qdd);
+        let fd =
+            recursive::forward_dynamics(model, &mut self.data, q, v, &w.tau, &g, ext, &mut qdd);
         if fd.is_ok() {
             recursive::inverse_dynamics_derivatives(model, &mut self.data, dd, q, v, &qdd, &g);
         }
         dd.qdd = qdd;
         fd.map_err(|e| e.to_string())?;
-        w.rq.fill(0.0);
-        w.rv.fill(0.0);
+        w.rq.as_mut_slice().fill(0.0);
+        w.rv.as_mut_slice().fill(0.0);
         self.effects
             .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)?;
-        w.rq -= &dd.dtau_dq;
-        w.rv -= &dd.dtau_dv;
-        dd.minv.copy_from(&dd.mass);
-        spd_inverse(&mut dd.minv)
+        for (r, x) in w.rq.as_mut_slice().iter_mut().zip(dd.dtau_dq.as_slice()) {
+            *r -= x;
+        }
+        for (r, x) in w.rv.as_mut_slice().iter_mut().zip(dd.dtau_dv.as_slice()) {
+            *r -= x;
+        }
+        dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
+        spd_inverse(&mut dd.minv, &mut dd.scratch)
             .map_err(|k| format!("the mass matrix is not positive definite (pivot {k})"))?;
         dd.ddq_dq.gemm(1.0, &dd.minv, &w.rq, 0.0);
         dd.ddq_dv.gemm(1.0, &dd.minv, &w.rv, 0.0);
@@ -124,13 +129,17 @@ impl Dynamics<'_> {
         }
         let g = self.effects.gravity;
         recursive::inverse_dynamics_derivatives(model, &mut self.data, &mut w.dd, q, v, a, &g);
-        w.rq.fill(0.0);
-        w.rv.fill(0.0);
+        w.rq.as_mut_slice().fill(0.0);
+        w.rv.as_mut_slice().fill(0.0);
         let cx = Context { model, t, q, v };
         self.effects
             .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)?;
-        w.dd.dtau_dq -= &w.rq;
-        w.dd.dtau_dv -= &w.rv;
+        for (d, x) in w.dd.dtau_dq.as_mut_slice().iter_mut().zip(w.rq.as_slice()) {
+            *d -= x;
+        }
+        for (d, x) in w.dd.dtau_dv.as_mut_slice().iter_mut().zip(w.rv.as_slice()) {
+            *d -= x;
+        }
         Ok(())
     }
 

@@ -180,7 +180,12 @@ impl OdeSystem for Dynamics<'_> {
     }
 
     /// The analytic state Jacobian (`super::derivatives`); `Ok(false)` with closed loops.
-    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> std::result::Result<bool, String> {
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        jac: &mut [f64],
+    ) -> std::result::Result<bool, String> {
         let mut w = match self.deriv.take() {
             Some(w) => w,
             None => Box::new(super::derivatives::DerivativeWork::new(self)),
