@@ -33,7 +33,7 @@ pub fn forward_dynamics_derivatives(
     dd.qdd = qdd;
     done?;
     dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
-    spd_inverse(&mut dd.minv, &mut dd.scratch).map_err(|k| {
+    spd_inverse(&mut dd.minv, &mut dd.ddq_dq, &mut dd.ddq_dv).map_err(|k| {
         Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
         ))
@@ -44,11 +44,12 @@ pub fn forward_dynamics_derivatives(
 }
 
 /// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`, then
-/// `M⁻¹ = Xᵀ X`, every inner loop along a (contiguous) column. `diag`: scratch of length n.
-/// `Err(k)` at a non-positive pivot `k`.
+/// `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`, `out`:
+/// scratch matrices of the same size. `Err(k)` at a non-positive pivot `k`.
 pub(crate) fn spd_inverse(
     m: &mut DMatrix<f64>,
-    diag: &mut [f64],
+    t: &mut DMatrix<f64>,
+    out: &mut DMatrix<f64>,
 ) -> std::result::Result<(), usize> {
     let n = m.nrows();
     let a = m.as_mut_slice();
@@ -93,23 +94,24 @@ pub(crate) fn spd_inverse(
             }
         }
     }
-    // (Xᵀ X)_ij = column i · column j over rows ≥ max(i, j): off-diagonals into the (free)
-    // upper triangle, diagonals aside, then mirrored down over X.
+    // M⁻¹ = Xᵀ X by one matrix product (matrixmultiply's kernels): Xᵀ into `t`, the product
+    // into `out`, swapped into place.
     for j in 0..n {
         for i in 0..j {
-            let s: f64 = a[i * n + j..(i + 1) * n]
-                .iter()
-                .zip(&a[j * n + j..(j + 1) * n])
-                .map(|(x, y)| x * y)
-                .sum();
-            a[j * n + i] = s;
+            a[j * n + i] = 0.0;
         }
-        diag[j] = a[j * n + j..(j + 1) * n].iter().map(|x| x * x).sum();
     }
     for j in 0..n {
-        a[j * n + j] = diag[j];
+        for i in 0..n {
+            t[(i, j)] = m[(j, i)];
+        }
+    }
+    out.gemm(1.0, t, m, 0.0);
+    std::mem::swap(m, out);
+    // Exactly symmetric (the product rounds (i, j) and (j, i) alike, but say so).
+    for j in 0..n {
         for i in j + 1..n {
-            a[j * n + i] = a[i * n + j];
+            m[(j, i)] = m[(i, j)];
         }
     }
     Ok(())

@@ -158,8 +158,6 @@ pub struct DerivativeData {
     pub tau: Vec<f64>,
     /// `q̈` of the forward derivatives.
     pub qdd: Vec<f64>,
-    /// nv scratch values (the inverse's diagonal).
-    pub scratch: Vec<f64>,
 }
 
 impl DerivativeData {
@@ -177,7 +175,6 @@ impl DerivativeData {
             minv: z(),
             tau: vec![0.0; nv],
             qdd: vec![0.0; nv],
-            scratch: vec![0.0; nv],
         }
     }
 
