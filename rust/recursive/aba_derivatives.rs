@@ -33,7 +33,13 @@ pub fn forward_dynamics_derivatives(
     dd.qdd = qdd;
     done?;
     dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
-    spd_inverse(&mut dd.minv, &mut dd.ddq_dq, &mut dd.ddq_dv).map_err(|k| {
+    spd_inverse(
+        &mut dd.minv,
+        &mut dd.ddq_dq,
+        &mut dd.ddq_dv,
+        &mut dd.inv_diag,
+    )
+    .map_err(|k| {
         Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
         ))
@@ -45,11 +51,14 @@ pub fn forward_dynamics_derivatives(
 
 /// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`, then
 /// `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`, `out`:
-/// scratch matrices of the same size. `Err(k)` at a non-positive pivot `k`.
+/// scratch matrices of the same size; `inv_diag`: scratch of length n (the reciprocal
+/// pivots, so the substitution multiplies instead of dividing). `Err(k)` at a non-positive
+/// pivot `k`.
 pub(crate) fn spd_inverse(
     m: &mut DMatrix<f64>,
     t: &mut DMatrix<f64>,
     out: &mut DMatrix<f64>,
+    inv_diag: &mut [f64],
 ) -> std::result::Result<(), usize> {
     let n = m.nrows();
     let a = m.as_mut_slice();
@@ -71,6 +80,7 @@ pub(crate) fn spd_inverse(
         let d = d.sqrt();
         cj[j] = d;
         let inv = 1.0 / d;
+        inv_diag[j] = inv;
         for x in &mut cj[j + 1..] {
             *x *= inv;
         }
@@ -80,14 +90,14 @@ pub(crate) fn spd_inverse(
     for j in 0..n {
         let (head, tail) = a.split_at_mut((j + 1) * n);
         let cj = &mut head[j * n..];
-        let xj = 1.0 / cj[j];
+        let xj = inv_diag[j];
         cj[j] = xj;
         for x in &mut cj[j + 1..] {
             *x *= -xj;
         }
         for k in j + 1..n {
             let ck = &tail[(k - j - 1) * n..(k - j) * n];
-            let xk = cj[k] / ck[k];
+            let xk = cj[k] * inv_diag[k];
             cj[k] = xk;
             for (x, y) in cj[k + 1..].iter_mut().zip(&ck[k + 1..]) {
                 *x -= xk * y;

@@ -31,6 +31,9 @@ use crate::kinematics;
 use crate::model::Model;
 use crate::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
 
+/// No dof (above the root).
+pub(crate) const NO_DOF: usize = usize::MAX;
+
 /// Spatial motion cross product `a × b` (angular part first).
 #[inline(always)]
 pub(crate) fn cross_motion(a: &Vec6, b: &Vec6) -> Vec6 {
@@ -81,6 +84,12 @@ pub fn inverse_dynamics_derivatives(
             None => (z6, base),
         };
         let nv = l.joint.nv();
+        // The last dof at or above this link, and each dof's upstream neighbour.
+        let above = l.parent.map_or(NO_DOF, |p| dd.last_dof[p]);
+        for k in 0..nv {
+            dd.dof_parent[l.v_index + k] = if k == 0 { above } else { l.v_index + k - 1 };
+        }
+        dd.last_dof[i] = if nv > 0 { l.v_index + nv - 1 } else { above };
         let (vi, ai) = (&v[l.v_index..l.v_index + nv], &a[l.v_index..l.v_index + nv]);
         // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
         // before it; every other joint's columns are fixed in the parent (one column) or in
@@ -175,21 +184,19 @@ pub fn inverse_dynamics_derivatives(
                 dv[at] = moved_v(dj, dk);
                 mm[at] = dj.s.dot(&dk.ys);
             }
-            let mut up = l.parent;
-            while let Some(pa) = up {
-                let la = &model.links[pa];
-                for k in la.v_index..la.v_index + la.joint.nv() {
-                    let dk = &dd.dofs[k];
-                    let (col, row) = (j * nvt + k, k * nvt + j);
-                    dq[col] = dk.s.dot(&dj.g);
-                    dq[row] = moved_q(dj, dk);
-                    dv[col] = dk.s.dot(&dj.gv);
-                    dv[row] = moved_v(dj, dk);
-                    let m = dk.s.dot(&dj.ys);
-                    mm[col] = m;
-                    mm[row] = m;
-                }
-                up = la.parent;
+            // The dofs upstream of this joint, nearest first.
+            let mut k = dd.dof_parent[l.v_index];
+            while k != NO_DOF {
+                let dk = &dd.dofs[k];
+                let (col, row) = (j * nvt + k, k * nvt + j);
+                dq[col] = dk.s.dot(&dj.g);
+                dq[row] = moved_q(dj, dk);
+                dv[col] = dk.s.dot(&dj.gv);
+                dv[row] = moved_v(dj, dk);
+                let m = dk.s.dot(&dj.ys);
+                mm[col] = m;
+                mm[row] = m;
+                k = dd.dof_parent[k];
             }
         }
         if let Some(pa) = l.parent {

@@ -102,8 +102,13 @@ impl Dynamics<'_> {
             *r -= x;
         }
         dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
-        spd_inverse(&mut dd.minv, &mut dd.ddq_dq, &mut dd.ddq_dv)
-            .map_err(|k| format!("the mass matrix is not positive definite (pivot {k})"))?;
+        spd_inverse(
+            &mut dd.minv,
+            &mut dd.ddq_dq,
+            &mut dd.ddq_dv,
+            &mut dd.inv_diag,
+        )
+        .map_err(|k| format!("the mass matrix is not positive definite (pivot {k})"))?;
         dd.ddq_dq.gemm(1.0, &dd.minv, &w.rq, 0.0);
         dd.ddq_dv.gemm(1.0, &dd.minv, &w.rv, 0.0);
         Ok(())
