@@ -171,12 +171,12 @@ impl Dynamics<'_> {
         tangent::tangent_map(model, q, &mut w.tmap);
         w.ddq_dcoords.gemm(1.0, &w.dd.ddq_dq, &w.tmap, 0.0);
         for r in 0..nv {
-            let row = &mut jac[(nq + r) * dim..(nq + r + 1) * dim];
-            for c in 0..nq {
-                row[c] = w.ddq_dcoords[(r, c)];
+            let (left, right) = jac[(nq + r) * dim..(nq + r + 1) * dim].split_at_mut(nq);
+            for (c, x) in left.iter_mut().enumerate() {
+                *x = w.ddq_dcoords[(r, c)];
             }
-            for c in 0..nv {
-                row[nq + c] = w.dd.ddq_dv[(r, c)];
+            for (c, x) in right.iter_mut().enumerate() {
+                *x = w.dd.ddq_dv[(r, c)];
             }
         }
         Ok(true)
