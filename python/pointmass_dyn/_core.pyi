@@ -503,7 +503,7 @@ class Scene:
     ) -> dict[str, Any]:
         """``{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [names]}`` of the scene's
         accelerations with its enabled effects (plus ``tau``); ``numerical`` names the effects
-        differentiated by central differences (callbacks, external loads, point springs).
+        differentiated by central differences (torque callbacks, external loads).
         Scenes without loops (docs/derivatives.md)."""
     def inverse_dynamics_derivatives(
         self,

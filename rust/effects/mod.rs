@@ -660,8 +660,8 @@ pub trait ForceLaw: Send {
     /// `dq` (`∂τ_e/∂q`, columns in the tangent space as the dynamics derivatives,
     /// docs/derivatives.md) and `dv` (`∂τ_e/∂v`), both nv × nv; returns whether it did.
     /// `false` (the default) leaves them untouched and the caller differentiates the law's
-    /// generalized force numerically (central differences), saying so in its result: laws
-    /// with wrenches or a Python callback. Must not allocate.
+    /// generalized force numerically (central differences), saying so in its result: external
+    /// loads and Python callbacks. Must not allocate.
     fn add_derivatives(
         &mut self,
         _cx: &Context<'_>,
