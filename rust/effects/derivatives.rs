@@ -1,10 +1,10 @@
 //! Derivatives of the effects' generalized forces `τ_e(t, q, v)` (docs/derivatives.md): each
-//! law's own analytic [`ForceLaw::add_derivatives`] where it has one (springs, dampers,
-//! smooth friction, constant, tabulated and PD torques); otherwise (a Python torque
-//! callback, external loads, point springs: wrenches whose generalized force goes through
-//! the body Jacobians) central differences of the law's generalized force, in the tangent
-//! space, flagged in [`EffectDerivatives::numerical`]. Gravity rides on the dynamics'
-//! own derivatives (the base acceleration), not here.
+//! law's own analytic [`ForceLaw::add_derivatives`] where it has one (springs, point
+//! springs, dampers, smooth friction, constant, tabulated and PD torques); otherwise (a
+//! Python torque callback; external loads, wrenches whose generalized force goes through the
+//! inverse dynamics) central differences of the law's generalized force, in the tangent
+//! space, flagged in [`EffectDerivatives::numerical`]. Gravity rides on the dynamics' own
+//! derivatives (the base acceleration), not here.
 use super::{Context, Effects, Probe};
 use crate::model::Model;
 use crate::recursive::tangent::integrate;
