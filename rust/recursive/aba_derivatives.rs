@@ -14,7 +14,8 @@ use nalgebra::DMatrix;
 /// `∂q̈/∂q`, `∂q̈/∂v`, `M⁻¹` into `dd.ddq_dq`, `dd.ddq_dv`, `dd.minv` (and `q̈` into
 /// `dd.qdd`, `∂τ/∂q`, `∂τ/∂v`, `M` as [`inverse_dynamics_derivatives`] leaves them). `tau`
 /// holds the joint forces (gravity `g`, no external wrenches). Errors where the forward
-/// dynamics does (a ZYZ singularity, a singular mass matrix). No allocation.
+/// dynamics does (a ZYZ singularity, a singular mass matrix). Every buffer is in `dd`; the only
+/// allocations are the packing buffers matrixmultiply takes inside each of the three products.
 #[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics_derivatives(
     model: &Model,
