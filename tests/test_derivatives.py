@@ -339,6 +339,12 @@ def test_loops_and_bad_input_are_refused():
     q, v = np.array([0.3, 0.5, 0.7]), np.zeros(3)
     with pytest.raises(pmd.errors.InvalidInputError, match="loop"):
         m.forward_dynamics_derivatives(q, v, np.zeros(3))
+    # Scenes with loops: no analytic state Jacobian (the integrator differentiates
+    # numerically), and the derivatives are refused.
+    s = pmd.Scene(m, effects=[E.gravity()])
+    assert s.state_jacobian(np.concatenate([q, v])) is None
+    with pytest.raises(pmd.errors.InvalidInputError, match="loop"):
+        s.forward_dynamics_derivatives(q, v)
     tree = random_tree(1, 5, kinds=("Revolute",))
     model = build_model(tree)
     with pytest.raises(pmd.errors.InvalidInputError, match="v"):
