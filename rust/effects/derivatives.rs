@@ -115,3 +115,114 @@ impl Effects {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Each analytic law against central differences of its own `apply`, including the
+    //! series branches (a ball spring near its rest, ball friction near rest).
+    use super::super::{Damper, Effect, Friction, JointRef, PerJoint, Spring};
+    use super::*;
+    use crate::body::RigidBody;
+    use crate::joint::Joint;
+    use crate::spatial::{Mat3, Placement};
+
+    fn model() -> Model {
+        let mut m = Model::new();
+        let b = RigidBody::new(1.0, Vec3::new(0.1, 0.0, 0.0), Mat3::identity() * 0.02).unwrap();
+        let place = Placement::new(Mat3::identity(), Vec3::new(0.2, 0.0, 0.0));
+        m.add_body(
+            b,
+            Joint::revolute(Vec3::z()).unwrap(),
+            None,
+            Placement::identity(),
+            Some("r".into()),
+            None,
+        )
+        .unwrap();
+        m.add_body(b, Joint::Spherical, Some(0), place, Some("s".into()), None)
+            .unwrap();
+        m
+    }
+
+    /// `(analytic, numerical)` `∂τ/∂q`, `∂τ/∂v` of one effect at `(q, v)`.
+    fn both(model: &Model, e: &Effect, q: &[f64], v: &[f64]) -> [(DMatrix<f64>, DMatrix<f64>); 2] {
+        let nv = model.nv;
+        let mut law = e.build(model).unwrap();
+        let cx = Context {
+            model,
+            t: 0.0,
+            q,
+            v,
+        };
+        let (mut aq, mut av) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
+        assert!(law.add_derivatives(&cx, &mut aq, &mut av).unwrap());
+        let mut probe = Probe::new(model);
+        let (mut nq, mut nvm) = (DMatrix::zeros(nv, nv), DMatrix::zeros(nv, nv));
+        let (mut qp, mut d, mut vp) = (q.to_vec(), vec![0.0; nv], v.to_vec());
+        let (mut fp, mut fm) = (vec![0.0; nv], vec![0.0; nv]);
+        let h = 1e-6;
+        for c in 0..nv {
+            for (s, out) in [(1.0, &mut fp), (-1.0, &mut fm)] {
+                d[c] = s * h;
+                integrate(model, q, &d, &mut qp);
+                let at = Context { q: &qp, ..cx };
+                generalized_force(&mut probe, law.as_mut(), &at, out).unwrap();
+            }
+            d[c] = 0.0;
+            for r in 0..nv {
+                nq[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
+            }
+            for (s, out) in [(1.0, &mut fp), (-1.0, &mut fm)] {
+                vp[c] = v[c] + s * h;
+                let at = Context { v: &vp, ..cx };
+                generalized_force(&mut probe, law.as_mut(), &at, out).unwrap();
+            }
+            vp[c] = v[c];
+            for r in 0..nv {
+                nvm[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
+            }
+        }
+        [(aq, nq), (av, nvm)]
+    }
+
+    #[test]
+    fn analytic_effect_derivatives_match_central_differences() {
+        let m = model();
+        let s = 0.3f64.sin();
+        let turned = [0.6 * s, -0.3 * s, 0.1 * s, 0.3f64.cos()];
+        let n = turned.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let states: [(Vec<f64>, Vec<f64>); 3] = [
+            // General, near rest (ball spring and ball friction series), far from rest.
+            (
+                vec![
+                    0.4,
+                    turned[0] / n,
+                    turned[1] / n,
+                    turned[2] / n,
+                    turned[3] / n,
+                ],
+                vec![0.7, 0.5, -0.4, 0.2],
+            ),
+            (
+                vec![0.1, 1e-6, 0.0, 0.0, 1.0],
+                vec![1e-9, 1e-9, -2e-9, 1e-9],
+            ),
+            (vec![-2.0, 0.0, 0.9, 0.0, 0.3], vec![-3.0, 2.0, 1.0, -1.5]),
+        ];
+        let all = Some(vec![JointRef::Index(0), JointRef::Index(1)]);
+        let effects = [
+            Effect::Spring(Spring::new(None, all.clone(), PerJoint::All(2.5), None).unwrap()),
+            Effect::Damper(Damper::new(None, all.clone(), PerJoint::All(0.7)).unwrap()),
+            Effect::Friction(Friction::new(None, all, PerJoint::All(0.4), Some(0.05)).unwrap()),
+        ];
+        for (q, v) in &states {
+            for e in &effects {
+                for (k, (a, n)) in both(&m, e, q, v).iter().enumerate() {
+                    let scale = a.amax().max(1.0);
+                    let err = (a - n).amax();
+                    assert!(err < 1e-6 * scale, "{e:?} {k} at {q:?}: {err}\n{a}\n{n}");
+                }
+            }
+        }
+    }
+}
