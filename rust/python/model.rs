@@ -479,9 +479,15 @@ fn square_to_array<'py>(
         let arr = PyArray2::<f64>::new(py, [r, c], false);
         let out = std::slice::from_raw_parts_mut(arr.data(), r * c);
         let src = m.as_slice();
-        for j in 0..c {
-            for i in 0..r {
-                out[i * c + j] = src[j * r + i];
+        // By 8 × 8 tiles: each tile's reads and writes stay within a few cache lines.
+        const T: usize = 8;
+        for j0 in (0..c).step_by(T) {
+            for i0 in (0..r).step_by(T) {
+                for j in j0..(j0 + T).min(c) {
+                    for i in i0..(i0 + T).min(r) {
+                        out[i * c + j] = src[j * r + i];
+                    }
+                }
             }
         }
         arr

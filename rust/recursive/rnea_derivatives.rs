@@ -55,12 +55,25 @@ fn b_mul(baa: &Mat3, bla: &Mat3, x: &Vec6) -> Vec6 {
     stack(&(baa * xa), &(bla * xa))
 }
 
-/// `∂τ/∂q`, `∂τ/∂v` and `M = ∂τ/∂a` of `τ = ID(q, v, a)` (gravity `g`, no external
-/// wrenches) into `dd.dtau_dq`, `dd.dtau_dv`, `dd.mass`; `τ` itself into `dd.tau`. Columns
-/// are tangent directions (nv of them). `data.links` is overwritten with the positions at
-/// `q`. No allocation.
+crate::cpu::multiversion! {
+    /// `∂τ/∂q`, `∂τ/∂v` and `M = ∂τ/∂a` of `τ = ID(q, v, a)` (gravity `g`, no external
+    /// wrenches) into `dd.dtau_dq`, `dd.dtau_dv`, `dd.mass`; `τ` itself into `dd.tau`. Columns
+    /// are tangent directions (nv of them). `data.links` is overwritten with the positions at
+    /// `q`. No allocation. Compiled for AVX2 where the CPU has it (see [`crate::cpu`]).
+    pub fn inverse_dynamics_derivatives / derivatives_avx2 / derivatives_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        dd: &mut DerivativeData,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        g: &Vec3,
+    ) => derivatives_body
+}
+
 #[allow(clippy::too_many_arguments)]
-pub fn inverse_dynamics_derivatives(
+#[inline(always)]
+fn derivatives_body(
     model: &Model,
     data: &mut Data,
     dd: &mut DerivativeData,
