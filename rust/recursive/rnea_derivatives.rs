@@ -195,7 +195,12 @@ fn derivatives_body(
                     moved_q(dj, dk)
                 };
                 dv[at] = moved_v(dj, dk);
-                mm[at] = dj.s.dot(&dk.ys);
+                // Exactly symmetric: one product per pair, mirrored.
+                if k >= j {
+                    let m = dj.s.dot(&dk.ys);
+                    mm[at] = m;
+                    mm[j * nvt + k] = m;
+                }
             }
             // The dofs upstream of this joint, nearest first.
             let mut k = dd.dof_parent[l.v_index];
