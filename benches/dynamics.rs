@@ -133,9 +133,54 @@ fn bench(c: &mut Criterion) {
     group.finish();
 }
 
+/// The analytic derivatives (docs/derivatives.md): inverse (RNEA) and forward (ABA).
+fn bench_derivatives(c: &mut Criterion) {
+    for (label, forward) in [
+        ("inverse_dynamics_derivatives", false),
+        ("forward_dynamics_derivatives", true),
+    ] {
+        let mut group = c.benchmark_group(label);
+        for (name, model) in models() {
+            if model.nv > 300 {
+                continue; // O(nv²) memory and O(nv³) time: beyond the compared sizes
+            }
+            let (q, v, u) = state(&model);
+            let mut data = Data::new(&model);
+            let mut dd = recursive::DerivativeData::new(&model);
+            group.bench_function(BenchmarkId::from_parameter(&name), |b| {
+                b.iter(|| {
+                    if forward {
+                        recursive::forward_dynamics_derivatives(
+                            &model,
+                            &mut data,
+                            &mut dd,
+                            black_box(&q),
+                            black_box(&v),
+                            black_box(&u),
+                            &G,
+                        )
+                        .expect("regular configuration");
+                    } else {
+                        recursive::inverse_dynamics_derivatives(
+                            &model,
+                            &mut data,
+                            &mut dd,
+                            black_box(&q),
+                            black_box(&v),
+                            black_box(&u),
+                            &G,
+                        );
+                    }
+                })
+            });
+        }
+        group.finish();
+    }
+}
+
 criterion_group! {
     name = benches;
     config = Criterion::default().sample_size(30).measurement_time(std::time::Duration::from_secs(2)).warm_up_time(std::time::Duration::from_millis(500));
-    targets = bench
+    targets = bench, bench_derivatives
 }
 criterion_main!(benches);

@@ -523,6 +523,32 @@ class Scene:
         """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
         ``effects`` act (none: no gravity); joint and body names and table widths are checked
         against the model here. ``disable``: families switched off by default."""
+    def forward_dynamics_derivatives(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        tau: ArrayLike | None = None,
+        t: float = 0.0,
+        disable: _Family | Sequence[_Family] | None = None,
+    ) -> dict[str, Any]:
+        """``{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [names]}`` of the scene's
+        accelerations with its enabled effects (plus ``tau``); ``numerical`` names the effects
+        differentiated by central differences (torque callbacks, external loads).
+        Scenes without loops (docs/derivatives.md)."""
+    def inverse_dynamics_derivatives(
+        self,
+        q: ArrayLike,
+        v: ArrayLike,
+        a: ArrayLike,
+        t: float = 0.0,
+        disable: _Family | Sequence[_Family] | None = None,
+    ) -> dict[str, Any]:
+        """``{"dq", "dv", "da", "numerical"}`` of ``τ = ID(q, v, a) − τ_effects(t, q, v)``."""
+    def state_jacobian(
+        self, y: ArrayLike, t: float = 0.0, disable: _Family | Sequence[_Family] | None = None
+    ) -> _Array | None:
+        """``∂ẏ/∂y`` of ``y = [q; v]`` (q's own coordinates), shape (nq+nv, nq+nv), as the
+        implicit integrators use it; ``None`` for a scene with closed loops."""
     def replace(
         self, model: Model | None = None, effects: Sequence[Effect] | None = None
     ) -> Scene:

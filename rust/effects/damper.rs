@@ -78,4 +78,17 @@ impl ForceLaw for DamperLaw {
         }
         Ok(false)
     }
+
+    /// `∂τ/∂v = −c` on each damped speed.
+    fn add_derivatives(
+        &mut self,
+        _cx: &Context<'_>,
+        _dq: &mut nalgebra::DMatrix<f64>,
+        dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        for &(i, c) in &self.dofs {
+            dv[(i, i)] -= c;
+        }
+        Ok(true)
+    }
 }

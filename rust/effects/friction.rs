@@ -119,4 +119,40 @@ impl ForceLaw for FrictionLaw {
         }
         Ok(false)
     }
+
+    /// The smooth law's derivative, `∂τ/∂v = −F sech²(v/ε)/ε` (scalar); for a ball joint,
+    /// `τ = −F φ(s) w` with `φ(s) = tanh(s/ε)/s`, `s = |w|`: `∂τ/∂w = −F (φ 1 + φ'(s)/s w wᵀ)`,
+    /// by its series near `s = 0` (where it tends to `−F/ε 1`).
+    fn add_derivatives(
+        &mut self,
+        cx: &Context<'_>,
+        _dq: &mut nalgebra::DMatrix<f64>,
+        dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        let ie = self.inv_eps;
+        for &(i, f) in &self.scalar {
+            let c = (cx.v[i] * ie).cosh();
+            dv[(i, i)] -= f * ie / (c * c);
+        }
+        for &(i, f) in &self.ball {
+            let w = &cx.v[i..i + 3];
+            let s = (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+            let x = s * ie;
+            let (phi, dphi_s) = if x < 1e-4 {
+                // tanh(x)/x = 1 − x²/3 + …
+                (ie * (1.0 - x * x / 3.0), -2.0 / 3.0 * ie * ie * ie)
+            } else {
+                let t = x.tanh();
+                let sech2 = 1.0 - t * t;
+                (t / s, (sech2 * ie * s - t) / (s * s * s))
+            };
+            for r in 0..3 {
+                for c in 0..3 {
+                    let d = if r == c { phi } else { 0.0 };
+                    dv[(i + r, i + c)] -= f * (d + dphi_s * w[r] * w[c]);
+                }
+            }
+        }
+        Ok(true)
+    }
 }

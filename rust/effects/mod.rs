@@ -51,6 +51,7 @@
 //!
 //! `[simulate] disable = ["gravity", "springs"]` switches families off.
 pub mod damper;
+pub mod derivatives;
 pub mod external;
 pub mod friction;
 pub mod gravity;
@@ -655,6 +656,20 @@ pub trait ForceLaw: Send {
         tau: &mut [f64],
         wrenches: &mut [Vec6],
     ) -> std::result::Result<bool, String>;
+    /// Adds the derivatives of this law's joint forces `τ_e` (the `tau` part of `apply`) to
+    /// `dq` (`∂τ_e/∂q`, columns in the tangent space as the dynamics derivatives,
+    /// docs/derivatives.md) and `dv` (`∂τ_e/∂v`), both nv × nv; returns whether it did.
+    /// `false` (the default) leaves them untouched and the caller differentiates the law's
+    /// generalized force numerically (central differences), saying so in its result: external
+    /// loads and Python callbacks. Must not allocate.
+    fn add_derivatives(
+        &mut self,
+        _cx: &Context<'_>,
+        _dq: &mut nalgebra::DMatrix<f64>,
+        _dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        Ok(false)
+    }
     /// Potential energy of a conservative effect (`links` holds positions at `cx.q`);
     /// `None` for the others.
     fn potential_energy(&self, _cx: &Context<'_>, _links: &[LinkState]) -> Option<f64> {

@@ -163,6 +163,8 @@ impl Declaration for PointSpring {
             rest: self.rest_length,
             c: self.damping,
             coincide,
+            g: vec![Vec3::zeros(); model.nv],
+            h: vec![Vec3::zeros(); model.nv],
         }))
     }
 }
@@ -176,6 +178,21 @@ struct Column {
     origin: Vec3,
     s: Vec6,
     j: Vec3,
+    /// The link of the column's joint, and whether that joint's columns move each other
+    /// only forward (ZYZ: a chain of revolutes) rather than all together (quaternion
+    /// joints); for the derivatives.
+    link: usize,
+    chain: bool,
+}
+
+impl Column {
+    /// Whether perturbing column `c` carries this column along (docs/derivatives.md): `c`'s
+    /// joint is upstream, or it is the same joint and not an earlier ZYZ angle. Both on one
+    /// root-to-link path, in path order.
+    #[inline]
+    fn moved_by(&self, c: &Column, c_before: bool) -> bool {
+        c.link != self.link && c_before || c.link == self.link && (!self.chain || c.v <= self.v)
+    }
 }
 
 /// One end of the spring, resolved: the link carrying it (`None`: fixed in the world), the
@@ -228,6 +245,8 @@ impl End {
             origin: Vec3::zeros(),
             s: Vec6::zeros(),
             j: Vec3::zeros(),
+            link: 0,
+            chain: false,
         };
         Ok(End {
             link: Some(link),
@@ -260,6 +279,8 @@ impl End {
             for (k, s) in s.iter().take(l.joint.nv()).enumerate() {
                 let col = &mut self.columns[c];
                 col.v = l.v_index + k;
+                col.link = i;
+                col.chain = matches!(l.joint, crate::joint::Joint::SphericalZYZ);
                 col.origin = o;
                 col.s = *s;
                 c += 1;
@@ -309,6 +330,35 @@ pub struct PointSpringLaw {
     c: f64,
     /// The error when the points coincide (built once: the run stops on it).
     coincide: String,
+    /// Per speed, `∂d/∂δ` and `∂ḋ/∂δ` of the points' separation `d` (derivatives only).
+    g: Vec<Vec3>,
+    h: Vec<Vec3>,
+}
+
+impl PointSpringLaw {
+    /// The force on b, `f(d, ḋ)`, and its Jacobians `∂f/∂d`, `∂f/∂ḋ` (after `place`).
+    fn force_jacobians(
+        &self,
+        d: &Vec3,
+        dd: &Vec3,
+    ) -> std::result::Result<(Vec3, Mat3, Mat3), String> {
+        if self.rest == 0.0 && self.c == 0.0 {
+            return Ok((-self.k * d, Mat3::identity() * -self.k, Mat3::zeros()));
+        }
+        let l = d.norm();
+        if l == 0.0 {
+            return Err(self.coincide.clone());
+        }
+        let u = d / l;
+        let perp = (Mat3::identity() - u * u.transpose()) / l;
+        let l_dot = u.dot(dd);
+        let m = self.k * (l - self.rest) + self.c * l_dot;
+        // f = −m u: ∂m/∂d = k u + c (1 − u uᵀ) ḋ / l, ∂u/∂d = (1 − u uᵀ)/l, ∂m/∂ḋ = c u.
+        let dm = u * self.k + perp * dd * self.c;
+        let fd = -(u * dm.transpose()) - perp * m;
+        let fdd = -(u * u.transpose()) * self.c;
+        Ok((-m * u, fd, fdd))
+    }
 }
 
 impl ForceLaw for PointSpringLaw {
@@ -339,6 +389,67 @@ impl ForceLaw for PointSpringLaw {
         self.b.add_force(&f_b, tau);
         self.a.add_force(&-f_b, tau);
         Ok(false)
+    }
+
+    /// `τ = σ_b J_bᵀ f − …` differentiated: a column `j_k` of an end's point Jacobian turns
+    /// as `ω_c × j_k` under a column `c` that carries it, and as `ω_k × j_c` (its point moves)
+    /// under one downstream; `d` moves by `g_c = Σ σ j_c`, `ḋ` by
+    /// `h_c = Σ σ Σ_m v_m ∂j_m/∂δ_c` along `δ_c` and by `g_c` along `v_c`.
+    fn add_derivatives(
+        &mut self,
+        cx: &Context<'_>,
+        dq: &mut nalgebra::DMatrix<f64>,
+        dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        let d = self.b.place(cx.model, cx.q) - self.a.place(cx.model, cx.q);
+        let ddot = self.b.velocity(cx.v) - self.a.velocity(cx.v);
+        let (f, fd, fdd) = self.force_jacobians(&d, &ddot)?;
+        let z = Vec3::zeros();
+        for end in [&self.a, &self.b] {
+            for col in &end.columns {
+                self.g[col.v] = z;
+                self.h[col.v] = z;
+            }
+        }
+        for (sign, end) in [(-1.0, &self.a), (1.0, &self.b)] {
+            let cols = &end.columns;
+            for (ci, c) in cols.iter().enumerate() {
+                let wc = angular(&c.s);
+                self.g[c.v] += c.j * sign;
+                let mut hc = Vec3::zeros();
+                for (mi, m) in cols.iter().enumerate() {
+                    let djm = if m.moved_by(c, ci < mi) {
+                        wc.cross(&m.j)
+                    } else {
+                        angular(&m.s).cross(&c.j)
+                    };
+                    hc += djm * cx.v[m.v];
+                    // (∂j_m/∂δ_c)·f, the Jacobian's own turn.
+                    dq[(m.v, c.v)] += sign * djm.dot(&f);
+                }
+                self.h[c.v] += hc * sign;
+            }
+        }
+        for (sign, end) in [(-1.0, &self.a), (1.0, &self.b)] {
+            for k in &end.columns {
+                let jf = fd.transpose() * k.j * sign;
+                let jfd = fdd.transpose() * k.j * sign;
+                for other in [&self.a, &self.b] {
+                    for c in &other.columns {
+                        // Each (k, c) once: the second end's columns shared with the first
+                        // (a common ancestor) are skipped there.
+                        if !std::ptr::eq(other, &self.a)
+                            && self.a.columns.iter().any(|x| x.v == c.v)
+                        {
+                            continue;
+                        }
+                        dq[(k.v, c.v)] += jf.dot(&self.g[c.v]) + jfd.dot(&self.h[c.v]);
+                        dv[(k.v, c.v)] += jfd.dot(&self.g[c.v]);
+                    }
+                }
+            }
+        }
+        Ok(true)
     }
 
     fn potential_energy(&self, _cx: &Context<'_>, links: &[LinkState]) -> Option<f64> {

@@ -192,6 +192,31 @@ impl ForceLaw for SpringLaw {
         Ok(false)
     }
 
+    /// `−k` for a linear spring; for a ball spring `τ = −k θ`, `θ = log(r ⊗ q)`, and a right
+    /// perturbation `q ⊗ exp(δ)` moves `θ` by `J_r⁻¹(θ) δ` (the inverse right Jacobian of
+    /// SO(3)): `∂τ/∂δ = −k J_r⁻¹(θ)`. At `|θ| = π` the shortest rotation flips: the
+    /// one-sided value is returned there.
+    fn add_derivatives(
+        &mut self,
+        cx: &Context<'_>,
+        dq: &mut nalgebra::DMatrix<f64>,
+        _dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        for s in &self.linear {
+            dq[(s.v, s.v)] -= s.k;
+        }
+        for s in &self.ball {
+            let th = relative_rotation_vector(&s.rest_conj, &cx.q[s.q..s.q + 4]);
+            let j = inverse_right_jacobian(&crate::spatial::Vec3::new(th[0], th[1], th[2]));
+            for r in 0..3 {
+                for c in 0..3 {
+                    dq[(s.v + r, s.v + c)] -= s.k * j[(r, c)];
+                }
+            }
+        }
+        Ok(true)
+    }
+
     fn potential_energy(&self, cx: &Context<'_>, _links: &[LinkState]) -> Option<f64> {
         let mut e = 0.0;
         for s in &self.linear {
@@ -204,4 +229,17 @@ impl ForceLaw for SpringLaw {
         }
         Some(e)
     }
+}
+
+/// `J_r⁻¹(θ) = 1 + ½ θ̃ + (1/|θ|² − (1 + cos|θ|)/(2|θ| sin|θ|)) θ̃²`: how `log(exp(θ̃) exp(δ̃))`
+/// moves with `δ` at 0 (series below |θ| = 1e-4, where the coefficient tends to 1/12).
+pub fn inverse_right_jacobian(th: &crate::spatial::Vec3) -> crate::spatial::Mat3 {
+    let t = th.norm();
+    let c = if t < 1e-4 {
+        1.0 / 12.0 + t * t / 720.0
+    } else {
+        1.0 / (t * t) - (1.0 + t.cos()) / (2.0 * t * t.sin())
+    };
+    let s = crate::spatial::skew(th);
+    crate::spatial::Mat3::identity() + s * 0.5 + s * s * c
 }

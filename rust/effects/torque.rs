@@ -350,6 +350,16 @@ impl ForceLaw for ConstantLaw {
         }
         Ok(false)
     }
+
+    /// Independent of the state.
+    fn add_derivatives(
+        &mut self,
+        _cx: &Context<'_>,
+        _dq: &mut nalgebra::DMatrix<f64>,
+        _dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        Ok(true)
+    }
 }
 
 struct TableLaw {
@@ -372,6 +382,16 @@ impl ForceLaw for TableLaw {
             tau[i] += x;
         }
         Ok(false)
+    }
+
+    /// A function of time only.
+    fn add_derivatives(
+        &mut self,
+        _cx: &Context<'_>,
+        _dq: &mut nalgebra::DMatrix<f64>,
+        _dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        Ok(true)
     }
 }
 
@@ -398,6 +418,21 @@ impl ForceLaw for PdLaw {
             tau[iv] += kp * (self.r[k] - cx.q[iq]) + kd * (self.rd[k] - cx.v[iv]);
         }
         Ok(false)
+    }
+
+    /// `−kp` and `−kd` on each joint's diagonal (one-speed joints: the tangent is the
+    /// coordinate).
+    fn add_derivatives(
+        &mut self,
+        _cx: &Context<'_>,
+        dq: &mut nalgebra::DMatrix<f64>,
+        dv: &mut nalgebra::DMatrix<f64>,
+    ) -> std::result::Result<bool, String> {
+        for &(_, iv, kp, kd) in &self.joints {
+            dq[(iv, iv)] -= kp;
+            dv[(iv, iv)] -= kd;
+        }
+        Ok(true)
     }
 }
 

@@ -10,7 +10,7 @@
 //!   constraint wrenches, the driving forces of chosen actuated joints, and the projections
 //!   onto the position, velocity and acceleration manifolds (`assemble`).
 mod constraints;
-pub(crate) mod factor;
+mod factor;
 mod solve;
 #[cfg(test)]
 mod tests;

@@ -2,6 +2,7 @@
 mod body;
 mod convert;
 mod dense;
+mod derivatives;
 mod effects;
 mod errors;
 mod events;

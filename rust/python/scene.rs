@@ -214,6 +214,48 @@ impl PyScene {
     fn disable(&self) -> Option<Vec<&'static str>> {
         self.inner.settings.disable.map(|d| d.names())
     }
+    /// `{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [...]}` of the scene's
+    /// accelerations at `(t, q, v)` with the joint forces `tau` (default zero) on top of the
+    /// enabled effects; `numerical` names the effects differentiated by central differences
+    /// (docs/derivatives.md).
+    #[pyo3(signature = (q, v, tau=None, t=0.0, disable=None))]
+    fn forward_dynamics_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: Option<&Bound<'_, PyAny>>,
+        t: f64,
+        disable: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        super::derivatives::forward(py, &self.inner, q, v, tau, t, disable)
+    }
+    /// `{"dq": ∂τ/∂q, "dv": ∂τ/∂v, "da": M, "numerical": [...]}` of the joint forces
+    /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
+    #[pyo3(signature = (q, v, a, t=0.0, disable=None))]
+    fn inverse_dynamics_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        t: f64,
+        disable: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        super::derivatives::inverse(py, &self.inner, q, v, a, t, disable)
+    }
+    /// `∂ẏ/∂y` of the equations of motion `y = [q; v]` (nq + nv square, `q`'s own
+    /// coordinates), what implicit integrators use; `None` for a scene with closed loops.
+    #[pyo3(signature = (y, t=0.0, disable=None))]
+    fn state_jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        y: &Bound<'_, PyAny>,
+        t: f64,
+        disable: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Option<Bound<'py, PyAny>>> {
+        super::derivatives::state_jacobian(py, &self.inner, y, t, disable)
+    }
     fn __repr__(&self) -> String {
         let s = &self.inner;
         format!(

@@ -238,7 +238,7 @@ fn power_dict<'py>(
 
 /// The scene's equations of motion with the `disable`d families (the caller's, else the
 /// scene's) left out.
-fn scene_system<'s>(
+pub(super) fn scene_system<'s>(
     py: Python<'_>,
     s: &'s Scene,
     disable: Option<&Bound<'_, PyAny>>,

@@ -7,7 +7,6 @@
 use super::rnea_derivatives::inverse_dynamics_derivatives;
 use super::workspace::{Data, DerivativeData};
 use crate::error::{Error, Result};
-use crate::loops::factor::cholesky;
 use crate::model::Model;
 use crate::spatial::Vec3;
 use nalgebra::DMatrix;
@@ -15,7 +14,8 @@ use nalgebra::DMatrix;
 /// `∂q̈/∂q`, `∂q̈/∂v`, `M⁻¹` into `dd.ddq_dq`, `dd.ddq_dv`, `dd.minv` (and `q̈` into
 /// `dd.qdd`, `∂τ/∂q`, `∂τ/∂v`, `M` as [`inverse_dynamics_derivatives`] leaves them). `tau`
 /// holds the joint forces (gravity `g`, no external wrenches). Errors where the forward
-/// dynamics does (a ZYZ singularity, a singular mass matrix). No allocation.
+/// dynamics does (a ZYZ singularity, a singular mass matrix). Every buffer is in `dd`; the only
+/// allocations are the packing buffers matrixmultiply takes inside each of the three products.
 #[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics_derivatives(
     model: &Model,
@@ -33,8 +33,14 @@ pub fn forward_dynamics_derivatives(
     }
     dd.qdd = qdd;
     done?;
-    dd.minv.copy_from(&dd.mass);
-    spd_inverse(&mut dd.minv).map_err(|k| {
+    dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
+    spd_inverse(
+        &mut dd.minv,
+        &mut dd.ddq_dq,
+        &mut dd.ddq_dv,
+        &mut dd.inv_diag,
+    )
+    .map_err(|k| {
         Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
         ))
@@ -44,37 +50,79 @@ pub fn forward_dynamics_derivatives(
     Ok(())
 }
 
-/// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `L⁻¹`, then
-/// `M⁻¹ = L⁻ᵀ L⁻¹`. `Err(k)` at a non-positive pivot `k`.
-pub(crate) fn spd_inverse(m: &mut DMatrix<f64>) -> std::result::Result<(), usize> {
+/// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`, then
+/// `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`, `out`:
+/// scratch matrices of the same size; `inv_diag`: scratch of length n (the reciprocal
+/// pivots, so the substitution multiplies instead of dividing). `Err(k)` at a non-positive
+/// pivot `k`.
+pub(crate) fn spd_inverse(
+    m: &mut DMatrix<f64>,
+    t: &mut DMatrix<f64>,
+    out: &mut DMatrix<f64>,
+    inv_diag: &mut [f64],
+) -> std::result::Result<(), usize> {
     let n = m.nrows();
-    cholesky(m)?;
-    // L⁻¹ by columns, left to right: column j reads only L's columns > j, not yet overwritten.
+    let a = m.as_mut_slice();
+    // Cholesky, left-looking: column j −= L_jk · column k (rows j..n), k < j.
     for j in 0..n {
-        let djj = 1.0 / m[(j, j)];
-        for i in j + 1..n {
-            let mut s = m[(i, j)] * djj;
-            for k in j + 1..i {
-                s += m[(i, k)] * m[(k, j)];
+        let (done, rest) = a.split_at_mut(j * n);
+        let cj = &mut rest[..n];
+        for k in 0..j {
+            let ck = &done[k * n..(k + 1) * n];
+            let l = ck[j];
+            for (x, y) in cj[j..].iter_mut().zip(&ck[j..]) {
+                *x -= l * y;
             }
-            m[(i, j)] = -s / m[(i, i)];
         }
-        m[(j, j)] = djj;
+        let d = cj[j];
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(j);
+        }
+        let d = d.sqrt();
+        cj[j] = d;
+        let inv = 1.0 / d;
+        inv_diag[j] = inv;
+        for x in &mut cj[j + 1..] {
+            *x *= inv;
+        }
     }
-    // (L⁻ᵀ L⁻¹)_ij = Σ_{k ≥ i} L⁻¹_ki L⁻¹_kj (j ≤ i), rows top to bottom: entry (i, j) is the
-    // last reader of L⁻¹_ij, and later rows read only rows below them.
-    for i in 0..n {
-        for j in 0..=i {
-            let mut s = 0.0;
-            for k in i..n {
-                s += m[(k, i)] * m[(k, j)];
+    // X = L⁻¹ by columns, left to right: column j is L x = e_j by column-oriented forward
+    // substitution, reading only L's columns > j (not yet overwritten).
+    for j in 0..n {
+        let (head, tail) = a.split_at_mut((j + 1) * n);
+        let cj = &mut head[j * n..];
+        let xj = inv_diag[j];
+        cj[j] = xj;
+        for x in &mut cj[j + 1..] {
+            *x *= -xj;
+        }
+        for k in j + 1..n {
+            let ck = &tail[(k - j - 1) * n..(k - j) * n];
+            let xk = cj[k] * inv_diag[k];
+            cj[k] = xk;
+            for (x, y) in cj[k + 1..].iter_mut().zip(&ck[k + 1..]) {
+                *x -= xk * y;
             }
-            m[(i, j)] = s;
         }
     }
+    // M⁻¹ = Xᵀ X by one matrix product (matrixmultiply's kernels): Xᵀ into `t`, the product
+    // into `out`, swapped into place.
     for j in 0..n {
         for i in 0..j {
-            m[(i, j)] = m[(j, i)];
+            a[j * n + i] = 0.0;
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            t[(i, j)] = m[(j, i)];
+        }
+    }
+    out.gemm(1.0, t, m, 0.0);
+    std::mem::swap(m, out);
+    // Exactly symmetric (the product rounds (i, j) and (j, i) alike, but say so).
+    for j in 0..n {
+        for i in j + 1..n {
+            m[(j, i)] = m[(i, j)];
         }
     }
     Ok(())

@@ -21,11 +21,14 @@ pub mod aba_derivatives;
 pub(crate) mod algebra;
 pub mod compiled;
 pub mod crba;
+#[cfg(test)]
+mod derivative_tests;
 mod outward;
 pub mod reference;
 pub mod rnea;
 pub mod rnea_derivatives;
 pub(crate) mod shift;
+pub mod tangent;
 #[cfg(test)]
 mod tests;
 pub mod workspace;

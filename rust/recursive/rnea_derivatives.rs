@@ -31,6 +31,9 @@ use crate::kinematics;
 use crate::model::Model;
 use crate::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
 
+/// No dof (above the root).
+pub(crate) const NO_DOF: usize = usize::MAX;
+
 /// Spatial motion cross product `a × b` (angular part first).
 #[inline(always)]
 pub(crate) fn cross_motion(a: &Vec6, b: &Vec6) -> Vec6 {
@@ -52,12 +55,25 @@ fn b_mul(baa: &Mat3, bla: &Mat3, x: &Vec6) -> Vec6 {
     stack(&(baa * xa), &(bla * xa))
 }
 
-/// `∂τ/∂q`, `∂τ/∂v` and `M = ∂τ/∂a` of `τ = ID(q, v, a)` (gravity `g`, no external
-/// wrenches) into `dd.dtau_dq`, `dd.dtau_dv`, `dd.mass`; `τ` itself into `dd.tau`. Columns
-/// are tangent directions (nv of them). `data.links` is overwritten with the positions at
-/// `q`. No allocation.
+crate::cpu::multiversion! {
+    /// `∂τ/∂q`, `∂τ/∂v` and `M = ∂τ/∂a` of `τ = ID(q, v, a)` (gravity `g`, no external
+    /// wrenches) into `dd.dtau_dq`, `dd.dtau_dv`, `dd.mass`; `τ` itself into `dd.tau`. Columns
+    /// are tangent directions (nv of them). `data.links` is overwritten with the positions at
+    /// `q`. No allocation. Compiled for AVX2 where the CPU has it (see [`crate::cpu`]).
+    pub fn inverse_dynamics_derivatives / derivatives_avx2 / derivatives_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        dd: &mut DerivativeData,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        g: &Vec3,
+    ) => derivatives_body
+}
+
 #[allow(clippy::too_many_arguments)]
-pub fn inverse_dynamics_derivatives(
+#[inline(always)]
+fn derivatives_body(
     model: &Model,
     data: &mut Data,
     dd: &mut DerivativeData,
@@ -81,6 +97,12 @@ pub fn inverse_dynamics_derivatives(
             None => (z6, base),
         };
         let nv = l.joint.nv();
+        // The last dof at or above this link, and each dof's upstream neighbour.
+        let above = l.parent.map_or(NO_DOF, |p| dd.last_dof[p]);
+        for k in 0..nv {
+            dd.dof_parent[l.v_index + k] = if k == 0 { above } else { l.v_index + k - 1 };
+        }
+        dd.last_dof[i] = if nv > 0 { l.v_index + nv - 1 } else { above };
         let (vi, ai) = (&v[l.v_index..l.v_index + nv], &a[l.v_index..l.v_index + nv]);
         // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
         // before it; every other joint's columns are fixed in the parent (one column) or in
@@ -128,9 +150,9 @@ pub fn inverse_dynamics_derivatives(
         lk.y = y;
     }
 
-    dd.dtau_dq.fill(0.0);
-    dd.dtau_dv.fill(0.0);
-    dd.mass.fill(0.0);
+    dd.dtau_dq.as_mut_slice().fill(0.0);
+    dd.dtau_dv.as_mut_slice().fill(0.0);
+    dd.mass.as_mut_slice().fill(0.0);
 
     // Inward: composite sums, then the entries of each dof with its upstream dofs.
     for i in (0..n).rev() {
@@ -155,32 +177,44 @@ pub fn inverse_dynamics_derivatives(
         let moved_v = |dj: &super::workspace::DofWork, dk: &super::workspace::DofWork| {
             dj.ys.dot(&dk.dav) + dj.bts.dot(&angular(&dk.s))
         };
+        let nvt = model.nv;
+        let (dq, dv, mm) = (
+            dd.dtau_dq.as_mut_slice(),
+            dd.dtau_dv.as_mut_slice(),
+            dd.mass.as_mut_slice(),
+        );
+        // Column-major: entry (row, col) at `col · nv + row`.
         for j in r.clone() {
             let dj = &dd.dofs[j];
             for k in r.clone() {
                 let dk = &dd.dofs[k];
-                dd.dtau_dq[(j, k)] = if chain && k > j {
+                let at = k * nvt + j;
+                dq[at] = if chain && k > j {
                     dj.s.dot(&dk.g)
                 } else {
                     moved_q(dj, dk)
                 };
-                dd.dtau_dv[(j, k)] = moved_v(dj, dk);
-                dd.mass[(j, k)] = dj.s.dot(&dk.ys);
-            }
-            let mut up = l.parent;
-            while let Some(pa) = up {
-                let la = &model.links[pa];
-                for k in la.v_index..la.v_index + la.joint.nv() {
-                    let dk = &dd.dofs[k];
-                    dd.dtau_dq[(k, j)] = dk.s.dot(&dj.g);
-                    dd.dtau_dq[(j, k)] = moved_q(dj, dk);
-                    dd.dtau_dv[(k, j)] = dk.s.dot(&dj.gv);
-                    dd.dtau_dv[(j, k)] = moved_v(dj, dk);
-                    let m = dk.s.dot(&dj.ys);
-                    dd.mass[(k, j)] = m;
-                    dd.mass[(j, k)] = m;
+                dv[at] = moved_v(dj, dk);
+                // Exactly symmetric: one product per pair, mirrored.
+                if k >= j {
+                    let m = dj.s.dot(&dk.ys);
+                    mm[at] = m;
+                    mm[j * nvt + k] = m;
                 }
-                up = la.parent;
+            }
+            // The dofs upstream of this joint, nearest first.
+            let mut k = dd.dof_parent[l.v_index];
+            while k != NO_DOF {
+                let dk = &dd.dofs[k];
+                let (col, row) = (j * nvt + k, k * nvt + j);
+                dq[col] = dk.s.dot(&dj.g);
+                dq[row] = moved_q(dj, dk);
+                dv[col] = dk.s.dot(&dj.gv);
+                dv[row] = moved_v(dj, dk);
+                let m = dk.s.dot(&dj.ys);
+                mm[col] = m;
+                mm[row] = m;
+                k = dd.dof_parent[k];
             }
         }
         if let Some(pa) = l.parent {

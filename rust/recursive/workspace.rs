@@ -158,6 +158,12 @@ pub struct DerivativeData {
     pub tau: Vec<f64>,
     /// `q̈` of the forward derivatives.
     pub qdd: Vec<f64>,
+    /// Per dof, the nearest dof upstream (`NO_DOF` at the root); per link, the last dof at or
+    /// above it: the tree's shape, refilled by each call.
+    pub dof_parent: Vec<usize>,
+    pub last_dof: Vec<usize>,
+    /// Scratch: the reciprocal pivots of the mass matrix's Cholesky factor.
+    pub inv_diag: Vec<f64>,
 }
 
 impl DerivativeData {
@@ -175,6 +181,9 @@ impl DerivativeData {
             minv: z(),
             tau: vec![0.0; nv],
             qdd: vec![0.0; nv],
+            inv_diag: vec![0.0; nv],
+            dof_parent: vec![0; nv],
+            last_dof: vec![0; n],
         }
     }
 

@@ -24,6 +24,8 @@ pub struct Dynamics<'a> {
     probe: Option<Probe>,
     /// The closed-loop solver (models with loops only).
     pub loops: Option<Box<LoopSolver>>,
+    /// The derivatives' buffers (built on the first `jacobian` call).
+    deriv: Option<Box<super::derivatives::DerivativeWork>>,
 }
 
 /// The effects' view of the state `(t, q, v)`.
@@ -59,6 +61,7 @@ impl<'a> Dynamics<'a> {
             calls: 0,
             probe: None,
             loops: (!model.loops.is_empty()).then(|| Box::new(LoopSolver::new(model))),
+            deriv: None,
         }
     }
 
@@ -186,6 +189,22 @@ impl OdeSystem for Dynamics<'_> {
         let (q, v) = y.split_at(self.model.nq);
         self.model.velocity_to_qdot(q, v, qdot);
         Ok(true)
+    }
+
+    /// The analytic state Jacobian (`super::derivatives`); `Ok(false)` with closed loops.
+    fn jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        jac: &mut [f64],
+    ) -> std::result::Result<bool, String> {
+        let mut w = match self.deriv.take() {
+            Some(w) => w,
+            None => Box::new(super::derivatives::DerivativeWork::new(self)),
+        };
+        let r = self.state_jacobian(t, y, jac, &mut w);
+        self.deriv = Some(w);
+        r
     }
 
     /// Unit quaternions (the right-hand side normalises them too, so FSAL stays valid);

@@ -6,6 +6,7 @@
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
 //! effects runs the bare forward dynamics.
 pub mod batch;
+pub mod derivatives;
 mod dynamics;
 mod settings;
 

@@ -1,0 +1,184 @@
+//! Derivatives of the scene's equations of motion (docs/derivatives.md): the accelerations
+//! `q̈ = FD(q, v, τ + τ_e(t, q, v))` with every enabled effect, differentiated as
+//! `∂q̈/∂x = M⁻¹ (∂τ_e/∂x − ∂ID/∂x)` at `a = q̈` (the effects' part from
+//! [`Effects::add_derivatives`](crate::effects::Effects::add_derivatives), gravity through
+//! the base acceleration), and the state Jacobian `∂ẏ/∂y` for implicit integrators,
+//! `y = [q; v]` in the coordinates of `q` (nq of them): `[[∂q̇/∂q, ∂q̇/∂v], [∂q̈/∂δ · ∂δ/∂q,
+//! ∂q̈/∂v]]`. Trees only: with closed loops the Jacobian is not given (`Ok(false)`, the
+//! integrator differentiates numerically) and the derivatives are refused.
+use super::dynamics::Dynamics;
+use crate::effects::derivatives::EffectDerivatives;
+use crate::effects::Context;
+use crate::recursive::aba_derivatives::spd_inverse;
+use crate::recursive::{self, tangent, DerivativeData};
+use crate::spatial::Vec6;
+use nalgebra::DMatrix;
+
+/// Everything the derivatives of one scene's dynamics need, allocated once.
+pub struct DerivativeWork {
+    /// The recursions' derivatives; after [`Dynamics::derivatives`], `ddq_dq`, `ddq_dv` and
+    /// `minv` hold the scene's `∂q̈/∂q`, `∂q̈/∂v`, `∂q̈/∂τ = M⁻¹`, `qdd` its accelerations.
+    pub dd: DerivativeData,
+    pub effects: EffectDerivatives,
+    tau: Vec<f64>,
+    wrenches: Vec<Vec6>,
+    /// `∂τ_e/∂q − ∂ID/∂q`, `∂τ_e/∂v − ∂ID/∂v`.
+    rq: DMatrix<f64>,
+    rv: DMatrix<f64>,
+    /// `∂δ/∂q` (nv × nq) and `∂q̈/∂q` in coordinates (nv × nq).
+    tmap: DMatrix<f64>,
+    ddq_dcoords: DMatrix<f64>,
+    /// nv zeros: the joint forces of the state Jacobian (the effects' only).
+    zeros: Vec<f64>,
+}
+
+impl DerivativeWork {
+    pub fn new(sys: &Dynamics<'_>) -> Self {
+        let m = sys.model;
+        let (nq, nv) = (m.nq, m.nv);
+        DerivativeWork {
+            dd: DerivativeData::new(m),
+            effects: EffectDerivatives::new(m, &sys.effects),
+            tau: vec![0.0; nv],
+            wrenches: vec![Vec6::zeros(); m.links.len()],
+            rq: DMatrix::zeros(nv, nv),
+            rv: DMatrix::zeros(nv, nv),
+            tmap: DMatrix::zeros(nv, nq),
+            ddq_dcoords: DMatrix::zeros(nv, nq),
+            zeros: vec![0.0; nv],
+        }
+    }
+}
+
+impl Dynamics<'_> {
+    /// `∂q̈/∂q` (tangent columns), `∂q̈/∂v`, `M⁻¹` of the scene's accelerations at
+    /// `(t, q, v)` with the extra joint forces `tau` (length nv) on top of the effects'; into
+    /// `w.dd.ddq_dq`, `w.dd.ddq_dv`, `w.dd.minv` (accelerations into `w.dd.qdd`). Which
+    /// effects were differentiated numerically: `w.effects.numerical`. Errors with closed
+    /// loops, at a singular configuration, or when an effect fails.
+    pub fn derivatives(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        tau: &[f64],
+        w: &mut DerivativeWork,
+    ) -> Result<(), String> {
+        let model = self.model;
+        if !model.loops.is_empty() {
+            return Err(format!(
+                "the dynamics derivatives are for trees: this model has {} closed loop(s)",
+                model.loops.len()
+            ));
+        }
+        let cx = Context { model, t, q, v };
+        w.tau.fill(0.0);
+        let ext = if self.effects.apply(&cx, &mut w.tau, &mut w.wrenches)? {
+            Some(w.wrenches.as_slice())
+        } else {
+            None
+        };
+        for (a, b) in w.tau.iter_mut().zip(tau) {
+            *a += b;
+        }
+        let g = self.effects.gravity;
+        let dd = &mut w.dd;
+        let mut qdd = std::mem::take(&mut dd.qdd);
+        let fd =
+            recursive::forward_dynamics(model, &mut self.data, q, v, &w.tau, &g, ext, &mut qdd);
+        if fd.is_ok() {
+            recursive::inverse_dynamics_derivatives(model, &mut self.data, dd, q, v, &qdd, &g);
+        }
+        dd.qdd = qdd;
+        fd.map_err(|e| e.to_string())?;
+        w.rq.as_mut_slice().fill(0.0);
+        w.rv.as_mut_slice().fill(0.0);
+        self.effects
+            .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)?;
+        for (r, x) in w.rq.as_mut_slice().iter_mut().zip(dd.dtau_dq.as_slice()) {
+            *r -= x;
+        }
+        for (r, x) in w.rv.as_mut_slice().iter_mut().zip(dd.dtau_dv.as_slice()) {
+            *r -= x;
+        }
+        dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
+        spd_inverse(
+            &mut dd.minv,
+            &mut dd.ddq_dq,
+            &mut dd.ddq_dv,
+            &mut dd.inv_diag,
+        )
+        .map_err(|k| format!("the mass matrix is not positive definite (pivot {k})"))?;
+        dd.ddq_dq.gemm(1.0, &dd.minv, &w.rq, 0.0);
+        dd.ddq_dv.gemm(1.0, &dd.minv, &w.rv, 0.0);
+        Ok(())
+    }
+
+    /// `∂τ/∂q` (tangent columns), `∂τ/∂v`, `M` of the joint forces that give accelerations
+    /// `a` at `(t, q, v)` on top of the enabled effects, `τ = ID(q, v, a) − τ_e(t, q, v)`:
+    /// into `w.dd.dtau_dq`, `w.dd.dtau_dv`, `w.dd.mass` (the effects' part subtracted).
+    pub fn inverse_derivatives(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        w: &mut DerivativeWork,
+    ) -> Result<(), String> {
+        let model = self.model;
+        if !model.loops.is_empty() {
+            return Err(format!(
+                "the dynamics derivatives are for trees: this model has {} closed loop(s)",
+                model.loops.len()
+            ));
+        }
+        let g = self.effects.gravity;
+        recursive::inverse_dynamics_derivatives(model, &mut self.data, &mut w.dd, q, v, a, &g);
+        w.rq.as_mut_slice().fill(0.0);
+        w.rv.as_mut_slice().fill(0.0);
+        let cx = Context { model, t, q, v };
+        self.effects
+            .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)?;
+        for (d, x) in w.dd.dtau_dq.as_mut_slice().iter_mut().zip(w.rq.as_slice()) {
+            *d -= x;
+        }
+        for (d, x) in w.dd.dtau_dv.as_mut_slice().iter_mut().zip(w.rv.as_slice()) {
+            *d -= x;
+        }
+        Ok(())
+    }
+
+    /// The state Jacobian (see the module) into the row-major `jac`; `Ok(false)` with loops.
+    pub fn state_jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+        jac: &mut [f64],
+        w: &mut DerivativeWork,
+    ) -> Result<bool, String> {
+        let model = self.model;
+        if !model.loops.is_empty() {
+            return Ok(false);
+        }
+        let (nq, nv) = (model.nq, model.nv);
+        let dim = nq + nv;
+        let (q, v) = y.split_at(nq);
+        let zeros = std::mem::take(&mut w.zeros);
+        let r = self.derivatives(t, q, v, &zeros, w);
+        w.zeros = zeros;
+        r?;
+        tangent::qdot_jacobian(model, q, v, jac);
+        tangent::tangent_map(model, q, &mut w.tmap);
+        w.ddq_dcoords.gemm(1.0, &w.dd.ddq_dq, &w.tmap, 0.0);
+        for r in 0..nv {
+            let (left, right) = jac[(nq + r) * dim..(nq + r + 1) * dim].split_at_mut(nq);
+            for (c, x) in left.iter_mut().enumerate() {
+                *x = w.ddq_dcoords[(r, c)];
+            }
+            for (c, x) in right.iter_mut().enumerate() {
+                *x = w.dd.ddq_dv[(r, c)];
+            }
+        }
+        Ok(true)
+    }
+}
