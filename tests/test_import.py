@@ -125,7 +125,7 @@ def test_from_mujoco_equals_mujoco(path):
     m = mj_compile(path=path)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pmd.errors.ModelImportWarning)
-        model = pmd.from_mujoco(m)
+        model = pmd.Model.from_mujoco(m)  # the same importer as pmd.from_mujoco
     names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) or f"jnt{j}" for j in range(m.njnt)]
     assert model.joint_names == names  # order and names kept
     assert model.nv == m.nv and model.nq == m.nq
@@ -296,7 +296,7 @@ PIN_MODELS = pin_models()
 @pytest.mark.parametrize("name", sorted(PIN_MODELS))
 def test_from_pinocchio_equals_pinocchio(name):
     pm = PIN_MODELS[name]
-    model = pmd.from_pinocchio(pm)
+    model = pmd.Model.from_pinocchio(pm)  # the same importer as pmd.from_pinocchio
     assert model.joint_names == list(pm.names)[1:]
     check_against_pinocchio(name, model, pm)
 
@@ -308,6 +308,8 @@ def test_from_pinocchio_refuses_unsupported_joints():
         pmd.from_pinocchio(pm)
     with pytest.raises(pmd.errors.InvalidInputError, match="pin_model"):
         pmd.from_pinocchio(None)
+    with pytest.raises(pmd.errors.InvalidInputError, match="pin_model"):
+        pmd.Model.from_pinocchio(None)
 
 
 # -------------------------------------------------------------- floating-base URDF loads

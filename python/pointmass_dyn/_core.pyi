@@ -367,6 +367,14 @@ class Model:
         ``bound_inertia``) and welds moving joints that move no mass (``weld_massless``);
         every change is listed in one :class:`pointmass_dyn.errors.UrdfRepairWarning` and in
         :attr:`repairs` (docs/robots.md)."""
+    @staticmethod
+    def from_mujoco(mj_model: Any) -> Model:
+        """Our model of a compiled ``mujoco.MjModel``: same as
+        :func:`pointmass_dyn.from_mujoco` (docs/robots.md)."""
+    @staticmethod
+    def from_pinocchio(pin_model: Any) -> Model:
+        """Our model of a ``pinocchio.Model``: same as :func:`pointmass_dyn.from_pinocchio`
+        (docs/robots.md)."""
     @property
     def repairs(self) -> list[dict[str, Any]]:
         """What ``from_urdf(..., repair=...)`` changed: one dict per link or welded joint

@@ -1654,6 +1654,21 @@ impl PyModel {
         ))
     }
 
+    /// A model of a compiled `mujoco.MjModel` (`pointmass_dyn.from_mujoco`, docs/robots.md).
+    /// The importer is Python (it reads MuJoCo's arrays); this is its place beside `from_urdf`.
+    #[staticmethod]
+    fn from_mujoco(py: Python<'_>, mj_model: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
+        let importers = py.import("pointmass_dyn.importers")?;
+        Ok(importers.call_method1("from_mujoco", (mj_model,))?.unbind())
+    }
+
+    /// A model of a `pinocchio.Model` (`pointmass_dyn.from_pinocchio`, docs/robots.md).
+    #[staticmethod]
+    fn from_pinocchio(py: Python<'_>, pin_model: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
+        let importers = py.import("pointmass_dyn.importers")?;
+        Ok(importers.call_method1("from_pinocchio", (pin_model,))?.unbind())
+    }
+
     /// For the importers (python/pointmass_dyn/importers.py): a model from bodies in tree
     /// order, each `(name, parent, joint, translation, rotation, joint_name, mass, com,
     /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body.
