@@ -1666,7 +1666,9 @@ impl PyModel {
     #[staticmethod]
     fn from_pinocchio(py: Python<'_>, pin_model: &Bound<'_, PyAny>) -> PyResult<Py<PyAny>> {
         let importers = py.import("pointmass_dyn.importers")?;
-        Ok(importers.call_method1("from_pinocchio", (pin_model,))?.unbind())
+        Ok(importers
+            .call_method1("from_pinocchio", (pin_model,))?
+            .unbind())
     }
 
     /// For the importers (python/pointmass_dyn/importers.py): a model from bodies in tree
