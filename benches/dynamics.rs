@@ -6,7 +6,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::DMatrix;
 use pointmass_dyn::benchmark_models::{chain, paper_pendulum, tree};
 use pointmass_dyn::effects::{Disabled, Effect};
-use pointmass_dyn::integrator::{Rk45Options, Stepper};
+use pointmass_dyn::integrator::{SolverOptions, Stepper};
 use pointmass_dyn::model::Model;
 use pointmass_dyn::recursive::{self, Data};
 use pointmass_dyn::simulate::Dynamics;
@@ -104,7 +104,7 @@ fn bench(c: &mut Criterion) {
         let (q, v, _) = state(&model);
         let y0: Vec<f64> = q.iter().chain(v.iter()).copied().collect();
         let effects = [Effect::Gravity { g: G }];
-        let opts = Rk45Options {
+        let opts = SolverOptions {
             rtol: 1e-8.into(),
             atol: 1e-10.into(),
             max_step: 1e-3,

@@ -7,7 +7,7 @@ use std::hint::black_box;
 use criterion::{criterion_group, criterion_main, Criterion};
 use pointmass_dyn::body::RigidBody;
 use pointmass_dyn::effects::Disabled;
-use pointmass_dyn::integrator::Rk45Options;
+use pointmass_dyn::integrator::SolverOptions;
 use pointmass_dyn::joint::Joint;
 use pointmass_dyn::loops::{self, LoopSolver};
 use pointmass_dyn::model::Model;
@@ -105,10 +105,10 @@ fn bench(c: &mut Criterion) {
     if let Some(s) = andrews() {
         let mut group = c.benchmark_group("loops_simulate");
         group.sample_size(10);
-        let opts = Rk45Options {
+        let opts = SolverOptions {
             rtol: 1e-10.into(),
             atol: 1e-10.into(),
-            ..Rk45Options::default()
+            ..SolverOptions::default()
         };
         group.bench_function("andrews_to_0.03", |b| {
             b.iter(|| {

@@ -67,7 +67,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
             "gim" => recursive::mass_matrix(&model, &mut data, black_box(&q), &mut gim),
             "sim" => {
-                let opts = pointmass_dyn::integrator::Rk45Options {
+                let opts = pointmass_dyn::integrator::SolverOptions {
                     rtol: 1e-6.into(),
                     atol: 1e-8.into(),
                     ..Default::default()

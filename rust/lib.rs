@@ -14,6 +14,7 @@ pub mod integrator;
 pub mod interrupt;
 pub mod joint;
 pub mod kinematics;
+pub mod linalg;
 pub mod loops;
 pub mod model;
 pub mod persist;

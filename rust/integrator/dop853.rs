@@ -12,7 +12,7 @@ use super::stepper::{
     call_rhs, check_start, check_state, check_step_options, combine, next_toward,
     select_initial_step, tolerances, Start, State, MAX_FACTOR, MIN_FACTOR, SAFETY,
 };
-use super::{Controller, InputError, OdeSystem, Rk45Options, Status, StepOutcome};
+use super::{Controller, InputError, OdeSystem, SolverOptions, Status, StepOutcome};
 
 /// SciPy's `DOP853.error_estimator_order`.
 const ERROR_ESTIMATOR_ORDER: u32 = 7;
@@ -64,7 +64,7 @@ impl<S: OdeSystem> Dop853<S> {
         t0: f64,
         y0: &[f64],
         t_bound: f64,
-        opts: &Rk45Options,
+        opts: &SolverOptions,
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
         check_start(dim, y0, t0, t_bound)?;

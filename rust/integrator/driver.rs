@@ -9,7 +9,7 @@ use super::fixed_step::{Euler, FixedStep, Rk4};
 use super::method::{radau_available, Counts, Integrator, Method};
 use super::radau::Radau;
 use super::stepper::{StepOutcome, Stepper};
-use super::{fmt_time, InputError, OdeSystem, Rk45Options, Solution, Status, StiffnessCheck};
+use super::{fmt_time, InputError, OdeSystem, SolverOptions, Solution, Status, StiffnessCheck};
 
 /// Integrate `sys` over `t_span = (t0, t_end)` (backwards if `t_end < t0`) from `y0`,
 /// exactly as SciPy's `solve_ivp(..., method="RK45")` (whatever `opts.method` says).
@@ -18,7 +18,7 @@ pub fn rk45<S: OdeSystem>(
     sys: S,
     t_span: (f64, f64),
     y0: &[f64],
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     events: &mut [Event<'_>],
 ) -> Result<Solution, InputError> {
     let (t0, t_end) = t_span;
@@ -33,7 +33,7 @@ pub fn solve<S: OdeSystem>(
     sys: S,
     t_span: (f64, f64),
     y0: &[f64],
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     events: &mut [Event<'_>],
 ) -> Result<Solution, InputError> {
     let (t0, t_end) = t_span;
@@ -81,7 +81,7 @@ pub fn solve<S: OdeSystem>(
 }
 
 /// The implicit method `auto` continues with: Radau from `(t, y)` to `t_end`.
-type StiffTarget<S, J> = fn(S, f64, &[f64], f64, &Rk45Options) -> Result<J, InputError>;
+type StiffTarget<S, J> = fn(S, f64, &[f64], f64, &SolverOptions) -> Result<J, InputError>;
 
 /// Radau from `(t, y)`, with SciPy's controller (a PI controller asked for is RK45's).
 fn stiff_target<S: OdeSystem>(
@@ -89,9 +89,9 @@ fn stiff_target<S: OdeSystem>(
     t: f64,
     y: &[f64],
     t_end: f64,
-    opts: &Rk45Options,
+    opts: &SolverOptions,
 ) -> Result<Radau<S>, InputError> {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         controller: super::Controller::Standard,
         ..opts.clone()
     };
@@ -104,12 +104,12 @@ pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
     sys: S,
     t_span: (f64, f64),
     y0: &[f64],
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     events: &mut [Event<'_>],
     target: StiffTarget<S, J>,
 ) -> Result<Solution, InputError> {
     let (t0, t_end) = t_span;
-    let first = Rk45Options {
+    let first = SolverOptions {
         stiffness: StiffnessCheck::Stop,
         ..opts.clone()
     };
@@ -126,7 +126,7 @@ pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
     };
     let mut info = RunInfo::of(&st, Method::Auto);
     let y = st.y().to_vec();
-    let second = Rk45Options {
+    let second = SolverOptions {
         first_step: None,
         ..opts.clone()
     };
@@ -143,7 +143,7 @@ pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
 /// Run `st` to the end with the driver's outputs and events.
 pub(crate) fn drive<I: Integrator>(
     mut st: I,
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     events: &mut [Event<'_>],
     method: Method,
 ) -> Result<Solution, InputError> {
@@ -489,7 +489,7 @@ struct Output<'o> {
 
 impl<'o> Output<'o> {
     /// The output of a run from `(t0, y0)`: with `t_eval`, its whole size reserved now.
-    fn new(opts: &'o Rk45Options, t0: f64, y0: &[f64]) -> Result<Self, InputError> {
+    fn new(opts: &'o SolverOptions, t0: f64, y0: &[f64]) -> Result<Self, InputError> {
         let dim = y0.len();
         let mut out = Output {
             t_eval: opts.t_eval.as_deref(),

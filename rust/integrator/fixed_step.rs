@@ -14,7 +14,7 @@ use std::marker::PhantomData;
 use super::dense::Interpolant;
 use super::method::{Counts, Integrator};
 use super::stepper::{call_rhs, check_start, check_state, State};
-use super::{InputError, Method, OdeSystem, Rk45Options, Status, StepOutcome};
+use super::{InputError, Method, OdeSystem, SolverOptions, Status, StepOutcome};
 
 /// The update of one fixed-step scheme.
 pub trait Scheme {
@@ -142,7 +142,7 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
         t0: f64,
         y0: &[f64],
         t_bound: f64,
-        opts: &Rk45Options,
+        opts: &SolverOptions,
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
         check_start(dim, y0, t0, t_bound)?;

@@ -270,10 +270,10 @@ pub fn fmt_time(t: f64) -> String {
     }
 }
 
-/// Integration options (of every method; the name is historical). Defaults equal SciPy's
+/// Integration options of every method. Defaults equal SciPy's
 /// RK45 defaults.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Rk45Options {
+pub struct SolverOptions {
     /// The method [`solve`] uses (default RK45; [`rk45`] ignores it).
     pub method: Method,
     /// Fixed step of `RK4` and `Euler` (required by them, refused by the others). The last
@@ -302,7 +302,7 @@ pub struct Rk45Options {
     pub stiffness: StiffnessCheck,
 }
 
-impl Default for Rk45Options {
+impl Default for SolverOptions {
     fn default() -> Self {
         Self {
             method: Method::Rk45,
@@ -560,7 +560,7 @@ pub struct Solution {
     pub t_reached: f64,
     /// Some rtol was below `100 * EPS` and raised to it (SciPy warns instead).
     pub rtol_clamped: bool,
-    /// Piecewise interpolant when `Rk45Options::dense` is on.
+    /// Piecewise interpolant when `SolverOptions::dense` is on.
     pub dense: Option<DenseOutput>,
     /// First stiffness detection (`None` if none, or if the check was off).
     pub stiffness: Option<Stiffness>,

@@ -42,7 +42,7 @@ use super::num_jac::NumJac;
 use super::stepper::{
     check_start, check_step_options, next_toward, rms_norm as rms, select_initial_step, Start,
 };
-use super::{Controller, InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, StepOutcome};
+use super::{Controller, InputError, NonFiniteKind, OdeSystem, SolverOptions, Status, StepOutcome};
 
 const S6: f64 = 2.449_489_742_783_178; // √6
 /// Collocation nodes.
@@ -236,7 +236,7 @@ impl<S: OdeSystem> Radau<S> {
         t0: f64,
         y0: &[f64],
         t_bound: f64,
-        opts: &Rk45Options,
+        opts: &SolverOptions,
     ) -> Result<Self, InputError> {
         Self::with_jacobian(sys, t0, y0, t_bound, opts, JacobianSource::Auto)
     }
@@ -247,7 +247,7 @@ impl<S: OdeSystem> Radau<S> {
         t0: f64,
         y0: &[f64],
         t_bound: f64,
-        opts: &Rk45Options,
+        opts: &SolverOptions,
         jacobian: JacobianSource,
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
@@ -948,7 +948,7 @@ pub fn radau_solve<S: OdeSystem>(
     sys: S,
     t_span: (f64, f64),
     y0: &[f64],
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     events: &mut [super::Event<'_>],
     jacobian: JacobianSource,
 ) -> Result<super::Solution, InputError> {

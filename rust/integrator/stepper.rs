@@ -5,7 +5,7 @@
 
 use super::method::{Counts, Integrator};
 use super::{
-    dense, Controller, InputError, NonFiniteKind, OdeSystem, Rk45Options, Status, Stiffness,
+    dense, Controller, InputError, NonFiniteKind, OdeSystem, SolverOptions, Status, Stiffness,
     StiffnessCheck, Tol, NONSTIFF_RESET, STIFF_H_LAMBDA, STIFF_STEPS,
 };
 
@@ -371,7 +371,7 @@ pub(crate) fn check_start(dim: usize, y0: &[f64], t0: f64, t_bound: f64) -> Resu
 
 /// `rtol` and `atol` per component, and whether some rtol was raised to `100 EPS`.
 pub(crate) fn tolerances(
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     dim: usize,
 ) -> Result<(Vec<f64>, Vec<f64>, bool), InputError> {
     let mut rtol = expand_tol(&opts.rtol, "rtol", dim)?;
@@ -387,7 +387,7 @@ pub(crate) fn tolerances(
 
 /// `max_step`, `max_steps`, `first_step` (within the interval's length `span`) and the
 /// controller's parameters.
-pub(crate) fn check_step_options(opts: &Rk45Options, span: f64) -> Result<(), InputError> {
+pub(crate) fn check_step_options(opts: &SolverOptions, span: f64) -> Result<(), InputError> {
     if opts.max_step.is_nan() || opts.max_step <= 0.0 {
         return Err(InputError::MaxStep(opts.max_step));
     }
@@ -421,7 +421,7 @@ impl<S: OdeSystem> Stepper<S> {
         t0: f64,
         y0: &[f64],
         t_bound: f64,
-        opts: &Rk45Options,
+        opts: &SolverOptions,
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
         check_start(dim, y0, t0, t_bound)?;

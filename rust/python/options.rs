@@ -4,7 +4,7 @@ use pyo3::types::PyDict;
 
 use super::convert::{array, opt_count, opt_real, shape_str, vector};
 use super::errors::invalid;
-use crate::integrator::{self, Controller, Rk45Options, Status, Tol};
+use crate::integrator::{self, Controller, SolverOptions, Status, Tol};
 use crate::simulate::Requested;
 
 pub(super) fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
@@ -120,14 +120,14 @@ pub(super) fn options(
     dense: bool,
     controller: &str,
     stiffness: &str,
-) -> PyResult<Rk45Options> {
+) -> PyResult<SolverOptions> {
     let controller = controller_arg(py, controller)?;
     requested.rtol = given(rtol).map(|r| tol_arg(r, "rtol", dim)).transpose()?;
     requested.atol = given(atol).map(|a| tol_arg(a, "atol", dim)).transpose()?;
     let t_eval = given(t_eval)
         .map(|t| vector(t, "t_eval", None))
         .transpose()?;
-    Ok(Rk45Options {
+    Ok(SolverOptions {
         dense,
         controller,
         t_eval,

@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use super::{simulate, Record, StateEvent, Trajectory};
 use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};
-use crate::integrator::Rk45Options;
+use crate::integrator::SolverOptions;
 use crate::model::Model;
 
 /// One run of a batch: its model and effects (a scene's, or a variant of it), its initial
@@ -20,7 +20,7 @@ pub struct Run<'a> {
     pub q0: &'a [f64],
     pub v0: &'a [f64],
     pub t_span: (f64, f64),
-    pub opts: &'a Rk45Options,
+    pub opts: &'a SolverOptions,
 }
 
 /// What the batch's caller sees while it runs: how many runs have finished, and a flag that

@@ -15,7 +15,7 @@ pub use settings::{disabled, Requested, Resolved};
 
 use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};
-use crate::integrator::{self, Event, Rk45Options, Status};
+use crate::integrator::{self, Event, SolverOptions, Status};
 use crate::model::Model;
 
 /// An event on the state: `q[index] − value` or `v[index] − value` crossing zero.
@@ -87,7 +87,7 @@ pub fn simulate(
     q0: &[f64],
     v0: &[f64],
     t_span: (f64, f64),
-    opts: &Rk45Options,
+    opts: &SolverOptions,
     state_events: &[StateEvent],
     extra_events: Vec<Event<'_>>,
     record: Record,

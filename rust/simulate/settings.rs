@@ -2,7 +2,7 @@
 //! the default. The one place that decides it; the bindings only parse the arguments.
 use crate::effects::Disabled;
 use crate::error::{Error, Result};
-use crate::integrator::{Rk45Options, Tol};
+use crate::integrator::{SolverOptions, Tol};
 use crate::scene::Settings;
 
 /// What the caller of a run asked for: `None` where they said nothing (an infinite
@@ -25,7 +25,7 @@ pub struct Requested {
 pub struct Resolved {
     pub t_span: (f64, f64),
     pub disabled: Disabled,
-    pub opts: Rk45Options,
+    pub opts: SolverOptions,
 }
 
 /// The effect families to leave out: the caller's, else the scene's, else none.
@@ -37,7 +37,7 @@ impl Requested {
     /// The run's settings against a scene's: `base` carries the options a scene does not
     /// set (controller, `t_eval`, dense output, stiffness check) and the defaults of the rest.
     /// Without a `t_span` from either, an `InvalidArgument` naming `t_span`.
-    pub fn resolve(self, scene: &Settings, base: Rk45Options) -> Result<Resolved> {
+    pub fn resolve(self, scene: &Settings, base: SolverOptions) -> Result<Resolved> {
         let t_span = self
             .t_span
             .or(scene.t_span)
@@ -50,9 +50,9 @@ impl Requested {
     }
 
     /// `base` with the tolerances and step limits resolved (all but `t_span` and `disable`).
-    pub fn options(self, scene: &Settings, base: Rk45Options) -> Rk45Options {
+    pub fn options(self, scene: &Settings, base: SolverOptions) -> SolverOptions {
         let method = self.method.or(scene.method).unwrap_or(base.method);
-        Rk45Options {
+        SolverOptions {
             rtol: self
                 .rtol
                 .or(scene.rtol.map(Tol::Scalar))
@@ -106,7 +106,7 @@ mod tests {
             disable: Some(Disabled::none()),
             ..Default::default()
         };
-        let r = caller.resolve(&scene(), Rk45Options::default()).unwrap();
+        let r = caller.resolve(&scene(), SolverOptions::default()).unwrap();
         assert_eq!(r.t_span, (1.0, 0.0));
         assert_eq!(r.disabled, Disabled::none());
         assert_eq!(r.opts.rtol, Tol::PerComponent(vec![1e-4, 1e-4]));
@@ -117,7 +117,7 @@ mod tests {
         );
 
         let r = Requested::default()
-            .resolve(&scene(), Rk45Options::default())
+            .resolve(&scene(), SolverOptions::default())
             .unwrap();
         assert_eq!(r.t_span, (0.0, 2.0));
         assert_eq!(r.disabled, Disabled::none().with(Kind::Gravity));
@@ -134,7 +134,7 @@ mod tests {
             t_span: Some((0.0, 1.0)),
             ..Default::default()
         };
-        let base = Rk45Options {
+        let base = SolverOptions {
             dense: true,
             ..Default::default()
         };
@@ -145,7 +145,7 @@ mod tests {
     #[test]
     fn a_run_without_t_span_names_it() {
         let e = Requested::default()
-            .resolve(&Settings::default(), Rk45Options::default())
+            .resolve(&Settings::default(), SolverOptions::default())
             .unwrap_err();
         assert_eq!(
             e.to_string(),

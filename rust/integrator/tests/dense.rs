@@ -1,7 +1,7 @@
 use super::*;
 use crate::integrator::stepper::B;
 use crate::integrator::tests::fixtures::{at_halved_steps, observed_orders, oscillator};
-use crate::integrator::{rk45, Rk45Options, Tol};
+use crate::integrator::{rk45, SolverOptions, Tol};
 
 #[test]
 fn interpolant_reproduces_the_step_weights() {
@@ -17,7 +17,7 @@ fn interpolant_reproduces_the_step_weights() {
 
 #[test]
 fn dense_matches_step_end_points() {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         rtol: 1e-8.into(),
         atol: 1e-8.into(),
         dense: true,
@@ -55,7 +55,7 @@ fn dense_matches_step_end_points() {
 
 /// Max error at step midpoints of the interpolant with fixed steps `h`.
 fn midpoint_error(h: f64) -> f64 {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         rtol: 1e-3.into(),
         atol: Tol::Scalar(1e-3),
         max_step: h,

@@ -1,6 +1,6 @@
 use super::*;
 use crate::integrator::tests::fixtures::{oscillator, tol};
-use crate::integrator::{rk45, Rk45Options, Status};
+use crate::integrator::{rk45, SolverOptions, Status};
 use std::f64::consts::PI;
 
 #[test]
@@ -43,7 +43,7 @@ fn activity_follows_scipy_find_active_events() {
 }
 
 /// Tight tolerances: events located to ~1e-10.
-fn tight() -> Rk45Options {
+fn tight() -> SolverOptions {
     tol(1e-12)
 }
 
@@ -113,7 +113,7 @@ fn terminal_event_stops_at_the_event_time() {
 
 #[test]
 fn terminal_event_with_t_eval_truncates_output() {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         t_eval: Some((0..=20).map(|k| k as f64 * 0.5).collect()),
         ..tight()
     };

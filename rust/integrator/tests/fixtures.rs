@@ -1,5 +1,5 @@
 //! Systems and options shared by the integrator's tests.
-use crate::integrator::{FnSystem, Rk45Options};
+use crate::integrator::{FnSystem, SolverOptions};
 
 /// An `FnSystem` built from a plain closure.
 pub(crate) type TestSystem = FnSystem<fn(f64, &[f64], &mut [f64]) -> Result<(), String>>;
@@ -62,8 +62,8 @@ pub(crate) fn decay() -> TestSystem {
 }
 
 /// Default options with `rtol = atol = tol`.
-pub(crate) fn tol(tol: f64) -> Rk45Options {
-    Rk45Options {
+pub(crate) fn tol(tol: f64) -> SolverOptions {
+    SolverOptions {
         rtol: tol.into(),
         atol: tol.into(),
         ..Default::default()

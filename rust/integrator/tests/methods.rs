@@ -3,12 +3,12 @@
 //! a test double, and the argument errors.
 use super::fixtures::{krogh, oscillator, tol};
 use crate::integrator::{
-    solve, Event, FixedStep, InputError, Integrator, Interpolant, Method, OdeSystem, Rk45Options,
+    solve, Event, FixedStep, InputError, Integrator, Interpolant, Method, OdeSystem, SolverOptions,
     Status, Stepper,
 };
 
-fn with(method: Method, opts: Rk45Options) -> Rk45Options {
-    Rk45Options { method, ..opts }
+fn with(method: Method, opts: SolverOptions) -> SolverOptions {
+    SolverOptions { method, ..opts }
 }
 
 /// SciPy 1.17 `solve_ivp(krogh, (0, 12), [0, 1, 1], method="DOP853", rtol=tol, atol=tol)`:
@@ -73,7 +73,7 @@ fn dop853_dense_output_and_t_eval_equal_scipy_and_count_like_it() {
         [-0.7053969317342933, -0.708811326858724, 0.8638465705436734],
     ];
     let t_eval = vec![0.0, 2.5, 5.0, 7.5, 12.0];
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dense: true,
         t_eval: Some(t_eval.clone()),
         ..with(Method::Dop853, tol(1e-6))
@@ -109,7 +109,7 @@ fn dop853_dense_output_and_t_eval_equal_scipy_and_count_like_it() {
             assert!((y[i] - r[i]).abs() <= 1e-12, "{t}: {y:?}");
         }
     }
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         t_eval: Some(t_eval),
         ..with(Method::Dop853, tol(1e-6))
     };
@@ -139,9 +139,9 @@ fn rk4_is_its_stability_polynomial_on_the_oscillator() {
     // On y0' = y1, y1' = −y0 (λ = ±i), each step multiplies (y0 + i y1) by R(−i h).
     let h = 0.1f64;
     let (re, im) = (1.0 - h * h / 2.0 + h.powi(4) / 24.0, -(h - h.powi(3) / 6.0));
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dt: Some(h),
-        ..with(Method::Rk4, Rk45Options::default())
+        ..with(Method::Rk4, SolverOptions::default())
     };
     let sol = solve(oscillator(), (0.0, 1.0), &[0.0, 1.0], &opts, &mut []).unwrap();
     assert_eq!(sol.status, Status::Success);
@@ -181,9 +181,9 @@ impl OdeSystem for SplitOscillator {
 #[test]
 fn euler_is_semi_implicit_with_a_split_and_explicit_without() {
     let h = 0.01;
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dt: Some(h),
-        ..with(Method::Euler, Rk45Options::default())
+        ..with(Method::Euler, SolverOptions::default())
     };
     for position_rate in [true, false] {
         let sys = SplitOscillator { position_rate };
@@ -221,10 +221,10 @@ fn fixed_steps_land_on_t_end_and_dense_output_is_hermite() {
         ((0.0, 0.25), vec![0.0, 0.1, 0.2, 0.25]),
         ((1.0, 0.75), vec![1.0, 0.9, 0.8, 0.75]),
     ] {
-        let opts = Rk45Options {
+        let opts = SolverOptions {
             dt: Some(0.1),
             dense: true,
-            ..with(Method::Rk4, Rk45Options::default())
+            ..with(Method::Rk4, SolverOptions::default())
         };
         let sol = solve(oscillator(), span, &[0.0, 1.0], &opts, &mut []).unwrap();
         for (a, b) in sol.t.iter().zip(&times) {
@@ -244,9 +244,9 @@ fn fixed_steps_land_on_t_end_and_dense_output_is_hermite() {
         assert!((y[0] - exact).abs() < 1e-5, "{y:?} vs {exact}");
     }
     // A step a hair short of t_end ends there instead of leaving a sliver.
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dt: Some(0.1),
-        ..with(Method::Euler, Rk45Options::default())
+        ..with(Method::Euler, SolverOptions::default())
     };
     let sol = solve(
         oscillator(),
@@ -261,22 +261,22 @@ fn fixed_steps_land_on_t_end_and_dense_output_is_hermite() {
 
 #[test]
 fn bad_method_arguments_are_named() {
-    let run = |opts: Rk45Options| solve(oscillator(), (0.0, 1.0), &[0.0, 1.0], &opts, &mut []);
-    let e = run(with(Method::Rk4, Rk45Options::default())).unwrap_err();
+    let run = |opts: SolverOptions| solve(oscillator(), (0.0, 1.0), &[0.0, 1.0], &opts, &mut []);
+    let e = run(with(Method::Rk4, SolverOptions::default())).unwrap_err();
     assert_eq!(e, InputError::DtMissing { method: "RK4" });
     assert_eq!(e.argument(), "dt");
     assert!(e
         .to_string()
         .starts_with("dt: method 'RK4' takes a fixed step"));
-    let e = run(Rk45Options {
+    let e = run(SolverOptions {
         dt: Some(-1.0),
-        ..with(Method::Euler, Rk45Options::default())
+        ..with(Method::Euler, SolverOptions::default())
     })
     .unwrap_err();
     assert_eq!(e, InputError::DtInvalid(-1.0));
-    let e = run(Rk45Options {
+    let e = run(SolverOptions {
         dt: Some(0.1),
-        ..with(Method::Dop853, Rk45Options::default())
+        ..with(Method::Dop853, SolverOptions::default())
     })
     .unwrap_err();
     assert_eq!(e.argument(), "dt");
@@ -285,7 +285,7 @@ fn bad_method_arguments_are_named() {
     assert_eq!(e.argument(), "method");
     assert!(e.to_string().contains("got 'RK5'"), "{e}");
     if !crate::integrator::radau_available() {
-        let e = run(with(Method::Radau, Rk45Options::default())).unwrap_err();
+        let e = run(with(Method::Radau, SolverOptions::default())).unwrap_err();
         assert_eq!(e.argument(), "method");
         assert!(e.to_string().contains("not available"), "{e}");
     }
@@ -305,9 +305,9 @@ fn rk4_double<S: OdeSystem>(
     t: f64,
     y: &[f64],
     t_end: f64,
-    opts: &Rk45Options,
+    opts: &SolverOptions,
 ) -> Result<FixedStep<S, crate::integrator::Rk4>, InputError> {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dt: Some(1e-3),
         ..opts.clone()
     };
@@ -316,7 +316,7 @@ fn rk4_double<S: OdeSystem>(
 
 #[test]
 fn auto_switches_at_the_stiffness_detection_and_continues_from_there() {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dense: true,
         ..with(Method::Auto, tol(1e-6))
     };
@@ -328,7 +328,7 @@ fn auto_switches_at_the_stiffness_detection_and_continues_from_there() {
     assert_eq!(sol.switched_to, Some(Method::Radau));
     let ts = sol.t_switch.unwrap();
     // RK45 alone, stopping at the detection, stops exactly there.
-    let first = Rk45Options {
+    let first = SolverOptions {
         stiffness: crate::integrator::StiffnessCheck::Stop,
         ..tol(1e-6)
     };

@@ -1,7 +1,7 @@
 //! Tests of Radau IIA against SciPy 1.17's `solve_ivp(method="Radau")` (counts pinned from it),
 //! published reference values (Hairer's test set) and exact solutions.
 use super::*;
-use crate::integrator::{FnSystem, Rk45Options};
+use crate::integrator::{FnSystem, SolverOptions};
 
 type Counts = (usize, usize, usize, usize);
 
@@ -68,8 +68,8 @@ impl OdeSystem for Robertson {
     }
 }
 
-fn opts(rtol: f64, atol: f64) -> Rk45Options {
-    Rk45Options {
+fn opts(rtol: f64, atol: f64) -> SolverOptions {
+    SolverOptions {
         rtol: rtol.into(),
         atol: atol.into(),
         ..Default::default()
@@ -473,8 +473,8 @@ fn integrates_backwards() {
     );
 }
 
-fn radau_opts(tol: f64) -> Rk45Options {
-    Rk45Options {
+fn radau_opts(tol: f64) -> SolverOptions {
+    SolverOptions {
         method: crate::integrator::Method::Radau,
         ..opts(tol, tol)
     }
@@ -496,7 +496,7 @@ fn driver_events_t_eval_and_dense_output() {
         Linear,
         (0.0, 2.0),
         &y0,
-        &Rk45Options {
+        &SolverOptions {
             dense: true,
             t_eval: Some(t_eval.clone()),
             ..radau_opts(tol)
@@ -547,7 +547,7 @@ fn auto_switches_to_radau_on_van_der_pol() {
             },
             (0.0, 2.0),
             &[2.0, 0.0],
-            &Rk45Options {
+            &SolverOptions {
                 method,
                 ..opts(tol, tol)
             },
@@ -580,7 +580,7 @@ fn radau_refuses_a_pi_controller() {
         0.0,
         &[1.0, 0.0],
         1.0,
-        &Rk45Options {
+        &SolverOptions {
             controller: crate::integrator::Controller::hairer_pi(),
             ..opts(1e-3, 1e-6)
         },
@@ -632,7 +632,7 @@ fn stiff_chain_radau_needs_ten_times_fewer_evaluations_than_rk45() {
     let dim = y0.len();
     let go = |method, tol: f64| {
         let mut sys = Dynamics::try_new(model, &scene.effects, Default::default()).unwrap();
-        let o = Rk45Options {
+        let o = SolverOptions {
             method,
             ..opts(tol, tol)
         };

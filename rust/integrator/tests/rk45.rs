@@ -131,7 +131,7 @@ fn t_eval_and_dense_match_scipy() {
         [0.049398104974078344, 0.9987765076297669, 0.9993758692252135],
         [-0.7053837295840915, -0.7088187876243793, 0.8638491355867973],
     ];
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dense: true,
         t_eval: Some(vec![0.0, 2.5, 5.0, 7.5, 12.0]),
         ..tol(1e-6)
@@ -195,7 +195,7 @@ fn backward_integration() {
         decay(),
         (1.0, 0.0),
         &[1.0],
-        &Rk45Options::default(),
+        &SolverOptions::default(),
         &mut [],
     )
     .unwrap();
@@ -212,7 +212,7 @@ fn backward_integration() {
 
     // Krogh backwards from the exact y(12) to t = 0 (SciPy: nfev 902, 151 points).
     let (sn, cn, dn) = ellipj(12.0, 0.51);
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         dense: true,
         t_eval: Some(vec![12.0, 6.0, 1.0, 0.0]),
         ..tol(1e-9)
@@ -238,7 +238,7 @@ fn nan_in_rhs_gives_non_finite_with_time() {
         dy[0] = if t > 0.5 { f64::NAN } else { -y[0] };
         Ok(())
     });
-    let sol = rk45(sys, (0.0, 2.0), &[1.0], &Rk45Options::default(), &mut []).unwrap();
+    let sol = rk45(sys, (0.0, 2.0), &[1.0], &SolverOptions::default(), &mut []).unwrap();
     match sol.status {
         Status::NonFinite { t, at, what } => {
             assert_eq!(what, NonFiniteKind::Derivative);
@@ -263,7 +263,7 @@ fn overflowing_state_gives_non_finite_state() {
         dy[0] = f64::MAX;
         Ok(())
     });
-    let sol = rk45(sys, (0.0, 1.0), &[1.0], &Rk45Options::default(), &mut []).unwrap();
+    let sol = rk45(sys, (0.0, 1.0), &[1.0], &SolverOptions::default(), &mut []).unwrap();
     assert!(
         matches!(sol.status, Status::NonFinite { t, what: NonFiniteKind::State, .. } if t == 0.0),
         "{:?}",
@@ -273,7 +273,7 @@ fn overflowing_state_gives_non_finite_state() {
 
 #[test]
 fn max_steps_is_honoured() {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         max_steps: 5,
         ..tol(1e-10)
     };
@@ -299,7 +299,7 @@ fn blow_up_gives_step_too_small_like_scipy() {
         dy[0] = y[0] * y[0];
         Ok(())
     });
-    let sol = rk45(sys, (0.0, 2.0), &[1.0], &Rk45Options::default(), &mut []).unwrap();
+    let sol = rk45(sys, (0.0, 2.0), &[1.0], &SolverOptions::default(), &mut []).unwrap();
     match sol.status {
         Status::StepTooSmall { t, min_step } => {
             assert!((t - 0.9999286400563746).abs() < 1e-12, "{t}");
@@ -325,7 +325,7 @@ fn rhs_error_is_propagated() {
         dy[0] = -y[0];
         Ok(())
     });
-    let sol = rk45(sys, (0.0, 3.0), &[1.0], &Rk45Options::default(), &mut []).unwrap();
+    let sol = rk45(sys, (0.0, 3.0), &[1.0], &SolverOptions::default(), &mut []).unwrap();
     match &sol.status {
         Status::RhsError { t, at, message } => {
             assert!(*t <= 1.0 && *at > 1.0);
@@ -344,7 +344,7 @@ fn rhs_error_is_propagated() {
         sys,
         (0.0, 3.0),
         &[1.0],
-        &Rk45Options {
+        &SolverOptions {
             dense: true,
             ..Default::default()
         },
@@ -359,35 +359,35 @@ fn rhs_error_is_propagated() {
 #[test]
 fn bad_inputs_give_typed_errors() {
     let y0 = [0.0, 1.0, 1.0];
-    let run = |span: (f64, f64), y0: &[f64], opts: Rk45Options| {
+    let run = |span: (f64, f64), y0: &[f64], opts: SolverOptions| {
         rk45(krogh(), span, y0, &opts, &mut []).unwrap_err()
     };
     let ok = (0.0, 1.0);
     // The error of a run on `ok` with one option set.
-    let bad = |set: fn(&mut Rk45Options)| {
-        let mut opts = Rk45Options::default();
+    let bad = |set: fn(&mut SolverOptions)| {
+        let mut opts = SolverOptions::default();
         set(&mut opts);
         run(ok, &y0, opts)
     };
-    let e = run(ok, &[0.0, f64::NAN, 1.0], Rk45Options::default());
+    let e = run(ok, &[0.0, f64::NAN, 1.0], SolverOptions::default());
     assert!(
         matches!(e, InputError::Y0NonFinite { index: 1, value } if value.is_nan()),
         "{e:?}"
     );
     assert_eq!(e.argument(), "y0");
     assert_eq!(
-        run(ok, &[0.0, 1.0], Rk45Options::default()),
+        run(ok, &[0.0, 1.0], SolverOptions::default()),
         InputError::Y0Length {
             expected: 3,
             got: 2
         }
     );
     assert_eq!(
-        run((1.0, 1.0), &y0, Rk45Options::default()),
+        run((1.0, 1.0), &y0, SolverOptions::default()),
         InputError::TSpanEmpty(1.0)
     );
     assert_eq!(
-        run((0.0, f64::INFINITY), &y0, Rk45Options::default()).argument(),
+        run((0.0, f64::INFINITY), &y0, SolverOptions::default()).argument(),
         "t_span"
     );
     let e = bad(|o| o.rtol = (-1e-3).into());
@@ -460,7 +460,7 @@ fn bad_inputs_give_typed_errors() {
     let e = run(
         (1.0, 0.0),
         &y0,
-        Rk45Options {
+        SolverOptions {
             t_eval: Some(vec![0.2, 0.5]),
             ..Default::default()
         },
@@ -484,7 +484,7 @@ fn tiny_rtol_is_clamped_with_a_flag() {
         krogh(),
         (0.0, 1.0),
         &[0.0, 1.0, 1.0],
-        &Rk45Options {
+        &SolverOptions {
             rtol: 0.0.into(),
             ..Default::default()
         },
@@ -496,7 +496,7 @@ fn tiny_rtol_is_clamped_with_a_flag() {
         krogh(),
         (0.0, 1.0),
         &[0.0, 1.0, 1.0],
-        &Rk45Options::default(),
+        &SolverOptions::default(),
         &mut [],
     )
     .unwrap();
@@ -506,7 +506,7 @@ fn tiny_rtol_is_clamped_with_a_flag() {
 #[test]
 fn per_component_tolerances_equal_scalar_ones() {
     let a = rk45(krogh(), (0.0, 12.0), &[0.0, 1.0, 1.0], &tol(1e-7), &mut []).unwrap();
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         rtol: vec![1e-7; 3].into(),
         atol: vec![1e-7; 3].into(),
         ..Default::default()
@@ -514,7 +514,7 @@ fn per_component_tolerances_equal_scalar_ones() {
     let b = rk45(krogh(), (0.0, 12.0), &[0.0, 1.0, 1.0], &opts, &mut []).unwrap();
     assert_eq!((&a.t, &a.y), (&b.t, &b.y));
     // A looser atol on one component must change the steps.
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         atol: vec![1e-7, 1e-7, 1e-2].into(),
         ..tol(1e-7)
     };
@@ -529,7 +529,7 @@ fn boxed_dyn_system_and_mut_ref_work() {
         &mut sys,
         (0.0, 1.0),
         &[0.0, 1.0, 1.0],
-        &Rk45Options::default(),
+        &SolverOptions::default(),
         &mut [],
     )
     .unwrap();
@@ -538,7 +538,7 @@ fn boxed_dyn_system_and_mut_ref_work() {
         boxed,
         (0.0, 1.0),
         &[0.0, 1.0, 1.0],
-        &Rk45Options::default(),
+        &SolverOptions::default(),
         &mut [],
     )
     .unwrap();

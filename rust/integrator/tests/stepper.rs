@@ -68,7 +68,7 @@ fn combinations_round_alike_on_every_cpu_path() {
 fn first_steps_match_scipy() {
     // Reference: scipy 1.17 `RK45(lambda t, y: -y, 0, [1.0], 10)`; h_abs after init,
     // then t after each of the first three steps, and nfev.
-    let mut st = Stepper::new(decay(), 0.0, &[1.0], 10.0, &Rk45Options::default()).unwrap();
+    let mut st = Stepper::new(decay(), 0.0, &[1.0], 10.0, &SolverOptions::default()).unwrap();
     st.initialize().unwrap();
     assert_eq!(st.h_next(), SCIPY_DECAY_H0);
     for &t in SCIPY_DECAY_T.iter() {
@@ -87,7 +87,7 @@ const SCIPY_DECAY_Y3: f64 = 0.14860780882670885;
 
 #[test]
 fn stepper_runs_to_the_bound_and_stays_finished() {
-    let mut st = Stepper::new(decay(), 0.0, &[1.0], 1.0, &Rk45Options::default()).unwrap();
+    let mut st = Stepper::new(decay(), 0.0, &[1.0], 1.0, &SolverOptions::default()).unwrap();
     let mut n = 0;
     while st.step().unwrap() == StepOutcome::Accepted {
         n += 1;
@@ -107,7 +107,7 @@ fn stepper_runs_to_the_bound_and_stays_finished() {
 /// Global error at t = 2 of y'' = -y with fixed steps h (max_step = first_step = h).
 fn fixed_step_error(h: f64) -> f64 {
     let sys = oscillator();
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         atol: 1e-2.into(),
         rtol: 1e-2.into(),
         max_step: h,
@@ -136,7 +136,7 @@ fn fifth_order_convergence_with_fixed_steps() {
 
 #[test]
 fn max_step_is_respected() {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         max_step: 0.1,
         ..Default::default()
     };
@@ -155,7 +155,7 @@ fn max_step_is_respected() {
 #[test]
 fn pi_controller_is_accurate_and_differs_from_standard() {
     let run = |controller| {
-        let opts = Rk45Options {
+        let opts = SolverOptions {
             rtol: 1e-8.into(),
             atol: 1e-8.into(),
             controller,
@@ -201,7 +201,7 @@ fn projection_is_applied_to_each_accepted_state() {
         0.0,
         &[1.0, 0.0],
         50.0,
-        &Rk45Options::default(),
+        &SolverOptions::default(),
     )
     .unwrap();
     while st.step().unwrap() == StepOutcome::Accepted {

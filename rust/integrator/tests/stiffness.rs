@@ -14,8 +14,8 @@ fn prothero_robinson(
     })
 }
 
-fn with_stiffness(opts: Rk45Options, stiffness: StiffnessCheck) -> Rk45Options {
-    Rk45Options { stiffness, ..opts }
+fn with_stiffness(opts: SolverOptions, stiffness: StiffnessCheck) -> SolverOptions {
+    SolverOptions { stiffness, ..opts }
 }
 
 #[test]
@@ -111,7 +111,7 @@ fn stiff_linear_problem_is_detected_early_and_steps_are_unchanged() {
 
 #[test]
 fn stiffness_and_max_steps_are_reported_together() {
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         max_steps: 500,
         ..tol(1e-6)
     };
@@ -206,7 +206,7 @@ damping = 3e3
 "#;
     let scene = crate::scene::Scene::from_toml(text, "stiff.toml").unwrap();
     let run = |check, max_steps| {
-        let opts = Rk45Options {
+        let opts = SolverOptions {
             stiffness: check,
             max_steps,
             ..tol(1e-8)
@@ -256,7 +256,7 @@ fn stiffness_estimate_survives_huge_values_and_times_read_well() {
         dy[1] = lambda * y[1];
         Ok(())
     });
-    let opts = Rk45Options {
+    let opts = SolverOptions {
         first_step: Some(1e-3),
         ..tol(1e-6)
     };

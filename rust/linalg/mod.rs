@@ -1,0 +1,2 @@
+//! Hand-written factorisations, in one place. Each file says in one line why it is not
+//! nalgebra's (or faer's) own.
