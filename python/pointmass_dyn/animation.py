@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
+from . import _core, viewer_camera
 from .errors import InvalidInputError
 
 #: Colours (RGB in 0..1), shared by both writers so a page and a GIF look alike.
@@ -71,6 +71,14 @@ class Drawing:
     extent: float = 0.0
     title: str = ""
     labels: dict = field(default_factory=dict)
+    #: The robot's shapes (``_visuals``) or None: meshes, instances, body poses.
+    visuals: dict | None = None
+    #: Layers shown when the page opens (:data:`LAYERS`).
+    show: tuple = ()
+
+    @property
+    def triangles(self) -> int:
+        return 0 if self.visuals is None else self.visuals["scene"].triangles
 
     @property
     def nframes(self) -> int:
@@ -79,15 +87,30 @@ class Drawing:
 
 @dataclass
 class AnimationInfo:
-    """What :func:`animate` wrote: the file, its frame count and times, the frame size in
-    pixels and the initial camera (see :func:`view_projection`)."""
+    """What :func:`animate` made: the file (None: nothing written), its frame count and
+    times, the frame size in pixels, the initial camera (see :func:`view_projection`;
+    :func:`camera_at` for a following camera), the size in bytes, how many triangles the
+    robot's shapes have, and for a page its HTML, which a notebook shows inline."""
 
-    path: Path
+    path: Path | None
     frames: int
     times: np.ndarray
     size: tuple[int, int]
     camera: dict
     bytes: int
+    triangles: int = 0
+    html: str | None = field(default=None, repr=False)
+
+    def _repr_html_(self) -> str | None:
+        """The page in an ``<iframe srcdoc>``: self-contained (no server, no network), so it
+        works in Jupyter, JupyterLab, VS Code and Colab, offline; None for a GIF/MP4."""
+        if self.html is None:
+            return None
+        import html as _html
+
+        return (f'<iframe srcdoc="{_html.escape(self.html, quote=True)}" '
+                f'style="width:100%;height:{self.size[1]}px;border:0" '
+                'sandbox="allow-scripts" title="pointmass_dyn animation"></iframe>')
 
 
 # ---------------------------------------------------------------- sampling
@@ -136,67 +159,17 @@ def sample(t, x, times, quaternions=()) -> np.ndarray:
 
 
 # ---------------------------------------------------------------- camera
+# (viewer_camera; the names are kept here, where tests and users found them)
 
-
-#: (azimuth, elevation) in degrees: the general view (matplotlib's default 3-D view), and for
-#: a motion flat across x, y or z a view about 30° off that axis, so its plane is seen nearly
-#: face on rather than at a grazing angle.
-VIEWS = {None: (-60.0, 25.0), 0: (-20.0, 20.0), 1: (-70.0, 20.0), 2: (-60.0, 60.0)}
+VIEWS = viewer_camera.VIEWS
+view_projection = viewer_camera.view_projection
+project = viewer_camera.project
+camera_at = viewer_camera.camera_at
 
 
 def default_camera(lo: np.ndarray, hi: np.ndarray) -> dict:
-    """A view of the box ``[lo, hi]`` (azimuth and elevation from :data:`VIEWS`; flat: an
-    extent under 15 % of the largest), field of view 35°, far enough that the bounding
-    sphere fits."""
-    centre = (lo + hi) / 2
-    extent = hi - lo
-    radius = max(float(np.linalg.norm(extent)) / 2, 1e-3)
-    flat = int(np.argmin(extent)) if extent.min() < 0.15 * extent.max() else None
-    azimuth, elevation = VIEWS[flat]
-    fov = 35.0
-    return {
-        "target": centre.tolist(),
-        "distance": radius / math.sin(math.radians(fov / 2)) * 1.05,
-        "azimuth": azimuth,
-        "elevation": elevation,
-        "fov": fov,
-    }
-
-
-def view_projection(camera: dict, aspect: float) -> np.ndarray:
-    """The page's 4×4 world → clip matrix (column vectors): a perspective of vertical field
-    of view ``fov`` looking at ``target`` from ``distance`` along azimuth/elevation (degrees,
-    z up). The page computes the same matrix (``viewProj`` in viewer.js)."""
-    az, el = math.radians(camera["azimuth"]), math.radians(camera["elevation"])
-    d = camera["distance"]
-    target = np.asarray(camera["target"], dtype=float)
-    eye = target + d * np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az),
-                                 math.sin(el)])
-    f = target - eye
-    f /= np.linalg.norm(f)
-    s = np.cross(f, [0.0, 0.0, 1.0])
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    view = np.eye(4)
-    view[0, :3], view[1, :3], view[2, :3] = s, u, -f
-    view[:3, 3] = -view[:3, :3] @ eye
-    near, far = d / 100.0, d * 100.0
-    ft = 1.0 / math.tan(math.radians(camera["fov"]) / 2)
-    proj = np.zeros((4, 4))
-    proj[0, 0], proj[1, 1] = ft / aspect, ft
-    proj[2, 2], proj[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
-    proj[3, 2] = -1.0
-    return proj @ view
-
-
-def project(camera: dict, width: int, height: int, points) -> np.ndarray:
-    """Pixel coordinates (x right, y down) of world ``points`` (..., 3) in a page of
-    ``width × height`` CSS pixels at the initial camera."""
-    p = np.asarray(points, dtype=float)
-    h = np.concatenate([p, np.ones(p.shape[:-1] + (1,))], axis=-1)
-    c = h @ view_projection(camera, width / height).T
-    ndc = c[..., :3] / c[..., 3:4]
-    return np.stack([(ndc[..., 0] + 1) / 2 * width, (1 - ndc[..., 1]) / 2 * height], axis=-1)
+    """A view of the box ``[lo, hi]``, z up (:func:`viewer_camera.fit`)."""
+    return viewer_camera.fit(lo, hi)
 
 
 # ---------------------------------------------------------------- the drawing
@@ -285,6 +258,46 @@ def _boxes(model, poses) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             np.stack([np.array(los), np.array(his)], axis=1))
 
 
+#: The page's layers (toggles): the robot's shapes, the seven point masses of each link with
+#: their boxes, the links as segments, the joint axes, body frames, force arrows.
+LAYERS = ("robot", "masses", "links", "axes", "frames", "forces")
+
+
+def _layers(show, robot: bool) -> tuple:
+    """Layers shown at first: ``show`` if given, else the robot and forces for a model with
+    visuals, and everything but the robot and frames otherwise."""
+    if show is None:
+        return ("robot", "forces") if robot else ("masses", "links", "axes", "forces")
+    names = (show,) if isinstance(show, str) else tuple(show)
+    bad = [n for n in names if n not in LAYERS]
+    if bad:
+        raise InvalidInputError(f"show: expected names among {LAYERS}, got {bad!r}")
+    return names
+
+
+def _visuals(model, rot, origins, triangles) -> dict | None:
+    """The model's visuals as triangles (``viewer_meshes``), with the poses (F, nb, 12:
+    rotation row-major, origin) of the bodies that carry them and the world corners
+    (F, 8·instances, 3) of their boxes; None for a model without visuals."""
+    if not model.visuals:
+        return None
+    from . import viewer_meshes
+
+    scene = viewer_meshes.visual_scene(
+        model, viewer_meshes.DEFAULT_TRIANGLES if triangles is None else triangles)
+    if not scene.instances:
+        return None
+    bodies = sorted({i.body for i in scene.instances})
+    nf = rot.shape[0]
+    pose = np.concatenate([rot[:, bodies].reshape(nf, len(bodies), 9), origins[:, bodies]],
+                          axis=2)
+    local = viewer_meshes.bounds(scene)  # (k, 8, 3) in body frames
+    which = [i.body for i in scene.instances]
+    corners = origins[:, which, None, :] + np.einsum("fkij,kcj->fkci", rot[:, which], local)
+    return {"scene": scene, "bodies": bodies, "pose": pose,
+            "corners": corners.reshape(nf, -1, 3)}
+
+
 def build_drawing(
     model,
     times: np.ndarray,
@@ -293,27 +306,37 @@ def build_drawing(
     trails=None,
     shaking: np.ndarray | None = None,
     title: str = "",
+    gravity=None,
+    camera: Any = "auto",
+    show=None,
+    triangles: int | None = None,
 ) -> Drawing:
     """The :class:`Drawing` of ``model`` at configurations ``q`` (F, nq) and ``times`` (F,).
-    ``shaking``: the shaking force (F, 3) to draw as an arrow, or None."""
+    ``shaking``: the shaking force (F, 3) to draw as an arrow, or None. ``gravity``: sets
+    "up" (−g) for the camera and the ground. ``camera``, ``show``, ``triangles``: as in
+    :func:`animate`."""
     poses = model.body_poses(q)
     nf, nb = len(times), model.nbodies
     origins, jo = poses["origins"], poses["joint_origins"]
     rot = poses["rotations"]
     info = [model.body_info(b) for b in range(nb)]
     children = {b: [c for c in range(nb) if info[c][2] == b] for b in range(nb)}
+    floating = [b for b in range(nb) if info[b][2] < 0 and info[b][1] == "FreeFlyer"]
 
     # Links: parent origin → joint origin → body origin; a body without children extends
-    # to twice its centre of mass (a uniform rod's far end), so a leaf is not invisible.
+    # to twice its centre of mass (a uniform rod's far end), so a leaf is not invisible. A
+    # floating base is joined to nothing.
     segs = []
     for b in range(nb):
         parent = info[b][2]
-        start = origins[:, parent] if parent >= 0 else np.zeros((nf, 3))
-        segs.append((start, jo[:, b]))
-        segs.append((jo[:, b], origins[:, b]))
+        if b not in floating:
+            start = origins[:, parent] if parent >= 0 else np.zeros((nf, 3))
+            segs.append((start, jo[:, b]))
+            segs.append((jo[:, b], origins[:, b]))
         if not children[b]:
             com = np.asarray(model.body(b).com, dtype=float)
             segs.append((origins[:, b], origins[:, b] + 2 * rot[:, b] @ com))
+    segs = segs or [(origins[:, 0], origins[:, 0])]
     links = np.stack([np.stack(s, axis=1) for s in segs], axis=1)
     # Degenerate segments (length 0 in every frame) are dropped.
     keep = np.linalg.norm(links[:, :, 1] - links[:, :, 0], axis=-1).max(axis=0) > 1e-12
@@ -330,10 +353,22 @@ def build_drawing(
         trail[:, k] = origins[:, b] + rot[:, b] @ p
     trail_colour = np.array([c for _b, _p, c in specs]).reshape(-1, 3)
 
-    everything = np.concatenate([pts.reshape(-1, 3), links.reshape(-1, 3),
-                                 trail.reshape(-1, 3), np.zeros((1, 3))])
-    lo, hi = everything.min(axis=0), everything.max(axis=0)
+    visuals = _visuals(model, rot, origins, triangles)
+    # The subject, frame by frame: a robot's meshes and point masses, else everything drawn
+    # and the world origin.
+    if visuals is not None:
+        subject = [pts, visuals["corners"], trail]
+    else:
+        subject = [pts, links.reshape(nf, -1, 3), trail, np.zeros((nf, 1, 3))]
+    per_frame = np.concatenate(subject, axis=1)
+    lo_f, hi_f = per_frame.min(axis=1), per_frame.max(axis=1)
+    lo, hi = lo_f.min(axis=0), hi_f.max(axis=0)
     size = max(float(np.linalg.norm(hi - lo)), 1e-3)
+    up = viewer_camera.up_from_gravity(gravity)
+    base = origins[:, floating[0]] if floating else None
+    cam = viewer_camera.choose(camera, lo_f, hi_f, base, up)
+    if cam.get("track") is not None:  # sizes follow the subject, not its whole path
+        size = max(float(np.max(np.linalg.norm(hi_f - lo_f, axis=1))), 1e-3)
 
     # Radius ∝ |m|^(1/3) (a sphere of uniform density), the heaviest 2.5 % of the scene size.
     mmax = max(float(np.max(np.abs(m))), 1e-300)
@@ -367,17 +402,6 @@ def build_drawing(
         base = np.zeros((nf, 3))
         arrow = np.stack([base, base + scale * f], axis=1)
 
-    # Ground grid: a square under everything (world z up), spacing a round number.
-    raw = size / 8
-    step = min((f * 10 ** math.floor(math.log10(raw)) for f in (1, 2, 5, 10)),
-               key=lambda x: abs(math.log(x / raw)))
-    half = step * math.ceil(size / step / 2)
-    grid = {
-        "z": float(lo[2]) - 0.02 * size,
-        "center": [round(float(c) / step) * step for c in (lo[:2] + hi[:2]) / 2],
-        "half": half,
-        "step": step,
-    }
     return Drawing(
         times=np.asarray(times, dtype=float),
         spheres=pts,
@@ -394,12 +418,14 @@ def build_drawing(
         trails=trail,
         trail_colour=trail_colour,
         arrow=arrow,
-        grid=grid,
-        camera=default_camera(lo, hi),
+        grid=viewer_camera.ground(lo, hi, up),
+        camera=cam,
         size=size,
         extent=max(float(np.max(hi - lo)), 1e-3),
         title=title,
         labels={"links": model.link_names, "loops": model.loop_names},
+        visuals=visuals,
+        show=_layers(show, visuals is not None),
     )
 
 
@@ -438,6 +464,9 @@ def prepare(
     trails: Any = None,
     shaking: bool = False,
     title: str | None = None,
+    camera: Any = "auto",
+    show=None,
+    triangles: int | None = None,
 ) -> Drawing:
     """The :class:`Drawing` :func:`animate` writes (same arguments)."""
     scene = model_or_scene if isinstance(model_or_scene, _core.Scene) else None
@@ -471,15 +500,30 @@ def prepare(
         from .balancing import shaking as shaking_of
 
         force = np.asarray(shaking_of(scene, _Sampled(times, qf, sample(t, v, times))).force)
+    if triangles is not None and not (isinstance(triangles, (int, np.integer))
+                                      and 0 <= triangles <= 10_000_000):
+        raise InvalidInputError(f"triangles: expected an integer 0..10000000, got {triangles!r}")
     if title is None:
-        title = scene.name if scene is not None and scene.name else "pointmass_dyn"
-    return build_drawing(model, times, qf, trails=trails, shaking=force, title=title)
+        title = (scene.name if scene is not None and scene.name
+                 else model.name or "pointmass_dyn")
+    return build_drawing(model, times, qf, trails=trails, shaking=force, title=title,
+                         gravity=_gravity(scene), camera=camera, show=show,
+                         triangles=triangles)
+
+
+def _gravity(scene):
+    """The scene's gravity vector (None: no scene or no gravity effect)."""
+    for e in getattr(scene, "effects", ()):
+        g = getattr(e, "g", None)
+        if g is not None:
+            return np.asarray(g, dtype=float)
+    return None
 
 
 def animate(
     result: Any,
     model_or_scene: Any,
-    path: str | os.PathLike,
+    path: str | os.PathLike | None = None,
     *,
     fps: float = 30.0,
     frames: int | None = None,
@@ -489,26 +533,36 @@ def animate(
     shaking: bool = False,
     title: str | None = None,
     dpi: int = 100,
+    camera: Any = "auto",
+    show: Any = None,
+    triangles: int | None = None,
 ) -> AnimationInfo:
     """Writes an animation of ``result`` to ``path``: ``.html`` (one self-contained WebGL
-    page, works offline: play/pause, scrub, orbit/zoom), ``.gif`` (Pillow) or ``.mp4``
-    (ffmpeg), the last two with matplotlib.
+    page, works offline: play/pause, scrub, orbit/zoom, layer toggles), ``.gif`` (Pillow) or
+    ``.mp4`` (ffmpeg), the last two with matplotlib. ``path=None`` writes nothing: the
+    returned object holds the page and shows it inline in a notebook (``_repr_html_``).
 
     ``result``: a :class:`SimulationResult` or ``(t, q[, v])``. ``model_or_scene``: the
-    :class:`Model` or the :class:`Scene` it came from (a scene is needed for ``shaking``).
-    The trajectory is sampled at ``fps``: ``frames`` frames if given, else
-    ``round(duration·fps)``, ``duration`` being the result's time span unless given, so a
-    long result costs only its frames. ``size``: GIF/MP4 frame size in pixels (width,
-    height); the page fills its window. ``trails``: points whose path is drawn — body
-    names/indices (their origin) or ``(body, point_in_body[, colour])``. ``shaking``: draw
-    the shaking force ``−Σ m a`` (docs/balancing.md) as an arrow at the world origin.
-    Returns :class:`AnimationInfo`. Raises :class:`~pointmass_dyn.errors.AnimationWriterError`
-    for a format this machine cannot write (MP4 without ffmpeg)."""
-    path = Path(path)
-    kind = path.suffix.lower()
+    :class:`Model` or the :class:`Scene` it came from (a scene is needed for ``shaking``,
+    and gives gravity, hence "up" and the ground's plane). The trajectory is sampled at
+    ``fps``: ``frames`` frames if given, else ``round(duration·fps)``, ``duration`` being
+    the result's time span unless given, so a long result costs only its frames. ``size``:
+    GIF/MP4 frame size in pixels (width, height); the page fills its window (inline: that
+    height). ``trails``: points whose path is drawn — body names/indices (their origin) or
+    ``(body, point_in_body[, colour])``. ``shaking``: draw the shaking force ``−Σ m a``
+    (docs/balancing.md) as an arrow at the world origin. ``camera``: "auto" (frame the
+    subject over the motion; follow a floating base that travels farther than its size),
+    "fixed", "follow" or a dict of ``target``, ``distance``, ``azimuth``, ``elevation``,
+    ``fov``. ``show``: the layers shown at first (:data:`LAYERS`). ``triangles``: the
+    budget the model's meshes are simplified to (default
+    ``viewer_meshes.DEFAULT_TRIANGLES``). Returns :class:`AnimationInfo`. Raises
+    :class:`~pointmass_dyn.errors.AnimationWriterError` for a format this machine cannot
+    write (MP4 without ffmpeg); a mesh that cannot be drawn is a
+    :class:`~pointmass_dyn.errors.VisualWarning`."""
+    kind = ".html" if path is None else Path(path).suffix.lower()
     if kind not in (".html", ".gif", ".mp4"):
         raise InvalidInputError(
-            f"path: expected a file name ending in .html, .gif or .mp4, got '{path}'"
+            f"path: expected None or a file name ending in .html, .gif or .mp4, got '{path}'"
         )
     if not (isinstance(size, (tuple, list)) and len(size) == 2
             and all(isinstance(s, (int, np.integer)) and 16 <= s <= 8192 for s in size)):
@@ -518,19 +572,24 @@ def animate(
     if not (isinstance(dpi, (int, np.integer)) and 10 <= dpi <= 1000):
         raise InvalidInputError(f"dpi: expected an integer 10..1000, got {dpi!r}")
     drawing = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
-                      trails=trails, shaking=shaking, title=title)
+                      trails=trails, shaking=shaking, title=title, camera=camera, show=show,
+                      triangles=triangles)
     width, height = int(size[0]), int(size[1])
+    html = None
     if kind == ".html":
-        from .viewer_html import write_html
+        from .viewer_html import page
 
-        write_html(drawing, path, fps=fps, size=(width, height))
+        html = page(drawing, fps)
+        if path is not None:
+            Path(path).write_text(html, encoding="utf-8")
     else:
         from .viewer_video import write_video
 
-        write_video(drawing, path, fps=fps, size=(width, height), dpi=int(dpi))
-    return AnimationInfo(path=path, frames=drawing.nframes, times=drawing.times,
-                         size=(width, height), camera=drawing.camera,
-                         bytes=path.stat().st_size)
+        write_video(drawing, Path(path), fps=fps, size=(width, height), dpi=int(dpi))
+    return AnimationInfo(path=None if path is None else Path(path), frames=drawing.nframes,
+                         times=drawing.times, size=(width, height), camera=drawing.camera,
+                         bytes=(len(html.encode()) if path is None else Path(path).stat().st_size),
+                         triangles=drawing.triangles, html=html)
 
 
 @dataclass

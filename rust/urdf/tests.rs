@@ -469,7 +469,7 @@ fn errors_carry_their_location() {
 }
 
 fn load_repaired(text: &str, r: &Repair) -> Result<Urdf> {
-    model_from_urdf_with(text, "t.urdf", None, RootJoint::Fixed, Some(r))
+    model_from_urdf_with(text, "t.urdf", None, RootJoint::Fixed, Some(r), &[])
 }
 
 #[test]
