@@ -295,7 +295,7 @@ def _visuals(model, rot, origins, triangles) -> dict | None:
     which = [i.body for i in scene.instances]
     corners = origins[:, which, None, :] + np.einsum("fkij,kcj->fkci", rot[:, which], local)
     return {"scene": scene, "bodies": bodies, "pose": pose,
-            "corners": corners.reshape(nf, -1, 3)}
+            "corners": corners.reshape(nf, -1, 3), "model": model}
 
 
 def build_drawing(

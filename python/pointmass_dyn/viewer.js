@@ -44,12 +44,13 @@
   const gl = canvas.getContext("webgl", { antialias: true, preserveDrawingBuffer: true });
   if (!gl) throw new Error("WebGL is not available in this browser");
 
-  // ---- shader: lit (headlight diffuse + ambient) or flat colour
+  // ---- shader: lit (headlight diffuse + ambient, at most 90 % of the colour, so a white
+  // surface stays apart from the white background) or flat colour
   const VS = "attribute vec3 aP;attribute vec3 aN;uniform mat4 uVP;uniform mat4 uM;" +
     "varying vec3 vN;void main(){vN=mat3(uM)*aN;gl_Position=uVP*uM*vec4(aP,1.0);}";
   const FS = "precision mediump float;varying vec3 vN;uniform vec3 uC;uniform float uLit;" +
     "uniform vec3 uL;void main(){float d=abs(dot(normalize(vN+1e-9),uL));" +
-    "gl_FragColor=vec4(uLit>0.5?uC*(0.35+0.65*d):uC,1.0);}";
+    "gl_FragColor=vec4(uLit>0.5?uC*(0.3+0.6*d):uC,1.0);}";
   function shader(type, src) {
     const s = gl.createShader(type);
     gl.shaderSource(s, src);

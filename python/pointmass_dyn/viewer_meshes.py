@@ -171,6 +171,12 @@ def inertia_box(body) -> tuple[Mesh, np.ndarray] | None:
 # ---------------------------------------------------------------- files
 
 
+def _has_trimesh() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("trimesh") is not None
+
+
 def _trimesh():
     try:
         import trimesh
@@ -195,7 +201,7 @@ def _part_colour(geom) -> tuple | None:
             rows, counts = np.unique(fc, axis=0, return_counts=True)
             c = rows[np.argmax(counts)]
         return tuple(float(x) / 255 for x in np.asarray(c)[:3])
-    except Exception:  # noqa: BLE001 - a colour is optional; any reader quirk means none
+    except Exception:  # a colour is optional: any reader quirk means none
         return None
 
 
@@ -206,9 +212,14 @@ def _welded(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     f = f[np.all(np.isfinite(v[f].reshape(len(f), -1)), axis=1)]
     if not len(f):
         return v[:0], f
-    span = float(np.max(np.ptp(v[f.reshape(-1)], axis=0))) or 1.0
-    _keys, first, inverse = np.unique(np.round(v / (1e-6 * span)), axis=0, return_index=True,
-                                      return_inverse=True)
+    used = v[f.reshape(-1)]
+    lo = used.min(axis=0)
+    span = float(np.max(used.max(axis=0) - lo)) or 1.0
+    # Positions on a grid of span/2^20 (finer than any screen), as one 60-bit integer each:
+    # a 1-D unique, far faster than unique rows.
+    grid = np.clip(np.round((v - lo) * ((2**20 - 1) / span)), 0, 2**20 - 1).astype(np.int64)
+    key = (grid[:, 0] << 40) | (grid[:, 1] << 20) | grid[:, 2]
+    _keys, first, inverse = np.unique(key, return_index=True, return_inverse=True)
     f = inverse.reshape(-1)[f]
     f = f[(f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])]
     return v[first], f
@@ -220,9 +231,30 @@ def _read_cached(path: str, mtime: int, size: int) -> list:
     return _read(path)
 
 
+def _read_stl(path: str, size: int) -> list:
+    """A binary STL (80-byte header, count, 50 bytes per triangle) with NumPy alone: the
+    commonest robot mesh format, read without the extra and without trimesh's 1-2 s import.
+    ASCII STL goes to trimesh."""
+    with open(path, "rb") as fh:
+        head = fh.read(84)
+        if len(head) < 84:
+            raise MeshReadError(f"truncated: {size} bytes, less than an STL header")
+        n = int(np.frombuffer(head, dtype="<u4", count=1, offset=80)[0])
+        if head[:5].lower() == b"solid" and 84 + 50 * n != size:
+            return []  # ASCII
+        if 84 + 50 * n > size:
+            raise MeshReadError(f"truncated: {n} triangles announced, {size} bytes")
+        rec = np.fromfile(fh, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)),
+                                              ("a", "<u2")]), count=n)
+    v = rec["v"].reshape(-1, 3).astype(float)
+    v, f = _welded(v, np.arange(len(v)).reshape(-1, 3))
+    if not len(f):
+        raise MeshReadError("no triangles in it")
+    return [(v, f, None)]
+
+
 def _read(path: str) -> list:
     """(vertices, faces, rgb or None) of each part of the file, in the file's frame."""
-    trimesh = _trimesh()
     try:
         size = os.stat(path).st_size
     except OSError as exc:
@@ -230,11 +262,16 @@ def _read(path: str) -> list:
     if size > MAX_MESH_BYTES:
         raise MeshReadError(f"{size} bytes, more than the {MAX_MESH_BYTES} read for display")
     ext = os.path.splitext(path)[1].lower().lstrip(".")
+    if ext == "stl":
+        parts = _read_stl(path, size)
+        if parts:
+            return parts
+    trimesh = _trimesh()
     if ext not in trimesh.available_formats():
         raise MeshReadError(f"unknown mesh format '.{ext}'")
     try:
         loaded = trimesh.load(path, force=None)
-    except Exception as exc:  # noqa: BLE001 - readers raise anything on a corrupt file
+    except Exception as exc:  # readers raise anything on a corrupt file
         raise MeshReadError(f"unreadable ({type(exc).__name__}: {exc})"[:300]) from exc
     if isinstance(loaded, trimesh.Scene):
         geoms = loaded.dump() if len(loaded.geometry) else []
@@ -298,11 +335,12 @@ def _stat(path: str) -> tuple[int, int]:
 # ---------------------------------------------------------------- a model's scene
 
 
-def visual_scene(model, triangles: int = DEFAULT_TRIANGLES) -> VisualScene:
+def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -> VisualScene:
     """The triangles of ``model.visuals``: each mesh file read once (shared by the visuals
     that use it at one scale), simplified so that all meshes together have about
     ``triangles`` (each keeps a share in proportion to its own count). Bodies whose meshes
-    could not be drawn get their inertia box; one :class:`VisualWarning` names the files."""
+    could not be drawn get their inertia box; one :class:`VisualWarning` names the files
+    that could not be read (those not found were named when the model was loaded)."""
     visuals = model.visuals
     meshes, instances, failed = [], [], {}
     counts: dict[str, int] = {}
@@ -325,8 +363,7 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES) -> VisualScene:
             instances.append(Instance(v["body"], len(meshes) - 1, pose, rgba or DEFAULT_RGBA))
             continue
         path = v["path"]
-        if not path:
-            failed.setdefault(v["uri"], "not found")
+        if not path:  # not found when the model was loaded, which warned about it
             broken_bodies.add(v["body"])
             continue
         if path in failed:
@@ -355,7 +392,7 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES) -> VisualScene:
         if box is not None:
             meshes.append(box[0])
             instances.append(Instance(b, len(meshes) - 1, box[1], FALLBACK_RGBA, True))
-    if failed:
+    if failed and warn:
         shown = [f"{k} ({why})" for k, why in list(failed.items())[:8]]
         more = f" and {len(failed) - 8} more" if len(failed) > 8 else ""
         warnings.warn(
