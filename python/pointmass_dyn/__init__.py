@@ -7,36 +7,12 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
+import importlib
+
 from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
+from ._batch import BatchResult, simulate_batch
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
-from .animation import AnimationInfo, animate
-from .balancing import (
-    Balance,
-    Counterweight,
-    MotionAnalysis,
-    Shaking,
-    analyze_motion,
-    balance,
-    pareto_front,
-    prescribed_motion,
-    shaking,
-)
-from .batch import BatchResult, simulate_batch
-from .errors import (
-    InertiaError,
-    InvalidInputError,
-    LoopClosureError,
-    ModelStructureError,
-    NumericalError,
-    PointMassDynError,
-    SceneError,
-    SimulationError,
-    SingularityError,
-)
-from .importers import InertiaRepair, from_mujoco, from_pinocchio
-from .mjcf import to_mjcf
-from .scenes import builtin_scenes, load_scene
-from .simulation import (
+from ._simulation import (
     Damper,
     ExternalForce,
     Gravity,
@@ -56,9 +32,49 @@ from .simulation import (
     simulate,
     solve_ivp,
 )
-from .sweep import sweep
-from .viewer_meshcat import show as show_meshcat
-from .work_precision import WorkPrecision, work_precision
+from ._sweep import sweep
+from .benchmarking import WorkPrecision
+from .design import (
+    Balance,
+    Counterweight,
+    MotionAnalysis,
+    Shaking,
+    analyze_motion,
+    balance,
+    pareto_front,
+    prescribed_motion,
+    shaking,
+)
+from .errors import (
+    InertiaError,
+    InvalidInputError,
+    LoopClosureError,
+    ModelStructureError,
+    NumericalError,
+    PointMassDynError,
+    SceneError,
+    SimulationError,
+    SingularityError,
+)
+from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
+from .scenes import builtin_scenes, load_scene
+from .viewer import AnimationInfo, animate
+from .viewer import show as show_meshcat
+
+# `pointmass_dyn.work_precision` is both the function and a former module path (an alias of
+# `benchmarking`): importing the function through that module loads it now, so that a later
+# `from pointmass_dyn.work_precision import ...` cannot rebind `pmd.work_precision` to it.
+from .work_precision import work_precision
+
+#: Module paths of the flat layout before the subpackages, each a thin alias module that
+#: re-exports from its subpackage (loaded on first use as ``pmd.<name>``).
+FORMER_MODULES = ("animation", "importers", "mjcf", "viewer_video", "work_precision_methods")
+
+
+def __getattr__(name: str):
+    if name in FORMER_MODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def Revolute(axis) -> Joint:
@@ -97,6 +113,10 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "benchmarking",
+    "design",
+    "io",
+    "viewer",
     "AnimationInfo",
     "animate",
     "Balance",

@@ -1,170 +1,21 @@
-"""``pointmass-dyn``: simulate a scene, print its point masses, list the bundled scenes,
-measure work–precision, analyse and balance a mechanism's shaking forces, sweep parameters
-and initial states over many runs (sweep_cli.py)."""
+"""``pointmass-dyn balance``: shaking forces of a one-input mechanism driven over a revolution
+(docs/balancing.md), and counterweights or redesigned links that balance it."""
 
 from __future__ import annotations
 
 import argparse
 import csv
 import math
-import sys
-import time
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InertiaError, InvalidInputError, PointMassDynError
-from .scenes import builtin_scenes, load_scene, resolve_scene_path
-from .simulation import simulate
+from .._helpers import scene_gravity
+from ..design import OBJECTIVES, Counterweight, balance, pareto_front, prescribed_motion
+from ..errors import InertiaError, InvalidInputError, PointMassDynError
+from ..plotting import objective_rms, plot_balance, plot_motion, plot_pareto
+from ..scenes import load_scene, resolve_scene_path
 
-
-def _progress_printer(t0: float, t1: float, stream):
-    """A one-line progress indicator, shown only for runs that take a while."""
-    start = time.perf_counter()
-    state = {"shown": False}
-
-    def report(t: float) -> None:
-        if time.perf_counter() - start < 0.5:
-            return
-        frac = (t - t0) / (t1 - t0) if t1 != t0 else 1.0
-        bar = "#" * int(30 * frac)
-        stream.write(f"\r  t = {t:10.4f} s  [{bar:<30}] {100 * frac:5.1f}%")
-        stream.flush()
-        state["shown"] = True
-
-    def finish() -> None:
-        if state["shown"]:
-            stream.write("\n")
-
-    return report, finish
-
-
-def _write_trajectory(path: Path, result, model) -> None:
-    from .plotting import coordinate_labels
-
-    qlab, vlab, _ = coordinate_labels(model)
-    if path.suffix == ".npz":
-        extra = {} if result.energy is None else {"energy": result.energy}
-        np.savez(path, t=result.t, q=result.q, v=result.v, q_names=np.array(qlab),
-                 v_names=np.array(vlab), **extra)
-    elif path.suffix == ".csv":
-        cols = [result.t[:, None], result.q, result.v]
-        header = ["t"] + [f"q[{k}] {n}" for k, n in enumerate(qlab)] + [
-            f"v[{k}] {n}" for k, n in enumerate(vlab)]
-        if result.energy is not None:
-            cols.append(np.asarray(result.energy)[:, None])
-            header.append("energy")
-        np.savetxt(path, np.hstack(cols), delimiter=",", header=",".join(header), comments="",
-                   fmt="%.17g")
-    else:
-        raise PointMassDynError(f"--out: expected a .csv or .npz file name, got '{path}'")
-
-
-def cmd_simulate(args) -> int:
-    scene = load_scene(args.scene)
-    t_span = scene.t_span or (0.0, 10.0)
-    if args.t_end is not None:
-        t_span = (t_span[0], args.t_end)
-    report, finish = _progress_printer(t_span[0], t_span[1], sys.stderr)
-    start = time.perf_counter()
-    result = simulate(scene, t_span, rtol=args.rtol, atol=args.atol, energy=True, progress=report,
-                      method=args.method, dt=args.dt)
-    wall = time.perf_counter() - start
-    finish()
-    model = scene.model
-    e = np.asarray(result.energy)
-    # Relative to the largest kinetic energy reached: the total may be ~0 (zero potential at
-    # the pivot), which would make a ratio to |E| meaningless.
-    kinetic = max(model.kinetic_energy(q, v) for q, v in zip(result.q, result.v))
-    drift = np.max(np.abs(e - e[0]))
-    print(f"{scene.name}: {result.message}")
-    print(f"  method {result.method}"
-          + (f" (switched to {result.switched_to} at t = {result.t_switch:g})" if result.switched_to else ""))
-    print(f"  {result.n_accepted} steps ({result.n_rejected} rejected), {result.nfev} evaluations, "
-          f"{wall * 1e3:.1f} ms")
-    print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J "
-          f"({drift / max(kinetic, 1e-300):.2e} of the largest kinetic energy)")
-    if result.constraint_residual is not None and len(result.constraint_residual):
-        print(f"  loops: {model.nloops} closed, largest residual {result.constraint_residual.max():.3e} "
-              f"(drift before projection at most {result.constraint_drift:.3e})")
-    if args.out:
-        _write_trajectory(Path(args.out), result, model)
-        print(f"  trajectory written to {args.out}")
-    if args.plot:
-        from .plotting import plot_trajectory
-
-        plot_trajectory(result, model, args.plot, title=f"{scene.name}: {result.message}")
-        print(f"  plot written to {args.plot}")
-    if args.animate:
-        from .animate_cli import write as write_animation
-
-        write_animation(args, result, scene, args.animate)
-    return 0 if result.success else 1
-
-
-def cmd_point_masses(args) -> int:
-    scene = load_scene(args.scene)
-    model = scene.model
-    masses, positions = model.point_masses(scene.q0)
-    print(f"{scene.name}: seven equimomental point masses per moving link "
-          f"(positions in the world frame at q0, metres)")
-    for name, m, p in zip(model.link_names, masses, positions):
-        print(f"\n{name}  (total {m.sum():.6g} kg)")
-        print(f"  {'j':>2} {'mass (kg)':>14} {'x':>12} {'y':>12} {'z':>12}")
-        for j in range(7):
-            print(f"  {j + 1:>2} {m[j]:>14.6g} {p[j, 0]:>12.6g} {p[j, 1]:>12.6g} {p[j, 2]:>12.6g}")
-    return 0
-
-
-def cmd_scenes(args) -> int:
-    for name, path in builtin_scenes().items():
-        scene = load_scene(path)
-        first = scene.description.split(". ")[0].strip()
-        print(f"{name:<20} nq={scene.model.nq:<3} {first}")
-    return 0
-
-
-def cmd_work_precision(args) -> int:
-    from .work_precision import (
-        DEFAULT_TOLERANCES,
-        plot_work_precision,
-        work_precision,
-        write_csv,
-    )
-
-    tols = DEFAULT_TOLERANCES if not args.tolerances else tuple(args.tolerances)
-    results = []
-    for name in args.scene:
-        def say(msg: str) -> None:
-            if args.verbose:
-                print(f"  {msg}", file=sys.stderr, flush=True)
-
-        res = work_precision(
-            name, tols, t_end=args.t_end, repeats=args.repeats, scipy=not args.no_scipy,
-            scipy_repeats=args.scipy_repeats, rk4=not args.no_rk4, progress=say,
-            methods=args.methods, dts=args.dt,
-        )
-        results.append(res)
-        print(res.table() if args.methods is None else
-              res.methods_table() + "\n\n" + res.cheapest_table())
-        print()
-    writer, plotter = write_csv, plot_work_precision
-    if args.methods is not None:
-        from .work_precision_methods import plot_methods, write_methods_csv
-
-        writer, plotter = write_methods_csv, plot_methods
-    if args.out:
-        writer(results, args.out)
-        print(f"table written to {args.out}")
-    if args.plot:
-        plotter(results, args.plot)
-        print(f"plot written to {args.plot}")
-    return 0
-
-
-# --------------------------------------------------------------------------------------------
-# balance: shaking forces along a prescribed motion, counterweights, redesigned links
-# --------------------------------------------------------------------------------------------
 BALANCE_EPILOG = """\
 The mechanism is driven by one 1-dof joint at constant speed over one revolution (its own
 loops closed at every instant), and the shaking force and moment (about the world origin),
@@ -194,6 +45,47 @@ examples:
   pointmass-dyn balance fourbar --counterweight crank:0.02 --counterweight rocker:0.02 \\
       --pareto force,moment:9 --plot front.png
 """
+
+
+def add_parser(sub):
+    """The ``balance`` subcommand."""
+    bl = sub.add_parser(
+        "balance",
+        help="shaking force and moment, driving torque and bearing forces of a mechanism "
+             "driven over a revolution; counterweights or redesigned links that balance it",
+        description="Shaking forces and balancing of a one-input mechanism: a scene file or\n"
+                    "a bundled name (fourbar, slider_crank, andrews).",
+        epilog=BALANCE_EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    bl.add_argument("scene", help="a scene file or a bundled name")
+    bl.add_argument("--driver", default=None, metavar="BODY",
+                    help="the driving body, on a revolute or prismatic joint (default: the "
+                         "scene's one [initial] fixed body)")
+    bl.add_argument("--speed", type=float, default=None, metavar="W",
+                    help="driver speed, rad/s or m/s (default: the scene's initial speed of the "
+                         "driver, or 2π)")
+    bl.add_argument("--samples", type=int, default=360, metavar="N",
+                    help="instants over the revolution (default 360)")
+    bl.add_argument("--counterweight", action="append", metavar=COUNTERWEIGHT_SPEC,
+                    help="candidate counterweights on a ring (see below); repeatable")
+    bl.add_argument("--max-mass", type=float, default=None, metavar="KG",
+                    help="upper bound of each counterweight candidate's mass (default none)")
+    bl.add_argument("--redesign", action="append", metavar="BODY",
+                    help="redesign BODY's own mass distribution; repeatable")
+    bl.add_argument("--zero", action="append", choices=("force", "moment", "torque"),
+                    help="make this quantity vanish at every instant; repeatable")
+    bl.add_argument("--weight", action="append", metavar="Q=W",
+                    help="weight of a quantity's relative RMS (force, moment, torque); "
+                         "repeatable; default force=1")
+    bl.add_argument("--pareto", default=None, metavar="Q1,Q2[:COUNT]",
+                    help="sweep the weights of two quantities and print the front")
+    bl.add_argument("--plot", default=None,
+                    help="write the plot (PNG): polar shaking force, moment, driving torque, "
+                         "bearing forces; or the Pareto front")
+    bl.add_argument("--out", default=None, help="write the table to a .csv file")
+    bl.set_defaults(func=cmd_balance)
+    return bl
 
 
 def _scene_fixed(path: Path) -> list[str] | None:
@@ -284,8 +176,6 @@ COUNTERWEIGHT_SPEC = "BODY:RADIUS[:COUNT][@X,Y,Z]"
 
 
 def _counterweights(args, scene) -> list:
-    from .balancing import Counterweight
-
     model = scene.model
     out = []
     for spec in args.counterweight or []:
@@ -327,8 +217,6 @@ def _counterweights(args, scene) -> list:
 
 
 def _weights(args) -> dict[str, float] | None:
-    from .balancing import OBJECTIVES
-
     if not args.weight:
         return None
     out = {}
@@ -349,8 +237,6 @@ def _weights(args) -> dict[str, float] | None:
 
 
 def _pareto_spec(text: str) -> tuple[tuple[str, str], int]:
-    from .balancing import OBJECTIVES
-
     pair, _, count_text = text.partition(":")
     names = tuple(p.strip() for p in pair.split(","))
     try:
@@ -380,8 +266,6 @@ def _vec(x) -> str:
 
 
 def cmd_balance(args) -> int:
-    from .balancing import _gravity_of, balance, pareto_front, prescribed_motion
-
     scene = load_scene(args.scene)
     model = scene.model
     driver = _balance_driver(args, scene)
@@ -416,7 +300,7 @@ def cmd_balance(args) -> int:
     if pareto and weights:
         raise InvalidInputError("--pareto: sweeps the weights itself; drop --weight")
 
-    gravity = _gravity_of(scene)
+    gravity = scene_gravity(scene)
     motion = prescribed_motion(model, driver, speed=speed, samples=args.samples,
                                q_guess=scene.q0, gravity=gravity)
     g_text = "no gravity" if gravity is None else f"gravity {_vec(gravity)} m/s²"
@@ -434,16 +318,12 @@ def cmd_balance(args) -> int:
                         [[k, v["rms"], v["peak"]] for k, v in summary.items()])
             print(f"table written to {args.out}")
         if args.plot:
-            from .plotting import plot_motion
-
             plot_motion(motion, args.plot, title=title)
             print(f"plot written to {args.plot}")
         return 0
 
     kwargs = dict(counterweights=cws, links=list(args.redesign or []), zero=tuple(args.zero or ()))
     if pareto:
-        from .plotting import objective_rms
-
         (first, second), count = pareto
         front = pareto_front(motion, (first, second), count, **kwargs)
         rows = []
@@ -463,8 +343,6 @@ def cmd_balance(args) -> int:
                                          f"rms_{second}", "mass_added"], rows)
             print(f"table written to {args.out}")
         if args.plot:
-            from .plotting import plot_pareto
-
             plot_pareto(front, (first, second), args.plot, title=f"{title}: Pareto front")
             print(f"plot written to {args.plot}")
         return 0
@@ -511,119 +389,6 @@ def cmd_balance(args) -> int:
         )
         print(f"table written to {args.out}")
     if args.plot:
-        from .plotting import plot_balance
-
         plot_balance(b, args.plot, title=f"{title}: {goal}")
         print(f"plot written to {args.plot}")
     return 0
-
-
-def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
-        prog="pointmass-dyn",
-        description="Multibody dynamics with equimomental point masses and DeNOC matrices.",
-    )
-    sub = p.add_subparsers(dest="command", required=True)
-    s = sub.add_parser("simulate", help="simulate a scene (a file or a bundled name)")
-    s.add_argument("scene")
-    s.add_argument("--t-end", type=float, default=None, help="end time (s); default: the scene's")
-    s.add_argument("--rtol", type=float, default=None)
-    s.add_argument("--atol", type=float, default=None)
-    s.add_argument("--method", default=None,
-                   help="RK45 (default), DOP853, Radau, RK4, Euler or auto; default: the scene's")
-    s.add_argument("--dt", type=float, default=None, help="fixed step (s) of RK4 and Euler")
-    s.add_argument("--out", default=None, help="write the trajectory to a .csv or .npz file")
-    s.add_argument("--plot", default=None, help="write a plot of q and v against time (PNG)")
-    s.add_argument("--animate", default=None, metavar="PATH",
-                   help="write a 3-D animation (.html, .gif or .mp4; options as 'animate')")
-    from .animate_cli import add_options as add_animate_options
-    from .animate_cli import add_parser as add_animate_parser
-
-    add_animate_options(s)
-    s.set_defaults(func=cmd_simulate)
-    pm = sub.add_parser("point-masses", help="print each body's seven point masses")
-    pm.add_argument("scene")
-    pm.set_defaults(func=cmd_point_masses)
-    sc = sub.add_parser("scenes", help="list the bundled scenes")
-    sc.set_defaults(func=cmd_scenes)
-    wp = sub.add_parser(
-        "work-precision",
-        help="error, time and evaluations of simulate against tolerance, beside SciPy RK45 "
-             "and fixed-step RK4",
-    )
-    wp.add_argument("scene", nargs="+", help="one or more scene files or bundled names")
-    wp.add_argument("--plot", default=None, help="write the work-precision plot (PNG)")
-    wp.add_argument("--out", default=None, help="write the table to a .csv file")
-    wp.add_argument("--t-end", type=float, default=None, help="end time (s); default: the scene's")
-    wp.add_argument("--tolerances", type=float, nargs="+", default=None,
-                    help="rtol = atol values (default 1e-3 ... 1e-12)")
-    wp.add_argument("--repeats", type=int, default=5, help="timing runs of simulate (best kept)")
-    wp.add_argument("--scipy-repeats", type=int, default=2, help="timing runs of SciPy RK45")
-    wp.add_argument("--no-scipy", action="store_true", help="skip SciPy RK45 (the slow part)")
-    wp.add_argument("--no-rk4", action="store_true", help="skip the fixed-step RK4 line")
-    wp.add_argument("--methods", nargs="+", default=None,
-                    help="compare methods instead: 'all' or names among RK45 DOP853 Radau "
-                         "auto RK4 Euler scipy:RK45 scipy:DOP853 scipy:Radau mujoco:RK4 "
-                         "mujoco:Euler mujoco:implicitfast numpy:RK4; prints the cheapest "
-                         "method per accuracy decade")
-    wp.add_argument("--dt", type=float, nargs="+", default=None,
-                    help="fixed steps for RK4/Euler/MuJoCo (default: a sweep per method)")
-    wp.add_argument("-v", "--verbose", action="store_true", help="report progress on stderr")
-    wp.set_defaults(func=cmd_work_precision)
-    bl = sub.add_parser(
-        "balance",
-        help="shaking force and moment, driving torque and bearing forces of a mechanism "
-             "driven over a revolution; counterweights or redesigned links that balance it",
-        description="Shaking forces and balancing of a one-input mechanism: a scene file or\n"
-                    "a bundled name (fourbar, slider_crank, andrews).",
-        epilog=BALANCE_EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
-    bl.add_argument("scene", help="a scene file or a bundled name")
-    bl.add_argument("--driver", default=None, metavar="BODY",
-                    help="the driving body, on a revolute or prismatic joint (default: the "
-                         "scene's one [initial] fixed body)")
-    bl.add_argument("--speed", type=float, default=None, metavar="W",
-                    help="driver speed, rad/s or m/s (default: the scene's initial speed of the "
-                         "driver, or 2π)")
-    bl.add_argument("--samples", type=int, default=360, metavar="N",
-                    help="instants over the revolution (default 360)")
-    bl.add_argument("--counterweight", action="append", metavar=COUNTERWEIGHT_SPEC,
-                    help="candidate counterweights on a ring (see below); repeatable")
-    bl.add_argument("--max-mass", type=float, default=None, metavar="KG",
-                    help="upper bound of each counterweight candidate's mass (default none)")
-    bl.add_argument("--redesign", action="append", metavar="BODY",
-                    help="redesign BODY's own mass distribution; repeatable")
-    bl.add_argument("--zero", action="append", choices=("force", "moment", "torque"),
-                    help="make this quantity vanish at every instant; repeatable")
-    bl.add_argument("--weight", action="append", metavar="Q=W",
-                    help="weight of a quantity's relative RMS (force, moment, torque); "
-                         "repeatable; default force=1")
-    bl.add_argument("--pareto", default=None, metavar="Q1,Q2[:COUNT]",
-                    help="sweep the weights of two quantities and print the front")
-    bl.add_argument("--plot", default=None,
-                    help="write the plot (PNG): polar shaking force, moment, driving torque, "
-                         "bearing forces; or the Pareto front")
-    bl.add_argument("--out", default=None, help="write the table to a .csv file")
-    bl.set_defaults(func=cmd_balance)
-    from .sweep_cli import add_parser as add_sweep_parser
-
-    add_sweep_parser(sub)
-    add_animate_parser(sub)
-    return p
-
-
-def main(argv=None) -> int:
-    args = build_parser().parse_args(argv)
-    try:
-        return args.func(args)
-    except PointMassDynError as exc:
-        print(f"pointmass-dyn: error: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:  # writing --out / --plot (inputs are read with our own errors)
-        print(f"pointmass-dyn: error: cannot write the output file: {exc}", file=sys.stderr)
-        return 2
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
