@@ -265,6 +265,28 @@ def _vec(x) -> str:
     return "(" + ", ".join(f"{0.0 if abs(v) < 1e-300 else v:.6g}" for v in x) + ")"
 
 
+def _print_balance(b, model) -> None:
+    """The before/after table, the counterweights placed and the new bodies of a balance."""
+    print(b.table())
+    if b.counterweights:
+        print("\ncounterweights placed (positions in the body's frame)")
+        print(f"  {'body':<16}{'mass (kg)':>13}{'x (m)':>13}{'y (m)':>13}{'z (m)':>13}")
+        for body, pos, mass in b.counterweights:
+            p = [0.0 if abs(x) < 1e-15 else x for x in pos]
+            print(f"  {body:<16}{mass:>13.6g}{p[0]:>13.6g}{p[1]:>13.6g}{p[2]:>13.6g}")
+    else:
+        print("\nno counterweight placed")
+    print("\nnew bodies (COM in the body's frame; inertia about the COM, diagonal)")
+    print(f"  {'body':<16}{'mass (kg)':>13}{'COM x':>12}{'COM y':>12}{'COM z':>12}"
+          f"{'Ixx':>12}{'Iyy':>12}{'Izz':>12}")
+    for name, rb in b.bodies.items():
+        c = [0.0 if abs(x) < 1e-15 else x for x in rb.com]
+        d = np.diag(rb.inertia)
+        print(f"  {name:<16}{rb.mass:>13.6g}{c[0]:>12.5g}{c[1]:>12.5g}{c[2]:>12.5g}"
+              f"{d[0]:>12.5g}{d[1]:>12.5g}{d[2]:>12.5g}")
+    print(f"  mass added: {b.model.total_mass - model.total_mass:.6g} kg")
+
+
 def cmd_balance(args) -> int:
     scene = load_scene(args.scene)
     model = scene.model
@@ -362,24 +384,7 @@ def cmd_balance(args) -> int:
     print(f"balanced: {', '.join(f'zero {z}' for z in b.zero) or 'nothing made zero'}"
           + (f"; minimising the weighted RMS {', '.join(weighed)} (each relative to its "
              f"unbalanced RMS)" if weighed else "; least mass added"))
-    print(b.table())
-    if b.counterweights:
-        print("\ncounterweights placed (positions in the body's frame)")
-        print(f"  {'body':<16}{'mass (kg)':>13}{'x (m)':>13}{'y (m)':>13}{'z (m)':>13}")
-        for body, pos, mass in b.counterweights:
-            p = [0.0 if abs(x) < 1e-15 else x for x in pos]
-            print(f"  {body:<16}{mass:>13.6g}{p[0]:>13.6g}{p[1]:>13.6g}{p[2]:>13.6g}")
-    else:
-        print("\nno counterweight placed")
-    print("\nnew bodies (COM in the body's frame; inertia about the COM, diagonal)")
-    print(f"  {'body':<16}{'mass (kg)':>13}{'COM x':>12}{'COM y':>12}{'COM z':>12}"
-          f"{'Ixx':>12}{'Iyy':>12}{'Izz':>12}")
-    for name, rb in b.bodies.items():
-        c = [0.0 if abs(x) < 1e-15 else x for x in rb.com]
-        d = np.diag(rb.inertia)
-        print(f"  {name:<16}{rb.mass:>13.6g}{c[0]:>12.5g}{c[1]:>12.5g}{c[2]:>12.5g}"
-              f"{d[0]:>12.5g}{d[1]:>12.5g}{d[2]:>12.5g}")
-    print(f"  mass added: {b.model.total_mass - model.total_mass:.6g} kg")
+    _print_balance(b, model)
     if args.out:
         before, after = b.before.summary(), b.after.summary()
         _write_rows(
