@@ -156,6 +156,41 @@ def test_import_graph_has_no_cycles():
     assert _cycles(edges) == []
 
 
+#: Top-level modules that import the parts: the public API, the former paths, ``-m``.
+TOP_IMPORTERS = {ROOT, f"{ROOT}.__main__"} | {
+    f"{ROOT}.{m}" for m in ("animation", "importers", "mjcf", "viewer_video", "work_precision",
+                             "work_precision_methods")
+}
+
+
+def test_parts_depend_downwards():
+    """cli → benchmarking, design, viewer, io → the core: a part imports only the parts
+    below it, the core none (docs/architecture.md)."""
+    below = {
+        "cli": {"benchmarking", "design", "viewer", "io"},
+        "benchmarking": {"io"},
+        "viewer": {"design"},
+        "design": set(),
+        "io": set(),
+    }
+
+    def part(name):
+        p = name.split(".")
+        return p[1] if len(p) > 1 and p[1] in below else "core"
+
+    wrong = set()
+    for n, targets in _graph().items():
+        for t in targets:
+            a, b = part(n), part(t)
+            if b != a and b != "core" and a != "core" and b not in below[a]:
+                wrong.add((n, t))
+            # The core imports no part: only the package's __init__ (the public API), the
+            # former module paths (aliases of a part) and __main__ (the CLI) do.
+            if a == "core" and b != "core" and n not in TOP_IMPORTERS:
+                wrong.add((n, t))
+    assert wrong == set()
+
+
 @pytest.mark.parametrize("name", sorted(n for n in MODULES if not n.endswith(".__main__")))
 def test_every_module_imports_first_in_a_fresh_interpreter(name):
     """Dynamic: whichever module a program imports first, the import succeeds (a cycle that
