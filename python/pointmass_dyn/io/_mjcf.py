@@ -54,7 +54,7 @@ from xml.sax.saxutils import quoteattr
 import numpy as np
 
 from .. import _core
-from .._helpers import rotation_of_wxyz
+from .._helpers import rotation_of_wxyz, scene_gravity
 from ..errors import InvalidInputError, ModelStructureError
 
 #: MuJoCo's integrators, as ``<option integrator=...>`` names them.
@@ -240,14 +240,15 @@ def probe_effects(scene, model, lay: MujocoLayout):
     """Gravity, per-dof spring stiffness/rest and damping of the scene's enabled effects,
     read back through ``effect_forces`` and checked to be laws MuJoCo has."""
     disabled = set(scene.disable or ())
-    gravity = np.zeros(3)
+    g = scene_gravity(scene)
+    gravity = np.zeros(3) if g is None else g
     springs, dampers = [], []
     for e in scene.effects:
         if e.kind in disabled:
             continue
         r = repr(e)
         if r.startswith("Gravity("):
-            gravity += np.asarray(e.g)
+            continue
         elif r.startswith("Spring("):
             springs.append(e)
         elif r.startswith("Damper("):
