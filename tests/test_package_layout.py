@@ -156,11 +156,8 @@ def test_import_graph_has_no_cycles():
     assert _cycles(edges) == []
 
 
-#: Top-level modules that import the parts: the public API, the former paths, ``-m``.
-TOP_IMPORTERS = {ROOT, f"{ROOT}.__main__"} | {
-    f"{ROOT}.{m}" for m in ("animation", "importers", "mjcf", "viewer_video", "work_precision",
-                             "work_precision_methods")
-}
+#: Top-level modules that import the parts: the public API and ``python -m pointmass_dyn``.
+TOP_IMPORTERS = {ROOT, f"{ROOT}.__main__"}
 
 
 def test_parts_depend_downwards():
@@ -184,17 +181,23 @@ def test_parts_depend_downwards():
             a, b = part(n), part(t)
             if b != a and b != "core" and a != "core" and b not in below[a]:
                 wrong.add((n, t))
-            # The core imports no part: only the package's __init__ (the public API), the
-            # former module paths (aliases of a part) and __main__ (the CLI) do.
+            # The core imports no part: only the package's __init__ (the public API) and
+            # __main__ (the CLI) do.
             if a == "core" and b != "core" and n not in TOP_IMPORTERS:
                 wrong.add((n, t))
     assert wrong == set()
 
 
-@pytest.mark.parametrize("name", sorted(n for n in MODULES if not n.endswith(".__main__")))
+#: The flat layout's module paths that docs, tests and scripts name (``FORMER_MODULES``).
+FORMER = ("animation", "balancing", "importers", "mjcf", "viewer_video", "work_precision",
+          "work_precision_methods")
+
+
+@pytest.mark.parametrize("name", sorted(n for n in MODULES if not n.endswith(".__main__"))
+                         + [f"{ROOT}.{m}" for m in FORMER])
 def test_every_module_imports_first_in_a_fresh_interpreter(name):
     """Dynamic: whichever module a program imports first, the import succeeds (a cycle that
-    only bites in one order would fail here)."""
+    only bites in one order would fail here); so does a former module path."""
     run = subprocess.run([sys.executable, "-c", f"import {name}"], capture_output=True,
                          text=True, timeout=120)
     assert run.returncode == 0, run.stderr[-2000:]
@@ -214,6 +217,10 @@ def test_former_module_paths_still_import():
     assert scene_rhs is pmd.benchmarking.scene_rhs and rk4_fixed is pmd.benchmarking.rk4_fixed
     assert callable(pmd.work_precision) and pmd.work_precision is pmd.benchmarking.work_precision
     assert pmd.importers is importers and pmd.mjcf is mjcf
+    assert set(pmd.FORMER_MODULES) == set(FORMER)
+    from pointmass_dyn.balancing import Counterweight, balance
+
+    assert balance is pmd.balance and Counterweight is pmd.design.Counterweight
     with pytest.raises(AttributeError):
         pmd.no_such_module  # noqa: B018
 

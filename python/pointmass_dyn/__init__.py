@@ -7,9 +7,9 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-import importlib
+import sys
 
-from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
+from . import _pickle, benchmarking, design, errors, io, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from ._simulation import (
@@ -33,7 +33,7 @@ from ._simulation import (
     solve_ivp,
 )
 from ._sweep import sweep
-from .benchmarking import WorkPrecision
+from .benchmarking import WorkPrecision, work_precision
 from .design import (
     Balance,
     Counterweight,
@@ -61,19 +61,27 @@ from .scenes import builtin_scenes, load_scene
 from .viewer import AnimationInfo, animate
 from .viewer import show as show_meshcat
 
-# `pointmass_dyn.work_precision` is both the function and a former module path (an alias of
-# `benchmarking`): importing the function through that module loads it now, so that a later
-# `from pointmass_dyn.work_precision import ...` cannot rebind `pmd.work_precision` to it.
-from .work_precision import work_precision
-
-#: Module paths of the flat layout before the subpackages, each a thin alias module that
-#: re-exports from its subpackage (loaded on first use as ``pmd.<name>``).
-FORMER_MODULES = ("animation", "importers", "mjcf", "viewer_video", "work_precision_methods")
+#: Module paths of the flat layout before the subpackages, still importable (``import
+#: pointmass_dyn.mjcf``, ``from pointmass_dyn.work_precision import scene_rhs``): each is the
+#: subpackage that now holds its public names. Registered in ``sys.modules`` rather than kept
+#: as alias files, so that importing ``pointmass_dyn.work_precision`` never rebinds
+#: ``pmd.work_precision`` (the function) to a module.
+FORMER_MODULES = {
+    "animation": viewer,
+    "balancing": design,
+    "importers": io,
+    "mjcf": io,
+    "viewer_video": viewer,
+    "work_precision": benchmarking,
+    "work_precision_methods": benchmarking,
+}
+for _name, _module in FORMER_MODULES.items():
+    sys.modules.setdefault(f"{__name__}.{_name}", _module)
 
 
 def __getattr__(name: str):
     if name in FORMER_MODULES:
-        return importlib.import_module(f"{__name__}.{name}")
+        return FORMER_MODULES[name]
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
