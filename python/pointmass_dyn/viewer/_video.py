@@ -12,22 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .animation import COLOURS, Drawing
-from .errors import AnimationWriterError
+from .._helpers import pyplot
+from ..errors import AnimationWriterError
+from ._drawing import COLOURS, Drawing
 
 
 def _pyplot():
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise AnimationWriterError(
-            "GIF and MP4 animations need matplotlib: pip install 'pointmass-dyn[plot]' "
-            "(or write an .html animation, which needs nothing)"
-        ) from exc
-    return plt
+    return pyplot("GIF and MP4 animations", AnimationWriterError,
+                  instead="or write an .html animation, which needs nothing")
 
 
 #: Triangles of a robot's meshes in a GIF/MP4 (matplotlib sorts and fills each one).
@@ -41,9 +33,9 @@ def _robot(ax, d: Drawing, up: np.ndarray):
         return None
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
-    from . import viewer_camera, viewer_meshes
+    from . import _camera, _meshes
 
-    scene = viewer_meshes.visual_scene(d.visuals["model"], VIDEO_TRIANGLES, warn=False)
+    scene = _meshes.visual_scene(d.visuals["model"], VIDEO_TRIANGLES, warn=False)
     slot = {b: k for k, b in enumerate(d.visuals["bodies"])}
     local, colours, which = [], [], []
     for inst in scene.instances:
@@ -54,14 +46,14 @@ def _robot(ax, d: Drawing, up: np.ndarray):
         rgb = np.empty((len(m.faces), 3))
         for a, n, c in m.parts or [(0, len(m.faces), None)]:
             rgb[a:a + n] = (inst.rgba[:3] if inst.rgba is not None
-                            else c if c is not None else viewer_meshes.DEFAULT_RGBA[:3])
+                            else c if c is not None else _meshes.DEFAULT_RGBA[:3])
         local.append(tri)
         colours.append(rgb)
         which += [slot[inst.body]] * len(tri)
     if not local:
         return None
     local, colours, which = np.concatenate(local), np.concatenate(colours), np.array(which)
-    e1, e2, u = viewer_camera.up_basis(up)
+    e1, e2, u = _camera.up_basis(up)
     az, el = np.radians(d.camera["azimuth"]), np.radians(d.camera["elevation"])
     eye = np.cos(el) * np.cos(az) * e1 + np.cos(el) * np.sin(az) * e2 + np.sin(el) * u
     coll = Poly3DCollection(np.zeros((0, 3, 3)), edgecolors="none", zorder=1.9)

@@ -22,7 +22,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .errors import VisualWarning
+from ..errors import VisualWarning
 
 #: Files larger than this are not read (a mesh for display is rarely over a few MB).
 MAX_MESH_BYTES = 256 * 1024 * 1024

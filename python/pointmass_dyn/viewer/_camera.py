@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from .errors import InvalidInputError
+from ..errors import InvalidInputError
 
 #: (azimuth, elevation) in degrees for z up: the general view (matplotlib's default 3-D view),
 #: and for a motion flat across x, y or z a view about 30° off that axis, so its plane is seen
