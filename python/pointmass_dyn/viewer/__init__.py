@@ -25,9 +25,9 @@ from ._drawing import (
     project,
     view_projection,
 )
-from ._meshes import inertia_box, visual_scene
 from ._html import page, write_html
 from ._meshcat import show
+from ._meshes import inertia_box, visual_scene
 from ._video import figure, write_video
 
 __all__ = [

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInputError
-from . import _camera
+from . import _camera, _meshes
 
 #: Colours (RGB in 0..1), shared by both writers so a page and a GIF look alike.
 COLOURS = {
@@ -209,8 +209,6 @@ def _visuals(model, rot, origins, triangles) -> dict | None:
     (F, 8·instances, 3) of their boxes; None for a model without visuals."""
     if not model.visuals:
         return None
-    from . import _meshes
-
     scene = _meshes.visual_scene(
         model, _meshes.DEFAULT_TRIANGLES if triangles is None else triangles)
     if not scene.instances:

@@ -154,10 +154,8 @@ def inertia_box(body) -> tuple[Mesh, np.ndarray] | None:
     m = float(body.mass)
     if not m > 0:
         return None
-    inertia = np.asarray(body.inertia, dtype=float)
+    ic = np.asarray(body.inertia, dtype=float)  # about the COM
     com = np.asarray(body.com, dtype=float)
-    # About the COM: I_c = I_o − m (|c|² 1 − c cᵀ).
-    ic = inertia - m * (com @ com * np.eye(3) - np.outer(com, com))
     moments, axes = np.linalg.eigh((ic + ic.T) / 2)
     # Box of sides a: I_x = m (a_y² + a_z²) / 12.
     sq = 6.0 / m * (moments.sum() - 2 * moments)
@@ -237,11 +235,11 @@ def _read_stl(path: str, size: int) -> list:
     ASCII STL goes to trimesh."""
     with open(path, "rb") as fh:
         head = fh.read(84)
-        if len(head) < 84:
-            raise MeshReadError(f"truncated: {size} bytes, less than an STL header")
-        n = int(np.frombuffer(head, dtype="<u4", count=1, offset=80)[0])
+        n = int(np.frombuffer(head, dtype="<u4", count=1, offset=80)[0]) if len(head) == 84 else 0
         if head[:5].lower() == b"solid" and 84 + 50 * n != size:
             return []  # ASCII
+        if len(head) < 84:
+            raise MeshReadError(f"truncated: {size} bytes, less than an STL header")
         if 84 + 50 * n > size:
             raise MeshReadError(f"truncated: {n} triangles announced, {size} bytes")
         rec = np.fromfile(fh, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)),

@@ -14,6 +14,7 @@ import numpy as np
 
 from .._helpers import pyplot
 from ..errors import AnimationWriterError
+from . import _camera, _meshes
 from ._drawing import COLOURS, Drawing
 
 
@@ -32,8 +33,6 @@ def _robot(ax, d: Drawing, up: np.ndarray):
     if d.visuals is None or "robot" not in d.show:
         return None
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
-
-    from . import _camera, _meshes
 
     scene = _meshes.visual_scene(d.visuals["model"], VIDEO_TRIANGLES, warn=False)
     slot = {b: k for k, b in enumerate(d.visuals["bodies"])}
