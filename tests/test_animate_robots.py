@@ -360,3 +360,72 @@ def test_ground_and_camera_follow_gravity():
     target = np.asarray(d.camera["target"])
     px = animation.project(d.camera, W, H, np.stack([target, target + 0.1 * up]))
     assert px[1, 1] < px[0, 1] - 1
+
+
+# ---------------------------------------------------------------- MJCF geoms
+
+MJCF = """<mujoco model="geoms">
+  <compiler angle="radian" meshdir="{meshdir}"/>
+  <asset><mesh name="wedge" file="wedge.stl" scale="1 2 0.5"/></asset>
+  <worldbody>
+    <geom type="plane" size="5 5 0.1"/>
+    <body name="a" pos="0.1 0.2 1" quat="0.9 0.1 0.3 0.2">
+      <joint name="h" type="hinge" axis="0 1 1" pos="0.05 0 0" ref="0.4"/>
+      <joint name="s" type="slide" axis="1 0 0" pos="0 0.1 0"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0.1 0" size="0.04" rgba="1 0 0 1"/>
+      <geom type="box" pos="0.1 0 0.2" euler="0.3 0.2 0.1" size="0.1 0.05 0.02"/>
+      <geom type="box" size="0.3 0.3 0.3" group="3"/>
+      <body name="b" pos="0.3 0.1 0">
+        <joint name="ball" type="ball" pos="0 0 0.1"/>
+        <geom type="mesh" mesh="wedge" pos="0.1 0 0" euler="0.5 0 0.2"/>
+        <geom type="ellipsoid" size="0.05 0.1 0.02" pos="0 0.2 0"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"""
+
+
+def test_mujoco_geoms_are_placed_where_mujoco_puts_them(tmp_path):
+    mujoco = pytest.importorskip("mujoco")
+    tri = np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 0], [0, 1, 0], [0.2, 0.3, 1]],
+                    [[0, 0, 0], [0.2, 0.3, 1], [1, 0, 0]], [[1, 0, 0], [0.2, 0.3, 1], [0, 1, 0]]])
+    (tmp_path / "wedge.stl").write_bytes(_stl(0.2 * tri + [0.3, -0.1, 0.05]))
+    mj = mujoco.MjModel.from_xml_string(MJCF.format(meshdir=tmp_path))
+    model = pmd.from_mujoco(mj)
+    assert model.name == "geoms"
+    assert [v["kind"] for v in model.visuals] == ["capsule", "box", "mesh", "ellipsoid"]
+    assert model.visuals[0]["rgba"] == [1.0, 0.0, 0.0, 1.0]
+    data = mujoco.MjData(mj)
+    rng = np.random.default_rng(5)
+    data.qpos[:] = rng.normal(size=mj.nq)
+    data.qpos[2:6] /= np.linalg.norm(data.qpos[2:6])
+    mujoco.mj_forward(mj, data)
+    q, _v = pmd.io.mujoco_state(mj, data.qpos, data.qvel)
+    rot, org = model.placements(q)
+    geoms = [g for g in range(mj.ngeom) if mj.geom_bodyid[g] > 0 and mj.geom_group[g] < 3]
+    for v, g in zip(model.visuals, geoms):
+        r = rot[v["body"]] @ np.asarray(v["rotation"])
+        p = org[v["body"]] + rot[v["body"]] @ np.asarray(v["translation"])
+        if v["kind"] != "mesh":
+            np.testing.assert_allclose(p, data.geom_xpos[g], atol=1e-12)
+            np.testing.assert_allclose(r, data.geom_xmat[g].reshape(3, 3), atol=1e-12)
+            continue
+        # The file's vertices, scaled and placed by us, are MuJoCo's compiled vertices placed
+        # by MuJoCo.
+        k = mj.geom_dataid[g]
+        ours = (0.2 * tri + [0.3, -0.1, 0.05]).reshape(-1, 3) * v["scale"] @ r.T + p
+        theirs = mj.mesh_vert[mj.mesh_vertadr[k]:mj.mesh_vertadr[k] + mj.mesh_vertnum[k]]
+        theirs = theirs @ data.geom_xmat[g].reshape(3, 3).T + data.geom_xpos[g]
+        gap = np.linalg.norm(ours[:, None] - theirs[None], axis=-1)
+        assert gap.min(axis=1).max() < 1e-6 and gap.min(axis=0).max() < 1e-6
+        assert v["path"] == str((tmp_path / "wedge.stl").resolve())
+    # A mesh file gone since MuJoCo compiled the model: named once, then an inertia box.
+    (tmp_path / "wedge.stl").unlink()
+    with pytest.warns(pmd.errors.ModelImportWarning, match="1 mesh file.*wedge.stl"):
+        gone = pmd.from_mujoco(mj)
+    assert gone.visuals[2]["path"] is None
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        d = animation.prepare((np.zeros(1), q[None]), gone)
+    assert [i.body for i in d.visuals["scene"].instances if i.fallback] == [gone.visuals[2]["body"]]
