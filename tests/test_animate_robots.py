@@ -429,3 +429,33 @@ def test_mujoco_geoms_are_placed_where_mujoco_puts_them(tmp_path):
         warnings.simplefilter("error")
         d = animation.prepare((np.zeros(1), q[None]), gone)
     assert [i.body for i in d.visuals["scene"].instances if i.fallback] == [gone.visuals[2]["body"]]
+
+
+def test_simplified_meshes_are_cached_on_disk(tmp_path, monkeypatch):
+    tri = np.random.default_rng(2).normal(size=(400, 3, 3))
+    path = _write_urdf(tmp_path, stl=_stl(tri))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UrdfWarning)
+        model = pmd.Model.from_urdf(str(path))
+    monkeypatch.setenv("PMD_MESH_CACHE", str(tmp_path / "cache"))
+    first = viewer_meshes.visual_scene(model, triangles=200)
+    assert len(list((tmp_path / "cache").glob("*.npz"))) == 2  # the count, the mesh
+    # A new process in effect: nothing in memory, and the file cannot be read again.
+    for f in (viewer_meshes._file_mesh, viewer_meshes._triangle_count,
+              viewer_meshes._read_cached):
+        f.cache_clear()
+
+    def unreadable(path):
+        raise AssertionError("read again")
+
+    monkeypatch.setattr(viewer_meshes, "_read", unreadable)
+    again = viewer_meshes.visual_scene(model, triangles=200)
+    assert len(first.meshes) == len(again.meshes)
+    for a, b in zip(first.meshes, again.meshes):
+        np.testing.assert_array_equal(a.vertices, b.vertices)
+        np.testing.assert_array_equal(a.faces, b.faces)
+        assert a.parts == b.parts
+    # Instances in the visuals' order (box, cylinder, sphere, arm.stl), then the inertia box
+    # of the base, whose mesh is missing.
+    arm = first.meshes[first.instances[3].mesh]
+    assert 100 <= len(arm.faces) <= 400  # simplified from 400 to about the budget

@@ -9,16 +9,19 @@ missing, unreadable, of an unknown format or too large is left out with one
 :class:`~pointmass_dyn.errors.VisualWarning` naming every such file, and its body is drawn as
 the box of its inertia (same mass and principal moments, uniform density).
 
-Read meshes are kept in memory (keyed by path, modification time, size, scale and budget), so
-animating the same robot again does not read its files again.
+Simplified meshes are kept in memory and on disk (``~/.cache/pointmass_dyn/meshes``, or
+``$PMD_MESH_CACHE``; ``PMD_MESH_CACHE=0`` turns that off), keyed by path, modification time,
+size, scale and budget, so animating the same robot again does not read its files again.
 """
 
 from __future__ import annotations
 
+import hashlib
 import os
 import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -301,8 +304,62 @@ def _simplify(v: np.ndarray, f: np.ndarray, target: int) -> tuple[np.ndarray, np
     return (v2, f2) if len(f2) else (v, f)
 
 
+# ---------------------------------------------------------------- the disk cache
+# Reading a COLLADA file takes pycollada ~0.5 s; the simplified meshes (a few hundred kB per
+# robot) are kept in ~/.cache/pointmass_dyn/meshes (or $PMD_MESH_CACHE; "0" turns it off), keyed
+# by path, modification time, size, scale and budget, so a new process need not read them.
+
+_CACHE_FORMAT = 1
+
+
+def _cache_dir() -> Path | None:
+    env = os.environ.get("PMD_MESH_CACHE")
+    if env is not None and env.strip().lower() in ("", "0", "off", "no", "false"):
+        return None
+    if env:
+        return Path(env)
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "pointmass_dyn" / "meshes"
+
+
+def _cache_file(*key) -> Path | None:
+    d = _cache_dir()
+    if d is None:
+        return None
+    digest = hashlib.sha256(repr((_CACHE_FORMAT, *key)).encode()).hexdigest()[:32]
+    return d / f"{digest}.npz"
+
+
+def _cache_load(f: Path | None) -> dict | None:
+    if f is None:
+        return None
+    try:
+        with np.load(f) as z:
+            return {k: z[k] for k in z.files}
+    except Exception:  # absent, or damaged: computed again (and rewritten)
+        return None
+
+
+def _cache_save(f: Path | None, **arrays) -> None:
+    if f is None:
+        return
+    try:
+        f.parent.mkdir(parents=True, exist_ok=True)
+        tmp = f.with_suffix(f".{os.getpid()}.tmp.npz")
+        np.savez(tmp, **arrays)
+        os.replace(tmp, f)  # whole or not at all, also with processes writing at once
+    except OSError:
+        pass  # a read-only home: no cache, same result
+
+
 @lru_cache(maxsize=512)
 def _file_mesh(path: str, mtime: int, size: int, scale: tuple, target: int) -> Mesh:
+    cache = _cache_file("mesh", path, mtime, size, scale, target)
+    z = _cache_load(cache)
+    if z is not None:
+        rgb = [None if np.isnan(c[0]) else tuple(float(x) for x in c) for c in z["rgb"]]
+        return Mesh(z["vertices"], z["faces"],
+                    [(int(a), int(n), c) for a, n, c in zip(z["start"], z["count"], rgb)])
     parts = _read_cached(path, mtime, size)
     total = sum(len(p[1]) for p in parts)
     verts, faces, spans = [], [], []
@@ -318,11 +375,23 @@ def _file_mesh(path: str, mtime: int, size: int, scale: tuple, target: int) -> M
     mesh = Mesh(np.concatenate(verts).astype(np.float32), np.concatenate(faces), spans)
     if np.prod(np.sign(scale)) < 0:  # a mirroring scale turns the faces inside out
         mesh.faces = mesh.faces[:, ::-1].copy()
+    _cache_save(cache, vertices=mesh.vertices, faces=mesh.faces.astype(np.int64),
+                start=np.array([a for a, _n, _c in spans]),
+                count=np.array([n for _a, n, _c in spans]),
+                rgb=np.array([c if c is not None else (np.nan,) * 3 for _a, _n, c in spans],
+                             dtype=float).reshape(-1, 3))
     return mesh
 
 
+@lru_cache(maxsize=512)
 def _triangle_count(path: str, mtime: int, size: int) -> int:
-    return sum(len(p[1]) for p in _read_cached(path, mtime, size))
+    cache = _cache_file("count", path, mtime, size)
+    z = _cache_load(cache)
+    if z is not None:
+        return int(z["n"])
+    n = sum(len(p[1]) for p in _read_cached(path, mtime, size))
+    _cache_save(cache, n=np.array(n))
+    return n
 
 
 def _stat(path: str) -> tuple[int, int]:
