@@ -472,7 +472,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (5, 1881, 0x96c4_1f8b_dda5_beb2),
+            (6, 2808, 0xe807_66c2_601c_a4d0),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }
