@@ -4,6 +4,8 @@
 #![allow(clippy::needless_range_loop)]
 use super::*;
 use crate::body::RigidBody;
+use crate::joint::Joint;
+use crate::recursive::{self, Data};
 use crate::joint::rot_z;
 use crate::kinematics;
 use crate::simulate::Dynamics;

@@ -22,15 +22,8 @@ impl PyModel {
         self.with_workspace(|ws| {
             load_state(ws, py, q, None)?;
             let model: &Model = &ws.version.model;
-            kinematics::positions(model, &ws.q, &mut ws.data.links);
             let nb = model.nbodies();
-            let mut rots = Vec::with_capacity(9 * nb);
-            let mut origins = Vec::with_capacity(3 * nb);
-            for b in 0..nb {
-                let p = kinematics::body_placement(model, &ws.data.links, b);
-                rots.extend_from_slice(p.rotation.transpose().as_slice());
-                origins.extend_from_slice(p.translation.as_slice());
-            }
+            let (rots, origins) = kinematics::body_placements(model, &ws.q, &mut ws.data.links);
             check_result(py, "placements", &origins)?;
             Ok((
                 to_array(py, rots, &[nb, 3, 3])?,
@@ -63,23 +56,8 @@ impl PyModel {
             }
         };
         let rows = count.unwrap_or(1);
-        for k in 0..rows {
-            let qk = &qs[k * model.nq..(k + 1) * model.nq];
-            model
-                .check_state(qk, None)
-                .map_err(|e| match count {
-                    Some(_) => e.map_arg(|name| format!("{name}[{k}]")),
-                    None => e,
-                })
-                .py(py)?;
-        }
         let poses = detach_interruptible(py, || {
-            let mut poses = crate::poses::Poses::new(&model, rows)?;
-            for k in 0..rows {
-                crate::interrupt::check("body_poses")?;
-                poses.fill(&model, k, &qs[k * model.nq..(k + 1) * model.nq]);
-            }
-            Ok(poses)
+            crate::poses::Poses::at(&model, &qs, rows, count.is_some())
         })?;
         let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
         let shape = |tail: &[usize]| -> Vec<usize> {
