@@ -1,4 +1,4 @@
-//! `Model.from_urdf` and, for the Python importers (`pointmass_dyn.importers`: MuJoCo,
+//! `Model.from_urdf` and, for the Python importers (`pointmass_dyn.io`: MuJoCo,
 //! Pinocchio), `Model._from_parts`, the core's constructor from bodies in tree order
 //! (`urdf::model_from_parts`). `Model.from_mujoco` and `Model.from_pinocchio` are those
 //! importers, attached to the class in Python: nothing here calls back into Python.
@@ -73,7 +73,7 @@ impl PyModel {
         ))
     }
 
-    /// For the importers (python/pointmass_dyn/importers.py): a model from bodies in tree
+    /// For the importers (python/pointmass_dyn/io/_importers.py): a model from bodies in tree
     /// order, each `(name, parent, joint, translation, rotation, joint_name, mass, com,
     /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body.
     #[staticmethod]
