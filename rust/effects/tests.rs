@@ -4,10 +4,10 @@
 #![allow(clippy::needless_range_loop)]
 use super::*;
 use crate::body::RigidBody;
-use crate::joint::Joint;
-use crate::recursive::{self, Data};
 use crate::joint::rot_z;
+use crate::joint::Joint;
 use crate::kinematics;
+use crate::recursive::{self, Data};
 use crate::simulate::Dynamics;
 use crate::spatial::{Mat3, Placement};
 
