@@ -23,6 +23,7 @@ pub mod poses;
 pub mod reactions;
 pub mod recursive;
 pub mod scene;
+pub mod shared;
 pub mod simulate;
 pub mod spatial;
 pub mod trig;

@@ -326,3 +326,9 @@ def pinocchio_q(pin_model: Any, q) -> np.ndarray:
             out[jm.idx_q : jm.idx_q + jm.nq] = q[k : k + jm.nq]
             k += jm.nq
     return out
+
+
+# The importers are Model's constructors too, beside the core's Model.from_urdf: attached
+# here, so the extension never calls back into Python.
+Model.from_mujoco = staticmethod(from_mujoco)  # type: ignore[method-assign]
+Model.from_pinocchio = staticmethod(from_pinocchio)  # type: ignore[method-assign]
