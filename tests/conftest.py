@@ -383,16 +383,11 @@ FLOATING = {
 
 
 def robots_dir():
-    """example-robot-data's robots folder (the cmeel wheel has no Python module to ask)."""
-    import importlib.metadata
-    from pathlib import Path
-
+    """example-robot-data's robots folder (pmd.robots), or None if it is not installed."""
     try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
+        return pmd.robots.directory()
+    except pmd.errors.InvalidInputError:
         return None
-    d = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-    return d if d.is_dir() else None
 
 
 @pytest.fixture(scope="module", params=sorted(FLOATING))

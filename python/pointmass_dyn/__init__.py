@@ -7,7 +7,7 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
+from . import _pickle, errors, robots  # noqa: F401  (_pickle registers the copyreg reducers)
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from .animation import AnimationInfo, animate
 from .balancing import (
@@ -35,6 +35,7 @@ from .errors import (
 )
 from .importers import InertiaRepair, from_mujoco, from_pinocchio
 from .mjcf import to_mjcf
+from .robots import example_robot
 from .scenes import builtin_scenes, load_scene
 from .simulation import (
     Damper,
@@ -99,6 +100,8 @@ def FreeFlyer() -> Joint:
 __all__ = [
     "AnimationInfo",
     "animate",
+    "example_robot",
+    "robots",
     "Balance",
     "BatchResult",
     "Counterweight",

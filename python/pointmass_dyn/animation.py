@@ -77,7 +77,7 @@ class Drawing:
         return len(self.times)
 
 
-@dataclass
+@dataclass(repr=False)
 class AnimationInfo:
     """What :func:`animate` wrote: the file, its frame count and times, the frame size in
     pixels and the initial camera (see :func:`view_projection`)."""
@@ -88,6 +88,14 @@ class AnimationInfo:
     size: tuple[int, int]
     camera: dict
     bytes: int
+
+    def __repr__(self) -> str:
+        t = np.asarray(self.times)
+        span = f"[{t[0]:g}, {t[-1]:g}] s" if t.size else "[]"
+        return (
+            f"AnimationInfo(path={str(self.path)!r}, frames={self.frames}, times={span}, "
+            f"size={tuple(self.size)}, bytes={self.bytes})"
+        )
 
 
 # ---------------------------------------------------------------- sampling

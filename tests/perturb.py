@@ -1,0 +1,42 @@
+"""Pytest plugin that finds comparisons fragile to rounding: every call of SciPy's
+``solve_ivp`` gets its initial state and tolerances multiplied by (1 + δ), δ ~ 1e-15, as
+another CPU's BLAS/LAPACK kernel would move SciPy's last bits. A comparison whose verdict
+flips under this is fragile and must assert margins plus accuracy instead of equality.
+
+    PYTHONPATH=tests POINTMASS_DYN_PERTURB=1e-15 python -m pytest -p perturb tests/...
+
+``POINTMASS_DYN_PERTURB`` is δ (negative allowed); ``POINTMASS_DYN_PERTURB_WHAT`` is
+``y0``, ``tol`` or ``both`` (the default). Off unless the variable is set.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+
+import numpy as np
+
+
+def _perturbed(solve_ivp, delta, what):
+    @functools.wraps(solve_ivp)
+    def wrapper(fun, t_span, y0, *args, **kw):
+        if what in ("y0", "both"):
+            y0 = np.asarray(y0, dtype=float) * (1.0 + delta)
+        if what in ("tol", "both"):
+            for name, default in (("rtol", 1e-3), ("atol", 1e-6)):
+                kw[name] = np.asarray(kw.get(name, default), dtype=float) * (1.0 + delta)
+                if kw[name].ndim == 0:
+                    kw[name] = float(kw[name])
+        return solve_ivp(fun, t_span, y0, *args, **kw)
+
+    return wrapper
+
+
+def pytest_configure(config):
+    delta = os.environ.get("POINTMASS_DYN_PERTURB")
+    if not delta:
+        return
+    import scipy.integrate
+
+    what = os.environ.get("POINTMASS_DYN_PERTURB_WHAT", "both")
+    scipy.integrate.solve_ivp = _perturbed(scipy.integrate.solve_ivp, float(delta), what)
