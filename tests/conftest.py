@@ -372,6 +372,13 @@ def _hypothesis_home():
 _hypothesis_home()
 
 
+def pytest_report_header(config):
+    # Which build the suite tests: the installed wheel or the source tree, and which copy of
+    # the multiversioned loops (POINTMASS_DYN_BASELINE=1 forces the portable one).
+    return f"pointmass_dyn {pmd.__version__} from {os.path.dirname(pmd.__file__)}, " \
+        f"CPU dispatch: {pmd._core.cpu_dispatch}"
+
+
 # Floating-base robots of example-robot-data (two humanoids, two quadrupeds), loaded both
 # ways: ours with root_joint="free", Pinocchio's with JointModelFreeFlyer.
 FLOATING = {

@@ -6,7 +6,9 @@ flips under this is fragile and must assert margins plus accuracy instead of equ
     PYTHONPATH=tests POINTMASS_DYN_PERTURB=1e-15 python -m pytest -p perturb tests/...
 
 ``POINTMASS_DYN_PERTURB`` is δ (negative allowed); ``POINTMASS_DYN_PERTURB_WHAT`` is
-``y0``, ``tol`` or ``both`` (the default). Off unless the variable is set.
+``y0``, ``tol``, ``both`` (the default) or ``fun``: every value ``fun`` returns to SciPy
+multiplied by (1 ± δ), random signs (seed 0), as another kernel rounds each evaluation.
+Off unless the variable is set.
 """
 
 from __future__ import annotations
@@ -17,9 +19,21 @@ import os
 import numpy as np
 
 
+def _noisy(fun, delta, rng):
+    def noisy(t, y, *args):
+        f = np.asarray(fun(t, y, *args), dtype=float)
+        return f * (1.0 + delta * rng.choice([-1.0, 1.0], size=f.shape))
+
+    return noisy
+
+
 def _perturbed(solve_ivp, delta, what):
+    rng = np.random.default_rng(0)
+
     @functools.wraps(solve_ivp)
     def wrapper(fun, t_span, y0, *args, **kw):
+        if what == "fun":
+            fun = _noisy(fun, delta, rng)
         if what in ("y0", "both"):
             y0 = np.asarray(y0, dtype=float) * (1.0 + delta)
         if what in ("tol", "both"):

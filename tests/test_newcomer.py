@@ -113,3 +113,20 @@ def test_masked_arrays_are_still_refused():
     m = chain_by(["world"])
     with pytest.raises(pmd.InvalidInputError, match="masked"):
         m.mass_matrix(np.ma.masked_array([0.1], mask=[True]))
+
+
+def test_the_package_under_test_is_the_one_asked_for():
+    # CI runs the suite against the installed wheel (POINTMASS_DYN_TEST_INSTALLED=1) and in
+    # the portable build (POINTMASS_DYN_BASELINE=1): make sure that is what was imported.
+    import os
+    from pathlib import Path
+
+    where = Path(pmd.__file__).resolve()
+    if os.environ.get("POINTMASS_DYN_TEST_INSTALLED"):
+        source = Path(__file__).resolve().parents[1] / "python"
+        assert source not in where.parents, where
+        assert "site-packages" in where.parts, where
+    expected = "baseline" if os.environ.get("POINTMASS_DYN_BASELINE") else None
+    assert pmd._core.cpu_dispatch in ("avx2", "baseline")
+    if expected:
+        assert pmd._core.cpu_dispatch == expected

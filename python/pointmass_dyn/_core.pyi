@@ -16,6 +16,8 @@ from numpy.typing import ArrayLike, NDArray
 from typing_extensions import TypeAlias
 
 __version__: str
+#: Which copy of the multiversioned loops runs: "avx2" or "baseline" (POINTMASS_DYN_BASELINE=1).
+cpu_dispatch: str
 
 _Array: TypeAlias = NDArray[np.float64]
 #: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).

@@ -93,7 +93,7 @@ def cmd_simulate(args) -> int:
     if args.plot:
         from .plotting import plot_trajectory
 
-        plot_trajectory(result, model, args.plot, title=f"{scene.name}: {result.message}")
+        plot_trajectory(result, model, args.plot, title=scene.name)
         print(f"  plot written to {args.plot}")
     if args.animate:
         from .animate_cli import write as write_animation
