@@ -9,6 +9,15 @@ flips under this is fragile and must assert margins plus accuracy instead of equ
 ``y0``, ``tol``, ``both`` (the default) or ``fun``: every value ``fun`` returns to SciPy
 multiplied by (1 ± δ), random signs (seed 0), as another kernel rounds each evaluation.
 Off unless the variable is set.
+
+Record (issue 26; δ = ±1e-15, ±3e-15 on y0 and tolerances, and 1e-15 noise on f), over
+test_radau, test_rk45, test_methods, test_work_precision, test_hard_cases, test_simulate and
+test_free_flyer. Flipped, now margins plus accuracy against a reference: test_radau's van der
+Pol μ = 1e3 with finite-difference Jacobians, van der Pol μ = 1e5 (error ratio), Robertson
+with finite differences, the constant-Jacobian test's finite-difference run; test_hard_cases'
+stiff Prothero–Robinson under RK45; test_rk45's Krogh error comparison at tol 1e-12 (only at
+3e-15). Never flipped, kept step for step: every RK45 and DOP853 comparison (Krogh, chain7,
+events, dense output, work-precision rows), Radau with analytic or constant Jacobians.
 """
 
 from __future__ import annotations
