@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ._core import Model
 from .errors import InvalidInputError
 
 __all__ = ["NAMES", "directory", "example_robot", "urdf_path"]
@@ -75,6 +76,4 @@ def urdf_path(name: str) -> Path:
 def example_robot(name: str, **kwargs):
     """``Model.from_urdf`` of the robot ``name`` (see :func:`urdf_path`); keyword arguments
     (``root_joint="free"``, ``repair=True``) go to ``from_urdf``."""
-    from ._core import Model
-
     return Model.from_urdf(str(urdf_path(name)), **kwargs)
