@@ -208,7 +208,24 @@ impl Error {
     /// This error met while reading an input file at `at`: the message is this error's whole
     /// text (argument name included), placed after the file and key.
     pub fn in_file(self, kind: FileKind, at: Location) -> Self {
-        Error::file(kind, at, self.to_string())
+        // Where the key already ends with the argument's name (`body[0] ('rod').mass`), the
+        // message says it once: `….mass: expected …`, not `….mass: mass: expected …`.
+        let named = |arg: &str| {
+            !arg.is_empty()
+                && (at.key == arg || at.key.strip_suffix(arg).is_some_and(|k| k.ends_with('.')))
+        };
+        let message = match &self {
+            Error::InvalidArgument { arg, expected, got } if named(arg) => {
+                format!("expected {expected}, got {got}")
+            }
+            Error::InvalidInertia { arg, reason } | Error::InvalidModel { arg, reason }
+                if named(arg) =>
+            {
+                reason.clone()
+            }
+            _ => self.to_string(),
+        };
+        Error::file(kind, at, message)
     }
 
     /// Like [`Error::in_file`], but an invalid argument's name is appended to the key (as

@@ -252,6 +252,30 @@ impl Model {
         }
     }
 
+    /// The index of the body named `name`, or an error on argument `arg` listing the
+    /// model's body names (the first 20 of them) and `'world'`.
+    pub fn body_named(&self, arg: &str, name: &str) -> Result<usize> {
+        self.body_index(name).ok_or_else(|| {
+            let mut names: Vec<String> = self
+                .bodies
+                .iter()
+                .take(20)
+                .map(|b| format!("'{}'", b.name))
+                .collect();
+            if self.bodies.len() > 20 {
+                names.push(format!("… ({} bodies)", self.bodies.len()));
+            }
+            names.push("'world'".into());
+            Error::model(
+                arg,
+                format!(
+                    "no body named '{name}': expected one of {}",
+                    names.join(", ")
+                ),
+            )
+        })
+    }
+
     /// Adds a body on `joint` below `parent` (None: the world). `placement` puts the joint
     /// frame in the parent body's frame; the body frame equals the joint frame at the neutral
     /// configuration. `point_mass_center` (body frame) is where the seven-point box is

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from . import _pickle, benchmarking, design, errors, io, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, benchmarking, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from ._simulation import (
@@ -57,6 +57,7 @@ from .errors import (
     SingularityError,
 )
 from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
+from .robots import example_robot
 from .scenes import builtin_scenes, load_scene
 from .viewer import AnimationInfo, animate
 from .viewer import show as show_meshcat
@@ -122,11 +123,13 @@ def FreeFlyer() -> Joint:
 
 __all__ = [
     "benchmarking",
+    "robots",
     "design",
     "io",
     "viewer",
     "AnimationInfo",
     "animate",
+    "example_robot",
     "Balance",
     "BatchResult",
     "Counterweight",

@@ -16,6 +16,8 @@ from numpy.typing import ArrayLike, NDArray
 from typing_extensions import TypeAlias
 
 __version__: str
+#: Which copy of the multiversioned loops runs: "avx2" or "baseline" (POINTMASS_DYN_BASELINE=1).
+cpu_dispatch: str
 
 _Array: TypeAlias = NDArray[np.float64]
 #: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).
@@ -121,14 +123,19 @@ class Model:
         self,
         body: RigidBody,
         joint: Joint,
-        parent: int = -1,
+        parent: int | str | None = -1,
         translation: ArrayLike | None = None,
         rotation: ArrayLike | None = None,
         name: str | None = None,
         point_mass_center: ArrayLike | None = None,
     ) -> int:
-        """Adds ``body`` on ``joint`` below ``parent`` (-1: the world), the joint frame placed
-        at ``translation``/``rotation`` in the parent's body frame; returns its index.
+        """Adds ``body`` on ``joint`` below ``parent``; returns its index.
+
+        ``parent`` is the parent body's name or index (-1, ``"world"`` or None: the world; an
+        unknown name is a ``ModelStructureError`` listing the names). ``translation`` and
+        ``rotation`` place the joint frame in the parent's body frame; ``name`` is the body's
+        unique name (default ``"body<index>"``); ``point_mass_center`` is where the box of
+        the seven point masses is centred, body frame (default: the COM).
 
         ``rotation`` must be a rotation to 1e-9; it is re-orthonormalised, and one within 4ε of
         a quarter or half turn about coordinate axes is taken as exactly that turn."""

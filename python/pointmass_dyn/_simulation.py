@@ -155,7 +155,7 @@ def PointSpring(
     )
 
 
-@dataclass
+@dataclass(repr=False)
 class SimulationResult:
     """Trajectory of a scene. ``q`` is (N, nq), ``v`` (N, nv); ``energy`` (N,) when asked."""
 
@@ -196,6 +196,23 @@ class SimulationResult:
     @property
     def nsteps(self) -> int:
         return self.n_accepted
+
+    def __repr__(self) -> str:
+        # A summary: the arrays can hold millions of numbers.
+        t = np.asarray(self.t)
+        span = f"[{t[0]:g}, {t[-1]:g}]" if t.size else "[]"
+        parts = [
+            f"scene={self.scene!r}" if self.scene else None,
+            f"method={self.method!r}",
+            f"success={self.success}",
+            f"t={span} ({t.size} points)",
+            f"q: {np.shape(self.q)}, v: {np.shape(self.v)}",
+            f"energy: {np.shape(self.energy)}" if self.energy is not None else None,
+            f"events: {[len(e) for e in self.t_events]}" if self.t_events else None,
+            f"nfev={self.nfev}, n_accepted={self.n_accepted}, n_rejected={self.n_rejected}",
+            f"message={self.message!r}",
+        ]
+        return "SimulationResult(" + ", ".join(p for p in parts if p) + ")"
 
     def raise_for_status(self) -> SimulationResult:
         """Raises :class:`SimulationError` (with ``.t``) if the run failed; returns self."""

@@ -49,7 +49,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import Any
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -372,6 +371,9 @@ def to_mjcf(
                 f"model: the FreeFlyer joint of body {infos[j.body][0]!r} is below body "
                 f"{infos[infos[j.body][2]][0]!r}; MuJoCo allows free joints only on bodies of "
                 f"the world")
+
+    # Here, not at module level: xml.sax pulls in urllib, http and email (~20 ms of import).
+    from xml.sax.saxutils import quoteattr
 
     xml = [f"<mujoco model={quoteattr(name or 'pointmass_dyn')}>",
            '  <compiler angle="radian" autolimits="true"/>',

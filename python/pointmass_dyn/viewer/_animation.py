@@ -23,7 +23,7 @@ from ._html import page
 from ._video import write_video
 
 
-@dataclass
+@dataclass(repr=False)
 class AnimationInfo:
     """What :func:`animate` made: the file (None: nothing written), its frame count and
     times, the frame size in pixels, the initial camera (see
@@ -50,6 +50,15 @@ class AnimationInfo:
         return (f'<iframe srcdoc="{_html.escape(self.html, quote=True)}" '
                 f'style="width:100%;height:{self.size[1]}px;border:0" '
                 'sandbox="allow-scripts" title="pointmass_dyn animation"></iframe>')
+
+    def __repr__(self) -> str:
+        # A summary: ``times`` holds one entry per frame.
+        t = np.asarray(self.times)
+        span = f"[{t[0]:g}, {t[-1]:g}] s" if t.size else "[]"
+        return (
+            f"AnimationInfo(path={str(self.path)!r}, frames={self.frames}, times={span}, "
+            f"size={tuple(self.size)}, bytes={self.bytes})"
+        )
 
 
 # ---------------------------------------------------------------- sampling
