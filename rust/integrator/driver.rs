@@ -6,10 +6,11 @@ use super::dense::{DenseOutput, Interpolant};
 use super::dop853::Dop853;
 use super::events::{self, Event};
 use super::fixed_step::{Euler, FixedStep, Rk4};
-use super::method::{radau_available, Counts, Integrator, Method};
+use super::method::{Counts, Integrator, Method};
 use super::radau::Radau;
-use super::stepper::{StepOutcome, Stepper};
-use super::{fmt_time, InputError, OdeSystem, SolverOptions, Solution, Status, StiffnessCheck};
+use super::stepper::Stepper;
+use super::StepOutcome;
+use super::{fmt_time, InputError, OdeSystem, Solution, SolverOptions, Status, StiffnessCheck};
 
 /// Integrate `sys` over `t_span = (t0, t_end)` (backwards if `t_end < t0`) from `y0`,
 /// exactly as SciPy's `solve_ivp(..., method="RK45")` (whatever `opts.method` says).
@@ -71,12 +72,7 @@ pub fn solve<S: OdeSystem>(
             events,
             Method::Radau,
         ),
-        Method::Auto => {
-            if !radau_available() {
-                return Err(InputError::MethodUnavailable("auto (it switches to Radau)"));
-            }
-            auto(sys, t_span, y0, opts, events, stiff_target::<S>)
-        }
+        Method::Auto => auto(sys, t_span, y0, opts, events, stiff_target::<S>),
     }
 }
 

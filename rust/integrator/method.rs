@@ -87,7 +87,7 @@ pub enum Method {
     Rk45,
     /// Dormand–Prince 8(5,3), SciPy's `DOP853` step for step.
     Dop853,
-    /// Radau IIA order 5 (implicit), SciPy's `Radau`; see [`radau_available`].
+    /// Radau IIA order 5 (implicit), SciPy's `Radau`.
     Radau,
     /// Classical Runge–Kutta 4 at a fixed step `dt`.
     Rk4,
@@ -96,12 +96,6 @@ pub enum Method {
     Euler,
     /// RK45 until Hairer's stiffness test fires, then Radau from that state.
     Auto,
-}
-
-/// Whether `Method::Radau` (and the stiff half of `Method::Auto`) is built in. The single
-/// dispatch point for Radau is `driver::solve` (and `driver::stiff_target`).
-pub const fn radau_available() -> bool {
-    true
 }
 
 impl Method {

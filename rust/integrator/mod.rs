@@ -20,11 +20,13 @@
 //! so step times can differ from SciPy's by up to ~1e-7 relative at tight tolerances (as
 //! SciPy's own do between CPUs); values at fixed times (t_end, t_eval, events) agree to ~1e-14.
 
+mod common;
 mod dense;
 mod dop853;
 mod dop853_tableau;
 mod driver;
 mod events;
+mod explicit_rk;
 mod fixed_step;
 mod lu;
 mod method;
@@ -32,16 +34,18 @@ mod num_jac;
 mod radau;
 mod stepper;
 
+pub use common::{StepOutcome, StepState};
 pub use dense::{eval_segment, DenseOutput, Interpolant};
-pub use dop853::Dop853;
+pub use dop853::{Dop853, Dop853Tableau};
 #[cfg(test)]
 pub(crate) use driver::auto as driver_auto;
 pub use driver::{rk45, solve};
 pub use events::{Event, EventDirection, EventFn};
+pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
-pub use method::{radau_available, Counts, Integrator, Method};
+pub use method::{Counts, Integrator, Method};
 pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
-pub use stepper::{StepOutcome, Stepper};
+pub use stepper::{Rk45, Stepper};
 
 use thiserror::Error;
 
@@ -376,8 +380,6 @@ pub enum InputError {
         "method: expected one of 'RK45', 'DOP853', 'Radau', 'RK4', 'Euler' or 'auto', got '{0}'"
     )]
     UnknownMethod(String),
-    #[error("method: {0} is not available in this build (the Radau solver is not built in yet); use 'RK45', 'DOP853', 'RK4' or 'Euler'")]
-    MethodUnavailable(&'static str),
     #[error("dt: method '{method}' takes a fixed step size dt > 0, got none")]
     DtMissing { method: &'static str },
     #[error("controller: method '{method}' has SciPy's controller only ('standard')")]
@@ -414,7 +416,7 @@ impl InputError {
             InputError::TEvalOutsideSpan { .. }
             | InputError::TEvalNotSorted { .. }
             | InputError::OutputTooLarge { .. } => "t_eval",
-            InputError::UnknownMethod(_) | InputError::MethodUnavailable(_) => "method",
+            InputError::UnknownMethod(_) => "method",
             InputError::DtMissing { .. }
             | InputError::DtInvalid(_)
             | InputError::DtNotUsed { .. } => "dt",

@@ -26,7 +26,6 @@
 //! for `∂τ/∂v`.
 use super::base_accel;
 use super::workspace::{Data, DerivativeData};
-use crate::joint::Joint;
 use crate::kinematics;
 use crate::model::Model;
 use crate::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
@@ -107,7 +106,7 @@ fn derivatives_body(
         // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
         // before it; every other joint's columns are fixed in the parent (one column) or in
         // the body (the quaternion joints), and all of them move together.
-        let chain = matches!(l.joint, Joint::SphericalZYZ);
+        let chain = l.joint.chained_columns();
         let (mut vc, mut ac) = (vp, ap);
         let (mut vd, mut ad) = (z6, z6);
         for k in 0..nv {
@@ -159,7 +158,7 @@ fn derivatives_body(
         let l = &model.links[i];
         let nv = l.joint.nv();
         let lk = dd.links[i];
-        let chain = matches!(l.joint, Joint::SphericalZYZ);
+        let chain = l.joint.chained_columns();
         let r = l.v_index..l.v_index + nv;
         for j in r.clone() {
             let d = &mut dd.dofs[j];
