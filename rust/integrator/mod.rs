@@ -28,7 +28,6 @@ mod driver;
 mod events;
 mod explicit_rk;
 mod fixed_step;
-mod lu;
 mod method;
 mod num_jac;
 mod radau;
@@ -207,7 +206,7 @@ impl Controller {
 /// each accepted step, `h·|λ| ≈ h ‖k7 − k6‖ / ‖y7 − y6‖`, where `y6`, `y7 = y_new` are the
 /// two stage states at `t + h` and `k6`, `k7` their derivatives, estimates the step times the
 /// dominant eigenvalue of the Jacobian. Above [`STIFF_H_LAMBDA`] (the edge of the
-/// Dormand–Prince stability region, ≈ 3.3) on [`STIFF_STEPS`] accepted steps (a run of
+/// Dormand–Prince 5(4) stability region, ≈ 3.3; DOP853's 6.1) on [`STIFF_STEPS`] accepted steps (a run of
 /// [`NONSTIFF_RESET`] steps below it starts the count again) the step size is limited by
 /// stability, not accuracy: an explicit method then needs ~|λ|·T/3 steps whatever the
 /// tolerance, where an implicit one (SciPy's Radau, BDF) would not.
@@ -226,7 +225,8 @@ pub enum StiffnessCheck {
     Stop,
 }
 
-/// `h·|λ|` above which a step counts as stability-limited (Hairer's 3.25).
+/// `h·|λ|` above which an RK45 step counts as stability-limited (Hairer's 3.25 in DOPRI5;
+/// DOP853's is 6.1, [`Tableau::STIFF_H_LAMBDA`]).
 pub const STIFF_H_LAMBDA: f64 = 3.25;
 /// Number of stability-limited accepted steps that make a detection (Hairer's 15).
 pub const STIFF_STEPS: usize = 15;
@@ -252,10 +252,10 @@ impl Stiffness {
 
     fn warning(&self) -> String {
         format!(
-            "warning: the problem looks stiff from t = {} (h·|λ| ≈ {:.2} > {STIFF_H_LAMBDA} on \
-             {STIFF_STEPS} accepted steps, |λ| ≈ {:.3e}): the step size is limited by the \
-             stability of the explicit method, not by the tolerance; an implicit solver (e.g. \
-             SciPy's Radau or BDF) or softer stiff elements would need far fewer steps",
+            "warning: the problem looks stiff from t = {} (h·|λ| ≈ {:.2} on {STIFF_STEPS} \
+             accepted steps, |λ| ≈ {:.3e}): the step size is limited by the stability of the \
+             explicit method, not by the tolerance; an implicit solver (e.g. SciPy's Radau or \
+             BDF) or softer stiff elements would need far fewer steps",
             fmt_time(self.t),
             self.h_lambda,
             self.lambda()
@@ -525,8 +525,8 @@ impl Status {
             ),
             Status::Stiff { t, h_lambda, h } => format!(
                 "the problem is stiff at t = {}: on {STIFF_STEPS} accepted steps the step size \
-                 was limited by the stability of the explicit method (h·|λ| ≈ {h_lambda:.2} > \
-                 {STIFF_H_LAMBDA}, |λ| ≈ {:.3e}), not by the tolerance; use an implicit solver \
+                 was limited by the stability of the explicit method (h·|λ| ≈ {h_lambda:.2}, \
+                 |λ| ≈ {:.3e}), not by the tolerance; use an implicit solver \
                  (e.g. SciPy's Radau or BDF) or soften the stiff elements",
                 f(*t),
                 h_lambda / h

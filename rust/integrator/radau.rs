@@ -42,12 +42,12 @@ use super::common::{
     tolerances, Lifecycle, StepState, Stepping,
 };
 use super::dense::Interpolant;
-use super::lu::Lu;
 use super::method::{Counts, Integrator};
 use super::num_jac::NumJac;
 use super::{
     Controller, InputError, NonFiniteKind, OdeSystem, SolverOptions, Status, StepOutcome, Tol,
 };
+use crate::linalg::lu::Lu;
 
 const S6: f64 = 2.449_489_742_783_178; // √6
 /// Collocation nodes.

@@ -1,2 +1,4 @@
 //! Hand-written factorisations, in one place. Each file says in one line why it is not
 //! nalgebra's (or faer's) own.
+
+pub(crate) mod lu;
