@@ -594,6 +594,8 @@ impl<S: OdeSystem> Radau<S> {
         self.error_norm_old = Some(error_norm);
         self.st.h_abs = h_abs * factor;
         self.current_jac = current_jac;
+        self.fill_q();
+        self.st.n_accepted += 1;
         Ok(self.st.outcome())
     }
 
@@ -655,10 +657,10 @@ impl<S: OdeSystem> Radau<S> {
         self.lu_complex.invalidate();
     }
 
-    /// The accepted `y_new` (projected) becomes the state with its derivative `f`, and the
-    /// step's interpolant `Q = Zᵀ P`; if that derivative fails the step is undone.
+    /// The accepted `y_new` (projected) becomes the state with its derivative `f`; if that
+    /// derivative fails the step is undone.
     fn accept(&mut self, t_new: f64) -> Result<(), Status> {
-        let (t, n) = (self.st.t, self.st.dim);
+        let t = self.st.t;
         self.sys
             .project(&mut self.st.y_new)
             .map_err(|message| Status::RhsError {
@@ -685,14 +687,18 @@ impl<S: OdeSystem> Radau<S> {
             }
             return Err(s);
         }
+        Ok(())
+    }
+
+    /// The step's interpolant `Q = Zᵀ P`.
+    fn fill_q(&mut self) {
+        let n = self.st.dim;
         for i in 0..n {
             let (a, b, c) = (self.z[i], self.z[n + i], self.z[2 * n + i]);
             for j in 0..3 {
                 self.q[3 * i + j] = a * P[0][j] + b * P[1][j] + c * P[2][j];
             }
         }
-        self.st.n_accepted += 1;
-        Ok(())
     }
 
     /// After a rejection: the error estimate once more through the LU with `f(t, y + err)`
