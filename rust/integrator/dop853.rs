@@ -8,6 +8,7 @@
 use super::dense::Interpolant;
 use super::dop853_tableau::{A, B, C, D, E3, E5, INTERPOLATOR_POWER, N_STAGES, N_STAGES_EXTENDED};
 use super::explicit_rk::{ExplicitRk, Tableau};
+use super::method::Method;
 use super::stepper::combine;
 
 /// The first `S` entries of row `s` of the tableau.
@@ -20,6 +21,7 @@ fn row<const S: usize>(s: usize) -> [f64; S] {
 pub struct Dop853Tableau;
 
 impl Tableau for Dop853Tableau {
+    const METHOD: Method = Method::Dop853;
     const N_STAGES: usize = N_STAGES;
     const ROWS: usize = N_STAGES_EXTENDED;
     const C: &'static [f64] = &C;

@@ -13,7 +13,7 @@ use super::common::{
     Lifecycle, StepState, Stepping,
 };
 use super::dense::Interpolant;
-use super::method::{Counts, Integrator};
+use super::method::{Counts, Integrator, Method};
 use super::{
     Controller, InputError, OdeSystem, SolverOptions, Status, StepOutcome, Stiffness,
     StiffnessCheck, NONSTIFF_RESET, STIFF_STEPS,
@@ -32,6 +32,8 @@ const PI_ERR_FLOOR: f64 = 1e-4;
 /// `f(t_new, y_new)` (FSAL), then the dense output's extra stages, if any. Its last stage
 /// ends at `t + h` (`C[N_STAGES - 1] = 1`), which the stiffness test uses.
 pub trait Tableau {
+    /// The method's name in results and messages.
+    const METHOD: Method;
     const N_STAGES: usize;
     /// Rows of `k` (at least `N_STAGES + 1`).
     const ROWS: usize;

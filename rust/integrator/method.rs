@@ -94,7 +94,8 @@ pub enum Method {
     /// Semi-implicit (symplectic) Euler at a fixed step `dt` (explicit Euler for a system
     /// without a `[q; v]` split; see [`OdeSystem::split`]).
     Euler,
-    /// RK45 until Hairer's stiffness test fires, then Radau from that state.
+    /// RK45 (DOP853 when every rtol ≤ [`super::AUTO_DOP853_RTOL`]) until Hairer's stiffness test
+    /// fires, then Radau from that state.
     Auto,
 }
 

@@ -1,10 +1,14 @@
 //! Integration methods behind one driver, SciPy's `solve_ivp` loop: adaptive Dormand–Prince
 //! 5(4) (`RK45`) and 8(5,3) (`DOP853`) that reproduce SciPy step for step, fixed-step `RK4`
-//! and semi-implicit `Euler`, and `auto` (RK45, then Radau once stiff). See docs/integrators.md.
+//! and semi-implicit `Euler`, and `auto` (RK45 or, at tight tolerances, DOP853, then Radau
+//! once stiff). See docs/integrators.md.
 //!
 //! * `method.rs`     – the [`Integrator`] trait every method implements, [`Method`] names.
-//! * `stepper.rs`    – RK45: Butcher tableau, error norm, step-size control, [`Stepper`].
+//! * `common.rs`     – what every method shares: [`StepState`], the solver life cycle, checks.
+//! * `explicit_rk.rs` – the one explicit Runge–Kutta engine [`ExplicitRk`] over a [`Tableau`].
+//! * `stepper.rs`    – the RK45 tableau ([`Rk45`]; [`Stepper`] = the engine with it).
 //! * `dop853.rs`     – DOP853 ([`Dop853`]), its tableau in `dop853_tableau.rs`.
+//! * `radau.rs`      – Radau IIA ([`Radau`]), finite-difference Jacobians in `num_jac.rs`.
 //! * `fixed_step.rs` – the fixed-step methods ([`FixedStep`] with [`Rk4`] or [`Euler`]).
 //! * `dense.rs`      – the interpolants ([`Interpolant`]) and the piecewise [`DenseOutput`].
 //! * `events.rs`     – [`Event`] functions and SciPy's `brentq` root finder.
@@ -38,7 +42,7 @@ pub use dense::{eval_segment, DenseOutput, Interpolant};
 pub use dop853::{Dop853, Dop853Tableau};
 #[cfg(test)]
 pub(crate) use driver::auto as driver_auto;
-pub use driver::{rk45, solve};
+pub use driver::{rk45, solve, AUTO_DOP853_RTOL};
 pub use events::{Event, EventDirection, EventFn};
 pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};

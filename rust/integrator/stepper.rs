@@ -4,6 +4,7 @@
 
 use super::dense::{self, Interpolant};
 use super::explicit_rk::{ExplicitRk, Tableau};
+use super::method::Method;
 use super::OdeSystem;
 #[cfg(test)]
 use super::{common::next_toward, Controller, SolverOptions, StepOutcome};
@@ -124,6 +125,7 @@ fn scaled_errors_body(
 pub struct Rk45;
 
 impl Tableau for Rk45 {
+    const METHOD: Method = Method::Rk45;
     const N_STAGES: usize = N_STAGES;
     const ROWS: usize = N_STAGES + 1;
     const C: &'static [f64] = &C;
