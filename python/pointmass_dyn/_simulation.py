@@ -247,7 +247,8 @@ def simulate(
     ``method``: ``"RK45"`` (default; SciPy's, step for step), ``"DOP853"`` (SciPy's, step for
     step; better at tight tolerances), ``"RK4"`` or ``"Euler"`` (semi-implicit, MuJoCo's) at
     the fixed step ``dt`` (required by these two only), ``"Radau"`` (implicit) or ``"auto"``
-    (RK45, then Radau from where the stiffness test fires; ``.switched_to``, ``.t_switch``).
+    (RK45, or DOP853 at rtol ≤ 1e-8, then Radau from where the stiffness test fires;
+    ``.switched_to``, ``.t_switch``).
     ``None`` takes the scene's ``[simulate] method``/``dt``. See docs/integrators.md.
 
     Settings not given here come from the scene (its ``[simulate]`` table), then SciPy's

@@ -2,10 +2,13 @@
 //! the body's angular velocity relative to its parent, in body axes, as its three speeds:
 //! `P = [R_body; 0]` (world axes), the identity columns in the body frame. No coordinate
 //! singularity; `q̇ = ½ q ⊗ (v, 0)`.
-use super::{turn_columns, JointType, LocalMotion, MotionClass, Subspace};
+use super::{
+    quaternion, turn_columns, JacobianRows, JointType, LocalMotion, MotionClass, Subspace,
+};
 use crate::error::{check_finite, Error, Result};
 use crate::joint::rotation::quat_to_matrix;
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use nalgebra::DMatrixViewMut;
 
 pub struct Spherical;
 
@@ -65,6 +68,16 @@ impl JointType for Spherical {
     /// Finite, and a quaternion of usable norm.
     fn check_configuration(&self, q: &[f64], arg: &str) -> Result<()> {
         check_quaternion(q, 0, arg, Self::NAME)
+    }
+    /// The body turned by `R exp(δ)`.
+    fn integrate(&self, q: &[f64], delta: &[f64], out: &mut [f64]) {
+        quaternion::step(q, delta, out);
+    }
+    fn tangent_map(&self, q: &[f64], t: &mut DMatrixViewMut<'_, f64>) {
+        quaternion::tangent_into(q, t, 0, 0);
+    }
+    fn qdot_jacobian(&self, q: &[f64], v: &[f64], jac: &mut JacobianRows<'_>) {
+        quaternion::rate_blocks(q, v, jac, 0, 0);
     }
 }
 
