@@ -8,6 +8,8 @@
 //! mechanism's linear and angular momenta exactly (docs/balancing.md). The quantities are
 //! linear in the point masses for a given motion, which is what makes balancing a least
 //! squares problem.
+use crate::alloc::try_zeros_vec;
+use crate::error::Result;
 use crate::kinematics::{self, body_placement};
 use crate::model::Model;
 use crate::recursive::reference::{inverse_dynamics_world, Workspace};
@@ -88,16 +90,70 @@ pub fn point_motion(
 
 /// The motion of given points `(link, offset in the link frame)` at the state of the last
 /// [`link_accelerations`] (or [`point_motion`]) call: `(position, velocity, acceleration)`.
-pub fn carried_points(ws: &Workspace, points: &[(usize, Vec3)]) -> Vec<(Vec3, Vec3, Vec3)> {
-    points
-        .iter()
-        .map(|(i, p)| {
-            let s = &ws.links[*i];
-            let d = s.rotation * p;
-            let (vel, acc) = carried_point(&s.twist, &ws.accel[*i], &d);
-            (s.origin + d, vel, acc)
-        })
-        .collect()
+pub fn carried_points<'a>(
+    ws: &'a Workspace,
+    points: &'a [(usize, Vec3)],
+) -> impl Iterator<Item = (Vec3, Vec3, Vec3)> + 'a {
+    points.iter().map(|(i, p)| {
+        let s = &ws.links[*i];
+        let d = s.rotation * p;
+        let (vel, acc) = carried_point(&s.twist, &ws.accel[*i], &d);
+        (s.origin + d, vel, acc)
+    })
+}
+
+/// What balancing needs per state `k` and point `j` (C order, `(N, P, ·)`): world positions
+/// and accelerations (3 each) and `generalized = J_pᵀ (a_p − g)` (nv), the joint forces a
+/// unit mass at the point needs.
+#[derive(Debug, Clone, Default)]
+pub struct PointRegressor {
+    pub positions: Vec<f64>,
+    pub accelerations: Vec<f64>,
+    pub generalized: Vec<f64>,
+}
+
+/// [`PointRegressor`] at the `rows` states stacked in `qs` (rows × nq), `vs`, `accs`
+/// (rows × nv), for `points` given as `(link, offset in the link frame)`. The arrays' sizes
+/// are the caller's to choose, so they are requested fallibly (an `OutOfMemory` error, not an
+/// abort); interruptible between states.
+pub fn point_regressor(
+    model: &Model,
+    states: (&[f64], &[f64], &[f64]),
+    rows: usize,
+    points: &[(usize, Vec3)],
+    g: &Vec3,
+) -> Result<PointRegressor> {
+    let (qs, vs, accs) = states;
+    let (nq, nv, np) = (model.nq, model.nv, points.len());
+    let entries = |width: usize| {
+        rows.checked_mul(np)
+            .and_then(|x| x.checked_mul(width))
+            .unwrap_or(usize::MAX)
+    };
+    let what = |name: &str| format!("point_regressor['{name}'] ({rows} states × {np} points)");
+    let mut out = PointRegressor {
+        positions: try_zeros_vec(entries(3), &what("positions"))?,
+        accelerations: try_zeros_vec(entries(3), &what("accelerations"))?,
+        generalized: try_zeros_vec(entries(nv), &what("generalized"))?,
+    };
+    let mut ws = Workspace::new(model);
+    for k in 0..rows {
+        crate::interrupt::check("point_regressor")?;
+        let (qk, vk, ak) = (
+            &qs[k * nq..(k + 1) * nq],
+            &vs[k * nv..(k + 1) * nv],
+            &accs[k * nv..(k + 1) * nv],
+        );
+        link_accelerations(model, &mut ws, qk, vk, ak);
+        for (j, (r, _, ap)) in carried_points(&ws, points).enumerate() {
+            let at = (k * np + j) * 3;
+            out.positions[at..at + 3].copy_from_slice(r.as_slice());
+            out.accelerations[at..at + 3].copy_from_slice(ap.as_slice());
+            let gen = &mut out.generalized[(k * np + j) * nv..(k * np + j + 1) * nv];
+            add_point_force(model, &ws, points[j].0, &r, &(ap - g), gen);
+        }
+    }
+    Ok(out)
 }
 
 /// Shaking force and moment about `about` (world): `(−Σ m a, −Σ m (r − O) × a)`.

@@ -1163,28 +1163,13 @@ impl PyModel {
             Some(list) => super::reactions::body_points(&model, list)?,
         };
         let rows = count.unwrap_or(1);
-        let (nq, nv, np) = (model.nq, model.nv, pts.len());
-        let (pos, acc, gen) = detach_interruptible(py, || {
-            let mut ws = recursive::reference::Workspace::new(&model);
-            let mut pos = Vec::with_capacity(rows * np * 3);
-            let mut acc = Vec::with_capacity(rows * np * 3);
-            let mut gen = vec![0.0; rows * np * nv];
-            for k in 0..rows {
-                crate::interrupt::check("point_regressor")?;
-                let (qk, vk, ak) = (
-                    &qs[k * nq..(k + 1) * nq],
-                    &vs[k * nv..(k + 1) * nv],
-                    &accs[k * nv..(k + 1) * nv],
-                );
-                reactions::link_accelerations(&model, &mut ws, qk, vk, ak);
-                for (j, (r, _, ap)) in reactions::carried_points(&ws, &pts).iter().enumerate() {
-                    pos.extend_from_slice(r.as_slice());
-                    acc.extend_from_slice(ap.as_slice());
-                    let out = &mut gen[(k * np + j) * nv..(k * np + j + 1) * nv];
-                    reactions::add_point_force(&model, &ws, pts[j].0, r, &(ap - g), out);
-                }
-            }
-            Ok((pos, acc, gen))
+        let (nv, np) = (model.nv, pts.len());
+        let reactions::PointRegressor {
+            positions: pos,
+            accelerations: acc,
+            generalized: gen,
+        } = detach_interruptible(py, || {
+            reactions::point_regressor(&model, (&qs, &vs, &accs), rows, &pts, &g)
         })?;
         for (k, x) in [
             ("positions", &pos),
@@ -1887,8 +1872,8 @@ fn repair_options(
                 }
             }
             _ => {
-                let x: f64 = v
-                    .extract()
+                // `real` refuses bools (True is not a 1 kg bound).
+                let x = super::convert::real(&v, &arg)
                     .ok()
                     .filter(|x: &f64| x.is_finite() && *x >= 0.0)
                     .ok_or_else(|| invalid(py, &arg, "a finite number >= 0", shown(&v)))?;
