@@ -304,7 +304,8 @@ def balance(
         miss = np.abs(ce @ x_start - de).max()
         if miss > 1e-9 * (1.0 + np.abs(de).max()):
             raise InvalidInputError(
-                f"zero: the design point masses cannot make {', '.join(zero)} vanish at every "
+                f"zero: the design point masses cannot make "
+                f"{', '.join(zero) or 'the link masses'} vanish at every "
                 f"instant within their bounds (best residual {miss:.3e}); add counterweight "
                 f"candidates on other links, or relax the bounds"
             )
