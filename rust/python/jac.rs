@@ -65,7 +65,11 @@ pub(super) fn jac_arg<'a>(
     if jac.is_callable() {
         if method == Method::Auto {
             let (t0, y0) = start;
-            let m = matrix(&jac.call1((t0, PyArray1::from_slice(py, y0)))?, "jac(t, y)", dim)?;
+            let m = matrix(
+                &jac.call1((t0, PyArray1::from_slice(py, y0)))?,
+                "jac(t, y)",
+                dim,
+            )?;
             if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
                 return Err(invalid(
                     py,
