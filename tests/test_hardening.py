@@ -302,3 +302,59 @@ def test_zyz_far_from_its_singularity_runs_to_the_end_accurately():
     got = zyz.model.placements(r.q[-1])[0][0]
     want = ball.model.placements(ref.q[-1])[0][0]
     assert np.abs(got - want).max() < 1e-7
+
+
+# --------------------------------------------------------------------------------------------
+# 19. simulate_batch: params of the wrong kind and threads=0 are input errors.
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_refuses_non_numeric_params_and_zero_threads():
+    scene = pmd.load_scene("pendulum_planar")
+    with pytest.raises(InvalidInputError, match=r"params\['gravity'\]: expected numbers"):
+        pmd.simulate_batch(scene, (0, 0.1), t_eval=[0, 0.1], params={"gravity": "x"})
+    with pytest.raises(InvalidInputError, match="threads: expected a thread count >= 1"):
+        pmd.simulate_batch(scene, (0, 0.1), t_eval=[0, 0.1], q0=np.tile(scene.q0, (2, 1)),
+                           threads=0)
+
+
+# --------------------------------------------------------------------------------------------
+# Found by the extended fuzz: a driver or actuated index of another type.
+# --------------------------------------------------------------------------------------------
+def test_prescribed_motion_refuses_a_driver_of_another_type(fourbar_motion):
+    scene, mo = fourbar_motion
+    for driver in (np.inf, b"", 1.5, True):
+        with pytest.raises(InvalidInputError, match="driver: expected a body name or an int"):
+            pmd.prescribed_motion(scene.model, driver, speed=1.0, q_guess=scene.q0)
+    with pytest.raises(InvalidInputError, match="actuated: expected"):
+        pmd.analyze_motion(scene.model, mo.t, mo.q, mo.v, mo.a, actuated=[0.5])
+
+
+# --------------------------------------------------------------------------------------------
+# 3, 20. animate: a bounded frame count, and a missing directory said before any work.
+# --------------------------------------------------------------------------------------------
+def test_animate_bounds_the_frame_count_and_checks_the_directory(tmp_path):
+    scene = pmd.load_scene("pendulum_planar")
+    sol = pmd.simulate(scene, (0, 0.5))
+    for kwargs in ({"fps": 1e9}, {"duration": 1e9}, {"frames": 10**9}):
+        start = time.perf_counter()
+        with pytest.raises(InvalidInputError, match="at most 108000"):
+            pmd.animate(sol, scene, tmp_path / "x.html", **kwargs)
+        assert time.perf_counter() - start < 5.0  # refused, not OOM-killed after minutes
+        assert not (tmp_path / "x.html").exists()
+    with pytest.raises(InvalidInputError, match="path: expected a file in an existing dir"):
+        pmd.animate(sol, scene, tmp_path / "missing" / "x.html")
+    info = pmd.animate(sol, scene, tmp_path / "x.html", fps=20)
+    assert info.frames == 10 and info.bytes > 0  # round(0.5 s × 20 fps), as before
+
+
+# --------------------------------------------------------------------------------------------
+# 25. RK4 (and Euler) refuse tolerances no method could use, as the adaptive ones do.
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("method", ["RK4", "Euler"])
+def test_fixed_step_methods_refuse_bad_tolerances(method):
+    scene = pmd.load_scene("pendulum_planar")
+    with pytest.raises(InvalidInputError, match="rtol"):
+        pmd.simulate(scene, (0, 0.1), method=method, dt=1e-3, rtol=np.nan)
+    with pytest.raises(InvalidInputError, match="atol"):
+        pmd.simulate(scene, (0, 0.1), method=method, dt=1e-3, atol=-1)
+    ok = pmd.simulate(scene, (0, 0.1), method=method, dt=1e-3)
+    assert ok.success and np.all(np.isfinite(ok.q))

@@ -232,8 +232,15 @@ def _actuated_indices(model, actuated) -> list[int]:
             _, iv, _, nv = model.joint_slices()[link]
             out.extend(range(iv, iv + nv))
         else:
-            out.append(int(item))
+            out.append(_index(item, "actuated"))
     return sorted(set(out))
+
+
+def _index(x, arg: str) -> int:
+    """An int index (a Python or NumPy integer, not a bool), else an error naming ``arg``."""
+    if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
+        return int(x)
+    raise InvalidInputError(f"{arg}: expected a body name or an int index, got {x!r}")
 
 
 def _driver_slot(model, driver) -> tuple[str, int, int]:
@@ -246,7 +253,7 @@ def _driver_slot(model, driver) -> tuple[str, int, int]:
             )
         body = names.index(driver)
     else:
-        body = int(driver)
+        body = _index(driver, "driver")
         if not 0 <= body < len(names):
             raise InvalidInputError(
                 f"driver: expected a body index 0..{len(names) - 1}, got {body}"
