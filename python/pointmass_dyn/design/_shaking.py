@@ -157,6 +157,7 @@ def analyze_motion(
     report = _reporter(progress, len(t))
     g = None if gravity is None else np.asarray(gravity, dtype=float)
     act = None if model.nloops == 0 else actuated
+    actuated_idx = None if act is None else _actuated_indices(model, act)
     tau, bearing, cut = [], [], []
     for k, (qk, vk, ak) in enumerate(zip(q, v, a)):
         report(k)
@@ -166,7 +167,6 @@ def analyze_motion(
         cut.append(b["loops"])
     sh = shaking(model, q, v, a, about=about, gravity=g)
     report(len(t))
-    actuated_idx = None if act is None else _actuated_indices(model, act)
     return MotionAnalysis(
         model=model,
         t=t,
