@@ -358,3 +358,21 @@ def test_fixed_step_methods_refuse_bad_tolerances(method):
         pmd.simulate(scene, (0, 0.1), method=method, dt=1e-3, atol=-1)
     ok = pmd.simulate(scene, (0, 0.1), method=method, dt=1e-3)
     assert ok.success and np.all(np.isfinite(ok.q))
+
+
+# --------------------------------------------------------------------------------------------
+# 8, 16. balance / pareto_front weights and counts.
+# --------------------------------------------------------------------------------------------
+def test_balance_refuses_weights_and_counts_that_mean_nothing(fourbar_motion):
+    _, mo = fourbar_motion
+    cw = [pmd.Counterweight.ring("crank", [0, 0, 0], 0.05, count=8)]
+    for objective in ({"force": np.nan}, {"force": -1.0}, {"force": 0.0}, {"force": True}):
+        with pytest.raises(InvalidInputError, match="objective"):
+            pmd.balance(mo, counterweights=cw, objective=objective)
+    for reg in (np.nan, -1.0, np.inf):
+        with pytest.raises(InvalidInputError, match="regularization"):
+            pmd.balance(mo, counterweights=cw, regularization=reg)
+    for kwargs in ({"count": -1}, {"count": 1}, {"objectives": ("force", "moment", "torque")},
+                   {"objectives": ("force", "force")}):
+        with pytest.raises(InvalidInputError, match="count|objectives"):
+            pmd.pareto_front(mo, counterweights=cw, **kwargs)
