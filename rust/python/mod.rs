@@ -16,6 +16,7 @@ mod rk45;
 mod scene;
 mod signals;
 mod simulate;
+mod visuals;
 
 use pyo3::prelude::*;
 
