@@ -230,10 +230,10 @@ def animate(
         )
     if not (isinstance(dpi, (int, np.integer)) and 10 <= dpi <= 1000):
         raise InvalidInputError(f"dpi: expected an integer 10..1000, got {dpi!r}")
-    if not path.parent.is_dir():
+    if path is not None and not Path(path).parent.is_dir():
         raise InvalidInputError(
-            f"path: expected a file in an existing directory, got '{path}' ('{path.parent}' "
-            f"does not exist or is not a directory)"
+            f"path: expected a file in an existing directory, got '{path}' "
+            f"('{Path(path).parent}' does not exist or is not a directory)"
         )
     drawing = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
                       trails=trails, shaking=shaking, title=title, camera=camera, show=show,
