@@ -121,10 +121,10 @@ def _connect(distributed, scheduler, timeout: float):
         return distributed.Client(scheduler, timeout=timeout)
     except ValueError as exc:
         raise InvalidInputError(f"scheduler: expected {expected}, got {scheduler!r} ({exc})") from exc
-    except OSError as exc:  # Dask's connect timeout is an OSError
+    except Exception as exc:  # Dask's connect timeout is an OSError; its own loop may fail too
         raise ClusterError(
             f"scheduler: no Dask scheduler answered at {scheduler!r} within "
-            f"connect_timeout={timeout} s ({exc})"
+            f"connect_timeout={timeout} s ({type(exc).__name__}: {exc})"
         ) from exc
 
 
