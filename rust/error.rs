@@ -74,6 +74,10 @@ pub enum Error {
     /// The equations cannot be solved at this state (singular mass matrix, Euler singularity).
     #[error("{0}")]
     Singular(String),
+    /// Finite inputs gave a meaningless result (an effect's failure inside a computation that
+    /// is not a simulation, which reports its own).
+    #[error("{0}")]
+    Numerical(String),
     /// A loop that cannot be closed (or kept closed) from the given state; names the loop.
     #[error("{0}")]
     Closure(String),
@@ -156,6 +160,7 @@ impl Error {
         };
         match self {
             Error::Singular(m) => Error::Singular(tell(m)),
+            Error::Numerical(m) => Error::Numerical(tell(m)),
             Error::Closure(m) => Error::Closure(tell(m)),
             Error::InvalidSetting(m) => Error::InvalidSetting(tell(m)),
             Error::Interrupted(m) => Error::Interrupted(tell(m)),
@@ -199,6 +204,7 @@ impl Error {
                 message,
             },
             unnamed @ (Error::Singular(_)
+            | Error::Numerical(_)
             | Error::Closure(_)
             | Error::InvalidSetting(_)
             | Error::Interrupted(_)) => unnamed,

@@ -562,8 +562,8 @@ impl Model {
         for l in &self.links {
             if let Some(at) = l.joint.quaternion_at() {
                 let s = &mut q[l.q_index + at..l.q_index + at + 4];
-                let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if n > 0.0 {
+                let n = crate::joint::rotation::quat_norm(s);
+                if n > 0.0 && n.is_finite() {
                     s.iter_mut().for_each(|x| *x /= n);
                 }
             }

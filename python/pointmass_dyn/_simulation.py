@@ -270,7 +270,10 @@ def simulate(
     changes no step, ``"stop"`` ends the run, ``"off"`` skips the test.
 
     A ``SphericalZYZ`` joint reaching its Euler singularity (sin θ = 0) ends the run there
-    with ``success=False`` and a message naming the joint and the time.
+    with ``success=False`` and a message naming the joint and the time; so does one coming
+    within ``|sin θ| = 3 √(ε / rtol)`` of it (1.4e-3 at rtol 1e-9; a run starting nearer:
+    twice as near as it started), where rounding in the Euler-angle rates would exceed the
+    tolerance. Use ``Spherical`` for motions through or near it.
 
     A run that cannot finish returns ``success=False`` with a message giving the reason and
     the time reached (a non-finite force from any effect, a ``TorqueFunction`` included);

@@ -146,6 +146,8 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
         check_start(dim, y0, t0, t_bound)?;
+        // Unused at a fixed step, but a NaN or negative one is still a mistake to report.
+        super::common::tolerances(opts, dim)?;
         let dt = opts.dt.ok_or(InputError::DtMissing {
             method: M::METHOD.name(),
         })?;

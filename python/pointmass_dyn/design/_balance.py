@@ -248,6 +248,17 @@ def balance(
     for k in list(objective) + list(zero):
         if k not in OBJECTIVES:
             raise InvalidInputError(f"objective/zero: expected keys among {OBJECTIVES}, got '{k}'")
+    for k, w in objective.items():
+        if isinstance(w, bool) or not (isinstance(w, (int, float, np.number)) and 0 <= w < np.inf):
+            raise InvalidInputError(f"objective['{k}']: expected a finite weight >= 0, got {w!r}")
+    if not any(objective.values()) and not zero:
+        raise InvalidInputError(f"objective: expected some weight > 0 (or a zero=), got {objective}")
+    if isinstance(regularization, bool) or not (
+        isinstance(regularization, (int, float, np.number)) and 0 <= regularization < np.inf
+    ):
+        raise InvalidInputError(
+            f"regularization: expected a finite number >= 0, got {regularization!r}"
+        )
     design = _design_points(model, list(links), list(counterweights))
     if not design:
         raise InvalidInputError("counterweights, links: give at least one design point mass")
@@ -304,7 +315,8 @@ def balance(
         miss = np.abs(ce @ x_start - de).max()
         if miss > 1e-9 * (1.0 + np.abs(de).max()):
             raise InvalidInputError(
-                f"zero: the design point masses cannot make {', '.join(zero)} vanish at every "
+                f"zero: the design point masses cannot make "
+                f"{', '.join(zero) or 'the link masses'} vanish at every "
                 f"instant within their bounds (best residual {miss:.3e}); add counterweight "
                 f"candidates on other links, or relax the bounds"
             )
@@ -353,6 +365,13 @@ def pareto_front(
             "objective: pareto_front sets the weights itself; give the two objectives as "
             "`objectives` (and equalities as `zero`)"
         )
+    if not (isinstance(objectives, (tuple, list)) and len(objectives) == 2
+            and all(o in OBJECTIVES for o in objectives) and objectives[0] != objectives[1]):
+        raise InvalidInputError(
+            f"objectives: expected two different keys among {OBJECTIVES}, got {objectives!r}"
+        )
+    if isinstance(count, bool) or not (isinstance(count, (int, np.integer)) and count >= 2):
+        raise InvalidInputError(f"count: expected an integer >= 2, got {count!r}")
     first, second = objectives
     out = []
     for s in np.linspace(0.0, 1.0, count):
