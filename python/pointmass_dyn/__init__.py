@@ -16,11 +16,11 @@ from .balancing import (
     MotionAnalysis,
     Shaking,
     analyze_motion,
-    balance,
-    pareto_front,
     prescribed_motion,
     shaking,
 )
+from .design_problem import balance, pareto_front
+from .design_shapes import LinkShape, Shape
 from .batch import BatchResult, simulate_batch
 from .errors import (
     InertiaError,
@@ -102,6 +102,8 @@ __all__ = [
     "Balance",
     "BatchResult",
     "Counterweight",
+    "LinkShape",
+    "Shape",
     "Damper",
     "Effect",
     "ExternalForce",

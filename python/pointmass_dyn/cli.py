@@ -327,7 +327,7 @@ def _counterweights(args, scene) -> list:
 
 
 def _weights(args) -> dict[str, float] | None:
-    from .balancing import OBJECTIVES
+    from .design_problem import OBJECTIVES
 
     if not args.weight:
         return None
@@ -349,7 +349,7 @@ def _weights(args) -> dict[str, float] | None:
 
 
 def _pareto_spec(text: str) -> tuple[tuple[str, str], int]:
-    from .balancing import OBJECTIVES
+    from .design_problem import OBJECTIVES
 
     pair, _, count_text = text.partition(":")
     names = tuple(p.strip() for p in pair.split(","))
@@ -380,7 +380,8 @@ def _vec(x) -> str:
 
 
 def cmd_balance(args) -> int:
-    from .balancing import _gravity_of, balance, pareto_front, prescribed_motion
+    from .balancing import _gravity_of, prescribed_motion
+    from .design_problem import balance, pareto_front
 
     scene = load_scene(args.scene)
     model = scene.model
