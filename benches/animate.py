@@ -32,7 +32,7 @@ def best(f, repeats=5):
 def main() -> None:
     panda = pmd.load_scene("panda")
     res = pmd.simulate(panda, (0.0, 1.0))
-    qs = pmd.animation.sample(res.t, res.q, np.linspace(0, 1, 300))
+    qs = pmd.viewer.sample(res.t, res.q, np.linspace(0, 1, 300))
     m = panda.model
     batched = best(lambda: m.body_poses(qs))
     looped = best(lambda: [(m.placements(q), m.point_masses(q)) for q in qs])

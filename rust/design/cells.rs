@@ -197,7 +197,8 @@ pub fn fill(envelope: &Envelope, side: f64) -> Result<Vec<Vec3>> {
         lo.z + 0.5 * (span.z - counts[2] as f64 * side),
     );
     let mut out = Vec::new();
-    let h = 0.5 * side;
+    // Corners a hair inside, so that a face of the envelope through them counts as inside.
+    let h = 0.5 * side * (1.0 - 1e-9);
     for k in 0..counts[2] {
         for j in 0..counts[1] {
             for i in 0..counts[0] {

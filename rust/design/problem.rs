@@ -364,7 +364,6 @@ fn solve_stage(problem: &Problem, optimum: Option<&Solution>) -> Result<Solution
         let r = bld.row(limit);
         (0..nx).for_each(|j| bld.put(r, j, 1.0));
     }
-    let mut epigraph = vec![];
     for &(k, t) in &lay.peaks {
         let q = &problem.quantities[k];
         if let Some(limit) = q.limit {
@@ -372,7 +371,6 @@ fn solve_stage(problem: &Problem, optimum: Option<&Solution>) -> Result<Solution
             bld.put(r, t, 1.0);
         }
         q_vec[t] += q.weight;
-        epigraph.push(t);
     }
     if let (Some(opt), Norm::Peak) = (optimum, problem.norm) {
         // Σ w t ≤ the optimum, with the solver's own slack.
@@ -395,14 +393,15 @@ fn solve_stage(problem: &Problem, optimum: Option<&Solution>) -> Result<Solution
             Norm::Peak if t_var.is_some() || q.limit.is_some() => {
                 let blocks = q.rows.nrows() / q.dim;
                 for b in 0..blocks {
-                    let head = match t_var {
+                    match t_var {
                         Some(t) => {
                             let r = bld.row(0.0);
                             bld.put(r, t, -1.0);
-                            r
                         }
-                        None => bld.row(q.limit.unwrap_or(0.0) * s),
-                    };
+                        None => {
+                            bld.row(q.limit.unwrap_or(0.0) * s);
+                        }
+                    }
                     for i in 0..q.dim {
                         let row = b * q.dim + i;
                         let r = bld.row(q.constant[row] * s);
@@ -504,7 +503,6 @@ fn solve_stage(problem: &Problem, optimum: Option<&Solution>) -> Result<Solution
         solve_time: sol.solve_time,
         refined: false,
     };
-    let _ = epigraph;
     if let Some(first) = optimum {
         // The objective is that of the first stage.
         out.objective = first.objective;

@@ -15,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from ._core import Joint, Model
-from .errors import InvalidInputError, ModelImportWarning
+from .._core import Joint, Model
+from .._helpers import rotation_of_wxyz
+from ..errors import InvalidInputError, ModelImportWarning
 
 
 @dataclass(frozen=True)
@@ -40,19 +41,6 @@ class InertiaRepair:
 
 
 # ---------------------------------------------------------------------------------- MuJoCo
-
-
-def _quat_wxyz_to_matrix(q) -> np.ndarray:
-    w, x, y, z = (float(c) for c in q)
-    n = math.sqrt(w * w + x * x + y * y + z * z)
-    w, x, y, z = w / n, x / n, y / n, z / n
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
 
 
 def _axis_angle(axis, angle: float) -> np.ndarray:
@@ -102,11 +90,11 @@ def from_mujoco(mj_model: Any) -> Model:
         parent = last_of_body[pb]
         # The body frame in the parent's last part's frame.
         t_body = np.asarray(m.body_pos[b], float) - anchor_of_body[pb]
-        r_body = _quat_wxyz_to_matrix(m.body_quat[b])
+        r_body = rotation_of_wxyz(m.body_quat[b])
         bname = _name(m, mujoco.mjtObj.mjOBJ_BODY, b, f"body{b}")
         jids = list(range(int(m.body_jntadr[b]), int(m.body_jntadr[b]) + int(m.body_jntnum[b])))
         mass = float(m.body_mass[b])
-        ri = _quat_wxyz_to_matrix(m.body_iquat[b])
+        ri = rotation_of_wxyz(m.body_iquat[b])
         inertia = ri @ np.diag(m.body_inertia[b]) @ ri.T
         ipos = np.asarray(m.body_ipos[b], float)
         if not jids:
@@ -195,7 +183,7 @@ def _mujoco_loops(m, model, parts, last_of_body, anchor_of_body) -> list[str]:
             joint, rot_a = Joint.spherical(), np.eye(3)
             t_a, t_b = data[0:3] - shift[0], data[3:6] - shift[1]
         else:
-            rot_a = _quat_wxyz_to_matrix(data[6:10])
+            rot_a = rotation_of_wxyz(data[6:10])
             joint = Joint.fixed()
             # MuJoCo's rows: body 2's anchor at body 1's relpos point, and body 2's
             # orientation body 1's times relquat (engine_core_constraint.c).
@@ -229,7 +217,7 @@ def mujoco_state(mj_model: Any, qpos, qvel) -> tuple[np.ndarray, np.ndarray]:
         if t == mujoco.mjtJoint.mjJNT_FREE:
             w = qpos[a + 3 : a + 7]
             q[a + 3 : a + 7] = [w[1], w[2], w[3], w[0]]
-            v[d : d + 3] = _quat_wxyz_to_matrix(w).T @ qvel[d : d + 3]
+            v[d : d + 3] = rotation_of_wxyz(w).T @ qvel[d : d + 3]
         elif t == mujoco.mjtJoint.mjJNT_BALL:
             w = qpos[a : a + 4]
             q[a : a + 4] = [w[1], w[2], w[3], w[0]]

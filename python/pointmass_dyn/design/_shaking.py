@@ -1,52 +1,27 @@
-"""Shaking forces, bearing forces and balancing with point masses (docs/balancing.md).
+"""Shaking forces and moments, and a mechanism along a prescribed motion (docs/balancing.md).
 
 A moving mechanism shakes its ground with the resultant of its inertia forces, the shaking
 force ``F = −Σ m_ij a_ij`` and moment ``M_O = −Σ m_ij (r_ij − O) × a_ij`` over every point
-mass (gravity excluded: the weight is steady and reported apart). For a prescribed motion the
-point masses' positions and accelerations are fixed, so the shaking force, the shaking
-moment and the driving torque are **linear in the masses** placed at given body points: a
-link's own seven point masses, or counterweights at candidate points. Balancing is then a
-least-squares problem with linear equalities (e.g. zero shaking force) and bounds (a
-counterweight's mass is not negative), solved exactly here, not by a search.
+mass (gravity excluded: the weight is steady and reported apart).
 
 * :func:`shaking` — shaking force and moment per state, over arrays of states or along a
   :class:`~pointmass_dyn.SimulationResult`.
 * :func:`prescribed_motion` — a mechanism driven at a prescribed input (a crank at constant
   speed over a revolution, or a tabulated input): per instant the whole state, driving
-  torque, bearing forces, shaking force and moment (:class:`MotionAnalysis`).
-* :func:`balance` — counterweights and/or redesigned links that minimise weighted RMS
-  shaking force, moment and driving torque, subject to chosen ones being zero
-  (:class:`Balance`); :func:`pareto_front` between two objectives.
+  torque, bearing forces, shaking force and moment (:class:`MotionAnalysis`);
+  :func:`analyze_motion` the same along given states.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from . import _core
-from .errors import InvalidInputError
-
-OBJECTIVES = ("force", "moment", "torque")
-
-
-def _rms(x: np.ndarray) -> float:
-    """RMS of the magnitude of the rows of x (N, k), or of x (N,)."""
-    x = np.asarray(x, dtype=float)
-    if x.size == 0:
-        return 0.0
-    sq = x**2 if x.ndim == 1 else np.sum(x**2, axis=-1)
-    return float(np.sqrt(np.mean(sq)))
-
-
-def _peak(x: np.ndarray) -> float:
-    x = np.asarray(x, dtype=float)
-    if x.size == 0:
-        return 0.0
-    return float(np.max(np.abs(x) if x.ndim == 1 else np.linalg.norm(x, axis=-1)))
+from .. import _core
+from .._helpers import peak, rms, scene_gravity
+from ..errors import InvalidInputError
 
 
 @dataclass(frozen=True)
@@ -63,19 +38,12 @@ class Shaking:
     @property
     def rms(self) -> dict[str, float]:
         """RMS magnitudes over the states (equal weights: sample the cycle uniformly)."""
-        return {"force": _rms(self.force), "moment": _rms(self.moment)}
+        return {"force": rms(self.force), "moment": rms(self.moment)}
 
     @property
     def peak(self) -> dict[str, float]:
-        return {"force": _peak(self.force), "moment": _peak(self.moment)}
+        return {"force": peak(self.force), "moment": peak(self.moment)}
 
-
-def _gravity_of(scene) -> np.ndarray | None:
-    """The sum of a scene's gravity effects (None without one)."""
-    if "gravity" in (scene.disable or ()):
-        return None
-    gs = [np.asarray(e.g) for e in scene.effects if e.g is not None]
-    return np.sum(gs, axis=0) if gs else None
 
 
 def shaking(
@@ -112,7 +80,7 @@ def shaking(
             ]
         ).reshape(len(result.t), model.nv)
         if gravity is None:
-            gravity = _gravity_of(scene)
+            gravity = scene_gravity(scene)
     else:
         model = model_or_scene.model if isinstance(model_or_scene, _core.Scene) else model_or_scene
         if v is None or a is None:
@@ -149,24 +117,24 @@ class MotionAnalysis:
         """RMS and peak of the shaking force and moment, the driving force(s) and each
         joint's bearing force."""
         out = {
-            "shaking force": {"rms": _rms(self.shaking.force), "peak": _peak(self.shaking.force)},
+            "shaking force": {"rms": rms(self.shaking.force), "peak": peak(self.shaking.force)},
             "shaking moment": {
-                "rms": _rms(self.shaking.moment),
-                "peak": _peak(self.shaking.moment),
+                "rms": rms(self.shaking.moment),
+                "peak": peak(self.shaking.moment),
             },
         }
         cols = self.actuated if self.actuated is not None else range(self.tau.shape[1])
         for c in cols:
             out[f"driving force [{c}]"] = {
-                "rms": _rms(self.tau[:, c]),
-                "peak": _peak(self.tau[:, c]),
+                "rms": rms(self.tau[:, c]),
+                "peak": peak(self.tau[:, c]),
             }
         for i, name in enumerate(self.model.link_names):
             f = self.bearing[:, i, :3]
-            out[f"bearing '{name}'"] = {"rms": _rms(f), "peak": _peak(f)}
+            out[f"bearing '{name}'"] = {"rms": rms(f), "peak": peak(f)}
         for k, name in enumerate(self.model.loop_names):
             f = self.cut[:, k, :3]
-            out[f"cut joint '{name}'"] = {"rms": _rms(f), "peak": _peak(f)}
+            out[f"cut joint '{name}'"] = {"rms": rms(f), "peak": peak(f)}
         return out
 
 
@@ -353,79 +321,3 @@ def prescribed_motion(
     out = analyze_motion(model, t, q, v, a, actuated=[name], gravity=gravity, about=about)
     out.input, out.input_name = pos, name
     return out
-
-
-@dataclass(frozen=True)
-class Counterweight:
-    """Candidate counterweight positions on one body: point masses at ``points`` (K, 3) in the
-    body's frame, each of mass in ``[0, max_mass]`` (``None``: unbounded). Balancing chooses
-    their masses; a ring of candidates around a pivot lets it place a counterweight at any
-    angle (two neighbours share it)."""
-
-    body: Any
-    points: Any
-    max_mass: float | None = None
-
-    @staticmethod
-    def ring(
-        body: Any,
-        center: Any,
-        radius: float,
-        count: int = 24,
-        normal: Any = (0, 0, 1),
-        max_mass: float | None = None,
-    ) -> Counterweight:
-        """``count`` candidates on a circle of ``radius`` about ``center`` in the plane normal
-        to ``normal`` (body frame)."""
-        n = np.asarray(normal, dtype=float)
-        n = n / np.linalg.norm(n)
-        u = np.cross(n, [1.0, 0.0, 0.0])
-        if np.linalg.norm(u) < 1e-8:
-            u = np.cross(n, [0.0, 1.0, 0.0])
-        u /= np.linalg.norm(u)
-        w = np.cross(n, u)
-        ang = 2 * np.pi * np.arange(count) / count
-        pts = np.asarray(center, float) + radius * (
-            np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)
-        )
-        return Counterweight(body, pts, max_mass)
-
-
-@dataclass
-class Balance:
-    """The result of :func:`balance`.
-
-    ``counterweights``: ``(body name, position in the body frame (3,), mass)`` of each
-    counterweight placed (mass above ``1e-12`` of the largest); ``bodies``: each changed
-    body's new :class:`RigidBody` (mass, COM, inertia, all physically valid); ``model``: the
-    balanced model; ``before`` / ``after``: the analysis of the original and of the balanced
-    model along the same motion (recomputed, not predicted); ``predicted``: the objective
-    quantities the linear model gave, which ``after`` reproduces to round-off."""
-
-    masses: np.ndarray
-    counterweights: list[tuple[str, np.ndarray, float]]
-    bodies: dict[str, Any]
-    model: Any
-    before: MotionAnalysis
-    after: MotionAnalysis
-    predicted: dict[str, np.ndarray]
-    objective: dict[str, float]
-    zero: tuple[str, ...]
-    message: str = ""
-    extras: dict = field(default_factory=dict)
-    #: Designed link shapes by body name (:class:`~pointmass_dyn.Shape`).
-    shapes: dict = field(default_factory=dict)
-    #: The conic solver's report: status, duality gap, iterations, times, values.
-    solver: dict = field(default_factory=dict)
-
-    def table(self) -> str:
-        """Before/after RMS and peaks, as text."""
-        b, a = self.before.summary(), self.after.summary()
-        rows = [
-            f"{'quantity':<34}{'RMS before':>13}{'RMS after':>13}{'peak before':>13}{'peak after':>13}"
-        ]
-        for k in b:
-            rows.append(
-                f"{k:<34}{b[k]['rms']:>13.5g}{a[k]['rms']:>13.5g}{b[k]['peak']:>13.5g}{a[k]['peak']:>13.5g}"
-            )
-        return "\n".join(rows)

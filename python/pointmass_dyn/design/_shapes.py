@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
-from .errors import InvalidInputError
+from .. import _core
+from ..errors import InvalidInputError
 
 
 def _box(value: Any, arg: str) -> np.ndarray:

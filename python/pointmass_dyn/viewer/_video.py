@@ -12,22 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .animation import COLOURS, Drawing
-from .errors import AnimationWriterError
+from .._helpers import pyplot
+from ..errors import AnimationWriterError
+from ._drawing import COLOURS, Drawing
 
 
 def _pyplot():
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise AnimationWriterError(
-            "GIF and MP4 animations need matplotlib: pip install 'pointmass-dyn[plot]' "
-            "(or write an .html animation, which needs nothing)"
-        ) from exc
-    return plt
+    return pyplot("GIF and MP4 animations", AnimationWriterError,
+                  instead="or write an .html animation, which needs nothing")
 
 
 def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):

@@ -17,10 +17,11 @@ from typing import Any
 
 import numpy as np
 
-from . import _core
-from .balancing import Balance, Counterweight, MotionAnalysis, analyze_motion
-from .design_shapes import LinkShape, Shape
-from .errors import InvalidInputError
+from .. import _core
+from ..errors import InvalidInputError
+from ._balance import Balance, Counterweight
+from ._shaking import MotionAnalysis, analyze_motion
+from ._shapes import LinkShape, Shape
 
 QUANTITIES = ("force", "moment", "torque", "bearing")
 OBJECTIVES = (*QUANTITIES, "mass")

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .animation import COLOURS, Drawing
+from ._drawing import COLOURS, Drawing
 
 _PAGE = """<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">

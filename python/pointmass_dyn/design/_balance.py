@@ -1,0 +1,89 @@
+"""What balancing takes and gives (docs/balancing.md, docs/design.md): candidate
+counterweight points (:class:`Counterweight`) and the result of a design (:class:`Balance`).
+The design itself is in ``_problem``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ._shaking import MotionAnalysis
+
+
+@dataclass(frozen=True)
+class Counterweight:
+    """Candidate counterweight positions on one body: point masses at ``points`` (K, 3) in the
+    body's frame, each of mass in ``[0, max_mass]`` (``None``: unbounded). Balancing chooses
+    their masses; a ring of candidates around a pivot lets it place a counterweight at any
+    angle (two neighbours share it)."""
+
+    body: Any
+    points: Any
+    max_mass: float | None = None
+
+    @staticmethod
+    def ring(
+        body: Any,
+        center: Any,
+        radius: float,
+        count: int = 24,
+        normal: Any = (0, 0, 1),
+        max_mass: float | None = None,
+    ) -> Counterweight:
+        """``count`` candidates on a circle of ``radius`` about ``center`` in the plane normal
+        to ``normal`` (body frame)."""
+        n = np.asarray(normal, dtype=float)
+        n = n / np.linalg.norm(n)
+        u = np.cross(n, [1.0, 0.0, 0.0])
+        if np.linalg.norm(u) < 1e-8:
+            u = np.cross(n, [0.0, 1.0, 0.0])
+        u /= np.linalg.norm(u)
+        w = np.cross(n, u)
+        ang = 2 * np.pi * np.arange(count) / count
+        pts = np.asarray(center, float) + radius * (
+            np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)
+        )
+        return Counterweight(body, pts, max_mass)
+
+
+@dataclass
+class Balance:
+    """The result of :func:`balance`.
+
+    ``counterweights``: ``(body name, position in the body frame (3,), mass)`` of each
+    counterweight placed (mass above ``1e-12`` of the largest); ``bodies``: each changed
+    body's new :class:`RigidBody` (mass, COM, inertia, all physically valid); ``model``: the
+    balanced model; ``before`` / ``after``: the analysis of the original and of the balanced
+    model along the same motion (recomputed, not predicted); ``predicted``: the objective
+    quantities the linear model gave, which ``after`` reproduces to round-off."""
+
+    masses: np.ndarray
+    counterweights: list[tuple[str, np.ndarray, float]]
+    bodies: dict[str, Any]
+    model: Any
+    before: MotionAnalysis
+    after: MotionAnalysis
+    predicted: dict[str, np.ndarray]
+    objective: dict[str, float]
+    zero: tuple[str, ...]
+    message: str = ""
+    extras: dict = field(default_factory=dict)
+    #: Designed link shapes by body name (:class:`~pointmass_dyn.Shape`).
+    shapes: dict = field(default_factory=dict)
+    #: The conic solver's report: status, duality gaps, iterations, times, the values it
+    #: predicts in the problem's norm and those before.
+    solver: dict = field(default_factory=dict)
+
+    def table(self) -> str:
+        """Before/after RMS and peaks, as text."""
+        b, a = self.before.summary(), self.after.summary()
+        rows = [
+            f"{'quantity':<34}{'RMS before':>13}{'RMS after':>13}{'peak before':>13}{'peak after':>13}"
+        ]
+        for k in b:
+            rows.append(
+                f"{k:<34}{b[k]['rms']:>13.5g}{a[k]['rms']:>13.5g}{b[k]['peak']:>13.5g}{a[k]['peak']:>13.5g}"
+            )
+        return "\n".join(rows)
