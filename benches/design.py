@@ -96,6 +96,9 @@ def de_comparison(motion):
     pts = [(c.body, p) for c in cws for p in c.points]
     reg = motion.model.point_regressor(motion.q, motion.v, motion.a, points=pts, gravity=G)
     acc, pos = reg["accelerations"], reg["positions"]
+    # Per unit mass at each point: its shaking force and moment (N, P, 3), flattened.
+    per_force = -np.transpose(acc, (1, 0, 2)).reshape(len(pts), -1)
+    per_moment = -np.transpose(np.cross(pos, acc), (1, 0, 2)).reshape(len(pts), -1)
     f0, m0 = motion.shaking.force, motion.shaking.moment
     for norm in ("rms", "peak"):
         def value(y, norm=norm):
@@ -105,8 +108,8 @@ def de_comparison(motion):
         ref_f, ref_m = value(f0), value(m0)
 
         def score(x, norm=norm):
-            f = f0 - np.einsum("p,npk->nk", x, acc)
-            m = m0 - np.einsum("p,npk->nk", x, np.cross(pos, acc))
+            f = f0 + (x @ per_force).reshape(f0.shape)
+            m = m0 + (x @ per_moment).reshape(m0.shape)
             if norm == "rms":
                 return (value(f) / ref_f) ** 2 + (value(m) / ref_m) ** 2
             return value(f) / ref_f + value(m) / ref_m

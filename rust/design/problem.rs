@@ -243,6 +243,38 @@ pub fn solve(problem: &Problem) -> Result<Solution> {
     }
 }
 
+/// What no design meets, named: the zero quantities, the limits, the masses' bounds.
+fn infeasible(problem: &Problem) -> Error {
+    let zero: Vec<&str> = problem
+        .quantities
+        .iter()
+        .filter(|q| q.zero)
+        .map(|q| q.name.as_str())
+        .collect();
+    let mut limits: Vec<String> = problem
+        .quantities
+        .iter()
+        .filter_map(|q| {
+            q.limit
+                .map(|l| format!("{} <= {l:.4g} (before: {:.4g})", q.name, q.reference))
+        })
+        .collect();
+    if let Some(m) = problem.mass_limit {
+        limits.push(format!("mass <= {m:.4g} kg"));
+    }
+    let arg = if zero.is_empty() { "limits" } else { "zero" };
+    Error::arg(
+        arg,
+        "requirements some design within the masses' bounds (and link mass ranges) meets",
+        format!(
+            "zero {zero:?} and limits [{}] that none meets (Clarabel's certificate of primal \
+             infeasibility): relax them, or give the design more room (candidates, envelopes, \
+             mass ranges)",
+            limits.join(", ")
+        ),
+    )
+}
+
 struct Layout {
     nx: usize,
     nd: usize,
@@ -476,11 +508,7 @@ fn solve_stage(problem: &Problem, optimum: Option<&Solution>) -> Result<Solution
         SolverStatus::Solved | SolverStatus::AlmostSolved => {}
         SolverStatus::CallbackTerminated => return Err(Error::Interrupted("design".into())),
         SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
-            return Err(Error::arg(
-                "limits",
-                "limits, equalities and bounds some design meets",
-                "a combination none meets (the solver's certificate of primal infeasibility)",
-            ))
+            return Err(infeasible(problem));
         }
         other => {
             return Err(Error::Singular(format!(

@@ -14,9 +14,17 @@ use crate::spatial::Vec3;
 fn points3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec<Vec3>> {
     let (shape, data) = array(obj, arg)?;
     if shape.len() != 2 || shape[1] != 3 {
-        return Err(invalid(obj.py(), arg, "an (N, 3) array", format!("shape {shape:?}")));
+        return Err(invalid(
+            obj.py(),
+            arg,
+            "an (N, 3) array",
+            format!("shape {shape:?}"),
+        ));
     }
-    Ok(data.chunks(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect())
+    Ok(data
+        .chunks(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect())
 }
 
 /// Cell centres (K, 3) of side `cell` in a `box` (2, 3), a `polygon` (P, 2) extruded over
@@ -35,33 +43,67 @@ pub fn design_cells<'py>(
         (Some(b), None, None) => {
             let c = points3(b, "box")?;
             if c.len() != 2 {
-                return Err(invalid(py, "box", "(lower, upper) corners", format!("{} points", c.len())));
+                return Err(invalid(
+                    py,
+                    "box",
+                    "(lower, upper) corners",
+                    format!("{} points", c.len()),
+                ));
             }
-            Envelope::Box { lower: c[0], upper: c[1] }
+            Envelope::Box {
+                lower: c[0],
+                upper: c[1],
+            }
         }
         (None, Some(p), None) => {
             let (shape, data) = array(p, "polygon")?;
             if shape.len() != 2 || shape[1] != 2 {
-                return Err(invalid(py, "polygon", "a (P, 2) array of vertices", format!("shape {shape:?}")));
+                return Err(invalid(
+                    py,
+                    "polygon",
+                    "a (P, 2) array of vertices",
+                    format!("shape {shape:?}"),
+                ));
             }
             let z = z.ok_or_else(|| invalid(py, "z", "(z_low, z_high) for a polygon", "None"))?;
-            Envelope::Prism { polygon: data.chunks(2).map(|c| [c[0], c[1]]).collect(), z }
+            Envelope::Prism {
+                polygon: data.chunks(2).map(|c| [c[0], c[1]]).collect(),
+                z,
+            }
         }
         (None, None, Some(t)) => {
             let (shape, data) = array(t, "triangles")?;
             if shape.len() != 3 || shape[1] != 3 || shape[2] != 3 {
-                return Err(invalid(py, "triangles", "a (T, 3, 3) array", format!("shape {shape:?}")));
+                return Err(invalid(
+                    py,
+                    "triangles",
+                    "a (T, 3, 3) array",
+                    format!("shape {shape:?}"),
+                ));
             }
             let v = |k: usize| Vec3::new(data[3 * k], data[3 * k + 1], data[3 * k + 2]);
-            Envelope::Mesh { triangles: (0..shape[0]).map(|t| [v(3 * t), v(3 * t + 1), v(3 * t + 2)]).collect() }
+            Envelope::Mesh {
+                triangles: (0..shape[0])
+                    .map(|t| [v(3 * t), v(3 * t + 1), v(3 * t + 2)])
+                    .collect(),
+            }
         }
         _ => {
-            return Err(invalid(py, "envelope", "exactly one of box, polygon or triangles", "none or several"))
+            return Err(invalid(
+                py,
+                "envelope",
+                "exactly one of box, polygon or triangles",
+                "none or several",
+            ))
         }
     };
     let cells = detach_interruptible(py, || design::fill(&env, cell))?;
     let n = cells.len();
-    to_array(py, cells.iter().flat_map(|c| c.iter().copied()).collect(), &[n, 3])
+    to_array(
+        py,
+        cells.iter().flat_map(|c| c.iter().copied()).collect(),
+        &[n, 3],
+    )
 }
 
 /// The maps along a motion: dict with `data` (N · rows, 10 · nlinks), `rows`, `nactuated`,
@@ -96,7 +138,10 @@ pub fn design_regressor<'py>(
     d.set_item("nactuated", reg.layout.nactuated)?;
     d.set_item("nlinks", reg.layout.nlinks)?;
     d.set_item("nloops", reg.layout.nloops)?;
-    d.set_item("parameters", to_array1(py, &design::model_parameters(&model)))?;
+    d.set_item(
+        "parameters",
+        to_array1(py, &design::model_parameters(&model)),
+    )?;
     Ok(d)
 }
 
@@ -109,8 +154,14 @@ pub fn design_pins<'py>(
     body: &Bound<'_, PyAny>,
 ) -> PyResult<Bound<'py, PyList>> {
     let model = model.model();
-    let b = super::loops::body_ref(&model, Some(body), "body")?
-        .ok_or_else(|| invalid(py, "body", "a body of the model (not the world)", "the world"))?;
+    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
+        invalid(
+            py,
+            "body",
+            "a body of the model (not the world)",
+            "the world",
+        )
+    })?;
     let pins = design::pins(&model, b);
     let out = PyList::empty(py);
     for (p, axis) in pins {
@@ -122,12 +173,18 @@ pub fn design_pins<'py>(
 fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
     let py = obj.py();
     let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        obj.get_item(k).map_err(|_| invalid(py, "quantities", format!("a dict with '{k}'"), "none"))
+        obj.get_item(k)
+            .map_err(|_| invalid(py, "quantities", format!("a dict with '{k}'"), "none"))
     };
     let name: String = get("name")?.extract()?;
     let (shape, rows) = array(&get("rows")?, &name)?;
     if shape.len() != 2 || shape[1] != ndelta {
-        return Err(invalid(py, &name, format!("rows of shape (R, {ndelta})"), format!("{shape:?}")));
+        return Err(invalid(
+            py,
+            &name,
+            format!("rows of shape (R, {ndelta})"),
+            format!("{shape:?}"),
+        ));
     }
     let (_, constant) = array(&get("constant")?, &name)?;
     Ok(Quantity {
@@ -145,9 +202,13 @@ fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
 
 /// Solves the design program given as a dict (see `pointmass_dyn`'s design module).
 #[pyfunction]
-pub fn design_solve<'py>(py: Python<'py>, spec: &Bound<'_, PyDict>) -> PyResult<Bound<'py, PyDict>> {
+pub fn design_solve<'py>(
+    py: Python<'py>,
+    spec: &Bound<'_, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
     let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        spec.get_item(k)?.ok_or_else(|| invalid(py, "problem", format!("a dict with '{k}'"), "none"))
+        spec.get_item(k)?
+            .ok_or_else(|| invalid(py, "problem", format!("a dict with '{k}'"), "none"))
     };
     let ndelta: usize = get("ndelta")?.extract()?;
     let (_, lower) = array(&get("lower")?, "lower")?;
@@ -156,7 +217,12 @@ pub fn design_solve<'py>(py: Python<'py>, spec: &Bound<'_, PyDict>) -> PyResult<
     let map_cols: Vec<usize> = get("map_cols")?.extract()?;
     let (_, map_vals) = array(&get("map_vals")?, "map_vals")?;
     if map_rows.len() != map_cols.len() || map_rows.len() != map_vals.len() {
-        return Err(invalid(py, "map", "rows, columns and values of one length", "different lengths"));
+        return Err(invalid(
+            py,
+            "map",
+            "rows, columns and values of one length",
+            "different lengths",
+        ));
     }
     let quantities = get("quantities")?
         .try_iter()?
@@ -165,12 +231,24 @@ pub fn design_solve<'py>(py: Python<'py>, spec: &Bound<'_, PyDict>) -> PyResult<
     let norm = match get("norm")?.extract::<String>()?.as_str() {
         "rms" => Norm::Rms,
         "peak" => Norm::Peak,
-        other => return Err(invalid(py, "norm", "\"rms\" or \"peak\"", format!("'{other}'"))),
+        other => {
+            return Err(invalid(
+                py,
+                "norm",
+                "\"rms\" or \"peak\"",
+                format!("'{other}'"),
+            ))
+        }
     };
     let problem = Problem {
         lower,
         upper,
-        map: map_rows.into_iter().zip(map_cols).zip(map_vals).map(|((r, c), v)| (r, c, v)).collect(),
+        map: map_rows
+            .into_iter()
+            .zip(map_cols)
+            .zip(map_vals)
+            .map(|((r, c), v)| (r, c, v))
+            .collect(),
         ndelta,
         groups: get("groups")?.extract()?,
         equal: get("equal")?.extract()?,

@@ -2,8 +2,8 @@
 mod body;
 mod convert;
 mod dense;
-mod design;
 mod derivatives;
+mod design;
 mod effects;
 mod errors;
 mod events;

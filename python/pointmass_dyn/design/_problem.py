@@ -165,7 +165,7 @@ def _collect(model, links, counterweights, link_mass) -> _Variables:
 
 def _quantity_rows(reg: dict, what: str, model) -> tuple[np.ndarray, int]:
     """Row indices (per sample) and the block size of a quantity."""
-    rows, na, nl, nk = reg["rows"], reg["nactuated"], reg["nlinks"], reg["nloops"]
+    rows, na, nl = reg["rows"], reg["nactuated"], reg["nlinks"]
     if what == "force":
         return np.arange(0, 3), 3
     if what == "moment":
@@ -323,7 +323,12 @@ def balance(
     sol = _core.design_solve(spec)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
-    result = _build(motion, var, x, phi_base, designed, cols, sol)
+    # The parameters of the masses found (the solver's δ = M x holds to its tolerance only):
+    # the bodies, the prediction and the re-analysis all follow from x.
+    phi = phi_base.copy()
+    for (link, mom), (_, _, _, sl) in zip(var.columns, var.parts):
+        phi[NPARAM * link : NPARAM * (link + 1)] += mom.T @ x[sl]
+    result = _build(motion, var, x, phi, designed)
     result.solver.update(
         {
             "status": sol["status"],
@@ -338,8 +343,6 @@ def balance(
         }
     )
     # Predicted quantities along the motion (what the re-analysis must reproduce).
-    phi = phi_base.copy()
-    phi[cols] += sol["delta"]
     full = data @ phi
     result.predicted.update(
         {
@@ -354,26 +357,23 @@ def balance(
     return result
 
 
-def _build(motion, var: _Variables, x, phi_base, designed, cols, sol) -> Balance:
+def _build(motion, var: _Variables, x, phi, designed) -> Balance:
     model = motion.model
-    bodies, shapes, cws = {}, {}, []
-    phi = phi_base.copy()
-    phi[cols] += sol["delta"]
+    shapes, cws = {}, []
     by_link: dict[int, list] = {}
     for (kind, name, spec, sl), (link, mom) in zip(var.parts, var.columns):
         by_link.setdefault(link, []).append((kind, name, spec, sl, mom))
-        xs = x[sl]
         if kind == "shape":
             shapes[name] = (spec, sl)
         if kind == "counterweight":
             pts = np.atleast_2d(np.asarray(spec.points, float))
             big = max(float(np.max(x)), 1e-300)
-            cws += [(name, p, float(m)) for p, m in zip(pts, xs) if m > 1e-9 * big]
+            cws += [(name, p, float(m)) for p, m in zip(pts, x[sl]) if m > 1e-9 * big]
     out_shapes = {}
     for name, (spec, sl) in shapes.items():
         centers, _, cap = spec.cells(model)
         out_shapes[name] = Shape(name, centers, x[sl], cap, float(spec.cell))
-    new_model = model
+    bodies, new_model = {}, model
     for link in designed:
         name = model.link_names[link]
         parts = by_link[link]
@@ -384,17 +384,13 @@ def _build(motion, var: _Variables, x, phi_base, designed, cols, sol) -> Balance
                 pm = model.body(name).point_masses()
                 masses += list(pm.masses)
                 positions += list(np.asarray(pm.positions, float))
-            for kind, _, spec, sl, mom in parts:
+            for _kind, _, _spec, sl, mom in parts:
                 masses += list(x[sl])
                 positions += list(mom[:, 1:4])
             body = _core.RigidBody.from_point_masses(np.array(masses), np.array(positions))
         else:
-            # Cells carry their own inertia: the body from the parameters they give (the
-            # solver's δ recomputed from the clipped masses).
-            p = phi_base[NPARAM * link : NPARAM * (link + 1)].copy()
-            for kind, _, spec, sl, mom in parts:
-                p += mom.T @ x[sl]
-            body = _body_from_parameters(p)
+            # Cells carry their own inertia: the body from the parameters they give.
+            body = _body_from_parameters(phi[NPARAM * link : NPARAM * (link + 1)])
         bodies[name] = body
         new_model = new_model.with_body(name, body)
     after = analyze_motion(

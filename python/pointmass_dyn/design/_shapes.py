@@ -99,7 +99,7 @@ class LinkShape:
                 raise InvalidInputError(f"{arg}: expected a positive number, got {v!r}")
         env = self._envelope()
         centers = np.asarray(_core.design_cells(float(self.cell), **env), dtype=float).reshape(-1, 3)
-        for k, b in enumerate(_boxes(self.keep_out, "keep_out")):
+        for b in _boxes(self.keep_out, "keep_out"):
             centers = centers[~_inside(centers, b)]
         if len(centers) == 0:
             raise InvalidInputError(
