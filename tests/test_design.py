@@ -244,7 +244,7 @@ def test_no_design_found_by_differential_evolution_is_better(fourbar):
 
         ours = score(b.masses)
         t0 = time.perf_counter()
-        de = differential_evolution(score, [(0.0, 0.03)] * len(pts), seed=3, tol=1e-10, maxiter=1000)
+        de = differential_evolution(score, [(0.0, 0.03)] * len(pts), seed=3, tol=1e-10, maxiter=300)
         de_time = time.perf_counter() - t0
         print(f"{norm}: conic {ours:.12g} in {ours_time:.3f} s; DE {de.fun:.12g} in {de_time:.2f} s "
               f"({de_time / ours_time:.0f}x)")

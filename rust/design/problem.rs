@@ -256,11 +256,11 @@ fn infeasible(problem: &Problem) -> Error {
         .iter()
         .filter_map(|q| {
             q.limit
-                .map(|l| format!("{} <= {l:.4g} (before: {:.4g})", q.name, q.reference))
+                .map(|l| format!("{} <= {l:.4e} (before: {:.4e})", q.name, q.reference))
         })
         .collect();
     if let Some(m) = problem.mass_limit {
-        limits.push(format!("mass <= {m:.4g} kg"));
+        limits.push(format!("mass <= {m:.4e} kg"));
     }
     let arg = if zero.is_empty() { "limits" } else { "zero" };
     Error::arg(
