@@ -28,6 +28,7 @@ pub mod simulate;
 pub mod spatial;
 pub mod trig;
 pub mod urdf;
+pub mod visual;
 
 #[cfg(feature = "python")]
 mod python;

@@ -17,6 +17,7 @@ mod rk45;
 mod scene;
 mod signals;
 mod simulate;
+mod visuals;
 
 use pyo3::prelude::*;
 

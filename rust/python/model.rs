@@ -446,6 +446,12 @@ impl PyModel {
         self.version().model.clone()
     }
 
+    /// Changes what no computation depends on (visuals, name): the dynamics' workspaces
+    /// stay valid, so the version is kept.
+    pub fn update_model(&self, f: impl FnOnce(&mut Model)) {
+        f(Arc::make_mut(&mut self.version().model));
+    }
+
     /// The URDF joints of a model from `from_urdf` (empty otherwise).
     pub fn urdf_joints(&self) -> Arc<Vec<crate::urdf::UrdfJoint>> {
         self.version().urdf_joints.clone()
@@ -1601,15 +1607,18 @@ impl PyModel {
     /// `repair` (None/False, True, a dict or `pmd.InertiaRepair`) allows MuJoCo-style
     /// inertia repairs (docs/robots.md); each change is listed in one `UrdfRepairWarning` and
     /// in `model.repairs`. Raises `UrdfError`; warnings go through `warnings.warn` as
-    /// `UrdfWarning`.
+    /// `UrdfWarning`. Mesh URIs (`package://...`) are looked for in `package_dirs` (a path
+    /// or a list of paths), `ROS_PACKAGE_PATH` and the file's ancestors (`model.visuals`).
     #[staticmethod]
-    #[pyo3(signature = (path, *, root_joint=None, repair=None))]
+    #[pyo3(signature = (path, *, root_joint=None, repair=None, package_dirs=None))]
     fn from_urdf(
         py: Python<'_>,
         path: std::path::PathBuf,
         root_joint: Option<&Bound<'_, PyAny>>,
         repair: Option<&Bound<'_, PyAny>>,
+        package_dirs: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
+        let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
         let root = match root_joint {
             None => crate::urdf::RootJoint::Fixed,
             Some(r) => match r.extract::<String>().ok().as_deref() {
@@ -1626,7 +1635,8 @@ impl PyModel {
             },
         };
         let repair = repair_options(py, repair)?;
-        let urdf = crate::urdf::load_urdf_with(&path, root, repair.as_ref()).py(py)?;
+        let urdf =
+            crate::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
         let warnings = py.import("warnings")?;
         if !urdf.warnings.is_empty() {
             let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;

@@ -18,6 +18,7 @@ import numpy as np
 from .._core import Joint, Model
 from .._helpers import rotation_of_wxyz
 from ..errors import InvalidInputError, ModelImportWarning
+from ._mujoco_visuals import geom_visuals, mesh_dirs_of, model_name
 
 
 @dataclass(frozen=True)
@@ -57,7 +58,7 @@ def _name(mj, objtype, i: int, fallback: str) -> str:
     return n if n else fallback
 
 
-def from_mujoco(mj_model: Any) -> Model:
+def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     """Our model of a compiled ``mujoco.MjModel``: its bodies (mass, COM, inertia from
     ``body_inertia``/``body_iquat``), hinge, slide, ball and free joints in MuJoCo's order and
     with its names (unnamed: ``jnt<i>``).
@@ -69,7 +70,11 @@ def from_mujoco(mj_model: Any) -> Model:
     MuJoCo's: ``dof_armature``, passive forces, contacts, actuators and equality constraints
     are not imported (a :class:`ModelImportWarning` names those present), but for
     ``<equality connect>`` and ``<equality weld>`` between bodies, which become loops
-    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md)."""
+    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md).
+
+    The geoms of the bodies (groups 0-2) become ``model.visuals`` (mesh files looked for as
+    MuJoCo recorded them and in ``mesh_dirs``), and the model is named after
+    ``<mujoco model>``."""
     try:
         import mujoco
     except ImportError as e:  # pragma: no cover - optional dependency
@@ -140,7 +145,12 @@ def from_mujoco(mj_model: Any) -> Model:
             prev_anchor, trans, rot = anchor, np.zeros(3), np.eye(3)
         last_of_body[b], anchor_of_body[b] = parent, prev_anchor
     model = Model._from_parts(parts)
+    visuals, missing = geom_visuals(m, last_of_body, anchor_of_body, mesh_dirs_of(mesh_dirs))
+    model.set_visuals(visuals, name=model_name(m))
     ignored = []
+    if missing:
+        ignored.append(f"{len(missing)} mesh file(s) not found (their bodies are drawn as "
+                       f"inertia boxes; pass mesh_dirs=[...]): " + ", ".join(missing[:8]))
     if np.any(np.asarray(m.dof_armature) != 0):
         ignored.append("dof_armature (added to MuJoCo's mass matrix)")
     ignored += _mujoco_loops(m, model, parts, last_of_body, anchor_of_body)

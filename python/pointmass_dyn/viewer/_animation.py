@@ -8,32 +8,48 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .. import _core
-from .._helpers import quaternion_slices
+from .._helpers import quaternion_slices, scene_gravity
 from ..design import shaking as shaking_of
 from ..errors import InvalidInputError
 from ._drawing import Drawing, build_drawing
-from ._html import write_html
+from ._html import page
 from ._video import write_video
 
 
 @dataclass
 class AnimationInfo:
-    """What :func:`animate` wrote: the file, its frame count and times, the frame size in
-    pixels and the initial camera (see :func:`~pointmass_dyn.viewer.view_projection`)."""
+    """What :func:`animate` made: the file (None: nothing written), its frame count and
+    times, the frame size in pixels, the initial camera (see
+    :func:`~pointmass_dyn.viewer.view_projection`; ``camera_at`` for a following camera),
+    the size in bytes, how many triangles the robot's shapes have, and for a page its HTML,
+    which a notebook shows inline."""
 
-    path: Path
+    path: Path | None
     frames: int
     times: np.ndarray
     size: tuple[int, int]
     camera: dict
     bytes: int
+    triangles: int = 0
+    html: str | None = field(default=None, repr=False)
+
+    def _repr_html_(self) -> str | None:
+        """The page in an ``<iframe srcdoc>``: self-contained (no server, no network), so it
+        works in Jupyter, JupyterLab, VS Code and Colab, offline; None for a GIF/MP4."""
+        if self.html is None:
+            return None
+        import html as _html
+
+        return (f'<iframe srcdoc="{_html.escape(self.html, quote=True)}" '
+                f'style="width:100%;height:{self.size[1]}px;border:0" '
+                'sandbox="allow-scripts" title="pointmass_dyn animation"></iframe>')
 
 
 # ---------------------------------------------------------------- sampling
@@ -104,6 +120,9 @@ def prepare(
     trails: Any = None,
     shaking: bool = False,
     title: str | None = None,
+    camera: Any = "auto",
+    show=None,
+    triangles: int | None = None,
 ) -> Drawing:
     """The :class:`Drawing` :func:`animate` writes (same arguments)."""
     scene = model_or_scene if isinstance(model_or_scene, _core.Scene) else None
@@ -135,15 +154,21 @@ def prepare(
         if v is None:
             raise InvalidInputError("shaking: needs the result's speeds v, got none")
         force = np.asarray(shaking_of(scene, _Sampled(times, qf, sample(t, v, times))).force)
+    if triangles is not None and not (isinstance(triangles, (int, np.integer))
+                                      and 0 <= triangles <= 10_000_000):
+        raise InvalidInputError(f"triangles: expected an integer 0..10000000, got {triangles!r}")
     if title is None:
-        title = scene.name if scene is not None and scene.name else "pointmass_dyn"
-    return build_drawing(model, times, qf, trails=trails, shaking=force, title=title)
+        title = (scene.name if scene is not None and scene.name
+                 else model.name or "pointmass_dyn")
+    return build_drawing(model, times, qf, trails=trails, shaking=force, title=title,
+                         gravity=None if scene is None else scene_gravity(scene),
+                         camera=camera, show=show, triangles=triangles)
 
 
 def animate(
     result: Any,
     model_or_scene: Any,
-    path: str | os.PathLike,
+    path: str | os.PathLike | None = None,
     *,
     fps: float = 30.0,
     frames: int | None = None,
@@ -153,26 +178,36 @@ def animate(
     shaking: bool = False,
     title: str | None = None,
     dpi: int = 100,
+    camera: Any = "auto",
+    show: Any = None,
+    triangles: int | None = None,
 ) -> AnimationInfo:
     """Writes an animation of ``result`` to ``path``: ``.html`` (one self-contained WebGL
-    page, works offline: play/pause, scrub, orbit/zoom), ``.gif`` (Pillow) or ``.mp4``
-    (ffmpeg), the last two with matplotlib.
+    page, works offline: play/pause, scrub, orbit/zoom, layer toggles), ``.gif`` (Pillow) or
+    ``.mp4`` (ffmpeg), the last two with matplotlib. ``path=None`` writes nothing: the
+    returned object holds the page and shows it inline in a notebook (``_repr_html_``).
 
     ``result``: a :class:`SimulationResult` or ``(t, q[, v])``. ``model_or_scene``: the
-    :class:`Model` or the :class:`Scene` it came from (a scene is needed for ``shaking``).
-    The trajectory is sampled at ``fps``: ``frames`` frames if given, else
-    ``round(duration·fps)``, ``duration`` being the result's time span unless given, so a
-    long result costs only its frames. ``size``: GIF/MP4 frame size in pixels (width,
-    height); the page fills its window. ``trails``: points whose path is drawn — body
-    names/indices (their origin) or ``(body, point_in_body[, colour])``. ``shaking``: draw
-    the shaking force ``−Σ m a`` (docs/balancing.md) as an arrow at the world origin.
-    Returns :class:`AnimationInfo`. Raises :class:`~pointmass_dyn.errors.AnimationWriterError`
-    for a format this machine cannot write (MP4 without ffmpeg)."""
-    path = Path(path)
-    kind = path.suffix.lower()
+    :class:`Model` or the :class:`Scene` it came from (a scene is needed for ``shaking``,
+    and gives gravity, hence "up" and the ground's plane). The trajectory is sampled at
+    ``fps``: ``frames`` frames if given, else ``round(duration·fps)``, ``duration`` being
+    the result's time span unless given, so a long result costs only its frames. ``size``:
+    GIF/MP4 frame size in pixels (width, height); the page fills its window (inline: that
+    height). ``trails``: points whose path is drawn — body names/indices (their origin) or
+    ``(body, point_in_body[, colour])``. ``shaking``: draw the shaking force ``−Σ m a``
+    (docs/balancing.md) as an arrow at the world origin. ``camera``: "auto" (frame the
+    subject over the motion; follow a floating base that travels farther than its size),
+    "fixed", "follow" or a dict of ``target``, ``distance``, ``azimuth``, ``elevation``,
+    ``fov``. ``show``: the layers shown at first (``LAYERS``: "robot", "masses", "links",
+    "axes", "frames", "forces"). ``triangles``: the budget the model's meshes are
+    simplified to (default 60,000). Returns :class:`AnimationInfo`. Raises
+    :class:`~pointmass_dyn.errors.AnimationWriterError` for a format this machine cannot
+    write (MP4 without ffmpeg); a mesh that cannot be drawn is a
+    :class:`~pointmass_dyn.errors.VisualWarning`."""
+    kind = ".html" if path is None else Path(path).suffix.lower()
     if kind not in (".html", ".gif", ".mp4"):
         raise InvalidInputError(
-            f"path: expected a file name ending in .html, .gif or .mp4, got '{path}'"
+            f"path: expected None or a file name ending in .html, .gif or .mp4, got '{path}'"
         )
     if not (isinstance(size, (tuple, list)) and len(size) == 2
             and all(isinstance(s, (int, np.integer)) and 16 <= s <= 8192 for s in size)):
@@ -182,15 +217,20 @@ def animate(
     if not (isinstance(dpi, (int, np.integer)) and 10 <= dpi <= 1000):
         raise InvalidInputError(f"dpi: expected an integer 10..1000, got {dpi!r}")
     drawing = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
-                      trails=trails, shaking=shaking, title=title)
+                      trails=trails, shaking=shaking, title=title, camera=camera, show=show,
+                      triangles=triangles)
     width, height = int(size[0]), int(size[1])
+    html = None
     if kind == ".html":
-        write_html(drawing, path, fps=fps, size=(width, height))
+        html = page(drawing, fps)
+        if path is not None:
+            Path(path).write_text(html, encoding="utf-8")
     else:
-        write_video(drawing, path, fps=fps, size=(width, height), dpi=int(dpi))
-    return AnimationInfo(path=path, frames=drawing.nframes, times=drawing.times,
-                         size=(width, height), camera=drawing.camera,
-                         bytes=path.stat().st_size)
+        write_video(drawing, Path(path), fps=fps, size=(width, height), dpi=int(dpi))
+    nbytes = len(html.encode()) if path is None else Path(path).stat().st_size
+    return AnimationInfo(path=None if path is None else Path(path), frames=drawing.nframes,
+                         times=drawing.times, size=(width, height), camera=drawing.camera,
+                         bytes=nbytes, triangles=drawing.triangles, html=html)
 
 
 @dataclass

@@ -8,12 +8,13 @@ shaking-force arrow, the world frame and a ground grid.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from ..errors import InvalidInputError
+from . import _camera, _meshes
 
 #: Colours (RGB in 0..1), shared by both writers so a page and a GIF look alike.
 COLOURS = {
@@ -65,6 +66,14 @@ class Drawing:
     extent: float = 0.0
     title: str = ""
     labels: dict = field(default_factory=dict)
+    #: The robot's shapes (``_visuals``) or None: meshes, instances, body poses.
+    visuals: dict | None = None
+    #: Layers shown when the page opens (:data:`LAYERS`).
+    show: tuple = ()
+
+    @property
+    def triangles(self) -> int:
+        return 0 if self.visuals is None else self.visuals["scene"].triangles
 
     @property
     def nframes(self) -> int:
@@ -72,67 +81,17 @@ class Drawing:
 
 
 # ---------------------------------------------------------------- camera
+# (in ._camera; these names stay here, where users and tests found them)
 
-
-#: (azimuth, elevation) in degrees: the general view (matplotlib's default 3-D view), and for
-#: a motion flat across x, y or z a view about 30° off that axis, so its plane is seen nearly
-#: face on rather than at a grazing angle.
-VIEWS = {None: (-60.0, 25.0), 0: (-20.0, 20.0), 1: (-70.0, 20.0), 2: (-60.0, 60.0)}
+VIEWS = _camera.VIEWS
+view_projection = _camera.view_projection
+project = _camera.project
+camera_at = _camera.camera_at
 
 
 def default_camera(lo: np.ndarray, hi: np.ndarray) -> dict:
-    """A view of the box ``[lo, hi]`` (azimuth and elevation from :data:`VIEWS`; flat: an
-    extent under 15 % of the largest), field of view 35°, far enough that the bounding
-    sphere fits."""
-    centre = (lo + hi) / 2
-    extent = hi - lo
-    radius = max(float(np.linalg.norm(extent)) / 2, 1e-3)
-    flat = int(np.argmin(extent)) if extent.min() < 0.15 * extent.max() else None
-    azimuth, elevation = VIEWS[flat]
-    fov = 35.0
-    return {
-        "target": centre.tolist(),
-        "distance": radius / math.sin(math.radians(fov / 2)) * 1.05,
-        "azimuth": azimuth,
-        "elevation": elevation,
-        "fov": fov,
-    }
-
-
-def view_projection(camera: dict, aspect: float) -> np.ndarray:
-    """The page's 4×4 world → clip matrix (column vectors): a perspective of vertical field
-    of view ``fov`` looking at ``target`` from ``distance`` along azimuth/elevation (degrees,
-    z up). The page computes the same matrix (``viewProj`` in viewer.js)."""
-    az, el = math.radians(camera["azimuth"]), math.radians(camera["elevation"])
-    d = camera["distance"]
-    target = np.asarray(camera["target"], dtype=float)
-    eye = target + d * np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az),
-                                 math.sin(el)])
-    f = target - eye
-    f /= np.linalg.norm(f)
-    s = np.cross(f, [0.0, 0.0, 1.0])
-    s /= np.linalg.norm(s)
-    u = np.cross(s, f)
-    view = np.eye(4)
-    view[0, :3], view[1, :3], view[2, :3] = s, u, -f
-    view[:3, 3] = -view[:3, :3] @ eye
-    near, far = d / 100.0, d * 100.0
-    ft = 1.0 / math.tan(math.radians(camera["fov"]) / 2)
-    proj = np.zeros((4, 4))
-    proj[0, 0], proj[1, 1] = ft / aspect, ft
-    proj[2, 2], proj[2, 3] = (far + near) / (near - far), 2 * far * near / (near - far)
-    proj[3, 2] = -1.0
-    return proj @ view
-
-
-def project(camera: dict, width: int, height: int, points) -> np.ndarray:
-    """Pixel coordinates (x right, y down) of world ``points`` (..., 3) in a page of
-    ``width × height`` CSS pixels at the initial camera."""
-    p = np.asarray(points, dtype=float)
-    h = np.concatenate([p, np.ones(p.shape[:-1] + (1,))], axis=-1)
-    c = h @ view_projection(camera, width / height).T
-    ndc = c[..., :3] / c[..., 3:4]
-    return np.stack([(ndc[..., 0] + 1) / 2 * width, (1 - ndc[..., 1]) / 2 * height], axis=-1)
+    """A view of the box ``[lo, hi]``, z up (:func:`._camera.fit`)."""
+    return _camera.fit(lo, hi)
 
 
 # ---------------------------------------------------------------- the drawing
@@ -227,6 +186,44 @@ def _boxes(model, poses) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             np.stack([np.array(los), np.array(his)], axis=1))
 
 
+#: The page's layers (toggles): the robot's shapes, the seven point masses of each link with
+#: their boxes, the links as segments, the joint axes, body frames, force arrows.
+LAYERS = ("robot", "masses", "links", "axes", "frames", "forces")
+
+
+def _layers(show, robot: bool) -> tuple:
+    """Layers shown at first: ``show`` if given, else the robot and forces for a model with
+    visuals, and everything but the robot and frames otherwise."""
+    if show is None:
+        return ("robot", "forces") if robot else ("masses", "links", "axes", "forces")
+    names = (show,) if isinstance(show, str) else tuple(show)
+    bad = [n for n in names if n not in LAYERS]
+    if bad:
+        raise InvalidInputError(f"show: expected names among {LAYERS}, got {bad!r}")
+    return names
+
+
+def _visuals(model, rot, origins, triangles) -> dict | None:
+    """The model's visuals as triangles (:mod:`._meshes`), with the poses (F, nb, 12:
+    rotation row-major, origin) of the bodies that carry them and the world corners
+    (F, 8·instances, 3) of their boxes; None for a model without visuals."""
+    if not model.visuals:
+        return None
+    scene = _meshes.visual_scene(
+        model, _meshes.DEFAULT_TRIANGLES if triangles is None else triangles)
+    if not scene.instances:
+        return None
+    bodies = sorted({i.body for i in scene.instances})
+    nf = rot.shape[0]
+    pose = np.concatenate([rot[:, bodies].reshape(nf, len(bodies), 9), origins[:, bodies]],
+                          axis=2)
+    local = _meshes.bounds(scene)  # (k, 8, 3) in body frames
+    which = [i.body for i in scene.instances]
+    corners = origins[:, which, None, :] + np.einsum("fkij,kcj->fkci", rot[:, which], local)
+    return {"scene": scene, "bodies": bodies, "pose": pose,
+            "corners": corners.reshape(nf, -1, 3), "model": model}
+
+
 def build_drawing(
     model,
     times: np.ndarray,
@@ -235,27 +232,37 @@ def build_drawing(
     trails=None,
     shaking: np.ndarray | None = None,
     title: str = "",
+    gravity=None,
+    camera: Any = "auto",
+    show=None,
+    triangles: int | None = None,
 ) -> Drawing:
     """The :class:`Drawing` of ``model`` at configurations ``q`` (F, nq) and ``times`` (F,).
-    ``shaking``: the shaking force (F, 3) to draw as an arrow, or None."""
+    ``shaking``: the shaking force (F, 3) to draw as an arrow, or None. ``gravity``: sets
+    "up" (−g) for the camera and the ground. ``camera``, ``show``, ``triangles``: as in
+    :func:`~pointmass_dyn.viewer.animate`."""
     poses = model.body_poses(q)
     nf, nb = len(times), model.nbodies
     origins, jo = poses["origins"], poses["joint_origins"]
     rot = poses["rotations"]
     info = [model.body_info(b) for b in range(nb)]
     children = {b: [c for c in range(nb) if info[c][2] == b] for b in range(nb)}
+    floating = [b for b in range(nb) if info[b][2] < 0 and info[b][1] == "FreeFlyer"]
 
     # Links: parent origin → joint origin → body origin; a body without children extends
-    # to twice its centre of mass (a uniform rod's far end), so a leaf is not invisible.
+    # to twice its centre of mass (a uniform rod's far end), so a leaf is not invisible. A
+    # floating base is joined to nothing.
     segs = []
     for b in range(nb):
         parent = info[b][2]
-        start = origins[:, parent] if parent >= 0 else np.zeros((nf, 3))
-        segs.append((start, jo[:, b]))
-        segs.append((jo[:, b], origins[:, b]))
+        if b not in floating:
+            start = origins[:, parent] if parent >= 0 else np.zeros((nf, 3))
+            segs.append((start, jo[:, b]))
+            segs.append((jo[:, b], origins[:, b]))
         if not children[b]:
             com = np.asarray(model.body(b).com, dtype=float)
             segs.append((origins[:, b], origins[:, b] + 2 * rot[:, b] @ com))
+    segs = segs or [(origins[:, 0], origins[:, 0])]
     links = np.stack([np.stack(s, axis=1) for s in segs], axis=1)
     # Degenerate segments (length 0 in every frame) are dropped.
     keep = np.linalg.norm(links[:, :, 1] - links[:, :, 0], axis=-1).max(axis=0) > 1e-12
@@ -272,10 +279,22 @@ def build_drawing(
         trail[:, k] = origins[:, b] + rot[:, b] @ p
     trail_colour = np.array([c for _b, _p, c in specs]).reshape(-1, 3)
 
-    everything = np.concatenate([pts.reshape(-1, 3), links.reshape(-1, 3),
-                                 trail.reshape(-1, 3), np.zeros((1, 3))])
-    lo, hi = everything.min(axis=0), everything.max(axis=0)
+    visuals = _visuals(model, rot, origins, triangles)
+    # The subject, frame by frame: a robot's meshes and point masses, else everything drawn
+    # and the world origin.
+    if visuals is not None:
+        subject = [pts, visuals["corners"], trail]
+    else:
+        subject = [pts, links.reshape(nf, -1, 3), trail, np.zeros((nf, 1, 3))]
+    per_frame = np.concatenate(subject, axis=1)
+    lo_f, hi_f = per_frame.min(axis=1), per_frame.max(axis=1)
+    lo, hi = lo_f.min(axis=0), hi_f.max(axis=0)
     size = max(float(np.linalg.norm(hi - lo)), 1e-3)
+    up = _camera.up_from_gravity(gravity)
+    base = origins[:, floating[0]] if floating else None
+    cam = _camera.choose(camera, lo_f, hi_f, base, up)
+    if cam.get("track") is not None:  # sizes follow the subject, not its whole path
+        size = max(float(np.max(np.linalg.norm(hi_f - lo_f, axis=1))), 1e-3)
 
     # Radius ∝ |m|^(1/3) (a sphere of uniform density), the heaviest 2.5 % of the scene size.
     mmax = max(float(np.max(np.abs(m))), 1e-300)
@@ -309,17 +328,6 @@ def build_drawing(
         base = np.zeros((nf, 3))
         arrow = np.stack([base, base + scale * f], axis=1)
 
-    # Ground grid: a square under everything (world z up), spacing a round number.
-    raw = size / 8
-    step = min((f * 10 ** math.floor(math.log10(raw)) for f in (1, 2, 5, 10)),
-               key=lambda x: abs(math.log(x / raw)))
-    half = step * math.ceil(size / step / 2)
-    grid = {
-        "z": float(lo[2]) - 0.02 * size,
-        "center": [round(float(c) / step) * step for c in (lo[:2] + hi[:2]) / 2],
-        "half": half,
-        "step": step,
-    }
     return Drawing(
         times=np.asarray(times, dtype=float),
         spheres=pts,
@@ -336,10 +344,12 @@ def build_drawing(
         trails=trail,
         trail_colour=trail_colour,
         arrow=arrow,
-        grid=grid,
-        camera=default_camera(lo, hi),
+        grid=_camera.ground(lo, hi, up),
+        camera=cam,
         size=size,
         extent=max(float(np.max(hi - lo)), 1e-3),
         title=title,
         labels={"links": model.link_names, "loops": model.loop_names},
+        visuals=visuals,
+        show=_layers(show, visuals is not None),
     )
