@@ -755,3 +755,34 @@ def _dumps(obj: _Pickled) -> tuple[bytes, tuple[Callable[..., Any], ...]]:
 def _loads(data: bytes, callables: tuple[Callable[..., Any], ...] | None = None) -> _Pickled:
     """The object ``_dumps`` encoded; raises :class:`pointmass_dyn.errors.UnpicklingError`
     for data that is truncated, altered or of another format version."""
+
+def design_cells(
+    cell: float,
+    box: ArrayLike | None = None,
+    polygon: ArrayLike | None = None,
+    z: tuple[float, float] | None = None,
+    triangles: ArrayLike | None = None,
+) -> _Array:
+    """Centres (K, 3) of the cubes of side ``cell`` inside an envelope: a ``box`` (2, 3), a
+    ``polygon`` (P, 2) extruded over ``z``, or a closed mesh of ``triangles`` (T, 3, 3)."""
+
+def design_regressor(
+    model: Model,
+    q: ArrayLike,
+    v: ArrayLike,
+    a: ArrayLike,
+    gravity: ArrayLike | None,
+    about: ArrayLike,
+    actuated: list[int],
+) -> dict[str, Any]:
+    """The design maps along N states: ``data`` (N · rows, 10 · nlinks) (shaking force,
+    moment, driving forces, bearing forces per link and cut joint, per unit inertial
+    parameter), ``rows``, ``nactuated``, ``nlinks``, ``nloops``, ``parameters``."""
+
+def design_pins(model: Model, body: int | str) -> list[tuple[_Array, _Array]]:
+    """``(point, axis)`` of each revolute or ball joint on ``body``, in its frame."""
+
+def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
+    """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
+    ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel``,
+    ``iterations``, ``solve_time``."""

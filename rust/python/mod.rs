@@ -3,6 +3,7 @@ mod body;
 mod convert;
 mod dense;
 mod derivatives;
+mod design;
 mod effects;
 mod errors;
 mod events;
@@ -49,6 +50,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
     m.add_function(wrap_pyfunction!(rk45::rk45, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_regressor, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_pins, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_solve, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;
     Ok(())
