@@ -248,7 +248,9 @@ pub fn regressor(
         };
         for i in 0..nl {
             for (b, p) in pts.iter().enumerate() {
-                let (r, _, acc) = carried_points(&ws, &[(i, *p)])[0];
+                let Some((r, _, acc)) = carried_points(&ws, &[(i, *p)]).next() else {
+                    continue;
+                };
                 let f = acc - g;
                 col.iter_mut().for_each(|x| *x = 0.0);
                 col[0..3].copy_from_slice((-acc).as_slice());
