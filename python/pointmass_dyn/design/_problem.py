@@ -243,6 +243,10 @@ def balance(
         _number(w, f"objective['{k}']")
     for k, v in limits.items():
         _number(v, f"limits['{k}']")
+    if not any(float(w) > 0 for w in objective.values()) and not limits and not zero:
+        raise InvalidInputError(
+            f"objective: expected some weight > 0 (or limits= / zero=), got {objective}"
+        )
     if norm not in ("rms", "peak"):
         raise InvalidInputError(f"norm: expected 'rms' or 'peak', got {norm!r}")
     zero = tuple([zero] if isinstance(zero, str) else zero)
