@@ -1,2 +1,3 @@
 //! Hand-written factorisations, in one place. Each file says in one line why it is not
 //! nalgebra's (or faer's) own.
+pub mod pivoted_qr;
