@@ -9,7 +9,7 @@ use super::fixed_step::{Euler, FixedStep, Rk4};
 use super::method::{radau_available, Counts, Integrator, Method};
 use super::radau::Radau;
 use super::stepper::{StepOutcome, Stepper};
-use super::{fmt_time, InputError, OdeSystem, SolverOptions, Solution, Status, StiffnessCheck};
+use super::{fmt_time, InputError, OdeSystem, Solution, SolverOptions, Status, StiffnessCheck};
 
 /// Integrate `sys` over `t_span = (t0, t_end)` (backwards if `t_end < t0`) from `y0`,
 /// exactly as SciPy's `solve_ivp(..., method="RK45")` (whatever `opts.method` says).

@@ -38,19 +38,6 @@ impl PivotedQr {
     /// taken in order. Returns the rank; a NaN stops it (the callers check their results).
     pub fn factor(&mut self, cols: usize, pivot: bool, rel_tol: f64, abs_tol: f64) -> usize {
         let rows = self.a.nrows();
-        self.factor_rows(rows, cols, pivot, rel_tol, abs_tol)
-    }
-
-    /// [`factor`](Self::factor) of the leading `rows × cols` block (the other rows ignored;
-    /// [`apply_q`](Self::apply_q) is then not meaningful, the triangular solves are).
-    pub fn factor_rows(
-        &mut self,
-        rows: usize,
-        cols: usize,
-        pivot: bool,
-        rel_tol: f64,
-        abs_tol: f64,
-    ) -> usize {
         let a = &mut self.a;
         for (k, p) in self.perm[..cols].iter_mut().enumerate() {
             *p = k;
@@ -190,8 +177,15 @@ mod tests {
         qr.apply_q(&w, &mut x);
         for (j, c) in cols.iter().enumerate() {
             let got: f64 = c.iter().zip(&x).map(|(a, b)| a * b).sum();
-            let want = if j == 2 { b_of(0) + 2.0 * b_of(1) } else { b_of(j) };
-            assert!((got - want).abs() < 1e-14 * (1.0 + want.abs()), "{j}: {got} {want}");
+            let want = if j == 2 {
+                b_of(0) + 2.0 * b_of(1)
+            } else {
+                b_of(j)
+            };
+            assert!(
+                (got - want).abs() < 1e-14 * (1.0 + want.abs()),
+                "{j}: {got} {want}"
+            );
         }
         // A tolerance above the tiny column drops it.
         for (j, c) in cols.iter().enumerate() {

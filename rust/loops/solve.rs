@@ -12,8 +12,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::constraints::{self, Constraints, LoopKinematics};
 use super::factor::{self, back_substitute, forward_substitute};
-use crate::linalg::pivoted_qr::PivotedQr;
 use crate::error::{Error, Result};
+use crate::linalg::pivoted_qr::PivotedQr;
 use crate::model::Model;
 use crate::recursive::{self, Data};
 
@@ -26,10 +26,8 @@ pub struct LoopSolver {
     /// `Jᵀ` of the active rows, factored with column pivoting: the rank and the independent
     /// rows, decided on the Jacobian itself.
     qr_j: PivotedQr,
-    /// `[L⁻¹ J_Bᵀ; μ I]` of the independent rows, factored (no pivoting) for the multipliers.
+    /// `L⁻¹ J_Bᵀ` of the independent rows, factored (no pivoting) for the multipliers.
     qr_y: PivotedQr,
-    /// `Jᵀ λ` (nv).
-    force: Vec<f64>,
     pub lambda: DVector<f64>,
     rhs: DVector<f64>,
     /// Constraint rows with a non-zero Jacobian row at the last solve.
@@ -56,11 +54,8 @@ pub const RANK_REL_TOL: f64 = 1e-11;
 /// closed): a pivot below `SPURIOUS · ‖Φ‖₂` is taken as dependent (a margin of 10).
 pub const SPURIOUS: f64 = 1.0;
 
-/// Off the manifold, directions of `J` weaker than `DAMPING · ‖Φ‖₂` are enforced only in
-/// part, `σ²/(σ² + μ²)`, as an augmented Lagrangian's finite penalty does: near a singular
-/// position the accelerations then stay bounded and smooth in the integrator's stages instead
-/// of growing like `‖Φ‖/σ` (on the manifold `μ = 0`: exact).
-pub const DAMPING: f64 = 10.0;
+/// The residual-scaled tolerance never exceeds this fraction of the largest row of `J`.
+pub const SPURIOUS_CAP: f64 = 1e-3;
 
 impl LoopSolver {
     pub fn new(model: &Model) -> Self {
@@ -70,8 +65,7 @@ impl LoopSolver {
             cons: Constraints::new(model),
             mass: DMatrix::zeros(n, n),
             qr_j: PivotedQr::new(n, m),
-            qr_y: PivotedQr::new(n + m.min(n), m.min(n)),
-            force: vec![0.0; n],
+            qr_y: PivotedQr::new(n, m.min(n)),
             lambda: DVector::zeros(m),
             rhs: DVector::zeros(m),
             active: Vec::with_capacity(m),
@@ -114,13 +108,20 @@ impl LoopSolver {
                 self.active.push(r);
             }
         }
+        let mut largest: f64 = 0.0;
         for (k, &r) in self.active.iter().enumerate() {
+            let mut s = 0.0;
             for c in 0..n {
                 self.qr_j.a[(c, k)] = j[(r, c)];
+                s += j[(r, c)] * j[(r, c)];
             }
+            largest = largest.max(s);
         }
+        // Far from the manifold (assembling from a guess) the residual says nothing about
+        // spurious directions: capped, so that genuine rows are never dropped for it.
+        let spurious = (SPURIOUS * residual).min(SPURIOUS_CAP * largest.sqrt());
         self.qr_j
-            .factor(self.active.len(), true, RANK_REL_TOL, SPURIOUS * residual)
+            .factor(self.active.len(), true, RANK_REL_TOL, spurious)
     }
 }
 
@@ -164,11 +165,9 @@ pub fn constrained_forward_dynamics(
         lambda,
         work,
         step,
-        force,
         active,
         ..
     } = solver;
-    let mut y_max: f64 = 0.0;
     for k in 0..rank {
         let r = active[qr_j.perm[k]];
         for c in 0..n {
@@ -177,21 +176,9 @@ pub fn constrained_forward_dynamics(
         let ja: f64 = step.iter().zip(a.iter()).map(|(j, x)| j * x).sum();
         work[k] = -cons.gamma[r] - ja;
         forward_substitute(mass, step);
-        let mut col = qr_y.a.column_mut(k);
-        col.fill(0.0);
-        col.rows_mut(0, n).copy_from_slice(step);
-        y_max = y_max.max(col.norm());
+        qr_y.a.column_mut(k).copy_from_slice(step);
     }
-    // μ in Y's units (`L⁻¹` rescales J's columns): DAMPING ‖Φ‖ times |Y| / |J|.
-    let j_max = qr_j.a[(0, 0)].abs().max(f64::MIN_POSITIVE);
-    let mu = DAMPING * residual * y_max / j_max;
-    let rows = if mu > 0.0 { n + rank } else { n };
-    if mu > 0.0 {
-        for k in 0..rank {
-            qr_y.a[(n + k, k)] = mu;
-        }
-    }
-    qr_y.factor_rows(rows, rank, false, 0.0, 0.0);
+    qr_y.factor(rank, false, 0.0, 0.0);
     // Independent rows of J and a nonsingular L keep every column of Y independent; a
     // NaN state is the only way to lose one.
     if qr_y.rank < rank {
@@ -200,20 +187,14 @@ pub fn constrained_forward_dynamics(
             qr_y.rank
         )));
     }
-    // (YᵀY + μ²) λ_B = RᵀR λ_B = b; q̈ − a₀ = M⁻¹ J_Bᵀ λ_B.
+    // Y_Bᵀ z = b for z in range(Y_B): z = Q R⁻ᵀ b; λ_B = R⁻¹ R⁻ᵀ b (Y_B λ_B = z).
     qr_y.solve_rt(work);
+    qr_y.apply_q(work, step);
     qr_y.solve_r(work);
     lambda.fill(0.0);
-    force.fill(0.0);
     for k in 0..rank {
-        let r = active[qr_j.perm[k]];
-        lambda[r] = work[k];
-        for c in 0..n {
-            force[c] += cons.jacobian[(r, c)] * work[k];
-        }
+        lambda[active[qr_j.perm[k]]] = work[k];
     }
-    step.copy_from_slice(force);
-    forward_substitute(mass, step);
     back_substitute(mass, step);
     for (ai, si) in a.iter_mut().zip(step.iter()) {
         *ai += si;
@@ -222,7 +203,11 @@ pub fn constrained_forward_dynamics(
 }
 
 fn locked(model: &Model, rank: usize) -> Error {
-    let names: Vec<String> = model.loops.iter().map(|l| format!("'{}'", l.name)).collect();
+    let names: Vec<String> = model
+        .loops
+        .iter()
+        .map(|l| format!("'{}'", l.name))
+        .collect();
     Error::Singular(format!(
         "the cut joint(s) {} leave the mechanism no freedom of motion: the constraint Jacobian has rank {rank} = nv = {} (a locked mechanism, a structure); remove a cut joint or a constraint",
         names.join(", "),
@@ -392,6 +377,16 @@ fn min_norm_step(solver: &mut LoopSolver, residual: f64) -> usize {
     rank
 }
 
+/// The step is in the range of `J_fᵀ`, zero in the held coordinates up to the rounding of
+/// the reflectors: made exactly zero there.
+fn hold_fixed(step: &mut [f64], fixed: &[bool]) {
+    for (s, &f) in step.iter_mut().zip(fixed) {
+        if f {
+            *s = 0.0;
+        }
+    }
+}
+
 fn zero_fixed(jac: &mut DMatrix<f64>, fixed: &[bool]) {
     for (c, &f) in fixed.iter().enumerate() {
         if f {
@@ -430,6 +425,7 @@ pub fn assemble(
         // Directions weaker than the residual are left for later iterations (Bricard's
         // redundant row is spurious off the manifold): a truncated Gauss-Newton step.
         min_norm_step(&mut solver, norm);
+        hold_fixed(&mut solver.step, fixed);
         let mut scale = 1.0;
         let mut improved = false;
         for _ in 0..30 {
@@ -490,6 +486,7 @@ pub fn project_velocity_like(
     zero_fixed(&mut solver.cons.jacobian, fixed);
     solver.rhs.copy_from(&c);
     min_norm_step(&mut solver, residual);
+    hold_fixed(&mut solver.step, fixed);
     for (xi, s) in x.iter_mut().zip(solver.step.iter()) {
         *xi += s;
     }
