@@ -20,7 +20,7 @@ from scipy.integrate import solve_ivp
 from scipy.special import ellipj
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
-import andrews as andrews_ref  # noqa: E402
+import andrews as andrews_ref
 
 G = 9.81
 #: Times the benchmark pages report for another code (OpenSim 3.2, i5-4570; the OpenSim

@@ -1,6 +1,9 @@
 """Writes python/pointmass_dyn/scenes/iftomm_a02_nfourbar.toml (N = 40): `python benches/iftomm_scenes.py python/pointmass_dyn/scenes/iftomm_a02_nfourbar.toml`."""
+
+import sys
+
 N = 40
-I = 1.0 / 12.0
+INERTIA = 1.0 / 12.0
 lines = [
     'name = "iftomm_a02_nfourbar"',
     'description = """IFToMM multibody benchmark A02 (Library of Computational Benchmark Problems, \\',
@@ -24,7 +27,7 @@ for k in range(N + 1):
         f"translation = [{float(k)}, 0.0, 0.0]",
         "mass = 1.0",
         "com = [0.5, 0.0, 0.0]",
-        f"inertia_diag = [1e-08, {I!r}, {I!r}]",
+        f"inertia_diag = [1e-08, {INERTIA!r}, {INERTIA!r}]",
         "q0 = [1.5707963267948966]",
         "v0 = [-1.0]",
         "",
@@ -38,7 +41,7 @@ for k in range(N + 1):
             "translation = [1.0, 0.0, 0.0]",
             "mass = 1.0",
             "com = [0.5, 0.0, 0.0]",
-            f"inertia_diag = [1e-08, {I!r}, {I!r}]",
+            f"inertia_diag = [1e-08, {INERTIA!r}, {INERTIA!r}]",
             "q0 = [-1.5707963267948966]",
             "v0 = [1.0]",
             "",
@@ -67,5 +70,4 @@ lines += [
     "rtol = 1e-8",
     "atol = 1e-10",
 ]
-import sys
 open(sys.argv[1], "w").write("\n".join(lines) + "\n")
