@@ -18,7 +18,7 @@ import numpy as np
 import pointmass_dyn as pmd
 from dask.system import CPU_COUNT
 from distributed import Client, LocalCluster
-from pointmass_dyn.sweep import CHUNKS_PER_SLOT
+from pointmass_dyn._sweep import CHUNKS_PER_SLOT  # the default chunking, to report it
 
 
 def main():

@@ -6,7 +6,7 @@ behind the targets:
 * ≥ 20× faster than SciPy's best method on our right-hand side,
 
 at every accuracy decade from 1e-3 to 1e-10 (times read off each method's time–error curve by
-log–log interpolation, ``pointmass_dyn.work_precision_methods``).
+log–log interpolation, ``pointmass_dyn.benchmarking``).
 
     pip install mujoco              # optional peer
     python benches/work_precision_methods.py                      # ~5 min on 2 cores
@@ -28,8 +28,8 @@ import time
 
 import numpy as np
 import pointmass_dyn as pmd
-from pointmass_dyn import work_precision_methods as wpm
-from pointmass_dyn.work_precision import DEFAULT_TOLERANCES
+from pointmass_dyn import benchmarking
+from pointmass_dyn.benchmarking import DEFAULT_TOLERANCES
 
 SPANS = {"chain7": 2.0, "panda": 1.0, "pendulum_spatial": 10.0, "chain_stiff": 3.0}
 TARGET_MUJOCO, TARGET_SCIPY = 5.0, 20.0
@@ -76,7 +76,7 @@ def main():
         print(res.cheapest_table())
         print(f"({time.perf_counter() - t0:.0f} s; reference floor: ours at 1e-13 against "
               f"DOP853 {res.reference_check.get('err_dense', math.nan):.1e})")
-        for r in wpm.ratio_table(res.method_rows):
+        for r in benchmarking.ratio_table(res.method_rows):
             summary.append((name, r))
     print(f"\nall scenes: {time.perf_counter() - t_all:.0f} s\n")
     print("Targets: ours best >= 5x MuJoCo RK4 and >= 20x SciPy best, at equal error")
@@ -95,10 +95,10 @@ def main():
     print("met?: yes = both targets; MJ = the MuJoCo target missed; SP = the SciPy target "
           "missed; n/a = no method of ours reaches that error")
     if args.out:
-        wpm.write_methods_csv(results, args.out)
+        benchmarking.write_methods_csv(results, args.out)
         print(f"rows written to {args.out}")
     if args.plot:
-        wpm.plot_methods(results, args.plot)
+        benchmarking.plot_methods(results, args.plot)
         print(f"figure written to {args.plot}")
 
 

@@ -113,3 +113,18 @@ pub fn body_placement(model: &Model, st: &[LinkState], body: usize) -> Placement
         }
     }
 }
+
+/// World placements of every body at `q` (positions into `links`): rotations row-major
+/// (nbodies × 3 × 3) and origins (nbodies × 3).
+pub fn body_placements(model: &Model, q: &[f64], links: &mut [LinkState]) -> (Vec<f64>, Vec<f64>) {
+    positions(model, q, links);
+    let nb = model.nbodies();
+    let mut rots = Vec::with_capacity(9 * nb);
+    let mut origins = Vec::with_capacity(3 * nb);
+    for b in 0..nb {
+        let p = body_placement(model, links, b);
+        rots.extend_from_slice(p.rotation.transpose().as_slice());
+        origins.extend_from_slice(p.translation.as_slice());
+    }
+    (rots, origins)
+}

@@ -23,10 +23,12 @@ pub mod poses;
 pub mod reactions;
 pub mod recursive;
 pub mod scene;
+pub mod shared;
 pub mod simulate;
 pub mod spatial;
 pub mod trig;
 pub mod urdf;
+pub mod visual;
 
 #[cfg(feature = "python")]
 mod python;

@@ -58,6 +58,13 @@ pub struct Model {
     /// Cut joints closing kinematic loops (`crate::loops`); empty for a tree.
     #[serde(default)]
     pub loops: Vec<crate::loops::LoopJoint>,
+    /// What a viewer draws for each body (URDF `<visual>`, MJCF geoms); no part of the
+    /// dynamics. Checked against `bodies` by `check_structure`.
+    #[serde(default)]
+    pub visuals: Vec<crate::visual::Visual>,
+    /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; empty if none): titles.
+    #[serde(default)]
+    pub name: String,
     /// Body index by name, kept by `add_body` (the only place bodies are added or named), so
     /// name lookups and duplicate checks cost O(1) and building a model is linear. Derived
     /// from `bodies`: not serialised, rebuilt when deserialising.
@@ -78,6 +85,10 @@ struct ModelData {
     nv: usize,
     #[serde(default)]
     loops: Vec<crate::loops::LoopJoint>,
+    #[serde(default)]
+    visuals: Vec<crate::visual::Visual>,
+    #[serde(default)]
+    name: String,
 }
 
 impl TryFrom<ModelData> for Model {
@@ -95,6 +106,8 @@ impl TryFrom<ModelData> for Model {
             nq: d.nq,
             nv: d.nv,
             loops: d.loops,
+            visuals: d.visuals,
+            name: d.name,
             names,
             compiled: OnceLock::new(),
         };
@@ -458,6 +471,9 @@ impl Model {
                 "nq = {}, nv = {} where the joints give {nq}, {nv}",
                 self.nq, self.nv
             ));
+        }
+        for (k, v) in self.visuals.iter().enumerate() {
+            v.check(self.bodies.len(), &format!("visuals[{k}]"))?;
         }
         Ok(())
     }

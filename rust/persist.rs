@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 5;
+pub const FORMAT_VERSION: u8 = 6;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
@@ -314,6 +314,39 @@ mod tests {
         }];
         model.nq = 1;
         model.nv = 1;
+        model.name = "m".into();
+        use crate::visual::{Shape, Visual};
+        let shapes = [
+            Shape::Box {
+                size: Vec3::new(0.5, 0.25, 1.0),
+            },
+            Shape::Cylinder {
+                radius: 0.5,
+                length: 2.0,
+            },
+            Shape::Sphere { radius: 0.25 },
+            Shape::Capsule {
+                radius: 0.5,
+                length: 1.0,
+            },
+            Shape::Ellipsoid {
+                radii: Vec3::new(0.75, 0.5, 0.25),
+            },
+            Shape::Mesh {
+                uri: "package://p/m.stl".into(),
+                path: Some("/m.stl".into()),
+                scale: v(2.0),
+            },
+        ];
+        model.visuals = shapes
+            .into_iter()
+            .map(|shape| Visual {
+                body: 0,
+                origin: placement,
+                shape,
+                rgba: Some([0.5, 0.25, 1.0, 1.0]),
+            })
+            .collect();
         let col = |x: Vec<f64>| crate::effects::torque::column(x);
         let table = Table::new(vec![0.0, 1.0], col(vec![1.0, 2.0]), "t", "v").unwrap();
         let each = PerJoint::Each(vec![1.0, 2.0]);
@@ -439,7 +472,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (5, 1881, 0x96c4_1f8b_dda5_beb2),
+            (6, 2808, 0xe807_66c2_601c_a4d0),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

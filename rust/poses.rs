@@ -50,6 +50,26 @@ impl Poses {
         })
     }
 
+    /// The poses at `rows` configurations stacked row-major in `qs`, each checked first
+    /// (errors name `q[k]` when `stacked`, `q` otherwise).
+    pub fn at(model: &Model, qs: &[f64], rows: usize, stacked: bool) -> Result<Poses> {
+        let nq = model.nq;
+        for k in 0..rows {
+            model
+                .check_state(&qs[k * nq..(k + 1) * nq], None)
+                .map_err(|e| match stacked {
+                    true => e.map_arg(|name| format!("{name}[{k}]")),
+                    false => e,
+                })?;
+        }
+        let mut poses = Poses::new(model, rows)?;
+        for k in 0..rows {
+            crate::interrupt::check("body_poses")?;
+            poses.fill(model, k, &qs[k * nq..(k + 1) * nq]);
+        }
+        Ok(poses)
+    }
+
     /// Fills row `k` from `q` (checked by the caller: length nq, finite, unit quaternions).
     pub fn fill(&mut self, model: &Model, k: usize, q: &[f64]) {
         kinematics::positions(model, q, &mut self.links);

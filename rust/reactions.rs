@@ -8,9 +8,12 @@
 //! mechanism's linear and angular momenta exactly (docs/balancing.md). The quantities are
 //! linear in the point masses for a given motion, which is what makes balancing a least
 //! squares problem.
+use crate::error::Result;
 use crate::kinematics::{self, body_placement};
+use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::reference::{inverse_dynamics_world, Workspace};
+use crate::recursive::{self, Data};
 use crate::spatial::{angular, linear, shift_twist, stack, Mat3, Placement, Vec3, Vec6};
 
 /// World positions, velocities and accelerations of points carried by the links, with
@@ -193,4 +196,146 @@ pub fn add_point_force(
         }
         k = l.parent;
     }
+}
+
+/// Stacked states: `rows` rows of `q` (nq each), `v` and `a` (nv each), row-major.
+#[derive(Clone, Copy)]
+pub struct States<'a> {
+    pub rows: usize,
+    pub q: &'a [f64],
+    pub v: &'a [f64],
+    pub a: &'a [f64],
+}
+
+impl<'a> States<'a> {
+    /// Row `k`: `(q, v, a)`.
+    pub fn row(&self, model: &Model, k: usize) -> (&'a [f64], &'a [f64], &'a [f64]) {
+        let (nq, nv) = (model.nq, model.nv);
+        (
+            &self.q[k * nq..(k + 1) * nq],
+            &self.v[k * nv..(k + 1) * nv],
+            &self.a[k * nv..(k + 1) * nv],
+        )
+    }
+}
+
+/// Shaking force and moment about `about` at every state: `(forces, moments)`, 3 per row.
+pub fn shaking_of_states(
+    model: &Model,
+    states: &States<'_>,
+    about: &Vec3,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    let mut ws = Workspace::new(model);
+    let mut pm = PointMotion::default();
+    let rows = states.rows;
+    let (mut force, mut moment) = (Vec::with_capacity(3 * rows), Vec::with_capacity(3 * rows));
+    for k in 0..rows {
+        crate::interrupt::check("shaking")?;
+        let (q, v, a) = states.row(model, k);
+        point_motion(model, &mut ws, q, v, a, &mut pm);
+        let (f, m) = shaking(&pm, about);
+        force.extend_from_slice(f.as_slice());
+        moment.extend_from_slice(m.as_slice());
+    }
+    Ok((force, moment))
+}
+
+/// What the balancing regressors need per point and state ([`point_regressor`]), row-major
+/// (state, point, component).
+pub struct PointRegressor {
+    /// World positions (rows × P × 3).
+    pub positions: Vec<f64>,
+    /// World accelerations (rows × P × 3).
+    pub accelerations: Vec<f64>,
+    /// `J_pᵀ (a_p − g)` (rows × P × nv): the joint forces a unit mass at the point needs.
+    pub generalized: Vec<f64>,
+}
+
+/// Per state and point `(link, offset in the link frame)`: its world position, acceleration
+/// and the joint forces a unit mass there needs under gravity `g` (docs/balancing.md).
+pub fn point_regressor(
+    model: &Model,
+    states: &States<'_>,
+    points: &[(usize, Vec3)],
+    g: &Vec3,
+) -> Result<PointRegressor> {
+    let (rows, nv, np) = (states.rows, model.nv, points.len());
+    let mut ws = Workspace::new(model);
+    let mut out = PointRegressor {
+        positions: Vec::with_capacity(rows * np * 3),
+        accelerations: Vec::with_capacity(rows * np * 3),
+        generalized: vec![0.0; rows * np * nv],
+    };
+    for k in 0..rows {
+        crate::interrupt::check("point_regressor")?;
+        let (q, v, a) = states.row(model, k);
+        link_accelerations(model, &mut ws, q, v, a);
+        for (j, (r, _, ap)) in carried_points(&ws, points).iter().enumerate() {
+            out.positions.extend_from_slice(r.as_slice());
+            out.accelerations.extend_from_slice(ap.as_slice());
+            let row = &mut out.generalized[(k * np + j) * nv..(k * np + j + 1) * nv];
+            add_point_force(model, &ws, points[j].0, r, &(ap - g), row);
+        }
+    }
+    Ok(out)
+}
+
+/// What every joint transmits at one state ([`bearing_forces`]).
+pub struct BearingForces {
+    /// Per moving link `[force; moment]` the parent applies to the link's subtree at the
+    /// link origin, in the link's axes or the world's (nlinks × 6, row-major).
+    pub joints: Vec<f64>,
+    /// The cut joints' wrenches as `loops::constraint_forces` gives them (empty for a tree).
+    pub loops: Vec<[f64; 6]>,
+    /// The joint forces: with loops the `actuated` ones' as solved (exact zeros at the
+    /// passive joints, as the inverse dynamics), not the wrenches' projections (zero only to
+    /// round-off).
+    pub tau: Vec<f64>,
+}
+
+/// The bearing forces at `(q, v, a)` under gravity `g` and `external` link wrenches: the
+/// inverse dynamics, for a model with loops the forces of the `actuated` coordinates and the
+/// cut joints' wrenches that produce the motion (`loops::driving_forces`), then the joint
+/// wrenches with the cut wrenches applied; `world` gives them in world axes.
+#[allow(clippy::too_many_arguments)]
+pub fn bearing_forces(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    external: Option<&[Vec6]>,
+    actuated: Option<&[usize]>,
+    world: bool,
+) -> Result<BearingForces> {
+    let mut cut: Vec<[f64; 6]> = Vec::new();
+    let mut tau_loops: Option<Vec<f64>> = None;
+    if let Some(act) = actuated {
+        let mut data = Data::new(model);
+        let mut tree = vec![0.0; model.nv];
+        recursive::inverse_dynamics(model, &mut data, q, v, a, g, external, &mut tree);
+        let mut solver = LoopSolver::new(model);
+        let (tau_act, c) = loops::driving_forces(model, &mut solver, q, v, a, &tree, act)?;
+        (cut, tau_loops) = (c, Some(tau_act));
+    }
+    let mut ws = Workspace::new(model);
+    link_accelerations(model, &mut ws, q, v, a);
+    let mut all_ext =
+        external.map_or_else(|| vec![Vec6::zeros(); model.links.len()], <[_]>::to_vec);
+    add_cut_wrenches(model, &ws, &cut, &mut all_ext);
+    let mut tau = vec![0.0; model.nv];
+    let wrenches = joint_wrenches(model, &mut ws, q, v, a, g, Some(&all_ext), &mut tau);
+    let joints = wrenches
+        .iter()
+        .zip(&ws.links)
+        .flat_map(|(w, s)| {
+            let rot = if world { Mat3::identity() } else { s.rotation };
+            in_link_frame(&rot, w)
+        })
+        .collect();
+    Ok(BearingForces {
+        joints,
+        loops: cut,
+        tau: tau_loops.unwrap_or(tau),
+    })
 }

@@ -7,13 +7,22 @@ ever hard-coded.
 
 from __future__ import annotations
 
+import atexit
 import math
 import os
+import shutil
+import tempfile
 from dataclasses import dataclass, field
 
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
+
+# Simplified robot meshes are cached on disk (pmd.viewer): in a directory of this run, not
+# the user's ~/.cache.
+_MESH_CACHE = tempfile.mkdtemp(prefix="pmd-mesh-cache-")
+os.environ.setdefault("PMD_MESH_CACHE", _MESH_CACHE)
+atexit.register(shutil.rmtree, _MESH_CACHE, True)
 
 G = np.array([0.0, 0.0, -9.81])
 

@@ -10,6 +10,7 @@ import re
 import shutil
 import subprocess
 import time
+from types import SimpleNamespace
 
 import chromium_driver
 import numpy as np
@@ -243,8 +244,8 @@ def test_page_with_loops_and_shaking_arrow_and_its_error_report(tmp_path):
     assert data["cuts"]["count"] == 1 and data["arrow"] is not None
     # The arrow is the shaking force −Σ m a, scaled: its direction at each frame.
     arrow = _f32(data["arrow"]).reshape(10, 2, 3)
-    sub = animation._Sampled(info.times, animation.sample(result.t, result.q, info.times),
-                             animation.sample(result.t, result.v, info.times))
+    sub = SimpleNamespace(t=info.times, q=animation.sample(result.t, result.q, info.times),
+                          v=animation.sample(result.t, result.v, info.times))
     force = pmd.shaking(scene, sub).force
     d = arrow[:, 1] - arrow[:, 0]
     cos = np.sum(d * force, axis=1) / np.linalg.norm(d, axis=1) / np.linalg.norm(force, axis=1)

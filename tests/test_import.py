@@ -14,7 +14,8 @@ import numpy as np
 import pointmass_dyn as pmd
 import pytest
 from conftest import record, rel_err, robots_dir
-from pointmass_dyn.importers import _quat_wxyz_to_matrix, mujoco_state, pinocchio_q
+from pointmass_dyn._helpers import rotation_of_wxyz
+from pointmass_dyn.importers import mujoco_state, pinocchio_q
 
 TOL = 1e-9
 mujoco = pytest.importorskip("mujoco")
@@ -69,7 +70,7 @@ def ours_in_mujoco_coordinates(model, m, qpos, qvel, gravity):
     for j in range(m.njnt):
         if int(m.jnt_type[j]) == mujoco.mjtJoint.mjJNT_FREE:
             a, d = int(m.jnt_qposadr[j]), int(m.jnt_dofadr[j])
-            r = _quat_wxyz_to_matrix(qpos[a + 3 : a + 7])
+            r = rotation_of_wxyz(qpos[a + 3 : a + 7])
             t[d : d + 3, d : d + 3] = r.T
             # d/dt (Rᵀ v_w) at fixed v_w = −ω_body × (Rᵀ v_w)
             tdot_v[d : d + 3] = -np.cross(qvel[d + 3 : d + 6], r.T @ qvel[d : d + 3])
@@ -380,7 +381,7 @@ def check_free_against_mujoco(name, model, m, names):
         v = np.empty(model.nv)
         q[pq], v[pv] = q_mj, v_mj
         t = np.eye(m.nv)
-        r = _quat_wxyz_to_matrix(qpos[3:7])
+        r = rotation_of_wxyz(qpos[3:7])
         t[:3, :3] = r.T
         tdot_v = np.zeros(m.nv)
         tdot_v[:3] = -np.cross(qvel[3:6], r.T @ qvel[:3])

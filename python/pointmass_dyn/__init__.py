@@ -7,36 +7,12 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-from . import _pickle, errors  # noqa: F401  (_pickle registers the copyreg reducers)
+import sys
+
+from . import _pickle, benchmarking, design, errors, io, viewer  # noqa: F401  (_pickle: copyreg)
+from ._batch import BatchResult, simulate_batch
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
-from .animation import AnimationInfo, animate
-from .balancing import (
-    Balance,
-    Counterweight,
-    MotionAnalysis,
-    Shaking,
-    analyze_motion,
-    balance,
-    pareto_front,
-    prescribed_motion,
-    shaking,
-)
-from .batch import BatchResult, simulate_batch
-from .errors import (
-    InertiaError,
-    InvalidInputError,
-    LoopClosureError,
-    ModelStructureError,
-    NumericalError,
-    PointMassDynError,
-    SceneError,
-    SimulationError,
-    SingularityError,
-)
-from .importers import InertiaRepair, from_mujoco, from_pinocchio
-from .mjcf import to_mjcf
-from .scenes import builtin_scenes, load_scene
-from .simulation import (
+from ._simulation import (
     Damper,
     ExternalForce,
     Gravity,
@@ -56,9 +32,57 @@ from .simulation import (
     simulate,
     solve_ivp,
 )
-from .sweep import sweep
-from .viewer_meshcat import show as show_meshcat
-from .work_precision import WorkPrecision, work_precision
+from ._sweep import sweep
+from .benchmarking import WorkPrecision, work_precision
+from .design import (
+    Balance,
+    Counterweight,
+    MotionAnalysis,
+    Shaking,
+    analyze_motion,
+    balance,
+    pareto_front,
+    prescribed_motion,
+    shaking,
+)
+from .errors import (
+    InertiaError,
+    InvalidInputError,
+    LoopClosureError,
+    ModelStructureError,
+    NumericalError,
+    PointMassDynError,
+    SceneError,
+    SimulationError,
+    SingularityError,
+)
+from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
+from .scenes import builtin_scenes, load_scene
+from .viewer import AnimationInfo, animate
+from .viewer import show as show_meshcat
+
+#: Module paths of the flat layout before the subpackages, still importable (``import
+#: pointmass_dyn.mjcf``, ``from pointmass_dyn.work_precision import scene_rhs``): each is the
+#: subpackage that now holds its public names. Registered in ``sys.modules`` rather than kept
+#: as alias files, so that importing ``pointmass_dyn.work_precision`` never rebinds
+#: ``pmd.work_precision`` (the function) to a module.
+FORMER_MODULES = {
+    "animation": viewer,
+    "balancing": design,
+    "importers": io,
+    "mjcf": io,
+    "viewer_video": viewer,
+    "work_precision": benchmarking,
+    "work_precision_methods": benchmarking,
+}
+for _name, _module in FORMER_MODULES.items():
+    sys.modules.setdefault(f"{__name__}.{_name}", _module)
+
+
+def __getattr__(name: str):
+    if name in FORMER_MODULES:
+        return FORMER_MODULES[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def Revolute(axis) -> Joint:
@@ -97,6 +121,10 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "benchmarking",
+    "design",
+    "io",
+    "viewer",
     "AnimationInfo",
     "animate",
     "Balance",

@@ -351,6 +351,7 @@ class Model:
         *,
         root_joint: Literal["fixed", "free"] | None = None,
         repair: bool | dict[str, Any] | Any | None = None,
+        package_dirs: Any | None = None,
     ) -> Model:
         """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
         (q = angle), prismatic and fixed joints; joint order and body (link) names as
@@ -366,7 +367,25 @@ class Model:
         MuJoCo-style repairs of non-physical inertials (``balance_inertia``, ``bound_mass``,
         ``bound_inertia``) and welds moving joints that move no mass (``weld_massless``);
         every change is listed in one :class:`pointmass_dyn.errors.UrdfRepairWarning` and in
-        :attr:`repairs` (docs/robots.md)."""
+        :attr:`repairs` (docs/robots.md).
+
+        ``<visual>`` elements become :attr:`visuals`; mesh URIs (``package://...``) are looked
+        for in ``package_dirs`` (a path or a list), ``ROS_PACKAGE_PATH`` and the file's
+        ancestors, as Pinocchio does; one ``UrdfWarning`` names those not found
+        (docs/visualisation.md §2)."""
+    @property
+    def visuals(self) -> list[dict[str, Any]]:
+        """The visual geometry (URDF ``<visual>``, MJCF geoms): one dict per shape with
+        ``body``, ``body_name``, ``kind`` ("box", "cylinder", "sphere", "capsule",
+        "ellipsoid", "mesh"), ``rotation`` (3×3) and ``translation`` in the body frame, its
+        sizes (``size``; ``radius``, ``length``; ``radii``; ``uri``, ``path``, ``scale``) and
+        ``rgba`` or None (docs/visualisation.md §2)."""
+    @property
+    def name(self) -> str:
+        """The model's name (URDF ``<robot name>``, MJCF ``<mujoco model>``; "" if none)."""
+    def set_visuals(self, visuals: list[dict[str, Any]], *, name: str | None = None) -> None:
+        """Replaces :attr:`visuals` (dicts as it gives them; checked, errors name
+        ``visuals[k]``) and, if given, the name. The dynamics is unchanged."""
     @staticmethod
     def from_mujoco(mj_model: Any) -> Model:
         """Our model of a compiled ``mujoco.MjModel``: same as

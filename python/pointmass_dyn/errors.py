@@ -81,6 +81,12 @@ class UrdfRepairWarning(UrdfWarning):
     listing each link (before → after); ``model.repairs`` holds the same records."""
 
 
+class VisualWarning(UserWarning):
+    """Visual geometry an animation could not draw as the model says (a mesh file missing,
+    unreadable or too large, the mesh readers not installed): one warning per animation,
+    naming the files; those bodies are drawn with simple shapes."""
+
+
 class ModelImportWarning(UserWarning):
     """A model imported from MuJoCo or Pinocchio differs from its source in something that
     does not enter the mass matrix or bias forces (equality constraints, limits, ...)."""
@@ -103,4 +109,5 @@ __all__ = [
     "UrdfWarning",
     "UrdfRepairWarning",
     "ModelImportWarning",
+    "VisualWarning",
 ]

@@ -1,4 +1,5 @@
-"""Plots of trajectories (matplotlib, imported only when a plot is asked for)."""
+"""Plots (matplotlib, imported only when a plot is asked for): trajectories, shaking and
+balancing (:mod:`pointmass_dyn.design`), sweeps."""
 
 from __future__ import annotations
 
@@ -6,18 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-def _pyplot():
-    try:
-        import matplotlib
-
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise ImportError(
-            "plots need matplotlib: pip install 'pointmass-dyn[plot]'"
-        ) from exc
-    return plt
+from ._helpers import pyplot, rms
 
 
 def coordinate_labels(model) -> tuple[list[str], list[str], list[bool]]:
@@ -47,7 +37,7 @@ def coordinate_labels(model) -> tuple[list[str], list[str], list[bool]]:
 def plot_trajectory(result, model, path: str | Path | None = None, title: str = ""):
     """Joint coordinates and rates against time (angles in degrees), like the paper's
     Figs. 4 and 5, plus the energy when it was recorded. Saves to ``path`` if given."""
-    plt = _pyplot()
+    plt = pyplot()
     qlab, vlab, angular = coordinate_labels(model)
     rows = 3 if result.energy is not None else 2
     fig, axes = plt.subplots(rows, 1, figsize=(8, 2.6 * rows + 0.6), sharex=True)
@@ -81,18 +71,10 @@ def plot_trajectory(result, model, path: str | Path | None = None, title: str = 
 
 
 # --------------------------------------------------------------------------------------------
-# Shaking forces and balancing (balancing.py)
+# Shaking forces and balancing (pointmass_dyn.design)
 # --------------------------------------------------------------------------------------------
 _AXES = "xyz"
 _BEFORE, _AFTER = "#1f5fa8", "#d1495b"
-
-
-def _rms_of(x) -> float:
-    x = np.asarray(x, dtype=float)
-    if x.size == 0:
-        return 0.0
-    sq = x**2 if x.ndim == 1 else np.sum(x**2, axis=-1)
-    return float(np.sqrt(np.mean(sq)))
 
 
 def _planar_axis(*vectors) -> int | None:
@@ -247,7 +229,7 @@ def _polar_panel(ax, series, x_deg, plane, revolute: bool, closed: bool):
 
 def _balance_figure(analyses, labels, colors, title, caption, path):
     """The four panels for one or two analyses of one motion (before, after)."""
-    plt = _pyplot()
+    plt = pyplot()
     first = analyses[0]
     x, xlabel, tau_unit = _driver_axis(first)
     revolute = xlabel.endswith("(deg)")
@@ -263,7 +245,7 @@ def _balance_figure(analyses, labels, colors, title, caption, path):
 
     # (a) polar diagram of the shaking force.
     series = [
-        (f, c, s, f"{lab} (RMS {_g(_rms_of(f))} N)")
+        (f, c, s, f"{lab} (RMS {_g(rms(f))} N)")
         for f, c, s, lab in zip(forces, colors, styles, labels)
     ]
     _polar_panel(ax_a, series, x, _force_plane(*forces), revolute, closed)
@@ -272,7 +254,7 @@ def _balance_figure(analyses, labels, colors, title, caption, path):
     axis = _planar_axis(*moments)
     for m, c, s, lab in zip(moments, colors, styles, labels):
         y = m[:, axis] if axis is not None else np.linalg.norm(m, axis=1)
-        ax_b.plot(x, y, s, color=c, lw=1.6, label=f"{lab} (RMS {_g(_rms_of(m))} N·m)")
+        ax_b.plot(x, y, s, color=c, lw=1.6, label=f"{lab} (RMS {_g(rms(m))} N·m)")
     about = np.asarray(first.shaking.about, dtype=float)
     where = "the origin" if not np.any(about) else _point_text(about)
     name = f"M{_AXES[axis]}" if axis is not None else "|M|"
@@ -284,7 +266,7 @@ def _balance_figure(analyses, labels, colors, title, caption, path):
     for a_, c, s, lab in zip(analyses, colors, styles, labels):
         for n, (col, cname) in enumerate(cols):
             y = a_.tau[:, col]
-            text = f"{lab} (RMS {_g(_rms_of(y))} {tau_unit})"
+            text = f"{lab} (RMS {_g(rms(y))} {tau_unit})"
             if len(cols) > 1:
                 text = f"{cname}, {text}"
             ax_c.plot(x, y, s, color=c if len(cols) == 1 else f"C{n % 10}", lw=1.6, label=text)
@@ -368,18 +350,18 @@ _UNITS = {"force": "N", "moment": "N·m", "torque": "N·m"}
 def objective_rms(analysis, what: str) -> float:
     """RMS over the cycle of the shaking force, the shaking moment or the driving force(s)."""
     if what == "force":
-        return _rms_of(analysis.shaking.force)
+        return rms(analysis.shaking.force)
     if what == "moment":
-        return _rms_of(analysis.shaking.moment)
+        return rms(analysis.shaking.moment)
     cols = [c for c, _ in _driven_columns(analysis)]
-    return _rms_of(analysis.tau[:, cols])
+    return rms(analysis.tau[:, cols])
 
 
 def plot_pareto(front, objectives=("force", "moment"), path: str | Path | None = None,
                 title: str = ""):
     """The RMS pairs of a :func:`~pointmass_dyn.pareto_front` (one point per weighting), with
     the unbalanced mechanism's pair. Saves to ``path`` if given."""
-    plt = _pyplot()
+    plt = pyplot()
     first, second = objectives
     xs = np.array([objective_rms(b.after, first) for b in front])
     ys = np.array([objective_rms(b.after, second) for b in front])
@@ -426,7 +408,7 @@ def plot_sweep(t, q, success, q_labels, angular, param_names, param_values, coor
     25–75 % and 5–95 % bands, a few runs drawn), its final value against the first swept
     parameter (coloured by the second, if any; a histogram when nothing was swept), and
     the spread of every coordinate's final value. Angles in degrees. Saves to ``path``."""
-    plt = _pyplot()
+    plt = pyplot()
     q = np.asarray(q, dtype=float)[np.asarray(success, dtype=bool)]
     values = np.asarray(param_values, dtype=float).reshape(len(success), -1)
     values = values[np.asarray(success, dtype=bool)]

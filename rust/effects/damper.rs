@@ -1,5 +1,6 @@
 //! Viscous joint dampers: `τ = −c v` on every speed of each selected joint (isotropic on the
 //! 3 speeds of a spherical joint). Power `−c |v|²`.
+use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
     Sign,
@@ -7,9 +8,6 @@ use super::{
 use crate::error::Result;
 use crate::model::Model;
 use crate::spatial::Vec6;
-
-/// Keys of a `type = "damper"` table.
-pub(super) const KEYS: &[&str] = &["name", "joints", "damping"];
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Damper {
@@ -43,6 +41,26 @@ impl Damper {
 }
 
 impl Declaration for Damper {
+    fn parameters(&self) -> &'static [&'static str] {
+        &["damping"]
+    }
+    fn with_parameter(&self, _key: &str, values: &[f64]) -> Result<Effect> {
+        let c = PerJoint::from_values(values);
+        let e = Damper::new(self.name.clone(), self.joints.clone(), c)?;
+        Ok(Effect::Damper(e))
+    }
+    fn repr(&self) -> String {
+        let label = label_repr(self.label());
+        format!("Damper(joints={}{label})", joints_repr(&self.joints))
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[TomlType {
+            name: "damper",
+            keys: &["name", "joints", "damping"],
+            parse: |_, f| Damper::from_toml(f).map(Effect::Damper),
+        }];
+        TYPES
+    }
     fn kind(&self) -> Kind {
         Kind::Dampers
     }

@@ -12,6 +12,7 @@ use super::{
     check_values, resolve_body, Context, Declaration, Fields, ForceLaw, JointRef, Kind, Matrix,
     Sign,
 };
+use super::{label_repr, Effect, TomlType};
 use crate::error::{check_finite, Error, Result};
 use crate::model::Model;
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
@@ -53,7 +54,7 @@ pub enum ExternalLoad {
 }
 
 /// Keys of a `type = "external"` table.
-pub(super) const KEYS: &[&str] = &["name", "body", "point", "frame", "force", "moment", "time"];
+const KEYS: &[&str] = &["name", "body", "point", "frame", "force", "moment", "time"];
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct External {
@@ -195,6 +196,40 @@ impl External {
 }
 
 impl Declaration for External {
+    fn parameters(&self) -> &'static [&'static str] {
+        &[]
+    }
+    fn with_parameter(&self, key: &str, _values: &[f64]) -> Result<Effect> {
+        Err(Error::arg(
+            "parameter",
+            "none (an external load has no parameter to replace)",
+            format!("'{key}'"),
+        ))
+    }
+    fn repr(&self) -> String {
+        let p = self.point;
+        let rows = match &self.load {
+            ExternalLoad::Constant { .. } => String::new(),
+            ExternalLoad::Tabulated(t) => format!(", {} rows", t.len()),
+        };
+        format!(
+            "ExternalForce(body={}, point=[{}, {}, {}], frame='{}'{rows}{})",
+            self.body,
+            p.x,
+            p.y,
+            p.z,
+            self.frame.name(),
+            label_repr(self.label()),
+        )
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[TomlType {
+            name: "external",
+            keys: KEYS,
+            parse: |_, f| External::from_toml(f).map(Effect::External),
+        }];
+        TYPES
+    }
     fn kind(&self) -> Kind {
         Kind::External
     }

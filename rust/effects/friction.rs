@@ -3,6 +3,7 @@
 //! a quaternion spherical joint's angular velocity `ω`. `F` is the friction torque (N·m) or
 //! force (N) reached when sliding well above `v_eps`; below it the law is viscous with slope
 //! `F / v_eps`, which keeps the equations smooth (no stick-slip switching). Power ≤ 0.
+use super::{joints_repr, label_repr, one_number, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
     Sign,
@@ -14,9 +15,6 @@ use crate::spatial::Vec6;
 
 /// Default regularisation speed (rad/s or m/s).
 pub const DEFAULT_V_EPS: f64 = 1e-3;
-
-/// Keys of a `type = "friction"` table.
-pub(super) const KEYS: &[&str] = &["name", "joints", "friction", "v_eps"];
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Friction {
@@ -64,6 +62,38 @@ impl Friction {
 }
 
 impl Declaration for Friction {
+    fn parameters(&self) -> &'static [&'static str] {
+        &["friction", "v_eps"]
+    }
+    fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
+        let (friction, v_eps) = match key {
+            "friction" => (PerJoint::from_values(values), self.v_eps),
+            _ => (self.friction.clone(), one_number(key, values)?),
+        };
+        let e = Friction::new(
+            self.name.clone(),
+            self.joints.clone(),
+            friction,
+            Some(v_eps),
+        )?;
+        Ok(Effect::Friction(e))
+    }
+    fn repr(&self) -> String {
+        let label = label_repr(self.label());
+        let joints = joints_repr(&self.joints);
+        format!(
+            "JointFriction(joints={joints}, v_eps={}{label})",
+            self.v_eps
+        )
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[TomlType {
+            name: "friction",
+            keys: &["name", "joints", "friction", "v_eps"],
+            parse: |_, f| Friction::from_toml(f).map(Effect::Friction),
+        }];
+        TYPES
+    }
     fn kind(&self) -> Kind {
         Kind::Friction
     }

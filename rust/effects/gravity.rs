@@ -1,19 +1,77 @@
 //! Uniform gravity: `f_ij = m_ij g` on every point mass. It rides on the base twist rate
 //! `[0; −g]`, so the forward dynamics pays nothing for it; its potential energy is
 //! `−Σ m_ij g·x_ij` (zero at the world origin).
-use super::{required, Context, Effect, Fields, ForceLaw};
-use crate::error::Result;
+use super::{required, Context, Declaration, Effect, Fields, ForceLaw, Kind, TomlType};
+use crate::error::{check_finite, Error, Result};
 use crate::kinematics::LinkState;
+use crate::model::Model;
 use crate::spatial::{Vec3, Vec6};
 
-/// Keys of a `type = "gravity"` table.
-pub(super) const KEYS: &[&str] = &["g"];
+/// Gravity's declaration. [`Effect::Gravity`] stores its field inline (`{ g }`, the
+/// serialised shape since the first format), so the registry reaches it through
+/// [`Gravity::view`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(transparent)]
+pub struct Gravity {
+    /// m/s², world frame.
+    pub g: Vec3,
+}
 
-/// Parses a `type = "gravity"` table. Gravity has no declaration type of its own: it is
-/// `Effect::Gravity { g }`, and `Effect`'s methods treat it apart (`each_effect!`).
-pub(super) fn from_toml(f: &mut Fields<'_>) -> Result<Effect> {
-    let g = required(f.vec3("g")?, "g", "a 3-vector (m/s², world frame)")?;
-    Effect::gravity(g)
+impl Gravity {
+    pub fn new(g: Vec3) -> Result<Gravity> {
+        check_finite("gravity", g.as_slice())?;
+        Ok(Gravity { g })
+    }
+
+    /// `Effect::Gravity { g }`'s field as a declaration.
+    pub fn view(g: &Vec3) -> &Gravity {
+        // SAFETY: `Gravity` is `repr(transparent)` over `Vec3`: same layout and alignment.
+        unsafe { &*(g as *const Vec3 as *const Gravity) }
+    }
+
+    fn from_toml(f: &mut Fields<'_>) -> Result<Gravity> {
+        let g = required(f.vec3("g")?, "g", "a 3-vector (m/s², world frame)")?;
+        Gravity::new(g)
+    }
+}
+
+impl From<Gravity> for Effect {
+    fn from(d: Gravity) -> Effect {
+        Effect::Gravity { g: d.g }
+    }
+}
+
+impl Declaration for Gravity {
+    fn kind(&self) -> Kind {
+        Kind::Gravity
+    }
+    fn label(&self) -> Option<&str> {
+        None
+    }
+    fn build(&self, _model: &Model) -> Result<Box<dyn ForceLaw>> {
+        Ok(Box::new(GravityLaw { g: self.g }))
+    }
+    fn parameters(&self) -> &'static [&'static str] {
+        &["g"]
+    }
+    fn with_parameter(&self, _key: &str, values: &[f64]) -> Result<Effect> {
+        match values {
+            [x, y, z] => Effect::gravity(Vec3::new(*x, *y, *z)),
+            xs => Err(Error::arg("g", "3 values", format!("{} values", xs.len()))),
+        }
+    }
+    fn repr(&self) -> String {
+        let g = self.g;
+        format!("Gravity(g=[{}, {}, {}])", g.x, g.y, g.z)
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[TomlType {
+            name: "gravity",
+            keys: &["g"],
+            parse: |_, f| Gravity::from_toml(f).map(Effect::from),
+        }];
+        TYPES
+    }
 }
 
 pub struct GravityLaw {

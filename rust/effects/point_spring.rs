@@ -12,6 +12,7 @@
 //!
 //! The direction `u` is undefined where the points coincide (`l = 0`): the run stops there
 //! with an error, unless `l₀ = 0` and `c = 0`, where the force is `−k d` (smooth through 0).
+use super::{label_repr, one_number, Effect, TomlType};
 use super::{resolve_body, Context, Declaration, Fields, ForceLaw, JointRef, Kind};
 use crate::error::{check_finite, Error, Result};
 use crate::kinematics::{body_placement, LinkState};
@@ -19,7 +20,7 @@ use crate::model::Model;
 use crate::spatial::{angular, linear, Mat3, Vec3, Vec6};
 
 /// Keys of a `type = "point_spring"` table.
-pub(super) const KEYS: &[&str] = &[
+const KEYS: &[&str] = &[
     "name",
     "body_a",
     "point_a",
@@ -134,6 +135,50 @@ fn body_or_world(f: &mut Fields<'_>, key: &'static str) -> Result<Option<Option<
 }
 
 impl Declaration for PointSpring {
+    fn parameters(&self) -> &'static [&'static str] {
+        &["stiffness", "rest_length", "damping"]
+    }
+    fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
+        let x = one_number(key, values)?;
+        let pick = |k: &str, now: f64| if k == key { x } else { now };
+        let e = PointSpring::new(
+            self.name.clone(),
+            self.body_a.clone(),
+            self.point_a,
+            self.body_b.clone(),
+            self.point_b,
+            pick("stiffness", self.stiffness),
+            pick("rest_length", self.rest_length),
+            pick("damping", self.damping),
+        )?;
+        Ok(Effect::PointSpring(e))
+    }
+    fn repr(&self) -> String {
+        let body = |b: &Option<JointRef>| match b {
+            Some(r) => r.to_string(),
+            None => "'world'".to_string(),
+        };
+        let p = |x: &Vec3| format!("[{}, {}, {}]", x.x, x.y, x.z);
+        format!(
+            "PointSpring(body_a={}, point_a={}, body_b={}, point_b={}, stiffness={}, rest_length={}, damping={}{})",
+            body(&self.body_a),
+            p(&self.point_a),
+            body(&self.body_b),
+            p(&self.point_b),
+            self.stiffness,
+            self.rest_length,
+            self.damping,
+            label_repr(self.label()),
+        )
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[TomlType {
+            name: "point_spring",
+            keys: KEYS,
+            parse: |_, f| PointSpring::from_toml(f).map(Effect::PointSpring),
+        }];
+        TYPES
+    }
     fn kind(&self) -> Kind {
         Kind::Springs
     }

@@ -4,6 +4,7 @@
 //! rest orientation: `τ = −k θ` (body-frame speeds, which is exactly `−∂V/∂` of the potential
 //! `½ k |θ|²` since `θ` is an eigenvector of the SO(3) Jacobians). Euler-angle
 //! (`SphericalZYZ`) joints are refused: use the quaternion joint.
+use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
     Sign,
@@ -13,9 +14,6 @@ use crate::joint::Joint;
 use crate::kinematics::LinkState;
 use crate::model::Model;
 use crate::spatial::Vec6;
-
-/// Keys of a `type = "spring"` table.
-pub(super) const KEYS: &[&str] = &["name", "joints", "stiffness", "rest"];
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Spring {
@@ -58,6 +56,30 @@ impl Spring {
 }
 
 impl Declaration for Spring {
+    fn parameters(&self) -> &'static [&'static str] {
+        &["stiffness", "rest"]
+    }
+    fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
+        let x = PerJoint::from_values(values);
+        let (k, rest) = match key {
+            "stiffness" => (x, self.rest.clone()),
+            _ => (self.stiffness.clone(), x),
+        };
+        let e = Spring::new(self.name.clone(), self.joints.clone(), k, Some(rest))?;
+        Ok(Effect::Spring(e))
+    }
+    fn repr(&self) -> String {
+        let label = label_repr(self.label());
+        format!("Spring(joints={}{label})", joints_repr(&self.joints))
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[TomlType {
+            name: "spring",
+            keys: &["name", "joints", "stiffness", "rest"],
+            parse: |_, f| Spring::from_toml(f).map(Effect::Spring),
+        }];
+        TYPES
+    }
     fn kind(&self) -> Kind {
         Kind::Springs
     }

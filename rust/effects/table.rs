@@ -82,6 +82,25 @@ impl Table {
         })
     }
 
+    /// The same times with new values (row-major, one row per time; a batch's parameter).
+    pub fn with_values(&self, values: &[f64]) -> Result<Table> {
+        let (rows, cols) = (self.time().len(), self.cols());
+        if values.len() != rows * cols {
+            return Err(Error::arg(
+                "values",
+                format!("{rows} × {cols} values (the table's times × columns)"),
+                format!("{} values", values.len()),
+            ));
+        }
+        let m = Matrix {
+            values: values.to_vec(),
+            rows,
+            cols,
+            one_d: cols == 1,
+        };
+        Table::new(self.time().to_vec(), m, "time", "values")
+    }
+
     pub fn len(&self) -> usize {
         self.time.len()
     }

@@ -5,7 +5,9 @@
 use super::*;
 use crate::body::RigidBody;
 use crate::joint::rot_z;
+use crate::joint::Joint;
 use crate::kinematics;
+use crate::recursive::{self, Data};
 use crate::simulate::Dynamics;
 use crate::spatial::{Mat3, Placement};
 

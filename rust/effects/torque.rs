@@ -9,6 +9,7 @@ use std::any::Any;
 use std::sync::Arc;
 
 use super::table::Table;
+use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, JointSlot, Kind,
     Matrix, PerJoint, Sign,
@@ -116,9 +117,9 @@ pub enum TorqueLaw {
 }
 
 /// Keys of `type = "torque"`, `"tabulated_torque"` and `"pd_torque"` tables.
-pub(super) const KEYS_CONSTANT: &[&str] = &["name", "joints", "tau"];
-pub(super) const KEYS_TABULATED: &[&str] = &["name", "joints", "time", "values"];
-pub(super) const KEYS_PD: &[&str] = &["name", "joints", "kp", "kd", "time", "reference"];
+const KEYS_CONSTANT: &[&str] = &["name", "joints", "tau"];
+const KEYS_TABULATED: &[&str] = &["name", "joints", "time", "values"];
+const KEYS_PD: &[&str] = &["name", "joints", "kp", "kd", "time", "reference"];
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Torque {
@@ -219,6 +220,69 @@ impl Torque {
 }
 
 impl Declaration for Torque {
+    fn parameters(&self) -> &'static [&'static str] {
+        match self.law {
+            TorqueLaw::Constant(_) => &["tau"],
+            TorqueLaw::Tabulated(_) => &["values"],
+            TorqueLaw::Pd { .. } => &["kp", "kd"],
+            TorqueLaw::Function(_) => &[],
+        }
+    }
+    fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
+        let (name, joints) = (self.name.clone(), self.joints.clone());
+        let e = match (&self.law, key) {
+            (TorqueLaw::Tabulated(t), _) => {
+                Torque::tabulated(name, joints, t.with_values(values)?)?
+            }
+            (TorqueLaw::Pd { kp, kd, reference }, _) => {
+                let (kp, kd) = match key {
+                    "kp" => (PerJoint::from_values(values), kd.clone()),
+                    _ => (kp.clone(), PerJoint::from_values(values)),
+                };
+                Torque::pd(name, joints, kp, kd, reference.clone())?
+            }
+            // Constant (`tau`; a function has no parameter, `Effect::with_parameter` says so).
+            _ => Torque::constant(name, joints, PerJoint::from_values(values))?,
+        };
+        Ok(Effect::Torque(e))
+    }
+    fn repr(&self) -> String {
+        let label = label_repr(self.label());
+        let joints = joints_repr(&self.joints);
+        match &self.law {
+            TorqueLaw::Constant(_) => format!("JointTorque(joints={joints}{label})"),
+            TorqueLaw::Tabulated(t) => {
+                format!("TabulatedTorque(joints={joints}, {} rows{label})", t.len())
+            }
+            TorqueLaw::Pd { reference, .. } => {
+                format!("PDTorque(joints={joints}, {} rows{label})", reference.len())
+            }
+            TorqueLaw::Function(_) => match self.label() {
+                Some(l) => format!("TorqueFunction(name='{l}')"),
+                None => "TorqueFunction()".to_string(),
+            },
+        }
+    }
+    fn toml_types() -> &'static [TomlType] {
+        const TYPES: &[TomlType] = &[
+            TomlType {
+                name: "torque",
+                keys: KEYS_CONSTANT,
+                parse: |ty, f| Torque::from_toml(ty, f).map(Effect::Torque),
+            },
+            TomlType {
+                name: "tabulated_torque",
+                keys: KEYS_TABULATED,
+                parse: |ty, f| Torque::from_toml(ty, f).map(Effect::Torque),
+            },
+            TomlType {
+                name: "pd_torque",
+                keys: KEYS_PD,
+                parse: |ty, f| Torque::from_toml(ty, f).map(Effect::Torque),
+            },
+        ];
+        TYPES
+    }
     fn kind(&self) -> Kind {
         Kind::Torques
     }

@@ -10,8 +10,8 @@ use super::convert::{array, int_arg, opt_real, real, shape_str, vec3, vector};
 use super::errors::{invalid, IntoPyResult};
 use super::options::given;
 use crate::effects::{
-    Damper, Effect, External, ExternalLoad, Frame, Friction, JointRef, Matrix, PerJoint,
-    PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLaw,
+    Damper, Effect, External, Frame, Friction, JointRef, Matrix, PerJoint, PointSpring, Spring,
+    Table, Torque, TorqueFunction,
 };
 
 #[pyclass(
@@ -422,78 +422,7 @@ impl PyEffect {
         }
     }
     fn __repr__(&self) -> String {
-        let label = match self.inner.label() {
-            Some(l) => format!(", name='{l}'"),
-            None => String::new(),
-        };
-        let joints = |j: &Option<Vec<JointRef>>| match j {
-            None => "all".to_string(),
-            Some(v) => format!(
-                "[{}]",
-                v.iter()
-                    .map(|r| r.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        };
-        match &self.inner {
-            Effect::Gravity { g } => format!("Gravity(g=[{}, {}, {}])", g.x, g.y, g.z),
-            Effect::Spring(e) => format!("Spring(joints={}{label})", joints(&e.joints)),
-            Effect::Damper(e) => format!("Damper(joints={}{label})", joints(&e.joints)),
-            Effect::Friction(e) => format!(
-                "JointFriction(joints={}, v_eps={}{label})",
-                joints(&e.joints),
-                e.v_eps
-            ),
-            Effect::Torque(e) => match &e.law {
-                TorqueLaw::Constant(_) => {
-                    format!("JointTorque(joints={}{label})", joints(&e.joints))
-                }
-                TorqueLaw::Tabulated(t) => format!(
-                    "TabulatedTorque(joints={}, {} rows{label})",
-                    joints(&e.joints),
-                    t.len()
-                ),
-                TorqueLaw::Pd { reference, .. } => format!(
-                    "PDTorque(joints={}, {} rows{label})",
-                    joints(&e.joints),
-                    reference.len()
-                ),
-                TorqueLaw::Function(_) => match self.inner.label() {
-                    Some(l) => format!("TorqueFunction(name='{l}')"),
-                    None => "TorqueFunction()".to_string(),
-                },
-            },
-            Effect::External(e) => format!(
-                "ExternalForce(body={}, point=[{}, {}, {}], frame='{}'{}{label})",
-                e.body,
-                e.point.x,
-                e.point.y,
-                e.point.z,
-                e.frame.name(),
-                match &e.load {
-                    ExternalLoad::Constant { .. } => String::new(),
-                    ExternalLoad::Tabulated(t) => format!(", {} rows", t.len()),
-                }
-            ),
-            Effect::PointSpring(e) => {
-                let body = |b: &Option<JointRef>| match b {
-                    Some(r) => r.to_string(),
-                    None => "'world'".to_string(),
-                };
-                let p = |x: &crate::spatial::Vec3| format!("[{}, {}, {}]", x.x, x.y, x.z);
-                format!(
-                    "PointSpring(body_a={}, point_a={}, body_b={}, point_b={}, stiffness={}, rest_length={}, damping={}{label})",
-                    body(&e.body_a),
-                    p(&e.point_a),
-                    body(&e.body_b),
-                    p(&e.point_b),
-                    e.stiffness,
-                    e.rest_length,
-                    e.damping
-                )
-            }
-        }
+        self.inner.repr()
     }
     fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {
         self.inner == other.inner

@@ -7,6 +7,7 @@ mod effects;
 mod errors;
 mod events;
 mod jac;
+mod joint;
 mod loops;
 mod model;
 mod options;
@@ -16,6 +17,7 @@ mod rk45;
 mod scene;
 mod signals;
 mod simulate;
+mod visuals;
 
 use pyo3::prelude::*;
 
@@ -24,7 +26,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add_class::<body::PyRigidBody>()?;
     m.add_class::<body::PyPointMasses>()?;
-    m.add_class::<model::PyJoint>()?;
+    m.add_class::<joint::PyJoint>()?;
     m.add_class::<model::PyModel>()?;
     m.add_class::<effects::PyEffect>()?;
     m.add_class::<events::PyStateEvent>()?;

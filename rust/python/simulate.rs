@@ -10,9 +10,10 @@ use super::errors::{check_result, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
 use super::options::{given, method_args, options, set_method, set_outcome, step_args, t_span_arg};
 use super::scene::{disable_arg, PyScene};
-use super::signals::Watch;
+use super::signals::{Watch, INTERVAL};
 use crate::integrator::Event;
 use crate::scene::Scene;
+use crate::simulate::batch::StateRows;
 use crate::simulate::{simulate, Dynamics, Progress, Record, StateEvent, Trajectory};
 
 /// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
@@ -357,41 +358,13 @@ pub fn simulate_batch<'py>(
     method: Option<&str>,
     dt: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
-    use crate::simulate::batch::{run_batch, Control, Run};
+    use crate::simulate::batch::{broadcast, run_batch_polled};
     if scenes.is_empty() {
         return Err(invalid(py, "scenes", "at least one Scene", "none"));
     }
     let scenes: Vec<Scene> = scenes.iter().map(|s| s.inner.clone()).collect();
     let q0s = batch_states("q0", q0, scenes[0].model.nq)?;
     let v0s = batch_states("v0", v0, scenes[0].model.nv)?;
-    if (q0s.is_some() || v0s.is_some())
-        && scenes
-            .iter()
-            .any(|s| (s.model.nq, s.model.nv) != (scenes[0].model.nq, scenes[0].model.nv))
-    {
-        return Err(invalid(
-            py,
-            "q0, v0",
-            "scenes of one model size when initial states are given",
-            "scenes of different sizes",
-        ));
-    }
-    let rows = |x: &Option<BatchStates>| x.as_ref().map_or(1, |b| b.rows);
-    let count = rows(&q0s).max(rows(&v0s)).max(scenes.len());
-    for (arg, n) in [
-        ("q0", rows(&q0s)),
-        ("v0", rows(&v0s)),
-        ("scenes", scenes.len()),
-    ] {
-        if n != 1 && n != count {
-            return Err(invalid(
-                py,
-                arg,
-                format!("1 or {count} runs (as the other batch arguments)"),
-                format!("{n}"),
-            ));
-        }
-    }
     let events = SceneEvents::parse(py, events)?;
     if !events.python.is_empty() {
         return Err(invalid(
@@ -429,69 +402,24 @@ pub fn simulate_batch<'py>(
         )?;
         resolved.push(requested.resolve(&s.settings, base).py(py)?);
     }
-    let pick = |k: usize, n: usize| if n == 1 { 0 } else { k };
-    let runs: Vec<Run<'_>> = (0..count)
-        .map(|k| {
-            let s = &scenes[pick(k, scenes.len())];
-            let r = &resolved[pick(k, scenes.len())];
-            Run {
-                model: &s.model,
-                effects: &s.effects,
-                disabled: r.disabled,
-                q0: q0s.as_ref().map_or(&s.q0[..], |b| b.row(pick(k, b.rows))),
-                v0: v0s.as_ref().map_or(&s.v0[..], |b| b.row(pick(k, b.rows))),
-                t_span: r.t_span,
-                opts: &r.opts,
-            }
-        })
-        .collect();
-    let control = Control::default();
-    let mut raised: Option<PyErr> = None;
+    let runs = broadcast(&scenes, &resolved, q0s.as_ref(), v0s.as_ref()).py(py)?;
+    let count = runs.len();
+    let record = Record {
+        energy,
+        power: false,
+    };
+    // Ctrl-C and the caller's progress from this thread, by elapsed time (signals::Watch).
+    let mut watch = Watch::default();
     take_callback_error();
     let results = py.detach(|| {
-        // The batch wakes this thread when it ends, so that the call returns then, not at
-        // the next 50 ms tick (on average 25 ms idle per call otherwise).
-        let caller = std::thread::current();
-        let finished = std::sync::atomic::AtomicBool::new(false);
-        std::thread::scope(|sc| {
-            let handle = sc.spawn(|| {
-                let record = Record {
-                    energy,
-                    power: false,
-                };
-                let out = run_batch(&runs, &events.state, record, threads, &control);
-                finished.store(true, std::sync::atomic::Ordering::Release);
-                caller.unpark();
-                out
-            });
-            // Ctrl-C and the caller's progress from this thread, every 50 ms.
-            while !finished.load(std::sync::atomic::Ordering::Acquire) {
-                std::thread::park_timeout(std::time::Duration::from_millis(50));
-                if finished.load(std::sync::atomic::Ordering::Acquire) {
-                    break;
-                }
-                if raised.is_some() {
-                    continue;
-                }
-                let done = control.done.load(std::sync::atomic::Ordering::Relaxed);
-                let polled = Python::attach(|py| {
-                    py.check_signals()?;
-                    match &progress {
-                        Some(cb) => cb.bind(py).call1((done, count)).map(|_| ()),
-                        None => Ok(()),
-                    }
-                });
-                if let Err(e) = polled {
-                    raised = Some(e);
-                    control
-                        .stop
-                        .store(true, std::sync::atomic::Ordering::Relaxed);
-                }
-            }
-            handle.join()
+        run_batch_polled(&runs, &events.state, record, threads, INTERVAL, |done| {
+            watch.poll(|py| match &progress {
+                Some(cb) => cb.bind(py).call1((done, count)).map(|_| ()),
+                None => Ok(()),
+            })
         })
     });
-    if let Some(e) = raised.or(take_callback_error()) {
+    if let Some(e) = watch.error.take().or(take_callback_error()) {
         return Err(e);
     }
     // A last report at the end, so a caller's progress bar always reaches B.
@@ -515,38 +443,16 @@ pub fn simulate_batch<'py>(
 }
 
 /// Per-run initial states: one (1-D) for every run, or a row per run (2-D `(B, width)`).
-struct BatchStates {
-    rows: usize,
-    width: usize,
-    data: Vec<f64>,
-}
-
-impl BatchStates {
-    fn row(&self, k: usize) -> &[f64] {
-        &self.data[k * self.width..(k + 1) * self.width]
-    }
-}
-
 fn batch_states(
     arg: &str,
     obj: Option<&Bound<'_, PyAny>>,
     width: usize,
-) -> PyResult<Option<BatchStates>> {
+) -> PyResult<Option<StateRows>> {
     let Some(obj) = given(obj) else {
         return Ok(None);
     };
     let (shape, data) = super::convert::array(obj, arg)?;
-    let rows = match shape.as_slice() {
-        [w] if *w == width => 1,
-        [b, w] if *w == width && *b >= 1 => *b,
-        _ => {
-            return Err(invalid(
-                obj.py(),
-                arg,
-                format!("shape ({width},) or (B, {width})"),
-                super::convert::shape_str(&shape),
-            ))
-        }
-    };
-    Ok(Some(BatchStates { rows, width, data }))
+    StateRows::new(arg, &shape, data, width)
+        .py(obj.py())
+        .map(Some)
 }

@@ -290,7 +290,7 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
         .urdf_repair
         .unwrap_or(false)
         .then(crate::urdf::Repair::default);
-    let urdf = crate::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref())
+    let urdf = crate::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref(), &[])
         .map_err(|e| ctx.core("urdf", e))?;
     let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
     Ok((urdf.model, effects))

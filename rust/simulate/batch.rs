@@ -4,12 +4,15 @@
 //! own result.
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
+use std::time::Duration;
 
+use super::settings::Resolved;
 use super::{simulate, Record, StateEvent, Trajectory};
 use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};
 use crate::integrator::SolverOptions;
 use crate::model::Model;
+use crate::scene::Scene;
 
 /// One run of a batch: its model and effects (a scene's, or a variant of it), its initial
 /// state, span and integrator options.
@@ -94,4 +97,129 @@ pub fn run_batch(
                 .unwrap_or_else(|| Err(Error::Interrupted("the run did not finish".into())))
         })
         .collect()
+}
+
+/// Per-run initial states: one row for every run, or a row per run (`rows × width`).
+pub struct StateRows {
+    pub rows: usize,
+    pub width: usize,
+    pub data: Vec<f64>,
+}
+
+impl StateRows {
+    /// An array of `shape` (`(width,)` or `(B, width)`) and its row-major `data`; errors
+    /// name `arg`.
+    pub fn new(arg: &str, shape: &[usize], data: Vec<f64>, width: usize) -> Result<StateRows> {
+        let rows = match shape {
+            [w] if *w == width => 1,
+            [b, w] if *w == width && *b >= 1 => *b,
+            _ => {
+                let dims: Vec<String> = shape.iter().map(|s| s.to_string()).collect();
+                let got = match shape {
+                    [n] => format!("shape ({n},)"),
+                    _ => format!("shape ({})", dims.join(", ")),
+                };
+                return Err(Error::arg(
+                    arg,
+                    format!("shape ({width},) or (B, {width})"),
+                    got,
+                ));
+            }
+        };
+        Ok(StateRows { rows, width, data })
+    }
+
+    fn row(&self, k: usize) -> &[f64] {
+        let k = if self.rows == 1 { 0 } else { k };
+        &self.data[k * self.width..(k + 1) * self.width]
+    }
+}
+
+/// The runs of a batch: one per scene, per row of `q0` or per row of `v0` (each of these
+/// counts 1 or the batch's size; a count of 1 is every run's), each scene with its own
+/// `resolved` settings. Initial states need scenes of one model size. Errors name the
+/// argument at fault.
+pub fn broadcast<'a>(
+    scenes: &'a [Scene],
+    resolved: &'a [Resolved],
+    q0: Option<&'a StateRows>,
+    v0: Option<&'a StateRows>,
+) -> Result<Vec<Run<'a>>> {
+    let Some(first) = scenes.first() else {
+        return Err(Error::arg("scenes", "at least one Scene", "none"));
+    };
+    // A scene per run, or one for all: the settings resolved for each.
+    debug_assert_eq!(resolved.len(), scenes.len());
+    let size = |s: &Scene| (s.model.nq, s.model.nv);
+    if (q0.is_some() || v0.is_some()) && scenes.iter().any(|s| size(s) != size(first)) {
+        return Err(Error::arg(
+            "q0, v0",
+            "scenes of one model size when initial states are given",
+            "scenes of different sizes",
+        ));
+    }
+    let rows = |x: Option<&StateRows>| x.map_or(1, |b| b.rows);
+    let count = rows(q0).max(rows(v0)).max(scenes.len());
+    for (arg, n) in [("q0", rows(q0)), ("v0", rows(v0)), ("scenes", scenes.len())] {
+        if n != 1 && n != count {
+            return Err(Error::arg(
+                arg,
+                format!("1 or {count} runs (as the other batch arguments)"),
+                format!("{n}"),
+            ));
+        }
+    }
+    let pick = |k: usize| if scenes.len() == 1 { 0 } else { k };
+    Ok((0..count)
+        .map(|k| {
+            let (s, r) = (&scenes[pick(k)], &resolved[pick(k)]);
+            Run {
+                model: &s.model,
+                effects: &s.effects,
+                disabled: r.disabled,
+                q0: q0.map_or(&s.q0[..], |b| b.row(k)),
+                v0: v0.map_or(&s.v0[..], |b| b.row(k)),
+                t_span: r.t_span,
+                opts: &r.opts,
+            }
+        })
+        .collect())
+}
+
+/// [`run_batch`] on a thread of its own while this thread calls `poll(done)` every `tick`
+/// with the number of finished runs; `poll` returning `false` stops the batch (runs under
+/// way end at their next progress check, runs not started do not start). The batch wakes
+/// this thread when it ends, so the call returns then, not at the next tick. `Err` if a
+/// batch thread panicked.
+pub fn run_batch_polled(
+    runs: &[Run<'_>],
+    state_events: &[StateEvent],
+    record: Record,
+    threads: usize,
+    tick: Duration,
+    mut poll: impl FnMut(usize) -> bool,
+) -> std::thread::Result<Vec<Result<Trajectory>>> {
+    let control = Control::default();
+    let caller = std::thread::current();
+    let finished = AtomicBool::new(false);
+    std::thread::scope(|sc| {
+        let handle = sc.spawn(|| {
+            let out = run_batch(runs, state_events, record, threads, &control);
+            finished.store(true, Ordering::Release);
+            caller.unpark();
+            out
+        });
+        let mut stopped = false;
+        while !finished.load(Ordering::Acquire) {
+            std::thread::park_timeout(tick);
+            if finished.load(Ordering::Acquire) || stopped {
+                continue;
+            }
+            if !poll(control.done.load(Ordering::Relaxed)) {
+                stopped = true;
+                control.stop.store(true, Ordering::Relaxed);
+            }
+        }
+        handle.join()
+    })
 }

@@ -9,7 +9,7 @@
 use super::dynamics::Dynamics;
 use crate::effects::derivatives::EffectDerivatives;
 use crate::effects::Context;
-use crate::recursive::aba_derivatives::spd_inverse;
+use crate::linalg::spd_inverse;
 use crate::recursive::{self, tangent, DerivativeData};
 use crate::spatial::Vec6;
 use nalgebra::DMatrix;

@@ -45,6 +45,7 @@ mod parse;
 mod parts;
 mod repair;
 mod tree;
+mod visuals;
 
 pub use parts::{model_from_parts, Part};
 pub use repair::{Repair, RepairRecord};
@@ -185,8 +186,7 @@ pub struct Urdf {
     pub warnings: Vec<String>,
     /// What a `repair` changed, one record per link or welded joint (empty without repair).
     pub repairs: Vec<RepairRecord>,
-    /// Directory the file's relative resources would be resolved against (the geometry is
-    /// not loaded, so nothing is resolved yet).
+    /// Directory the file's relative resources (mesh files) are resolved against.
     pub base_dir: Option<PathBuf>,
 }
 
@@ -204,11 +204,17 @@ impl Urdf {
 /// Only a regular file of at most [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a
 /// device is refused before it is opened); a path too long to show is shortened in messages.
 pub fn load_urdf(path: &Path, root: RootJoint) -> Result<Urdf> {
-    load_urdf_with(path, root, None)
+    load_urdf_with(path, root, None, &[])
 }
 
-/// [`load_urdf`] with the given repairs (`None`: none; invalid inertials are errors).
-pub fn load_urdf_with(path: &Path, root: RootJoint, repair: Option<&Repair>) -> Result<Urdf> {
+/// [`load_urdf`] with the given repairs (`None`: none; invalid inertials are errors) and
+/// the directories `package://` mesh URIs are looked for in besides the file's ancestors.
+pub fn load_urdf_with(
+    path: &Path,
+    root: RootJoint,
+    repair: Option<&Repair>,
+    package_dirs: &[PathBuf],
+) -> Result<Urdf> {
     let text = crate::files::read_text(path, FileKind::Urdf)?;
     model_from_urdf_with(
         &text,
@@ -216,6 +222,7 @@ pub fn load_urdf_with(path: &Path, root: RootJoint, repair: Option<&Repair>) -> 
         path.parent(),
         root,
         repair,
+        package_dirs,
     )
 }
 
@@ -234,16 +241,17 @@ pub fn model_from_urdf(
     base_dir: Option<&Path>,
     root: RootJoint,
 ) -> Result<Urdf> {
-    model_from_urdf_with(text, file, base_dir, root, None)
+    model_from_urdf_with(text, file, base_dir, root, None, &[])
 }
 
-/// [`model_from_urdf`] with the given repairs.
+/// [`model_from_urdf`] with the given repairs and `package_dirs` (see [`load_urdf_with`]).
 pub fn model_from_urdf_with(
     text: &str,
     file: &str,
     base_dir: Option<&Path>,
     root: RootJoint,
     repair: Option<&Repair>,
+    package_dirs: &[PathBuf],
 ) -> Result<Urdf> {
     let ctx = Ctx::new(file, text);
     let mut robot = parse::parse_robot(&ctx, text, repair)?;
@@ -252,11 +260,13 @@ pub fn model_from_urdf_with(
     if repair.is_some_and(|r| r.weld_massless) {
         repairs.extend(repair::weld_massless(&mut robot, &tree));
     }
-    let built = build::build_model(&ctx, &robot, &tree, root)?;
+    let mut built = build::build_model(&ctx, &robot, &tree, root)?;
     let joints = build::joint_records(&robot, &tree, &built);
+    let meshes = visuals::attach(&robot, &mut built.model, file, base_dir, package_dirs);
     let warnings = std::mem::take(&mut robot.notes)
         .into_iter()
         .chain(built.warning)
+        .chain(meshes)
         .chain(build::joint_warnings(file, &joints, &robot.ignored))
         .collect();
     Ok(Urdf {

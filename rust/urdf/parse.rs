@@ -10,6 +10,9 @@ use crate::body::RigidBody;
 use crate::error::{Error, FileKind, Location, Result};
 use crate::spatial::{Mat3, Placement, Vec3};
 
+mod visual;
+pub(super) use visual::VisualData;
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) enum Kind {
     Revolute,
@@ -61,6 +64,10 @@ pub(super) struct LinkData {
     /// Why the inertial is no rigid body's (its line, and the message, which says the line):
     /// an error unless the link is welded to the world.
     pub invalid: Option<(u32, String)>,
+    /// `<visual>` elements in file order (those that could be read).
+    pub visuals: Vec<VisualData>,
+    /// Why the others were dropped (moved to [`RobotData::notes`]).
+    pub visual_notes: Vec<String>,
 }
 
 pub(super) struct JointData {
@@ -86,8 +93,10 @@ pub(super) struct RobotData {
     pub ignored: BTreeMap<String, usize>,
     /// The links whose inertials a `repair` changed, in file order.
     pub repairs: Vec<RepairRecord>,
-    /// Leniencies the reader allowed itself (undeclared namespace prefixes).
+    /// Leniencies the reader allowed itself (undeclared namespace prefixes), visuals dropped.
     pub notes: Vec<String>,
+    /// Robot-level `<material name><color rgba>`, by name.
+    pub materials: BTreeMap<String, [f64; 4]>,
 }
 
 /// Error builder bound to one file.
@@ -263,6 +272,7 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Res
     let mut links: Vec<LinkData> = Vec::new();
     let mut joints: Vec<JointData> = Vec::new();
     let mut repairs = Vec::new();
+    let mut materials = BTreeMap::new();
     for c in robot.children().filter(|c| c.is_element()) {
         if let Some(q) = foreign(c) {
             count(&mut ignored, format!("<{q}>"));
@@ -271,9 +281,18 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Res
         match c.tag_name().name() {
             "link" => links.push(parse_link(ctx, c, &mut ignored, repair, &mut repairs)?),
             "joint" => joints.push(parse_joint(ctx, c, &mut ignored)?),
-            "material" => {}
+            "material" => match visual::material(ctx, "robot", c) {
+                Ok((Some(name), Some(rgba))) => {
+                    materials.insert(name, rgba);
+                }
+                Ok(_) => {}
+                Err(warning) => notes.push(warning),
+            },
             other => count(&mut ignored, format!("<{other}>")),
         }
+    }
+    for link in &mut links {
+        notes.append(&mut link.visual_notes);
     }
     if links.is_empty() {
         return Err(ctx.at("robot", robot, "no <link> elements"));
@@ -285,6 +304,7 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Res
         ignored,
         repairs,
         notes,
+        materials,
     })
 }
 
@@ -384,6 +404,7 @@ fn parse_link(
     let mut inertial = Inertial::none();
     let mut line = ctx.line(node);
     let mut seen_inertial = false;
+    let (mut visuals, mut visual_notes) = (Vec::new(), Vec::new());
     for c in node.children().filter(|c| c.is_element()) {
         if let Some(q) = foreign(c) {
             count(ignored, format!("<link><{q}>"));
@@ -396,7 +417,11 @@ fn parse_link(
                 inertial = parse_inertial(ctx, &element, c)?;
                 line = ctx.line(c);
             }
-            "visual" | "collision" => {}
+            "visual" => match visual::visual(ctx, &element, c) {
+                Ok(v) => visuals.push(v),
+                Err(warning) => visual_notes.push(format!("{warning}: this visual is not drawn")),
+            },
+            "collision" => {}
             other => count(ignored, format!("<link><{other}>")),
         }
     }
@@ -416,6 +441,8 @@ fn parse_link(
         line: ctx.line(node),
         inertial,
         invalid,
+        visuals,
+        visual_notes,
     })
 }
 

@@ -469,7 +469,7 @@ fn errors_carry_their_location() {
 }
 
 fn load_repaired(text: &str, r: &Repair) -> Result<Urdf> {
-    model_from_urdf_with(text, "t.urdf", None, RootJoint::Fixed, Some(r))
+    model_from_urdf_with(text, "t.urdf", None, RootJoint::Fixed, Some(r), &[])
 }
 
 #[test]
@@ -580,4 +580,51 @@ fn parts_keep_order_and_allow_massless_intermediates() {
     // A massless body that moves nothing is refused.
     let e = model_from_parts(&[part("lonely", None, x, 0.0)]).unwrap_err();
     assert!(e.to_string().contains("moves nothing"), "{e}");
+}
+
+#[test]
+fn visuals_are_kept_on_the_links_bodies_with_their_materials() {
+    let arm = format!(
+        r#"<link name="a">{}<visual><origin xyz="0 0 0.5" rpy="0 0 0"/><geometry><cylinder radius="0.1" length="1"/></geometry><material name="steel"/></visual><visual><geometry><mesh filename="package://nowhere/a.stl" scale="1 -1 1"/></geometry></visual><visual><geometry><torus/></geometry></visual></link>"#,
+        inertial(1.0, "0.1 0 0", "0 0 0", [0.01, 0.02, 0.02])
+    );
+    let text = robot(&[
+        r#"<material name="steel"><color rgba="0.5 0.5 0.6 1"/></material>"#.to_string(),
+        link("base", 1.0),
+        arm,
+        revolute("j", "base", "a"),
+    ]);
+    let u = load(&text);
+    let m = &u.model;
+    assert_eq!(m.visuals.len(), 2);
+    let a = m.body_index("a").unwrap();
+    assert_eq!(m.visuals[0].body, a);
+    assert_eq!(
+        m.visuals[0].shape,
+        crate::visual::Shape::Cylinder {
+            radius: 0.1,
+            length: 1.0
+        }
+    );
+    assert_eq!(m.visuals[0].rgba, Some([0.5, 0.5, 0.6, 1.0]));
+    assert_eq!(m.visuals[0].origin.translation, Vec3::new(0.0, 0.0, 0.5));
+    let crate::visual::Shape::Mesh { uri, path, scale } = &m.visuals[1].shape else {
+        panic!("{:?}", m.visuals[1])
+    };
+    assert_eq!(uri, "package://nowhere/a.stl");
+    assert!(path.is_none());
+    assert_eq!(*scale, Vec3::new(1.0, -1.0, 1.0));
+    // One warning names the mesh not found; one the geometry that could not be read.
+    let missing: Vec<_> = u
+        .warnings
+        .iter()
+        .filter(|w| w.contains("not found"))
+        .collect();
+    assert_eq!(missing.len(), 1, "{:?}", u.warnings);
+    assert!(missing[0].contains("package://nowhere/a.stl"));
+    assert!(u
+        .warnings
+        .iter()
+        .any(|w| w.contains("link 'a'") && w.contains("<torus>")));
+    assert!(m.check_structure().is_ok());
 }

@@ -21,6 +21,9 @@
   const CU = f32(D.cuts.pos), NC = D.cuts.count;
   const TR = f32(D.trails.pos), NT = D.trails.colour.length;
   const AR = D.arrow ? f32(D.arrow) : null;
+  const VIS = D.visuals;
+  const VP = VIS ? f32(VIS.pose) : null, NV = VIS ? VIS.nbodies : 0;
+  const TRACK = D.camera.track ? f32(D.camera.track) : null;
   // A page whose data do not fit together fails loudly, not with a blank canvas.
   const check = (ok, what) => { if (!ok) throw new Error("pmd-data: " + what); };
   check(Number.isInteger(F) && F >= 1, "nframes must be an integer >= 1");
@@ -30,17 +33,24 @@
     "segments: wrong length");
   check(BP.length === 12 * F * NB, "boxes: wrong length");
   check(TR.length === 3 * F * NT && (!AR || AR.length === 6 * F), "trails/arrow: wrong length");
+  check(!VIS || VP.length === 12 * F * NV, "visuals.pose: wrong length");
+  check(!TRACK || TRACK.length === 3 * F, "camera.track: wrong length");
+  // Layers shown (toggles in the bar; `#show=robot,masses` in the address overrides).
+  const LAYERS = { robot: "robot", masses: "point masses", links: "links", axes: "joint axes",
+    frames: "frames", forces: "forces" };
+  const shown = new Set(D.show);
 
   const canvas = $("c");
   const gl = canvas.getContext("webgl", { antialias: true, preserveDrawingBuffer: true });
   if (!gl) throw new Error("WebGL is not available in this browser");
 
-  // ---- shader: lit (headlight diffuse + ambient) or flat colour
+  // ---- shader: lit (headlight diffuse + ambient, at most 90 % of the colour, so a white
+  // surface stays apart from the white background) or flat colour
   const VS = "attribute vec3 aP;attribute vec3 aN;uniform mat4 uVP;uniform mat4 uM;" +
     "varying vec3 vN;void main(){vN=mat3(uM)*aN;gl_Position=uVP*uM*vec4(aP,1.0);}";
   const FS = "precision mediump float;varying vec3 vN;uniform vec3 uC;uniform float uLit;" +
     "uniform vec3 uL;void main(){float d=abs(dot(normalize(vN+1e-9),uL));" +
-    "gl_FragColor=vec4(uLit>0.5?uC*(0.35+0.65*d):uC,1.0);}";
+    "gl_FragColor=vec4(uLit>0.5?uC*(0.3+0.6*d):uC,1.0);}";
   function shader(type, src) {
     const s = gl.createShader(type);
     gl.shaderSource(s, src);
@@ -95,6 +105,79 @@
   const SPHERE = sphereMesh(20, 12), CYL = tubeMesh(14, false), CONE = tubeMesh(18, true);
   const lineBuf = gl.createBuffer();
 
+  // ---- the robot's meshes: flat arrays expanded per corner, each corner's normal the
+  // average of the faces around its vertex that bend less than ~37° from its own face
+  // (smooth on curved surfaces, sharp at creases).
+  function robotMesh(m) {
+    const P = f32(m.pos);
+    const raw = atob(m.idx), bytes = new Uint8Array(raw.length);
+    for (let i = 0; i < raw.length; i++) bytes[i] = raw.charCodeAt(i);
+    const I = m.wide ? new Uint32Array(bytes.buffer) : new Uint16Array(bytes.buffer);
+    const nf = I.length / 3, nv = P.length / 3;
+    for (let i = 0; i < I.length; i++) check(I[i] < nv, "visuals: face index out of range");
+    const FN = new Float32Array(3 * nf);
+    for (let f = 0; f < nf; f++) {
+      const a = 3 * I[3 * f], b = 3 * I[3 * f + 1], c = 3 * I[3 * f + 2];
+      const ux = P[b] - P[a], uy = P[b + 1] - P[a + 1], uz = P[b + 2] - P[a + 2];
+      const vx = P[c] - P[a], vy = P[c + 1] - P[a + 1], vz = P[c + 2] - P[a + 2];
+      FN[3 * f] = uy * vz - uz * vy; FN[3 * f + 1] = uz * vx - ux * vz; FN[3 * f + 2] = ux * vy - uy * vx;
+    }
+    const start = new Uint32Array(nv + 1);
+    for (let i = 0; i < I.length; i++) start[I[i] + 1]++;
+    for (let v = 0; v < nv; v++) start[v + 1] += start[v];
+    const fill = start.slice(0, nv), around = new Uint32Array(I.length);
+    for (let i = 0; i < I.length; i++) around[fill[I[i]]++] = (i / 3) | 0;
+    const out = new Float32Array(nf * 18);
+    for (let f = 0; f < nf; f++) {
+      const fl = Math.hypot(FN[3 * f], FN[3 * f + 1], FN[3 * f + 2]) || 1;
+      for (let c = 0; c < 3; c++) {
+        const v = I[3 * f + c];
+        let nx = 0, ny = 0, nz = 0;
+        for (let k = start[v]; k < start[v + 1]; k++) {
+          const g = around[k];
+          const gl2 = Math.hypot(FN[3 * g], FN[3 * g + 1], FN[3 * g + 2]) || 1;
+          const cos = (FN[3 * f] * FN[3 * g] + FN[3 * f + 1] * FN[3 * g + 1] + FN[3 * f + 2] * FN[3 * g + 2]) / (fl * gl2);
+          if (cos > 0.8) { nx += FN[3 * g]; ny += FN[3 * g + 1]; nz += FN[3 * g + 2]; }
+        }
+        const o = (3 * f + c) * 6;
+        out[o] = P[3 * v]; out[o + 1] = P[3 * v + 1]; out[o + 2] = P[3 * v + 2];
+        out[o + 3] = nx; out[o + 4] = ny; out[o + 5] = nz;
+      }
+    }
+    const b = gl.createBuffer();
+    gl.bindBuffer(gl.ARRAY_BUFFER, b);
+    gl.bufferData(gl.ARRAY_BUFFER, out, gl.STATIC_DRAW);
+    for (const [a, n] of m.parts) check(a + n <= nf, "visuals: parts exceed the faces");
+    return { buf: b, n: 3 * nf, parts: m.parts };
+  }
+  const ROBOT = VIS ? VIS.meshes.map(robotMesh) : [];
+  if (VIS) for (const inst of VIS.instances)
+    check(inst.mesh < ROBOT.length && inst.body < NV && inst.pose.length === 12, "visuals: bad instance");
+  const DEFAULT_RGB = [0.72, 0.74, 0.78];
+  // body pose (row-major R | t, 12 floats) ∘ instance pose, as a column-major 4×4.
+  function instanceMatrix(o, p) {
+    const out = new Float32Array(16);
+    for (let r = 0; r < 3; r++) {
+      for (let c = 0; c < 3; c++)
+        out[4 * c + r] = VP[o + 3 * r] * p[4 * 0 + c] + VP[o + 3 * r + 1] * p[4 * 1 + c] + VP[o + 3 * r + 2] * p[4 * 2 + c];
+      out[12 + r] = VP[o + 9 + r] + VP[o + 3 * r] * p[3] + VP[o + 3 * r + 1] * p[7] + VP[o + 3 * r + 2] * p[11];
+    }
+    out[15] = 1;
+    return out;
+  }
+  function drawRobot() {
+    for (const inst of VIS.instances) {
+      const m = ROBOT[inst.mesh];
+      bindMesh(m);
+      gl.uniformMatrix4fv(U.uM, false, instanceMatrix((frame * NV + inst.body) * 12, inst.pose));
+      gl.uniform1f(U.uLit, 1);
+      for (const [a, n, rgb] of m.parts) {
+        gl.uniform3fv(U.uC, inst.rgba ? inst.rgba.slice(0, 3) : rgb || DEFAULT_RGB);
+        gl.drawArrays(gl.TRIANGLES, 3 * a, 3 * n);
+      }
+    }
+  }
+
   function bindMesh(m) {
     gl.bindBuffer(gl.ARRAY_BUFFER, m.buf);
     gl.enableVertexAttribArray(aN);
@@ -144,10 +227,11 @@
   }
 
   // ---- static lines: ground grid and world frame
+  // The ground: a square in the plane at right angles to gravity (axes u, v), under the motion.
   const G = D.grid, gv = [];
+  const gp = (a, b) => [0, 1, 2].map((c) => G.origin[c] + a * G.u[c] + b * G.v[c]);
   for (let k = -G.half; k <= G.half + 1e-9 * G.half; k += G.step) {
-    gv.push(G.center[0] + k, G.center[1] - G.half, G.z, G.center[0] + k, G.center[1] + G.half, G.z);
-    gv.push(G.center[0] - G.half, G.center[1] + k, G.z, G.center[0] + G.half, G.center[1] + k, G.z);
+    gv.push(...gp(k, -G.half), ...gp(k, G.half), ...gp(-G.half, k), ...gp(G.half, k));
   }
   const GRID = new Float32Array(gv);
   const W = 0.15 * D.size;
@@ -167,16 +251,28 @@
   // ---- camera: the same matrix as animation.view_projection (column-major here)
   const cam0 = D.camera;
   const cam = { az: cam0.azimuth, el: cam0.elevation, d: cam0.distance, t: cam0.target.slice() };
+  // (e1, e2, up): up is −gravity; e1 is world x made orthogonal to it (y if up is along x).
+  const UP = (cam0.up || [0, 0, 1]).slice();
+  const upl = Math.hypot(...UP);
+  for (let c = 0; c < 3; c++) UP[c] /= upl;
+  const ref = Math.abs(UP[0]) < 0.9 ? [1, 0, 0] : [0, 1, 0];
+  const rd = ref[0] * UP[0] + ref[1] * UP[1] + ref[2] * UP[2];
+  const E1 = [0, 1, 2].map((c) => ref[c] - rd * UP[c]);
+  const e1l = Math.hypot(...E1);
+  for (let c = 0; c < 3; c++) E1[c] /= e1l;
+  const E2 = [UP[1] * E1[2] - UP[2] * E1[1], UP[2] * E1[0] - UP[0] * E1[2], UP[0] * E1[1] - UP[1] * E1[0]];
   function viewProj(aspect) {
     const az = (cam.az * Math.PI) / 180, el = (cam.el * Math.PI) / 180, d = cam.d;
-    const e = [cam.t[0] + d * Math.cos(el) * Math.cos(az), cam.t[1] + d * Math.cos(el) * Math.sin(az),
-      cam.t[2] + d * Math.sin(el)];
-    const f = [cam.t[0] - e[0], cam.t[1] - e[1], cam.t[2] - e[2]];
+    // A following camera moves its target with the subject (the user's orbit and zoom stay).
+    const t = TRACK ? [0, 1, 2].map((c) => cam.t[c] + TRACK[3 * frame + c] - TRACK[c]) : cam.t;
+    const dir = [0, 1, 2].map((c) => Math.cos(el) * Math.cos(az) * E1[c] + Math.cos(el) * Math.sin(az) * E2[c] + Math.sin(el) * UP[c]);
+    const e = [t[0] + d * dir[0], t[1] + d * dir[1], t[2] + d * dir[2]];
+    const f = [t[0] - e[0], t[1] - e[1], t[2] - e[2]];
     const fl = Math.hypot(...f);
     f[0] /= fl; f[1] /= fl; f[2] /= fl;
-    const s = [f[1], -f[0], 0];  // f × z
+    const s = [f[1] * UP[2] - f[2] * UP[1], f[2] * UP[0] - f[0] * UP[2], f[0] * UP[1] - f[1] * UP[0]];  // f × up
     const sl = Math.hypot(...s);
-    s[0] /= sl; s[1] /= sl;
+    s[0] /= sl; s[1] /= sl; s[2] /= sl;
     const u = [s[1] * f[2] - s[2] * f[1], s[2] * f[0] - s[0] * f[2], s[0] * f[1] - s[1] * f[0]];
     const V = [s, u, [-f[0], -f[1], -f[2]]];  // rows of the view rotation
     const tv = V.map((r) => -(r[0] * e[0] + r[1] * e[1] + r[2] * e[2]));
@@ -221,6 +317,23 @@
     return BOXES;
   }
 
+  // Each link's frame (x, y, z as three segments from its origin) at the current frame.
+  const LF = new Float32Array(NB * 18);
+  function linkFrames() {
+    const L = 0.05 * D.size;
+    for (let i = 0; i < NB; i++) {
+      const o = (frame * NB + i) * 12;
+      for (let a = 0; a < 3; a++) {
+        const k = (3 * i + a) * 6;
+        for (let r = 0; r < 3; r++) {
+          LF[k + r] = BP[o + 9 + r];
+          LF[k + 3 + r] = BP[o + 9 + r] + L * BP[o + 3 * r + a];
+        }
+      }
+    }
+    return LF;
+  }
+
   // ---- drawing one frame
   let frame = 0;
   const c3 = (arr, i) => [arr[i], arr[i + 1], arr[i + 2]];
@@ -234,27 +347,26 @@
     gl.uniformMatrix4fv(U.uVP, false, viewProj(w / h));
     drawLines(GRID, D.colours.grid, gl.LINES);
     for (const [pts, col] of FRAME) drawLines(pts, col, gl.LINES);
+    if (shown.has("frames")) drawLines(linkFrames(), [0.4, 0.4, 0.4], gl.LINES);
     for (let j = 0; j < NT; j++)
       if (frame > 0) drawLines(TRAILS[j].subarray(0, 3 * (frame + 1)), D.trails.colour[j], gl.LINE_STRIP);
-    if (NB) drawLines(boxEdges(), D.colours.box, gl.LINES);
+    if (VIS && shown.has("robot")) drawRobot();
+    const masses = shown.has("masses");
+    if (NB && masses) drawLines(boxEdges(), D.colours.box, gl.LINES);
     bindMesh(CYL);
-    for (let i = 0; i < NL; i++) {
-      const o = (frame * NL + i) * 6;
-      const m = tubeMatrix(c3(LK, o), c3(LK, o + 3), D.links.radius);
-      if (m) drawMesh(CYL, m, D.colours.link, true);
-    }
-    for (let i = 0; i < NA; i++) {
-      const o = (frame * NA + i) * 6;
-      const m = tubeMatrix(c3(AX, o), c3(AX, o + 3), D.axes.radius);
-      if (m) drawMesh(CYL, m, D.colours.axis, true);
-    }
-    for (let i = 0; i < NC; i++) {
-      const o = (frame * NC + i) * 6;
-      const m = tubeMatrix(c3(CU, o), c3(CU, o + 3), D.cuts.radius);
-      if (m) drawMesh(CYL, m, D.colours.cut, true);
-    }
+    const tubes = (P, n, on, r, col) => {
+      if (!on) return;
+      for (let i = 0; i < n; i++) {
+        const o = (frame * n + i) * 6;
+        const m = tubeMatrix(c3(P, o), c3(P, o + 3), r);
+        if (m) drawMesh(CYL, m, col, true);
+      }
+    };
+    tubes(LK, NL, shown.has("links"), D.links.radius, D.colours.link);
+    tubes(AX, NA, shown.has("axes"), D.axes.radius, D.colours.axis);
+    tubes(CU, NC, shown.has("links"), D.cuts.radius, D.colours.cut);
     let shaft = null;
-    if (AR) {
+    if (AR && shown.has("forces")) {
       const a = c3(AR, frame * 6), b = c3(AR, frame * 6 + 3);
       const k = [0, 1, 2].map((c) => a[c] + 0.8 * (b[c] - a[c]));
       shaft = [k, b];
@@ -262,12 +374,12 @@
       if (m) drawMesh(CYL, m, D.colours.shaking, true);
     }
     bindMesh(SPHERE);
-    for (let i = 0; i < NS; i++) {
+    for (let i = 0; masses && i < NS; i++) {
       const o = (frame * NS + i) * 3;
       drawMesh(SPHERE, sphereMatrix(SP[o], SP[o + 1], SP[o + 2], D.spheres.radius[i]),
         D.spheres.colour[i], true);
     }
-    for (let i = 0; i < NC; i++) {
+    for (let i = 0; shown.has("links") && i < NC; i++) {
       const o = (frame * NC + i) * 6;
       drawMesh(SPHERE, sphereMatrix(CU[o], CU[o + 1], CU[o + 2], D.cuts.radius * 2.2), D.colours.cut, true);
     }
@@ -291,6 +403,17 @@
 
   // ---- controls
   const hash = new URLSearchParams(location.hash.slice(1));
+  if (hash.has("show")) { shown.clear(); for (const n of hash.get("show").split(",")) if (n) shown.add(n); }
+  const present = { robot: !!VIS, masses: NS > 0, links: NL + NC > 0, axes: NA > 0, frames: NB > 0, forces: !!AR };
+  for (const [name, label] of Object.entries(LAYERS)) {
+    if (!present[name]) continue;
+    const box = document.createElement("input");
+    box.type = "checkbox"; box.id = "show-" + name; box.checked = shown.has(name);
+    box.onchange = () => { if (box.checked) shown.add(name); else shown.delete(name); if (!playing) draw(); };
+    const lab = document.createElement("label");
+    lab.append(box, " " + label);
+    $("layers").append(lab);
+  }
   let playing = !hash.has("paused") && !hash.has("frame") && F > 1;
   if (hash.has("frame")) frame = Math.min(F - 1, Math.max(0, parseInt(hash.get("frame"), 10) || 0));
   let start = performance.now() - (frame / D.fps) * 1000;
@@ -341,7 +464,8 @@
   if (err !== gl.NO_ERROR) throw new Error("WebGL error " + err);
   window.__firstFrame = frame;
   // For tests and the console: the frame shown and the box edges the page draws for it.
-  window.__pmd = { frame: () => frame, boxEdges: () => Array.from(boxEdges()) };
+  window.__pmd = { frame: () => frame, boxEdges: () => Array.from(boxEdges()),
+    shown: () => Array.from(shown).sort(), triangles: () => (VIS ? VIS.instances.reduce((n, i) => n + ROBOT[i.mesh].n / 3, 0) : 0) };
   window.__status = "ok";
   $("status").textContent = window.__errors.length ? "error: " + window.__errors.join("; ") : "";
   document.title = (window.__errors.length ? "pmd error: " + window.__errors.join("; ") : "pmd ok") +

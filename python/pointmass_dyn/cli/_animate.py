@@ -7,7 +7,10 @@ import argparse
 
 import numpy as np
 
-from .errors import InvalidInputError
+from .._simulation import simulate
+from ..errors import InvalidInputError
+from ..scenes import load_scene
+from ..viewer import animate
 
 TRAIL_SPEC = "BODY[:X,Y,Z]"
 
@@ -30,7 +33,7 @@ def add_options(p: argparse.ArgumentParser) -> None:
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    """The ``animate`` subcommand (cli.py's ``build_parser`` calls this)."""
+    """The ``animate`` subcommand."""
     an = sub.add_parser(
         "animate",
         help="simulate a scene and write a 3-D animation (.html, .gif or .mp4)",
@@ -80,8 +83,6 @@ def _trails(specs) -> list:
 
 def write(args, result, scene, path: str) -> None:
     """Writes the animation of ``result`` that ``args`` (``add_options``) describe."""
-    from .animation import animate
-
     info = animate(result, scene, path, fps=args.fps, frames=args.frames,
                    duration=args.duration, size=_size(args.size), trails=_trails(args.trail),
                    shaking=args.shaking)
@@ -89,9 +90,6 @@ def write(args, result, scene, path: str) -> None:
 
 
 def cmd_animate(args) -> int:
-    from .scenes import load_scene
-    from .simulation import simulate
-
     scene = load_scene(args.scene)
     t_span = scene.t_span or (0.0, 10.0)
     if args.t_end is not None:

@@ -15,8 +15,10 @@ from typing import Any
 
 import numpy as np
 
-from ._core import Joint, Model
-from .errors import InvalidInputError, ModelImportWarning
+from .._core import Joint, Model
+from .._helpers import rotation_of_wxyz
+from ..errors import InvalidInputError, ModelImportWarning
+from ._mujoco_visuals import geom_visuals, mesh_dirs_of, model_name
 
 
 @dataclass(frozen=True)
@@ -42,19 +44,6 @@ class InertiaRepair:
 # ---------------------------------------------------------------------------------- MuJoCo
 
 
-def _quat_wxyz_to_matrix(q) -> np.ndarray:
-    w, x, y, z = (float(c) for c in q)
-    n = math.sqrt(w * w + x * x + y * y + z * z)
-    w, x, y, z = w / n, x / n, y / n, z / n
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
-
-
 def _axis_angle(axis, angle: float) -> np.ndarray:
     a = np.asarray(axis, float)
     a = a / np.linalg.norm(a)
@@ -69,7 +58,7 @@ def _name(mj, objtype, i: int, fallback: str) -> str:
     return n if n else fallback
 
 
-def from_mujoco(mj_model: Any) -> Model:
+def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     """Our model of a compiled ``mujoco.MjModel``: its bodies (mass, COM, inertia from
     ``body_inertia``/``body_iquat``), hinge, slide, ball and free joints in MuJoCo's order and
     with its names (unnamed: ``jnt<i>``).
@@ -81,7 +70,11 @@ def from_mujoco(mj_model: Any) -> Model:
     MuJoCo's: ``dof_armature``, passive forces, contacts, actuators and equality constraints
     are not imported (a :class:`ModelImportWarning` names those present), but for
     ``<equality connect>`` and ``<equality weld>`` between bodies, which become loops
-    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md)."""
+    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md).
+
+    The geoms of the bodies (groups 0-2) become ``model.visuals`` (mesh files looked for as
+    MuJoCo recorded them and in ``mesh_dirs``), and the model is named after
+    ``<mujoco model>``."""
     try:
         import mujoco
     except ImportError as e:  # pragma: no cover - optional dependency
@@ -102,11 +95,11 @@ def from_mujoco(mj_model: Any) -> Model:
         parent = last_of_body[pb]
         # The body frame in the parent's last part's frame.
         t_body = np.asarray(m.body_pos[b], float) - anchor_of_body[pb]
-        r_body = _quat_wxyz_to_matrix(m.body_quat[b])
+        r_body = rotation_of_wxyz(m.body_quat[b])
         bname = _name(m, mujoco.mjtObj.mjOBJ_BODY, b, f"body{b}")
         jids = list(range(int(m.body_jntadr[b]), int(m.body_jntadr[b]) + int(m.body_jntnum[b])))
         mass = float(m.body_mass[b])
-        ri = _quat_wxyz_to_matrix(m.body_iquat[b])
+        ri = rotation_of_wxyz(m.body_iquat[b])
         inertia = ri @ np.diag(m.body_inertia[b]) @ ri.T
         ipos = np.asarray(m.body_ipos[b], float)
         if not jids:
@@ -152,7 +145,12 @@ def from_mujoco(mj_model: Any) -> Model:
             prev_anchor, trans, rot = anchor, np.zeros(3), np.eye(3)
         last_of_body[b], anchor_of_body[b] = parent, prev_anchor
     model = Model._from_parts(parts)
+    visuals, missing = geom_visuals(m, last_of_body, anchor_of_body, mesh_dirs_of(mesh_dirs))
+    model.set_visuals(visuals, name=model_name(m))
     ignored = []
+    if missing:
+        ignored.append(f"{len(missing)} mesh file(s) not found (their bodies are drawn as "
+                       f"inertia boxes; pass mesh_dirs=[...]): " + ", ".join(missing[:8]))
     if np.any(np.asarray(m.dof_armature) != 0):
         ignored.append("dof_armature (added to MuJoCo's mass matrix)")
     ignored += _mujoco_loops(m, model, parts, last_of_body, anchor_of_body)
@@ -195,7 +193,7 @@ def _mujoco_loops(m, model, parts, last_of_body, anchor_of_body) -> list[str]:
             joint, rot_a = Joint.spherical(), np.eye(3)
             t_a, t_b = data[0:3] - shift[0], data[3:6] - shift[1]
         else:
-            rot_a = _quat_wxyz_to_matrix(data[6:10])
+            rot_a = rotation_of_wxyz(data[6:10])
             joint = Joint.fixed()
             # MuJoCo's rows: body 2's anchor at body 1's relpos point, and body 2's
             # orientation body 1's times relquat (engine_core_constraint.c).
@@ -229,7 +227,7 @@ def mujoco_state(mj_model: Any, qpos, qvel) -> tuple[np.ndarray, np.ndarray]:
         if t == mujoco.mjtJoint.mjJNT_FREE:
             w = qpos[a + 3 : a + 7]
             q[a + 3 : a + 7] = [w[1], w[2], w[3], w[0]]
-            v[d : d + 3] = _quat_wxyz_to_matrix(w).T @ qvel[d : d + 3]
+            v[d : d + 3] = rotation_of_wxyz(w).T @ qvel[d : d + 3]
         elif t == mujoco.mjtJoint.mjJNT_BALL:
             w = qpos[a : a + 4]
             q[a : a + 4] = [w[1], w[2], w[3], w[0]]
@@ -328,3 +326,9 @@ def pinocchio_q(pin_model: Any, q) -> np.ndarray:
             out[jm.idx_q : jm.idx_q + jm.nq] = q[k : k + jm.nq]
             k += jm.nq
     return out
+
+
+# The importers are Model's constructors too, beside the core's Model.from_urdf: attached
+# here, so the extension never calls back into Python.
+Model.from_mujoco = staticmethod(from_mujoco)  # type: ignore[method-assign]
+Model.from_pinocchio = staticmethod(from_pinocchio)  # type: ignore[method-assign]

@@ -27,8 +27,8 @@ import numpy as np
 
 from . import _core
 from ._core import Scene
+from ._simulation import SimulationResult
 from .errors import InvalidInputError
-from .simulation import SimulationResult
 
 
 @dataclass
@@ -79,7 +79,7 @@ def _effect_param(effects: list, name: str, parameter: str, value: np.ndarray) -
     return out
 
 
-def _scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
+def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
     """One scene per run, from ``scene`` with the per-run ``params``."""
     model = scene.model
     count = None
@@ -169,7 +169,7 @@ def simulate_batch(
     if params:
         if len(scenes) != 1:
             raise InvalidInputError("params: give one scene with params, or a list of scenes")
-        scenes = _scenes_from_params(scenes[0], dict(params))
+        scenes = scenes_from_params(scenes[0], dict(params))
     out = _core.simulate_batch(
         scenes,
         q0,

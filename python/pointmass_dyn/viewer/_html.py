@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .animation import COLOURS, Drawing
+from ._drawing import COLOURS, Drawing
 
 _PAGE = """<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8">
@@ -32,12 +32,13 @@ canvas{{display:block;width:100vw;height:100vh;touch-action:none}}
 #bar{{position:fixed;left:0;right:0;bottom:0;display:flex;gap:8px;align-items:center;
 padding:5px 10px;background:rgba(245,245,245,.85)}}
 #slider{{flex:1}}
+#layers label{{margin-left:6px;white-space:nowrap}}
 </style></head><body>
 <canvas id="c"></canvas>
 <div id="time"></div><div id="title">{title}</div><div id="status"></div>
 <div id="legend">{legend}</div>
 <div id="bar"><button id="play">play</button><input id="slider" type="range" min="0" value="0">
-<span id="frame"></span><button id="reset">reset view</button></div>
+<span id="frame"></span><span id="layers"></span><button id="reset">reset view</button></div>
 <script>
 window.__errors = [];
 function __report(msg) {{
@@ -69,11 +70,43 @@ def _legend(d: Drawing) -> str:
     if np.any(d.sphere_mass == 0):
         items.append(f'<span style="color:{hexc["zero"]}">●</span> m = 0')
     items.append("radius ∝ |m|<sup>1/3</sup>")
+    if d.visuals is not None and any(i.fallback for i in d.visuals["scene"].instances):
+        items.append('<span style="color:#d99959">■</span> inertia box (mesh not drawn)')
     if d.cuts.shape[1]:
         items.append(f'<span style="color:{hexc["cut"]}">●</span> cut joints')
     if d.arrow is not None:
         items.append(f'<span style="color:{hexc["shaking"]}">➜</span> shaking force')
     return " &nbsp; ".join(items) + "<br>drag: orbit · wheel: zoom · space: play/pause"
+
+
+def _visual_data(d: Drawing) -> dict | None:
+    """Meshes once each (vertices float32, faces uint16 or uint32, parts with colours),
+    instances (body slot, mesh, pose 3×4 row-major, rgba or None) and the bodies' poses per
+    frame (F, nbodies, 12)."""
+    if d.visuals is None:
+        return None
+    scene = d.visuals["scene"]
+    slot = {b: k for k, b in enumerate(d.visuals["bodies"])}
+    meshes = []
+    for m in scene.meshes:
+        wide = len(m.vertices) > 65535
+        idx = np.ascontiguousarray(m.faces, dtype="<u4" if wide else "<u2")
+        meshes.append({
+            "pos": _b64(m.vertices),
+            "idx": base64.b64encode(idx.tobytes()).decode("ascii"),
+            "wide": wide,
+            "parts": [[int(a), int(n), None if c is None else [round(x, 4) for x in c]]
+                      for a, n, c in m.parts] or [[0, len(m.faces), None]],
+        })
+    return {
+        "meshes": meshes,
+        "instances": [{"body": slot[i.body], "mesh": i.mesh,
+                       "pose": np.round(i.pose.reshape(-1), 9).tolist(),
+                       "rgba": None if i.rgba is None else [round(x, 4) for x in i.rgba]}
+                      for i in scene.instances],
+        "pose": _b64(d.visuals["pose"]),
+        "nbodies": len(d.visuals["bodies"]),
+    }
 
 
 def page(d: Drawing, fps: float) -> str:
@@ -101,7 +134,10 @@ def page(d: Drawing, fps: float) -> str:
         },
         "arrow": None if d.arrow is None else _b64(d.arrow),
         "grid": d.grid,
-        "camera": d.camera,
+        "camera": {**d.camera, "track": None if d.camera.get("track") is None
+                   else _b64(np.asarray(d.camera["track"]))},
+        "visuals": _visual_data(d),
+        "show": list(d.show),
         "colours": {k: list(v) for k, v in COLOURS.items()},
     }
     # "</" cannot appear inside a <script> element.

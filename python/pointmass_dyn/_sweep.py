@@ -22,8 +22,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ._batch import BatchResult, simulate_batch
 from ._core import Scene, __version__
-from .batch import BatchResult, simulate_batch
 from .errors import InvalidInputError
 
 #: Chunks per concurrent task slot when ``chunk_size`` is not given (see :func:`sweep`).

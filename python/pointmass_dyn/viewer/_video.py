@@ -12,22 +12,62 @@ from pathlib import Path
 
 import numpy as np
 
-from .animation import COLOURS, Drawing
-from .errors import AnimationWriterError
+from .._helpers import pyplot
+from ..errors import AnimationWriterError
+from . import _camera, _meshes
+from ._drawing import COLOURS, Drawing
 
 
 def _pyplot():
-    try:
-        import matplotlib
+    return pyplot("GIF and MP4 animations", AnimationWriterError,
+                  instead="or write an .html animation, which needs nothing")
 
-        matplotlib.use("Agg", force=False)
-        import matplotlib.pyplot as plt
-    except ImportError as exc:  # pragma: no cover - depends on the environment
-        raise AnimationWriterError(
-            "GIF and MP4 animations need matplotlib: pip install 'pointmass-dyn[plot]' "
-            "(or write an .html animation, which needs nothing)"
-        ) from exc
-    return plt
+
+#: Triangles of a robot's meshes in a GIF/MP4 (matplotlib sorts and fills each one).
+VIDEO_TRIANGLES = 6000
+
+
+def _robot(ax, d: Drawing, up: np.ndarray):
+    """The robot's meshes as one shaded ``Poly3DCollection`` (mplot3d sorts its faces by
+    depth), simplified to :data:`VIDEO_TRIANGLES`; returns ``update(k)`` or None."""
+    if d.visuals is None or "robot" not in d.show:
+        return None
+    from mpl_toolkits.mplot3d.art3d import Poly3DCollection
+
+    scene = _meshes.visual_scene(d.visuals["model"], VIDEO_TRIANGLES, warn=False)
+    slot = {b: k for k, b in enumerate(d.visuals["bodies"])}
+    local, colours, which = [], [], []
+    for inst in scene.instances:
+        if inst.body not in slot:
+            continue
+        m = scene.meshes[inst.mesh]
+        tri = m.vertices[m.faces].astype(float) @ inst.pose[:, :3].T + inst.pose[:, 3]
+        rgb = np.empty((len(m.faces), 3))
+        for a, n, c in m.parts or [(0, len(m.faces), None)]:
+            rgb[a:a + n] = (inst.rgba[:3] if inst.rgba is not None
+                            else c if c is not None else _meshes.DEFAULT_RGBA[:3])
+        local.append(tri)
+        colours.append(rgb)
+        which += [slot[inst.body]] * len(tri)
+    if not local:
+        return None
+    local, colours, which = np.concatenate(local), np.concatenate(colours), np.array(which)
+    e1, e2, u = _camera.up_basis(up)
+    az, el = np.radians(d.camera["azimuth"]), np.radians(d.camera["elevation"])
+    eye = np.cos(el) * np.cos(az) * e1 + np.cos(el) * np.sin(az) * e2 + np.sin(el) * u
+    coll = Poly3DCollection(np.zeros((0, 3, 3)), edgecolors="none", zorder=1.9)
+    ax.add_collection3d(coll)
+
+    def update(k: int):
+        pose = d.visuals["pose"][k][which]  # (n, 12) per triangle
+        rot = pose[:, :9].reshape(-1, 3, 3)
+        world = np.einsum("nij,nvj->nvi", rot, local) + pose[:, None, 9:]
+        n = np.cross(world[:, 1] - world[:, 0], world[:, 2] - world[:, 0])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+        coll.set_verts(world)
+        coll.set_facecolor(colours * (0.3 + 0.6 * np.abs(n @ eye))[:, None])
+
+    return update
 
 
 def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
@@ -42,37 +82,50 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     ax.set_axis_off()
     cam = d.camera
     target = np.asarray(cam["target"], dtype=float)
-    # A cube around the motion (equal scales), a little larger than its largest extent.
-    half = 0.55 * d.extent
-    ax.set_xlim(target[0] - half, target[0] + half)
-    ax.set_ylim(target[1] - half, target[1] + half)
-    ax.set_zlim(target[2] - half, target[2] + half)
+    # A cube around the motion (equal scales), a little larger than its largest extent (a
+    # following camera: around the subject, moved with it frame by frame).
+    half = 0.55 * (0.8 * d.size if cam.get("track") is not None else d.extent)
+
+    def centre(k: int):
+        c = target if cam.get("track") is None else np.asarray(cam["track"][k], dtype=float)
+        ax.set_xlim(c[0] - half, c[0] + half)
+        ax.set_ylim(c[1] - half, c[1] + half)
+        ax.set_zlim(c[2] - half, c[2] + half)
+
+    centre(0)
     ax.set_box_aspect((1, 1, 1), zoom=1.35)
-    ax.view_init(elev=cam["elevation"], azim=cam["azimuth"])
+    up = np.asarray(cam.get("up", (0, 0, 1)), dtype=float)
+    vertical = {0: "x", 1: "y", 2: "z"}.get(int(np.argmax(np.abs(up))), "z")
+    if abs(up[int(np.argmax(np.abs(up)))]) < 0.999 or up.max() < 0.999:
+        vertical = "z"  # mplot3d's vertical axis is a positive world axis
+    ax.view_init(elev=cam["elevation"], azim=cam["azimuth"], vertical_axis=vertical)
 
     g = d.grid
     ks = np.arange(-g["half"], g["half"] + 1e-9 * g["half"], g["step"])
-    cx, cy, h = g["center"][0], g["center"][1], g["half"]
+    o, gu, gv, h = (np.asarray(g[k], dtype=float) for k in ("origin", "u", "v", "half"))
     # The whole grid as one NaN-separated line (one artist: drawing cost is per artist).
-    seg = [[(cx + k, cy - h), (cx + k, cy + h)] for k in ks]
-    seg += [[(cx - h, cy + k), (cx + h, cy + k)] for k in ks]
-    xy = np.concatenate([np.array(seg), np.full((len(seg), 1, 2), np.nan)], axis=1).reshape(-1, 2)
-    ax.plot(xy[:, 0], xy[:, 1], np.full(len(xy), g["z"]), color=COLOURS["grid"], lw=0.5,
-            zorder=0.5)
+    seg = [[o + k * gu - h * gv, o + k * gu + h * gv] for k in ks]
+    seg += [[o - h * gu + k * gv, o + h * gu + k * gv] for k in ks]
+    xyz = np.concatenate([np.array(seg), np.full((len(seg), 1, 3), np.nan)],
+                         axis=1).reshape(-1, 3)
+    ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], color=COLOURS["grid"], lw=0.5, zorder=0.5)
+    robot = _robot(ax, d, up)
     w = 0.15 * d.size
     for axis, c in zip(np.eye(3), [(0.85, 0.1, 0.1), (0.1, 0.6, 0.1), (0.1, 0.2, 0.85)]):
         ax.plot([0, w * axis[0]], [0, w * axis[1]], [0, w * axis[2]], color=c, lw=1.2, zorder=1)
 
     trails = [ax.plot([], [], [], color=c, lw=1.2, zorder=1.5)[0] for c in d.trail_colour]
+    # The layers the page shows at first (each artist costs time in every frame).
+    on = {k: k in d.show for k in ("masses", "links", "axes", "forces")}
     boxes = [ax.plot([], [], [], color=COLOURS["box"], lw=0.7, zorder=1.8)[0]
-             for _ in range(d.boxes.shape[1] // 12)]
+             for _ in range(d.boxes.shape[1] // 12 if on["masses"] else 0)]
     links = [ax.plot([], [], [], color=COLOURS["link"], lw=3.5, solid_capstyle="round",
                      zorder=2)[0]
-             for _ in range(d.links.shape[1])]
+             for _ in range(d.links.shape[1] if on["links"] else 0)]
     axes = [ax.plot([], [], [], color=COLOURS["axis"], lw=2, zorder=2.1)[0]
-            for _ in range(d.axes.shape[1])]
+            for _ in range(d.axes.shape[1] if on["axes"] else 0)]
     arrow = (ax.plot([], [], [], color=COLOURS["shaking"], lw=2.5, zorder=2.2)[0]
-             if d.arrow is not None else None)
+             if d.arrow is not None and on["forces"] else None)
     # Disc diameter in points ∝ sphere radius / scene size.
     diam = 2 * d.sphere_radius / d.size * min(width, height) * 1.2 * 72 / dpi
     # Drawing order by zorder (computed_zorder is off): grid, frame, trails, point-mass
@@ -84,7 +137,7 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     masses = {
         int(i): ax.scatter(*d.spheres[0, i, :, None], s=diam[i] ** 2, c=[d.sphere_colour[i]],
                            depthshade=False, edgecolors="none", zorder=3)
-        for i in order
+        for i in (order if on["masses"] else ())
     }
     cuts = (ax.scatter(*d.cuts[0, :, 0].T, s=60, c=[COLOURS["cut"]], depthshade=False,
                        marker="o", edgecolors="none", zorder=3.5) if d.cuts.shape[1] else None)
@@ -93,12 +146,13 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     clock = ax.text2D(0.02, 0.96, "", transform=ax.transAxes, family="monospace", fontsize=11)
     if d.title:
         ax.text2D(0.02, 0.91, d.title, transform=ax.transAxes, color="0.35", fontsize=9)
-    legend = [("● m > 0", COLOURS["positive"])]
-    if np.any(d.sphere_mass < 0):
+    legend = [("● m > 0", COLOURS["positive"])] if on["masses"] else []
+    if on["masses"] and np.any(d.sphere_mass < 0):
         legend.append(("● m < 0", COLOURS["negative"]))
-    if np.any(d.sphere_mass == 0):
+    if on["masses"] and np.any(d.sphere_mass == 0):
         legend.append(("● m = 0", COLOURS["zero"]))
-    legend.append(("disc ∝ |m|^(1/3)", (0.35, 0.35, 0.35)))
+    if on["masses"]:
+        legend.append(("disc ∝ |m|^(1/3)", (0.35, 0.35, 0.35)))
     for k, (text, colour) in enumerate(reversed(legend)):
         ax.text2D(0.98, 0.03 + 0.05 * k, text, transform=ax.transAxes, color=colour,
                   fontsize=8, ha="right")
@@ -129,6 +183,10 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
             h = d.trails[k]
             heads._offsets3d = (h[:, 0], h[:, 1], h[:, 2])
         clock.set_text(f"t = {d.times[k]:.3f} s")
+        if robot is not None:
+            robot(k)
+        if cam.get("track") is not None:
+            centre(k)
         return []
 
     update(0)

@@ -31,20 +31,20 @@ Definitions (all errors on the state ``y = [q; v]``, radians and SI units):
 from __future__ import annotations
 
 import csv
-import math
 import os
-import re
-import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
-from . import _core
-from .errors import InvalidInputError
-from .scenes import load_scene
-from .simulation import energies, simulate
+from .. import _core
+from .._helpers import pyplot
+from .._simulation import energies, simulate
+from ..errors import InvalidInputError
+from ..scenes import load_scene
+from ._methods import DECADES, cheapest, cheapest_text, measure, methods_text, parse_methods
+from ._rhs import best_time, rk4_fixed, scene_rhs
 
 #: Tolerances of the study (rtol = atol), loose to tight.
 DEFAULT_TOLERANCES = tuple(10.0**-k for k in range(3, 13))
@@ -58,87 +58,10 @@ def _scene_of(scene: Any):
     return load_scene(scene)
 
 
-_GRAVITY_REPR = re.compile(r"^Gravity\(g=\[([^,\]]+), ([^,\]]+), ([^,\]]+)\]\)$")
-
-
-def scene_rhs(scene) -> Callable[[float, np.ndarray], np.ndarray]:
-    """``f(t, y)`` of the scene in Python, ``y = [q; v]``: ``q̇`` from ``v`` and ``v̇`` from
-    ``Model.forward_dynamics``. Gravity alone rides on ``forward_dynamics(..., gravity=g)``
-    (SciPy's cheapest faithful call); any other declared effect is added through
-    :func:`pointmass_dyn.effect_forces`."""
-    model = scene.model
-    nq, nv = model.nq, model.nv
-    disabled = set(scene.disable or ())
-    g = None
-    others = False
-    for e in scene.effects:
-        if e.kind in disabled:
-            continue
-        m = _GRAVITY_REPR.match(repr(e)) if e.kind == "gravity" else None
-        if m is not None and g is None:
-            cand = np.array([float(x) for x in m.groups()])
-            if e == _core.Effect.gravity(cand):
-                g = cand
-                continue
-        others = True
-    kinds = [model.body_info(i)[1] for i in range(model.nbodies)]
-    qdot_is_v = nq == nv and not {"Spherical", "FreeFlyer"} & set(kinds)
-    zeros = np.zeros(nv)
-
-    if not others:
-
-        def rhs(t, y):
-            q, v = y[:nq], y[nq:]
-            a = model.forward_dynamics(q, v, zeros, gravity=g)
-            qd = v if qdot_is_v else model.velocity_to_qdot(q, v)
-            return np.concatenate([qd, a])
-
-        return rhs
-
-    def rhs_effects(t, y):
-        q, v = y[:nq], y[nq:]
-        tau = sum(_core.effect_forces(scene, t, q, v, None).values())
-        a = model.forward_dynamics(q, v, np.asarray(tau, dtype=float), gravity=None)
-        qd = v if qdot_is_v else model.velocity_to_qdot(q, v)
-        return np.concatenate([qd, a])
-
-    return rhs_effects
-
-
 def _rel(diff: np.ndarray, ref: np.ndarray) -> float:
     scale = float(np.max(np.abs(ref)))
     err = float(np.max(np.abs(diff)))
     return err / scale if scale > 0 else err
-
-
-def _best_time(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    best, out = math.inf, None
-    for _ in range(max(1, repeats)):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
-def rk4_fixed(rhs, t_span, y0, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
-    """Classical fixed-step RK4 (MuJoCo's ``mjINT_RK4``): times and states, ``n_steps + 1``
-    rows."""
-    t0, t1 = float(t_span[0]), float(t_span[1])
-    h = (t1 - t0) / n_steps
-    ys = np.empty((n_steps + 1, len(y0)))
-    ts = t0 + h * np.arange(n_steps + 1)
-    ts[-1] = t1
-    y = np.array(y0, dtype=float)
-    ys[0] = y
-    for k in range(n_steps):
-        t = ts[k]
-        k1 = rhs(t, y)
-        k2 = rhs(t + h / 2, y + (h / 2) * k1)
-        k3 = rhs(t + h / 2, y + (h / 2) * k2)
-        k4 = rhs(t + h, y + h * k3)
-        y = y + (h / 6) * (k1 + 2 * k2 + 2 * k3 + k4)
-        ys[k + 1] = y
-    return ts, ys
 
 
 @dataclass
@@ -151,25 +74,19 @@ class WorkPrecision:
     #: How the reference was computed and how well it agrees with ``simulate`` at 1e-13.
     reference_check: dict = field(default_factory=dict)
     #: ``work_precision(..., methods=...)``: one dict per method and setting (see
-    #: :mod:`pointmass_dyn.work_precision_methods`).
+    #: :mod:`pointmass_dyn.benchmarking`).
     method_rows: list[dict] = field(default_factory=list)
 
     def methods_table(self) -> str:
         """Every method's rows (``methods=``), as text."""
-        from .work_precision_methods import methods_text
-
         return methods_text(self.scene, self.method_rows)
 
     def cheapest(self, decades: Sequence[float] | None = None) -> list[dict]:
         """The cheapest method per accuracy decade (``methods=``); see
-        :func:`pointmass_dyn.work_precision_methods.cheapest`."""
-        from .work_precision_methods import DECADES, cheapest
-
+        :func:`pointmass_dyn.benchmarking.cheapest`."""
         return cheapest(self.method_rows, DECADES if decades is None else decades)
 
     def cheapest_table(self) -> str:
-        from .work_precision_methods import cheapest_text
-
         return cheapest_text(self.scene, self.method_rows)
 
     COLUMNS = (
@@ -277,8 +194,8 @@ def work_precision(
     ``methods`` (``"all"`` or names such as ``["RK45", "Radau", "scipy:DOP853",
     "mujoco:RK4"]``) measures those methods instead, into ``method_rows`` (the per-tolerance
     ``rows`` above are then not measured): adaptive ones over ``tolerances``, fixed-step ones
-    over ``dts`` (default :func:`~pointmass_dyn.work_precision_methods.default_dts`); see
-    :mod:`pointmass_dyn.work_precision_methods` for the definitions, and
+    over ``dts`` (default :func:`~pointmass_dyn.benchmarking.default_dts`); see
+    :mod:`pointmass_dyn.benchmarking` for the definitions, and
     ``cheapest_table()`` for the cheapest method per accuracy decade."""
     try:
         from scipy.integrate import solve_ivp
@@ -291,8 +208,6 @@ def work_precision(
     sc = _scene_of(scene)
     tolerances = _tolerances_arg(tolerances)
     if methods is not None:
-        from .work_precision_methods import parse_methods
-
         methods = parse_methods(methods)
         if dts is not None:
             dts = _tolerances_arg(dts) if np.ndim(dts) else None
@@ -337,8 +252,6 @@ def work_precision(
             ours_nfev=int(ours.nfev),
         )
     if methods is not None:
-        from .work_precision_methods import measure
-
         out.method_rows = measure(sc, span, ref.sol, methods, tolerances, dts, repeats,
                                   scipy_repeats, say)
         return out
@@ -346,7 +259,7 @@ def work_precision(
     for tol in tolerances:
         row: dict[str, Any] = {"tol": float(tol)}
         say(f"{sc.name}: simulate at {tol:g}")
-        t_run, r = _best_time(lambda: simulate(sc, span, rtol=tol, atol=tol), repeats)
+        t_run, r = best_time(lambda: simulate(sc, span, rtol=tol, atol=tol), repeats)
         if not r.success:
             row.update(tol=float(tol), nfev=r.nfev, steps=r.n_accepted, rejected=r.n_rejected,
                        time=t_run, err_final=np.nan, err_dense=np.nan, err_energy=np.nan,
@@ -367,7 +280,7 @@ def work_precision(
         )
         if scipy:
             say(f"{sc.name}: SciPy RK45 at {tol:g}")
-            t_sp, s = _best_time(
+            t_sp, s = best_time(
                 lambda: solve_ivp(rhs, span, y0, method="RK45", rtol=tol, atol=tol),
                 scipy_repeats)
             row.update(scipy_time=t_sp, scipy_nfev=int(s.nfev),
@@ -396,9 +309,7 @@ def plot_work_precision(results: Sequence[WorkPrecision], path=None, title: str 
     """One row per scene: error against wall time (ours, SciPy RK45 on our right-hand side,
     fixed-step RK4 with our number of evaluations, drawn at our time), and errors against the
     tolerance."""
-    from .plotting import _pyplot
-
-    plt = _pyplot()
+    plt = pyplot()
     n = len(results)
     fig, axes = plt.subplots(n, 2, figsize=(10, 3.4 * n + 0.4), squeeze=False)
     for (ax_t, ax_tol), res in zip(axes, results):
@@ -443,14 +354,3 @@ def plot_work_precision(results: Sequence[WorkPrecision], path=None, title: str 
         fig.savefig(path, dpi=120)
         plt.close(fig)
     return fig
-
-
-__all__ = [
-    "DEFAULT_TOLERANCES",
-    "WorkPrecision",
-    "plot_work_precision",
-    "rk4_fixed",
-    "scene_rhs",
-    "work_precision",
-    "write_csv",
-]

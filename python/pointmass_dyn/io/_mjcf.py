@@ -3,9 +3,9 @@
     xml = pmd.to_mjcf(scene, timestep=1e-3, integrator="RK4")
     m = mujoco.MjModel.from_xml_string(xml)          # optional peer: pip install 'pointmass-dyn[mujoco]'
     d = mujoco.MjData(m)
-    d.qpos[:], d.qvel[:] = pmd.mjcf.to_mujoco_state(scene.model, q, v)
+    d.qpos[:], d.qvel[:] = pmd.io.to_mujoco_state(scene.model, q, v)
     mujoco.mj_forward(m, d)
-    d.qacc == pmd.mjcf.to_mujoco_acceleration(scene.model, q, v, a)   # a: our forward dynamics
+    d.qacc == pmd.io.to_mujoco_acceleration(scene.model, q, v, a)   # a: our forward dynamics
 
 Writing the MJCF needs no MuJoCo; only loading it does. The conversion, joint by joint:
 
@@ -53,8 +53,9 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from . import _core
-from .errors import InvalidInputError, ModelStructureError
+from .. import _core
+from .._helpers import rotation_of_wxyz, scene_gravity
+from ..errors import InvalidInputError, ModelStructureError
 
 #: MuJoCo's integrators, as ``<option integrator=...>`` names them.
 MUJOCO_INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
@@ -105,17 +106,6 @@ def _quat_wxyz_of(r: np.ndarray) -> np.ndarray:
         q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
     q = np.array(q)
     return q / np.linalg.norm(q)
-
-
-def _rot_of_wxyz(q: np.ndarray) -> np.ndarray:
-    """Rotation matrices (..., 3, 3) of quaternions (..., 4) in (w, x, y, z) order."""
-    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], -2)
 
 
 def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -246,18 +236,19 @@ def _fmt(v) -> str:
     return " ".join(repr(float(x)) for x in np.ravel(v))
 
 
-def _probe_effects(scene, model, lay: MujocoLayout):
+def probe_effects(scene, model, lay: MujocoLayout):
     """Gravity, per-dof spring stiffness/rest and damping of the scene's enabled effects,
     read back through ``effect_forces`` and checked to be laws MuJoCo has."""
     disabled = set(scene.disable or ())
-    gravity = np.zeros(3)
+    g = scene_gravity(scene)
+    gravity = np.zeros(3) if g is None else g
     springs, dampers = [], []
     for e in scene.effects:
         if e.kind in disabled:
             continue
         r = repr(e)
         if r.startswith("Gravity("):
-            gravity += np.asarray(e.g)
+            continue
         elif r.startswith("Spring("):
             springs.append(e)
         elif r.startswith("Damper("):
@@ -358,7 +349,7 @@ def to_mjcf(
         if gravity is not None:
             raise InvalidInputError("gravity: give it only with a Model; a Scene's gravity is "
                                     "its Gravity effect")
-        g, stiff, rest, damp = _probe_effects(scene, model, lay)
+        g, stiff, rest, damp = probe_effects(scene, model, lay)
         name = name or scene.name
     else:
         g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
@@ -478,13 +469,13 @@ def to_mujoco_state(model, q, v) -> tuple[np.ndarray, np.ndarray]:
             e, ed = q[..., a:a + 3], v[..., b:b + 3]
             qpos[..., p:p + 4] = _zyz_quat(e)
             w_joint = np.einsum("...ij,...j->...i", _zyz_rate(e), ed)
-            qvel[..., d:d + 3] = np.einsum("...ji,...j->...i", _rot_of_wxyz(_zyz_quat(e)),
+            qvel[..., d:d + 3] = np.einsum("...ji,...j->...i", rotation_of_wxyz(_zyz_quat(e)),
                                            w_joint)
         else:  # FreeFlyer below the world
             quat = _qmul(_quat_wxyz_of(j.rot0), q[..., [a + 6, a + 3, a + 4, a + 5]])
             qpos[..., p:p + 3] = j.pos0 + q[..., a:a + 3] @ j.rot0.T
             qpos[..., p + 3:p + 7] = quat
-            qvel[..., d:d + 3] = np.einsum("...ij,...j->...i", _rot_of_wxyz(quat),
+            qvel[..., d:d + 3] = np.einsum("...ij,...j->...i", rotation_of_wxyz(quat),
                                            v[..., b:b + 3])
             qvel[..., d + 3:d + 6] = v[..., b + 3:b + 6]
     return qpos, qvel
@@ -523,13 +514,13 @@ def from_mujoco_state(model, qpos, qvel, q_like=None) -> tuple[np.ndarray, np.nd
             q[..., a:a + 4] = near_sign(qpos[..., [p + 1, p + 2, p + 3, p]], a)
             v[..., b:b + 3] = qvel[..., d:d + 3]
         elif j.kind == "SphericalZYZ":
-            r = _rot_of_wxyz(qpos[..., p:p + 4])
+            r = rotation_of_wxyz(qpos[..., p:p + 4])
             e = _zyz_of_rot(r, None if like is None else like[..., a:a + 3])
             w_joint = np.einsum("...ij,...j->...i", r, qvel[..., d:d + 3])
             q[..., a:a + 3] = e
             v[..., b:b + 3] = np.linalg.solve(_zyz_rate(e), w_joint[..., None])[..., 0]
         else:
-            r_w = _rot_of_wxyz(qpos[..., p + 3:p + 7])
+            r_w = rotation_of_wxyz(qpos[..., p + 3:p + 7])
             rel = _qmul(_quat_wxyz_of(j.rot0.T), qpos[..., p + 3:p + 7])
             q[..., a:a + 3] = (qpos[..., p:p + 3] - j.pos0) @ j.rot0
             q[..., a + 3:a + 7] = near_sign(rel[..., [1, 2, 3, 0]], a + 3)
@@ -559,12 +550,12 @@ def to_mujoco_acceleration(model, q, v, a) -> np.ndarray:
             e, ed, edd = q[..., i:i + 3], v[..., b:b + 3], a[..., b:b + 3]
             wdot = (np.einsum("...ij,...j->...i", _zyz_rate(e), edd)
                     + np.einsum("...ij,...j->...i", _zyz_rate_dot(e, ed), ed))
-            qacc[..., d:d + 3] = np.einsum("...ji,...j->...i", _rot_of_wxyz(_zyz_quat(e)), wdot)
+            qacc[..., d:d + 3] = np.einsum("...ji,...j->...i", rotation_of_wxyz(_zyz_quat(e)), wdot)
         else:
             # world linear velocity R v_lin: its rate is R (a_lin + ω × v_lin)
             quat = _qmul(_quat_wxyz_of(j.rot0), q[..., [i + 6, i + 3, i + 4, i + 5]])
             lin = a[..., b:b + 3] + np.cross(v[..., b + 3:b + 6], v[..., b:b + 3])
-            qacc[..., d:d + 3] = np.einsum("...ij,...j->...i", _rot_of_wxyz(quat), lin)
+            qacc[..., d:d + 3] = np.einsum("...ij,...j->...i", rotation_of_wxyz(quat), lin)
             qacc[..., d + 3:d + 6] = a[..., b + 3:b + 6]
     return qacc
 

@@ -8,8 +8,9 @@ from typing import Any
 
 import numpy as np
 
-from .animation import COLOURS, prepare
-from .errors import AnimationWriterError
+from ..errors import AnimationWriterError
+from ._animation import prepare
+from ._drawing import BOX_EDGES, COLOURS, box_corners
 
 
 def _hex(rgb) -> int:
@@ -89,10 +90,9 @@ def show(
             g.Line(g.PointsGeometry(pts), g.LineBasicMaterial(color=_hex(colour))))
         root[f"trails/{j}/head"].set_object(g.Sphere(0.015 * d.size), mat(colour))
     # Point-mass boxes: rigid, set once in the link frame and moved with the link.
-    edges = [(a, a | bit) for bit in (1, 2, 4) for a in range(8) if not a & bit]
     for i, (lo, hi) in enumerate(d.box_corners):
-        corners = np.array([[(hi if c >> k & 1 else lo)[k] for k in range(3)] for c in range(8)])
-        seg = np.array([corners[[a, b]] for a, b in edges]).reshape(-1, 3).T
+        corners = box_corners(lo, hi)
+        seg = np.array([corners[[a, b]] for a, b in BOX_EDGES]).reshape(-1, 3).T
         root[f"boxes/{i}"].set_object(g.LineSegments(
             g.PointsGeometry(np.ascontiguousarray(seg, dtype=np.float32)),
             g.LineBasicMaterial(color=_hex(COLOURS["box"]))))

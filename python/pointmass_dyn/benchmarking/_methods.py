@@ -14,14 +14,14 @@ Methods (names as ``methods=`` takes them):
   :func:`pointmass_dyn.simulate` (``method=``; a method this build does not have is skipped
   with a note);
 * ``scipy:RK45``, ``scipy:DOP853``, ``scipy:Radau``: ``scipy.integrate.solve_ivp`` on
-  :func:`~pointmass_dyn.work_precision.scene_rhs` (our forward dynamics called from Python).
+  :func:`~pointmass_dyn.benchmarking.scene_rhs` (our forward dynamics called from Python).
   Radau gets an analytic Jacobian when the model has ``forward_dynamics_derivatives`` and
   the scene only gravity, springs and dampers on 1-dof joints (``jac`` column says
   ``analytic``), else SciPy's finite differences (``fd``);
 * ``mujoco:RK4``, ``mujoco:Euler``, ``mujoco:implicitfast``: MuJoCo's ``mj_step`` (run by
   ``mujoco.rollout``, one thread) on the model :func:`pointmass_dyn.to_mjcf` writes, states
-  converted both ways by :mod:`pointmass_dyn.mjcf`; swept over ``dt``;
-* ``numpy:RK4``: the classical RK4 of :func:`~pointmass_dyn.work_precision.rk4_fixed` in
+  converted both ways by :mod:`pointmass_dyn.io`; swept over ``dt``;
+* ``numpy:RK4``: the classical RK4 of :func:`~pointmass_dyn.benchmarking.rk4_fixed` in
   NumPy on ``scene_rhs`` (slow; a check of MuJoCo's RK4 error, not a contender).
 
 Every row: ``err`` = ``max_k max|y(t_k) − y_ref(t_k)| / max_k max|y_ref(t_k)|`` over the
@@ -31,7 +31,7 @@ check times ``t_k = t0 + k (t1 − t0) / n_check`` (k = 0 … n_check; adaptive 
 run with ``t_eval`` on the check grid, 21 points: the output costs nothing measurable),
 ``nfev`` right-hand-side evaluations (MuJoCo: stages × steps), ``steps`` accepted steps
 (0 for SciPy, which does not report them). The reference is the one of
-:func:`~pointmass_dyn.work_precision.work_precision`: SciPy DOP853 at 1e-13.
+:func:`~pointmass_dyn.work_precision`: SciPy DOP853 at 1e-13.
 
 The cheapest method at an accuracy ``e``: per method, the time to reach ``err ≤ e`` read off
 its time–error curve by log–log interpolation between the two settings around ``e`` (or the
@@ -41,16 +41,20 @@ that never reaches ``e`` has no time there.
 
 from __future__ import annotations
 
+import csv
 import math
 import time
 import warnings
 from collections.abc import Sequence
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
-from . import _core
-from .errors import InvalidInputError
+from .._helpers import pyplot
+from .._simulation import simulate
+from ..errors import InvalidInputError
+from ..io import from_mujoco_state, layout, to_mjcf, to_mujoco_state
+from ._rhs import analytic_jacobian, best_time, rk4_fixed, scene_rhs
 
 OURS_ADAPTIVE = ("RK45", "DOP853", "Radau", "auto")
 OURS_FIXED = ("RK4", "Euler")
@@ -123,15 +127,6 @@ class _Reference:
         return float(np.max(d)) / self.scale, float(np.max(d[-1])) / self.scale_final
 
 
-def _best(fn: Callable[[], Any], repeats: int) -> tuple[float, Any]:
-    best, out = math.inf, None
-    for _ in range(max(1, repeats)):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def _row(method, tol=math.nan, dt=math.nan, **kw) -> dict:
     r = dict(method=method, tol=float(tol), dt=float(dt), nfev=0, steps=0, time=math.nan,
              err=math.inf, err_final=math.inf, jac="", note="")
@@ -143,21 +138,19 @@ def _row(method, tol=math.nan, dt=math.nan, **kw) -> dict:
 
 
 def _ours(sc, span, ref: _Reference, method, settings, repeats, say) -> list[dict]:
-    from .simulation import simulate
-
     fixed = method in OURS_FIXED
     rows = []
     for s in settings:
         kw = dict(method=method, dt=s) if fixed else dict(method=method, rtol=s, atol=s)
         say(f"{sc.name}: ours {method} at {'dt' if fixed else 'tol'} {s:g}")
         try:
-            t, r = _best(lambda: simulate(sc, span, t_eval=ref.grid, **kw),
+            t, r = best_time(lambda: simulate(sc, span, t_eval=ref.grid, **kw),
                          repeats)
         except TypeError as exc:          # this build's simulate has no method= / dt=
             if method != "RK45":
                 return [_row(method, note=f"not available: {exc}")]
             kw.pop("method")              # RK45 is what simulate always did
-            t, r = _best(lambda: simulate(sc, span, t_eval=ref.grid, **kw), repeats)
+            t, r = best_time(lambda: simulate(sc, span, t_eval=ref.grid, **kw), repeats)
         except InvalidInputError as exc:
             if "method" in str(exc) and s == settings[0]:
                 return [_row(method, note=f"not available: {exc}")]
@@ -176,62 +169,6 @@ def _ours(sc, span, ref: _Reference, method, settings, repeats, say) -> list[dic
 # ----------------------------------------------------------------------------- SciPy
 
 
-def analytic_jacobian(sc) -> Callable[[float, np.ndarray], np.ndarray] | None:
-    """``J(t, y)`` of :func:`scene_rhs` for models whose q is v (no quaternion joints):
-    ``Scene.state_jacobian`` where this build has it, else ``Model.forward_dynamics_derivatives``
-    plus the springs' and dampers' terms (scenes of gravity, springs and dampers only);
-    ``None`` when neither applies."""
-    from .mjcf import _probe_effects, layout
-
-    model = sc.model
-    if model.nq != model.nv:
-        return None
-    if hasattr(sc, "state_jacobian"):       # the scene's own: every effect included
-        n2 = model.nq + model.nv
-        try:
-            ok = np.shape(sc.state_jacobian(np.concatenate([sc.q0, sc.v0]), t=0.0)) == (n2, n2)
-        except Exception:
-            ok = False
-        if ok:
-            return lambda t, y: np.asarray(sc.state_jacobian(np.asarray(y, float), t=float(t)))
-    if not hasattr(model, "forward_dynamics_derivatives"):
-        return None
-    try:
-        g, stiff, _, damp = _probe_effects(sc, model, layout(model))
-    except Exception:
-        return None
-    n = model.nv
-    rhs = _core_rhs(sc)
-
-    def jac(t, y):
-        q, v = y[:n], y[n:]
-        tau = rhs.tau(t, q, v)
-        d = model.forward_dynamics_derivatives(q, v, tau, gravity=g)
-        dq, dv, minv = (np.asarray(x) for x in d[:3])
-        j = np.zeros((2 * n, 2 * n))
-        j[:n, n:] = np.eye(n)
-        j[n:, :n] = dq - minv * stiff        # τ = −k (q − r) − c v: ∂τ/∂q = −diag(k)
-        j[n:, n:] = dv - minv * damp
-        return j
-
-    return jac
-
-
-class _core_rhs:
-    """The effects' generalized force of a scene, gravity excluded (for the Jacobian)."""
-
-    def __init__(self, sc):
-        others = [e for e in sc.effects if e.kind != "gravity"
-                  and e.kind not in set(sc.disable or ())]
-        self.sub = _core.Scene(sc.model, effects=others) if others else None
-        self.nv = sc.model.nv
-
-    def tau(self, t, q, v):
-        if self.sub is None:
-            return np.zeros(self.nv)
-        return np.sum(list(_core.effect_forces(self.sub, t, q, v, None).values()), axis=0)
-
-
 def _scipy(sc, span, y0, rhs, ref, method, tols, repeats, say) -> list[dict]:
     from scipy.integrate import solve_ivp
 
@@ -246,7 +183,7 @@ def _scipy(sc, span, y0, rhs, ref, method, tols, repeats, say) -> list[dict]:
     rows = []
     for tol in tols:
         say(f"{sc.name}: {method} at {tol:g}")
-        t, s = _best(lambda: solve_ivp(rhs, span, y0, method=name, rtol=tol, atol=tol,
+        t, s = best_time(lambda: solve_ivp(rhs, span, y0, method=name, rtol=tol, atol=tol,
                                        t_eval=ref.grid, **kw), repeats)
         ok = s.success and s.y.shape[1] == len(ref.grid)
         err, errf = ref.errors(s.y.T) if ok else (math.inf, math.inf)
@@ -266,8 +203,6 @@ def _mujoco(sc, span, ref, method, dts, repeats, say) -> list[dict]:
         import mujoco.rollout
     except ImportError:
         return [_row(method, note="not available: pip install 'pointmass-dyn[mujoco]'")]
-    from .mjcf import from_mujoco_state, layout, to_mjcf, to_mujoco_state
-
     integ = method.split(":")[1]
     model = sc.model
     try:
@@ -301,7 +236,7 @@ def _mujoco(sc, span, ref, method, dts, repeats, say) -> list[dict]:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 mujoco.rollout.rollout(m, d, x0[None], nstep=n, state=state)
-        t, _ = _best(run, repeats)
+        t, _ = best_time(run, repeats)
         idx = np.arange(per - 1, n, per)
         xs = np.vstack([x0[None], state[0, idx]])
         qpos = xs[:, i_qpos:i_qpos + lay.nq]
@@ -323,8 +258,6 @@ def _mujoco(sc, span, ref, method, dts, repeats, say) -> list[dict]:
 
 
 def _numpy_rk4(sc, span, rhs, y0, ref, dts, say) -> list[dict]:
-    from .work_precision import rk4_fixed
-
     rows = []
     for dt in dts:
         n = int(round((span[1] - span[0]) / dt))
@@ -349,8 +282,6 @@ def _numpy_rk4(sc, span, rhs, y0, ref, dts, say) -> list[dict]:
 def measure(sc, span, ref_sol, methods, tolerances, dts, repeats, scipy_repeats,
             say) -> list[dict]:
     """All rows of the listed methods (see :func:`pointmass_dyn.work_precision`)."""
-    from .work_precision import scene_rhs
-
     ref = _Reference(ref_sol, span, N_CHECK)
     y0 = np.concatenate([sc.q0, sc.v0])
     rhs = scene_rhs(sc)
@@ -467,9 +398,7 @@ STYLE = {
 
 def plot_methods(results, path=None):
     """Error over the check times against wall time, one panel per scene, every method."""
-    from .plotting import _pyplot
-
-    plt = _pyplot()
+    plt = pyplot()
     n = len(results)
     cols = 2 if n > 1 else 1
     nrows = (n + cols - 1) // cols
@@ -511,8 +440,6 @@ CSV_COLUMNS = ("scene", "t_end", "method", "tol", "dt", "nfev", "steps", "time",
 
 def write_methods_csv(results, path) -> None:
     """Every method row of ``results`` (``WorkPrecision`` with ``method_rows``), one CSV."""
-    import csv
-
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(CSV_COLUMNS)
@@ -521,21 +448,3 @@ def write_methods_csv(results, path) -> None:
                 w.writerow([res.scene, res.t_span[1]] + [
                     repr(float(r[c])) if isinstance(r.get(c), (float, np.floating))
                     else r.get(c, "") for c in CSV_COLUMNS[2:]])
-
-
-__all__ = [
-    "write_methods_csv",
-    "ALL_METHODS",
-    "DECADES",
-    "DEFAULT_METHODS",
-    "analytic_jacobian",
-    "cheapest",
-    "cheapest_text",
-    "default_dts",
-    "measure",
-    "methods_text",
-    "parse_methods",
-    "plot_methods",
-    "ratio_table",
-    "time_to_reach",
-]

@@ -18,7 +18,11 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import InvalidInputError
+from .._batch import scenes_from_params, simulate_batch
+from .._helpers import quaternion_slices, scene_gravity
+from ..errors import InvalidInputError
+from ..plotting import coordinate_labels, plot_sweep
+from ..scenes import load_scene
 
 PARAM_SPEC = "KEY=START:STOP:COUNT[:log] | KEY=V1,V2,..."
 
@@ -55,7 +59,7 @@ examples:
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    """The ``sweep`` subcommand (cli.py's ``build_parser`` calls this)."""
+    """The ``sweep`` subcommand."""
     sw = sub.add_parser(
         "sweep",
         help="many runs of a scene on a thread pool: a grid of parameters and/or random "
@@ -163,13 +167,6 @@ def parse_values(spec: str) -> tuple[str, np.ndarray]:
 _AXIS = {"x": 0, "y": 1, "z": 2}
 
 
-def _scene_gravity(scene) -> np.ndarray:
-    for e in scene.effects:
-        if e.g is not None:
-            return np.asarray(e.g, dtype=float)
-    return np.zeros(3)
-
-
 def _key_target(scene, key: str) -> tuple[str, int | None]:
     """The ``simulate_batch`` params key that ``key`` sets, and the component (or None)."""
     model = scene.model
@@ -188,15 +185,6 @@ def _key_target(scene, key: str) -> tuple[str, int | None]:
         f"<body>.com.x|y|z, gravity.x|y|z or <effect>.<parameter> (bodies: "
         f"{', '.join(model.body_names)}; effects: {', '.join(sorted(effects)) or 'none'})"
     )
-
-
-def _quaternion_blocks(model) -> list[int]:
-    """Start index in q of every quaternion (x, y, z, w) of the model."""
-    out = []
-    for iq, _, nq, nv in model.joint_slices():
-        if nq == nv + 1:  # Spherical (q = xyzw) or FreeFlyer (q = xyz, xyzw)
-            out.append(iq + nq - 4)
-    return out
 
 
 def sweep_runs(scene, param_specs=(), runs: int = 1, q0_noise: float = 0.0,
@@ -243,7 +231,8 @@ def sweep_runs(scene, param_specs=(), runs: int = 1, q0_noise: float = 0.0,
             continue
         if target not in params:
             if target == "gravity":
-                base = _scene_gravity(scene)
+                g = scene_gravity(scene)
+                base = np.zeros(3) if g is None else g
             else:
                 base = np.asarray(model.body(target[:-4]).com, dtype=float)
             params[target] = np.tile(base, (count, 1))
@@ -254,17 +243,15 @@ def sweep_runs(scene, param_specs=(), runs: int = 1, q0_noise: float = 0.0,
     v0 = np.tile(np.asarray(scene.v0, dtype=float), (count, 1))
     if q0_noise > 0.0:
         q0 = q0 + q0_noise * rng.standard_normal(q0.shape)
-        for k in _quaternion_blocks(model):
-            q0[:, k:k + 4] /= np.linalg.norm(q0[:, k:k + 4], axis=1, keepdims=True)
+        for s in quaternion_slices(model):
+            q0[:, s] /= np.linalg.norm(q0[:, s], axis=1, keepdims=True)
     if v0_noise > 0.0:
         v0 = v0 + v0_noise * rng.standard_normal(v0.shape)
     if params:
         # Every run's scene is built before anything runs: a bad value (a negative stiffness,
         # a mass <= 0) is reported here, naming the option.
-        from .batch import _scenes_from_params
-
         try:
-            _scenes_from_params(scene, params)
+            scenes_from_params(scene, params)
         except (InvalidInputError, ValueError) as exc:
             raise InvalidInputError(f"--param: {exc}") from None
     return SweepRuns(q0=q0, v0=v0, params=params or None, names=names, values=values,
@@ -354,10 +341,6 @@ def _thread_count(threads: int | None) -> int:
 
 
 def cmd_sweep(args) -> int:
-    from .batch import simulate_batch
-    from .plotting import coordinate_labels
-    from .scenes import load_scene
-
     if args.samples < 2:
         raise InvalidInputError(f"--samples: expected at least 2, got {args.samples}")
     if args.threads is not None and args.threads < 1:
@@ -443,14 +426,9 @@ def cmd_sweep(args) -> int:
         )
         print(f"  runs written to {args.out}")
     if args.plot:
-        from .plotting import plot_sweep
-
         k = _pick_coord(args.coord, model, qlab, final_q)
         plot_sweep(res.t, res.q, ok, qlab, angular, runs.names, runs.values, k, args.plot,
                    title=f"{scene.name}: {count} runs, {count - nfail} succeeded "
                          f"({wall:.3g} s on {threads} thread{'s' * (threads > 1)})")
         print(f"  plot written to {args.plot} (coordinate {k}: {qlab[k]})")
     return 0 if nfail == 0 else 1
-
-
-__all__ = ["SweepRuns", "add_parser", "cmd_sweep", "parse_values", "sweep_runs"]

@@ -1,0 +1,323 @@
+"""Shaking forces and moments, and a mechanism along a prescribed motion (docs/balancing.md).
+
+A moving mechanism shakes its ground with the resultant of its inertia forces, the shaking
+force ``F = −Σ m_ij a_ij`` and moment ``M_O = −Σ m_ij (r_ij − O) × a_ij`` over every point
+mass (gravity excluded: the weight is steady and reported apart).
+
+* :func:`shaking` — shaking force and moment per state, over arrays of states or along a
+  :class:`~pointmass_dyn.SimulationResult`.
+* :func:`prescribed_motion` — a mechanism driven at a prescribed input (a crank at constant
+  speed over a revolution, or a tabulated input): per instant the whole state, driving
+  torque, bearing forces, shaking force and moment (:class:`MotionAnalysis`);
+  :func:`analyze_motion` the same along given states.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from .._helpers import peak, rms, scene_gravity
+from ..errors import InvalidInputError
+
+
+@dataclass(frozen=True)
+class Shaking:
+    """Shaking force and moment (world axes) about ``about``, per state: (N, 3) or (3,).
+    ``weight`` is the steady load of the moving links (``total mass × g``; None without
+    gravity), which the shaking force leaves out."""
+
+    force: np.ndarray
+    moment: np.ndarray
+    about: np.ndarray
+    weight: np.ndarray | None = None
+
+    @property
+    def rms(self) -> dict[str, float]:
+        """RMS magnitudes over the states (equal weights: sample the cycle uniformly)."""
+        return {"force": rms(self.force), "moment": rms(self.moment)}
+
+    @property
+    def peak(self) -> dict[str, float]:
+        return {"force": peak(self.force), "moment": peak(self.moment)}
+
+
+
+def shaking(
+    model_or_scene: Any,
+    q: Any,
+    v: Any = None,
+    a: Any = None,
+    *,
+    about: Any = (0.0, 0.0, 0.0),
+    gravity: Any = None,
+) -> Shaking:
+    """Shaking force ``−Σ m a`` and moment ``−Σ m (r − O) × a`` (``O = about``) of a model.
+
+    ``q``, ``v``, ``a``: one state ((nq,), (nv,), (nv,)) or N states ((N, nq), (N, nv),
+    (N, nv)). Or ``q`` a :class:`SimulationResult` and ``model_or_scene`` the
+    :class:`Scene` it came from: the accelerations are then the scene's own (its effects, its
+    loops) at each output sample. ``gravity`` only sets the reported ``weight`` (a scene's
+    gravity by default)."""
+    about = np.asarray(about, dtype=float)
+    if hasattr(q, "t") and hasattr(q, "q") and hasattr(q, "v"):
+        result = q
+        if not isinstance(model_or_scene, _core.Scene):
+            raise InvalidInputError(
+                "model_or_scene: expected the Scene a SimulationResult came from (its effects "
+                "give the accelerations), got " + type(model_or_scene).__name__
+            )
+        scene = model_or_scene
+        model = scene.model
+        q, v = np.asarray(result.q, dtype=float), np.asarray(result.v, dtype=float)
+        a = np.array(
+            [
+                model.forward_dynamics(qk, vk, sum(_core.effect_forces(scene, t, qk, vk).values()))
+                for t, qk, vk in zip(result.t, q, v)
+            ]
+        ).reshape(len(result.t), model.nv)
+        if gravity is None:
+            gravity = scene_gravity(scene)
+    else:
+        model = model_or_scene.model if isinstance(model_or_scene, _core.Scene) else model_or_scene
+        if v is None or a is None:
+            raise InvalidInputError("v, a: expected the speeds and accelerations with q, got None")
+    force, moment = model.shaking(q, v, a, about=about)
+    weight = None if gravity is None else model.total_mass * np.asarray(gravity, dtype=float)
+    return Shaking(force, moment, about, weight)
+
+
+@dataclass
+class MotionAnalysis:
+    """A mechanism along a prescribed motion, per instant (N of them).
+
+    ``tau`` (N, nv): the driving forces (nonzero at the actuated coordinates only, for a
+    mechanism with loops); ``bearing`` (N, nlinks, 6): each joint's ``[force; moment]`` on its
+    link at the link origin, link axes; ``cut`` (N, nloops, 6): each cut joint's wrench
+    (frame a axes, as ``constraint_forces``); ``shaking``: force and moment."""
+
+    model: Any
+    t: np.ndarray
+    q: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    tau: np.ndarray
+    bearing: np.ndarray
+    cut: np.ndarray
+    shaking: Shaking
+    actuated: list[int] | None
+    gravity: np.ndarray | None
+    input: np.ndarray | None = None
+    input_name: str | None = None
+
+    def summary(self) -> dict[str, dict[str, float]]:
+        """RMS and peak of the shaking force and moment, the driving force(s) and each
+        joint's bearing force."""
+        out = {
+            "shaking force": {"rms": rms(self.shaking.force), "peak": peak(self.shaking.force)},
+            "shaking moment": {
+                "rms": rms(self.shaking.moment),
+                "peak": peak(self.shaking.moment),
+            },
+        }
+        cols = self.actuated if self.actuated is not None else range(self.tau.shape[1])
+        for c in cols:
+            out[f"driving force [{c}]"] = {
+                "rms": rms(self.tau[:, c]),
+                "peak": peak(self.tau[:, c]),
+            }
+        for i, name in enumerate(self.model.link_names):
+            f = self.bearing[:, i, :3]
+            out[f"bearing '{name}'"] = {"rms": rms(f), "peak": peak(f)}
+        for k, name in enumerate(self.model.loop_names):
+            f = self.cut[:, k, :3]
+            out[f"cut joint '{name}'"] = {"rms": rms(f), "peak": peak(f)}
+        return out
+
+
+def analyze_motion(
+    model: Any,
+    t: Any,
+    q: Any,
+    v: Any,
+    a: Any,
+    *,
+    actuated: Any = None,
+    gravity: Any = None,
+    about: Any = (0.0, 0.0, 0.0),
+) -> MotionAnalysis:
+    """Driving forces, bearing forces and shaking along given states (N, nq), (N, nv), (N, nv)
+    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``)."""
+    t = np.asarray(t, dtype=float).reshape(-1)
+    q = np.asarray(q, dtype=float).reshape(len(t), model.nq)
+    v = np.asarray(v, dtype=float).reshape(len(t), model.nv)
+    a = np.asarray(a, dtype=float).reshape(len(t), model.nv)
+    g = None if gravity is None else np.asarray(gravity, dtype=float)
+    act = None if model.nloops == 0 else actuated
+    tau, bearing, cut = [], [], []
+    for qk, vk, ak in zip(q, v, a):
+        b = model.bearing_forces(qk, vk, ak, gravity=g, actuated=act)
+        tau.append(b["tau"])
+        bearing.append(b["joints"])
+        cut.append(b["loops"])
+    sh = shaking(model, q, v, a, about=about, gravity=g)
+    actuated_idx = None if act is None else _actuated_indices(model, act)
+    return MotionAnalysis(
+        model=model,
+        t=t,
+        q=q,
+        v=v,
+        a=a,
+        tau=np.array(tau).reshape(len(t), model.nv),
+        bearing=np.array(bearing).reshape(len(t), model.nlinks, 6),
+        cut=np.array(cut).reshape(len(t), model.nloops, 6),
+        shaking=sh,
+        actuated=actuated_idx,
+        gravity=g,
+    )
+
+
+def _actuated_indices(model, actuated) -> list[int]:
+    """v indices of ``actuated`` (ints: v indices; names: all speeds of that body's joint)."""
+    items = [actuated] if isinstance(actuated, (str, int, np.integer)) else list(actuated)
+    out = []
+    for item in items:
+        if isinstance(item, str):
+            if item not in model.body_names:
+                raise InvalidInputError(f"actuated: no body named '{item}'")
+            link = model.body_info(model.body_names.index(item))[3]
+            if link < 0:
+                raise InvalidInputError(f"actuated: '{item}' has no joint coordinates")
+            _, iv, _, nv = model.joint_slices()[link]
+            out.extend(range(iv, iv + nv))
+        else:
+            out.append(int(item))
+    return sorted(set(out))
+
+
+def _driver_slot(model, driver) -> tuple[str, int, int]:
+    """(body name, q index, v index) of a 1-dof driving joint."""
+    names = model.body_names
+    if isinstance(driver, str):
+        if driver not in names:
+            raise InvalidInputError(
+                f"driver: expected a body name, got '{driver}' (bodies: {names})"
+            )
+        body = names.index(driver)
+    else:
+        body = int(driver)
+        if not 0 <= body < len(names):
+            raise InvalidInputError(
+                f"driver: expected a body index 0..{len(names) - 1}, got {body}"
+            )
+    link = model.body_info(body)[3]
+    if link < 0 or model.link_names[link] != names[body]:
+        raise InvalidInputError(f"driver: expected a body on a moving joint, got '{names[body]}'")
+    iq, iv, nq, nv = model.joint_slices()[link]
+    if nq != 1 or nv != 1:
+        raise InvalidInputError(
+            f"driver: expected a 1-dof joint (revolute or prismatic), got '{names[body]}' with "
+            f"nq = {nq}, nv = {nv}"
+        )
+    return names[body], iq, iv
+
+
+def prescribed_motion(
+    model: Any,
+    driver: Any,
+    *,
+    speed: float | None = None,
+    samples: int = 360,
+    revolutions: float = 1.0,
+    start: float | None = None,
+    q_guess: Any = None,
+    input: tuple | None = None,
+    gravity: Any = None,
+    about: Any = (0.0, 0.0, 0.0),
+) -> MotionAnalysis:
+    """A one-input mechanism driven by ``driver`` (a 1-dof joint's body): at constant
+    ``speed`` (rad/s or m/s) over ``revolutions`` turns sampled at ``samples`` uniformly
+    spaced instants (the end excluded, so RMS values are over whole cycles), or along a
+    tabulated ``input = (t, position, rate, acceleration)`` (arrays of one length).
+
+    Each instant's state is closed by ``assemble`` with the driver held, continuing from the
+    previous instant (from ``q_guess``, default the model's closed guess: a scene's
+    ``q0``), so the mechanism stays on one assembly branch. Freedoms the driver leaves
+    (the idle spin of an RSSR's coupler) take minimum-norm speeds and the accelerations the
+    dynamics gives them. Returns a :class:`MotionAnalysis`."""
+    name, iq, iv = _driver_slot(model, driver)
+    kind = model.body_info(model.body_names.index(name))[1]
+    if input is None and kind != "Revolute":
+        raise InvalidInputError(
+            f"input: a {kind} driver ('{name}') has no revolution to sample; give its motion "
+            f"as input=(t, position, rate, acceleration)"
+        )
+    q0 = np.asarray(model.neutral() if q_guess is None else q_guess, dtype=float).copy()
+    if input is not None:
+        t, pos, rate, acc = (np.asarray(x, dtype=float).reshape(-1) for x in input)
+        if not len(t) == len(pos) == len(rate) == len(acc):
+            raise InvalidInputError(
+                "input: expected (t, position, rate, acceleration) of one length"
+            )
+    else:
+        if speed is None or not np.isfinite(speed) or speed == 0.0:
+            raise InvalidInputError(f"speed: expected a finite non-zero driver speed, got {speed}")
+        if samples < 2:
+            raise InvalidInputError(f"samples: expected at least 2, got {samples}")
+        theta0 = q0[iq] if start is None else float(start)
+        span = 2.0 * np.pi * revolutions
+        pos = theta0 + np.sign(speed) * span * np.arange(samples) / samples
+        t = (pos - theta0) / speed
+        rate = np.full(samples, float(speed))
+        acc = np.zeros(samples)
+    n = len(t)
+    q = np.empty((n, model.nq))
+    v = np.empty((n, model.nv))
+    a = np.empty((n, model.nv))
+    guess = q0
+    loops = model.nloops > 0
+    # Freedoms the driver does not set (an RSSR coupler's spin about its own axis) move as
+    # the dynamics says: their speeds are taken at minimum norm, their accelerations from
+    # forward dynamics under the driver force that gives the prescribed acceleration.
+    idle = (
+        loops
+        and model.nv
+        - np.linalg.matrix_rank(
+            model.constraint_jacobian(model.assemble(q0, fixed=[name])), tol=1e-9
+        )
+        > 1
+    )
+    g = None if gravity is None else np.asarray(gravity, dtype=float)
+    for k in range(n):
+        guess = guess.copy()
+        guess[iq] = pos[k]
+        vk = np.zeros(model.nv)
+        vk[iv] = rate[k]
+        ak = np.zeros(model.nv)
+        ak[iv] = acc[k]
+        if loops:
+            guess = model.assemble(guess, fixed=[name])
+            vk = model.assemble_velocity(guess, vk, fixed=[name])
+            if idle:
+                zero = np.zeros(model.nv)
+                a0 = model.forward_dynamics(guess, vk, zero, gravity=g)
+                unit = zero.copy()
+                unit[iv] = 1.0
+                per_unit = model.forward_dynamics(guess, vk, unit, gravity=g) - a0
+                ak = a0 + per_unit * ((acc[k] - a0[iv]) / per_unit[iv])
+                ak[iv] = acc[k]
+            else:
+                ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
+        elif model.nv != 1:
+            raise InvalidInputError(
+                f"driver: a model without loops moves with one input only if it has one degree "
+                f"of freedom (this one has nv = {model.nv}); give every coordinate's motion to "
+                f"analyze_motion instead"
+            )
+        q[k], v[k], a[k] = guess, vk, ak
+    out = analyze_motion(model, t, q, v, a, actuated=[name], gravity=gravity, about=about)
+    out.input, out.input_name = pos, name
+    return out

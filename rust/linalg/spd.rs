@@ -1,0 +1,82 @@
+//! The inverse of a symmetric positive definite matrix in the caller's buffers. Not nalgebra's
+//! `Cholesky::new(m).inverse()`: that takes the matrix by value and allocates the factor and
+//! the inverse on every call; the derivatives reuse their workspace and allocate nothing.
+use nalgebra::DMatrix;
+
+/// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`, then
+/// `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`, `out`:
+/// scratch matrices of the same size; `inv_diag`: scratch of length n (the reciprocal
+/// pivots, so the substitution multiplies instead of dividing). `Err(k)` at a non-positive
+/// pivot `k`.
+pub fn spd_inverse(
+    m: &mut DMatrix<f64>,
+    t: &mut DMatrix<f64>,
+    out: &mut DMatrix<f64>,
+    inv_diag: &mut [f64],
+) -> std::result::Result<(), usize> {
+    let n = m.nrows();
+    let a = m.as_mut_slice();
+    // Cholesky, left-looking: column j −= L_jk · column k (rows j..n), k < j.
+    for j in 0..n {
+        let (done, rest) = a.split_at_mut(j * n);
+        let cj = &mut rest[..n];
+        for k in 0..j {
+            let ck = &done[k * n..(k + 1) * n];
+            let l = ck[j];
+            for (x, y) in cj[j..].iter_mut().zip(&ck[j..]) {
+                *x -= l * y;
+            }
+        }
+        let d = cj[j];
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(j);
+        }
+        let d = d.sqrt();
+        cj[j] = d;
+        let inv = 1.0 / d;
+        inv_diag[j] = inv;
+        for x in &mut cj[j + 1..] {
+            *x *= inv;
+        }
+    }
+    // X = L⁻¹ by columns, left to right: column j is L x = e_j by column-oriented forward
+    // substitution, reading only L's columns > j (not yet overwritten).
+    for j in 0..n {
+        let (head, tail) = a.split_at_mut((j + 1) * n);
+        let cj = &mut head[j * n..];
+        let xj = inv_diag[j];
+        cj[j] = xj;
+        for x in &mut cj[j + 1..] {
+            *x *= -xj;
+        }
+        for k in j + 1..n {
+            let ck = &tail[(k - j - 1) * n..(k - j) * n];
+            let xk = cj[k] * inv_diag[k];
+            cj[k] = xk;
+            for (x, y) in cj[k + 1..].iter_mut().zip(&ck[k + 1..]) {
+                *x -= xk * y;
+            }
+        }
+    }
+    // M⁻¹ = Xᵀ X by one matrix product (matrixmultiply's kernels): Xᵀ into `t`, the product
+    // into `out`, swapped into place.
+    for j in 0..n {
+        for i in 0..j {
+            a[j * n + i] = 0.0;
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            t[(i, j)] = m[(j, i)];
+        }
+    }
+    out.gemm(1.0, t, m, 0.0);
+    std::mem::swap(m, out);
+    // Exactly symmetric (the product rounds (i, j) and (j, i) alike, but say so).
+    for j in 0..n {
+        for i in j + 1..n {
+            m[(j, i)] = m[(i, j)];
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,87 @@
+//! `Joint`: the joint types a body hangs on (revolute, prismatic, spherical, fixed, free).
+use pyo3::prelude::*;
+
+use super::convert::{to_array1, vec3};
+use super::errors::IntoPyResult;
+use crate::joint::Joint;
+
+#[pyclass(name = "Joint", module = "pointmass_dyn._core", frozen, from_py_object)]
+#[derive(Clone)]
+pub struct PyJoint {
+    pub inner: Joint,
+}
+
+#[pymethods]
+impl PyJoint {
+    #[staticmethod]
+    fn revolute(py: Python<'_>, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Ok(PyJoint {
+            inner: Joint::revolute(vec3(axis, "axis")?).py(py)?,
+        })
+    }
+    #[staticmethod]
+    fn prismatic(py: Python<'_>, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
+        Ok(PyJoint {
+            inner: Joint::prismatic(vec3(axis, "axis")?).py(py)?,
+        })
+    }
+    #[staticmethod]
+    fn spherical_zyz() -> Self {
+        PyJoint {
+            inner: Joint::SphericalZYZ,
+        }
+    }
+    #[staticmethod]
+    fn spherical() -> Self {
+        PyJoint {
+            inner: Joint::Spherical,
+        }
+    }
+    #[staticmethod]
+    fn fixed() -> Self {
+        PyJoint {
+            inner: Joint::Fixed,
+        }
+    }
+    #[staticmethod]
+    fn free_flyer() -> Self {
+        PyJoint {
+            inner: Joint::FreeFlyer,
+        }
+    }
+    #[getter]
+    fn kind(&self) -> &'static str {
+        self.inner.kind()
+    }
+    #[getter]
+    fn nq(&self) -> usize {
+        self.inner.nq()
+    }
+    #[getter]
+    fn nv(&self) -> usize {
+        self.inner.nv()
+    }
+    #[getter]
+    fn axis<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+        match self.inner {
+            Joint::Revolute { axis } | Joint::Prismatic { axis } => {
+                Some(to_array1(py, axis.as_slice()).into_any())
+            }
+            _ => None,
+        }
+    }
+    fn __repr__(&self) -> String {
+        match self.inner {
+            Joint::Revolute { axis } | Joint::Prismatic { axis } => {
+                format!(
+                    "{}(axis=[{}, {}, {}])",
+                    self.inner.kind(),
+                    axis.x,
+                    axis.y,
+                    axis.z
+                )
+            }
+            _ => format!("{}()", self.inner.kind()),
+        }
+    }
+}

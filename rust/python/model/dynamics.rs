@@ -1,0 +1,314 @@
+//! `Model`'s dynamics: forward and inverse (either path), their derivatives, the mass
+//! matrix, bias forces and energies.
+use pyo3::prelude::*;
+
+use super::{
+    external_wrenches, gravity_arg, load_state, load_x, method_arg, square_to_array,
+    symmetric_to_array, Method, PyModel, DETACH_LINKS,
+};
+use crate::alloc::try_zeros;
+use crate::denoc;
+use crate::kinematics;
+use crate::model::Model;
+use crate::python::convert::{dmatrix_to_array, to_array1};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::signals::detach_interruptible;
+use crate::recursive;
+use crate::shared::{Direction, Workspace};
+
+fn name(direction: Direction) -> &'static str {
+    match direction {
+        Direction::Forward => "forward_dynamics",
+        Direction::Inverse => "inverse_dynamics",
+    }
+}
+
+/// The argument that is not a state: τ for forward dynamics, a for inverse.
+fn input(direction: Direction) -> &'static str {
+    match direction {
+        Direction::Forward => "tau",
+        Direction::Inverse => "a",
+    }
+}
+
+#[pymethods]
+impl PyModel {
+    /// Accelerations from `I a + C v = τ + τ_g + τ_ext`.
+    #[pyo3(signature = (q, v, tau, gravity=None, external=None, method="recursive"))]
+    #[allow(clippy::too_many_arguments)]
+    fn forward_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.dynamics(py, Direction::Forward, q, v, tau, gravity, external, method)
+    }
+
+    /// Joint forces `τ = I a + C v − τ_g − τ_ext`. With loops, the forces of the `actuated`
+    /// coordinates alone (the cut joints carry the rest).
+    #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive", actuated=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn inverse_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+        method: &str,
+        actuated: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model();
+        let Some(actuated) = crate::python::loops::loop_actuation(py, &model, actuated)? else {
+            return self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method);
+        };
+        let tree = self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method)?;
+        let tau_tree = crate::python::convert::vector(&tree, "tau", Some(model.nv))?;
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            load_x(ws, py, a, "a")?;
+            let tau = ws.driving_forces(&tau_tree, &actuated).py(py)?;
+            check_result(py, "inverse_dynamics", &tau)?;
+            Ok(to_array1(py, &tau).into_any())
+        })
+    }
+
+    /// `(∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M)` of the inverse dynamics at `(q, v, a)`, each nv × nv;
+    /// `q` is perturbed in the tangent space (`q ⊕ δ`, docs/derivatives.md).
+    #[pyo3(signature = (q, v, a, gravity=None))]
+    fn inverse_dynamics_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        self.derivatives(py, Direction::Inverse, q, v, a, gravity)
+    }
+
+    /// `(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)` of the forward dynamics at `(q, v, τ)`, each nv × nv;
+    /// `q` is perturbed in the tangent space (`q ⊕ δ`, docs/derivatives.md).
+    #[pyo3(signature = (q, v, tau, gravity=None))]
+    fn forward_dynamics_derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        self.derivatives(py, Direction::Forward, q, v, tau, gravity)
+    }
+
+    /// Generalized inertia matrix (GIM), nv × nv.
+    #[pyo3(signature = (q, method="recursive"))]
+    fn mass_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let method = method_arg(py, method)?;
+        match method {
+            Method::Recursive => self.with_workspace(|ws| {
+                load_state(ws, py, q, None)?;
+                let nv = ws.model().nv;
+                let mut gim = try_zeros(nv, nv, "mass_matrix").py(py)?;
+                let Workspace {
+                    version,
+                    data,
+                    q: qv,
+                    ..
+                } = ws;
+                let model: &Model = &version.model;
+                // O(n·depth): long chains are worth releasing the interpreter for.
+                if model.links.len() >= DETACH_LINKS {
+                    py.detach(|| recursive::mass_matrix(model, data, qv, &mut gim));
+                } else {
+                    recursive::mass_matrix(model, data, qv, &mut gim);
+                }
+                check_result(py, "mass_matrix", gim.as_slice())?;
+                dmatrix_to_array(py, &gim)
+            }),
+            Method::Denoc => {
+                let (model, qv) = self.state_only(py, q)?;
+                let m = detach_interruptible(py, || denoc::mass_matrix(&model, &qv))?;
+                check_result(py, "mass_matrix", m.as_slice())?;
+                dmatrix_to_array(py, &m)
+            }
+        }
+    }
+
+    /// Bias forces `C v − τ_g` (Pinocchio's `nonLinearEffects`).
+    #[pyo3(signature = (q, v, gravity=None))]
+    fn bias_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let g = gravity_arg(py, gravity)?;
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            ws.x.fill(0.0);
+            recursive::inverse_dynamics(
+                &ws.version.model,
+                &mut ws.data,
+                &ws.q,
+                &ws.v,
+                &ws.x,
+                &g,
+                None,
+                &mut ws.out,
+            );
+            check_result(py, "bias_forces", &ws.out)?;
+            Ok(to_array1(py, &ws.out).into_any())
+        })
+    }
+
+    /// Kinetic energy `½ vᵀ I v`.
+    fn kinetic_energy(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<f64> {
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            let model: &Model = &ws.version.model;
+            kinematics::positions(model, &ws.q, &mut ws.data.links);
+            kinematics::velocities(model, &ws.q, &ws.v, &mut ws.data.links);
+            let e = recursive::kinetic_energy(&ws.data);
+            check_result(py, "kinetic_energy", &[e])?;
+            Ok(e)
+        })
+    }
+
+    /// Gravitational potential energy `−Σ m_ij g·x_ij` (zero at the world origin).
+    fn potential_energy(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        gravity: &Bound<'_, PyAny>,
+    ) -> PyResult<f64> {
+        let g = gravity_arg(py, Some(gravity))?;
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, None)?;
+            kinematics::positions(&ws.version.model, &ws.q, &mut ws.data.links);
+            let e = recursive::potential_energy(&ws.data, &g);
+            check_result(py, "potential_energy", &[e])?;
+            Ok(e)
+        })
+    }
+}
+
+impl PyModel {
+    /// Forward or inverse dynamics on either path: one place validates, dispatches, releases
+    /// the GIL for large models and checks the result.
+    #[allow(clippy::too_many_arguments)]
+    fn dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        direction: Direction,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        x: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+        method: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let method = method_arg(py, method)?;
+        let g = gravity_arg(py, gravity)?;
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            load_x(ws, py, x, input(direction))?;
+            let ext = external_wrenches(ws.model(), external)?;
+            match method {
+                Method::Recursive => {
+                    let ext = ext.as_deref();
+                    if ws.model().links.len() >= DETACH_LINKS {
+                        py.detach(|| ws.dynamics(direction, &g, ext))
+                    } else {
+                        ws.dynamics(direction, &g, ext)
+                    }
+                    .py(py)?;
+                    check_result(py, name(direction), &ws.out)?;
+                    Ok(to_array1(py, &ws.out).into_any())
+                }
+                Method::Denoc => {
+                    if ext.is_some() {
+                        return Err(invalid(
+                            py,
+                            "external",
+                            "None with method='denoc' (apply point forces with generalized_forces)",
+                            "wrenches",
+                        ));
+                    }
+                    let out = detach_interruptible(py, || ws.denoc_dynamics(direction, &g))?;
+                    check_result(py, name(direction), &out)?;
+                    Ok(to_array1(py, &out).into_any())
+                }
+            }
+        })
+    }
+
+    /// Forward or inverse dynamics derivatives: validates, runs (GIL released for large
+    /// models) and returns the three nv × nv matrices.
+    #[allow(clippy::too_many_arguments)]
+    fn derivatives<'py>(
+        &self,
+        py: Python<'py>,
+        direction: Direction,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        x: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let g = gravity_arg(py, gravity)?;
+        let name = match direction {
+            Direction::Forward => "forward_dynamics_derivatives",
+            Direction::Inverse => "inverse_dynamics_derivatives",
+        };
+        self.with_workspace(|ws: &mut Workspace| {
+            if !ws.model().loops.is_empty() {
+                return Err(invalid(
+                    py,
+                    "model",
+                    format!("a tree for {name} (closed loops are not differentiated)"),
+                    format!("a model with {} loop(s)", ws.model().loops.len()),
+                ));
+            }
+            load_state(ws, py, q, Some(v))?;
+            load_x(ws, py, x, input(direction))?;
+            let dd = if ws.model().links.len() >= DETACH_LINKS {
+                py.detach(|| ws.derivatives(direction, &g))
+            } else {
+                ws.derivatives(direction, &g)
+            }
+            .py(py)?;
+            let (a, b, c) = match direction {
+                Direction::Forward => (&dd.ddq_dq, &dd.ddq_dv, &dd.minv),
+                Direction::Inverse => (&dd.dtau_dq, &dd.dtau_dv, &dd.mass),
+            };
+            for m in [a, b, c] {
+                if !super::all_finite(m.as_slice()) {
+                    check_result(py, name, m.as_slice())?;
+                }
+            }
+            // `c` (M or M⁻¹) is exactly symmetric: its column-major data is its C order.
+            Ok((
+                square_to_array(py, a).into_any(),
+                square_to_array(py, b).into_any(),
+                symmetric_to_array(py, c).into_any(),
+            ))
+        })
+    }
+}

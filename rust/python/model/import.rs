@@ -1,0 +1,245 @@
+//! `Model.from_urdf` and, for the Python importers (`pointmass_dyn.io`: MuJoCo,
+//! Pinocchio), `Model._from_parts`, the core's constructor from bodies in tree order
+//! (`urdf::model_from_parts`). `Model.from_mujoco` and `Model.from_pinocchio` are those
+//! importers, attached to the class in Python: nothing here calls back into Python.
+use std::sync::Arc;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use super::PyModel;
+use crate::python::convert::{mat3, vec3};
+use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::joint::PyJoint;
+use crate::spatial::Placement;
+
+#[pymethods]
+impl PyModel {
+    /// Loads a robot from a URDF file (joint order and body names as Pinocchio's
+    /// `buildModelFromUrdf`), fixed-base or, with `root_joint="free"`, on a free flyer.
+    /// `repair` (None/False, True, a dict or `pmd.InertiaRepair`) allows MuJoCo-style
+    /// inertia repairs (docs/robots.md); each change is listed in one `UrdfRepairWarning` and
+    /// in `model.repairs`. Raises `UrdfError`; warnings go through `warnings.warn` as
+    /// `UrdfWarning`. Mesh URIs (`package://...`) are looked for in `package_dirs` (a path
+    /// or a list of paths), `ROS_PACKAGE_PATH` and the file's ancestors (`model.visuals`).
+    #[staticmethod]
+    #[pyo3(signature = (path, *, root_joint=None, repair=None, package_dirs=None))]
+    fn from_urdf(
+        py: Python<'_>,
+        path: std::path::PathBuf,
+        root_joint: Option<&Bound<'_, PyAny>>,
+        repair: Option<&Bound<'_, PyAny>>,
+        package_dirs: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
+        let root = match root_joint {
+            None => crate::urdf::RootJoint::Fixed,
+            Some(r) => match r.extract::<String>().ok().as_deref() {
+                Some("fixed") => crate::urdf::RootJoint::Fixed,
+                Some("free") => crate::urdf::RootJoint::Free,
+                _ => {
+                    return Err(invalid(
+                        py,
+                        "root_joint",
+                        "None, \"fixed\" or \"free\"",
+                        r.repr().map_or_else(|_| "?".to_string(), |x| x.to_string()),
+                    ))
+                }
+            },
+        };
+        let repair = repair_options(py, repair)?;
+        let urdf =
+            crate::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
+        let warnings = py.import("warnings")?;
+        if !urdf.warnings.is_empty() {
+            let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
+            for w in &urdf.warnings {
+                warnings.call_method1("warn", (w.as_str(), &category, 1))?;
+            }
+        }
+        if !urdf.repairs.is_empty() {
+            let category = py
+                .import("pointmass_dyn.errors")?
+                .getattr("UrdfRepairWarning")?;
+            let lines: Vec<String> = urdf.repairs.iter().map(|r| r.describe()).collect();
+            let message = format!(
+                "{}: repaired {} link(s)/joint(s) (model.repairs lists them):\n  {}",
+                crate::files::display_path(&path),
+                urdf.repairs.len(),
+                lines.join("\n  ")
+            );
+            warnings.call_method1("warn", (message, &category, 1))?;
+        }
+        Ok(PyModel::from_parts_repaired(
+            Arc::new(urdf.model),
+            Arc::new(urdf.joints),
+            Arc::new(urdf.repairs),
+        ))
+    }
+
+    /// For the importers (python/pointmass_dyn/io/_importers.py): a model from bodies in tree
+    /// order, each `(name, parent, joint, translation, rotation, joint_name, mass, com,
+    /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body.
+    #[staticmethod]
+    fn _from_parts(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+        let mut out = Vec::with_capacity(parts.len());
+        for (k, p) in parts.iter().enumerate() {
+            #[allow(clippy::type_complexity)]
+            let (name, parent, joint, t, r, joint_name, mass, com, inertia): (
+                String,
+                i64,
+                PyRef<'_, PyJoint>,
+                Bound<'_, PyAny>,
+                Bound<'_, PyAny>,
+                String,
+                f64,
+                Bound<'_, PyAny>,
+                Bound<'_, PyAny>,
+            ) = p.extract().map_err(|_| {
+                invalid(
+                    py,
+                    &format!("parts[{k}]"),
+                    "(name, parent, joint, translation, rotation, joint_name, mass, com, inertia)",
+                    p.repr().map_or_else(|_| "?".to_string(), |x| x.to_string()),
+                )
+            })?;
+            let parent = match parent {
+                -1 => None,
+                q if q >= 0 && (q as usize) < k => Some(q as usize),
+                q => {
+                    return Err(invalid(
+                        py,
+                        &format!("parts[{k}].parent"),
+                        format!("-1 or an earlier part's index 0..{k}"),
+                        q,
+                    ))
+                }
+            };
+            out.push(crate::urdf::Part {
+                name,
+                parent,
+                placement: Placement::new(mat3(&r, "rotation")?, vec3(&t, "translation")?),
+                joint: joint.inner,
+                joint_name,
+                mass,
+                com: vec3(&com, "com")?,
+                inertia: mat3(&inertia, "inertia")?,
+            });
+        }
+        let built = crate::urdf::model_from_parts(&out).py(py)?;
+        Ok(PyModel::from_parts(
+            Arc::new(built.model),
+            Arc::new(built.joints),
+        ))
+    }
+
+    /// What `from_urdf(..., repair=...)` changed: one dict per link or welded joint with
+    /// `link`, `joint` (the welded joint, else None), `rules`, `mass` (before, after),
+    /// `principal_moments` (before, after; ascending) and `joint_type` (before, after; welds
+    /// only). Empty for a model loaded without repairs.
+    #[getter]
+    fn repairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
+        let out = pyo3::types::PyList::empty(py);
+        for r in self.repair_records().iter() {
+            let d = PyDict::new(py);
+            d.set_item("link", &r.link)?;
+            d.set_item("joint", &r.joint)?;
+            d.set_item("rules", &r.rules)?;
+            d.set_item("mass", r.mass)?;
+            d.set_item(
+                "principal_moments",
+                (
+                    (
+                        r.principal_moments.0[0],
+                        r.principal_moments.0[1],
+                        r.principal_moments.0[2],
+                    ),
+                    (
+                        r.principal_moments.1[0],
+                        r.principal_moments.1[1],
+                        r.principal_moments.1[2],
+                    ),
+                ),
+            )?;
+            d.set_item("joint_type", &r.joint_type)?;
+            out.append(d)?;
+        }
+        Ok(out)
+    }
+}
+
+/// `repair=`: None/False (no repairs), True (the defaults), a dict of the fields, or an
+/// object with them as attributes (`pmd.InertiaRepair`).
+fn repair_options(
+    py: Python<'_>,
+    repair: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<crate::urdf::Repair>> {
+    const FIELDS: [&str; 4] = [
+        "balance_inertia",
+        "bound_mass",
+        "bound_inertia",
+        "weld_massless",
+    ];
+    let expected = "None, False, True, a dict with keys balance_inertia, bound_mass, bound_inertia, weld_massless, or pmd.InertiaRepair(...)";
+    let shown = |x: &Bound<'_, PyAny>| x.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
+    let Some(r) = repair else { return Ok(None) };
+    if r.is_none() {
+        return Ok(None);
+    }
+    if let Ok(b) = r.cast::<pyo3::types::PyBool>() {
+        return Ok(b.is_true().then(crate::urdf::Repair::default));
+    }
+    let get = |name: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
+        if let Ok(d) = r.cast::<PyDict>() {
+            d.get_item(name)
+        } else if r.hasattr(name)? {
+            Ok(Some(r.getattr(name)?))
+        } else {
+            Err(invalid(py, "repair", expected, shown(r)))
+        }
+    };
+    if let Ok(d) = r.cast::<PyDict>() {
+        for k in d.keys() {
+            let key: Option<String> = k.extract().ok();
+            if !key.as_deref().is_some_and(|k| FIELDS.contains(&k)) {
+                return Err(invalid(
+                    py,
+                    "repair",
+                    expected,
+                    format!("a dict with key {}", shown(&k)),
+                ));
+            }
+        }
+    }
+    let mut out = crate::urdf::Repair::default();
+    for name in FIELDS {
+        let Some(v) = get(name)? else { continue };
+        let arg = format!("repair.{name}");
+        match name {
+            "balance_inertia" | "weld_massless" => {
+                let b = v
+                    .cast::<pyo3::types::PyBool>()
+                    .map_err(|_| invalid(py, &arg, "True or False", shown(&v)))?
+                    .is_true();
+                if name == "balance_inertia" {
+                    out.balance_inertia = b;
+                } else {
+                    out.weld_massless = b;
+                }
+            }
+            _ => {
+                let x: f64 = v
+                    .extract()
+                    .ok()
+                    .filter(|x: &f64| x.is_finite() && *x >= 0.0)
+                    .ok_or_else(|| invalid(py, &arg, "a finite number >= 0", shown(&v)))?;
+                if name == "bound_mass" {
+                    out.bound_mass = x;
+                } else {
+                    out.bound_inertia = x;
+                }
+            }
+        }
+    }
+    Ok(Some(out))
+}

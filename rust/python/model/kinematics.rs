@@ -1,0 +1,205 @@
+//! `Model`'s kinematics: placements, poses and point masses at a configuration, and the
+//! DeNOC matrices and the explicit products built from them.
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use super::{gravity_arg, load_state, PyModel};
+use crate::denoc;
+use crate::kinematics;
+use crate::model::Model;
+use crate::python::convert::{dmatrix_to_array, points, to_array, to_array1};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::signals::detach_interruptible;
+
+#[pymethods]
+impl PyModel {
+    /// World placements of every body at `q`: (rotations (nbodies, 3, 3), origins (nbodies, 3)).
+    fn placements<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, None)?;
+            let model: &Model = &ws.version.model;
+            let nb = model.nbodies();
+            let (rots, origins) = kinematics::body_placements(model, &ws.q, &mut ws.data.links);
+            check_result(py, "placements", &origins)?;
+            Ok((
+                to_array(py, rots, &[nb, 3, 3])?,
+                to_array(py, origins, &[nb, 3])?,
+            ))
+        })
+    }
+
+    /// Everything a viewer draws, at one configuration (q (nq,)) or N (q (N, nq)): dict of
+    /// world-frame arrays `rotations` ((N,) nbodies, 3, 3), `origins`, `joint_origins`,
+    /// `joint_axes` ((N,) nbodies, 3), `points` ((N,) nlinks, 7, 3) and per cut joint
+    /// `loop_a`, `loop_b`, `loop_axes` ((N,) nloops, 3). (docs/visualisation.md §2)
+    fn body_poses<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let (sq, qs) = crate::python::convert::array(q, "q")?;
+        let count = match sq.as_slice() {
+            [n] if *n == model.nq => None,
+            [rows, n] if *n == model.nq => Some(*rows),
+            _ => {
+                return Err(invalid(
+                    py,
+                    "q",
+                    format!("shape ({0},) or (N, {0})", model.nq),
+                    crate::python::convert::shape_str(&sq),
+                ))
+            }
+        };
+        let rows = count.unwrap_or(1);
+        let poses = detach_interruptible(py, || {
+            crate::poses::Poses::at(&model, &qs, rows, count.is_some())
+        })?;
+        let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
+        let shape = |tail: &[usize]| -> Vec<usize> {
+            count
+                .map(|n| vec![n])
+                .unwrap_or_default()
+                .into_iter()
+                .chain(tail.iter().copied())
+                .collect()
+        };
+        let d = PyDict::new(py);
+        for (key, buf, tail) in [
+            ("rotations", poses.rotations, vec![nb, 3, 3]),
+            ("origins", poses.origins, vec![nb, 3]),
+            ("joint_origins", poses.joint_origins, vec![nb, 3]),
+            ("joint_axes", poses.joint_axes, vec![nb, 3]),
+            ("points", poses.points, vec![nl, 7, 3]),
+            ("loop_a", poses.loop_a, vec![nc, 3]),
+            ("loop_b", poses.loop_b, vec![nc, 3]),
+            ("loop_axes", poses.loop_axes, vec![nc, 3]),
+        ] {
+            check_result(py, &format!("body_poses['{key}']"), &buf)?;
+            d.set_item(key, to_array(py, buf, &shape(&tail))?)?;
+        }
+        Ok(d)
+    }
+
+    /// The seven point masses of every moving link: (masses (nlinks, 7), world positions
+    /// (nlinks, 7, 3)) at `q`.
+    fn point_masses<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, None)?;
+            let (masses, points) = denoc::point_positions(ws.model(), &ws.q);
+            let n = ws.model().links.len();
+            let pts = points.transpose().as_slice().to_vec();
+            check_result(py, "point_masses", &pts)?;
+            Ok((
+                to_array(py, masses.as_slice().to_vec(), &[n, 7])?,
+                to_array(py, pts, &[n, 7, 3])?,
+            ))
+        })
+    }
+
+    /// The DeNOC matrices at `q`: dict with D, Nl, Nd, N, masses (7n,), points (7n, 3).
+    fn denoc<'py>(&self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+        let (model, qv) = self.state_only(py, q)?;
+        let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
+        for (k, m) in [("D", &den.d), ("N", &den.n), ("points", &den.points)] {
+            check_result(py, &format!("denoc['{k}']"), m.as_slice())?;
+        }
+        let d = PyDict::new(py);
+        d.set_item("D", dmatrix_to_array(py, &den.d)?)?;
+        d.set_item("Nl", dmatrix_to_array(py, &den.nl)?)?;
+        d.set_item("Nd", dmatrix_to_array(py, &den.nd)?)?;
+        d.set_item("N", dmatrix_to_array(py, &den.n)?)?;
+        d.set_item("masses", to_array1(py, den.masses.as_slice()))?;
+        d.set_item("points", dmatrix_to_array(py, &den.points)?)?;
+        Ok(d)
+    }
+
+    /// Time derivatives of the DeNOC matrices at `(q, v)`: dict with D, Nl, Nd, N.
+    fn denoc_rates<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (model, qv, vv) = self.state(py, q, v)?;
+        let (_, rates) = detach_interruptible(py, || denoc::matrices_and_rates(&model, &qv, &vv))?;
+        for (k, m) in [("D", &rates.d), ("N", &rates.n)] {
+            check_result(py, &format!("denoc_rates['{k}']"), m.as_slice())?;
+        }
+        let d = PyDict::new(py);
+        d.set_item("D", dmatrix_to_array(py, &rates.d)?)?;
+        d.set_item("Nl", dmatrix_to_array(py, &rates.nl)?)?;
+        d.set_item("Nd", dmatrix_to_array(py, &rates.nd)?)?;
+        d.set_item("N", dmatrix_to_array(py, &rates.n)?)?;
+        Ok(d)
+    }
+
+    /// Convective matrix `C = Nᵀ M Ṅ` (explicit DeNOC products).
+    fn convective_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, qv, vv) = self.state(py, q, v)?;
+        let c = detach_interruptible(py, || denoc::convective_matrix(&model, &qv, &vv))?;
+        check_result(py, "convective_matrix", c.as_slice())?;
+        dmatrix_to_array(py, &c)
+    }
+
+    /// Generalized gravity force `Nᵀ f^G` (right-hand side; Pinocchio's
+    /// `computeGeneralizedGravity` is its negative).
+    fn gravity_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        gravity: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let g = gravity_arg(py, Some(gravity))?;
+        let (model, qv) = self.state_only(py, q)?;
+        let tg = detach_interruptible(py, || denoc::gravity_forces(&model, &qv, &g))?;
+        check_result(py, "gravity_forces", tg.as_slice())?;
+        Ok(to_array1(py, tg.as_slice()).into_any())
+    }
+
+    /// `Nᵀ f` for forces on the point masses, shape (nlinks, 7, 3) or (7·nlinks, 3), world.
+    fn generalized_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        forces: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, qv) = self.state_only(py, q)?;
+        let f = points(forces, "forces")?;
+        for p in &f {
+            crate::error::check_finite("forces", p.as_slice()).py(py)?;
+        }
+        let tau = detach_interruptible(py, || denoc::generalized_forces(&model, &qv, &f))?;
+        check_result(py, "generalized_forces", tau.as_slice())?;
+        Ok(to_array1(py, tau.as_slice()).into_any())
+    }
+
+    /// `q̇` from `v` (differs from `v` only for quaternion joints).
+    fn velocity_to_qdot<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            let mut qd = vec![0.0; ws.model().nq];
+            ws.model().velocity_to_qdot(&ws.q, &ws.v, &mut qd);
+            check_result(py, "velocity_to_qdot", &qd)?;
+            Ok(to_array1(py, &qd).into_any())
+        })
+    }
+}

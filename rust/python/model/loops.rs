@@ -1,0 +1,185 @@
+//! `Model`'s closed loops: cut joints, their residuals and Jacobian, assembly, and the cut
+//! joints' forces.
+use pyo3::prelude::*;
+
+use super::{external_wrenches, gravity_arg, load_state, load_x, rename, PyModel};
+use crate::loops;
+use crate::python::convert::{dmatrix_to_array, mat3, to_array, to_array1, vec3};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::joint::PyJoint;
+use crate::python::loops::body_ref;
+use crate::spatial::{Placement, Vec3};
+
+#[pymethods]
+impl PyModel {
+    /// Adds a cut joint closing a kinematic loop; returns its index. See the package docs.
+    #[pyo3(signature = (body_a, body_b, joint, translation_a=None, translation_b=None, rotation_a=None, rotation_b=None, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_loop(
+        &self,
+        py: Python<'_>,
+        body_a: Option<&Bound<'_, PyAny>>,
+        body_b: Option<&Bound<'_, PyAny>>,
+        joint: PyRef<'_, PyJoint>,
+        translation_a: Option<&Bound<'_, PyAny>>,
+        translation_b: Option<&Bound<'_, PyAny>>,
+        rotation_a: Option<&Bound<'_, PyAny>>,
+        rotation_b: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<usize> {
+        let frame = |t: Option<&Bound<'_, PyAny>>,
+                     r: Option<&Bound<'_, PyAny>>,
+                     ta: &str,
+                     ra: &str|
+         -> PyResult<Placement> {
+            let t = match t.filter(|x| !x.is_none()) {
+                Some(t) => vec3(t, ta)?,
+                None => Vec3::zeros(),
+            };
+            let r = match r.filter(|x| !x.is_none()) {
+                Some(r) => mat3(r, ra)?,
+                None => crate::spatial::Mat3::identity(),
+            };
+            Ok(Placement::new(r, t))
+        };
+        let fa = frame(translation_a, rotation_a, "translation_a", "rotation_a")?;
+        let fb = frame(translation_b, rotation_b, "translation_b", "rotation_b")?;
+        let model = self.model();
+        let a = body_ref(&model, body_a, "body_a")?;
+        let b = body_ref(&model, body_b, "body_b")?;
+        // The handle let go first, so that the update extends the model in place.
+        drop(model);
+        self.shared
+            .update(|m| m.add_loop(a, b, joint.inner, fa, fb, name))
+            .py(py)
+    }
+
+    /// Number of cut joints (closed loops).
+    #[getter]
+    fn nloops(&self) -> usize {
+        self.model().nloops()
+    }
+
+    /// Number of scalar loop constraints (rows of `constraint_jacobian`).
+    #[getter]
+    fn nconstraints(&self) -> usize {
+        self.model().nconstraints()
+    }
+
+    #[getter]
+    fn loop_names(&self) -> Vec<String> {
+        self.model().loops.iter().map(|l| l.name.clone()).collect()
+    }
+
+    /// Position-level residual of every cut joint (frame a's axes; zero when closed).
+    fn constraint_residual<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q) = self.state_only(py, q)?;
+        let mut kin = loops::LoopKinematics::new(&model);
+        kin.positions(&model, &q);
+        let mut r = vec![0.0; model.nconstraints()];
+        loops::residual(&model, &kin, &mut r);
+        check_result(py, "constraint_residual", &r)?;
+        Ok(to_array1(py, &r).into_any())
+    }
+
+    /// Velocity-level constraint Jacobian `J` (nconstraints × nv): `J v = 0` keeps the loops.
+    fn constraint_jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q) = self.state_only(py, q)?;
+        let mut kin = loops::LoopKinematics::new(&model);
+        kin.positions(&model, &q);
+        let mut j = nalgebra::DMatrix::zeros(model.nconstraints(), model.nv);
+        loops::jacobian(&model, &kin, &mut j);
+        check_result(py, "constraint_jacobian", j.as_slice())?;
+        dmatrix_to_array(py, &j)
+    }
+
+    /// The closed configuration nearest `q_guess`, the coordinates in `fixed` held.
+    #[pyo3(signature = (q_guess, fixed=None, tol=1e-12, max_iterations=50))]
+    fn assemble<'py>(
+        &self,
+        py: Python<'py>,
+        q_guess: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+        tol: f64,
+        max_iterations: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q) = self
+            .state_only(py, q_guess)
+            .map_err(|e| rename(py, e, "q", "q_guess"))?;
+        if !(tol > 0.0 && tol.is_finite()) {
+            return Err(invalid(py, "tol", "a positive finite number", tol));
+        }
+        let mask = crate::python::loops::fixed_mask(&model, fixed)?;
+        let q = py
+            .detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))
+            .py(py)?;
+        Ok(to_array1(py, &q).into_any())
+    }
+
+    /// `v_guess` projected onto `J v = 0` (nearest, the speeds in `fixed` held).
+    #[pyo3(signature = (q, v_guess, fixed=None))]
+    fn assemble_velocity<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v_guess: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q, mut v) = self
+            .state(py, q, v_guess)
+            .map_err(|e| rename(py, e, "v", "v_guess"))?;
+        let mask = crate::python::loops::fixed_mask(&model, fixed)?;
+        loops::project_velocity_like(&model, &q, None, &mut v, &mask).py(py)?;
+        Ok(to_array1(py, &v).into_any())
+    }
+
+    /// `a_guess` projected onto `J a + J̇ v = 0` (nearest, the entries in `fixed` held).
+    #[pyo3(signature = (q, v, a_guess, fixed=None))]
+    fn assemble_acceleration<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a_guess: &Bound<'_, PyAny>,
+        fixed: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q, v) = self.state(py, q, v)?;
+        let mut a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
+        crate::error::check_finite("a_guess", &a).py(py)?;
+        let mask = crate::python::loops::fixed_mask(&model, fixed)?;
+        loops::project_velocity_like(&model, &q, Some(&v), &mut a, &mask).py(py)?;
+        Ok(to_array1(py, &a).into_any())
+    }
+
+    /// Per loop `[force, moment]` the cut joint applies to body b (minus that on body a) at
+    /// frame b's origin, in frame a's axes, under the forces `tau` (shape (nloops, 6)).
+    #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
+    fn constraint_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let g = gravity_arg(py, gravity)?;
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            load_x(ws, py, tau, "tau")?;
+            let ext = external_wrenches(ws.model(), external)?;
+            let w = ws.constraint_forces(&g, ext.as_deref()).py(py)?;
+            let flat: Vec<f64> = w.iter().flatten().copied().collect();
+            check_result(py, "constraint_forces", &flat)?;
+            to_array(py, flat, &[w.len(), 6])
+        })
+    }
+}

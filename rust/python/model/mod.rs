@@ -1,0 +1,248 @@
+//! `Model`: one class, its methods declared by concept in the files beside this one
+//! (pyo3's `multiple-pymethods`): the tree and its names ([`structure`]), importers
+//! ([`import`]), kinematics and DeNOC matrices ([`kinematics`]), dynamics and derivatives
+//! ([`dynamics`]), closed loops ([`loops`]), shaking and bearing forces ([`reactions`]). Each
+//! converts arguments, calls the core (`crate::shared` holds the versions and the workspace
+//! pool) and converts the result.
+use std::sync::Arc;
+
+use pyo3::prelude::*;
+
+use crate::model::Model;
+use crate::python::convert::{vec3, vector_into};
+use crate::python::errors::{invalid, IntoPyResult};
+use crate::shared::{SharedModel, Version, Workspace};
+use crate::spatial::{Vec3, Vec6};
+
+mod dynamics;
+mod import;
+mod kinematics;
+mod loops;
+mod reactions;
+mod structure;
+
+/// Link count above which the recursive calls release the GIL (below it, the release costs
+/// more than it frees).
+const DETACH_LINKS: usize = 64;
+
+#[pyclass(name = "Model", module = "pointmass_dyn._core", frozen)]
+pub struct PyModel {
+    shared: SharedModel,
+}
+
+/// `None` means no gravity: a model computes only what it is asked for.
+pub fn gravity_arg(py: Python<'_>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
+    match gravity {
+        Some(g) if !g.is_none() => {
+            let g = vec3(g, "gravity")?;
+            crate::error::check_finite("gravity", g.as_slice()).py(py)?;
+            Ok(g)
+        }
+        _ => Ok(Vec3::zeros()),
+    }
+}
+
+enum Method {
+    Recursive,
+    Denoc,
+}
+
+fn method_arg(py: Python<'_>, method: &str) -> PyResult<Method> {
+    match method {
+        "recursive" => Ok(Method::Recursive),
+        "denoc" => Ok(Method::Denoc),
+        other => Err(invalid(
+            py,
+            "method",
+            "'recursive' or 'denoc'",
+            format!("'{other}'"),
+        )),
+    }
+}
+
+/// Reads q (and v) into the workspace's buffers and validates them.
+fn load_state(
+    ws: &mut Workspace,
+    py: Python<'_>,
+    q: &Bound<'_, PyAny>,
+    v: Option<&Bound<'_, PyAny>>,
+) -> PyResult<()> {
+    vector_into(q, "q", &mut ws.q)?;
+    if let Some(v) = v {
+        vector_into(v, "v", &mut ws.v)?;
+    }
+    ws.check_state(v.is_some()).py(py)
+}
+
+/// Reads the argument that is not a state (τ or a) into the workspace and validates it.
+fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -> PyResult<()> {
+    vector_into(x, arg, &mut ws.x)?;
+    crate::error::check_finite(arg, &ws.x).py(py)
+}
+
+impl PyModel {
+    pub fn from_model(model: Model) -> Self {
+        Self::from_parts(Arc::new(model), Arc::new(Vec::new()))
+    }
+
+    /// A model sharing `model` (a scene's, another model's): nothing is copied until one of
+    /// them adds a body.
+    pub fn from_parts(model: Arc<Model>, urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>) -> Self {
+        Self::from_parts_repaired(model, urdf_joints, Arc::new(Vec::new()))
+    }
+
+    /// [`PyModel::from_parts`] with the repairs a URDF load made.
+    pub fn from_parts_repaired(
+        model: Arc<Model>,
+        urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>,
+        repairs: Arc<Vec<crate::urdf::RepairRecord>>,
+    ) -> Self {
+        PyModel {
+            shared: SharedModel::new(model, urdf_joints, repairs),
+        }
+    }
+
+    /// Changes what no computation depends on (visuals, name): the dynamics' workspaces
+    /// stay valid, so the version is kept.
+    pub fn update_model(&self, f: impl FnOnce(&mut Model)) {
+        self.shared.update_presentation(f);
+    }
+
+    /// The model as it is now (shared, immutable).
+    pub fn model(&self) -> Arc<Model> {
+        self.shared.model()
+    }
+
+    /// The URDF joints of a model from `from_urdf` (empty otherwise).
+    pub fn urdf_joints(&self) -> Arc<Vec<crate::urdf::UrdfJoint>> {
+        self.shared.version().urdf_joints
+    }
+
+    /// The repairs of a model from `from_urdf(..., repair=...)` (empty otherwise).
+    pub fn repair_records(&self) -> Arc<Vec<crate::urdf::RepairRecord>> {
+        self.shared.version().repairs
+    }
+
+    fn version(&self) -> Version {
+        self.shared.version()
+    }
+
+    /// Runs `f` with a workspace of the current model (the pool's, `crate::shared`).
+    fn with_workspace<R>(&self, f: impl FnOnce(&mut Workspace) -> PyResult<R>) -> PyResult<R> {
+        self.shared.with_workspace(f)
+    }
+
+    /// The current model and a checked copy of `q`, for the calls that run detached and
+    /// need no workspace.
+    fn state_only(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<(Arc<Model>, Vec<f64>)> {
+        let model = self.model();
+        let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
+        model.check_state(&q, None).py(py)?;
+        Ok((model, q))
+    }
+
+    /// As [`PyModel::state_only`] with `v`.
+    #[allow(clippy::type_complexity)]
+    fn state(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<(Arc<Model>, Vec<f64>, Vec<f64>)> {
+        let model = self.model();
+        let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
+        let v = crate::python::convert::vector(v, "v", Some(model.nv))?;
+        model.check_state(&q, Some(&v)).py(py)?;
+        Ok((model, q, v))
+    }
+}
+
+/// Whether every value is finite, in one vectorisable pass (`x · 0` is NaN exactly for a
+/// non-finite `x`; eight independent lanes); `check_result` then names the first bad index.
+fn all_finite(x: &[f64]) -> bool {
+    let mut acc = [0.0f64; 8];
+    let chunks = x.chunks_exact(8);
+    let rest = chunks.remainder();
+    for ch in chunks {
+        for (a, v) in acc.iter_mut().zip(ch) {
+            *a += v * 0.0;
+        }
+    }
+    for (a, v) in acc.iter_mut().zip(rest) {
+        *a += v * 0.0;
+    }
+    acc.iter().all(|a| *a == 0.0)
+}
+
+/// A NumPy copy of an exactly symmetric matrix: its column-major data, copied as it is.
+fn symmetric_to_array<'py>(
+    py: Python<'py>,
+    m: &nalgebra::DMatrix<f64>,
+) -> Bound<'py, numpy::PyArray2<f64>> {
+    use numpy::{PyArray2, PyArrayMethods};
+    let (r, c) = (m.nrows(), m.ncols());
+    // SAFETY: a new C-contiguous array of exactly r × c elements, all written.
+    unsafe {
+        let arr = PyArray2::<f64>::new(py, [r, c], false);
+        std::ptr::copy_nonoverlapping(m.as_ptr(), arr.data(), r * c);
+        arr
+    }
+}
+
+/// A C-ordered NumPy copy of a (column-major) matrix, written in one pass.
+fn square_to_array<'py>(
+    py: Python<'py>,
+    m: &nalgebra::DMatrix<f64>,
+) -> Bound<'py, numpy::PyArray2<f64>> {
+    use numpy::{PyArray2, PyArrayMethods};
+    let (r, c) = (m.nrows(), m.ncols());
+    // SAFETY: a new C-contiguous array of exactly r × c elements, every one written before
+    // it is handed to Python.
+    unsafe {
+        let arr = PyArray2::<f64>::new(py, [r, c], false);
+        let src = m.as_slice();
+        let dst = arr.data();
+        // By 8 × 8 tiles: each tile's reads and writes stay within a few cache lines.
+        const T: usize = 8;
+        for j0 in (0..c).step_by(T) {
+            for i0 in (0..r).step_by(T) {
+                for j in j0..(j0 + T).min(c) {
+                    for i in i0..(i0 + T).min(r) {
+                        // In bounds: i < r, j < c.
+                        *dst.add(i * c + j) = *src.get_unchecked(j * r + i);
+                    }
+                }
+            }
+        }
+        arr
+    }
+}
+
+fn external_wrenches(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Vec6>>> {
+    match obj {
+        Some(f) if !f.is_none() => {
+            let (shape, data) = crate::python::convert::array(f, "external")?;
+            let n = model.links.len();
+            if shape != [n, 6] {
+                return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), crate::python::convert::shape_str(&shape)));
+            }
+            crate::error::check_finite("external", &data).py(f.py())?;
+            Ok(Some(
+                data.chunks_exact(6).map(Vec6::from_column_slice).collect(),
+            ))
+        }
+        _ => Ok(None),
+    }
+}
+
+/// An error about argument `from` renamed to `to` (`q` → `q_guess`).
+fn rename(py: Python<'_>, e: PyErr, from: &str, to: &str) -> PyErr {
+    let msg = e.value(py).to_string();
+    match msg.strip_prefix(&format!("{from}:")) {
+        Some(rest) => {
+            let ty = e.get_type(py);
+            PyErr::from_type(ty, (format!("{to}:{rest}"),))
+        }
+        None => e,
+    }
+}

@@ -1,0 +1,198 @@
+//! `Model`'s reactions (`crate::reactions`): the point masses in motion, the balancing
+//! regressors, shaking forces and bearing forces.
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use super::{external_wrenches, gravity_arg, PyModel};
+use crate::python::convert::{to_array, to_array1, vec3};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::loops::loop_actuation;
+use crate::python::signals::detach_interruptible;
+use crate::reactions;
+use crate::recursive;
+use crate::spatial::Vec3;
+
+#[pymethods]
+impl PyModel {
+    /// Every link's seven point masses in motion at `(q, v, a)`: dict with `masses` (n, 7),
+    /// `positions`, `velocities`, `accelerations` (n, 7, 3), world axes, no gravity.
+    fn point_motion<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        if count.is_some() {
+            return Err(invalid(
+                py,
+                "q",
+                format!("shape ({},): one state", model.nq),
+                "a stack of states",
+            ));
+        }
+        let mut ws = recursive::reference::Workspace::new(&model);
+        let mut pm = reactions::PointMotion::default();
+        reactions::point_motion(&model, &mut ws, &qs, &vs, &accs, &mut pm);
+        let n = model.links.len();
+        let flat = |x: &[Vec3]| x.iter().flat_map(|p| [p.x, p.y, p.z]).collect::<Vec<f64>>();
+        let d = PyDict::new(py);
+        d.set_item("masses", to_array(py, pm.masses.clone(), &[n, 7])?)?;
+        for (k, x) in [
+            ("positions", &pm.positions),
+            ("velocities", &pm.velocities),
+            ("accelerations", &pm.accelerations),
+        ] {
+            let f = flat(x);
+            check_result(py, &format!("point_motion['{k}']"), &f)?;
+            d.set_item(k, to_array(py, f, &[n, 7, 3])?)?;
+        }
+        Ok(d)
+    }
+
+    /// Per point and state, what the balancing regressors need (`docs/balancing.md`): world
+    /// `positions` and `accelerations` (N, P, 3) and `generalized` (N, P, nv) `= J_pᵀ (a_p − g)`,
+    /// the joint forces that a unit mass at the point needs. `points`: None for every link's
+    /// seven point masses (P = 7 n, link by link), or `[(body, [x, y, z]), ...]` points given in
+    /// their bodies' frames. q (N, nq), v and a (N, nv), or one state (then N is dropped).
+    #[pyo3(signature = (q, v, a, points=None, gravity=None))]
+    fn point_regressor<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        points: Option<&Bound<'_, PyAny>>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let g = gravity_arg(py, gravity)?;
+        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        let pts: Vec<(usize, Vec3)> = match points.filter(|p| !p.is_none()) {
+            None => model
+                .links
+                .iter()
+                .enumerate()
+                .flat_map(|(i, l)| l.points.positions.iter().map(move |p| (i, *p)))
+                .collect(),
+            Some(list) => crate::python::reactions::body_points(&model, list)?,
+        };
+        let rows = count.unwrap_or(1);
+        let (np, nv) = (pts.len(), model.nv);
+        let states = reactions::States {
+            rows,
+            q: &qs,
+            v: &vs,
+            a: &accs,
+        };
+        let out =
+            detach_interruptible(py, || reactions::point_regressor(&model, &states, &pts, &g))?;
+        let (pos, acc, gen) = (out.positions, out.accelerations, out.generalized);
+        for (k, x) in [
+            ("positions", &pos),
+            ("accelerations", &acc),
+            ("generalized", &gen),
+        ] {
+            check_result(py, &format!("point_regressor['{k}']"), x)?;
+        }
+        let lead: Vec<usize> = count.into_iter().collect();
+        let shape = |tail: &[usize]| [lead.as_slice(), tail].concat();
+        let d = PyDict::new(py);
+        d.set_item("positions", to_array(py, pos, &shape(&[np, 3]))?)?;
+        d.set_item("accelerations", to_array(py, acc, &shape(&[np, 3]))?)?;
+        d.set_item("generalized", to_array(py, gen, &shape(&[np, nv]))?)?;
+        Ok(d)
+    }
+
+    /// Shaking force and moment about `about` at one state (q (nq,), v, a (nv,)) or at N
+    /// (q (N, nq), v, a (N, nv)): `(force, moment)`, each (3,) or (N, 3).
+    #[pyo3(signature = (q, v, a, about=None))]
+    fn shaking<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        about: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let model = self.model();
+        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        let about = match about.filter(|x| !x.is_none()) {
+            Some(o) => {
+                let o = vec3(o, "about")?;
+                crate::error::check_finite("about", o.as_slice()).py(py)?;
+                o
+            }
+            None => Vec3::zeros(),
+        };
+        let states = reactions::States {
+            rows: count.unwrap_or(1),
+            q: &qs,
+            v: &vs,
+            a: &accs,
+        };
+        let (force, moment) =
+            detach_interruptible(py, || reactions::shaking_of_states(&model, &states, &about))?;
+        check_result(py, "shaking", &force)?;
+        check_result(py, "shaking", &moment)?;
+        let shape: Vec<usize> = match count {
+            Some(n) => vec![n, 3],
+            None => vec![3],
+        };
+        Ok((to_array(py, force, &shape)?, to_array(py, moment, &shape)?))
+    }
+
+    /// The wrench every joint transmits at `(q, v, a)`: dict with `joints` (nlinks, 6),
+    /// `[force; moment]` that the parent applies to the link's subtree at the link origin, in
+    /// the link's axes (`frame="joint"`) or the world's; `loops` (nloops, 6), the cut joints'
+    /// wrenches as `constraint_forces` gives them; `tau` (nv,), the joint forces (the actuated
+    /// ones' for a model with loops, zero elsewhere).
+    #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
+    #[allow(clippy::too_many_arguments)]
+    fn bearing_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+        external: Option<&Bound<'_, PyAny>>,
+        actuated: Option<&Bound<'_, PyAny>>,
+        frame: &str,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let world = crate::python::reactions::world_frame(py, frame)?;
+        let model = self.model();
+        let g = gravity_arg(py, gravity)?;
+        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        if count.is_some() {
+            return Err(invalid(
+                py,
+                "q",
+                format!("shape ({},): one state", model.nq),
+                "a stack of states",
+            ));
+        }
+        let ext = external_wrenches(&model, external)?;
+        let actuated = loop_actuation(py, &model, actuated)?;
+        let out = reactions::bearing_forces(
+            &model,
+            &qs,
+            &vs,
+            &accs,
+            &g,
+            ext.as_deref(),
+            actuated.as_deref(),
+            world,
+        )
+        .py(py)?;
+        check_result(py, "bearing_forces", &out.joints)?;
+        let d = PyDict::new(py);
+        d.set_item("joints", to_array(py, out.joints, &[model.links.len(), 6])?)?;
+        let flat: Vec<f64> = out.loops.iter().flatten().copied().collect();
+        d.set_item("loops", to_array(py, flat, &[out.loops.len(), 6])?)?;
+        d.set_item("tau", to_array1(py, &out.tau))?;
+        Ok(d)
+    }
+}

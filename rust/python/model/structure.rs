@@ -1,0 +1,285 @@
+//! `Model`'s tree: building it body by body, its sizes and names, bodies and joints.
+use std::sync::Arc;
+
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use super::PyModel;
+use crate::model::Model;
+use crate::python::body::PyRigidBody;
+use crate::python::convert::{mat3, to_array1, vec3};
+use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::joint::PyJoint;
+use crate::spatial::{Placement, Vec3};
+
+#[pymethods]
+impl PyModel {
+    #[new]
+    fn new() -> Self {
+        PyModel::from_model(Model::new())
+    }
+
+    /// Adds a body; returns its index. See the package docs for the arguments.
+    #[pyo3(signature = (body, joint, parent=None, translation=None, rotation=None, name=None, point_mass_center=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn add_body(
+        &self,
+        py: Python<'_>,
+        body: PyRef<'_, PyRigidBody>,
+        joint: PyRef<'_, PyJoint>,
+        parent: Option<&Bound<'_, PyAny>>,
+        translation: Option<&Bound<'_, PyAny>>,
+        rotation: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+        point_mass_center: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<usize> {
+        let t = match translation {
+            Some(t) if !t.is_none() => vec3(t, "translation")?,
+            _ => Vec3::zeros(),
+        };
+        let r = match rotation {
+            Some(r) if !r.is_none() => mat3(r, "rotation")?,
+            _ => crate::spatial::Mat3::identity(),
+        };
+        let center = match point_mass_center {
+            Some(c) if !c.is_none() => Some(vec3(c, "point_mass_center")?),
+            _ => None,
+        };
+        // -1 (or None) is the world; any int is taken (no OverflowError), a non-int is a TypeError.
+        let parent = match parent.filter(|p| !p.is_none()) {
+            None => -1,
+            Some(p) => crate::python::convert::int_arg(
+                p,
+                "parent",
+                i64::MIN,
+                i64::MAX,
+                "-1 (the world) or a body index >= 0",
+            )?,
+        };
+        self.shared
+            .update(|model| {
+                let parent = match parent {
+                    -1 => None,
+                    p if p >= 0 => Some(p as usize),
+                    p => {
+                        return Err(crate::error::Error::model(
+                            "parent",
+                            format!(
+                                "expected -1 (the world) or a body index 0..{}, got {p}",
+                                model.nbodies()
+                            ),
+                        ))
+                    }
+                };
+                model.add_body(
+                    body.inner,
+                    joint.inner,
+                    parent,
+                    Placement::new(r, t),
+                    name,
+                    center,
+                )
+            })
+            .py(py)
+    }
+
+    #[getter]
+    fn nq(&self) -> usize {
+        self.version().model.nq
+    }
+
+    #[getter]
+    fn nv(&self) -> usize {
+        self.version().model.nv
+    }
+
+    #[getter]
+    fn nbodies(&self) -> usize {
+        self.version().model.nbodies()
+    }
+
+    /// Moving links (bodies on Fixed joints are welded into their parent's link).
+    #[getter]
+    fn nlinks(&self) -> usize {
+        self.version().model.links.len()
+    }
+
+    #[getter]
+    fn body_names(&self) -> Vec<String> {
+        let m = self.model();
+        m.bodies.iter().map(|b| b.name.clone()).collect()
+    }
+
+    /// Names of the bodies that define each moving link, in q/v order.
+    #[getter]
+    fn link_names(&self) -> Vec<String> {
+        let m = self.model();
+        m.links
+            .iter()
+            .map(|l| m.bodies[l.body].name.clone())
+            .collect()
+    }
+
+    #[getter]
+    fn total_mass(&self) -> f64 {
+        self.model().total_mass()
+    }
+
+    /// Per body: (name, joint kind, parent index or -1, link index or -1).
+    fn body_info(
+        &self,
+        py: Python<'_>,
+        index: &Bound<'_, PyAny>,
+    ) -> PyResult<(String, String, i64, i64)> {
+        let index = crate::python::convert::count_arg(index, "index", "a body index >= 0")?;
+        let m = self.model();
+        let b = m.bodies.get(index).ok_or_else(|| {
+            crate::python::errors::py_error(
+                py,
+                "ModelStructureError",
+                format!("index: no body {index} (the model has {})", m.nbodies()),
+            )
+        })?;
+        Ok((
+            b.name.clone(),
+            b.joint.kind().to_string(),
+            b.parent.map(|p| p as i64).unwrap_or(-1),
+            b.link.map(|p| p as i64).unwrap_or(-1),
+        ))
+    }
+
+    /// (q index, v index, nq, nv) of each link's joint.
+    fn joint_slices(&self) -> Vec<(usize, usize, usize, usize)> {
+        self.model()
+            .links
+            .iter()
+            .map(|l| (l.q_index, l.v_index, l.joint.nq(), l.joint.nv()))
+            .collect()
+    }
+
+    fn neutral<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, &self.model().neutral()).into_any()
+    }
+
+    /// Body `body`'s own rigid body (mass, COM and inertia in its frame), as added.
+    fn body(&self, py: Python<'_>, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
+        let model = self.model();
+        let b = crate::python::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
+            invalid(
+                py,
+                "body",
+                "a body of the model (not the world)",
+                "the world",
+            )
+        })?;
+        Ok(PyRigidBody {
+            inner: model.bodies[b].body,
+        })
+    }
+
+    /// A copy of this model with body `body`'s own rigid body replaced by `rigid_body` (its
+    /// joint, placement, loops and names kept); this model is unchanged.
+    fn with_body(
+        &self,
+        py: Python<'_>,
+        body: &Bound<'_, PyAny>,
+        rigid_body: PyRef<'_, PyRigidBody>,
+    ) -> PyResult<Self> {
+        let ver = self.version();
+        let b =
+            crate::python::loops::body_ref(&ver.model, Some(body), "body")?.ok_or_else(|| {
+                invalid(
+                    py,
+                    "body",
+                    "a body of the model (not the world)",
+                    "the world",
+                )
+            })?;
+        let mut model = (*ver.model).clone();
+        model.replace_body(b, rigid_body.inner).py(py)?;
+        Ok(PyModel::from_parts_repaired(
+            Arc::new(model),
+            ver.urdf_joints.clone(),
+            ver.repairs.clone(),
+        ))
+    }
+
+    fn __repr__(&self) -> String {
+        let m = self.model();
+        let loops = match m.nloops() {
+            0 => String::new(),
+            n => format!(", nloops={n}"),
+        };
+        format!(
+            "Model(nbodies={}, nlinks={}, nq={}, nv={}{loops})",
+            m.nbodies(),
+            m.links.len(),
+            m.nq,
+            m.nv
+        )
+    }
+
+    /// Names of the moving joints in q/v order: the URDF joint names for a model from
+    /// `from_urdf`, otherwise the names of the bodies that define each link.
+    #[getter]
+    fn joint_names(&self) -> Vec<String> {
+        let v = self.version();
+        joint_names(&v.model, &v.urdf_joints)
+    }
+
+    /// `{joint name: (lower, upper, effort, velocity)}` for the moving joints in q/v order.
+    /// What the file does not give is unbounded: ±inf position bounds (always, for
+    /// continuous joints), inf effort and velocity.
+    fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let ver = self.version();
+        let d = PyDict::new(py);
+        let names = joint_names(&ver.model, &ver.urdf_joints);
+        for (joint, name) in link_joints(&ver.model, &ver.urdf_joints).zip(names) {
+            let inf = f64::INFINITY;
+            let lim = joint
+                .and_then(|j| j.limit)
+                .map(|x| (x.lower, x.upper, x.effort, x.velocity))
+                .unwrap_or((-inf, inf, inf, inf));
+            d.set_item(name, lim)?;
+        }
+        Ok(d)
+    }
+
+    /// `{joint name: (damping, friction)}` from the URDF `<dynamics>` elements, for the
+    /// moving joints in q/v order (0 where absent). Not applied by the model itself.
+    fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let ver = self.version();
+        let d = PyDict::new(py);
+        let names = joint_names(&ver.model, &ver.urdf_joints);
+        for (joint, name) in link_joints(&ver.model, &ver.urdf_joints).zip(names) {
+            let dyn_ = joint.map(|j| (j.damping, j.friction)).unwrap_or((0.0, 0.0));
+            d.set_item(name, dyn_)?;
+        }
+        Ok(d)
+    }
+}
+
+fn joint_names(model: &Model, urdf_joints: &[crate::urdf::UrdfJoint]) -> Vec<String> {
+    model
+        .links
+        .iter()
+        .zip(link_joints(model, urdf_joints))
+        .map(|(l, joint)| match joint {
+            Some(j) => j.name.clone(),
+            None => model.bodies[l.body].name.clone(),
+        })
+        .collect()
+}
+
+/// The URDF joint (if any) of each moving link, in q/v order: one pass, not a search per link.
+fn link_joints<'a>(
+    model: &'a Model,
+    joints: &'a [crate::urdf::UrdfJoint],
+) -> impl Iterator<Item = Option<&'a crate::urdf::UrdfJoint>> + 'a {
+    let by_body: std::collections::HashMap<usize, &crate::urdf::UrdfJoint> =
+        joints.iter().map(|j| (j.body, j)).collect();
+    model
+        .links
+        .iter()
+        .map(move |l| by_body.get(&l.body).copied())
+}

@@ -1,0 +1,211 @@
+//! `Model.visuals`, `Model.name`, `Model.set_visuals` and the `package_dirs` argument of
+//! `from_urdf`: the visual geometry (crate::visual) as plain Python data, a list of dicts.
+use std::path::PathBuf;
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use super::convert::{mat3, vec3};
+use super::errors::{invalid, IntoPyResult};
+use super::model::PyModel;
+use crate::spatial::{Placement, Vec3};
+use crate::visual::{Shape, Visual};
+
+fn repr(obj: &Bound<'_, PyAny>) -> String {
+    obj.repr()
+        .map_or_else(|_| "?".to_string(), |x| x.to_string())
+}
+
+/// `package_dirs`: None, one path or a sequence of paths.
+pub(super) fn package_dirs(
+    py: Python<'_>,
+    obj: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Vec<PathBuf>> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Vec::new());
+    };
+    if let Ok(one) = obj.extract::<PathBuf>() {
+        return Ok(vec![one]);
+    }
+    obj.extract::<Vec<PathBuf>>()
+        .map_err(|_| invalid(py, "package_dirs", "a path or a list of paths", repr(obj)))
+}
+
+fn to_dict<'py>(py: Python<'py>, v: &Visual, body_name: &str) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("body", v.body)?;
+    d.set_item("body_name", body_name)?;
+    d.set_item("kind", v.shape.kind())?;
+    let r = v.origin.rotation;
+    let rows: Vec<[f64; 3]> = (0..3).map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]).collect();
+    d.set_item("rotation", rows)?;
+    d.set_item("translation", <[f64; 3]>::from(v.origin.translation))?;
+    let xyz = |x: &Vec3| <[f64; 3]>::from(*x);
+    match &v.shape {
+        Shape::Box { size } => d.set_item("size", xyz(size))?,
+        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
+            d.set_item("radius", radius)?;
+            d.set_item("length", length)?;
+        }
+        Shape::Sphere { radius } => d.set_item("radius", radius)?,
+        Shape::Ellipsoid { radii } => d.set_item("radii", xyz(radii))?,
+        Shape::Mesh { uri, path, scale } => {
+            d.set_item("uri", uri)?;
+            d.set_item("path", path)?;
+            d.set_item("scale", xyz(scale))?;
+        }
+    }
+    d.set_item("rgba", v.rgba)?;
+    Ok(d)
+}
+
+/// A `Visual` from a dict as `to_dict` writes it (`rotation`, `translation` default to the
+/// identity; `rgba` to None; a mesh's `path` to its `uri`, `scale` to ones).
+fn from_dict(py: Python<'_>, d: &Bound<'_, PyAny>, arg: &str) -> PyResult<Visual> {
+    let d = d
+        .cast::<PyDict>()
+        .map_err(|_| invalid(py, arg, "a dict with 'body' and 'kind'", repr(d)))?;
+    let key = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        d.get_item(k)?
+            .ok_or_else(|| invalid(py, &format!("{arg}['{k}']"), "a value", "nothing"))
+    };
+    let num = |k: &str| -> PyResult<f64> {
+        let v = key(k)?;
+        v.extract::<f64>()
+            .map_err(|_| invalid(py, &format!("{arg}['{k}']"), "a number", repr(&v)))
+    };
+    let three = |k: &str| -> PyResult<Vec3> { vec3(&key(k)?, &format!("{arg}['{k}']")) };
+    let body_obj = key("body")?;
+    let body = body_obj.extract::<usize>().map_err(|_| {
+        invalid(
+            py,
+            &format!("{arg}['body']"),
+            "a body index",
+            repr(&body_obj),
+        )
+    })?;
+    let kind_obj = key("kind")?;
+    let kind: String = kind_obj.extract().unwrap_or_default();
+    let shape = match kind.as_str() {
+        "box" => Shape::Box {
+            size: three("size")?,
+        },
+        "cylinder" => Shape::Cylinder {
+            radius: num("radius")?,
+            length: num("length")?,
+        },
+        "capsule" => Shape::Capsule {
+            radius: num("radius")?,
+            length: num("length")?,
+        },
+        "sphere" => Shape::Sphere {
+            radius: num("radius")?,
+        },
+        "ellipsoid" => Shape::Ellipsoid {
+            radii: three("radii")?,
+        },
+        "mesh" => {
+            let uri: String = key("uri")?
+                .extract()
+                .map_err(|_| invalid(py, &format!("{arg}['uri']"), "a string", "another type"))?;
+            let path = match d.get_item("path")? {
+                Some(p) if !p.is_none() => {
+                    Some(p.extract::<PathBuf>()?.to_string_lossy().into_owned())
+                }
+                Some(_) => None,
+                None => Some(uri.clone()),
+            };
+            let scale = match d.get_item("scale")? {
+                Some(s) => vec3(&s, &format!("{arg}['scale']"))?,
+                None => Vec3::new(1.0, 1.0, 1.0),
+            };
+            Shape::Mesh { uri, path, scale }
+        }
+        _ => {
+            return Err(invalid(
+                py,
+                &format!("{arg}['kind']"),
+                "'box', 'cylinder', 'capsule', 'sphere', 'ellipsoid' or 'mesh'",
+                repr(&kind_obj),
+            ))
+        }
+    };
+    let rotation = match d.get_item("rotation")? {
+        Some(r) => mat3(&r, &format!("{arg}['rotation']"))?,
+        None => crate::spatial::Mat3::identity(),
+    };
+    let translation = match d.get_item("translation")? {
+        Some(t) => vec3(&t, &format!("{arg}['translation']"))?,
+        None => Vec3::zeros(),
+    };
+    let rgba = match d.get_item("rgba")? {
+        Some(c) if !c.is_none() => Some(c.extract::<[f64; 4]>().map_err(|_| {
+            invalid(
+                py,
+                &format!("{arg}['rgba']"),
+                "four numbers in [0, 1]",
+                repr(&c),
+            )
+        })?),
+        _ => None,
+    };
+    let rotation =
+        crate::model::checked_rotation(&rotation, &format!("{arg}['rotation']")).py(py)?;
+    Ok(Visual {
+        body,
+        origin: Placement::new(rotation, translation),
+        shape,
+        rgba,
+    })
+}
+
+#[pymethods]
+impl PyModel {
+    /// The visual geometry (URDF `<visual>`, MJCF geoms; docs/visualisation.md): one dict per
+    /// shape with `body` (index), `body_name`, `kind` ("box", "cylinder", "sphere",
+    /// "capsule", "ellipsoid", "mesh"), `rotation` (3×3) and `translation` of its frame in
+    /// the body frame, its sizes (`size` full sides; `radius`, `length` along z; `radii`;
+    /// a mesh's `uri` as written, `path` where found or None, `scale`) and `rgba` or None.
+    #[getter]
+    fn visuals<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
+        let m = self.model();
+        let items = m
+            .visuals
+            .iter()
+            .map(|v| to_dict(py, v, &m.bodies[v.body].name))
+            .collect::<PyResult<Vec<_>>>()?;
+        PyList::new(py, items)
+    }
+
+    /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; "" if none).
+    #[getter]
+    fn name(&self) -> String {
+        self.model().name.clone()
+    }
+
+    /// Replaces the visual geometry with `visuals` (dicts as `Model.visuals` gives them; a
+    /// mesh's `path` defaults to its `uri`) and, if given, the name. The dynamics is unchanged.
+    #[pyo3(signature = (visuals, *, name=None))]
+    fn set_visuals(
+        &self,
+        py: Python<'_>,
+        visuals: Vec<Bound<'_, PyAny>>,
+        name: Option<String>,
+    ) -> PyResult<()> {
+        let nbodies = self.model().nbodies();
+        let mut out = Vec::with_capacity(visuals.len());
+        for (k, d) in visuals.iter().enumerate() {
+            let arg = format!("visuals[{k}]");
+            let v = from_dict(py, d, &arg)?;
+            v.check(nbodies, &arg).py(py)?;
+            out.push(v);
+        }
+        self.update_model(|m| {
+            m.visuals = out;
+            if let Some(n) = name {
+                m.name = n;
+            }
+        });
+        Ok(())
+    }
+}
