@@ -170,7 +170,7 @@ mod tests {
         assert_eq!(qr.factor(4, true, 1e-13, 0.0), 3);
         assert_eq!(qr.perm[2], 3);
         // The min-norm x with cᵀx = b for the independent columns: x = Q R⁻ᵀ b.
-        let b_of = |j: usize| [1.0, -2.0, 0.0, 3e-9][j];
+        let b_of = |j: usize| [1.0, -2.0, -3.0, 3e-9][j];
         let mut w: Vec<f64> = (0..3).map(|k| b_of(qr.perm[k])).collect();
         qr.solve_rt(&mut w);
         let mut x = [0.0; 4];
