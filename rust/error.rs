@@ -74,6 +74,10 @@ pub enum Error {
     /// The equations cannot be solved at this state (singular mass matrix, Euler singularity).
     #[error("{0}")]
     Singular(String),
+    /// Finite inputs gave a meaningless result (an effect's failure inside a computation that
+    /// is not a simulation, which reports its own).
+    #[error("{0}")]
+    Numerical(String),
     /// A loop that cannot be closed (or kept closed) from the given state; names the loop.
     #[error("{0}")]
     Closure(String),
@@ -156,6 +160,7 @@ impl Error {
         };
         match self {
             Error::Singular(m) => Error::Singular(tell(m)),
+            Error::Numerical(m) => Error::Numerical(tell(m)),
             Error::Closure(m) => Error::Closure(tell(m)),
             Error::InvalidSetting(m) => Error::InvalidSetting(tell(m)),
             Error::Interrupted(m) => Error::Interrupted(tell(m)),
@@ -199,6 +204,7 @@ impl Error {
                 message,
             },
             unnamed @ (Error::Singular(_)
+            | Error::Numerical(_)
             | Error::Closure(_)
             | Error::InvalidSetting(_)
             | Error::Interrupted(_)) => unnamed,
@@ -208,7 +214,24 @@ impl Error {
     /// This error met while reading an input file at `at`: the message is this error's whole
     /// text (argument name included), placed after the file and key.
     pub fn in_file(self, kind: FileKind, at: Location) -> Self {
-        Error::file(kind, at, self.to_string())
+        // Where the key already ends with the argument's name (`body[0] ('rod').mass`), the
+        // message says it once: `….mass: expected …`, not `….mass: mass: expected …`.
+        let named = |arg: &str| {
+            !arg.is_empty()
+                && (at.key == arg || at.key.strip_suffix(arg).is_some_and(|k| k.ends_with('.')))
+        };
+        let message = match &self {
+            Error::InvalidArgument { arg, expected, got } if named(arg) => {
+                format!("expected {expected}, got {got}")
+            }
+            Error::InvalidInertia { arg, reason } | Error::InvalidModel { arg, reason }
+                if named(arg) =>
+            {
+                reason.clone()
+            }
+            _ => self.to_string(),
+        };
+        Error::file(kind, at, message)
     }
 
     /// Like [`Error::in_file`], but an invalid argument's name is appended to the key (as

@@ -7,6 +7,7 @@ pub mod benchmark_models;
 pub mod body;
 pub mod cpu;
 pub mod denoc;
+pub mod design;
 pub mod effects;
 pub mod error;
 pub mod files;

@@ -252,6 +252,30 @@ impl Model {
         }
     }
 
+    /// The index of the body named `name`, or an error on argument `arg` listing the
+    /// model's body names (the first 20 of them) and `'world'`.
+    pub fn body_named(&self, arg: &str, name: &str) -> Result<usize> {
+        self.body_index(name).ok_or_else(|| {
+            let mut names: Vec<String> = self
+                .bodies
+                .iter()
+                .take(20)
+                .map(|b| format!("'{}'", b.name))
+                .collect();
+            if self.bodies.len() > 20 {
+                names.push(format!("… ({} bodies)", self.bodies.len()));
+            }
+            names.push("'world'".into());
+            Error::model(
+                arg,
+                format!(
+                    "no body named '{name}': expected one of {}",
+                    names.join(", ")
+                ),
+            )
+        })
+    }
+
     /// Adds a body on `joint` below `parent` (None: the world). `placement` puts the joint
     /// frame in the parent body's frame; the body frame equals the joint frame at the neutral
     /// configuration. `point_mass_center` (body frame) is where the seven-point box is
@@ -538,8 +562,8 @@ impl Model {
         for l in &self.links {
             if let Some(at) = l.joint.quaternion_at() {
                 let s = &mut q[l.q_index + at..l.q_index + at + 4];
-                let n = s.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if n > 0.0 {
+                let n = crate::joint::rotation::quat_norm(s);
+                if n > 0.0 && n.is_finite() {
                     s.iter_mut().for_each(|x| *x /= n);
                 }
             }

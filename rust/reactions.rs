@@ -8,6 +8,7 @@
 //! mechanism's linear and angular momenta exactly (docs/balancing.md). The quantities are
 //! linear in the point masses for a given motion, which is what makes balancing a least
 //! squares problem.
+use crate::alloc::try_zeros_vec;
 use crate::error::Result;
 use crate::kinematics::{self, body_placement};
 use crate::loops::{self, LoopSolver};
@@ -91,16 +92,16 @@ pub fn point_motion(
 
 /// The motion of given points `(link, offset in the link frame)` at the state of the last
 /// [`link_accelerations`] (or [`point_motion`]) call: `(position, velocity, acceleration)`.
-pub fn carried_points(ws: &Workspace, points: &[(usize, Vec3)]) -> Vec<(Vec3, Vec3, Vec3)> {
-    points
-        .iter()
-        .map(|(i, p)| {
-            let s = &ws.links[*i];
-            let d = s.rotation * p;
-            let (vel, acc) = carried_point(&s.twist, &ws.accel[*i], &d);
-            (s.origin + d, vel, acc)
-        })
-        .collect()
+pub fn carried_points<'a>(
+    ws: &'a Workspace,
+    points: &'a [(usize, Vec3)],
+) -> impl Iterator<Item = (Vec3, Vec3, Vec3)> + 'a {
+    points.iter().map(|(i, p)| {
+        let s = &ws.links[*i];
+        let d = s.rotation * p;
+        let (vel, acc) = carried_point(&s.twist, &ws.accel[*i], &d);
+        (s.origin + d, vel, acc)
+    })
 }
 
 /// Shaking force and moment about `about` (world): `(−Σ m a, −Σ m (r − O) × a)`.
@@ -260,21 +261,29 @@ pub fn point_regressor(
     g: &Vec3,
 ) -> Result<PointRegressor> {
     let (rows, nv, np) = (states.rows, model.nv, points.len());
-    let mut ws = Workspace::new(model);
-    let mut out = PointRegressor {
-        positions: Vec::with_capacity(rows * np * 3),
-        accelerations: Vec::with_capacity(rows * np * 3),
-        generalized: vec![0.0; rows * np * nv],
+    // The sizes are the caller's to choose: requested fallibly (OutOfMemory, not an abort).
+    let entries = |width: usize| {
+        rows.checked_mul(np)
+            .and_then(|x| x.checked_mul(width))
+            .unwrap_or(usize::MAX)
     };
+    let what = |name: &str| format!("point_regressor['{name}'] ({rows} states × {np} points)");
+    let mut out = PointRegressor {
+        positions: try_zeros_vec(entries(3), &what("positions"))?,
+        accelerations: try_zeros_vec(entries(3), &what("accelerations"))?,
+        generalized: try_zeros_vec(entries(nv), &what("generalized"))?,
+    };
+    let mut ws = Workspace::new(model);
     for k in 0..rows {
         crate::interrupt::check("point_regressor")?;
         let (q, v, a) = states.row(model, k);
         link_accelerations(model, &mut ws, q, v, a);
-        for (j, (r, _, ap)) in carried_points(&ws, points).iter().enumerate() {
-            out.positions.extend_from_slice(r.as_slice());
-            out.accelerations.extend_from_slice(ap.as_slice());
+        for (j, (r, _, ap)) in carried_points(&ws, points).enumerate() {
+            let at = (k * np + j) * 3;
+            out.positions[at..at + 3].copy_from_slice(r.as_slice());
+            out.accelerations[at..at + 3].copy_from_slice(ap.as_slice());
             let row = &mut out.generalized[(k * np + j) * nv..(k * np + j + 1) * nv];
-            add_point_force(model, &ws, points[j].0, r, &(ap - g), row);
+            add_point_force(model, &ws, points[j].0, &r, &(ap - g), row);
         }
     }
     Ok(out)

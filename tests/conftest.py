@@ -381,6 +381,13 @@ def _hypothesis_home():
 _hypothesis_home()
 
 
+def pytest_report_header(config):
+    # Which build the suite tests: the installed wheel or the source tree, and which copy of
+    # the multiversioned loops (POINTMASS_DYN_BASELINE=1 forces the portable one).
+    return f"pointmass_dyn {pmd.__version__} from {os.path.dirname(pmd.__file__)}, " \
+        f"CPU dispatch: {pmd._core.cpu_dispatch}"
+
+
 # Floating-base robots of example-robot-data (two humanoids, two quadrupeds), loaded both
 # ways: ours with root_joint="free", Pinocchio's with JointModelFreeFlyer.
 FLOATING = {
@@ -392,16 +399,11 @@ FLOATING = {
 
 
 def robots_dir():
-    """example-robot-data's robots folder (the cmeel wheel has no Python module to ask)."""
-    import importlib.metadata
-    from pathlib import Path
-
+    """example-robot-data's robots folder (pmd.robots), or None if it is not installed."""
     try:
-        dist = importlib.metadata.distribution("example-robot-data")
-    except importlib.metadata.PackageNotFoundError:
+        return pmd.robots.directory()
+    except pmd.errors.InvalidInputError:
         return None
-    d = Path(dist.locate_file("cmeel.prefix/share/example-robot-data/robots"))
-    return d if d.is_dir() else None
 
 
 @pytest.fixture(scope="module", params=sorted(FLOATING))

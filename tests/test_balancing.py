@@ -81,16 +81,19 @@ def test_the_optimiser_finds_the_berkof_lowen_balance_by_itself(fourbar):
     ]
     for kw in ({"zero": ("force",), "objective": {}}, {"objective": {"force": 1.0}}):
         b = pmd.balance(motion, counterweights=rings, **kw)
-        assert b.after.shaking.rms["force"] <= 1e-10 * motion.shaking.rms["force"], kw
+        # To the conic solver's tolerances (feasibility and gap 1e-10, relative).
+        assert b.solver["status"] == "Solved" and b.solver["gap_rel"] <= 1e-8
+        assert b.after.shaking.rms["force"] <= 1e-8 * motion.shaking.rms["force"], kw
         h1, h3 = berkof_lowen_targets(scene.model)
-        np.testing.assert_allclose(first_moment(b.bodies["crank"]), h1, atol=1e-12)
-        np.testing.assert_allclose(first_moment(b.bodies["rocker"]), h3, atol=1e-12)
+        tol = 1e-8 * np.linalg.norm(h1)
+        np.testing.assert_allclose(first_moment(b.bodies["crank"]), h1, atol=tol)
+        np.testing.assert_allclose(first_moment(b.bodies["rocker"]), h3, atol=tol)
         # The least added mass: one counterweight per link, on the ring point opposite.
         assert [c[0] for c in b.counterweights] == ["crank", "rocker"]
         for name, point, _ in b.counterweights:
             target = h1 if name == "crank" else h3
             np.testing.assert_allclose(
-                point / np.linalg.norm(point), target / np.linalg.norm(target), atol=1e-12
+                point / np.linalg.norm(point), target / np.linalg.norm(target), atol=1e-8
             )
 
 

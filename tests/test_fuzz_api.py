@@ -90,7 +90,11 @@ def model_zoo() -> list[pmd.Model]:
     tree.add_body(rod_body(0.2, 0.2, 0.01), pmd.Fixed(), parent=b, translation=[0, 0.1, 0])
     tree.add_body(rod_body(0.3, 0.2, 0.02), pmd.SphericalZYZ(), parent=a,
                   translation=[0, 0, 0.5], name="euler")
-    return [chain, tree]
+    free = pmd.Model()
+    box = free.add_body(rod_body(), pmd.FreeFlyer(), name="box")
+    free.add_body(rod_body(0.4, 0.3, 0.02), pmd.Revolute([0, 1, 0]), parent=box,
+                  translation=[0.2, 0, 0], name="flap")
+    return [chain, tree, free]
 
 
 MODELS = model_zoo()
@@ -258,6 +262,120 @@ def rk45_calls(data) -> None:
              first_step=data.draw(st.one_of(st.none(), floats)))
     if r is not None and r.get("sol") is not None:
         call(data, "sol", r.sol, data.draw(st.one_of(floats, arrays(None), junk)))
+
+
+FOURBAR = pmd.load_scene("fourbar")
+PENDULUM = pmd.load_scene("pendulum_planar")
+points_arg = st.one_of(
+    st.none(),
+    st.just([("crank", [0.1, 0.0, 0.0])]),
+    st.lists(st.tuples(st.one_of(st.sampled_from(["crank", "coupler", "nope"]), ints, junk),
+                       st.one_of(arrays(3), junk)), max_size=3),
+    junk,
+)
+
+
+def newer_model_calls(data, model: pmd.Model) -> None:
+    """Derivatives, point motions, shaking and bearing forces, poses (issue 29)."""
+    nq, nv = model.nq, model.nv
+    q, v, x = data.draw(arrays(nq)), data.draw(arrays(nv)), data.draw(arrays(nv))
+    g = data.draw(st.one_of(arrays(3), st.none()))
+    op = data.draw(st.sampled_from(["fd_derivs", "id_derivs", "point_motion", "regressor",
+                                    "shaking", "bearing", "poses", "poses_stack"]))
+    if op == "fd_derivs":
+        call(data, op, model.forward_dynamics_derivatives, q, v, x, gravity=g)
+    elif op == "id_derivs":
+        call(data, op, model.inverse_dynamics_derivatives, q, v, x, gravity=g)
+    elif op == "point_motion":
+        call(data, op, model.point_motion, q, v, x)
+    elif op == "regressor":
+        call(data, op, model.point_regressor, q, v, x, points=data.draw(points_arg), gravity=g)
+    elif op == "shaking":
+        call(data, op, model.shaking, q, v, x, about=data.draw(st.one_of(st.none(), arrays(3))))
+    elif op == "bearing":
+        call(data, op, model.bearing_forces, q, v, x, gravity=g)
+    elif op == "poses":
+        call(data, op, model.body_poses, q)
+    else:
+        call(data, op, model.body_poses, np.tile(model.neutral(), (2, 1)) * data.draw(floats))
+
+
+def newer_scene_calls(data, model: pmd.Model) -> None:
+    """Scene derivatives, every integrator, solve_ivp with jac, batches (issue 29)."""
+    scene = pmd.Scene(model, model.neutral(), np.zeros(model.nv),
+                      effects=[pmd.Gravity([0, 0, -9.81])])
+    nq, nv = model.nq, model.nv
+    op = data.draw(st.sampled_from(["fd_derivs", "state_jacobian", "methods", "solve_ivp",
+                                    "batch"]))
+    if op == "fd_derivs":
+        call(data, op, scene.forward_dynamics_derivatives, data.draw(arrays(nq)),
+             data.draw(arrays(nv)), data.draw(st.one_of(st.none(), arrays(nv))),
+             t=data.draw(floats))
+    elif op == "state_jacobian":
+        call(data, op, scene.state_jacobian, data.draw(arrays(nq + nv)), t=data.draw(floats))
+    elif op == "methods":
+        call(data, op, pmd.simulate, scene, (0.0, 0.05),
+             method=data.draw(st.sampled_from(["RK45", "DOP853", "RK4", "Euler", "Radau", "auto",
+                                               "rk45", None, 3])),
+             dt=data.draw(st.one_of(st.none(), st.sampled_from([1e-3, 0.0, -1.0]), floats)),
+             rtol=data.draw(st.one_of(st.none(), st.sampled_from([1e-6, 0.0, -1.0, math.nan]))),
+             atol=data.draw(st.one_of(st.none(), st.sampled_from([1e-9, 0.0, -1.0, math.nan]))),
+             max_steps=200)
+    elif op == "solve_ivp":
+        n = data.draw(st.integers(1, 3))
+        jac = data.draw(st.one_of(st.none(), st.just(lambda t, y: -np.eye(n)),
+                                  st.just(lambda t, y: np.eye(n + 1)), arrays(n * n),
+                                  st.just(np.full((n, n), data.draw(floats))), junk))
+        call(data, op, pmd.solve_ivp, lambda t, y: -np.asarray(y), (0.0, 1.0), np.ones(n),
+             method=data.draw(st.sampled_from(["RK45", "Radau", "auto", "RK4", "DOP853"])),
+             dt=0.1, jac=jac, max_steps=200,
+             rtol=data.draw(st.one_of(st.sampled_from([1e-6, 0.0, -1.0, math.nan]), floats)),
+             atol=data.draw(st.one_of(st.sampled_from([1e-9, 0.0, -1.0, math.nan]), floats)))
+    else:
+        call(data, op, pmd.simulate_batch, scene, (0.0, 0.05), t_eval=[0.0, 0.05],
+             q0=data.draw(st.one_of(st.none(), st.just(np.tile(model.neutral(), (2, 1))),
+                                    arrays(None))),
+             threads=data.draw(st.one_of(st.none(), st.integers(-1, 3), junk)),
+             params=data.draw(st.one_of(st.none(), st.just({"gravity": [[0, 0, -9.81]] * 2}),
+                                        st.dictionaries(st.sampled_from(["gravity", "x"]),
+                                                        st.one_of(arrays(None), junk),
+                                                        max_size=1))),
+             max_steps=200)
+
+
+def design_calls(data) -> None:
+    """Shaking analysis along prescribed motions of the bundled fourbar (issue 29)."""
+    model = FOURBAR.model
+    op = data.draw(st.sampled_from(["prescribed", "analyze", "to_mjcf"]))
+    if op == "prescribed":
+        call(data, op, pmd.prescribed_motion, model,
+             data.draw(st.one_of(st.sampled_from(["crank", "coupler", "nope"]), ints, junk)),
+             speed=data.draw(st.one_of(st.none(), floats)),
+             samples=data.draw(st.one_of(st.integers(-1, 12), junk)),
+             revolutions=data.draw(st.one_of(floats, st.just(1.0))), q_guess=FOURBAR.q0)
+    elif op == "analyze":
+        n = data.draw(st.integers(0, 3))
+        call(data, op, pmd.analyze_motion, model, data.draw(arrays(n)),
+             np.tile(FOURBAR.q0, (data.draw(st.integers(0, 3)), 1)), np.zeros((n, model.nv)),
+             data.draw(st.one_of(st.just(np.zeros((n, model.nv))), arrays(None))),
+             actuated=["crank"])
+    else:
+        call(data, op, pmd.to_mjcf, data.draw(st.sampled_from([PENDULUM, PENDULUM.model] + MODELS)),
+             timestep=data.draw(st.one_of(floats, junk)),
+             integrator=data.draw(st.sampled_from(["RK4", "Euler", "x", 3])))
+
+
+@settings(max_examples=600, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@given(st.data())
+def test_random_calls_to_the_newer_entry_points(data):
+    area = data.draw(st.sampled_from(["model", "scene", "design"]))
+    model = data.draw(st.sampled_from(MODELS))
+    if area == "model":
+        newer_model_calls(data, model)
+    elif area == "scene":
+        newer_scene_calls(data, model)
+    else:
+        design_calls(data)
 
 
 @settings(max_examples=2500, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)

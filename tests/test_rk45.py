@@ -115,7 +115,10 @@ def test_krogh_error_against_exact_solution_falls_with_tolerance():
         record(f"rk45 Krogh |y(12) - exact| / tol, tol={tol:g}", err / tol)
         # RK45 on this problem: global error ≈ 10-15 × tol (SciPy's own is 11-14 × tol).
         assert 0.1 * tol < err < 20 * tol
-        assert abs(err - ref_err) <= 1e-3 * ref_err + 1e-14
+        # Same steps, same error; at tol 1e-12 (error ~1e-11) the last bits of y(12) are
+        # rounding, which moved SciPy's by up to 7e-14 when its inputs were perturbed by
+        # 1e-15 .. 1e-14 relative (tests/perturb.py): a 2 % margin.
+        assert abs(err - ref_err) <= 2e-2 * ref_err + 1e-14
         errs.append(err)
     assert all(b < a / 10 for a, b in zip(errs, errs[1:])), errs
 

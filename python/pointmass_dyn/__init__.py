@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from . import _pickle, benchmarking, design, errors, io, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, benchmarking, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from ._simulation import (
@@ -37,8 +37,10 @@ from .benchmarking import WorkPrecision, work_precision
 from .design import (
     Balance,
     Counterweight,
+    LinkShape,
     MotionAnalysis,
     Shaking,
+    Shape,
     analyze_motion,
     balance,
     pareto_front,
@@ -57,6 +59,7 @@ from .errors import (
     SingularityError,
 )
 from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
+from .robots import example_robot
 from .scenes import builtin_scenes, load_scene
 from .viewer import AnimationInfo, animate
 from .viewer import show as show_meshcat
@@ -122,14 +125,18 @@ def FreeFlyer() -> Joint:
 
 __all__ = [
     "benchmarking",
+    "robots",
     "design",
     "io",
     "viewer",
     "AnimationInfo",
     "animate",
+    "example_robot",
     "Balance",
     "BatchResult",
     "Counterweight",
+    "LinkShape",
+    "Shape",
     "Damper",
     "Effect",
     "ExternalForce",

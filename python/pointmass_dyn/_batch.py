@@ -52,9 +52,19 @@ class BatchResult:
         return len(self.results)
 
 
+def _floats(name: str, value: Any) -> np.ndarray:
+    """``params[name]`` as a float array, or an error naming it (not NumPy's ValueError)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"params['{name}']: expected numbers, one value per run, got {value!r:.80}"
+        ) from exc
+
+
 def _rows(name: str, value: Any, count: int | None, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as B rows of ``shape`` (B from the first such argument)."""
-    arr = np.asarray(value, dtype=float)
+    arr = _floats(name, value)
     if arr.ndim == len(shape):
         arr = arr[None]
     if arr.shape[1:] != shape or (count is not None and arr.shape[0] != count):
@@ -85,7 +95,7 @@ def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
     count = None
     per = {}
     for key, value in params.items():
-        arr = np.asarray(value, dtype=float)
+        arr = _floats(key, value)
         if arr.ndim == 0:
             raise InvalidInputError(f"params['{key}']: expected one value per run, got a scalar")
         if count is None:

@@ -16,6 +16,8 @@ from numpy.typing import ArrayLike, NDArray
 from typing_extensions import TypeAlias
 
 __version__: str
+#: Which copy of the multiversioned loops runs: "avx2" or "baseline" (POINTMASS_DYN_BASELINE=1).
+cpu_dispatch: str
 
 _Array: TypeAlias = NDArray[np.float64]
 #: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).
@@ -121,14 +123,19 @@ class Model:
         self,
         body: RigidBody,
         joint: Joint,
-        parent: int = -1,
+        parent: int | str | None = -1,
         translation: ArrayLike | None = None,
         rotation: ArrayLike | None = None,
         name: str | None = None,
         point_mass_center: ArrayLike | None = None,
     ) -> int:
-        """Adds ``body`` on ``joint`` below ``parent`` (-1: the world), the joint frame placed
-        at ``translation``/``rotation`` in the parent's body frame; returns its index.
+        """Adds ``body`` on ``joint`` below ``parent``; returns its index.
+
+        ``parent`` is the parent body's name or index (-1, ``"world"`` or None: the world; an
+        unknown name is a ``ModelStructureError`` listing the names). ``translation`` and
+        ``rotation`` place the joint frame in the parent's body frame; ``name`` is the body's
+        unique name (default ``"body<index>"``); ``point_mass_center`` is where the box of
+        the seven point masses is centred, body frame (default: the COM).
 
         ``rotation`` must be a rotation to 1e-9; it is re-orthonormalised, and one within 4ε of
         a quarter or half turn about coordinate axes is taken as exactly that turn."""
@@ -748,3 +755,34 @@ def _dumps(obj: _Pickled) -> tuple[bytes, tuple[Callable[..., Any], ...]]:
 def _loads(data: bytes, callables: tuple[Callable[..., Any], ...] | None = None) -> _Pickled:
     """The object ``_dumps`` encoded; raises :class:`pointmass_dyn.errors.UnpicklingError`
     for data that is truncated, altered or of another format version."""
+
+def design_cells(
+    cell: float,
+    box: ArrayLike | None = None,
+    polygon: ArrayLike | None = None,
+    z: tuple[float, float] | None = None,
+    triangles: ArrayLike | None = None,
+) -> _Array:
+    """Centres (K, 3) of the cubes of side ``cell`` inside an envelope: a ``box`` (2, 3), a
+    ``polygon`` (P, 2) extruded over ``z``, or a closed mesh of ``triangles`` (T, 3, 3)."""
+
+def design_regressor(
+    model: Model,
+    q: ArrayLike,
+    v: ArrayLike,
+    a: ArrayLike,
+    gravity: ArrayLike | None,
+    about: ArrayLike,
+    actuated: list[int],
+) -> dict[str, Any]:
+    """The design maps along N states: ``data`` (N · rows, 10 · nlinks) (shaking force,
+    moment, driving forces, bearing forces per link and cut joint, per unit inertial
+    parameter), ``rows``, ``nactuated``, ``nlinks``, ``nloops``, ``parameters``."""
+
+def design_pins(model: Model, body: int | str) -> list[tuple[_Array, _Array]]:
+    """``(point, axis)`` of each revolute or ball joint on ``body``, in its frame."""
+
+def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
+    """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
+    ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel``,
+    ``iterations``, ``solve_time``."""

@@ -155,7 +155,7 @@ def PointSpring(
     )
 
 
-@dataclass
+@dataclass(repr=False)
 class SimulationResult:
     """Trajectory of a scene. ``q`` is (N, nq), ``v`` (N, nv); ``energy`` (N,) when asked."""
 
@@ -197,6 +197,23 @@ class SimulationResult:
     def nsteps(self) -> int:
         return self.n_accepted
 
+    def __repr__(self) -> str:
+        # A summary: the arrays can hold millions of numbers.
+        t = np.asarray(self.t)
+        span = f"[{t[0]:g}, {t[-1]:g}]" if t.size else "[]"
+        parts = [
+            f"scene={self.scene!r}" if self.scene else None,
+            f"method={self.method!r}",
+            f"success={self.success}",
+            f"t={span} ({t.size} points)",
+            f"q: {np.shape(self.q)}, v: {np.shape(self.v)}",
+            f"energy: {np.shape(self.energy)}" if self.energy is not None else None,
+            f"events: {[len(e) for e in self.t_events]}" if self.t_events else None,
+            f"nfev={self.nfev}, n_accepted={self.n_accepted}, n_rejected={self.n_rejected}",
+            f"message={self.message!r}",
+        ]
+        return "SimulationResult(" + ", ".join(p for p in parts if p) + ")"
+
     def raise_for_status(self) -> SimulationResult:
         """Raises :class:`SimulationError` (with ``.t``) if the run failed; returns self."""
         if not self.success:
@@ -230,7 +247,8 @@ def simulate(
     ``method``: ``"RK45"`` (default; SciPy's, step for step), ``"DOP853"`` (SciPy's, step for
     step; better at tight tolerances), ``"RK4"`` or ``"Euler"`` (semi-implicit, MuJoCo's) at
     the fixed step ``dt`` (required by these two only), ``"Radau"`` (implicit) or ``"auto"``
-    (RK45, then Radau from where the stiffness test fires; ``.switched_to``, ``.t_switch``).
+    (RK45, or DOP853 at rtol ≤ 1e-8, then Radau from where the stiffness test fires;
+    ``.switched_to``, ``.t_switch``).
     ``None`` takes the scene's ``[simulate] method``/``dt``. See docs/integrators.md.
 
     Settings not given here come from the scene (its ``[simulate]`` table), then SciPy's
@@ -252,7 +270,10 @@ def simulate(
     changes no step, ``"stop"`` ends the run, ``"off"`` skips the test.
 
     A ``SphericalZYZ`` joint reaching its Euler singularity (sin θ = 0) ends the run there
-    with ``success=False`` and a message naming the joint and the time.
+    with ``success=False`` and a message naming the joint and the time; so does one coming
+    within ``|sin θ| = 3 √(ε / rtol)`` of it (1.4e-3 at rtol 1e-9; a run starting nearer:
+    twice as near as it started), where rounding in the Euler-angle rates would exceed the
+    tolerance. Use ``Spherical`` for motions through or near it.
 
     A run that cannot finish returns ``success=False`` with a message giving the reason and
     the time reached (a non-finite force from any effect, a ``TorqueFunction`` included);

@@ -24,7 +24,7 @@ import numpy as np
 
 from ._batch import BatchResult, simulate_batch
 from ._core import Scene, __version__
-from .errors import InvalidInputError
+from .errors import ClusterError, InvalidInputError
 
 #: Chunks per concurrent task slot when ``chunk_size`` is not given (see :func:`sweep`).
 CHUNKS_PER_SLOT = 4
@@ -101,7 +101,34 @@ def _runs(scene, q0, v0, params) -> tuple[int, dict[str, bool]]:
     return b, {name: n == b and b > 1 for name, n in counts.items()}
 
 
-def _client(client, scheduler, threads_per_task: int):
+def _connect(distributed, scheduler, timeout: float):
+    """``Client(scheduler)``, with Dask's own errors as ours: a malformed address (Dask
+    raises ValueError, or for an unknown protocol an AssertionError after its timeout) is an
+    input error, a scheduler that does not answer within ``timeout`` a :class:`ClusterError`."""
+    expected = "an address such as 'tcp://host:8786'"
+    if not isinstance(scheduler, str):
+        raise InvalidInputError(f"scheduler: expected {expected}, got {scheduler!r}")
+    from distributed.comm import parse_address
+    from distributed.comm.registry import backends
+
+    protocol = parse_address(scheduler)[0]
+    if protocol not in backends:
+        raise InvalidInputError(
+            f"scheduler: expected {expected} (protocols {', '.join(backends)}), got "
+            f"{scheduler!r}"
+        )
+    try:
+        return distributed.Client(scheduler, timeout=timeout)
+    except ValueError as exc:
+        raise InvalidInputError(f"scheduler: expected {expected}, got {scheduler!r} ({exc})") from exc
+    except Exception as exc:  # Dask's connect timeout is an OSError; its own loop may fail too
+        raise ClusterError(
+            f"scheduler: no Dask scheduler answered at {scheduler!r} within "
+            f"connect_timeout={timeout} s ({type(exc).__name__}: {exc})"
+        ) from exc
+
+
+def _client(client, scheduler, threads_per_task: int, connect_timeout: float):
     """The client to use and what to close afterwards."""
     distributed = _distributed()
     if client is not None:
@@ -109,7 +136,7 @@ def _client(client, scheduler, threads_per_task: int):
             raise InvalidInputError("sweep: give a client or a scheduler address, not both")
         return client, []
     if scheduler is not None:
-        c = distributed.Client(scheduler)
+        c = _connect(distributed, scheduler, connect_timeout)
         return c, [c]
     from dask.system import CPU_COUNT
 
@@ -152,6 +179,7 @@ def sweep(
     chunk_size: int | None = None,
     client: Any = None,
     scheduler: str | None = None,
+    connect_timeout: float = 10.0,
     retries: int = 2,
     threads_per_task: int = 1,
     progress: Callable[[int, int], Any] | None = None,
@@ -162,7 +190,8 @@ def sweep(
     ``simulate_batch`` gives on the whole batch (bit for bit).
 
     The cluster: ``client`` (a ``distributed.Client``, left open), else ``Client(scheduler)``
-    for a scheduler address (closed afterwards), else a new ``LocalCluster`` of one process
+    for a scheduler address (closed afterwards; one that does not answer within
+    ``connect_timeout`` seconds is a :class:`~pointmass_dyn.errors.ClusterError`), else a new ``LocalCluster`` of one process
     per ``threads_per_task`` cores (closed afterwards). Each task runs ``simulate_batch`` with
     ``threads=threads_per_task``: give workers that many cores per thread.
 
@@ -200,7 +229,13 @@ def sweep(
     kwargs = dict(simulate_kwargs, threads=threads_per_task)
 
     distributed = _distributed()
-    client, close = _client(client, scheduler, threads_per_task)
+    if isinstance(connect_timeout, bool) or not (
+        isinstance(connect_timeout, (int, float)) and 0 < connect_timeout < math.inf
+    ):
+        raise InvalidInputError(
+            f"connect_timeout: expected a positive number of seconds, got {connect_timeout!r}"
+        )
+    client, close = _client(client, scheduler, threads_per_task, float(connect_timeout))
     futures: dict[Any, int] = {}
     try:
         if chunk_size is None:

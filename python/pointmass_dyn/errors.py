@@ -72,6 +72,11 @@ class AnimationWriterError(PointMassDynError, RuntimeError):
     matplotlib or Pillow); the message says what to install or which format works instead."""
 
 
+class ClusterError(PointMassDynError, ConnectionError):
+    """A Dask scheduler that did not answer within the stated timeout (``sweep``'s
+    ``connect_timeout``); the message names the address."""
+
+
 class UrdfWarning(UserWarning):
     """A URDF loaded differently from what it says (mimic joints, ignored elements)."""
 
@@ -94,6 +99,7 @@ class ModelImportWarning(UserWarning):
 
 __all__ = [
     "AnimationWriterError",
+    "ClusterError",
     "InertiaError",
     "InvalidInputError",
     "LoopClosureError",

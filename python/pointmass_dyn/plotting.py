@@ -34,35 +34,77 @@ def coordinate_labels(model) -> tuple[list[str], list[str], list[bool]]:
     return qlab, vlab, angular
 
 
+def coordinate_units(model) -> tuple[list[str], list[str]]:
+    """The quantity of each q entry (``"angle"``, ``"length"``, ``"quaternion"``) and of each v
+    entry (``"angular rate"``, ``"linear rate"``), in the order of q and v."""
+    qu, vu = [], []
+    for name in model.link_names:
+        kind = model.body_info(model.body_names.index(name))[1]
+        if kind == "SphericalZYZ":
+            qu += ["angle"] * 3
+            vu += ["angular rate"] * 3
+        elif kind == "Spherical":
+            qu += ["quaternion"] * 4
+            vu += ["angular rate"] * 3
+        elif kind == "FreeFlyer":
+            qu += ["length"] * 3 + ["quaternion"] * 4
+            vu += ["linear rate"] * 3 + ["angular rate"] * 3
+        elif kind == "Revolute":
+            qu.append("angle")
+            vu.append("angular rate")
+        else:
+            qu.append("length")
+            vu.append("linear rate")
+    return qu, vu
+
+
+# One unit system per figure: degrees for every angle and angular rate (SI otherwise); each
+# panel holds one quantity, its label says which and in what unit.
+_PANELS = {
+    "angle": ("joint angle (deg)", np.degrees(1.0)),
+    "length": ("joint position (m)", 1.0),
+    "quaternion": ("orientation quaternion (–)", 1.0),
+    "angular rate": ("angular rate (deg/s)", np.degrees(1.0)),
+    "linear rate": ("linear rate (m/s)", 1.0),
+}
+
+
 def plot_trajectory(result, model, path: str | Path | None = None, title: str = ""):
-    """Joint coordinates and rates against time (angles in degrees), like the paper's
-    Figs. 4 and 5, plus the energy when it was recorded. Saves to ``path`` if given."""
+    """Joint coordinates and rates against time, one panel per quantity (angles and angular
+    rates in degrees), like the paper's Figs. 4 and 5, plus the energy drift when it was
+    recorded. The title names the scene (``title`` or ``result.scene``), the method and, for a
+    failed run, why it stopped. Saves to ``path`` if given."""
     plt = pyplot()
-    qlab, vlab, angular = coordinate_labels(model)
-    rows = 3 if result.energy is not None else 2
-    fig, axes = plt.subplots(rows, 1, figsize=(8, 2.6 * rows + 0.6), sharex=True)
+    qlab, vlab, _ = coordinate_labels(model)
+    qu, vu = coordinate_units(model)
     q = np.array(result.q, dtype=float)
     v = np.array(result.v, dtype=float)
-    ang = np.array(angular, dtype=bool)
-    q_show = q.copy()
-    if ang.any():
-        q_show[:, ang] = np.degrees(q[:, ang])
-    for k in range(q.shape[1]):
-        axes[0].plot(result.t, q_show[:, k], label=qlab[k])
-    axes[0].set_ylabel("q (deg, m, -)")
-    for k in range(v.shape[1]):
-        axes[1].plot(result.t, v[:, k], label=vlab[k])
-    axes[1].set_ylabel("v (rad/s, m/s)")
+    series = [(u, q, qu, qlab) for u in ("angle", "length", "quaternion") if u in qu]
+    series += [(u, v, vu, vlab) for u in ("angular rate", "linear rate") if u in vu]
+    rows = len(series) + (result.energy is not None)
+    fig, axes = plt.subplots(rows, 1, figsize=(9, 2.2 * rows + 0.8), sharex=True, squeeze=False)
+    axes = axes[:, 0]
+    for ax, (unit, data, units, labels) in zip(axes, series):
+        label, scale = _PANELS[unit]
+        cols = [k for k, u in enumerate(units) if u == unit]
+        for k in cols:
+            ax.plot(result.t, scale * data[:, k], label=labels[k], lw=1.2)
+        ax.set_ylabel(label, fontsize=8)
+        ax.grid(alpha=0.3)
+        if len(cols) <= 12:  # beside the panel, never over the curves
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=7, frameon=False)
     if result.energy is not None:
         e = np.asarray(result.energy)
-        axes[2].plot(result.t, e - e[0], color="k")
-        axes[2].set_ylabel("E − E(0) (J)")
-    axes[-1].set_xlabel("t (s)")
-    for ax in axes[:2]:
-        if q.shape[1] <= 8:
-            ax.legend(loc="upper right", fontsize=7, ncol=2)
-        ax.grid(alpha=0.3)
-    fig.suptitle(title or f"{result.scene}: {result.message}", fontsize=9)
+        axes[-1].plot(result.t, e - e[0], color="k", lw=1.0)
+        axes[-1].set_ylabel("energy drift\nE − E(0) (J)", fontsize=8)
+        axes[-1].grid(alpha=0.3)
+    axes[-1].set_xlabel("time t (s)")
+    name = title or result.scene or "simulation"
+    t_end = float(result.t[-1]) if len(result.t) else 0.0
+    head = f"{name}: {result.method}, {len(result.t)} samples to t = {t_end:g} s"
+    if not result.success:
+        head += f"\nstopped: {result.message}"
+    fig.suptitle(head, fontsize=10)
     fig.tight_layout()
     if path is not None:
         fig.savefig(path, dpi=120)

@@ -123,11 +123,12 @@ impl Declaration for Spring {
                     if let PerJoint::Each(given) = &self.rest {
                         r.copy_from_slice(&given[at..at + 4]);
                     }
-                    let n = r.iter().map(|x| x * x).sum::<f64>().sqrt();
-                    if n <= 1e-8 {
+                    let n = crate::joint::rotation::quat_norm(&r);
+                    let min = crate::joint::rotation::MIN_QUATERNION_NORM;
+                    if !(n >= min && n.is_finite()) {
                         return Err(Error::arg(
                             "rest",
-                            "a quaternion (x, y, z, w) of non-zero norm for a Spherical joint",
+                            format!("a finite quaternion (x, y, z, w) of norm at least {min:e} for a Spherical joint"),
                             format!("{r:?} for body '{}'", s.name),
                         ));
                     }

@@ -3,12 +3,14 @@
 //! allocate their buffers once, before the first step. [`solve`] picks the method,
 //! [`rk45`] is the RK45 entry of old.
 use super::dense::{DenseOutput, Interpolant};
-use super::dop853::Dop853;
+use super::dop853::{Dop853, Dop853Tableau};
 use super::events::{self, Event};
+use super::explicit_rk::{ExplicitRk, Tableau};
 use super::fixed_step::{Euler, FixedStep, Rk4};
-use super::method::{radau_available, Counts, Integrator, Method};
+use super::method::{Counts, Integrator, Method};
 use super::radau::Radau;
-use super::stepper::{StepOutcome, Stepper};
+use super::stepper::{Rk45, Stepper};
+use super::StepOutcome;
 use super::{fmt_time, InputError, OdeSystem, Solution, SolverOptions, Status, StiffnessCheck};
 
 /// Integrate `sys` over `t_span = (t0, t_end)` (backwards if `t_end < t0`) from `y0`,
@@ -71,12 +73,7 @@ pub fn solve<S: OdeSystem>(
             events,
             Method::Radau,
         ),
-        Method::Auto => {
-            if !radau_available() {
-                return Err(InputError::MethodUnavailable("auto (it switches to Radau)"));
-            }
-            auto(sys, t_span, y0, opts, events, stiff_target::<S>)
-        }
+        Method::Auto => auto(sys, t_span, y0, opts, events, stiff_target::<S>),
     }
 }
 
@@ -98,9 +95,37 @@ fn stiff_target<S: OdeSystem>(
     Radau::new(sys, t, y, t_end, &opts)
 }
 
-/// `auto`: RK45 with Hairer's stiffness test stopping it; from the state where it fired, the
+/// `auto`: RK45 (DOP853 at tight tolerances, [`AUTO_DOP853_RTOL`]) with Hairer's stiffness
+/// test stopping it; from the state where it fired, the
 /// rest of the interval with the method `target` builds (Radau), same events and output.
 pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
+    sys: S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    opts: &SolverOptions,
+    events: &mut [Event<'_>],
+    target: StiffTarget<S, J>,
+) -> Result<Solution, InputError> {
+    if starts_on_dop853(opts) {
+        auto_from::<S, J, Dop853Tableau>(sys, t_span, y0, opts, events, target)
+    } else {
+        auto_from::<S, J, Rk45>(sys, t_span, y0, opts, events, target)
+    }
+}
+
+/// Every `rtol` at or below which `auto` starts on DOP853 instead of RK45: cheaper there on
+/// non-stiff problems, and its stiffness test fires as early (measured, docs/integrators.md).
+pub const AUTO_DOP853_RTOL: f64 = 1e-8;
+
+fn starts_on_dop853(opts: &SolverOptions) -> bool {
+    match &opts.rtol {
+        super::Tol::Scalar(r) => *r <= AUTO_DOP853_RTOL,
+        super::Tol::PerComponent(v) => v.iter().all(|r| *r <= AUTO_DOP853_RTOL),
+    }
+}
+
+/// `auto` with the explicit method of tableau `T` first.
+fn auto_from<S: OdeSystem, J: Integrator<System = S>, T: Tableau>(
     sys: S,
     t_span: (f64, f64),
     y0: &[f64],
@@ -113,7 +138,7 @@ pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
         stiffness: StiffnessCheck::Stop,
         ..opts.clone()
     };
-    let mut st = Stepper::new(sys, t0, y0, t_end, &first)?;
+    let mut st = ExplicitRk::<S, T>::new(sys, t0, y0, t_end, &first)?;
     if let Some(te) = &opts.t_eval {
         validate_t_eval(te, t0, t_end)?;
     }
@@ -136,7 +161,7 @@ pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
     info.counts = info.counts + info2.counts;
     info.t = info2.t;
     info.rtol_clamped |= info2.rtol_clamped;
-    info.switched = Some((Method::Radau, t_switch));
+    info.switched = Some((T::METHOD, Method::Radau, t_switch));
     Ok(solution(info, status, out, tracker))
 }
 
@@ -268,8 +293,8 @@ struct RunInfo {
     rtol_clamped: bool,
     stiffness: Option<super::Stiffness>,
     method: Method,
-    /// `auto`: the method it switched to and when.
-    switched: Option<(Method, f64)>,
+    /// `auto`: the method it switched from, to, and when.
+    switched: Option<(Method, Method, f64)>,
 }
 
 impl RunInfo {
@@ -295,9 +320,9 @@ fn solution(info: RunInfo, status: Status, out: Output<'_>, tracker: EventTracke
     let stiffness = info.stiffness;
     let mut message = status.describe(t_reached);
     match info.switched {
-        Some((to, t)) => {
+        Some((from, to, t)) => {
             message.push_str(&format!(
-                "; switched from RK45 to {to} at t = {} (stiffness detected)",
+                "; switched from {from} to {to} at t = {} (stiffness detected)",
                 fmt_time(t)
             ));
         }
@@ -327,8 +352,8 @@ fn solution(info: RunInfo, status: Status, out: Output<'_>, tracker: EventTracke
         dense: out.dense,
         stiffness,
         method: info.method,
-        switched_to: info.switched.map(|s| s.0),
-        t_switch: info.switched.map(|s| s.1),
+        switched_to: info.switched.map(|s| s.1),
+        t_switch: info.switched.map(|s| s.2),
     }
 }
 

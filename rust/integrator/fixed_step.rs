@@ -11,9 +11,9 @@
 
 use std::marker::PhantomData;
 
+use super::common::{self, call_rhs, check_start, check_state, Lifecycle, Stepping};
 use super::dense::Interpolant;
 use super::method::{Counts, Integrator};
-use super::stepper::{call_rhs, check_start, check_state, State};
 use super::{InputError, Method, OdeSystem, SolverOptions, Status, StepOutcome};
 
 /// The update of one fixed-step scheme.
@@ -131,7 +131,7 @@ pub struct FixedStep<S: OdeSystem, M: Scheme> {
     f_old: Vec<f64>,
     /// `w.k[0..dim]` holds `f(t, y)` (computed lazily: the next step's, or the interpolant's).
     f_valid: bool,
-    state: State,
+    lifecycle: Lifecycle,
     _m: PhantomData<M>,
 }
 
@@ -146,6 +146,8 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
     ) -> Result<Self, InputError> {
         let dim = sys.dim();
         check_start(dim, y0, t0, t_bound)?;
+        // Unused at a fixed step, but a NaN or negative one is still a mistake to report.
+        super::common::tolerances(opts, dim)?;
         let dt = opts.dt.ok_or(InputError::DtMissing {
             method: M::METHOD.name(),
         })?;
@@ -178,7 +180,7 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
             y_old: y0.to_vec(),
             f_old: vec![0.0; dim],
             f_valid: false,
-            state: State::Running,
+            lifecycle: Lifecycle::Running,
             _m: PhantomData,
         })
     }
@@ -251,21 +253,23 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
     }
 }
 
+/// Nothing to evaluate before the first step (`f(t0, y0)` is the first step's own).
+impl<S: OdeSystem, M: Scheme> Stepping for FixedStep<S, M> {
+    fn lifecycle(&mut self) -> &mut Lifecycle {
+        &mut self.lifecycle
+    }
+    fn start(&mut self) -> Result<(), Status> {
+        Ok(())
+    }
+    fn advance(&mut self) -> Result<StepOutcome, Status> {
+        self.step_impl()
+    }
+}
+
 impl<S: OdeSystem, M: Scheme> Integrator for FixedStep<S, M> {
     type System = S;
     fn step(&mut self) -> Result<StepOutcome, Status> {
-        match &self.state {
-            State::Running | State::Uninitialised => {}
-            State::Finished => return Ok(StepOutcome::Finished),
-            State::Failed(s) => return Err(s.clone()),
-        }
-        let r = self.step_impl();
-        match &r {
-            Ok(StepOutcome::Finished) => self.state = State::Finished,
-            Ok(StepOutcome::Accepted) => {}
-            Err(s) => self.state = State::Failed(s.clone()),
-        }
-        r
+        common::step(self)
     }
     fn dim(&self) -> usize {
         self.w.dim
@@ -306,10 +310,8 @@ impl<S: OdeSystem, M: Scheme> Integrator for FixedStep<S, M> {
     /// Cubic Hermite: `q0 = h f_old`, `q1 = 3Δ − 2 h f_old − h f`, `q2 = h f_old + h f − 2Δ`
     /// (`f = f(t, y)`, the next step's first evaluation, computed now if need be).
     fn dense_coefficients(&mut self, q: &mut [f64]) -> Result<(), Status> {
-        if let Err(s) = self.ensure_f() {
-            self.state = State::Failed(s.clone());
-            return Err(s);
-        }
+        let r = self.ensure_f();
+        common::record(&mut self.lifecycle, r)?;
         let h = self.t - self.t_old;
         let (n, f) = (self.w.dim, &self.w.k);
         for i in 0..n {

@@ -87,21 +87,16 @@ pub enum Method {
     Rk45,
     /// Dormand–Prince 8(5,3), SciPy's `DOP853` step for step.
     Dop853,
-    /// Radau IIA order 5 (implicit), SciPy's `Radau`; see [`radau_available`].
+    /// Radau IIA order 5 (implicit), SciPy's `Radau`.
     Radau,
     /// Classical Runge–Kutta 4 at a fixed step `dt`.
     Rk4,
     /// Semi-implicit (symplectic) Euler at a fixed step `dt` (explicit Euler for a system
     /// without a `[q; v]` split; see [`OdeSystem::split`]).
     Euler,
-    /// RK45 until Hairer's stiffness test fires, then Radau from that state.
+    /// RK45 (DOP853 when every rtol ≤ [`super::AUTO_DOP853_RTOL`]) until Hairer's stiffness test
+    /// fires, then Radau from that state.
     Auto,
-}
-
-/// Whether `Method::Radau` (and the stiff half of `Method::Auto`) is built in. The single
-/// dispatch point for Radau is `driver::solve` (and `driver::stiff_target`).
-pub const fn radau_available() -> bool {
-    true
 }
 
 impl Method {

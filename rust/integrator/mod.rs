@@ -1,10 +1,14 @@
 //! Integration methods behind one driver, SciPy's `solve_ivp` loop: adaptive Dormand–Prince
 //! 5(4) (`RK45`) and 8(5,3) (`DOP853`) that reproduce SciPy step for step, fixed-step `RK4`
-//! and semi-implicit `Euler`, and `auto` (RK45, then Radau once stiff). See docs/integrators.md.
+//! and semi-implicit `Euler`, and `auto` (RK45 or, at tight tolerances, DOP853, then Radau
+//! once stiff). See docs/integrators.md.
 //!
 //! * `method.rs`     – the [`Integrator`] trait every method implements, [`Method`] names.
-//! * `stepper.rs`    – RK45: Butcher tableau, error norm, step-size control, [`Stepper`].
+//! * `common.rs`     – what every method shares: [`StepState`], the solver life cycle, checks.
+//! * `explicit_rk.rs` – the one explicit Runge–Kutta engine [`ExplicitRk`] over a [`Tableau`].
+//! * `stepper.rs`    – the RK45 tableau ([`Rk45`]; [`Stepper`] = the engine with it).
 //! * `dop853.rs`     – DOP853 ([`Dop853`]), its tableau in `dop853_tableau.rs`.
+//! * `radau.rs`      – Radau IIA ([`Radau`]), finite-difference Jacobians in `num_jac.rs`.
 //! * `fixed_step.rs` – the fixed-step methods ([`FixedStep`] with [`Rk4`] or [`Euler`]).
 //! * `dense.rs`      – the interpolants ([`Interpolant`]) and the piecewise [`DenseOutput`].
 //! * `events.rs`     – [`Event`] functions and SciPy's `brentq` root finder.
@@ -20,28 +24,31 @@
 //! so step times can differ from SciPy's by up to ~1e-7 relative at tight tolerances (as
 //! SciPy's own do between CPUs); values at fixed times (t_end, t_eval, events) agree to ~1e-14.
 
+mod common;
 mod dense;
 mod dop853;
 mod dop853_tableau;
 mod driver;
 mod events;
+mod explicit_rk;
 mod fixed_step;
-mod lu;
 mod method;
 mod num_jac;
 mod radau;
 mod stepper;
 
+pub use common::{StepOutcome, StepState};
 pub use dense::{eval_segment, DenseOutput, Interpolant};
-pub use dop853::Dop853;
+pub use dop853::{Dop853, Dop853Tableau};
 #[cfg(test)]
 pub(crate) use driver::auto as driver_auto;
-pub use driver::{rk45, solve};
+pub use driver::{rk45, solve, AUTO_DOP853_RTOL};
 pub use events::{Event, EventDirection, EventFn};
+pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
-pub use method::{radau_available, Counts, Integrator, Method};
+pub use method::{Counts, Integrator, Method};
 pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
-pub use stepper::{StepOutcome, Stepper};
+pub use stepper::{Rk45, Stepper};
 
 use thiserror::Error;
 
@@ -203,7 +210,7 @@ impl Controller {
 /// each accepted step, `h·|λ| ≈ h ‖k7 − k6‖ / ‖y7 − y6‖`, where `y6`, `y7 = y_new` are the
 /// two stage states at `t + h` and `k6`, `k7` their derivatives, estimates the step times the
 /// dominant eigenvalue of the Jacobian. Above [`STIFF_H_LAMBDA`] (the edge of the
-/// Dormand–Prince stability region, ≈ 3.3) on [`STIFF_STEPS`] accepted steps (a run of
+/// Dormand–Prince 5(4) stability region, ≈ 3.3; DOP853's 6.1) on [`STIFF_STEPS`] accepted steps (a run of
 /// [`NONSTIFF_RESET`] steps below it starts the count again) the step size is limited by
 /// stability, not accuracy: an explicit method then needs ~|λ|·T/3 steps whatever the
 /// tolerance, where an implicit one (SciPy's Radau, BDF) would not.
@@ -222,7 +229,8 @@ pub enum StiffnessCheck {
     Stop,
 }
 
-/// `h·|λ|` above which a step counts as stability-limited (Hairer's 3.25).
+/// `h·|λ|` above which an RK45 step counts as stability-limited (Hairer's 3.25 in DOPRI5;
+/// DOP853's is 6.1, [`Tableau::STIFF_H_LAMBDA`]).
 pub const STIFF_H_LAMBDA: f64 = 3.25;
 /// Number of stability-limited accepted steps that make a detection (Hairer's 15).
 pub const STIFF_STEPS: usize = 15;
@@ -248,10 +256,10 @@ impl Stiffness {
 
     fn warning(&self) -> String {
         format!(
-            "warning: the problem looks stiff from t = {} (h·|λ| ≈ {:.2} > {STIFF_H_LAMBDA} on \
-             {STIFF_STEPS} accepted steps, |λ| ≈ {:.3e}): the step size is limited by the \
-             stability of the explicit method, not by the tolerance; an implicit solver (e.g. \
-             SciPy's Radau or BDF) or softer stiff elements would need far fewer steps",
+            "warning: the problem looks stiff from t = {} (h·|λ| ≈ {:.2} on {STIFF_STEPS} \
+             accepted steps, |λ| ≈ {:.3e}): the step size is limited by the stability of the \
+             explicit method, not by the tolerance; an implicit solver (e.g. SciPy's Radau or \
+             BDF) or softer stiff elements would need far fewer steps",
             fmt_time(self.t),
             self.h_lambda,
             self.lambda()
@@ -376,8 +384,6 @@ pub enum InputError {
         "method: expected one of 'RK45', 'DOP853', 'Radau', 'RK4', 'Euler' or 'auto', got '{0}'"
     )]
     UnknownMethod(String),
-    #[error("method: {0} is not available in this build (the Radau solver is not built in yet); use 'RK45', 'DOP853', 'RK4' or 'Euler'")]
-    MethodUnavailable(&'static str),
     #[error("dt: method '{method}' takes a fixed step size dt > 0, got none")]
     DtMissing { method: &'static str },
     #[error("controller: method '{method}' has SciPy's controller only ('standard')")]
@@ -414,7 +420,7 @@ impl InputError {
             InputError::TEvalOutsideSpan { .. }
             | InputError::TEvalNotSorted { .. }
             | InputError::OutputTooLarge { .. } => "t_eval",
-            InputError::UnknownMethod(_) | InputError::MethodUnavailable(_) => "method",
+            InputError::UnknownMethod(_) => "method",
             InputError::DtMissing { .. }
             | InputError::DtInvalid(_)
             | InputError::DtNotUsed { .. } => "dt",
@@ -523,8 +529,8 @@ impl Status {
             ),
             Status::Stiff { t, h_lambda, h } => format!(
                 "the problem is stiff at t = {}: on {STIFF_STEPS} accepted steps the step size \
-                 was limited by the stability of the explicit method (h·|λ| ≈ {h_lambda:.2} > \
-                 {STIFF_H_LAMBDA}, |λ| ≈ {:.3e}), not by the tolerance; use an implicit solver \
+                 was limited by the stability of the explicit method (h·|λ| ≈ {h_lambda:.2}, \
+                 |λ| ≈ {:.3e}), not by the tolerance; use an implicit solver \
                  (e.g. SciPy's Radau or BDF) or soften the stiff elements",
                 f(*t),
                 h_lambda / h

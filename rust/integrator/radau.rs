@@ -33,16 +33,21 @@
 // Index loops over parallel arrays read as SciPy's formulas; T and TI are SciPy's digits verbatim.
 #![allow(clippy::needless_range_loop, clippy::excessive_precision)]
 
+use std::ops::Deref;
+
 use nalgebra::Complex;
 
+use super::common::{
+    self, check_start, check_state, check_step_options, rms_norm as rms, step_state_accessors,
+    tolerances, Lifecycle, StepState, Stepping,
+};
 use super::dense::Interpolant;
-use super::lu::Lu;
 use super::method::{Counts, Integrator};
 use super::num_jac::NumJac;
-use super::stepper::{
-    check_start, check_step_options, next_toward, rms_norm as rms, select_initial_step, Start,
+use super::{
+    Controller, InputError, NonFiniteKind, OdeSystem, SolverOptions, Status, StepOutcome, Tol,
 };
-use super::{Controller, InputError, NonFiniteKind, OdeSystem, SolverOptions, Status, StepOutcome};
+use crate::linalg::lu::Lu;
 
 const S6: f64 = 2.449_489_742_783_178; // √6
 /// Collocation nodes.
@@ -138,14 +143,6 @@ enum JacMode {
     Constant,
 }
 
-#[derive(Debug, Clone, PartialEq)]
-enum State {
-    Uninitialised,
-    Running,
-    Finished,
-    Failed(Status),
-}
-
 /// Radau IIA (order 5) usable one step at a time (SciPy's `Radau` solver object).
 ///
 /// Buffers are allocated in [`Radau::new`]; [`Radau::step`] allocates nothing. The first
@@ -153,25 +150,9 @@ enum State {
 /// (without `first_step`) and the first Jacobian.
 pub struct Radau<S: OdeSystem> {
     sys: S,
-    dim: usize,
-    t: f64,
-    t_old: f64,
-    t_bound: f64,
-    direction: f64,
-    y: Vec<f64>,
-    y_old: Vec<f64>,
-    /// `f(t, y)`.
-    f: Vec<f64>,
-    y_new: Vec<f64>,
-    rtol: Vec<f64>,
-    atol: Vec<f64>,
-    rtol_clamped: bool,
+    st: StepState,
     newton_tol: f64,
-    max_step: f64,
-    first_step: Option<f64>,
-    max_steps: usize,
-    /// Next step size to try, and SciPy's `h_abs_old` / `error_norm_old` (controller memory).
-    h_abs: f64,
+    /// SciPy's `h_abs_old` / `error_norm_old` (the controller's memory).
     h_abs_old: Option<f64>,
     error_norm_old: Option<f64>,
     /// The Jacobian, row-major `dim × dim`.
@@ -199,15 +180,11 @@ pub struct Radau<S: OdeSystem> {
     err: Vec<f64>,
     /// Dense coefficients of the last accepted step, `q[3 i + j]`.
     q: Vec<f64>,
-    nfev: usize,
     njev: usize,
     nlu: usize,
-    n_accepted: usize,
-    n_rejected: usize,
     n_newton_failures: usize,
     /// Why the step size fell: the last attempt of a failed step was a Newton failure.
     last_attempt_newton_failure: bool,
-    state: State,
 }
 
 /// SciPy `predict_factor` (Gustafsson's predictive controller, Hairer & Wanner IV.8).
@@ -256,8 +233,7 @@ impl<S: OdeSystem> Radau<S> {
         if opts.controller != Controller::Standard {
             return Err(InputError::ControllerUnsupported { method: "Radau" });
         }
-        let mut rtol = super::stepper::expand_tol(&opts.rtol, "rtol", dim)?;
-        let atol = super::stepper::expand_tol(&opts.atol, "atol", dim)?;
+        let tols = tolerances(opts, dim)?;
         if let JacobianSource::Constant(m) = &jacobian {
             if m.len() != dim * dim {
                 return Err(InputError::JacobianShape {
@@ -269,41 +245,13 @@ impl<S: OdeSystem> Radau<S> {
                 return Err(InputError::JacobianNonFinite { index, value });
             }
         }
-        // SciPy computes newton_tol from the rtol it was given, before raising it to 100 EPS.
-        let rtol_given = rtol.iter().copied().fold(f64::INFINITY, f64::min);
-        let rtol_min = 100.0 * f64::EPSILON;
-        let rtol_clamped = rtol.iter().any(|&r| r < rtol_min);
-        if rtol_clamped {
-            rtol.iter_mut().for_each(|r| *r = r.max(rtol_min));
-        }
-        // rtol = 0 would make the tolerance infinite (SciPy's 10 EPS / 0).
-        let r = if rtol_given > 0.0 {
-            rtol_given
-        } else {
-            rtol_min
-        };
-        let newton_tol = (10.0 * f64::EPSILON / r).max(0.03f64.min(r.powf(0.5)));
+        let newton_tol = newton_tolerance(&opts.rtol);
         let v = || vec![0.0; dim];
         let v3 = || vec![0.0; 3 * dim];
         Ok(Self {
             sys,
-            dim,
-            t: t0,
-            t_old: t0,
-            t_bound,
-            direction: if t_bound > t0 { 1.0 } else { -1.0 },
-            y: y0.to_vec(),
-            y_old: y0.to_vec(),
-            f: v(),
-            y_new: v(),
-            rtol,
-            atol,
-            rtol_clamped,
+            st: StepState::new(t0, y0, t_bound, opts, tols),
             newton_tol,
-            max_step: opts.max_step,
-            first_step: opts.first_step,
-            max_steps: opts.max_steps,
-            h_abs: 0.0,
             h_abs_old: None,
             error_norm_old: None,
             jac: vec![0.0; dim * dim],
@@ -327,39 +275,40 @@ impl<S: OdeSystem> Radau<S> {
             ze: v(),
             err: v(),
             q: v3(),
-            nfev: 0,
             njev: 0,
             nlu: 0,
-            n_accepted: 0,
-            n_rejected: 0,
             n_newton_failures: 0,
             last_attempt_newton_failure: false,
-            state: State::Uninitialised,
         })
     }
 
     /// Evaluate `f(t0, y0)`, choose the first step and evaluate the first Jacobian. Called by
     /// the first [`Radau::step`].
     pub fn initialize(&mut self) -> Result<(), Status> {
-        match &self.state {
-            State::Uninitialised => {}
-            State::Failed(s) => return Err(s.clone()),
-            _ => return Ok(()),
-        }
-        let r = self.initialize_impl();
-        match &r {
-            Ok(()) => self.state = State::Running,
-            Err(s) => self.state = State::Failed(s.clone()),
-        }
-        r
+        common::initialize(self)
     }
 
-    fn initialize_impl(&mut self) -> Result<(), Status> {
-        let t0 = self.t;
-        self.rhs_strict(t0)?;
-        self.h_abs = match self.first_step {
+    /// Take one accepted step (retrying with smaller steps as needed), SciPy `_step_impl`.
+    /// `Err` carries a failure status; after it, every call returns the same error.
+    pub fn step(&mut self) -> Result<StepOutcome, Status> {
+        common::step(self)
+    }
+
+    /// `f(t0, y0)`, the first step (SciPy's `select_initial_step` with the error estimator's
+    /// order 3) and the first Jacobian.
+    fn start(&mut self) -> Result<(), Status> {
+        let t0 = self.st.t;
+        self.st.rhs_here(&mut self.sys)?;
+        self.st.h_abs = match self.st.first_step {
             Some(h) => h,
-            None => self.select_initial_step()?,
+            None => {
+                let scratch = (
+                    &mut self.scale[..],
+                    &mut self.y_stage[..],
+                    &mut self.err[..],
+                );
+                self.st.initial_step(&mut self.sys, 3, scratch)?
+            }
         };
         match std::mem::take(&mut self.jac_source) {
             JacobianSource::Constant(m) => {
@@ -375,7 +324,7 @@ impl<S: OdeSystem> Radau<S> {
                 self.jac_mode = JacMode::Analytic;
                 let has = self
                     .sys
-                    .jacobian(t0, &self.y, &mut self.jac)
+                    .jacobian(t0, &self.st.y, &mut self.jac)
                     .map_err(|m| jacobian_error(t0, m))?;
                 if has {
                     self.njev += 1;
@@ -390,57 +339,15 @@ impl<S: OdeSystem> Radau<S> {
         Ok(())
     }
 
-    /// SciPy `select_initial_step` with the error estimator's order 3.
-    fn select_initial_step(&mut self) -> Result<f64, Status> {
-        let start = Start {
-            t0: self.t,
-            y0: &self.y,
-            f0: &self.f,
-            t_bound: self.t_bound,
-            direction: self.direction,
-        };
-        select_initial_step(
-            &mut self.sys,
-            &mut self.nfev,
-            start,
-            (&self.atol, &self.rtol),
-            self.max_step,
-            3,
-            (&mut self.scale, &mut self.y_stage, &mut self.err),
-        )
-    }
-
-    /// `f(at, y)` into `self.f` (`y` the current state); a non-finite value ends the run.
-    fn rhs_strict(&mut self, at: f64) -> Result<(), Status> {
-        let t_reached = self.t;
-        self.nfev += 1;
-        self.sys
-            .rhs(at, &self.y, &mut self.f)
-            .map_err(|message| Status::RhsError {
-                t: t_reached,
-                at,
-                message,
-            })?;
-        if self.f.iter().all(|v| v.is_finite()) {
-            Ok(())
-        } else {
-            Err(Status::NonFinite {
-                t: t_reached,
-                at,
-                what: NonFiniteKind::Derivative,
-            })
-        }
-    }
-
     /// A fresh Jacobian at the current state `(t, y)`, `f = f(t, y)`.
     fn update_jacobian(&mut self) -> Result<(), Status> {
-        let t = self.t;
+        let t = self.st.t;
         self.njev += 1;
         match self.jac_mode {
             JacMode::Analytic => {
                 let filled = self
                     .sys
-                    .jacobian(t, &self.y, &mut self.jac)
+                    .jacobian(t, &self.st.y, &mut self.jac)
                     .map_err(|m| jacobian_error(t, m))?;
                 if filled {
                     return self.check_jacobian();
@@ -449,18 +356,18 @@ impl<S: OdeSystem> Radau<S> {
                 self.num_jac.compute(
                     &mut self.sys,
                     t,
-                    &self.y,
-                    &self.f,
-                    &self.atol,
+                    &self.st.y,
+                    &self.st.f,
+                    &self.st.atol,
                     &mut self.jac,
                 )
             }
             JacMode::FiniteDifference => self.num_jac.compute(
                 &mut self.sys,
                 t,
-                &self.y,
-                &self.f,
-                &self.atol,
+                &self.st.y,
+                &self.st.f,
+                &self.st.atol,
                 &mut self.jac,
             ),
             JacMode::Constant => Ok(()),
@@ -472,8 +379,8 @@ impl<S: OdeSystem> Radau<S> {
             Ok(())
         } else {
             Err(Status::NonFinite {
-                t: self.t,
-                at: self.t,
+                t: self.st.t,
+                at: self.st.t,
                 what: NonFiniteKind::Derivative,
             })
         }
@@ -482,7 +389,7 @@ impl<S: OdeSystem> Radau<S> {
     /// Factorise `μ/h I − J` and `(α + iβ)/h I − J` (SciPy counts both in `nlu`).
     /// False if either is singular (or not finite).
     fn factor_newton_matrices(&mut self, h: f64) -> bool {
-        let n = self.dim;
+        let n = self.st.dim;
         let mr = self.mu_real / h;
         let mc = Complex::new(self.mu_complex.re / h, self.mu_complex.im / h);
         {
@@ -512,7 +419,7 @@ impl<S: OdeSystem> Radau<S> {
     /// SciPy `solve_collocation_system` from the guess `z0`, into `z`. Returns (converged,
     /// iterations, last contraction rate or NaN).
     fn solve_collocation_system(&mut self, t: f64, h: f64) -> Result<(bool, usize, f64), Status> {
-        let n = self.dim;
+        let n = self.st.dim;
         let m_real = self.mu_real / h;
         let m_complex = Complex::new(self.mu_complex.re / h, self.mu_complex.im / h);
         let ch = [h * C[0], h * C[1], h * C[2]];
@@ -534,19 +441,19 @@ impl<S: OdeSystem> Radau<S> {
             let mut finite = true;
             for s in 0..3 {
                 for i in 0..n {
-                    self.y_stage[i] = self.y[i] + self.z[s * n + i];
+                    self.y_stage[i] = self.st.y[i] + self.z[s * n + i];
                 }
                 if !self.y_stage.iter().all(|v| v.is_finite()) {
                     // Diverged: nothing to evaluate (SciPy would call f on NaN/inf).
                     break 'newton;
                 }
                 let at = t + ch[s];
-                self.nfev += 1;
+                self.st.nfev += 1;
                 let fs = &mut self.stage_f[s * n..(s + 1) * n];
                 self.sys
                     .rhs(at, &self.y_stage, fs)
                     .map_err(|message| Status::RhsError {
-                        t: self.t,
+                        t: self.st.t,
                         at,
                         message,
                     })?;
@@ -603,216 +510,208 @@ impl<S: OdeSystem> Radau<S> {
         Ok((converged, n_iter, rate.unwrap_or(f64::NAN)))
     }
 
-    /// Take one accepted step (retrying with smaller steps as needed), SciPy `_step_impl`.
-    /// `Err` carries a failure status; after it, every call returns the same error.
-    pub fn step(&mut self) -> Result<StepOutcome, Status> {
-        match &self.state {
-            State::Uninitialised => self.initialize()?,
-            State::Running => {}
-            State::Finished => return Ok(StepOutcome::Finished),
-            State::Failed(s) => return Err(s.clone()),
-        }
-        let r = self.step_impl();
-        match &r {
-            Ok(StepOutcome::Finished) => self.state = State::Finished,
-            Ok(StepOutcome::Accepted) => {}
-            Err(s) => self.state = State::Failed(s.clone()),
-        }
-        r
-    }
-
     /// `Z0`: the previous step's collocation polynomial at `t + h c` minus `y` (zero before
     /// the first step).
     fn predict_z0(&mut self, t: f64, h: f64) {
-        let n = self.dim;
-        if self.n_accepted == 0 {
+        let n = self.st.dim;
+        if self.st.n_accepted == 0 {
             self.z0.fill(0.0);
             return;
         }
-        let h_old = self.t - self.t_old;
+        let h_old = self.st.t - self.st.t_old;
         for s in 0..3 {
-            let x = ((t + h * C[s]) - self.t_old) / h_old;
+            let x = ((t + h * C[s]) - self.st.t_old) / h_old;
             let (p1, p2) = (x, x * x);
             let p3 = p2 * x;
             for i in 0..n {
                 let q = &self.q[3 * i..3 * i + 3];
-                let sol = (q[0] * p1 + q[1] * p2 + q[2] * p3) + self.y_old[i];
-                self.z0[s * n + i] = sol - self.y[i];
+                let sol = (q[0] * p1 + q[1] * p2 + q[2] * p3) + self.st.y_old[i];
+                self.z0[s * n + i] = sol - self.st.y[i];
             }
         }
     }
 
-    fn step_impl(&mut self) -> Result<StepOutcome, Status> {
-        let t = self.t;
-        let n = self.dim;
-        if self.n_accepted >= self.max_steps {
-            return Err(Status::MaxSteps {
-                t,
-                max_steps: self.max_steps,
-            });
-        }
-        let dir = self.direction;
-        let min_step = 10.0 * (next_toward(t, dir) - t).abs();
-        let (mut h_abs, h_abs_old, error_norm_old) = if self.h_abs > self.max_step {
-            (self.max_step, None, None)
-        } else if self.h_abs < min_step {
-            (min_step, None, None)
+    /// SciPy `_step_impl`: attempts until one converges and passes the error test, then the
+    /// controller's next step and the Jacobian/LU reuse decisions.
+    fn advance_impl(&mut self) -> Result<StepOutcome, Status> {
+        let (mut h_abs, min_step, clipped) = self.st.step_bounds()?;
+        let t = self.st.t;
+        // A clipped step forgets the controller's memory (SciPy's h_abs_old = None).
+        let memory = if clipped {
+            (None, None)
         } else {
-            (self.h_abs, self.h_abs_old, self.error_norm_old)
+            (self.h_abs_old, self.error_norm_old)
         };
         let mut current_jac = self.current_jac;
         let mut rejected = false;
-        let (t_new, error_norm, n_iter, rate, safety) = loop {
+        let (t_new, error_norm, n_iter, rate) = loop {
             if h_abs < min_step {
                 return Err(Status::StepTooSmall { t, min_step });
             }
-            let mut t_new = t + h_abs * dir;
-            if dir * (t_new - self.t_bound) > 0.0 {
-                t_new = self.t_bound;
-            }
-            let h = t_new - t;
+            let (t_new, h) = self.st.attempt(h_abs);
             h_abs = h.abs();
             self.predict_z0(t, h);
-            for i in 0..n {
-                self.scale[i] = self.atol[i] + self.y[i].abs() * self.rtol[i];
-            }
-            let (converged, n_iter, rate) = loop {
-                let factored = if !(self.lu_real.is_valid() && self.lu_complex.is_valid()) {
-                    self.factor_newton_matrices(h)
-                } else {
-                    true
-                };
-                let r = if factored {
-                    self.solve_collocation_system(t, h)?
-                } else {
-                    (false, 0, f64::NAN)
-                };
-                if r.0 || current_jac || self.jac_mode == JacMode::Constant {
-                    break r;
-                }
-                self.update_jacobian()?;
-                current_jac = true;
-                self.lu_real.invalidate();
-                self.lu_complex.invalidate();
-            };
+            let (converged, n_iter, rate) = self.newton(t, h, &mut current_jac)?;
+            self.last_attempt_newton_failure = !converged;
             if !converged {
                 h_abs *= 0.5;
-                self.lu_real.invalidate();
-                self.lu_complex.invalidate();
+                self.invalidate_lu();
                 self.n_newton_failures += 1;
-                self.last_attempt_newton_failure = true;
                 continue;
             }
-            self.last_attempt_newton_failure = false;
-            for i in 0..n {
-                self.y_new[i] = self.y[i] + self.z[2 * n + i];
-            }
-            // ZE = Zᵀ E / h; error = LU_real⁻¹ (f + ZE).
-            for i in 0..n {
-                let z = (self.z[i] * E[0] + self.z[n + i] * E[1]) + self.z[2 * n + i] * E[2];
-                self.ze[i] = z / h;
-                self.err[i] = self.f[i] + self.ze[i];
-            }
-            self.lu_real.solve(&mut self.err);
-            for i in 0..n {
-                let (a, b) = (self.y[i].abs(), self.y_new[i].abs());
-                self.scale[i] = self.atol[i] + a.max(b) * self.rtol[i];
-            }
-            let mut error_norm = rms((0..n).map(|i| self.err[i] / self.scale[i]), n);
-            let safety =
-                0.9 * (2 * NEWTON_MAXITER + 1) as f64 / (2 * NEWTON_MAXITER + n_iter) as f64;
+            let mut error_norm = self.error_norm(h);
             if rejected && error_norm > 1.0 {
                 error_norm = self.filtered_error_norm(t)?;
             }
             // Written so that a NaN norm rejects.
             #[allow(clippy::neg_cmp_op_on_partial_ord)]
             if !(error_norm <= 1.0) {
-                let factor = predict_factor(h_abs, h_abs_old, error_norm, error_norm_old);
-                h_abs *= MIN_FACTOR.max(safety * factor);
-                self.lu_real.invalidate();
-                self.lu_complex.invalidate();
+                let factor = predict_factor(h_abs, memory.0, error_norm, memory.1);
+                h_abs *= MIN_FACTOR.max(safety(n_iter) * factor);
+                self.invalidate_lu();
                 rejected = true;
-                self.n_rejected += 1;
+                self.st.n_rejected += 1;
                 continue;
             }
-            break (t_new, error_norm, n_iter, rate, safety);
+            break (t_new, error_norm, n_iter, rate);
         };
         let recompute_jac = self.jac_mode != JacMode::Constant && n_iter > 2 && rate > 1e-3;
-        let mut factor = predict_factor(h_abs, h_abs_old, error_norm, error_norm_old);
-        factor = MAX_FACTOR.min(safety * factor);
+        let mut factor = predict_factor(h_abs, memory.0, error_norm, memory.1);
+        factor = MAX_FACTOR.min(safety(n_iter) * factor);
         if !recompute_jac && factor < 1.2 {
             factor = 1.0;
         } else {
-            self.lu_real.invalidate();
-            self.lu_complex.invalidate();
+            self.invalidate_lu();
         }
-        self.sys
-            .project(&mut self.y_new)
-            .map_err(|message| Status::RhsError {
-                t,
-                at: t_new,
-                message,
-            })?;
-        if !self.y_new.iter().all(|v| v.is_finite()) {
-            return Err(Status::NonFinite {
-                t,
-                at: t_new,
-                what: NonFiniteKind::State,
-            });
-        }
-        // The new state (the interpolant keeps the unprojected collocation polynomial).
-        let t_old_before = self.t_old;
-        std::mem::swap(&mut self.y_old, &mut self.y);
-        std::mem::swap(&mut self.y, &mut self.y_new);
-        self.t_old = t;
-        self.t = t_new;
-        if let Err(mut s) = self.rhs_strict(t_new) {
-            // Not accepted after all: the time reached is the step's start.
-            std::mem::swap(&mut self.y, &mut self.y_new);
-            std::mem::swap(&mut self.y_old, &mut self.y);
-            self.t = t;
-            self.t_old = t_old_before;
-            if let Status::RhsError { t: tr, .. } | Status::NonFinite { t: tr, .. } = &mut s {
-                *tr = t;
-            }
-            return Err(s);
-        }
+        self.accept(t_new)?;
         if recompute_jac {
             self.update_jacobian()?;
             current_jac = true;
         } else if self.jac_mode != JacMode::Constant {
             current_jac = false;
         }
-        self.h_abs_old = Some(self.h_abs);
+        self.h_abs_old = Some(self.st.h_abs);
         self.error_norm_old = Some(error_norm);
-        self.h_abs = h_abs * factor;
+        self.st.h_abs = h_abs * factor;
         self.current_jac = current_jac;
-        // Q = Zᵀ P.
+        self.fill_q();
+        self.st.n_accepted += 1;
+        Ok(self.st.outcome())
+    }
+
+    /// Simplified Newton for `Z` at step `h`: factorise if need be, iterate, and on failure
+    /// with an old Jacobian re-evaluate it once and retry. Returns (converged, iterations,
+    /// rate).
+    fn newton(
+        &mut self,
+        t: f64,
+        h: f64,
+        current_jac: &mut bool,
+    ) -> Result<(bool, usize, f64), Status> {
+        let n = self.st.dim;
+        for i in 0..n {
+            self.scale[i] = self.st.atol[i] + self.st.y[i].abs() * self.st.rtol[i];
+        }
+        loop {
+            let factored = if !(self.lu_real.is_valid() && self.lu_complex.is_valid()) {
+                self.factor_newton_matrices(h)
+            } else {
+                true
+            };
+            let r = if factored {
+                self.solve_collocation_system(t, h)?
+            } else {
+                (false, 0, f64::NAN)
+            };
+            if r.0 || *current_jac || self.jac_mode == JacMode::Constant {
+                return Ok(r);
+            }
+            self.update_jacobian()?;
+            *current_jac = true;
+            self.invalidate_lu();
+        }
+    }
+
+    /// `y_new = y + Z[2]` and the embedded error estimate `LU_real⁻¹ (f + Zᵀ E / h)` (into
+    /// `err`, `Zᵀ E / h` kept in `ze`); its RMS norm scaled by `atol + max(|y|, |y_new|) rtol`.
+    fn error_norm(&mut self, h: f64) -> f64 {
+        let n = self.st.dim;
+        for i in 0..n {
+            self.st.y_new[i] = self.st.y[i] + self.z[2 * n + i];
+        }
+        for i in 0..n {
+            let z = (self.z[i] * E[0] + self.z[n + i] * E[1]) + self.z[2 * n + i] * E[2];
+            self.ze[i] = z / h;
+            self.err[i] = self.st.f[i] + self.ze[i];
+        }
+        self.lu_real.solve(&mut self.err);
+        for i in 0..n {
+            let (a, b) = (self.st.y[i].abs(), self.st.y_new[i].abs());
+            self.scale[i] = self.st.atol[i] + a.max(b) * self.st.rtol[i];
+        }
+        rms((0..n).map(|i| self.err[i] / self.scale[i]), n)
+    }
+
+    fn invalidate_lu(&mut self) {
+        self.lu_real.invalidate();
+        self.lu_complex.invalidate();
+    }
+
+    /// The accepted `y_new` (projected) becomes the state with its derivative `f`; if that
+    /// derivative fails the step is undone.
+    fn accept(&mut self, t_new: f64) -> Result<(), Status> {
+        let t = self.st.t;
+        self.sys
+            .project(&mut self.st.y_new)
+            .map_err(|message| Status::RhsError {
+                t,
+                at: t_new,
+                message,
+            })?;
+        check_state(&self.st.y_new, t, t_new)?;
+        // The new state (the interpolant keeps the unprojected collocation polynomial).
+        let st = &mut self.st;
+        let t_old_before = st.t_old;
+        std::mem::swap(&mut st.y_old, &mut st.y);
+        std::mem::swap(&mut st.y, &mut st.y_new);
+        st.t_old = t;
+        st.t = t_new;
+        if let Err(mut s) = st.rhs_here(&mut self.sys) {
+            // Not accepted after all: the time reached is the step's start.
+            std::mem::swap(&mut st.y, &mut st.y_new);
+            std::mem::swap(&mut st.y_old, &mut st.y);
+            st.t = t;
+            st.t_old = t_old_before;
+            if let Status::RhsError { t: tr, .. } | Status::NonFinite { t: tr, .. } = &mut s {
+                *tr = t;
+            }
+            return Err(s);
+        }
+        Ok(())
+    }
+
+    /// The step's interpolant `Q = Zᵀ P`.
+    fn fill_q(&mut self) {
+        let n = self.st.dim;
         for i in 0..n {
             let (a, b, c) = (self.z[i], self.z[n + i], self.z[2 * n + i]);
             for j in 0..3 {
                 self.q[3 * i + j] = a * P[0][j] + b * P[1][j] + c * P[2][j];
             }
         }
-        self.n_accepted += 1;
-        if dir * (self.t - self.t_bound) >= 0.0 {
-            Ok(StepOutcome::Finished)
-        } else {
-            Ok(StepOutcome::Accepted)
-        }
     }
 
     /// After a rejection: the error estimate once more through the LU with `f(t, y + err)`
     /// (into `err`); its norm, infinite if that derivative is not finite.
     fn filtered_error_norm(&mut self, t: f64) -> Result<f64, Status> {
-        let n = self.dim;
+        let n = self.st.dim;
         for i in 0..n {
-            self.y_stage[i] = self.y[i] + self.err[i];
+            self.y_stage[i] = self.st.y[i] + self.err[i];
         }
         if !self.y_stage.iter().all(|v| v.is_finite()) {
             return Ok(f64::INFINITY);
         }
-        self.nfev += 1;
+        self.st.nfev += 1;
         self.sys
             .rhs(t, &self.y_stage, &mut self.err)
             .map_err(|message| Status::RhsError { t, at: t, message })?;
@@ -830,7 +729,7 @@ impl<S: OdeSystem> Radau<S> {
     /// for [`Interpolant::Radau`]`.eval(t_old(), t() - t_old(), y_old(), q, t, out)`.
     /// Returns false (leaving `q` untouched) before the first step.
     pub fn fill_dense_q(&self, q: &mut [f64]) -> bool {
-        if self.n_accepted == 0 {
+        if self.st.n_accepted == 0 {
             return false;
         }
         q.copy_from_slice(&self.q);
@@ -839,13 +738,13 @@ impl<S: OdeSystem> Radau<S> {
 
     /// The last step's interpolant at `t` into `out` (false before the first step).
     pub fn dense_eval(&self, t: f64, out: &mut [f64]) -> bool {
-        if self.n_accepted == 0 {
+        if self.st.n_accepted == 0 {
             return false;
         }
         Interpolant::Radau.eval(
-            self.t_old,
-            self.t - self.t_old,
-            &self.y_old,
+            self.st.t_old,
+            self.st.t - self.st.t_old,
+            &self.st.y_old,
             &self.q,
             t,
             out,
@@ -853,41 +752,6 @@ impl<S: OdeSystem> Radau<S> {
         true
     }
 
-    pub fn t(&self) -> f64 {
-        self.t
-    }
-    pub fn t_old(&self) -> f64 {
-        self.t_old
-    }
-    pub fn t_bound(&self) -> f64 {
-        self.t_bound
-    }
-    pub fn direction(&self) -> f64 {
-        self.direction
-    }
-    pub fn y(&self) -> &[f64] {
-        &self.y
-    }
-    pub fn y_old(&self) -> &[f64] {
-        &self.y_old
-    }
-    pub fn f(&self) -> &[f64] {
-        &self.f
-    }
-    pub fn dim(&self) -> usize {
-        self.dim
-    }
-    /// Size of the next step to try.
-    pub fn h_next(&self) -> f64 {
-        self.h_abs
-    }
-    pub fn step_size(&self) -> f64 {
-        (self.t - self.t_old).abs()
-    }
-    /// Right-hand-side calls, counted as SciPy does (finite-difference Jacobians excluded).
-    pub fn nfev(&self) -> usize {
-        self.nfev
-    }
     /// Jacobian evaluations (analytic or finite-difference).
     pub fn njev(&self) -> usize {
         self.njev
@@ -904,13 +768,6 @@ impl<S: OdeSystem> Radau<S> {
     pub fn analytic_jacobian(&self) -> bool {
         self.jac_mode == JacMode::Analytic
     }
-    pub fn n_accepted(&self) -> usize {
-        self.n_accepted
-    }
-    /// Attempts rejected by the error test.
-    pub fn n_rejected(&self) -> usize {
-        self.n_rejected
-    }
     /// Attempts whose Newton iteration did not converge (the step was halved).
     pub fn n_newton_failures(&self) -> usize {
         self.n_newton_failures
@@ -918,18 +775,6 @@ impl<S: OdeSystem> Radau<S> {
     /// The failed step's last attempt was a Newton failure (for the failure message).
     pub fn failed_in_newton(&self) -> bool {
         self.last_attempt_newton_failure
-    }
-    pub fn rtol_clamped(&self) -> bool {
-        self.rtol_clamped
-    }
-    pub fn is_finished(&self) -> bool {
-        self.state == State::Finished
-    }
-    pub fn failure(&self) -> Option<&Status> {
-        match &self.state {
-            State::Failed(s) => Some(s),
-            _ => None,
-        }
     }
     pub fn system(&self) -> &S {
         &self.sys
@@ -960,45 +805,19 @@ pub fn radau_solve<S: OdeSystem>(
 impl<S: OdeSystem> Integrator for Radau<S> {
     type System = S;
     fn step(&mut self) -> Result<StepOutcome, Status> {
-        Radau::step(self)
+        common::step(self)
     }
-    fn dim(&self) -> usize {
-        self.dim
-    }
-    fn t(&self) -> f64 {
-        self.t
-    }
-    fn t_old(&self) -> f64 {
-        self.t_old
-    }
-    fn t_bound(&self) -> f64 {
-        self.t_bound
-    }
-    fn direction(&self) -> f64 {
-        self.direction
-    }
-    fn y(&self) -> &[f64] {
-        &self.y
-    }
-    fn y_old(&self) -> &[f64] {
-        &self.y_old
-    }
+    step_state_accessors!();
     /// `nfev` as SciPy counts it: without the finite-difference Jacobians' evaluations
     /// ([`Radau::jac_evaluations`]).
     fn counts(&self) -> Counts {
         Counts {
-            nfev: self.nfev,
+            nfev: self.st.nfev,
             njev: self.njev,
             nlu: self.nlu,
-            n_accepted: self.n_accepted,
-            n_rejected: self.n_rejected,
+            n_accepted: self.st.n_accepted,
+            n_rejected: self.st.n_rejected,
         }
-    }
-    fn rtol_clamped(&self) -> bool {
-        self.rtol_clamped
-    }
-    fn h_next(&self) -> f64 {
-        self.h_abs
     }
     fn interpolant(&self) -> Interpolant {
         Interpolant::Radau
@@ -1013,6 +832,46 @@ impl<S: OdeSystem> Integrator for Radau<S> {
     fn into_system(self) -> S {
         self.sys
     }
+}
+
+impl<S: OdeSystem> Stepping for Radau<S> {
+    fn lifecycle(&mut self) -> &mut Lifecycle {
+        &mut self.st.lifecycle
+    }
+    fn start(&mut self) -> Result<(), Status> {
+        Radau::start(self)
+    }
+    fn advance(&mut self) -> Result<StepOutcome, Status> {
+        self.advance_impl()
+    }
+}
+
+impl<S: OdeSystem> Deref for Radau<S> {
+    type Target = StepState;
+    fn deref(&self) -> &StepState {
+        &self.st
+    }
+}
+
+/// SciPy's `newton_tol = max(10 EPS / rtol, min(0.03, √rtol))` from the rtol given (before it
+/// is raised to 100 EPS; the smallest entry of a per-component one).
+fn newton_tolerance(rtol: &Tol) -> f64 {
+    let given = match rtol {
+        Tol::Scalar(x) => *x,
+        Tol::PerComponent(v) => v.iter().copied().fold(f64::INFINITY, f64::min),
+    };
+    // rtol = 0 would make the tolerance infinite (SciPy's 10 EPS / 0).
+    let r = if given > 0.0 {
+        given
+    } else {
+        100.0 * f64::EPSILON
+    };
+    (10.0 * f64::EPSILON / r).max(0.03f64.min(r.powf(0.5)))
+}
+
+/// The step-size safety factor after `n_iter` Newton iterations, `0.9 (2 N + 1)/(2 N + iters)`.
+fn safety(n_iter: usize) -> f64 {
+    0.9 * (2 * NEWTON_MAXITER + 1) as f64 / (2 * NEWTON_MAXITER + n_iter) as f64
 }
 
 fn jacobian_error(t: f64, message: String) -> Status {

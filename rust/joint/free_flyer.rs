@@ -8,10 +8,11 @@
 //! singularity. The body-frame recursions give it its own inward and outward steps
 //! ([`MotionClass::Free`]): with `S = 1` the joint block is the whole articulated inertia.
 use super::spherical::{check_quaternion, quaternion_rate};
-use super::{JointType, LocalMotion, MotionClass, Subspace};
+use super::{quaternion, JacobianRows, JointType, LocalMotion, MotionClass, Subspace};
 use crate::error::Result;
 use crate::joint::rotation::quat_to_matrix;
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::spatial::{skew, stack, Mat3, Vec3, Vec6};
+use nalgebra::DMatrixViewMut;
 
 pub struct FreeFlyer;
 
@@ -88,5 +89,41 @@ impl JointType for FreeFlyer {
     /// Finite, and a quaternion of usable norm.
     fn check_configuration(&self, q: &[f64], arg: &str) -> Result<()> {
         check_quaternion(q, 3, arg, Self::NAME)
+    }
+    /// The origin moved by `R δ_lin`, the body turned by `R exp(δ_ang)`.
+    fn integrate(&self, q: &[f64], delta: &[f64], out: &mut [f64]) {
+        let r = quat_to_matrix(&q[3..7]);
+        let p = r * Vec3::new(delta[0], delta[1], delta[2]);
+        for k in 0..3 {
+            out[k] = q[k] + p[k];
+        }
+        quaternion::step(&q[3..7], &delta[3..6], &mut out[3..7]);
+    }
+    /// `Rᵀ` on the origin, the quaternion's map on the orientation.
+    fn tangent_map(&self, q: &[f64], t: &mut DMatrixViewMut<'_, f64>) {
+        let rot = quat_to_matrix(&q[3..7]);
+        for r in 0..3 {
+            for c in 0..3 {
+                t[(r, c)] = rot[(c, r)];
+            }
+        }
+        quaternion::tangent_into(&q[3..7], t, 3, 3);
+    }
+    /// `ṗ = R v`: `∂/∂v = R`, `∂/∂quat = −R ṽ ∂δ/∂quat`; the quaternion as the ball joint.
+    fn qdot_jacobian(&self, q: &[f64], v: &[f64], jac: &mut JacobianRows<'_>) {
+        let qq = &q[3..7];
+        let rot = quat_to_matrix(qq);
+        let vl = Vec3::new(v[0], v[1], v[2]);
+        let rv: Mat3 = -rot * skew(&vl);
+        let t = quaternion::tangent(qq);
+        for r in 0..3 {
+            for c in 0..3 {
+                jac.set_v(r, c, rot[(r, c)]);
+            }
+            for c in 0..4 {
+                jac.set_q(r, 3 + c, (0..3).map(|k| rv[(r, k)] * t[k][c]).sum::<f64>());
+            }
+        }
+        quaternion::rate_blocks(qq, &v[3..6], jac, 3, 3);
     }
 }

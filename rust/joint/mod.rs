@@ -19,6 +19,7 @@
 mod fixed;
 mod free_flyer;
 mod prismatic;
+mod quaternion;
 mod revolute;
 pub mod rotation;
 mod spherical;
@@ -28,6 +29,7 @@ mod zyz;
 
 use crate::error::{check_finite, Error, Result};
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use nalgebra::DMatrixViewMut;
 
 pub use rotation::{axis_angle, quat_to_matrix, rot_x, rot_y, rot_z};
 pub use zyz::{zyz_rate_matrix, ZYZ_SINGULAR_SIN};
@@ -95,12 +97,65 @@ pub struct LocalMotion {
     pub sdot_qd: Vec3,
 }
 
+/// A joint's rows of a row-major matrix with `stride` columns (the state Jacobian of
+/// `ẏ = [q̇(q, v); v̇]`): entry `(r, c)` of its `q` columns is `data[(row + r) stride + cq + c]`,
+/// of its `v` columns `data[(row + r) stride + cv + c]`.
+pub struct JacobianRows<'a> {
+    pub data: &'a mut [f64],
+    pub stride: usize,
+    pub row: usize,
+    pub cq: usize,
+    pub cv: usize,
+}
+
+impl JacobianRows<'_> {
+    #[inline]
+    pub fn set_q(&mut self, r: usize, c: usize, x: f64) {
+        self.data[(self.row + r) * self.stride + self.cq + c] = x;
+    }
+    #[inline]
+    pub fn set_v(&mut self, r: usize, c: usize, x: f64) {
+        self.data[(self.row + r) * self.stride + self.cv + c] = x;
+    }
+}
+
 /// One joint type: everything the model, the recursions and the loaders need to know of it.
 pub trait JointType {
     /// The name in files, messages and `repr`.
     const NAME: &'static str;
     const NQ: usize;
     const MOTION: MotionClass;
+    /// Whether each motion column is fixed in the frame of the joint's earlier coordinates (a
+    /// chain of single-axis rotations, as ZYZ angles) instead of all in one frame that moves
+    /// with them together (the derivatives of the recursions differ).
+    const CHAINED_COLUMNS: bool = false;
+
+    /// The axis of a rotation about one axis fixed in the joint frame (the compiled
+    /// recursions specialise it when it is a coordinate axis); `None` for other motions.
+    fn revolute_axis(&self) -> Option<Vec3> {
+        None
+    }
+    /// `out = q ⊕ δ` on this joint's coordinates (`δ` its nv tangent directions): the sum
+    /// where `q` is a vector space.
+    fn integrate(&self, q: &[f64], delta: &[f64], out: &mut [f64]) {
+        for ((o, q), d) in out.iter_mut().zip(q).zip(delta) {
+            *o = q + d;
+        }
+    }
+    /// This joint's block of `T = ∂δ/∂q` (nv × nq, zero on entry): the identity where `q` is a
+    /// vector space.
+    fn tangent_map(&self, _q: &[f64], t: &mut DMatrixViewMut<'_, f64>) {
+        for k in 0..Self::MOTION.nv() {
+            t[(k, k)] = 1.0;
+        }
+    }
+    /// This joint's rows of `∂q̇/∂q` and `∂q̇/∂v` (zero on entry): `q̇ = v` where `q` is a
+    /// vector space.
+    fn qdot_jacobian(&self, _q: &[f64], _v: &[f64], jac: &mut JacobianRows<'_>) {
+        for k in 0..Self::MOTION.nv() {
+            jac.set_v(k, k, 1.0);
+        }
+    }
 
     /// The neutral configuration (zero angles, identity quaternion).
     fn neutral(&self, q: &mut [f64]) {
@@ -197,6 +252,10 @@ macro_rules! dispatch {
 /// The type's constants, without a value of it.
 fn constants<J: JointType>(_: &J) -> (&'static str, usize, MotionClass) {
     (J::NAME, J::NQ, J::MOTION)
+}
+
+fn chained_columns<J: JointType>(_: &J) -> bool {
+    J::CHAINED_COLUMNS
 }
 
 fn unit_axis(axis: Vec3) -> Result<Vec3> {
@@ -302,6 +361,27 @@ impl Joint {
     #[inline]
     pub fn local_motion(&self, q: &[f64], v: &[f64]) -> LocalMotion {
         dispatch!(self, j => j.local_motion(q, v))
+    }
+    /// See [`JointType::CHAINED_COLUMNS`].
+    #[inline]
+    pub fn chained_columns(&self) -> bool {
+        dispatch!(self, j => chained_columns(&j))
+    }
+    /// See [`JointType::revolute_axis`].
+    pub fn revolute_axis(&self) -> Option<Vec3> {
+        dispatch!(self, j => j.revolute_axis())
+    }
+    /// See [`JointType::integrate`].
+    pub fn integrate(&self, q: &[f64], delta: &[f64], out: &mut [f64]) {
+        dispatch!(self, j => j.integrate(q, delta, out))
+    }
+    /// See [`JointType::tangent_map`].
+    pub fn tangent_map(&self, q: &[f64], t: &mut DMatrixViewMut<'_, f64>) {
+        dispatch!(self, j => j.tangent_map(q, t))
+    }
+    /// See [`JointType::qdot_jacobian`].
+    pub fn qdot_jacobian(&self, q: &[f64], v: &[f64], jac: &mut JacobianRows<'_>) {
+        dispatch!(self, j => j.qdot_jacobian(q, v, jac))
     }
     /// Where this joint's unit quaternion starts in its `q`, if it has one.
     #[inline]

@@ -17,6 +17,9 @@ impl JointType for Revolute {
     fn q_is_angle(&self, _k: usize) -> bool {
         true
     }
+    fn revolute_axis(&self) -> Option<Vec3> {
+        Some(self.axis)
+    }
     #[inline]
     fn transform(&self, q: &[f64]) -> (Mat3, Vec3) {
         (axis_angle(&self.axis, q[0]), Vec3::zeros())

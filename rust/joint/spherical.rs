@@ -2,10 +2,13 @@
 //! the body's angular velocity relative to its parent, in body axes, as its three speeds:
 //! `P = [R_body; 0]` (world axes), the identity columns in the body frame. No coordinate
 //! singularity; `q̇ = ½ q ⊗ (v, 0)`.
-use super::{turn_columns, JointType, LocalMotion, MotionClass, Subspace};
+use super::{
+    quaternion, turn_columns, JacobianRows, JointType, LocalMotion, MotionClass, Subspace,
+};
 use crate::error::{check_finite, Error, Result};
-use crate::joint::rotation::quat_to_matrix;
+use crate::joint::rotation::{quat_norm, quat_to_matrix, MIN_QUATERNION_NORM};
 use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use nalgebra::DMatrixViewMut;
 
 pub struct Spherical;
 
@@ -66,12 +69,22 @@ impl JointType for Spherical {
     fn check_configuration(&self, q: &[f64], arg: &str) -> Result<()> {
         check_quaternion(q, 0, arg, Self::NAME)
     }
+    /// The body turned by `R exp(δ)`.
+    fn integrate(&self, q: &[f64], delta: &[f64], out: &mut [f64]) {
+        quaternion::step(q, delta, out);
+    }
+    fn tangent_map(&self, q: &[f64], t: &mut DMatrixViewMut<'_, f64>) {
+        quaternion::tangent_into(q, t, 0, 0);
+    }
+    fn qdot_jacobian(&self, q: &[f64], v: &[f64], jac: &mut JacobianRows<'_>) {
+        quaternion::rate_blocks(q, v, jac, 0, 0);
+    }
 }
 
 /// `q̇ = ½ q ⊗ (w, 0)` for a quaternion `(x, y, z, w)` and a body-axes angular velocity, with
 /// the quaternion normalised so `q̇` does not depend on |q|.
 pub(super) fn quaternion_rate(q: &[f64], v: &[f64], qdot: &mut [f64]) {
-    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    let n = quat_norm(q);
     let (x, y, z, w) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
     let (a, b, c) = (v[0], v[1], v[2]);
     qdot[0] = 0.5 * (w * a + y * c - z * b);
@@ -85,12 +98,14 @@ pub(super) fn quaternion_rate(q: &[f64], v: &[f64], qdot: &mut [f64]) {
 pub(super) fn check_quaternion(q: &[f64], at: usize, arg: &str, joint: &str) -> Result<()> {
     check_finite(arg, q)?;
     let h = &q[at..at + 4];
-    let n = (h[0] * h[0] + h[1] * h[1] + h[2] * h[2] + h[3] * h[3]).sqrt();
-    if !(n > 1e-8) {
+    let n = quat_norm(h);
+    if !(n >= MIN_QUATERNION_NORM) {
         return Err(Error::arg(
             arg,
-            format!("a quaternion (x, y, z, w) of non-zero norm for a {joint} joint"),
-            format!("[{}, {}, {}, {}] (norm {n:.3e})", h[0], h[1], h[2], h[3]),
+            format!(
+                "a quaternion (x, y, z, w) of norm at least {MIN_QUATERNION_NORM:e} for a {joint} joint (it is normalised; smaller ones have lost their direction to rounding)"
+            ),
+            format!("[{:?}, {:?}, {:?}, {:?}] (norm {n:.3e})", h[0], h[1], h[2], h[3]),
         ));
     }
     Ok(())

@@ -24,6 +24,8 @@ impl JointType for SphericalZyz {
     const NAME: &'static str = "SphericalZYZ";
     const NQ: usize = 3;
     const MOTION: MotionClass = MotionClass::Angular3;
+    /// Three revolutes in a chain: each column is fixed in the frame of the angles before it.
+    const CHAINED_COLUMNS: bool = true;
 
     fn q_is_angle(&self, _k: usize) -> bool {
         true

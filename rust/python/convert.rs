@@ -60,6 +60,18 @@ fn is_exact_ndarray(obj: &Bound<'_, PyAny>) -> bool {
 fn is_masked(obj: &Bound<'_, PyAny>) -> bool {
     static MASKED: PyOnceLock<Py<PyType>> = PyOnceLock::new();
     let py = obj.py();
+    // No masked array can exist before numpy.ma is imported, and importing it here would
+    // cost the first call ~10 ms (numpy.ma builds its docstrings on import).
+    if MASKED.get(py).is_none() {
+        let loaded = py
+            .import("sys")
+            .and_then(|sys| sys.getattr("modules"))
+            .and_then(|m| m.contains("numpy.ma"))
+            .unwrap_or(true);
+        if !loaded {
+            return false;
+        }
+    }
     MASKED
         .get_or_try_init(py, || -> PyResult<Py<PyType>> {
             Ok(py

@@ -5,7 +5,7 @@ use pyo3::types::PyDict;
 
 use super::convert::{to_array, vector};
 use super::effects::take_callback_error;
-use super::errors::{check_result, invalid, py_error, IntoPyResult};
+use super::errors::{check_result, invalid, py_error, to_py, IntoPyResult};
 use super::simulate::{scene_state, scene_system};
 use crate::scene::Scene;
 use crate::simulate::derivatives::DerivativeWork;
@@ -35,14 +35,15 @@ fn refuse_loops(py: Python<'_>, s: &Scene, name: &str) -> PyResult<()> {
 }
 
 /// Runs `f` on the scene's system with a derivative workspace; a failure (an effect's error,
-/// a singular configuration) raises `NumericalError`, a callback's own exception as itself.
+/// a singular configuration) raises `NumericalError` (`SingularityError` for the latter, as
+/// `Model`'s derivatives), a callback's own exception as itself.
 fn run<'py>(
     py: Python<'py>,
     s: &Scene,
     disable: Option<&Bound<'_, PyAny>>,
     name: &str,
     keys: [&str; 3],
-    f: impl FnOnce(&mut crate::simulate::Dynamics<'_>, &mut DerivativeWork) -> Result<(), String>,
+    f: impl FnOnce(&mut crate::simulate::Dynamics<'_>, &mut DerivativeWork) -> crate::error::Result<()>,
     pick: impl Fn(&DerivativeWork) -> [&DMatrix<f64>; 3],
 ) -> PyResult<Bound<'py, PyDict>> {
     refuse_loops(py, s, name)?;
@@ -53,7 +54,7 @@ fn run<'py>(
     if let Some(e) = take_callback_error() {
         return Err(e);
     }
-    r.map_err(|m| py_error(py, "NumericalError", format!("{name}: {m}")))?;
+    r.map_err(|e| to_py(py, e.in_arg(name)))?;
     let d = PyDict::new(py);
     let nv = s.model.nv;
     for (key, m) in keys.iter().zip(pick(&w)) {

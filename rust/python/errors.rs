@@ -24,6 +24,7 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
         Error::InvalidInertia { .. } => "InertiaError",
         Error::InvalidModel { .. } => "ModelStructureError",
         Error::Singular(_) => "SingularityError",
+        Error::Numerical(_) => "NumericalError",
         Error::Closure(_) => "LoopClosureError",
         Error::OutOfMemory { .. } => "OutOfMemoryError",
         Error::File {

@@ -42,11 +42,14 @@ fn matrix(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Vec<f64>> {
 
 /// Check `jac` for a system of `dim` components integrated with `method`: only the implicit
 /// methods use a Jacobian, so one given to another method is refused rather than ignored.
+/// With `"auto"` a callable is called once at the start `(t0, y0)`: Radau calls it at once,
+/// but `auto` only if it switches, which would leave a wrong `jac` unnoticed until then.
 pub(super) fn jac_arg<'a>(
     py: Python<'_>,
     jac: Option<&'a Bound<'a, PyAny>>,
     dim: usize,
     method: Method,
+    start: (f64, &[f64]),
 ) -> PyResult<JacArg<'a>> {
     let Some(jac) = jac.filter(|j| !j.is_none()) else {
         return Ok(JacArg::None);
@@ -60,6 +63,22 @@ pub(super) fn jac_arg<'a>(
         ));
     }
     if jac.is_callable() {
+        if method == Method::Auto {
+            let (t0, y0) = start;
+            let m = matrix(
+                &jac.call1((t0, PyArray1::from_slice(py, y0)))?,
+                "jac(t, y)",
+                dim,
+            )?;
+            if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+                return Err(invalid(
+                    py,
+                    "jac(t0, y0)",
+                    "finite entries",
+                    format!("{v} at ({}, {})", i / dim, i % dim),
+                ));
+            }
+        }
         return Ok(JacArg::Callable(jac));
     }
     let m = matrix(jac, "jac", dim)?;

@@ -3,6 +3,7 @@ mod body;
 mod convert;
 mod dense;
 mod derivatives;
+mod design;
 mod effects;
 mod errors;
 mod events;
@@ -23,7 +24,19 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    let missing = crate::cpu::missing_cpu_features();
+    if !missing.is_empty() {
+        return Err(pyo3::exceptions::PyImportError::new_err(format!(
+            "pointmass_dyn was compiled for CPU features this processor lacks: {} (built with \
+             RUSTFLAGS such as -C target-cpu=native on another machine); rebuild it here, or \
+             install a wheel built without them",
+            missing.join(", ")
+        )));
+    }
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+    // Which copy of the multiversioned loops runs (rust/cpu.rs; POINTMASS_DYN_BASELINE=1
+    // forces "baseline").
+    m.add("cpu_dispatch", crate::cpu::dispatch())?;
     m.add_class::<body::PyRigidBody>()?;
     m.add_class::<body::PyPointMasses>()?;
     m.add_class::<joint::PyJoint>()?;
@@ -37,6 +50,10 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
     m.add_function(wrap_pyfunction!(rk45::rk45, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_regressor, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_pins, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_solve, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;
     Ok(())

@@ -65,7 +65,7 @@ pub fn rk45<'py>(
     )?;
     // No scene: the caller's settings, else the defaults.
     let opts = requested.options(&Settings::default(), base);
-    let jac = jac_arg(py, jac, dim, opts.method)?;
+    let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
     let specs = event_specs(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let mut evs: Vec<Event<'_>> = specs

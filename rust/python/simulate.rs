@@ -374,13 +374,12 @@ pub fn simulate_batch<'py>(
             "a callable",
         ));
     }
-    let threads = super::convert::opt_count(
-        threads,
-        "threads",
-        "a thread count >= 1 (or None: one per core)",
-    )?
-    .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
-    .max(1);
+    let expected = "a thread count >= 1 (or None: one per core)";
+    let threads = match super::convert::opt_count(threads, "threads", expected)? {
+        Some(0) => return Err(invalid(py, "threads", expected, 0)),
+        Some(n) => n,
+        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
     // Settings per scene (each resolves the caller's arguments against its own file's).
     let mut resolved = Vec::with_capacity(scenes.len());
     for s in &scenes {

@@ -13,7 +13,7 @@
 //! the turned frames, so results do not depend on `Q`.
 use super::algebra::{General, LocalInertia, Rot, Sym3};
 use super::shift::OffsetForm;
-use crate::joint::{Joint, MotionClass};
+use crate::joint::MotionClass;
 use crate::model::{Link, Model};
 use crate::spatial::{Mat3, Vec3};
 
@@ -251,10 +251,10 @@ pub(super) fn link_consts(l: &Link, frame_p: &Mat3) -> (LinkConsts, Mat3) {
         first_child: false,
         inertia: LocalInertia::default(),
     };
-    let on_axis = match l.joint {
-        Joint::Revolute { axis } => coordinate_axis(&axis).map(|_| axis),
-        _ => None,
-    };
+    let on_axis = l
+        .joint
+        .revolute_axis()
+        .filter(|a| coordinate_axis(a).is_some());
     let mut frame = Mat3::identity();
     let mut other = true;
     if let Some(axis) = on_axis {

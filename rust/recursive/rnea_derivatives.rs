@@ -26,7 +26,6 @@
 //! for `∂τ/∂v`.
 use super::base_accel;
 use super::workspace::{Data, DerivativeData};
-use crate::joint::Joint;
 use crate::kinematics;
 use crate::model::Model;
 use crate::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
@@ -85,69 +84,10 @@ fn derivatives_body(
     let n = model.links.len();
     kinematics::positions(model, q, &mut data.links);
     let base = base_accel(g);
-    let z6 = Vec6::zeros();
 
     // Outward: velocities, accelerations, the dof directions and each body's wrench.
     for i in 0..n {
-        let l = &model.links[i];
-        let st = &data.links[i];
-        let p = st.origin;
-        let (vp, ap) = match l.parent {
-            Some(pi) => (dd.links[pi].v, dd.links[pi].a),
-            None => (z6, base),
-        };
-        let nv = l.joint.nv();
-        // The last dof at or above this link, and each dof's upstream neighbour.
-        let above = l.parent.map_or(NO_DOF, |p| dd.last_dof[p]);
-        for k in 0..nv {
-            dd.dof_parent[l.v_index + k] = if k == 0 { above } else { l.v_index + k - 1 };
-        }
-        dd.last_dof[i] = if nv > 0 { l.v_index + nv - 1 } else { above };
-        let (vi, ai) = (&v[l.v_index..l.v_index + nv], &a[l.v_index..l.v_index + nv]);
-        // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
-        // before it; every other joint's columns are fixed in the parent (one column) or in
-        // the body (the quaternion joints), and all of them move together.
-        let chain = matches!(l.joint, Joint::SphericalZYZ);
-        let (mut vc, mut ac) = (vp, ap);
-        let (mut vd, mut ad) = (z6, z6);
-        for k in 0..nv {
-            let sk = st.s[k];
-            let sa = angular(&sk);
-            let s = stack(&sa, &(linear(&sk) + p.cross(&sa)));
-            let d = &mut dd.dofs[l.v_index + k];
-            d.s = s;
-            d.dv = cross_motion(&vc, &s);
-            d.da = cross_motion(&ac, &s) + cross_motion(&vc, &d.dv);
-            if chain {
-                d.dav = d.dv * 2.0;
-                ac += s * ai[k] + d.dv * vi[k];
-                vc += s * vi[k];
-            } else {
-                vd += s * vi[k];
-                ad += s * ai[k];
-            }
-        }
-        if !chain {
-            vc = vp + vd;
-            ac = ap + ad + cross_motion(&vp, &vd);
-            let vsum = vp + vc;
-            for d in &mut dd.dofs[l.v_index..l.v_index + nv] {
-                d.dav = cross_motion(&vsum, &d.s);
-            }
-        }
-        let y = st.inertia.shifted(&p);
-        let yv = y.mul_twist(&vc);
-        let w = angular(&vc);
-        let u = linear(&vc);
-        let iw = y.rotational * w;
-        let (sw, sh) = (skew(&w), skew(&y.first_moment));
-        let lk = &mut dd.links[i];
-        lk.v = vc;
-        lk.a = ac;
-        lk.f = y.mul_twist(&ac) + cross_force(&vc, &yv);
-        lk.baa = sw * y.rotational - y.rotational * sw - skew(&iw) - sh * skew(&u) * 2.0;
-        lk.bla = skew(&(u * y.mass - y.first_moment.cross(&w))) * -2.0;
-        lk.y = y;
+        outward_link(model, data, dd, i, (v, a), base);
     }
 
     dd.dtau_dq.as_mut_slice().fill(0.0);
@@ -159,7 +99,7 @@ fn derivatives_body(
         let l = &model.links[i];
         let nv = l.joint.nv();
         let lk = dd.links[i];
-        let chain = matches!(l.joint, Joint::SphericalZYZ);
+        let chain = l.joint.chained_columns();
         let r = l.v_index..l.v_index + nv;
         for j in r.clone() {
             let d = &mut dd.dofs[j];
@@ -225,4 +165,77 @@ fn derivatives_body(
             parent.f += lk.f;
         }
     }
+}
+
+/// One link of the outward pass: its velocity and acceleration, its dofs' directions and
+/// their `dV`, `dA`, `dAv`, and its wrench and `B` (`data.links` holds the positions).
+#[inline(always)]
+fn outward_link(
+    model: &Model,
+    data: &Data,
+    dd: &mut DerivativeData,
+    i: usize,
+    (v, a): (&[f64], &[f64]),
+    base: Vec6,
+) {
+    let z6 = Vec6::zeros();
+    let l = &model.links[i];
+    let st = &data.links[i];
+    let p = st.origin;
+    let (vp, ap) = match l.parent {
+        Some(pi) => (dd.links[pi].v, dd.links[pi].a),
+        None => (z6, base),
+    };
+    let nv = l.joint.nv();
+    // The last dof at or above this link, and each dof's upstream neighbour.
+    let above = l.parent.map_or(NO_DOF, |p| dd.last_dof[p]);
+    for k in 0..nv {
+        dd.dof_parent[l.v_index + k] = if k == 0 { above } else { l.v_index + k - 1 };
+    }
+    dd.last_dof[i] = if nv > 0 { l.v_index + nv - 1 } else { above };
+    let (vi, ai) = (&v[l.v_index..l.v_index + nv], &a[l.v_index..l.v_index + nv]);
+    // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
+    // before it; every other joint's columns are fixed in the parent (one column) or in
+    // the body (the quaternion joints), and all of them move together.
+    let chain = l.joint.chained_columns();
+    let (mut vc, mut ac) = (vp, ap);
+    let (mut vd, mut ad) = (z6, z6);
+    for k in 0..nv {
+        let sk = st.s[k];
+        let sa = angular(&sk);
+        let s = stack(&sa, &(linear(&sk) + p.cross(&sa)));
+        let d = &mut dd.dofs[l.v_index + k];
+        d.s = s;
+        d.dv = cross_motion(&vc, &s);
+        d.da = cross_motion(&ac, &s) + cross_motion(&vc, &d.dv);
+        if chain {
+            d.dav = d.dv * 2.0;
+            ac += s * ai[k] + d.dv * vi[k];
+            vc += s * vi[k];
+        } else {
+            vd += s * vi[k];
+            ad += s * ai[k];
+        }
+    }
+    if !chain {
+        vc = vp + vd;
+        ac = ap + ad + cross_motion(&vp, &vd);
+        let vsum = vp + vc;
+        for d in &mut dd.dofs[l.v_index..l.v_index + nv] {
+            d.dav = cross_motion(&vsum, &d.s);
+        }
+    }
+    let y = st.inertia.shifted(&p);
+    let yv = y.mul_twist(&vc);
+    let w = angular(&vc);
+    let u = linear(&vc);
+    let iw = y.rotational * w;
+    let (sw, sh) = (skew(&w), skew(&y.first_moment));
+    let lk = &mut dd.links[i];
+    lk.v = vc;
+    lk.a = ac;
+    lk.f = y.mul_twist(&ac) + cross_force(&vc, &yv);
+    lk.baa = sw * y.rotational - y.rotational * sw - skew(&iw) - sh * skew(&u) * 2.0;
+    lk.bla = skew(&(u * y.mass - y.first_moment.cross(&w))) * -2.0;
+    lk.y = y;
 }

@@ -9,6 +9,7 @@
 use super::dynamics::Dynamics;
 use crate::effects::derivatives::EffectDerivatives;
 use crate::effects::Context;
+use crate::error::Error;
 use crate::linalg::spd_inverse;
 use crate::recursive::{self, tangent, DerivativeData};
 use crate::spatial::Vec6;
@@ -63,17 +64,18 @@ impl Dynamics<'_> {
         v: &[f64],
         tau: &[f64],
         w: &mut DerivativeWork,
-    ) -> Result<(), String> {
+    ) -> crate::error::Result<()> {
         let model = self.model;
         if !model.loops.is_empty() {
-            return Err(format!(
+            return Err(Error::Numerical(format!(
                 "the dynamics derivatives are for trees: this model has {} closed loop(s)",
                 model.loops.len()
-            ));
+            )));
         }
         let cx = Context { model, t, q, v };
         w.tau.fill(0.0);
-        let ext = if self.effects.apply(&cx, &mut w.tau, &mut w.wrenches)? {
+        let applied = self.effects.apply(&cx, &mut w.tau, &mut w.wrenches);
+        let ext = if applied.map_err(Error::Numerical)? {
             Some(w.wrenches.as_slice())
         } else {
             None
@@ -90,11 +92,12 @@ impl Dynamics<'_> {
             recursive::inverse_dynamics_derivatives(model, &mut self.data, dd, q, v, &qdd, &g);
         }
         dd.qdd = qdd;
-        fd.map_err(|e| e.to_string())?;
+        fd?; // typed: a singular configuration stays a `Singular` error
         w.rq.as_mut_slice().fill(0.0);
         w.rv.as_mut_slice().fill(0.0);
         self.effects
-            .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)?;
+            .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)
+            .map_err(Error::Numerical)?;
         for (r, x) in w.rq.as_mut_slice().iter_mut().zip(dd.dtau_dq.as_slice()) {
             *r -= x;
         }
@@ -108,7 +111,11 @@ impl Dynamics<'_> {
             &mut dd.ddq_dv,
             &mut dd.inv_diag,
         )
-        .map_err(|k| format!("the mass matrix is not positive definite (pivot {k})"))?;
+        .map_err(|k| {
+            Error::Singular(format!(
+                "the mass matrix is not positive definite (pivot {k})"
+            ))
+        })?;
         dd.ddq_dq.gemm(1.0, &dd.minv, &w.rq, 0.0);
         dd.ddq_dv.gemm(1.0, &dd.minv, &w.rv, 0.0);
         Ok(())
@@ -124,13 +131,13 @@ impl Dynamics<'_> {
         v: &[f64],
         a: &[f64],
         w: &mut DerivativeWork,
-    ) -> Result<(), String> {
+    ) -> crate::error::Result<()> {
         let model = self.model;
         if !model.loops.is_empty() {
-            return Err(format!(
+            return Err(Error::Numerical(format!(
                 "the dynamics derivatives are for trees: this model has {} closed loop(s)",
                 model.loops.len()
-            ));
+            )));
         }
         let g = self.effects.gravity;
         recursive::inverse_dynamics_derivatives(model, &mut self.data, &mut w.dd, q, v, a, &g);
@@ -138,7 +145,8 @@ impl Dynamics<'_> {
         w.rv.as_mut_slice().fill(0.0);
         let cx = Context { model, t, q, v };
         self.effects
-            .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)?;
+            .add_derivatives(&cx, &mut w.effects, &mut w.rq, &mut w.rv)
+            .map_err(Error::Numerical)?;
         for (d, x) in w.dd.dtau_dq.as_mut_slice().iter_mut().zip(w.rq.as_slice()) {
             *d -= x;
         }
@@ -166,7 +174,7 @@ impl Dynamics<'_> {
         let zeros = std::mem::take(&mut w.zeros);
         let r = self.derivatives(t, q, v, &zeros, w);
         w.zeros = zeros;
-        r?;
+        r.map_err(|e| e.to_string())?;
         tangent::qdot_jacobian(model, q, v, jac);
         tangent::tangent_map(model, q, &mut w.tmap);
         w.ddq_dcoords.gemm(1.0, &w.dd.ddq_dq, &w.tmap, 0.0);

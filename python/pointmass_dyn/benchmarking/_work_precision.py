@@ -330,9 +330,13 @@ def plot_work_precision(results: Sequence[WorkPrecision], path=None, title: str 
         if floor is not None and np.isfinite(floor) and floor > 0:
             ax_t.axhline(floor, color="gray", ls=":", lw=1,
                          label=f"reference floor (ours at {REFERENCE_TOL:g} vs DOP853)")
-        for x, y, t in zip(tm, ef, tol):
-            ax_t.annotate(f"{t:.0e}", (x, y), fontsize=6, xytext=(3, 3),
-                          textcoords="offset points")
+        # Loose tolerances cost about the same time, so their points crowd together:
+        # alternate the labels' sides of the curve so that neighbours never overlap.
+        for k, (x, y, t) in enumerate(zip(tm, ef, tol)):
+            right = k % 2 == 0
+            ax_t.annotate(f"{t:.0e}", (x, y), fontsize=6, textcoords="offset points",
+                          xytext=(4, 2) if right else (-4, -2), ha="left" if right else "right",
+                          va="bottom" if right else "top")
         ax_t.set_xlabel("wall time (ms)")
         ax_t.set_ylabel("relative error")
         ax_t.set_title(f"{res.scene}, {res.t_span[1] - res.t_span[0]:g} s", fontsize=9)

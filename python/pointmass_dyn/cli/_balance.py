@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -15,6 +16,7 @@ from ..design import OBJECTIVES, Counterweight, balance, pareto_front, prescribe
 from ..errors import InertiaError, InvalidInputError, PointMassDynError
 from ..plotting import objective_rms, plot_balance, plot_motion, plot_pareto
 from ..scenes import load_scene, resolve_scene_path
+from ._progress import progress_bar
 
 BALANCE_EPILOG = """\
 The mechanism is driven by one 1-dof joint at constant speed over one revolution (its own
@@ -323,8 +325,13 @@ def cmd_balance(args) -> int:
         raise InvalidInputError("--pareto: sweeps the weights itself; drop --weight")
 
     gravity = scene_gravity(scene)
-    motion = prescribed_motion(model, driver, speed=speed, samples=args.samples,
-                               q_guess=scene.q0, gravity=gravity)
+    # Many samples take a while: a bar on stderr after half a second (Ctrl-C stops them).
+    report, finish = progress_bar(2 * args.samples, sys.stderr, always=False, unit="steps")
+    try:
+        motion = prescribed_motion(model, driver, speed=speed, samples=args.samples,
+                                   q_guess=scene.q0, gravity=gravity, progress=report)
+    finally:
+        finish()
     g_text = "no gravity" if gravity is None else f"gravity {_vec(gravity)} m/s²"
     print(f"{scene.name}: '{driver}' driven at {speed:.6g} {unit} over one "
           f"{'revolution' if revolute else 'cycle of 2π m'}, {args.samples} samples; {g_text}")

@@ -107,7 +107,7 @@ def cmd_simulate(args) -> int:
         _write_trajectory(Path(args.out), result, model)
         print(f"  trajectory written to {args.out}")
     if args.plot:
-        plot_trajectory(result, model, args.plot, title=f"{scene.name}: {result.message}")
+        plot_trajectory(result, model, args.plot, title=scene.name)
         print(f"  plot written to {args.plot}")
     if args.animate:
         write_animation(args, result, scene, args.animate)

@@ -23,6 +23,7 @@ from .._helpers import quaternion_slices, scene_gravity
 from ..errors import InvalidInputError
 from ..plotting import coordinate_labels, plot_sweep
 from ..scenes import load_scene
+from ._progress import progress_bar
 
 PARAM_SPEC = "KEY=START:STOP:COUNT[:log] | KEY=V1,V2,..."
 
@@ -261,36 +262,6 @@ def sweep_runs(scene, param_specs=(), runs: int = 1, q0_noise: float = 0.0,
 # --------------------------------------------------------------------------------------------
 # The command
 # --------------------------------------------------------------------------------------------
-def _progress_bar(total: int, stream, always: bool):
-    """``progress(done, B)`` drawing a text bar on ``stream`` (after 0.5 s unless ``always``),
-    and ``finish()`` ending its line."""
-    start = time.perf_counter()
-    state = {"shown": False, "done": 0}
-
-    def draw(done: int) -> None:
-        elapsed = time.perf_counter() - start
-        frac = done / total if total else 1.0
-        bar = "#" * int(30 * frac)
-        left = f", ~{elapsed * (total - done) / done:.0f} s left" if 0 < done < total else ""
-        stream.write(f"\r  [{bar:<30}] {done}/{total} runs, {elapsed:.1f} s{left}   ")
-        stream.flush()
-        state["shown"] = True
-
-    def report(done: int, count: int) -> None:
-        state["done"] = done
-        if always or time.perf_counter() - start >= 0.5:
-            draw(done)
-
-    def finish(done: int | None = None) -> None:
-        """Ends the bar at ``done`` runs (None: the last count reported)."""
-        if state["shown"] or always:
-            draw(state["done"] if done is None else done)
-            stream.write("\n")
-            stream.flush()
-
-    return report, finish
-
-
 def _failure_lines(message: list[str], success: np.ndarray, limit: int = 8) -> list[str]:
     """Failed runs grouped by message (the time reached is part of most messages, so runs
     are grouped by what precedes ' at t')."""
@@ -382,7 +353,7 @@ def cmd_sweep(args) -> int:
             f"{'s' * (threads > 1)}", flush=True)
 
     show = args.progress if args.progress is not None else sys.stderr.isatty()
-    report, finish = _progress_bar(count, sys.stderr, always=args.progress is True)
+    report, finish = progress_bar(count, sys.stderr, always=args.progress is True)
     start = time.perf_counter()
     try:
         res = simulate_batch(

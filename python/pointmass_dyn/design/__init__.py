@@ -1,24 +1,30 @@
-"""Mechanism design with point masses (docs/balancing.md): shaking forces and moments, a
-mechanism along a prescribed motion (driving and bearing forces), and balancing by
-counterweights or redesigned links, exactly, as a convex quadratic program.
+"""Mechanism design with point masses (docs/balancing.md, docs/design.md): shaking forces and
+moments, a mechanism along a prescribed motion (driving and bearing forces), and the design of
+link shapes (material cells) and counterweights that trade shaking force, shaking moment,
+driving torque, bearing forces and mass — a convex program (QP or SOCP) solved by Clarabel.
 
     motion = pmd.prescribed_motion(scene.model, "crank", speed=2 * np.pi, q_guess=scene.q0)
     b = pmd.balance(motion, counterweights=[pmd.Counterweight.ring("crank", (0, 0, 0), 0.02)],
                     zero=("force",))
 """
 
-from ._balance import OBJECTIVES, Balance, Counterweight, balance, pareto_front
+from ._balance import Balance, Counterweight
+from ._problem import OBJECTIVES, balance, pareto_front
 from ._shaking import MotionAnalysis, Shaking, analyze_motion, prescribed_motion, shaking
+from ._shapes import LinkShape, Shape, read_stl
 
 __all__ = [
     "OBJECTIVES",
     "Balance",
     "Counterweight",
+    "LinkShape",
     "MotionAnalysis",
+    "Shape",
     "Shaking",
     "analyze_motion",
     "balance",
     "pareto_front",
     "prescribed_motion",
+    "read_stl",
     "shaking",
 ]

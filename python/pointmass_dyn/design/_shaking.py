@@ -15,7 +15,7 @@ mass (gravity excluded: the weight is steady and reported apart).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 
@@ -148,23 +148,25 @@ def analyze_motion(
     actuated: Any = None,
     gravity: Any = None,
     about: Any = (0.0, 0.0, 0.0),
+    progress: Callable[[int, int], Any] | None = None,
 ) -> MotionAnalysis:
     """Driving forces, bearing forces and shaking along given states (N, nq), (N, nv), (N, nv)
-    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``)."""
-    t = np.asarray(t, dtype=float).reshape(-1)
-    q = np.asarray(q, dtype=float).reshape(len(t), model.nq)
-    v = np.asarray(v, dtype=float).reshape(len(t), model.nv)
-    a = np.asarray(a, dtype=float).reshape(len(t), model.nv)
+    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``).
+    ``progress(done, N)``, if given, is called as the states are analysed."""
+    t, q, v, a = _state_rows(model, t, q, v, a)
+    report = _reporter(progress, len(t))
     g = None if gravity is None else np.asarray(gravity, dtype=float)
     act = None if model.nloops == 0 else actuated
+    actuated_idx = None if act is None else _actuated_indices(model, act)
     tau, bearing, cut = [], [], []
-    for qk, vk, ak in zip(q, v, a):
+    for k, (qk, vk, ak) in enumerate(zip(q, v, a)):
+        report(k)
         b = model.bearing_forces(qk, vk, ak, gravity=g, actuated=act)
         tau.append(b["tau"])
         bearing.append(b["joints"])
         cut.append(b["loops"])
     sh = shaking(model, q, v, a, about=about, gravity=g)
-    actuated_idx = None if act is None else _actuated_indices(model, act)
+    report(len(t))
     return MotionAnalysis(
         model=model,
         t=t,
@@ -178,6 +180,42 @@ def analyze_motion(
         actuated=actuated_idx,
         gravity=g,
     )
+
+
+def _reporter(progress, total: int, scale: int = 1):
+    """``report(k)``: calls ``progress(k, scale * total)`` every 64th state and at the end
+    (a callback per state would cost more than a short model's state)."""
+    if progress is None:
+        return lambda k: None
+
+    def report(k: int) -> None:
+        if k % 64 == 0 or k == total:
+            progress(k, scale * total)
+
+    return report
+
+
+def _state_rows(model, t, q, v, a):
+    """``t`` (N,) finite, and ``q``, ``v``, ``a`` as (N, nq), (N, nv), (N, nv): one state per
+    time; anything else is an :class:`InvalidInputError` naming the array and both shapes."""
+    t = np.asarray(t, dtype=float)
+    if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
+        raise InvalidInputError(
+            f"t: expected a non-empty 1-D array of finite times, got shape {t.shape}"
+            + ("" if t.size == 0 or np.all(np.isfinite(t)) else " with non-finite entries")
+        )
+    n = len(t)
+    out = [t]
+    for name, x, width in (("q", q, model.nq), ("v", v, model.nv), ("a", a, model.nv)):
+        x = np.asarray(x, dtype=float)
+        if x.ndim == 1 and n == 1:
+            x = x.reshape(1, -1)
+        if x.shape != (n, width):
+            raise InvalidInputError(
+                f"{name}: expected shape ({n}, {width}) (one row per time in t), got {x.shape}"
+            )
+        out.append(x)
+    return out
 
 
 def _actuated_indices(model, actuated) -> list[int]:
@@ -194,8 +232,15 @@ def _actuated_indices(model, actuated) -> list[int]:
             _, iv, _, nv = model.joint_slices()[link]
             out.extend(range(iv, iv + nv))
         else:
-            out.append(int(item))
+            out.append(_index(item, "actuated"))
     return sorted(set(out))
+
+
+def _index(x, arg: str) -> int:
+    """An int index (a Python or NumPy integer, not a bool), else an error naming ``arg``."""
+    if isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_)):
+        return int(x)
+    raise InvalidInputError(f"{arg}: expected a body name or an int index, got {x!r}")
 
 
 def _driver_slot(model, driver) -> tuple[str, int, int]:
@@ -208,7 +253,7 @@ def _driver_slot(model, driver) -> tuple[str, int, int]:
             )
         body = names.index(driver)
     else:
-        body = int(driver)
+        body = _index(driver, "driver")
         if not 0 <= body < len(names):
             raise InvalidInputError(
                 f"driver: expected a body index 0..{len(names) - 1}, got {body}"
@@ -237,6 +282,7 @@ def prescribed_motion(
     input: tuple | None = None,
     gravity: Any = None,
     about: Any = (0.0, 0.0, 0.0),
+    progress: Callable[[int, int], Any] | None = None,
 ) -> MotionAnalysis:
     """A one-input mechanism driven by ``driver`` (a 1-dof joint's body): at constant
     ``speed`` (rad/s or m/s) over ``revolutions`` turns sampled at ``samples`` uniformly
@@ -247,7 +293,9 @@ def prescribed_motion(
     previous instant (from ``q_guess``, default the model's closed guess: a scene's
     ``q0``), so the mechanism stays on one assembly branch. Freedoms the driver leaves
     (the idle spin of an RSSR's coupler) take minimum-norm speeds and the accelerations the
-    dynamics gives them. Returns a :class:`MotionAnalysis`."""
+    dynamics gives them. Returns a :class:`MotionAnalysis`. ``progress(done, 2 N)``, if given,
+    is called as the N instants are closed, then analysed (long runs show it; Ctrl-C stops
+    them)."""
     name, iq, iv = _driver_slot(model, driver)
     kind = model.body_info(model.body_names.index(name))[1]
     if input is None and kind != "Revolute":
@@ -258,15 +306,22 @@ def prescribed_motion(
     q0 = np.asarray(model.neutral() if q_guess is None else q_guess, dtype=float).copy()
     if input is not None:
         t, pos, rate, acc = (np.asarray(x, dtype=float).reshape(-1) for x in input)
-        if not len(t) == len(pos) == len(rate) == len(acc):
+        if not len(t) == len(pos) == len(rate) == len(acc) or len(t) == 0:
             raise InvalidInputError(
-                "input: expected (t, position, rate, acceleration) of one length"
+                "input: expected (t, position, rate, acceleration) of one non-zero length, got "
+                f"lengths {[len(x) for x in (t, pos, rate, acc)]}"
             )
+        if not all(np.all(np.isfinite(x)) for x in (t, pos, rate, acc)):
+            raise InvalidInputError("input: expected finite values, got NaN or infinity")
     else:
         if speed is None or not np.isfinite(speed) or speed == 0.0:
             raise InvalidInputError(f"speed: expected a finite non-zero driver speed, got {speed}")
         if samples < 2:
             raise InvalidInputError(f"samples: expected at least 2, got {samples}")
+        if not (np.isfinite(revolutions) and revolutions > 0):
+            raise InvalidInputError(
+                f"revolutions: expected a finite positive number of turns, got {revolutions}"
+            )
         theta0 = q0[iq] if start is None else float(start)
         span = 2.0 * np.pi * revolutions
         pos = theta0 + np.sign(speed) * span * np.arange(samples) / samples
@@ -291,7 +346,9 @@ def prescribed_motion(
         > 1
     )
     g = None if gravity is None else np.asarray(gravity, dtype=float)
+    report = _reporter(progress, n, scale=2)
     for k in range(n):
+        report(k)
         guess = guess.copy()
         guess[iq] = pos[k]
         vk = np.zeros(model.nv)
@@ -318,6 +375,8 @@ def prescribed_motion(
                 f"analyze_motion instead"
             )
         q[k], v[k], a[k] = guess, vk, ak
-    out = analyze_motion(model, t, q, v, a, actuated=[name], gravity=gravity, about=about)
+    after = None if progress is None else (lambda k, _n: progress(n + k, 2 * n))
+    out = analyze_motion(model, t, q, v, a, actuated=[name], gravity=gravity, about=about,
+                         progress=after)
     out.input, out.input_name = pos, name
     return out

@@ -49,7 +49,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from typing import Any
-from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
@@ -373,6 +372,9 @@ def to_mjcf(
                 f"{infos[infos[j.body][2]][0]!r}; MuJoCo allows free joints only on bodies of "
                 f"the world")
 
+    # Here, not at module level: xml.sax pulls in urllib, http and email (~20 ms of import).
+    from xml.sax.saxutils import quoteattr
+
     xml = [f"<mujoco model={quoteattr(name or 'pointmass_dyn')}>",
            '  <compiler angle="radian" autolimits="true"/>',
            f'  <option gravity="{_fmt(g)}" integrator="{integrator}" '
@@ -381,41 +383,63 @@ def to_mjcf(
            "  </option>",
            "  <worldbody>"]
 
-    def write(b: int, depth: int) -> None:
+    def joint_xml(b: int, frame: int) -> str:
+        """Body b's joint, axis and anchor in the neutral frame of body ``frame``."""
         bname, kind, parent, _ = infos[b]
-        pad = "  " * depth
-        if parent < 0:
-            rp, op = np.eye(3), np.zeros(3)
+        j, rf = by_body[b], rots[frame]
+        attrs = "" if frame == b else f' pos="{_fmt(rf.T @ (origins[b] - origins[frame]))}"'
+        if kind in ("Revolute", "Prismatic"):
+            rp, op = (np.eye(3), np.zeros(3)) if parent < 0 else (rots[parent], origins[parent])
+            rpt = np.eye(3) if parent < 0 else rt[parent]
+            opt = np.zeros(3) if parent < 0 else ot[parent]
+            r0, p0 = rp.T @ rots[b], rp.T @ (origins[b] - op)
+            if kind == "Revolute":
+                axis = _axis_of(r0.T @ (rpt.T @ rt[b]), math.pi / 2)
+            else:
+                axis = r0.T @ (rpt.T @ (ot[b] - opt) - p0) / (math.pi / 2)
+                axis = axis / np.linalg.norm(axis)
+            axis = rf.T @ rots[b] @ axis
+            mj = "hinge" if kind == "Revolute" else "slide"
+            attrs += f' type="{mj}" axis="{_fmt(axis)}"'
+            if stiff[j.v]:
+                attrs += f' stiffness="{float(stiff[j.v])!r}" springref="{float(rest[j.v])!r}"'
+        elif kind in ("Spherical", "SphericalZYZ"):
+            attrs += ' type="ball"'
+            if stiff[j.v]:
+                attrs += f' stiffness="{float(stiff[j.v])!r}"'
         else:
-            rp, op = rots[parent], origins[parent]
+            attrs += ' type="free"'
+        if damp[j.v]:
+            attrs += f' damping="{float(damp[j.v])!r}"'
+        return f"<joint name={quoteattr('j_' + bname)}{attrs}/>"
+
+    def carried_into(b: int) -> int | None:
+        """The body a massless moving body's joint goes into, or None. MuJoCo refuses moving
+        bodies without mass, but takes several joints in one body: a massless body with one
+        child (what ``from_mujoco`` makes of a multi-joint body) lends its joint to the
+        child's MJCF body. A ball joint only where the two share axes (it turns the body's
+        own axes)."""
+        kind, c = infos[b][1], children[b][0] if len(children[b]) == 1 else None
+        if (b not in by_body or kind == "FreeFlyer" or float(model.body(b).mass) > 0
+                or c is None or infos[c][1] == "FreeFlyer"):
+            return None
+        if kind in ("Spherical", "SphericalZYZ") and not np.allclose(
+                rots[b].T @ rots[c], np.eye(3), rtol=0, atol=1e-12):
+            return None
+        return c
+
+    def write(b: int, depth: int, carried: list[int]) -> None:
+        into = carried_into(b)
+        if into is not None:
+            return write(into, depth, carried + [b])
+        pad, bname, parent = "  " * depth, infos[b][0], infos[(carried or [b])[0]][2]
+        rp, op = (np.eye(3), np.zeros(3)) if parent < 0 else (rots[parent], origins[parent])
         r0 = rp.T @ rots[b]
         p0 = rp.T @ (origins[b] - op)
         xml.append(f"{pad}<body name={quoteattr(bname)} pos=\"{_fmt(p0)}\" "
                    f"quat=\"{_fmt(_quat_wxyz_of(r0))}\">")
-        j = by_body.get(b)
-        if j is not None:
-            attrs = ""
-            if kind in ("Revolute", "Prismatic"):
-                rpt = np.eye(3) if parent < 0 else rt[parent]
-                opt = np.zeros(3) if parent < 0 else ot[parent]
-                if kind == "Revolute":
-                    axis = _axis_of(r0.T @ (rpt.T @ rt[b]), math.pi / 2)
-                else:
-                    axis = r0.T @ (rpt.T @ (ot[b] - opt) - p0) / (math.pi / 2)
-                    axis = axis / np.linalg.norm(axis)
-                mj = "hinge" if kind == "Revolute" else "slide"
-                attrs = f' type="{mj}" axis="{_fmt(axis)}"'
-                if stiff[j.v]:
-                    attrs += f' stiffness="{float(stiff[j.v])!r}" springref="{float(rest[j.v])!r}"'
-            elif kind in ("Spherical", "SphericalZYZ"):
-                attrs = ' type="ball"'
-                if stiff[j.v]:
-                    attrs += f' stiffness="{float(stiff[j.v])!r}"'
-            else:
-                attrs = ' type="free"'
-            if damp[j.v]:
-                attrs += f' damping="{float(damp[j.v])!r}"'
-            xml.append(f"{pad}  <joint name={quoteattr('j_' + bname)}{attrs}/>")
+        for k in carried + ([b] if b in by_body else []):
+            xml.append(f"{pad}  {joint_xml(k, b)}")
         body = model.body(b)
         mass = float(body.mass)
         inertia = np.asarray(body.inertia)
@@ -426,13 +450,17 @@ def to_mjcf(
                 iner = (f'fullinertia="{_fmt([inertia[0, 0], inertia[1, 1], inertia[2, 2]])} '
                         f'{_fmt([inertia[0, 1], inertia[0, 2], inertia[1, 2]])}"')
             xml.append(f"{pad}  <inertial mass=\"{mass!r}\" pos=\"{_fmt(body.com)}\" {iner}/>")
+        elif b in by_body or carried:
+            raise ModelStructureError(
+                f"model: body {bname!r} moves but has no mass; MuJoCo refuses massless moving "
+                f"bodies (give it a mass, or fix it to a body that has one)")
         for c in children[b]:
-            write(c, depth + 1)
+            write(c, depth + 1, [])
         xml.append(f"{pad}</body>")
 
     for b in range(model.nbodies):
         if infos[b][2] < 0:
-            write(b, 2)
+            write(b, 2, [])
     xml += ["  </worldbody>", "</mujoco>"]
     return "\n".join(xml) + "\n"
 

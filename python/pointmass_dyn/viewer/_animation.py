@@ -23,7 +23,7 @@ from ._html import page
 from ._video import write_video
 
 
-@dataclass
+@dataclass(repr=False)
 class AnimationInfo:
     """What :func:`animate` made: the file (None: nothing written), its frame count and
     times, the frame size in pixels, the initial camera (see
@@ -51,17 +51,40 @@ class AnimationInfo:
                 f'style="width:100%;height:{self.size[1]}px;border:0" '
                 'sandbox="allow-scripts" title="pointmass_dyn animation"></iframe>')
 
+    def __repr__(self) -> str:
+        # A summary: ``times`` holds one entry per frame.
+        t = np.asarray(self.times)
+        span = f"[{t[0]:g}, {t[-1]:g}] s" if t.size else "[]"
+        return (
+            f"AnimationInfo(path={str(self.path)!r}, frames={self.frames}, times={span}, "
+            f"size={tuple(self.size)}, bytes={self.bytes})"
+        )
+
 
 # ---------------------------------------------------------------- sampling
 
 
+#: The most frames an animation may have: an hour at 30 fps. Each frame costs every body's
+#: pose in the page (or an image in a video), so more is a memory bomb, not a longer film.
+MAX_FRAMES = 108_000
+
+
 def frame_times(t: np.ndarray, fps: float, frames: int | None, duration: float | None):
     """Frame times: ``frames`` of them, or ``round(duration·fps)`` over the result (playback
-    as long as the motion unless ``duration`` says otherwise), endpoints included."""
+    as long as the motion unless ``duration`` says otherwise), endpoints included; at most
+    :data:`MAX_FRAMES`, else an :class:`InvalidInputError` saying which arguments ask more."""
     t0, t1 = float(t[0]), float(t[-1])
     if frames is None:
         span = (t1 - t0) if duration is None else duration
-        frames = max(1, int(round(span * fps)))
+        wanted = span * fps
+        if not wanted <= MAX_FRAMES:
+            raise InvalidInputError(
+                f"fps, duration: expected at most {MAX_FRAMES} frames (duration × fps), got "
+                f"{span:g} s × {fps:g} fps = {wanted:.3g} frames"
+            )
+        frames = max(1, int(round(wanted)))
+    elif frames > MAX_FRAMES:
+        raise InvalidInputError(f"frames: expected at most {MAX_FRAMES}, got {frames}")
     return np.linspace(t0, t1, frames) if frames > 1 else np.array([t0])
 
 
@@ -216,6 +239,11 @@ def animate(
         )
     if not (isinstance(dpi, (int, np.integer)) and 10 <= dpi <= 1000):
         raise InvalidInputError(f"dpi: expected an integer 10..1000, got {dpi!r}")
+    if path is not None and not Path(path).parent.is_dir():
+        raise InvalidInputError(
+            f"path: expected a file in an existing directory, got '{path}' "
+            f"('{Path(path).parent}' does not exist or is not a directory)"
+        )
     drawing = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
                       trails=trails, shaking=shaking, title=title, camera=camera, show=show,
                       triangles=triangles)

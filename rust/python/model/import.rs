@@ -228,8 +228,8 @@ fn repair_options(
                 }
             }
             _ => {
-                let x: f64 = v
-                    .extract()
+                // `real` refuses bools (True is not a 1 kg bound).
+                let x = crate::python::convert::real(&v, &arg)
                     .ok()
                     .filter(|x: &f64| x.is_finite() && *x >= 0.0)
                     .ok_or_else(|| invalid(py, &arg, "a finite number >= 0", shown(&v)))?;

@@ -19,7 +19,13 @@ impl PyModel {
         PyModel::from_model(Model::new())
     }
 
-    /// Adds a body; returns its index. See the package docs for the arguments.
+    /// Adds `body` (a RigidBody) on `joint` (a Joint) below `parent`; returns its index.
+    ///
+    /// parent: the parent body's name or index; -1, "world" or None for the world.
+    /// translation, rotation: the joint frame in the parent's body frame (3-vector, 3×3
+    /// rotation to 1e-9; within 4ε of a quarter or half turn it is taken as exactly that).
+    /// name: unique body name (default "body<index>"). point_mass_center: where the seven
+    /// point masses' box is centred, body frame (default: the COM).
     #[pyo3(signature = (body, joint, parent=None, translation=None, rotation=None, name=None, point_mass_center=None))]
     #[allow(clippy::too_many_arguments)]
     fn add_body(
@@ -45,15 +51,22 @@ impl PyModel {
             Some(c) if !c.is_none() => Some(vec3(c, "point_mass_center")?),
             _ => None,
         };
-        // -1 (or None) is the world; any int is taken (no OverflowError), a non-int is a TypeError.
+        // -1, None or "world" is the world; a name is resolved by the model; any int is taken
+        // (no OverflowError), anything else is a TypeError.
         let parent = match parent.filter(|p| !p.is_none()) {
             None => -1,
+            Some(p) if p.is_instance_of::<pyo3::types::PyString>() => {
+                match p.extract::<String>()?.as_str() {
+                    "world" => -1,
+                    name => self.model().body_named("parent", name).py(py)? as i64,
+                }
+            }
             Some(p) => crate::python::convert::int_arg(
                 p,
                 "parent",
                 i64::MIN,
                 i64::MAX,
-                "-1 (the world) or a body index >= 0",
+                "-1 or 'world' (the world), a body index >= 0 or a body name",
             )?,
         };
         self.shared

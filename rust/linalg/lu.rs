@@ -1,5 +1,8 @@
 //! Dense LU factorisation with partial pivoting, in place and allocation-free, for the
 //! implicit methods' Newton matrices (real `γ/h I − J` and complex `(α + iβ)/h I − J`).
+//! Not nalgebra's `LU` (same pivot choice): it takes its matrix by value (an allocation per
+//! factorisation in the Newton loop) and steps over a zero pivot where Radau must see a
+//! singular matrix.
 //!
 //! LAPACK's `getrf` pivoting rule (first entry of largest magnitude in the column; for complex
 //! entries LAPACK's `|re| + |im|`), so that the factors SciPy's `lu_factor` computes and

@@ -1,0 +1,127 @@
+"""Design benchmarks (docs/design.md, issue 30's targets): the bundled four-bar at 30 rad/s,
+360 samples, crank, coupler and rocker as steel cells of 5 mm (~300 per link).
+
+    python benches/design.py            # all cases, one line each
+    python benches/design.py --quick    # fewer repeats
+
+Each line: the case, wall time of the whole `pmd.balance` call (maps, solve(s), re-analysis)
+median of the repeats, the solver's own time and iterations, its status and relative gap.
+"""
+
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+
+import numpy as np
+import pointmass_dyn as pmd
+
+QUICK = "--quick" in sys.argv
+REPEATS = 1 if QUICK else 3
+G = np.array([0.0, -9.81, 0.0])
+
+
+def links(cell=0.005):
+    box = lambda x0, x1, y: ([x0, -y, -0.006], [x1, y, 0.006])  # noqa: E731
+    return [
+        pmd.LinkShape("crank", box=box(-0.05, 0.045, 0.02), cell=cell),
+        pmd.LinkShape("coupler", box=box(-0.01, 0.10, 0.01), cell=cell),
+        pmd.LinkShape("rocker", box=box(-0.05, 0.08, 0.02), cell=cell),
+    ]
+
+
+def timed(fn):
+    times, out = [], None
+    for _ in range(REPEATS):
+        t0 = time.perf_counter()
+        out = fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times), out
+
+
+def line(label, seconds, b):
+    s = b.solver
+    print(
+        f"{label:<46} {seconds:8.3f} s   solver {s['solve_time']:7.3f} s, {s['iterations']:3d} it, "
+        f"{s['status']}, gap {s['gap_rel']:.1e}"
+    )
+
+
+def main():
+    scene = pmd.load_scene("fourbar")
+    motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=360, q_guess=scene.q0, gravity=G)
+    cells = [len(s.cells(scene.model)[0]) for s in links()]
+    print(f"four-bar, 360 samples, cells per link {cells}")
+    peak_force = motion.summary()["shaking force"]["peak"]
+
+    t, b = timed(lambda: pmd.balance(motion, links=links(), zero=("force",), objective={"mass": 1.0}))
+    line("force balance by shape", t, b)
+    t, b = timed(
+        lambda: pmd.balance(
+            motion, links=links(), objective={"bearing": 1.0}, norm="peak", limits={"force": 0.1 * peak_force}
+        )
+    )
+    line("peak bearing, peak force <= 10 % (SOCP)", t, b)
+    t0 = time.perf_counter()
+    front = pmd.pareto_front(motion, ("force", "moment"), count=11, links=links())
+    t = time.perf_counter() - t0
+    print(f"{'11-point Pareto front force-moment (RMS)':<46} {t:8.3f} s   "
+          f"({sum(f.solver['solve_time'] for f in front):.3f} s in the solver)")
+    t0 = time.perf_counter()
+    front = pmd.pareto_front(motion, ("bearing", "force"), count=11, links=links(), norm="peak")
+    t = time.perf_counter() - t0
+    print(f"{'11-point Pareto front bearing-force (peak)':<46} {t:8.3f} s   "
+          f"({sum(f.solver['solve_time'] for f in front):.3f} s in the solver)")
+    rings = [
+        pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 1000),
+        pmd.Counterweight.ring("rocker", [0, 0, 0], 0.02, 1000),
+    ]
+    t, b = timed(lambda: pmd.balance(motion, counterweights=rings, zero=("force",)))
+    line("2 x 1000 counterweight candidates, zero force", t, b)
+    t, b = timed(lambda: pmd.balance(motion, counterweights=rings, objective={"force": 1.0, "moment": 1.0}))
+    line("2 x 1000 candidates, force + moment (RMS)", t, b)
+    de_comparison(motion)
+
+
+def de_comparison(motion):
+    """SciPy's differential evolution on a small instance (2 rings of 4 candidates), each
+    design scored from point_regressor's linear model."""
+    from scipy.optimize import differential_evolution
+
+    cws = [
+        pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 4, max_mass=0.03),
+        pmd.Counterweight.ring("rocker", [0, 0, 0], 0.02, 4, max_mass=0.03),
+    ]
+    pts = [(c.body, p) for c in cws for p in c.points]
+    reg = motion.model.point_regressor(motion.q, motion.v, motion.a, points=pts, gravity=G)
+    acc, pos = reg["accelerations"], reg["positions"]
+    # Per unit mass at each point: its shaking force and moment (N, P, 3), flattened.
+    per_force = -np.transpose(acc, (1, 0, 2)).reshape(len(pts), -1)
+    per_moment = -np.transpose(np.cross(pos, acc), (1, 0, 2)).reshape(len(pts), -1)
+    f0, m0 = motion.shaking.force, motion.shaking.moment
+    for norm in ("rms", "peak"):
+        def value(y, norm=norm):
+            mag = np.linalg.norm(y, axis=1)
+            return np.sqrt(np.mean(mag**2)) if norm == "rms" else mag.max()
+
+        ref_f, ref_m = value(f0), value(m0)
+
+        def score(x, norm=norm):
+            f = f0 + (x @ per_force).reshape(f0.shape)
+            m = m0 + (x @ per_moment).reshape(m0.shape)
+            if norm == "rms":
+                return (value(f) / ref_f) ** 2 + (value(m) / ref_m) ** 2
+            return value(f) / ref_f + value(m) / ref_m
+
+        t, b = timed(lambda: pmd.balance(motion, counterweights=cws, objective={"force": 1.0, "moment": 1.0}, norm=norm))
+        t0 = time.perf_counter()
+        de = differential_evolution(score, [(0.0, 0.03)] * len(pts), seed=3, tol=1e-12, maxiter=3000)
+        t_de = time.perf_counter() - t0
+        print(f"{'vs differential evolution (' + norm + ', 8 masses)':<46} conic {t:.3f} s (objective "
+              f"{score(b.masses):.10g}), DE {t_de:.2f} s, {de.nfev} evaluations (objective {de.fun:.10g}): "
+              f"{t_de / t:.0f}x")
+
+
+if __name__ == "__main__":
+    main()

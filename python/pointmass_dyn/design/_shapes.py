@@ -1,0 +1,213 @@
+"""Link shapes as material cells (docs/design.md §1).
+
+A :class:`LinkShape` describes where a link's material may be: an envelope in the body frame
+(a box, a planar polygon extruded along z, or a closed STL mesh) cut into cubic cells of side
+``cell``, each holding between 0 and ``density × cell³`` of material. The design chooses
+every cell's mass; the link's mass, first and second moments are linear in them (each cell
+a small solid cube), which is what makes the design a convex program. The result per link
+is a :class:`Shape` (cells, masses, bounds; ``write_stl`` for a CAD tool)."""
+
+from __future__ import annotations
+
+import struct
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .. import _core
+from ..errors import InvalidInputError
+
+
+def _box(value: Any, arg: str) -> np.ndarray:
+    b = np.asarray(value, dtype=float)
+    if b.shape != (2, 3) or not np.all(np.isfinite(b)):
+        raise InvalidInputError(f"{arg}: expected (lower, upper) corners, two (x, y, z), got {value!r}")
+    if np.any(b[1] <= b[0]):
+        raise InvalidInputError(f"{arg}: expected lower < upper along x, y and z, got {b.tolist()}")
+    return b
+
+
+def read_stl(path: str | Path) -> np.ndarray:
+    """The triangles (T, 3, 3) of a binary or ASCII STL file."""
+    data = Path(path).read_bytes()
+    if len(data) >= 84:
+        count = struct.unpack("<I", data[80:84])[0]
+        if 84 + 50 * count == len(data):
+            rec = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), offset=84)
+            return rec["v"].astype(float)
+    text = data.decode("ascii", errors="replace").split()
+    verts = [[float(text[i + 1]), float(text[i + 2]), float(text[i + 3])] for i, w in enumerate(text) if w == "vertex"]
+    if not verts or len(verts) % 3:
+        raise InvalidInputError(f"stl: expected a binary or ASCII STL file, got '{path}' without triangles")
+    return np.asarray(verts).reshape(-1, 3, 3)
+
+
+@dataclass(frozen=True)
+class LinkShape:
+    """A link whose material the design places, as cells of side ``cell`` (m) inside an
+    envelope in the body frame: ``box=(lower, upper)``, or ``polygon=[(x, y), …]`` extruded
+    over ``z=(low, high)``, or ``stl=`` a closed mesh (path or (T, 3, 3) triangles).
+
+    Each cell holds between 0 and ``density × cell³`` kg. ``mass``: None (free) or
+    ``(low, high)`` in kg. The cells within ``boss`` (default: one cell) of the axis of every
+    joint on the link (its own, its children's, the cut joints') stay full, so the link
+    still carries its pins; ``keep`` (boxes) adds cells that must stay full, ``keep_out``
+    (boxes) removes cells. ``symmetric=True`` keeps the link symmetric about the mid-plane
+    of its envelope's z range (a planar link stays in its plane)."""
+
+    body: Any
+    box: Any = None
+    polygon: Any = None
+    z: Any = None
+    stl: Any = None
+    density: float = 7850.0
+    cell: float = 0.002
+    mass: Any = None
+    keep: Any = ()
+    keep_out: Any = ()
+    boss: float | None = None
+    symmetric: bool = False
+
+    def _envelope(self) -> dict:
+        given = [k for k in ("box", "polygon", "stl") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise InvalidInputError(
+                f"LinkShape '{self.body}': expected exactly one envelope (box, polygon or stl), got "
+                f"{given or 'none'}"
+            )
+        if self.box is not None:
+            return {"box": _box(self.box, "box")}
+        if self.polygon is not None:
+            poly = np.asarray(self.polygon, dtype=float)
+            z = np.asarray(self.z if self.z is not None else (), dtype=float)
+            if poly.ndim != 2 or poly.shape[1] != 2 or z.shape != (2,):
+                raise InvalidInputError(
+                    "polygon, z: expected (P, 2) vertices and z=(low, high), got "
+                    f"{poly.shape} and {self.z!r}"
+                )
+            return {"polygon": poly, "z": (float(z[0]), float(z[1]))}
+        tri = self.stl if not isinstance(self.stl, (str, Path)) else read_stl(self.stl)
+        return {"triangles": np.asarray(tri, dtype=float)}
+
+    def cells(self, model: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Centres (K, 3), lower and upper bounds (K,) of the cells, body frame."""
+        for arg in ("density", "cell"):
+            v = getattr(self, arg)
+            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+                raise InvalidInputError(f"{arg}: expected a positive number, got {v!r}")
+        env = self._envelope()
+        centers = np.asarray(_core.design_cells(float(self.cell), **env), dtype=float).reshape(-1, 3)
+        for b in _boxes(self.keep_out, "keep_out"):
+            centers = centers[~_inside(centers, b)]
+        if len(centers) == 0:
+            raise InvalidInputError(
+                f"LinkShape '{self.body}': no cell of side {self.cell} fits in the envelope (less keep_out)"
+            )
+        cap = np.full(len(centers), self.density * self.cell**3)
+        full = np.zeros(len(centers), dtype=bool)
+        for b in _boxes(self.keep, "keep"):
+            full |= _inside(centers, b)
+        radius = self.cell if self.boss is None else float(self.boss)
+        for point, axis in _core.design_pins(model, self.body):
+            d = centers - point
+            n = np.linalg.norm(axis)
+            if n > 0:
+                d = d - np.outer(d @ (axis / n), axis / n)
+            full |= np.linalg.norm(d, axis=1) <= radius * (1 + 1e-9)
+        return centers, np.where(full, cap, 0.0), cap
+
+    def mirror_pairs(self, centers: np.ndarray) -> list[tuple[int, int]]:
+        """Index pairs of cells mirrored about the envelope's z mid-plane."""
+        if not self.symmetric:
+            return []
+        lo, hi = (centers[:, 2].min(), centers[:, 2].max())
+        mid = 0.5 * (lo + hi)
+        key = {tuple(np.round(c / self.cell * 2).astype(int)): i for i, c in enumerate(centers)}
+        pairs = []
+        for i, c in enumerate(centers):
+            m = c.copy()
+            m[2] = 2 * mid - c[2]
+            j = key.get(tuple(np.round(m / self.cell * 2).astype(int)))
+            if j is None:
+                raise InvalidInputError(
+                    f"symmetric: the cells of '{self.body}' are not symmetric about z = {mid:g} "
+                    "(give an envelope symmetric about its mid-plane)"
+                )
+            if i < j:
+                pairs.append((i, j))
+        return pairs
+
+
+def _boxes(value: Any, arg: str) -> list[np.ndarray]:
+    if value is None or len(value) == 0:
+        return []
+    arr = np.asarray(value, dtype=float)
+    if arr.shape == (2, 3):
+        return [_box(arr, arg)]
+    return [_box(b, f"{arg}[{k}]") for k, b in enumerate(value)]
+
+
+def _inside(centers: np.ndarray, box: np.ndarray) -> np.ndarray:
+    return np.all((centers >= box[0]) & (centers <= box[1]), axis=1)
+
+
+@dataclass(frozen=True)
+class Shape:
+    """A designed link's material: cell ``centers`` (K, 3) in the body frame, their
+    ``masses`` (K,) and ``capacity`` (K,) (density × cell³), the cell side ``cell``."""
+
+    body: str
+    centers: np.ndarray
+    masses: np.ndarray
+    capacity: np.ndarray
+    cell: float
+
+    @property
+    def mass(self) -> float:
+        return float(np.sum(self.masses))
+
+    @property
+    def fill(self) -> np.ndarray:
+        """Each cell's mass as a fraction of its capacity."""
+        return self.masses / self.capacity
+
+    def write_stl(self, path: str | Path, threshold: float = 0.5) -> int:
+        """Writes the cells filled to at least ``threshold`` of their capacity as one closed
+        surface (binary STL, metres, the body frame): the faces between a kept cell and an
+        empty neighbour. Returns the number of triangles."""
+        if not 0.0 <= threshold <= 1.0:
+            raise InvalidInputError(f"threshold: expected a fraction in [0, 1], got {threshold}")
+        kept = self.centers[self.fill >= threshold]
+        base = self.centers.min(axis=0)
+        idx = np.round((kept - base) / self.cell).astype(np.int64)
+        occupied = {tuple(i) for i in idx}
+        h = 0.5 * self.cell
+        tris = []
+        for axis in range(3):
+            for sign in (-1, 1):
+                step = np.zeros(3, dtype=np.int64)
+                step[axis] = sign
+                u, v = (axis + 1) % 3, (axis + 2) % 3
+                for c, i in zip(kept, idx):
+                    if tuple(i + step) in occupied:
+                        continue
+                    center = c.copy()
+                    center[axis] += sign * h
+                    du, dv = np.zeros(3), np.zeros(3)
+                    du[u], dv[v] = h, h
+                    q = [center - du - dv, center + du - dv, center + du + dv, center - du + dv]
+                    if sign < 0:
+                        q = q[::-1]
+                    tris += [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
+        Path(path).parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "wb") as f:
+            f.write(b"pointmass_dyn design".ljust(80, b" "))
+            f.write(struct.pack("<I", len(tris)))
+            for t in tris:
+                a, b, c = (np.asarray(p, dtype=np.float32) for p in t)
+                n = np.cross(b - a, c - a)
+                n = n / (np.linalg.norm(n) or 1.0)
+                f.write(struct.pack("<12fH", *n, *a, *b, *c, 0))
+        return len(tris)

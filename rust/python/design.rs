@@ -1,0 +1,274 @@
+//! Arguments and results of the design functions (crate::design): cells of an envelope, the
+//! maps along a motion, a body's pins, and the conic program. Conversion only.
+use nalgebra::{DMatrix, DVector};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use super::convert::{array, to_array, to_array1};
+use super::errors::{check_result, invalid};
+use super::model::{gravity_arg, PyModel};
+use super::signals::detach_interruptible;
+use crate::design::{self, Envelope, Norm, Problem, Quantity};
+use crate::spatial::Vec3;
+
+fn points3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec<Vec3>> {
+    let (shape, data) = array(obj, arg)?;
+    if shape.len() != 2 || shape[1] != 3 {
+        return Err(invalid(
+            obj.py(),
+            arg,
+            "an (N, 3) array",
+            format!("shape {shape:?}"),
+        ));
+    }
+    Ok(data
+        .chunks(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect())
+}
+
+/// Cell centres (K, 3) of side `cell` in a `box` (2, 3), a `polygon` (P, 2) extruded over
+/// `z` (2,), or a mesh of `triangles` (T, 3, 3).
+#[pyfunction]
+#[pyo3(signature = (cell, r#box=None, polygon=None, z=None, triangles=None))]
+pub fn design_cells<'py>(
+    py: Python<'py>,
+    cell: f64,
+    r#box: Option<&Bound<'_, PyAny>>,
+    polygon: Option<&Bound<'_, PyAny>>,
+    z: Option<(f64, f64)>,
+    triangles: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let env = match (r#box, polygon, triangles) {
+        (Some(b), None, None) => {
+            let c = points3(b, "box")?;
+            if c.len() != 2 {
+                return Err(invalid(
+                    py,
+                    "box",
+                    "(lower, upper) corners",
+                    format!("{} points", c.len()),
+                ));
+            }
+            Envelope::Box {
+                lower: c[0],
+                upper: c[1],
+            }
+        }
+        (None, Some(p), None) => {
+            let (shape, data) = array(p, "polygon")?;
+            if shape.len() != 2 || shape[1] != 2 {
+                return Err(invalid(
+                    py,
+                    "polygon",
+                    "a (P, 2) array of vertices",
+                    format!("shape {shape:?}"),
+                ));
+            }
+            let z = z.ok_or_else(|| invalid(py, "z", "(z_low, z_high) for a polygon", "None"))?;
+            Envelope::Prism {
+                polygon: data.chunks(2).map(|c| [c[0], c[1]]).collect(),
+                z,
+            }
+        }
+        (None, None, Some(t)) => {
+            let (shape, data) = array(t, "triangles")?;
+            if shape.len() != 3 || shape[1] != 3 || shape[2] != 3 {
+                return Err(invalid(
+                    py,
+                    "triangles",
+                    "a (T, 3, 3) array",
+                    format!("shape {shape:?}"),
+                ));
+            }
+            let v = |k: usize| Vec3::new(data[3 * k], data[3 * k + 1], data[3 * k + 2]);
+            Envelope::Mesh {
+                triangles: (0..shape[0])
+                    .map(|t| [v(3 * t), v(3 * t + 1), v(3 * t + 2)])
+                    .collect(),
+            }
+        }
+        _ => {
+            return Err(invalid(
+                py,
+                "envelope",
+                "exactly one of box, polygon or triangles",
+                "none or several",
+            ))
+        }
+    };
+    let cells = detach_interruptible(py, || design::fill(&env, cell))?;
+    let n = cells.len();
+    to_array(
+        py,
+        cells.iter().flat_map(|c| c.iter().copied()).collect(),
+        &[n, 3],
+    )
+}
+
+/// The maps along a motion: dict with `data` (N · rows, 10 · nlinks), `rows`, `nactuated`,
+/// `nlinks`, `nloops` and `parameters` (the links' current ten numbers).
+#[pyfunction]
+#[pyo3(signature = (model, q, v, a, gravity, about, actuated))]
+#[allow(clippy::too_many_arguments)]
+pub fn design_regressor<'py>(
+    py: Python<'py>,
+    model: PyRef<'_, PyModel>,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    a: &Bound<'_, PyAny>,
+    gravity: Option<&Bound<'_, PyAny>>,
+    about: &Bound<'_, PyAny>,
+    actuated: Vec<usize>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let model = model.model();
+    let g = gravity_arg(py, gravity)?;
+    let about = super::convert::vec3(about, "about")?;
+    let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+    let reg = detach_interruptible(py, || {
+        design::regressor(&model, &qs, &vs, &accs, &g, &about, &actuated)
+    })?;
+    check_result(py, "design regressor", reg.data.as_slice())?;
+    let d = PyDict::new(py);
+    let (r, c) = reg.data.shape();
+    // Row-major for NumPy.
+    let data: Vec<f64> = reg.data.transpose().as_slice().to_vec();
+    d.set_item("data", to_array(py, data, &[r, c])?)?;
+    d.set_item("rows", reg.layout.rows())?;
+    d.set_item("nactuated", reg.layout.nactuated)?;
+    d.set_item("nlinks", reg.layout.nlinks)?;
+    d.set_item("nloops", reg.layout.nloops)?;
+    d.set_item(
+        "parameters",
+        to_array1(py, &design::model_parameters(&model)),
+    )?;
+    Ok(d)
+}
+
+/// The joints a body carries, in its own frame: `(point, axis)` pairs (axis zero for a
+/// spherical joint) — its own joint, its children's, and the cut joints on it.
+#[pyfunction]
+pub fn design_pins<'py>(
+    py: Python<'py>,
+    model: PyRef<'_, PyModel>,
+    body: &Bound<'_, PyAny>,
+) -> PyResult<Bound<'py, PyList>> {
+    let model = model.model();
+    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
+        invalid(
+            py,
+            "body",
+            "a body of the model (not the world)",
+            "the world",
+        )
+    })?;
+    let pins = design::pins(&model, b);
+    let out = PyList::empty(py);
+    for (p, axis) in pins {
+        out.append((to_array1(py, p.as_slice()), to_array1(py, axis.as_slice())))?;
+    }
+    Ok(out)
+}
+
+fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
+    let py = obj.py();
+    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        obj.get_item(k)
+            .map_err(|_| invalid(py, "quantities", format!("a dict with '{k}'"), "none"))
+    };
+    let name: String = get("name")?.extract()?;
+    let (shape, rows) = array(&get("rows")?, &name)?;
+    if shape.len() != 2 || shape[1] != ndelta {
+        return Err(invalid(
+            py,
+            &name,
+            format!("rows of shape (R, {ndelta})"),
+            format!("{shape:?}"),
+        ));
+    }
+    let (_, constant) = array(&get("constant")?, &name)?;
+    Ok(Quantity {
+        rows: DMatrix::from_row_slice(shape[0], ndelta, &rows),
+        constant: DVector::from_vec(constant),
+        dim: get("dim")?.extract()?,
+        samples: get("samples")?.extract()?,
+        weight: get("weight")?.extract()?,
+        reference: get("reference")?.extract()?,
+        limit: get("limit")?.extract()?,
+        zero: get("zero")?.extract()?,
+        name,
+    })
+}
+
+/// Solves the design program given as a dict (see `pointmass_dyn`'s design module).
+#[pyfunction]
+pub fn design_solve<'py>(
+    py: Python<'py>,
+    spec: &Bound<'_, PyDict>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        spec.get_item(k)?
+            .ok_or_else(|| invalid(py, "problem", format!("a dict with '{k}'"), "none"))
+    };
+    let ndelta: usize = get("ndelta")?.extract()?;
+    let (_, lower) = array(&get("lower")?, "lower")?;
+    let (_, upper) = array(&get("upper")?, "upper")?;
+    let map_rows: Vec<usize> = get("map_rows")?.extract()?;
+    let map_cols: Vec<usize> = get("map_cols")?.extract()?;
+    let (_, map_vals) = array(&get("map_vals")?, "map_vals")?;
+    if map_rows.len() != map_cols.len() || map_rows.len() != map_vals.len() {
+        return Err(invalid(
+            py,
+            "map",
+            "rows, columns and values of one length",
+            "different lengths",
+        ));
+    }
+    let quantities = get("quantities")?
+        .try_iter()?
+        .map(|q| quantity(&q?, ndelta))
+        .collect::<PyResult<Vec<_>>>()?;
+    let norm = match get("norm")?.extract::<String>()?.as_str() {
+        "rms" => Norm::Rms,
+        "peak" => Norm::Peak,
+        other => {
+            return Err(invalid(
+                py,
+                "norm",
+                "\"rms\" or \"peak\"",
+                format!("'{other}'"),
+            ))
+        }
+    };
+    let problem = Problem {
+        lower,
+        upper,
+        map: map_rows
+            .into_iter()
+            .zip(map_cols)
+            .zip(map_vals)
+            .map(|((r, c), v)| (r, c, v))
+            .collect(),
+        ndelta,
+        groups: get("groups")?.extract()?,
+        equal: get("equal")?.extract()?,
+        quantities,
+        norm,
+        mass_weight: get("mass_weight")?.extract()?,
+        mass_reference: get("mass_reference")?.extract()?,
+        mass_limit: get("mass_limit")?.extract()?,
+        least_mass: get("least_mass")?.extract()?,
+    };
+    let sol = detach_interruptible(py, || design::solve(&problem))?;
+    let d = PyDict::new(py);
+    d.set_item("x", to_array1(py, &sol.x))?;
+    d.set_item("delta", to_array1(py, &sol.delta))?;
+    d.set_item("values", to_array1(py, &sol.values))?;
+    d.set_item("status", sol.status)?;
+    d.set_item("objective", sol.objective)?;
+    d.set_item("gap_abs", sol.gap_abs)?;
+    d.set_item("gap_rel", sol.gap_rel)?;
+    d.set_item("iterations", sol.iterations)?;
+    d.set_item("solve_time", sol.solve_time)?;
+    Ok(d)
+}
