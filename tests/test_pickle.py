@@ -7,6 +7,7 @@ from __future__ import annotations
 import copy
 import multiprocessing
 import pickle
+import re
 from pathlib import Path
 
 import numpy as np
@@ -92,11 +93,15 @@ def assert_same_model(a: pmd.Model, b: pmd.Model, what: str):
         q, v, x = random_state(a, rng)
         for method in ("recursive", "denoc"):
             same(a.mass_matrix(q, method=method), b.mass_matrix(q, method=method), what)
-            same(
-                a.forward_dynamics(q, v, x, gravity=G, method=method),
-                b.forward_dynamics(q, v, x, gravity=G, method=method),
-                what,
-            )
+            try:
+                fa = a.forward_dynamics(q, v, x, gravity=G, method=method)
+            except pmd.SingularityError as e:
+                # A random state far off a mechanism's manifold can lock it (Bricard's five
+                # rows are independent there): the copy must refuse it alike.
+                with pytest.raises(pmd.SingularityError, match=re.escape(str(e))):
+                    b.forward_dynamics(q, v, x, gravity=G, method=method)
+                continue
+            same(fa, b.forward_dynamics(q, v, x, gravity=G, method=method), what)
             if a.nloops == 0:  # with loops, inverse dynamics needs a consistent state
                 same(
                     a.inverse_dynamics(q, v, x, gravity=G, method=method),

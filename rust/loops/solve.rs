@@ -11,8 +11,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::constraints::{self, Constraints, LoopKinematics};
-use super::factor::{self, back_substitute, forward_substitute, solve_semidefinite};
+use super::factor::{self, back_substitute, forward_substitute};
 use crate::error::{Error, Result};
+use crate::linalg::pivoted_qr::PivotedQr;
 use crate::model::Model;
 use crate::recursive::{self, Data};
 
@@ -22,15 +23,16 @@ pub struct LoopSolver {
     pub cons: Constraints,
     /// The mass matrix, then its Cholesky factor (lower triangle).
     mass: DMatrix<f64>,
-    /// `L⁻¹ Jᵀ` (nv × m).
-    y: DMatrix<f64>,
-    /// The constraint-space matrix (m × m), factored in place.
-    a: DMatrix<f64>,
-    rhs: DVector<f64>,
+    /// `Jᵀ` of the active rows, factored with column pivoting: the rank and the independent
+    /// rows, decided on the Jacobian itself.
+    qr_j: PivotedQr,
+    /// `L⁻¹ J_Bᵀ` of the independent rows, factored (no pivoting) for the multipliers.
+    qr_y: PivotedQr,
     pub lambda: DVector<f64>,
+    rhs: DVector<f64>,
     /// Constraint rows with a non-zero Jacobian row at the last solve.
     active: Vec<usize>,
-    perm: Vec<usize>,
+    /// m-long scratch (right-hand sides in pivoted order).
     work: Vec<f64>,
     /// nv-long scratch (a step in v, a column).
     step: Vec<f64>,
@@ -42,6 +44,19 @@ pub struct LoopSolver {
     pub max_drift: f64,
 }
 
+/// Relative size of a pivot of `Jᵀ`'s QR below which its row counts as dependent: exactly
+/// dependent rows leave ~1e-16 of the largest, a mechanism 1e-7 from a singular position
+/// leaves 1e-7, so anything in between separates them.
+pub const RANK_REL_TOL: f64 = 1e-11;
+
+/// Off the constraint manifold by a residual `‖Φ‖`, rows dependent on it are independent by
+/// `≤ 0.1 ‖Φ‖₂` (measured on Bricard's mechanism, whose sixth row is redundant only when
+/// closed): a pivot below `SPURIOUS · ‖Φ‖₂` is taken as dependent (a margin of 10).
+pub const SPURIOUS: f64 = 1.0;
+
+/// The residual-scaled tolerance never exceeds this fraction of the largest row of `J`.
+pub const SPURIOUS_CAP: f64 = 1e-3;
+
 impl LoopSolver {
     pub fn new(model: &Model) -> Self {
         let (m, n) = (model.nconstraints(), model.nv);
@@ -49,12 +64,11 @@ impl LoopSolver {
             kin: LoopKinematics::new(model),
             cons: Constraints::new(model),
             mass: DMatrix::zeros(n, n),
-            y: DMatrix::zeros(n, m),
-            a: DMatrix::zeros(m, m),
-            rhs: DVector::zeros(m),
+            qr_j: PivotedQr::new(n, m),
+            qr_y: PivotedQr::new(n, m.min(n)),
             lambda: DVector::zeros(m),
+            rhs: DVector::zeros(m),
             active: Vec::with_capacity(m),
-            perm: vec![0; m],
             work: vec![0.0; m.max(n)],
             step: vec![0.0; n],
             qdot: vec![0.0; model.nq],
@@ -63,14 +77,17 @@ impl LoopSolver {
         }
     }
 
-    /// Positions, Jacobian and (with `v`) velocities and `γ` at the state.
-    fn constraints_at(&mut self, model: &Model, q: &[f64], v: Option<&[f64]>) {
+    /// Positions, Jacobian and (with `v`) velocities and `γ` at the state; returns the
+    /// position residual's 2-norm.
+    fn constraints_at(&mut self, model: &Model, q: &[f64], v: Option<&[f64]>) -> f64 {
         self.kin.positions(model, q);
+        constraints::residual(model, &self.kin, self.cons.residual.as_mut_slice());
         constraints::jacobian(model, &self.kin, &mut self.cons.jacobian);
         if let Some(v) = v {
             self.kin.velocities(model, q, v);
             constraints::gamma(model, &self.kin, self.cons.gamma.as_mut_slice());
         }
+        self.cons.residual.norm()
     }
 
     fn residual_at(&mut self, model: &Model, q: &[f64]) -> f64 {
@@ -78,12 +95,47 @@ impl LoopSolver {
         constraints::residual(model, &self.kin, self.cons.residual.as_mut_slice());
         self.cons.residual.amax()
     }
+
+    /// The rows of `J` (as held in `cons.jacobian`) that are not identically zero, then the
+    /// pivoted QR of their transpose with the rank tolerance for a configuration off its
+    /// manifold by `residual`. Returns the rank.
+    fn factor_jacobian(&mut self, residual: f64) -> usize {
+        let (m, n) = self.cons.jacobian.shape();
+        let j = &self.cons.jacobian;
+        self.active.clear();
+        for r in 0..m {
+            if (0..n).any(|c| j[(r, c)] != 0.0) {
+                self.active.push(r);
+            }
+        }
+        let mut largest: f64 = 0.0;
+        for (k, &r) in self.active.iter().enumerate() {
+            let mut s = 0.0;
+            for c in 0..n {
+                self.qr_j.a[(c, k)] = j[(r, c)];
+                s += j[(r, c)] * j[(r, c)];
+            }
+            largest = largest.max(s);
+        }
+        // Far from the manifold (assembling from a guess) the residual says nothing about
+        // spurious directions: capped, so that genuine rows are never dropped for it.
+        let spurious = (SPURIOUS * residual).min(SPURIOUS_CAP * largest.sqrt());
+        self.qr_j
+            .factor(self.active.len(), true, RANK_REL_TOL, spurious)
+    }
 }
 
 /// Corrects the tree's accelerations `a` (from [`recursive::forward_dynamics`] at the same
 /// state and forces) so that they satisfy the loops; leaves the multipliers (a basic
-/// solution where constraints are redundant) in `solver.lambda`. Errors if the mass matrix is
-/// singular or the loops leave the mechanism no freedom of motion.
+/// solution where constraints are redundant: the dependent rows' are zero) in
+/// `solver.lambda`. Errors if the mass matrix is singular or the loops leave the mechanism
+/// no freedom of motion.
+///
+/// The rank is decided on `J` itself (pivoted QR of `Jᵀ`, tolerance scaled to the position
+/// residual), then `J_B q̈ = −γ_B` on the independent rows `B` is solved through the QR of
+/// `Y = L⁻¹ J_Bᵀ` (`M = L Lᵀ`): `q̈ = a₀ + L⁻ᵀ Q R⁻ᵀ (−γ_B − J_B a₀)`. Orthogonal steps and
+/// triangular solves only, so a mechanism near a singular position (a small but nonzero
+/// singular value of `J`) loses only the digits its own conditioning costs.
 pub fn constrained_forward_dynamics(
     model: &Model,
     data: &mut Data,
@@ -92,66 +144,56 @@ pub fn constrained_forward_dynamics(
     v: &[f64],
     a: &mut [f64],
 ) -> Result<()> {
-    let (n, m) = (model.nv, model.nconstraints());
-    solver.constraints_at(model, q, Some(v));
+    let n = model.nv;
+    let residual = solver.constraints_at(model, q, Some(v));
     recursive::mass_matrix(model, data, q, &mut solver.mass);
     if let Err(k) = factor::cholesky(&mut solver.mass) {
         return Err(Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k}): a massless chain, or a body too slender"
         )));
     }
-    // Rows that vanish identically (a planar loop's out-of-plane rows) are left out: they
-    // carry no force and would only be dropped by the pivoting.
-    solver.active.clear();
-    for r in 0..m {
-        if (0..n).any(|c| solver.cons.jacobian[(r, c)] != 0.0) {
-            solver.active.push(r);
-        }
-    }
-    let LoopSolver {
-        cons,
-        mass,
-        y,
-        a: s,
-        rhs,
-        lambda,
-        perm,
-        work,
-        step,
-        active,
-        ..
-    } = solver;
-    let na = active.len();
-    for (k, &r) in active.iter().enumerate() {
-        for c in 0..n {
-            step[c] = cons.jacobian[(r, c)];
-        }
-        forward_substitute(mass, step);
-        y.column_mut(k).copy_from_slice(step);
-    }
-    constraint_system(y, active, cons, a, s, rhs);
-    let rank = solve_semidefinite(s, na, rhs.as_slice(), work_lambda(lambda, na), perm, work);
+    let rank = solver.factor_jacobian(residual);
     solver.rank = rank;
     if n > 0 && rank >= n {
         return Err(locked(model, rank));
     }
     let LoopSolver {
+        cons,
         mass,
-        y,
+        qr_j,
+        qr_y,
         lambda,
+        work,
         step,
         active,
-        work,
         ..
     } = solver;
-    for (c, s) in step.iter_mut().enumerate() {
-        *s = (0..na).map(|k| y[(c, k)] * lambda[k]).sum();
+    for k in 0..rank {
+        let r = active[qr_j.perm[k]];
+        for c in 0..n {
+            step[c] = cons.jacobian[(r, c)];
+        }
+        let ja: f64 = step.iter().zip(a.iter()).map(|(j, x)| j * x).sum();
+        work[k] = -cons.gamma[r] - ja;
+        forward_substitute(mass, step);
+        qr_y.a.column_mut(k).copy_from_slice(step);
     }
-    // λ by constraint row: the active rows' values, zero for the vanishing ones.
-    work[..na].copy_from_slice(&lambda.as_slice()[..na]);
+    qr_y.factor(rank, false, 0.0, 0.0);
+    // Independent rows of J and a nonsingular L keep every column of Y independent; a
+    // NaN state is the only way to lose one.
+    if qr_y.rank < rank {
+        return Err(Error::Singular(format!(
+            "the constrained dynamics could not be solved at this state (a non-finite configuration?): {} of {rank} independent constraint rows remain",
+            qr_y.rank
+        )));
+    }
+    // Y_Bᵀ z = b for z in range(Y_B): z = Q R⁻ᵀ b; λ_B = R⁻¹ R⁻ᵀ b (Y_B λ_B = z).
+    qr_y.solve_rt(work);
+    qr_y.apply_q(work, step);
+    qr_y.solve_r(work);
     lambda.fill(0.0);
-    for (k, &r) in active.iter().enumerate() {
-        lambda[r] = work[k];
+    for k in 0..rank {
+        lambda[active[qr_j.perm[k]]] = work[k];
     }
     back_substitute(mass, step);
     for (ai, si) in a.iter_mut().zip(step.iter()) {
@@ -160,45 +202,17 @@ pub fn constrained_forward_dynamics(
     Ok(())
 }
 
-/// The first `n` entries of the multipliers, as the solve's output slice.
-fn work_lambda(lambda: &mut DVector<f64>, n: usize) -> &mut [f64] {
-    &mut lambda.as_mut_slice()[..n]
-}
-
 fn locked(model: &Model, rank: usize) -> Error {
+    let names: Vec<String> = model
+        .loops
+        .iter()
+        .map(|l| format!("'{}'", l.name))
+        .collect();
     Error::Singular(format!(
-        "the {} loop(s) leave the mechanism no freedom of motion: the constraint Jacobian has rank {rank} = nv = {} (a locked mechanism, a structure); remove a cut joint or a constraint",
-        model.nloops(),
+        "the cut joint(s) {} leave the mechanism no freedom of motion: the constraint Jacobian has rank {rank} = nv = {} (a locked mechanism, a structure); remove a cut joint or a constraint",
+        names.join(", "),
         model.nv
     ))
-}
-
-/// The multipliers' system on the active rows: `YᵀY` (`= J M⁻¹ Jᵀ`) into `s` and
-/// `−γ − J a` into `rhs`.
-fn constraint_system(
-    y: &DMatrix<f64>,
-    active: &[usize],
-    cons: &Constraints,
-    a: &[f64],
-    s: &mut DMatrix<f64>,
-    rhs: &mut DVector<f64>,
-) {
-    let na = active.len();
-    for i in 0..na {
-        for j in 0..=i {
-            let d = y.column(i).dot(&y.column(j));
-            s[(i, j)] = d;
-            s[(j, i)] = d;
-        }
-    }
-    for (k, &r) in active.iter().enumerate() {
-        let ja: f64 = a
-            .iter()
-            .enumerate()
-            .map(|(c, x)| cons.jacobian[(r, c)] * x)
-            .sum();
-        rhs[k] = -cons.gamma[r] - ja;
-    }
 }
 
 /// The cut joints' wrenches at a state: per loop `[force; moment]` on body b in frame a's
@@ -213,37 +227,47 @@ pub fn constraint_forces(
     v: &[f64],
     a: &mut [f64],
 ) -> Result<Vec<[f64; 6]>> {
-    let a_tree = DVector::from_column_slice(a);
+    let a_tree = a.to_vec();
     constrained_forward_dynamics(model, data, solver, q, v, a)?;
-    // `J M⁻¹ Jᵀ λ = −γ − J a₀` on the active rows again (`YᵀY` in the constraint-space
-    // buffer), now for the minimum-norm λ (same q̈): a complete orthogonal decomposition.
+    // `M (q̈ − a₀) = Jᵀ λ`: the minimum-norm λ of that (consistent) system, by a complete
+    // orthogonal decomposition of `Jᵀ` on the active rows (no squared form).
+    let n = model.nv;
     let LoopSolver {
         kin,
         cons,
-        y,
-        a: s,
-        rhs,
+        mass,
         lambda,
-        perm,
-        work,
         active,
         ..
     } = solver;
     let na = active.len();
-    constraint_system(y, active, cons, a_tree.as_slice(), s, rhs);
+    let mut jt = DMatrix::zeros(n, na);
+    for (k, &r) in active.iter().enumerate() {
+        for c in 0..n {
+            jt[(c, k)] = cons.jacobian[(r, c)];
+        }
+    }
+    // M Δa = L (Lᵀ Δa).
+    let mut b: Vec<f64> = (0..n).map(|c| a[c] - a_tree[c]).collect();
+    for i in 0..n {
+        b[i] = (i..n).map(|k| mass[(k, i)] * b[k]).sum();
+    }
+    for i in (0..n).rev() {
+        b[i] = (0..=i).map(|k| mass[(i, k)] * b[k]).sum();
+    }
+    let mut x = vec![0.0; na];
+    let (mut pivots, mut work) = (vec![0; na], vec![0.0; na.max(n)]);
     factor::min_norm_solve(
-        s.view_mut((0, 0), (na, na)),
-        &mut rhs.as_mut_slice()[..na],
-        work_lambda(lambda, na),
-        perm,
-        work,
-        factor::RANK_TOL,
+        jt.view_mut((0, 0), (n, na)),
+        &mut b,
+        &mut x,
+        &mut pivots,
+        &mut work,
+        RANK_REL_TOL,
     );
-    // λ by constraint row, zero for the vanishing ones.
-    work[..na].copy_from_slice(&lambda.as_slice()[..na]);
     lambda.fill(0.0);
     for (k, &r) in active.iter().enumerate() {
-        lambda[r] = work[k];
+        lambda[r] = x[k];
     }
     Ok(constraints::wrenches(model, kin, lambda.as_slice()))
 }
@@ -331,34 +355,36 @@ fn retract(model: &Model, q: &mut [f64], delta: &[f64], qdot: &mut [f64]) {
     model.normalize(q);
 }
 
-/// `δ = −J_fᵀ (J_f J_fᵀ)⁺ c` into `solver.step` for `c` in `solver.rhs`: the minimum-norm
-/// step with `J_f δ = −c` (`J_f`: the Jacobian with the `fixed` columns zeroed, which the
-/// caller has done). Returns the rank.
-fn min_norm_step(solver: &mut LoopSolver) -> usize {
+/// `δ = −J_f⁺ c` into `solver.step` for `c` in `solver.rhs`: the minimum-norm step with
+/// `J_f δ = −c` on the independent rows (`J_f`: the Jacobian with the `fixed` columns zeroed,
+/// which the caller has done), `δ = −Q R⁻ᵀ c_B` from the pivoted QR of `J_fᵀ`. `residual`:
+/// the configuration's position residual, which scales the rank tolerance. Returns the rank.
+fn min_norm_step(solver: &mut LoopSolver, residual: f64) -> usize {
+    let rank = solver.factor_jacobian(residual);
     let LoopSolver {
-        cons,
-        a,
+        qr_j,
         rhs,
-        lambda,
-        perm,
         work,
         step,
+        active,
         ..
     } = solver;
-    let j = &cons.jacobian;
-    for r in 0..j.nrows() {
-        for c in 0..=r {
-            let s = j.row(r).dot(&j.row(c));
-            a[(r, c)] = s;
-            a[(c, r)] = s;
+    for k in 0..rank {
+        work[k] = -rhs[active[qr_j.perm[k]]];
+    }
+    qr_j.solve_rt(work);
+    qr_j.apply_q(work, step);
+    rank
+}
+
+/// The step is in the range of `J_fᵀ`, zero in the held coordinates up to the rounding of
+/// the reflectors: made exactly zero there.
+fn hold_fixed(step: &mut [f64], fixed: &[bool]) {
+    for (s, &f) in step.iter_mut().zip(fixed) {
+        if f {
+            *s = 0.0;
         }
     }
-    let m = j.nrows();
-    let rank = solve_semidefinite(a, m, rhs.as_slice(), lambda.as_mut_slice(), perm, work);
-    for (col, s) in step.iter_mut().enumerate() {
-        *s = -(0..j.nrows()).map(|r| j[(r, col)] * lambda[r]).sum::<f64>();
-    }
-    rank
 }
 
 fn zero_fixed(jac: &mut DMatrix<f64>, fixed: &[bool]) {
@@ -393,10 +419,13 @@ pub fn assemble(
             polish -= 1;
         }
         iterations += 1;
-        solver.constraints_at(model, &q, None);
+        let norm = solver.constraints_at(model, &q, None);
         zero_fixed(&mut solver.cons.jacobian, fixed);
         solver.rhs.copy_from(&solver.cons.residual);
-        min_norm_step(&mut solver);
+        // Directions weaker than the residual are left for later iterations (Bricard's
+        // redundant row is spurious off the manifold): a truncated Gauss-Newton step.
+        min_norm_step(&mut solver, norm);
+        hold_fixed(&mut solver.step, fixed);
         let mut scale = 1.0;
         let mut improved = false;
         for _ in 0..30 {
@@ -447,7 +476,7 @@ pub fn project_velocity_like(
     fixed: &[bool],
 ) -> Result<()> {
     let mut solver = LoopSolver::new(model);
-    solver.constraints_at(model, q, v_for_gamma);
+    let residual = solver.constraints_at(model, q, v_for_gamma);
     let jx = &solver.cons.jacobian * DVector::from_column_slice(x);
     let c = match v_for_gamma {
         Some(_) => &jx + &solver.cons.gamma,
@@ -456,7 +485,8 @@ pub fn project_velocity_like(
     let full = solver.cons.jacobian.clone();
     zero_fixed(&mut solver.cons.jacobian, fixed);
     solver.rhs.copy_from(&c);
-    min_norm_step(&mut solver);
+    min_norm_step(&mut solver, residual);
+    hold_fixed(&mut solver.step, fixed);
     for (xi, s) in x.iter_mut().zip(solver.step.iter()) {
         *xi += s;
     }
@@ -480,9 +510,9 @@ pub fn project_velocity_like(
 /// Refuses a locked mechanism at `q` (the loops leave no freedom of motion): the check a run
 /// makes before it starts.
 pub fn check_mobility(model: &Model, solver: &mut LoopSolver, q: &[f64]) -> Result<()> {
-    solver.constraints_at(model, q, None);
+    let residual = solver.constraints_at(model, q, None);
     solver.rhs.fill(0.0);
-    let rank = min_norm_step(solver);
+    let rank = min_norm_step(solver, residual);
     if model.nv > 0 && rank >= model.nv {
         return Err(locked(model, rank));
     }
@@ -505,9 +535,9 @@ pub fn project_state(
         if res == 0.0 {
             break;
         }
-        solver.constraints_at(model, q, None);
+        let norm = solver.constraints_at(model, q, None);
         solver.rhs.copy_from(&solver.cons.residual);
-        min_norm_step(solver);
+        min_norm_step(solver, norm);
         let mut qdot = std::mem::take(&mut solver.qdot);
         retract(model, q, &solver.step, &mut qdot);
         solver.qdot = qdot;
@@ -523,11 +553,11 @@ pub fn project_state(
             "the loops drifted open beyond repair (residual {res:.3e} after projection): tighten rtol/atol"
         ));
     }
-    solver.constraints_at(model, q, None);
+    let norm = solver.constraints_at(model, q, None);
     for r in 0..solver.rhs.len() {
         solver.rhs[r] = (0..nv).map(|c| solver.cons.jacobian[(r, c)] * v[c]).sum();
     }
-    min_norm_step(solver);
+    min_norm_step(solver, norm);
     for (x, s) in v.iter_mut().zip(&solver.step[..nv]) {
         *x += s;
     }

@@ -1,35 +1,10 @@
 use nalgebra::{DMatrix, DVector};
 
-use super::factor::{cholesky, min_norm_solve, solve_semidefinite, RANK_TOL};
+use super::factor::{cholesky, min_norm_solve, RANK_TOL};
 use crate::body::RigidBody;
 use crate::joint::Joint;
 use crate::model::Model;
 use crate::spatial::{Mat3, Placement, Vec3};
-
-#[test]
-fn semidefinite_solve_finds_the_rank_and_solves_consistent_systems() {
-    // A = B Bᵀ with B 5×3 of rank 3: rank 3, and b in its range is solved exactly.
-    let b = DMatrix::from_fn(5, 3, |i, j| {
-        ((i * 7 + j * 3) % 5) as f64 - 1.5 + (i == j) as u8 as f64
-    });
-    let a0 = &b * b.transpose();
-    let x_true = DVector::from_fn(3, |i, _| i as f64 - 0.7);
-    let rhs = &b * &x_true;
-    let mut a = a0.clone();
-    let mut x = DVector::zeros(5);
-    let (mut perm, mut work) = (vec![0; 5], vec![0.0; 5]);
-    let rank = solve_semidefinite(
-        &mut a,
-        5,
-        rhs.as_slice(),
-        x.as_mut_slice(),
-        &mut perm,
-        &mut work,
-    );
-    assert_eq!(rank, 3);
-    let miss = (&a0 * &x - &rhs).amax();
-    assert!(miss < 1e-12 * rhs.amax(), "{miss}");
-}
 
 #[test]
 fn cholesky_reproduces_the_matrix_and_refuses_indefinite_ones() {

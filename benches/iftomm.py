@@ -1,0 +1,142 @@
+"""The IFToMM multibody benchmark problems A01-A05 (docs/mechanisms.md): per problem and
+method, the benchmark's error measure (largest error over the output steps, relative where the
+reference is >= 1e-3, absolute below), energy error, constraint residual, steps and wall time.
+References as in tests/test_iftomm.py (closed forms, exact reductions, the published Andrews
+values); A05 has no closed form: its reference is our own DOP853 run at rtol 1e-12, so its
+error column measures convergence only.
+
+    python benches/iftomm.py [--quick]
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pointmass_dyn as pmd
+from scipy.integrate import solve_ivp
+from scipy.special import ellipj
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+import andrews as andrews_ref
+
+G = 9.81
+#: Times the benchmark pages report for another code (OpenSim 3.2, i5-4570; the OpenSim
+#: implementation's pages, RehabEngGroup/MBSbenchmarksInOpenSim).
+OPENSIM = {"A04": "0.258 s"}
+
+
+def measure(x, ref):
+    x, ref = np.asarray(x), np.asarray(ref)
+    return float(np.max(np.abs(x - ref) / np.maximum(np.abs(ref), 1e-3)))
+
+
+def a01():
+    sc = pmd.load_scene("iftomm_a01_pendulum")
+    t = np.linspace(0, 2000, 4001)
+    _, cn, dn, _ = ellipj(np.sqrt(G) * t, 0.5)
+    a = 2 * np.arcsin(np.sqrt(0.5) * cn / dn)
+    ref = np.stack([np.sin(a), -np.cos(a)], 1)
+
+    def out(q):
+        return np.stack([np.cos(q[:, 0]), np.sin(q[:, 0])], 1)
+
+    return sc, t, out, ref
+
+
+def a02():
+    sc = pmd.load_scene("iftomm_a02_nfourbar")
+    n = 40
+    c = G * ((n + 1) / 2 + n) / ((n + 1) / 3 + n)
+    t = np.linspace(0, 20, 401)
+    r = solve_ivp(lambda _, y: [y[1], -c * np.cos(y[0])], (0, 20), [np.pi / 2, -1.0],
+                  t_eval=t, rtol=1e-13, atol=1e-13, method="DOP853")
+    ref = np.stack([np.cos(r.y[0]), np.sin(r.y[0])], 1)
+
+    def out(q):
+        return np.stack([np.cos(q[:, 0]), np.sin(q[:, 0])], 1)
+
+    return sc, t, out, ref
+
+
+def a03():
+    sc = pmd.load_scene("andrews")
+    t = np.array([0.0, andrews_ref.T_END])
+    inv = np.argsort(np.array([0, 1, 2, 4, 3, 6, 5]))
+    ref = np.vstack([andrews_ref.Q0, andrews_ref.Q_END])
+
+    def out(q):
+        return q[:, inv]
+
+    return sc, t, out, ref
+
+
+def a04():
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+    from test_iftomm import bricard_reduction
+
+    sc = pmd.load_scene("iftomm_a04_bricard")
+    m = sc.model
+    t = np.linspace(0, 10, 201)
+    qref = bricard_reduction(m, sc.q0, t)
+
+    def out(q):
+        return np.array([m.placements(x)[1][2] for x in q])
+
+    return sc, t, out, out(qref)
+
+
+def a05():
+    sc = pmd.load_scene("iftomm_a05_governor")
+    t = np.linspace(0, 10, 201)
+    r = pmd.simulate(sc, (0, 10), t_eval=t, method="DOP853", rtol=1e-12, atol=1e-14)
+    ref = np.asarray(r.q)[:, 1:2]
+
+    def out(q):
+        return q[:, 1:2]
+
+    return sc, t, out, ref
+
+
+PROBLEMS = {"A01": a01, "A02": a02, "A03": a03, "A04": a04, "A05": a05}
+RUNS = [("RK45", 1e-8), ("DOP853", 1e-8), ("DOP853", 1e-10), ("Radau", 1e-8), ("auto", 1e-8)]
+
+
+def run(name, method, rtol, setup, budget=60.0):
+    sc, t, out, ref = setup
+    t0 = time.perf_counter()
+    res = pmd.simulate(sc, (t[0], t[-1]), t_eval=t, method=method, rtol=rtol, atol=rtol * 1e-2,
+                       energy=True, max_steps=2_000_000)
+    wall = time.perf_counter() - t0
+    q = np.asarray(res.q)
+    err = measure(out(q), ref) if res.success and len(q) == len(t) else float("nan")
+    e = np.asarray(res.energy)
+    de = float(np.abs(e - e[0]).max() / max(np.abs(e).max(), 1.0))
+    resid = float(np.max(res.constraint_residual)) if res.constraint_residual is not None else 0.0
+    return err, de, resid, res.n_accepted, wall, res.success
+
+
+def main():
+    quick = "--quick" in sys.argv
+    print("| problem | method | rtol | error (spec measure) | energy error (rel.) | "
+          "constraint residual | steps | wall time | other codes |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for name, make in PROBLEMS.items():
+        setup = make()
+        for method, rtol in RUNS:
+            if quick and method != "DOP853":
+                continue
+            if name == "A02" and (method in ("RK45", "Radau", "auto") or rtol < 1e-8):
+                # Each over a minute on this machine (docs/mechanisms.md).
+                continue
+            err, de, resid, steps, wall, ok = run(name, method, rtol, setup)
+            note = OPENSIM.get(name, "")
+            status = "" if ok else " (failed)"
+            print(f"| {name} | {method} | {rtol:.0e} | {err:.1e}{status} | {de:.1e} | "
+                  f"{resid:.1e} | {steps} | {wall * 1e3:.0f} ms | {note} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,292 @@
+"""The IFToMM multibody benchmark problems A01-A05 (Library of Computational Benchmark
+Problems, Universidade da Coruña; docs/mechanisms.md) as bundled scenes, against references
+computed here independently of the loop solver: closed forms (A01: Jacobi's elliptic
+functions; A02: the exact one-degree-of-freedom reduction), the one-degree-of-freedom reduction
+of Bricard's mechanism (A04) from its closure alone, and invariants (A05). A03 is Andrews'
+mechanism: tests/test_andrews.py. Also the two defects of issue 27: accelerations near (not
+at) a singular position, and a redundant constraint judged off the constraint manifold."""
+
+from __future__ import annotations
+
+import numpy as np
+import pointmass_dyn as pmd
+import pytest
+from scipy.integrate import solve_ivp
+from scipy.special import ellipj
+
+G = 9.81
+Z = [0.0, 0.0, 1.0]
+
+
+def benchmark_error(x, ref):
+    """The benchmark's measure: the largest error over the output steps, relative to the
+    reference where it is at least 1e-3, absolute below."""
+    x, ref = np.asarray(x), np.asarray(ref)
+    return float(np.max(np.abs(x - ref) / np.maximum(np.abs(ref), 1e-3)))
+
+
+# --- A02 and the singular position --------------------------------------------------------
+
+
+def rod(length=1.0, mass=1.0):
+    i = mass * length**2 / 12
+    return pmd.RigidBody(mass, [length / 2, 0, 0], np.diag([1e-8, i, i]))
+
+
+def n_fourbar(n):
+    """The benchmark's N-four-bar built in Python as the scene builds it: vertical bars v_k
+    pinned at x = k, horizontal bar h_k on v_k's top, cut joint h_k's end -- v_(k+1)'s top."""
+    m = pmd.Model()
+    for k in range(n + 1):
+        m.add_body(rod(), pmd.Revolute(Z), translation=[k, 0, 0], name=f"v{k}")
+        if k < n:
+            m.add_body(rod(), pmd.Revolute(Z), parent=2 * k, translation=[1, 0, 0], name=f"h{k}")
+    for k in range(n):
+        m.add_loop(
+            f"h{k}", f"v{k + 1}", pmd.Revolute(Z), translation_a=[1, 0, 0], translation_b=[1, 0, 0]
+        )
+    return m
+
+
+def parallel_state(n, phi, rate=0.0):
+    """Every vertical bar at angle phi (from x), every horizontal one level."""
+    q = np.empty(2 * n + 1)
+    q[0::2], q[1::2] = phi, -phi
+    v = np.empty(2 * n + 1)
+    v[0::2], v[1::2] = rate, -rate
+    return q, v
+
+
+def n_fourbar_rate(n):
+    """phi'' = -c cos(phi) for the parallel motion: kinetic energy (N+1)/3 + N (translating
+    couplers) times phi'^2/2, potential g ((N+1)/2 + N) sin(phi)."""
+    return G * ((n + 1) / 2 + n) / ((n + 1) / 3 + n)
+
+
+@pytest.mark.parametrize("d", [1e-3, 1e-5, 1e-7, 1e-9])
+def test_n_fourbar_accelerations_near_the_singular_position_are_exact(d):
+    # Issue 27: at 1e-7 from the horizontal the old rank test (on J M^-1 J^T, squared
+    # conditioning) dropped a row and gave [12.04, 10.70, ...] instead of 11.445.
+    m = n_fourbar(2)
+    q, v = parallel_state(2, d)
+    a = m.forward_dynamics(q, v, np.zeros(m.nv), gravity=[0, -G, 0])
+    want = -n_fourbar_rate(2) * np.cos(d)
+    assert abs(want) == pytest.approx(3.5 * G / 3, rel=1e-6)
+    np.testing.assert_allclose(a[0::2], want, rtol=1e-9)
+    np.testing.assert_allclose(a[1::2], -want, rtol=1e-9)
+
+
+def parallelogram():
+    m = pmd.Model()
+    m.add_body(rod(0.3, 0.5), pmd.Revolute(Z), name="crank")
+    m.add_body(rod(0.8, 1.5), pmd.Revolute(Z), parent=0, translation=[0.3, 0, 0], name="coupler")
+    m.add_body(rod(0.3, 0.7), pmd.Revolute(Z), translation=[0.8, 0, 0], name="rocker")
+    m.add_loop("coupler", "rocker", pmd.Revolute(Z), translation_a=[0.8, 0, 0],
+               translation_b=[0.3, 0, 0])
+    return m
+
+
+@pytest.mark.parametrize("theta", [1e-3, 1e-5, 1e-6, 1e-8])
+def test_parallelogram_at_its_change_point_is_exact(theta):
+    # Crank and rocker turn together, the coupler translates: theta'' = -g k cos(theta) with
+    # k = (m_c l/2 + m_r l/2 + m_cp l) / (m_c l^2/3 + m_r l^2/3 + m_cp l^2). Old: 2.1e-7 off
+    # at theta = 1e-6.
+    m = parallelogram()
+    lc, mc, mr, mcp = 0.3, 0.5, 0.7, 1.5
+    k = (mc * lc / 2 + mr * lc / 2 + mcp * lc) / (mc * lc**2 / 3 + mr * lc**2 / 3 + mcp * lc**2)
+    # The point-mass inertia about the long axis adds nothing about z.
+    q = np.array([theta, -theta, theta])
+    a = m.forward_dynamics(q, np.zeros(3), np.zeros(3), gravity=[0, -G, 0])
+    want = -G * k * np.cos(theta)
+    np.testing.assert_allclose(a, [want, -want, want], rtol=1e-10)
+
+
+def test_n_fourbar_scene_has_the_benchmark_dimensions():
+    sc = pmd.load_scene("iftomm_a02_nfourbar")
+    m = sc.model
+    assert (m.nbodies, m.nloops, m.nconstraints) == (81, 40, 200)
+    # 80 independent rows, one degree of freedom away from the singular position.
+    assert np.linalg.matrix_rank(m.constraint_jacobian(sc.q0), tol=1e-9) == 80
+    # At the horizontal (all bars collinear) the mobility jumps to N + 1 = 41.
+    q, _ = parallel_state(40, 0.0)
+    assert np.linalg.matrix_rank(m.constraint_jacobian(q), tol=1e-9) == 40
+    # B0 (the top of v0) starts at (0, 1) moving at +1 m/s in x.
+    assert sc.q0[0] == pytest.approx(np.pi / 2) and sc.v0[0] == -1.0
+
+
+@pytest.mark.parametrize("method,rtol", [("DOP853", 1e-8), ("RK45", 1e-8)])
+def test_n_fourbar_passes_its_singular_positions(method, rtol):
+    # N = 4 (the scene's N = 40 is the benchmark: benches/iftomm.py): 5 s, 5 passes through
+    # the horizontal, against the exact reduction at the benchmark's high precision (1e-3).
+    n = 4
+    m = n_fourbar(n)
+    q0, v0 = parallel_state(n, np.pi / 2, -1.0)
+    t = np.linspace(0, 5, 101)
+    res = pmd.simulate(
+        pmd.Scene(m, q0, v0, effects=[pmd.Effect.gravity([0, -G, 0])]),
+        (0, 5), t_eval=t, method=method, rtol=rtol, atol=rtol * 1e-2, energy=True,
+    )
+    assert res.success, res.message
+    c = n_fourbar_rate(n)
+    ref = solve_ivp(lambda _, y: [y[1], -c * np.cos(y[0])], (0, 5), [np.pi / 2, -1.0],
+                    t_eval=t, rtol=1e-13, atol=1e-13, method="DOP853")
+    crossings = np.sum(np.diff(np.sign(np.cos(ref.y[0]))) != 0)
+    assert crossings >= 4
+    phi = np.asarray(res.q)[:, 0]
+    b0 = np.stack([np.cos(phi), np.sin(phi)], 1)
+    b0_ref = np.stack([np.cos(ref.y[0]), np.sin(ref.y[0])], 1)
+    assert benchmark_error(b0, b0_ref) < 1e-3
+    # The bars stay parallel and the energy constant.
+    assert np.ptp(np.asarray(res.q)[:, 0::2], axis=1).max() < 1e-6
+    e = np.asarray(res.energy)
+    assert np.abs(e - e[0]).max() < 1e-5 * np.abs(e).max()
+
+
+# --- A04: Bricard's mechanism, redundant constraints ---------------------------------------
+
+
+@pytest.fixture(scope="module")
+def bricard():
+    return pmd.load_scene("iftomm_a04_bricard")
+
+
+def test_bricard_is_redundant_not_locked(bricard):
+    m = bricard.model
+    assert (m.nv, m.nconstraints) == (5, 5)
+    # Five rows of rank 4 on the closed configuration: one redundant, mobility 1.
+    s = np.linalg.svd(m.constraint_jacobian(bricard.q0), compute_uv=False)
+    assert s[3] > 0.5 and s[4] < 1e-14
+
+
+@pytest.mark.parametrize("eps", [1e-6, 1e-5, 1e-4])
+def test_bricard_off_its_manifold_is_not_declared_locked(bricard, eps):
+    # Issue 27: 1e-5 off the closed configuration (where the sixth row is independent by
+    # ~1e-6) the old solver raised "rank 5 = nv = 5, a locked mechanism".
+    m = bricard.model
+    rng = np.random.default_rng(int(-np.log10(eps)))
+    j = m.constraint_jacobian(bricard.q0)
+    tangent = np.linalg.svd(j)[2][-1]
+    on = m.assemble(bricard.q0 + 0.3 * tangent, fixed=["b1"])
+    d = rng.normal(size=5)
+    d -= tangent * (tangent @ d)
+    q = on + eps * d / np.linalg.norm(d)
+    a = m.forward_dynamics(q, np.zeros(5), np.zeros(5), gravity=[0, -G, 0])
+    # The accelerations at the nearest closed configuration, where the decision is clear.
+    closed = m.assemble(q, fixed=["b1"])
+    a_closed = m.forward_dynamics(closed, np.zeros(5), np.zeros(5), gravity=[0, -G, 0])
+    assert np.abs(a - a_closed).max() < 1e3 * eps * np.abs(a_closed).max()
+
+
+def bricard_reduction(m, q0, t_eval):
+    """The one-degree-of-freedom motion from the closure alone: with theta = q[0], the
+    closed configuration q(theta) (assemble, q[0] held) and its tangent dq/dtheta (the null
+    vector of J, scaled to 1 in q[0]), the Lagrangian L = M(theta) theta'^2 / 2 - V(theta),
+    M = t^T M_tree t, integrated by SciPy; M' and V' by central differences of q(theta)."""
+    g = [0, -G, 0]
+    guess = {"q": np.array(q0, float)}
+
+    def closed(theta):
+        x = guess["q"].copy()
+        x[0] = theta
+        x = m.assemble(x, fixed=["b1"])
+        guess["q"] = x
+        return x
+
+    def tangent(q):
+        t = np.linalg.svd(m.constraint_jacobian(q))[2][-1]
+        return t / t[0]
+
+    def meff(theta):
+        q = closed(theta)
+        t = tangent(q)
+        return t @ m.mass_matrix(q) @ t
+
+    def pot(theta):
+        return m.potential_energy(closed(theta), g)
+
+    h = 1e-5
+
+    def rhs(_, y):
+        th, w = y
+        dm = (meff(th + h) - meff(th - h)) / (2 * h)
+        dv = (pot(th + h) - pot(th - h)) / (2 * h)
+        return [w, -(dv + 0.5 * dm * w * w) / meff(th)]
+
+    sol = solve_ivp(rhs, (t_eval[0], t_eval[-1]), [q0[0], 0.0], t_eval=t_eval, rtol=1e-10,
+                    atol=1e-12, method="DOP853")
+    assert sol.success
+    # Continuation along the output (each closure from the previous one: the same branch).
+    guess["q"] = np.array(q0, float)
+    return np.array([closed(th) for th in sol.y[0]])
+
+
+@pytest.mark.parametrize("method,rtol", [("RK45", 1e-5), ("DOP853", 1e-8), ("Radau", 1e-8)])
+def test_bricard_follows_its_one_dof_reduction(bricard, method, rtol):
+    m = bricard.model
+    t = np.linspace(0, 2.0, 41)
+    res = pmd.simulate(bricard, (0, 2.0), t_eval=t, method=method, rtol=rtol, atol=rtol * 1e-2,
+                       energy=True)
+    assert res.success, res.message
+    ref = bricard_reduction(m, bricard.q0, t)
+    # The benchmark's output: point B, the joint between bars 2 and 3 (origin of b3).
+    p = np.array([m.placements(q)[1][2] for q in np.asarray(res.q)])
+    p_ref = np.array([m.placements(q)[1][2] for q in ref])
+    assert benchmark_error(p, p_ref) < (1e-3 if rtol <= 1e-8 else 1e-1)
+    e = np.asarray(res.energy)
+    assert np.abs(e - e[0]).max() < 100 * rtol * (1 + np.abs(e).max())
+    assert np.max(res.constraint_residual) < 1e-9
+
+
+def test_locked_mechanism_names_its_cut_joints_and_rank():
+    # A triangle of bars: two pinned to the ground, pinned together by the cut joint.
+    m = pmd.Model()
+    m.add_body(rod(1.0), pmd.Revolute(Z), name="left")
+    m.add_body(rod(1.0), pmd.Revolute(Z), translation=[1.0, 0, 0], name="right")
+    m.add_loop("left", "right", pmd.Revolute(Z), translation_a=[1, 0, 0],
+               translation_b=[1, 0, 0], name="apex")
+    q = m.assemble(np.array([np.pi / 3, 2 * np.pi / 3]))
+    with pytest.raises(pmd.SingularityError, match=r"'apex'.*rank 2 = nv = 2"):
+        m.forward_dynamics(q, np.zeros(2), np.zeros(2))
+
+
+# --- A01 and A05 ---------------------------------------------------------------------------
+
+
+def test_pendulum_2000_s_matches_the_elliptic_closed_form():
+    sc = pmd.load_scene("iftomm_a01_pendulum")
+    t = np.linspace(0, 2000, 4001)
+    res = pmd.simulate(sc, (0, 2000), t_eval=t, method="DOP853", rtol=1e-12, atol=1e-14)
+    assert res.success
+    # Released from the horizontal: the angle from the bottom a obeys
+    # sin(a/2) = k cd(w t, k), k = sin(pi/4), w = sqrt(g / l).
+    k2 = 0.5
+    sn, cn, dn, _ = ellipj(np.sqrt(G) * t, k2)
+    a = 2 * np.arcsin(np.sqrt(k2) * cn / dn)
+    ref = np.stack([np.sin(a), -np.cos(a)], 1)
+    phi = np.asarray(res.q)[:, 0]
+    assert benchmark_error(np.stack([np.cos(phi), np.sin(phi)], 1), ref) < 1e-3
+
+
+def test_governor_keeps_its_angular_momentum_and_settles():
+    sc = pmd.load_scene("iftomm_a05_governor")
+    m = sc.model
+    res = pmd.simulate(sc, (0, 10), t_eval=np.linspace(0, 10, 201), method="Radau", rtol=1e-8,
+                       atol=1e-10)
+    assert res.success, res.message
+    q, v = np.asarray(res.q), np.asarray(res.v)
+    # The shaft angle is cyclic (gravity along the shaft, springs internal): its momentum
+    # (M v)[0] is constant.
+    p = np.array([(m.mass_matrix(qi) @ vi)[0] for qi, vi in zip(q, v)])
+    assert np.abs(p - p[0]).max() < 1e-6 * abs(p[0])
+    # Symmetric rods stay symmetric.
+    np.testing.assert_allclose(q[:, 2], -q[:, 3], atol=1e-8)
+    # The stiff spring-dampers act as the coupler rods they replace: their length stays at
+    # 0.5 m to within the static deflection (~ 50 N / 8e5 N/m), and the slider moves with
+    # the balls, s = 1 - 2 (0.5 cos(a)) for rods at angle a from the vertical.
+    for qi in q:
+        r, p = m.placements(qi)
+        a = p[1] + r[1] @ [0.05, 0, 0]
+        b = p[2] + r[2] @ [0, 0, 0.5]
+        assert abs(np.linalg.norm(b - a) - 0.5) < 1e-3
+    s_closure = 1.0 + np.cos(q[:, 2])
+    np.testing.assert_allclose(q[:, 1], s_closure, atol=2e-3)
