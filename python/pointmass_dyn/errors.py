@@ -28,6 +28,21 @@ class LoopClosureError(InvalidInputError):
     message names the loop."""
 
 
+class InfeasibleDesignError(InvalidInputError):
+    """A design (``pmd.balance``) whose limits or zero quantities no design within the bounds
+    meets. ``relaxation``: for each limit and zero quantity, ``(asked, needed)`` in the
+    problem's norm — the least summed relaxation (each relative to its value before) some
+    design meets; ``binding``: the names relaxed beyond the solver's tolerance."""
+
+    def __init__(self, message: str, relaxation: dict | None = None, binding: tuple = ()):
+        super().__init__(message)
+        self.relaxation = dict(relaxation or {})
+        self.binding = tuple(binding)
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.relaxation, self.binding))
+
+
 class NumericalError(PointMassDynError, ArithmeticError):
     """Finite inputs gave a non-finite or meaningless result (overflow, singular matrix)."""
 
@@ -101,6 +116,7 @@ __all__ = [
     "AnimationWriterError",
     "ClusterError",
     "InertiaError",
+    "InfeasibleDesignError",
     "InvalidInputError",
     "LoopClosureError",
     "ModelStructureError",
