@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InvalidInputError, SceneError
+from ..scenes import resolve_scene_path
 
 _INERTIAL_KEYS = ("mass", "com", "inertia", "inertia_diag")
 
@@ -131,8 +132,6 @@ def write_scene(bodies: dict[str, Any], source: str | os.PathLike, path: str | o
     :class:`RigidBody`): a body of a ``[[body]]`` table gets its ``mass``, ``com`` and full
     ``inertia`` replaced; a body from the scene's ``urdf`` is written into a copy of that URDF
     beside ``path`` (``<stem>.urdf``), which the new scene then loads. Returns ``path``."""
-    from ..scenes import resolve_scene_path
-
     source, path = resolve_scene_path(source), Path(path)
     text = source.read_text(encoding="utf-8")
     try:
