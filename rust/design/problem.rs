@@ -76,7 +76,7 @@ pub struct Solution {
     pub iterations: u32,
     /// Clarabel's time, summed over the programs solved.
     pub solve_time: f64,
-    /// Cutting-plane rounds of the (last) stage (1 for RMS).
+    /// Programs solved: one per stage for RMS, one per cutting-plane round for peak.
     pub rounds: u32,
 }
 
@@ -254,6 +254,7 @@ pub fn solve_outcome(problem: &Problem) -> Result<Outcome> {
             second.objective = first.objective;
             second.iterations += first.iterations;
             second.solve_time += first.solve_time;
+            second.rounds += first.rounds;
             Ok(Outcome::Solved(second))
         }
         // The second solve only refines; its failure leaves the optimum found.
