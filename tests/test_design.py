@@ -5,6 +5,7 @@ SciPy's differential evolution on the same design space, and against the envelop
 
 from __future__ import annotations
 
+import pickle
 import time
 
 import numpy as np
@@ -362,6 +363,21 @@ def test_an_infeasible_limit_says_by_how_much(fourbar):
         pmd.balance(motion, counterweights=rings, zero=("force",), objective={"moment": 1.0})
     assert info.value.relaxation["force"][1] == pytest.approx(best.solver["values"]["force"], rel=1e-6)
     assert isinstance(info.value, pmd.errors.InvalidInputError)
+    # The mass limit: force balance needs at least the least-mass force balance's mass.
+    rings = [pmd.Counterweight.ring(body, [0, 0, 0], 0.02, 8) for body in ("crank", "rocker")]
+    lightest = pmd.balance(motion, counterweights=rings, zero=("force",), objective={"mass": 1.0})
+    with pytest.raises(pmd.errors.InfeasibleDesignError, match="Relaxing one alone") as info:
+        pmd.balance(motion, counterweights=rings, zero=("force",), limits={"mass": 1e-4})
+    err = info.value
+    assert err.alone["mass"] == pytest.approx(lightest.masses.sum(), rel=1e-6)
+    assert "mass <= 1.0000e-4 needs" in str(err)
+    # ...or the force relaxed alone: the least RMS force with 0.1 g of counterweights.
+    light = pmd.balance(motion, counterweights=rings, objective={"force": 1.0}, limits={"mass": 1e-4})
+    assert err.alone["force"] == pytest.approx(light.solver["values"]["force"], rel=1e-6)
+    # Together (the least summed relative relaxation): whichever is cheaper relative to its
+    # scale, here the force (relaxing the mass costs more than the model's mass).
+    assert err.binding == ("force",)
+    assert pickle.loads(pickle.dumps(err)).alone == err.alone
 
 
 def test_the_epsilon_constraint_front_is_not_dominated_by_the_weighted_one(fourbar):
@@ -513,6 +529,14 @@ def test_the_design_command_writes_csv_stl_maps_and_the_designed_scene(tmp_path,
     assert main(["design", "fourbar", str(spec), "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "force <= 1.0000e-6 needs" in err
+    # A front instead: pareto.csv, one row per point, the ε levels met.
+    spec.write_text(SPEC.format(limit=limit, max_mass=0.05).replace("limits = ", "# ")
+                    + '[pareto]\nobjectives = ["bearing", "force"]\ncount = 3\nmethod = "epsilon"\n')
+    assert main(["design", "fourbar", str(spec), "--out", str(out)]) == 0
+    with open(out / "pareto.csv") as f:
+        front = [(float(r["bearing"]), float(r["force"])) for r in csv.DictReader(f)]
+    assert len(front) == 3 and front[0][1] >= front[1][1] >= front[2][1]
+    assert front[0][0] <= front[1][0] <= front[2][0]
     spec.write_text("colour = 3\n")
     assert main(["design", "fourbar", str(spec)]) == 2
     assert "colour" in capsys.readouterr().err

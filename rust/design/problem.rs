@@ -151,6 +151,9 @@ pub struct Relaxed {
     pub needed: f64,
     /// The value before the design (the scale of the relaxation).
     pub before: f64,
+    /// The least value when only this requirement is relaxed (the others held); None when
+    /// relaxing it alone does not make the design feasible.
+    pub alone: Option<f64>,
 }
 
 impl Relaxed {
@@ -176,39 +179,44 @@ impl Relaxation {
         } else {
             "zero"
         };
-        let named: Vec<String> = binding
-            .iter()
-            .map(|r| {
-                let what = if r.zero {
-                    format!("{} = 0", r.name)
-                } else {
-                    format!("{} <= {:.4e}", r.name, r.asked)
-                };
-                let relax = r.needed - r.asked;
-                let share = if r.name == "mass" {
-                    "kg".to_string()
-                } else {
-                    format!(
-                        "{:.2} % of its value before, {:.4e}",
-                        100.0 * relax / r.before.max(1e-300),
-                        r.before
-                    )
-                };
+        let what = |r: &Relaxed| {
+            if r.zero {
+                format!("{} = 0", r.name)
+            } else {
+                format!("{} <= {:.4e}", r.name, r.asked)
+            }
+        };
+        let needs = |r: &Relaxed, needed: f64| {
+            let share = if r.name == "mass" {
+                "kg".to_string()
+            } else {
                 format!(
-                    "{what} needs {:.4e} at least (relax by {relax:.4e}, {share})",
-                    r.needed
+                    "{:.2} % of its value before, {:.4e}",
+                    100.0 * (needed - r.asked) / r.before.max(1e-300),
+                    r.before
                 )
+            };
+            format!("{} needs {needed:.4e} at least ({share})", what(r))
+        };
+        let together: Vec<String> = binding.iter().map(|r| needs(r, r.needed)).collect();
+        let alone: Vec<String> = self
+            .items
+            .iter()
+            .map(|r| match r.alone {
+                Some(v) => needs(r, v),
+                None => format!("{} alone does not suffice", what(r)),
             })
             .collect();
-        let got = if named.is_empty() {
+        let got = if together.is_empty() {
             "requirements infeasible by less than the solver's tolerance (Clarabel's certificate)"
                 .to_string()
         } else {
             format!(
-                "requirements none meets (Clarabel's certificate); the least relaxation that \
-                 some design meets (phase 1, summed relative to the values before): {}; or give \
-                 the design more room (candidates, envelopes, mass ranges)",
-                named.join("; ")
+                "requirements none meets (Clarabel's certificate). Relaxing one alone: {}. The \
+                 least summed relaxation (phase 1, each relative to its value before): {}. Or \
+                 give the design more room (candidates, envelopes, mass ranges)",
+                alone.join("; "),
+                together.join("; ")
             )
         };
         Error::arg(
@@ -280,45 +288,46 @@ fn solution(problem: &Problem, raw: Raw, rounds: u32) -> Solution {
     }
 }
 
-/// Phase 1: the least relaxation of the requirements that some design meets.
-fn relax(problem: &Problem, mut active: Vec<Vec<usize>>) -> Result<Relaxation> {
-    let lay = Layout::new(problem, Stage::Relax);
-    let Some((raw, _)) = solve_cut(problem, Stage::Relax, &mut active)? else {
+/// Phase 1: the least relaxation of the requirements that some design meets, together and
+/// each alone.
+fn relax(problem: &Problem, active: Vec<Vec<usize>>) -> Result<Relaxation> {
+    let lay = Layout::new(problem, Stage::Relax(None));
+    let Some((raw, _)) = solve_cut(problem, Stage::Relax(None), &mut active.clone())? else {
         return Err(Error::arg(
             "links, counterweights",
             "bounds, link mass ranges and symmetry some design masses meet together",
             "ones that conflict (Clarabel's certificate, with every limit and zero relaxed)",
         ));
     };
-    let items = lay
-        .slacks
-        .iter()
-        .map(|&(k, sl)| {
-            let slack = raw.z[sl].max(0.0);
-            match k {
-                Some(k) => {
-                    let q = &problem.quantities[k];
-                    let asked = if q.zero { 0.0 } else { q.limit.unwrap_or(0.0) };
-                    Relaxed {
-                        name: q.name.clone(),
-                        zero: q.zero,
-                        asked,
-                        needed: asked + slack * q.reference,
-                        before: q.reference,
-                    }
-                }
-                None => {
-                    let asked = problem.mass_limit.unwrap_or(0.0);
-                    Relaxed {
-                        name: "mass".into(),
-                        zero: false,
-                        asked,
-                        needed: asked + slack,
-                        before: problem.mass_reference,
-                    }
-                }
+    let mut items = Vec::with_capacity(lay.slacks.len());
+    for (j, &(k, sl)) in lay.slacks.iter().enumerate() {
+        let alone = match lay.slacks.len() {
+            1 => Some(raw.z[sl].max(0.0)),
+            _ => solve_cut(problem, Stage::Relax(Some(j)), &mut active.clone())?
+                .map(|(r, _)| r.z[sl].max(0.0)),
+        };
+        let (name, zero, asked, before, unit) = match k {
+            Some(k) => {
+                let q = &problem.quantities[k];
+                let asked = if q.zero { 0.0 } else { q.limit.unwrap_or(0.0) };
+                (q.name.clone(), q.zero, asked, q.reference, q.reference)
             }
-        })
-        .collect();
+            None => (
+                "mass".to_string(),
+                false,
+                problem.mass_limit.unwrap_or(0.0),
+                problem.mass_reference,
+                1.0,
+            ),
+        };
+        items.push(Relaxed {
+            name,
+            zero,
+            asked,
+            needed: asked + raw.z[sl].max(0.0) * unit,
+            before,
+            alone: alone.map(|s| asked + s * unit),
+        });
+    }
     Ok(Relaxation { items })
 }

@@ -23,8 +23,9 @@ pub(crate) enum Stage<'a> {
     LeastMass(&'a Solution),
     /// Phase 1 of an infeasible program: the least summed relaxation of the limits and the
     /// zero quantities (each relative to its value before; the mass limit relative to the
-    /// model's mass) that some design meets.
-    Relax,
+    /// model's mass) that some design meets; `Some(j)`: only the j-th of them relaxed (the
+    /// others held).
+    Relax(Option<usize>),
 }
 
 /// The blocks (a sample's vector) of each quantity whose cones are in a peak program: the
@@ -48,18 +49,18 @@ impl Layout {
         let (mut peaks, mut slacks, mut next) = (vec![], vec![], nx + nd);
         for (k, q) in problem.quantities.iter().enumerate() {
             let own = match stage {
-                Stage::Relax => q.zero || q.limit.is_some(),
+                Stage::Relax(_) => q.zero || q.limit.is_some(),
                 _ => problem.norm == Norm::Peak && q.weight > 0.0 && !q.zero,
             };
             if own {
                 match stage {
-                    Stage::Relax => slacks.push((Some(k), next)),
+                    Stage::Relax(_) => slacks.push((Some(k), next)),
                     _ => peaks.push((k, next)),
                 }
                 next += 1;
             }
         }
-        if matches!(stage, Stage::Relax) && problem.mass_limit.is_some() {
+        if matches!(stage, Stage::Relax(_)) && problem.mass_limit.is_some() {
             slacks.push((None, next));
             next += 1;
         }
@@ -108,7 +109,7 @@ pub(crate) fn bound(problem: &Problem, lay: &Layout, stage: Stage, k: usize) -> 
         let asked = if q.zero { 0.0 } else { q.limit.unwrap_or(0.0) };
         return Some(Bound::Limit(asked * scale(q), Some(sl)));
     }
-    if matches!(stage, Stage::Relax) || q.zero {
+    if matches!(stage, Stage::Relax(_)) || q.zero {
         return None;
     }
     if let Some(t) = lay.epigraph(k) {
@@ -251,7 +252,7 @@ fn equalities(bld: &mut Builder, problem: &Problem, lay: &Layout, stage: Stage) 
     }
     bld.cone(SupportedConeT::ZeroConeT(nd));
     let zero = problem.quantities.iter().filter(|q| q.zero);
-    for q in zero.filter(|_| !matches!(stage, Stage::Relax)) {
+    for q in zero.filter(|_| !matches!(stage, Stage::Relax(_))) {
         let s = scale(q);
         let (rows, rhs, outside) = row_space(&(&q.rows * s), &(&q.constant * s));
         let total = (&q.constant * s).norm();
@@ -329,9 +330,13 @@ fn inequalities(bld: &mut Builder, problem: &Problem, lay: &Layout, stage: Stage
             bld.put(r, t, problem.quantities[k].weight);
         }
     }
-    for &(_, sl) in &lay.slacks {
+    for (j, &(_, sl)) in lay.slacks.iter().enumerate() {
         let r = bld.row(0.0);
         bld.put(r, sl, -1.0);
+        if matches!(stage, Stage::Relax(Some(only)) if only != j) {
+            let r = bld.row(0.0);
+            bld.put(r, sl, 1.0);
+        }
     }
     let count = bld.m() - n0;
     bld.cone(SupportedConeT::NonnegativeConeT(count));
@@ -390,7 +395,7 @@ fn objective(problem: &Problem, lay: &Layout, stage: Stage) -> (CscMatrix<f64>, 
     let mut q = vec![0.0; lay.nz];
     let mut constant = 0.0;
     match stage {
-        Stage::Relax => {
+        Stage::Relax(_) => {
             for &(k, sl) in &lay.slacks {
                 q[sl] = if k.is_some() { 1.0 } else { mass_scale };
             }

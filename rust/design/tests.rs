@@ -192,6 +192,7 @@ fn the_program_finds_known_optima() {
     };
     assert!(r.items.len() == 1 && r.items[0].binding());
     assert!((r.items[0].needed - 0.5).abs() < 1e-7, "{r:?}");
+    assert_eq!(r.items[0].alone, Some(r.items[0].needed));
     assert!(err.to_string().contains("needs 5.0000e-1"), "{err}");
     // Least mass among equal optima: y depends on x₁ + 2 x₂ only, so x = (0, ½).
     let mut p = toy(Norm::Rms, None, 10.0);

@@ -277,6 +277,7 @@ pub fn design_solve<'py>(
                         r.needed,
                         r.before,
                         r.binding(),
+                        r.alone,
                     )
                 })
                 .collect::<Vec<_>>();

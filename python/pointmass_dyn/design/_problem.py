@@ -326,9 +326,11 @@ def balance(
     say(f"conic program: {var.count} design masses, {len(quantities)} quantities ({norm})")
     sol = _core.design_solve(spec)
     if sol["status"] == "Infeasible":
-        relaxation = {name: (asked, needed) for name, _z, asked, needed, _b, _on in sol["relaxation"]}
-        binding = tuple(name for name, *_rest, on in sol["relaxation"] if on)
-        raise InfeasibleDesignError(sol["message"], relaxation, binding)
+        items = sol["relaxation"]
+        relaxation = {name: (asked, needed) for name, _z, asked, needed, *_ in items}
+        binding = tuple(name for name, _z, _a, _n, _b, on, _alone in items if on)
+        alone = {name: value for name, *_, value in items}
+        raise InfeasibleDesignError(sol["message"], relaxation, binding, alone)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
     # The parameters of the masses found (the solver's δ = M x holds to its tolerance only):
