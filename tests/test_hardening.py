@@ -374,3 +374,138 @@ def test_balance_refuses_weights_and_counts_that_mean_nothing(fourbar_motion):
                    {"objectives": ("force", "force")}):
         with pytest.raises(InvalidInputError, match="count|objectives"):
             pmd.pareto_front(mo, counterweights=cw, **kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# 2. simulate_batch stopped by a raising progress or Ctrl-C: the exception carries every
+#    run's result so far (finished runs whole, runs under way to where they stopped).
+# --------------------------------------------------------------------------------------------
+def _stoppable_batch_args():
+    scene = pmd.load_scene("pendulum_planar")
+    q0 = scene.q0 + np.linspace(0.0, 1.0, 400)[:, None]
+    return scene, q0, {"t_span": (0, 50), "rtol": 1e-11, "atol": 1e-12, "threads": 2}
+
+
+def _check_partial_batch(scene, q0, kw, batch):
+    assert isinstance(batch, pmd.BatchResult) and len(batch) == len(q0)
+    done = np.flatnonzero(batch.success)
+    assert 0 < len(done) < len(q0)
+    # A finished run is the simulate call it stands for (an independent single run).
+    k = done[-1]
+    single = pmd.Scene(scene.model, q0[k], scene.v0, scene.effects)
+    ref = pmd.simulate(single, kw["t_span"], rtol=kw["rtol"], atol=kw["atol"])
+    np.testing.assert_allclose(batch.results[k].q[-1], ref.q[-1], rtol=0, atol=1e-12)
+    # Every other run says why it stopped and how far it got.
+    for k in np.flatnonzero(~batch.success):
+        r = batch.results[k]
+        assert batch.status[k] == -1
+        assert "interrupted" in r.message or "stopped before this run started" in r.message
+        if len(r.t):
+            assert r.t[-1] == pytest.approx(r.t_reached) and r.t_reached < 50
+
+
+def test_simulate_batch_stopped_by_progress_keeps_every_run():
+    scene, q0, kw = _stoppable_batch_args()
+    seen = []
+
+    def progress(done, total):
+        seen.append(done)
+        if done >= 3:
+            raise RuntimeError("cancelled by the caller")
+
+    with pytest.raises(RuntimeError, match="cancelled by the caller") as info:
+        pmd.simulate_batch(scene, q0=q0, progress=progress, **kw)
+    batch = info.value.result
+    assert batch.success.sum() >= seen[-1]  # nothing finished is lost
+    assert "in this exception's .result" in info.value.__notes__[-1]
+    _check_partial_batch(scene, q0, kw, batch)
+
+
+def test_simulate_batch_stopped_by_ctrl_c_keeps_every_run():
+    import _thread
+    import threading
+
+    scene, q0, kw = _stoppable_batch_args()
+    timer = threading.Timer(0.4, _thread.interrupt_main)  # SIGINT's handler, as Ctrl-C
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt) as info:
+            pmd.simulate_batch(scene, q0=q0, **kw)
+    finally:
+        timer.cancel()
+    _check_partial_batch(scene, q0, kw, info.value.result)
+
+
+# --------------------------------------------------------------------------------------------
+# 6. simulate_batch of scenes of different sizes: each run's rows hold its own trajectory.
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_of_mixed_scenes_keeps_each_trajectory():
+    pp, chain7 = pmd.load_scene("pendulum_planar"), pmd.load_scene("chain7")
+    t_eval = [0.0, 0.25, 0.5]
+    batch = pmd.simulate_batch([pp, chain7], (0, 0.5), t_eval=t_eval)
+    assert batch.success.all() and batch.q.shape == (2, 3, 7) and batch.v.shape == (2, 3, 7)
+    for k, scene in enumerate([pp, chain7]):
+        ref = pmd.simulate(scene, (0, 0.5), t_eval=t_eval)
+        nq, nv = scene.model.nq, scene.model.nv
+        np.testing.assert_allclose(batch.q[k, :, :nq], ref.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(batch.v[k, :, :nv], ref.v, rtol=0, atol=1e-12)
+        assert np.isnan(batch.q[k, :, nq:]).all() and np.isnan(batch.v[k, :, nv:]).all()
+
+
+# --------------------------------------------------------------------------------------------
+# params={"gravity": g} on a scene with two gravity effects: the bodies feel g, not 2 g.
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_gravity_param_is_the_total_gravity():
+    pp = pmd.load_scene("pendulum_planar")
+    half = pmd.Effect.gravity(0.5 * G)
+    doubled = pp.replace(effects=[half, half])
+    g = np.array([[0.0, 0.0, -3.0], [0.0, 0.0, -20.0]])
+    batch = pmd.simulate_batch(doubled, (0, 0.5), t_eval=[0.5], params={"gravity": g})
+    for k in range(2):
+        ref = pmd.simulate(pp.replace(effects=[pmd.Effect.gravity(g[k])]), (0, 0.5),
+                           t_eval=[0.5])
+        np.testing.assert_allclose(batch.q[k], ref.q, rtol=0, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------------
+# 23. Radau with atol = 0: refused naming atol (as RADAU5), not a failure at t = 0; rtol = 0
+#     with atol > 0 runs (rtol raised to 100 ε, as SciPy) and is accurate.
+# --------------------------------------------------------------------------------------------
+def test_radau_refuses_zero_atol_and_runs_with_zero_rtol():
+    pp = pmd.load_scene("pendulum_planar")
+    for method in ("Radau", "auto"):
+        for rtol, atol in ((0, 0), (1e-6, 0), (1e-6, [1e-8, 1e-8, 0, 1e-8, 1e-8, 1e-8])):
+            with pytest.raises(InvalidInputError, match=r"atol: component \d must be > 0 .*got 0"):
+                pmd.simulate(pp, (0, 1), method=method, rtol=rtol, atol=atol)
+    r = pmd.simulate(pp, (0, 1), method="Radau", rtol=0, atol=1e-10)
+    ref = pmd.simulate(pp, (0, 1), method="DOP853", rtol=1e-13, atol=1e-13)
+    assert r.success
+    np.testing.assert_allclose(r.q[-1], ref.q[-1], rtol=0, atol=1e-7)
+
+
+# --------------------------------------------------------------------------------------------
+# 24. Radau names the cause: a NaN from fun (and when), a NaN from jac, Newton failing.
+# --------------------------------------------------------------------------------------------
+def test_radau_names_nan_from_fun_nan_from_jac_and_newton():
+    def fun(t, y):  # harmonic oscillator, NaN from t = 0.5 on
+        return np.array([y[1], -y[0] if t < 0.5 else np.nan])
+
+    r = pmd.solve_ivp(fun, (0, 1), [1.0, 0.0], method="Radau")
+    assert not r.success and "right-hand side returned a non-finite value" in r.message
+    assert 0.49 < r.t_reached <= 0.5 and "step size" not in r.message
+    np.testing.assert_allclose(r.y[:, -1], [np.cos(r.t_reached), -np.sin(r.t_reached)],
+                               atol=1e-3)
+
+    def jac(t, y):
+        return np.array([[0.0, 1.0], [-1.0, np.nan if t > 0.5 else 0.0]])
+
+    r = pmd.solve_ivp(lambda t, y: np.array([y[1], -y[0]]), (0, 1), [1.0, 0.0],
+                      method="Radau", jac=jac)
+    assert not r.success and "the Jacobian returned a non-finite value" in r.message
+    assert r.t_reached > 0.5
+    # f = 1e20 sin y with a zero Jacobian: Newton contracts only for h below ~1e-20, under
+    # the minimum step 10 ulp(1) = 2.2e-15 of a run starting at t = 1.
+    r = pmd.solve_ivp(lambda t, y: 1e20 * np.sin(y), (1, 2), [1.0], method="Radau",
+                      jac=np.zeros((1, 1)))
+    assert not r.success and "Newton iteration did not converge" in r.message
+    assert r.t_reached == 1.0
