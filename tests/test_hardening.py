@@ -509,3 +509,66 @@ def test_radau_names_nan_from_fun_nan_from_jac_and_newton():
                       jac=np.zeros((1, 1)))
     assert not r.success and "Newton iteration did not converge" in r.message
     assert r.t_reached == 1.0
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2, viewer: mesh files with non-finite vertices, a FIFO, a name with a NUL, a shape
+# beyond float32. Each is drawn as far as it can be (or as its inertia box) with one
+# VisualWarning naming it; never a ValueError from the camera, a hang, or NaN in the page.
+# --------------------------------------------------------------------------------------------
+def _binary_stl(path, triangles):
+    import struct
+
+    with open(path, "wb") as fh:
+        fh.write(b" " * 80 + struct.pack("<I", len(triangles)))
+        for t in triangles:
+            fh.write(struct.pack("<12fH", 0, 0, 1, *np.ravel(t), 0))
+
+
+def test_animate_survives_broken_visuals(tmp_path, monkeypatch):
+    import os
+    import pickle
+    import warnings
+
+    from pointmass_dyn.errors import VisualWarning
+    from pointmass_dyn.viewer import _meshes as viewer_meshes
+
+    monkeypatch.setenv("PMD_MESH_CACHE", "0")
+    viewer_meshes._read_cached.cache_clear()
+    good = np.array([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0]])
+    _binary_stl(tmp_path / "nan.stl", [good, good + np.nan])
+    os.mkfifo(tmp_path / "fifo.stl")
+    scene = pmd.load_scene("pendulum_planar")
+    eye = np.eye(3).tolist()
+
+    def mesh(path):
+        return {"body": 0, "kind": "mesh", "rotation": eye, "translation": [0, 0, 0],
+                "uri": path, "path": path, "scale": [1, 1, 1], "rgba": None}
+
+    model = pickle.loads(pickle.dumps(scene.model))
+    model.set_visuals([
+        mesh(str(tmp_path / "nan.stl")),
+        mesh(str(tmp_path / "fifo.stl")),
+        mesh(str(tmp_path / "a\x00b.stl")),
+        {"body": 0, "kind": "box", "size": [1e308] * 3, "rotation": eye,
+         "translation": [0, 0, 0], "rgba": None},
+    ])
+    vs = viewer_meshes.visual_scene(model, warn=False)
+    # The one finite triangle of nan.stl is kept, exactly (float32 of the file's values).
+    drawn = [m for m in vs.meshes if len(m.faces) == 1]
+    assert len(drawn) == 1
+    np.testing.assert_array_equal(np.sort(drawn[0].vertices, axis=0),
+                                  np.sort(good.astype(np.float32), axis=0))
+    assert all(np.isfinite(m.vertices).all() for m in vs.meshes)
+    assert set(vs.failed) == {str(tmp_path / "fifo.stl"), str(tmp_path / "a\x00b.stl"),
+                              "box of body 'rod'"}
+    sol = pmd.simulate(scene, (0, 0.2))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        pmd.animate(sol, pmd.Scene(model, scene.q0, scene.v0, scene.effects),
+                    tmp_path / "x.html")
+    msgs = [str(w.message) for w in caught if issubclass(w.category, VisualWarning)]
+    assert len(msgs) == 1 and "3 mesh file(s) or shape(s)" in msgs[0]
+    assert "not a regular file" in msgs[0] and "beyond float32" in msgs[0]
+    page = (tmp_path / "x.html").read_text()
+    assert "NaN" not in page and "Infinity" not in page
