@@ -572,3 +572,83 @@ def test_animate_survives_broken_visuals(tmp_path, monkeypatch):
     assert "not a regular file" in msgs[0] and "beyond float32" in msgs[0]
     page = (tmp_path / "x.html").read_text()
     assert "NaN" not in page and "Infinity" not in page
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2, CLI: an output in a missing directory, a --trail body the model does not have,
+# a bad --size are refused before the run (they were found after it, the run lost).
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("argv, named", [
+    (["simulate", "pendulum_planar", "--out", "{d}/missing/x.csv"], "--out"),
+    (["simulate", "pendulum_planar", "--plot", "{d}/missing/x.png"], "--plot"),
+    (["simulate", "pendulum_planar", "--animate", "{d}/x.html", "--trail", "nobody"], "--trail"),
+    (["simulate", "pendulum_planar", "--animate", "{d}/x.gif", "--size", "big"], "--size"),
+    (["animate", "pendulum_planar", "--out", "{d}/missing/x.html"], "--out"),
+    (["sweep", "pendulum_planar", "--runs", "2", "--q0-noise", "0.1",
+      "--out", "{d}/missing/x.npz"], "--out"),
+])
+def test_cli_refuses_bad_outputs_before_running(argv, named, tmp_path, monkeypatch, capsys):
+    from pointmass_dyn import cli
+    from pointmass_dyn.cli import _animate, _simulate, _sweep
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("the run started before the arguments were checked")
+
+    for module, name in ((_simulate, "simulate"), (_animate, "simulate"),
+                         (_sweep, "simulate_batch")):
+        monkeypatch.setattr(module, name, no_run)
+    assert cli.main([a.format(d=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert f"error: {named}: expected" in err
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2: a batch whose results alone exceed the machine's memory is refused at once with
+# OutOfMemoryError (10^8 runs built 10^8 scenes in Python, then ran out of memory).
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_beyond_memory_is_refused_up_front(monkeypatch):
+    from pointmass_dyn import _batch
+    from pointmass_dyn.errors import OutOfMemoryError
+
+    scene = pmd.load_scene("pendulum_planar")
+    # A machine of 1 GiB: 10^6 runs need 4.4 GB (the bound measured per run).
+    monkeypatch.setattr(_batch, "_physical_memory", lambda: 2**30)
+    with pytest.raises(OutOfMemoryError, match=r"1000000 runs need at least 4\.1 GiB"):
+        pmd.simulate_batch(scene, (0, 0.1), params={"rod.mass": np.ones(10**6)})
+    with pytest.raises(OutOfMemoryError, match=r"1000 runs .* 10000 output times of 6"):
+        pmd.simulate_batch(scene, (0, 0.1), q0=np.tile(scene.q0, (1000, 1)),
+                           t_eval=np.linspace(0, 0.1, 10**4))
+    monkeypatch.undo()
+    ok = pmd.simulate_batch(scene, (0, 0.1), q0=np.tile(scene.q0, (3, 1)))
+    assert ok.success.all()
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2, loops: max_iterations < 1 is our error (a builtin OverflowError for -1).
+# --------------------------------------------------------------------------------------------
+def test_assemble_refuses_iteration_counts_below_one():
+    scene = pmd.load_scene("fourbar")
+    for bad in (-1, 0, True, 10**30):
+        with pytest.raises(InvalidInputError, match="max_iterations: expected a whole number"):
+            scene.model.assemble(scene.q0, max_iterations=bad)
+    q = scene.model.assemble(scene.q0 + 0.05, fixed=[0])
+    assert np.abs(scene.model.constraint_residual(q)).max() < 1e-12
+    assert q[0] == scene.q0[0] + 0.05
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2 (found by the fuzz): assemble_velocity of a guess near the largest double gave
+# [-inf, -inf, inf] without a word.
+# --------------------------------------------------------------------------------------------
+def test_assemble_velocity_overflow_is_a_numerical_error():
+    from pointmass_dyn.errors import NumericalError
+
+    scene = pmd.load_scene("fourbar")
+    model = scene.model
+    with pytest.raises(NumericalError, match="assemble_velocity: the result is not finite"):
+        model.assemble_velocity(scene.q0, np.full(model.nv, 1e308))
+    # Linear in the guess: 1e200 × the projection of ones, to rounding.
+    unit = model.assemble_velocity(scene.q0, np.ones(model.nv))
+    big = model.assemble_velocity(scene.q0, np.full(model.nv, 1e200))
+    np.testing.assert_allclose(big / 1e200, unit, rtol=1e-12)
+    assert np.abs(model.constraint_jacobian(scene.q0) @ unit).max() < 1e-12

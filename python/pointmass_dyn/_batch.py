@@ -19,6 +19,7 @@ or by giving a list of scenes (one per run).
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -28,7 +29,11 @@ import numpy as np
 from . import _core
 from ._core import Scene
 from ._simulation import SimulationResult
-from .errors import InvalidInputError
+from .errors import InvalidInputError, OutOfMemoryError
+
+#: Memory a run of a batch holds at least, besides its outputs at ``t_eval``: its result's
+#: Python objects (measured: a 100,000-run batch of a small scene took 438 MB).
+BYTES_PER_RUN = 4400
 
 
 @dataclass
@@ -91,6 +96,31 @@ def _effect_param(effects: list, name: str, parameter: str, value: np.ndarray) -
     return out
 
 
+def _physical_memory() -> int | None:
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (AttributeError, ValueError, OSError):  # not POSIX: no bound
+        return None
+
+
+def check_batch_memory(count: int, nq: int, nv: int, t_eval: Any = None) -> None:
+    """Refuses, before anything is built, a batch whose results alone would exceed the
+    machine's physical memory (:class:`OutOfMemoryError` naming the sizes)."""
+    try:
+        points = 0 if t_eval is None else int(np.size(t_eval))
+    except (TypeError, ValueError):  # not an array: the core names the argument
+        points = 0
+    need = count * (BYTES_PER_RUN + 3 * 8 * (nq + nv) * points)
+    have = _physical_memory()
+    if have is not None and need > have:
+        raise OutOfMemoryError(
+            f"simulate_batch: {count} runs need at least {need / 2**30:.1f} GiB for their "
+            f"results ({BYTES_PER_RUN} bytes a run plus {points} output times of {nq + nv} "
+            f"values), more than this machine's {have / 2**30:.1f} GiB; split the batch (or "
+            "use sweep(..., scheduler=...) over a cluster)"
+        )
+
+
 def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
     """One scene per run, from ``scene`` with the per-run ``params``."""
     model = scene.model
@@ -107,6 +137,7 @@ def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
                 f"params['{key}']: expected {count} runs (as the other params), got {arr.shape[0]}"
             )
         per[key] = arr
+    check_batch_memory(count or 0, model.nq, model.nv)
     bodies = set(model.body_names)
     out = []
     for b in range(count or 0):
@@ -185,6 +216,15 @@ def simulate_batch(
     scenes = [scene] if isinstance(scene, Scene) else list(scene)
     if not scenes or not all(isinstance(s, Scene) for s in scenes):
         raise InvalidInputError("scene: expected a Scene or a non-empty list of Scenes")
+    count = len(scenes)
+    for x in (q0, v0):
+        try:
+            if x is not None and np.ndim(x) == 2:
+                count = max(count, int(np.shape(x)[0]))
+        except (TypeError, ValueError):  # not an array: the core names the argument
+            pass
+    model = scenes[0].model
+    check_batch_memory(count, model.nq, model.nv, t_eval)
     if params:
         if len(scenes) != 1:
             raise InvalidInputError("params: give one scene with params, or a list of scenes")
