@@ -392,6 +392,76 @@ def design_calls(data) -> None:
              integrator=data.draw(st.sampled_from(["RK4", "Euler", "x", 3])))
 
 
+def loop_calls(data) -> None:
+    """Closed loops on a copy of the bundled fourbar: cut joints of any kind between any
+    bodies, assembly with any held coordinates and iteration counts (issue 29, round 2)."""
+    import pickle
+
+    model = pickle.loads(pickle.dumps(FOURBAR.model))
+    q0 = FOURBAR.q0
+    body = st.one_of(st.sampled_from(["crank", "coupler", "rocker", "world", None, "nope"]),
+                     ints, junk)
+    op = data.draw(st.sampled_from(["add_loop", "assemble", "velocity", "forces"]))
+    if op == "add_loop":
+        call(data, op, model.add_loop, data.draw(body), data.draw(body),
+             data.draw(st.sampled_from([pmd.Revolute([0, 0, 1]), pmd.Prismatic([1, 0, 0]),
+                                        pmd.Spherical(), pmd.Fixed(), pmd.FreeFlyer()])),
+             translation_a=data.draw(st.one_of(st.none(), arrays(3))),
+             rotation_b=data.draw(st.one_of(st.none(), st.just(np.eye(3)), arrays(9))),
+             name=data.draw(st.one_of(st.none(), st.text(max_size=3), junk)))
+    elif op == "assemble":
+        call(data, op, model.assemble, data.draw(st.one_of(st.just(q0 + 0.05), arrays(model.nq))),
+             fixed=data.draw(st.one_of(st.none(), st.lists(st.one_of(ints, body), max_size=3),
+                                       body)),
+             tol=data.draw(st.one_of(st.just(1e-12), floats)),
+             max_iterations=data.draw(st.one_of(st.just(50), ints, junk)))
+    elif op == "velocity":
+        call(data, op, model.assemble_velocity, q0, data.draw(arrays(model.nv)),
+             fixed=data.draw(st.one_of(st.none(), st.lists(ints, max_size=3), body)))
+    else:
+        call(data, op, model.constraint_forces, q0, data.draw(arrays(model.nv)),
+             data.draw(arrays(model.nv)), gravity=data.draw(st.one_of(st.none(), arrays(3))))
+
+
+def visual_calls(data, model: pmd.Model) -> None:
+    """set_visuals with random shapes, then the page's geometry (issue 29, round 2)."""
+    import pickle
+
+    from pointmass_dyn.viewer import _meshes
+
+    model = pickle.loads(pickle.dumps(model))
+    kind = data.draw(st.sampled_from(["box", "cylinder", "sphere", "capsule", "ellipsoid",
+                                      "mesh", "teapot"]))
+    size = {"box": {"size": data.draw(arrays(3))},
+            "cylinder": {"radius": data.draw(floats), "length": data.draw(floats)},
+            "sphere": {"radius": data.draw(floats)},
+            "capsule": {"radius": data.draw(floats), "length": data.draw(floats)},
+            "ellipsoid": {"radii": data.draw(arrays(3))},
+            "mesh": {"uri": data.draw(st.text(max_size=4)),
+                     "path": data.draw(st.one_of(st.none(), st.text(max_size=4),
+                                                 st.just("/dev/null"), st.just("/tmp"))),
+                     "scale": data.draw(arrays(3))},
+            "teapot": {}}[kind]
+    visual = {"body": data.draw(st.one_of(st.integers(-1, 4), junk)), "kind": kind,
+              "rotation": data.draw(st.one_of(st.just(np.eye(3)), arrays(9))),
+              "translation": data.draw(arrays(3)),
+              "rgba": data.draw(st.one_of(st.none(), arrays(4))), **size}
+    call(data, "set_visuals", model.set_visuals, [visual])
+    if model.visuals:  # accepted (the zoo's models have none of their own)
+        scene = _meshes.visual_scene(model, warn=False)
+        for mesh in scene.meshes:
+            assert np.isfinite(mesh.vertices).all(), visual
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@given(st.data())
+def test_random_calls_to_loops_and_visuals(data):
+    if data.draw(st.booleans()):
+        loop_calls(data)
+    else:
+        visual_calls(data, data.draw(st.sampled_from(MODELS)))
+
+
 @settings(max_examples=600, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 @given(st.data())
 def test_random_calls_to_the_newer_entry_points(data):

@@ -374,3 +374,281 @@ def test_balance_refuses_weights_and_counts_that_mean_nothing(fourbar_motion):
                    {"objectives": ("force", "force")}):
         with pytest.raises(InvalidInputError, match="count|objectives"):
             pmd.pareto_front(mo, counterweights=cw, **kwargs)
+
+
+# --------------------------------------------------------------------------------------------
+# 2. simulate_batch stopped by a raising progress or Ctrl-C: the exception carries every
+#    run's result so far (finished runs whole, runs under way to where they stopped).
+# --------------------------------------------------------------------------------------------
+def _stoppable_batch_args():
+    scene = pmd.load_scene("pendulum_planar")
+    q0 = scene.q0 + np.linspace(0.0, 1.0, 400)[:, None]
+    return scene, q0, {"t_span": (0, 50), "rtol": 1e-11, "atol": 1e-12, "threads": 2}
+
+
+def _check_partial_batch(scene, q0, kw, batch):
+    assert isinstance(batch, pmd.BatchResult) and len(batch) == len(q0)
+    done = np.flatnonzero(batch.success)
+    assert 0 < len(done) < len(q0)
+    # A finished run is the simulate call it stands for (an independent single run).
+    k = done[-1]
+    single = pmd.Scene(scene.model, q0[k], scene.v0, scene.effects)
+    ref = pmd.simulate(single, kw["t_span"], rtol=kw["rtol"], atol=kw["atol"])
+    np.testing.assert_allclose(batch.results[k].q[-1], ref.q[-1], rtol=0, atol=1e-12)
+    # Every other run says why it stopped and how far it got.
+    for k in np.flatnonzero(~batch.success):
+        r = batch.results[k]
+        assert batch.status[k] == -1
+        assert "interrupted" in r.message or "stopped before this run started" in r.message
+        if len(r.t):
+            assert r.t[-1] == pytest.approx(r.t_reached) and r.t_reached < 50
+
+
+def test_simulate_batch_stopped_by_progress_keeps_every_run():
+    scene, q0, kw = _stoppable_batch_args()
+    seen = []
+
+    def progress(done, total):
+        seen.append(done)
+        if done >= 3:
+            raise RuntimeError("cancelled by the caller")
+
+    with pytest.raises(RuntimeError, match="cancelled by the caller") as info:
+        pmd.simulate_batch(scene, q0=q0, progress=progress, **kw)
+    batch = info.value.result
+    assert batch.success.sum() >= seen[-1]  # nothing finished is lost
+    assert "in this exception's .result" in info.value.__notes__[-1]
+    _check_partial_batch(scene, q0, kw, batch)
+
+
+def test_simulate_batch_stopped_by_ctrl_c_keeps_every_run():
+    import _thread
+    import threading
+
+    scene, q0, kw = _stoppable_batch_args()
+    timer = threading.Timer(0.4, _thread.interrupt_main)  # SIGINT's handler, as Ctrl-C
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt) as info:
+            pmd.simulate_batch(scene, q0=q0, **kw)
+    finally:
+        timer.cancel()
+    _check_partial_batch(scene, q0, kw, info.value.result)
+
+
+# --------------------------------------------------------------------------------------------
+# 6. simulate_batch of scenes of different sizes: each run's rows hold its own trajectory.
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_of_mixed_scenes_keeps_each_trajectory():
+    pp, chain7 = pmd.load_scene("pendulum_planar"), pmd.load_scene("chain7")
+    t_eval = [0.0, 0.25, 0.5]
+    batch = pmd.simulate_batch([pp, chain7], (0, 0.5), t_eval=t_eval)
+    assert batch.success.all() and batch.q.shape == (2, 3, 7) and batch.v.shape == (2, 3, 7)
+    for k, scene in enumerate([pp, chain7]):
+        ref = pmd.simulate(scene, (0, 0.5), t_eval=t_eval)
+        nq, nv = scene.model.nq, scene.model.nv
+        np.testing.assert_allclose(batch.q[k, :, :nq], ref.q, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(batch.v[k, :, :nv], ref.v, rtol=0, atol=1e-12)
+        assert np.isnan(batch.q[k, :, nq:]).all() and np.isnan(batch.v[k, :, nv:]).all()
+
+
+# --------------------------------------------------------------------------------------------
+# params={"gravity": g} on a scene with two gravity effects: the bodies feel g, not 2 g.
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_gravity_param_is_the_total_gravity():
+    pp = pmd.load_scene("pendulum_planar")
+    half = pmd.Effect.gravity(0.5 * G)
+    doubled = pp.replace(effects=[half, half])
+    g = np.array([[0.0, 0.0, -3.0], [0.0, 0.0, -20.0]])
+    batch = pmd.simulate_batch(doubled, (0, 0.5), t_eval=[0.5], params={"gravity": g})
+    for k in range(2):
+        ref = pmd.simulate(pp.replace(effects=[pmd.Effect.gravity(g[k])]), (0, 0.5),
+                           t_eval=[0.5])
+        np.testing.assert_allclose(batch.q[k], ref.q, rtol=0, atol=1e-12)
+
+
+# --------------------------------------------------------------------------------------------
+# 23. Radau with atol = 0: refused naming atol (as RADAU5), not a failure at t = 0; rtol = 0
+#     with atol > 0 runs (rtol raised to 100 ε, as SciPy) and is accurate.
+# --------------------------------------------------------------------------------------------
+def test_radau_refuses_zero_atol_and_runs_with_zero_rtol():
+    pp = pmd.load_scene("pendulum_planar")
+    for method in ("Radau", "auto"):
+        for rtol, atol in ((0, 0), (1e-6, 0), (1e-6, [1e-8, 1e-8, 0, 1e-8, 1e-8, 1e-8])):
+            with pytest.raises(InvalidInputError, match=r"atol: component \d must be > 0 .*got 0"):
+                pmd.simulate(pp, (0, 1), method=method, rtol=rtol, atol=atol)
+    r = pmd.simulate(pp, (0, 1), method="Radau", rtol=0, atol=1e-10)
+    ref = pmd.simulate(pp, (0, 1), method="DOP853", rtol=1e-13, atol=1e-13)
+    assert r.success
+    np.testing.assert_allclose(r.q[-1], ref.q[-1], rtol=0, atol=1e-7)
+
+
+# --------------------------------------------------------------------------------------------
+# 24. Radau names the cause: a NaN from fun (and when), a NaN from jac, Newton failing.
+# --------------------------------------------------------------------------------------------
+def test_radau_names_nan_from_fun_nan_from_jac_and_newton():
+    def fun(t, y):  # harmonic oscillator, NaN from t = 0.5 on
+        return np.array([y[1], -y[0] if t < 0.5 else np.nan])
+
+    r = pmd.solve_ivp(fun, (0, 1), [1.0, 0.0], method="Radau")
+    assert not r.success and "right-hand side returned a non-finite value" in r.message
+    assert 0.49 < r.t_reached <= 0.5 and "step size" not in r.message
+    np.testing.assert_allclose(r.y[:, -1], [np.cos(r.t_reached), -np.sin(r.t_reached)],
+                               atol=1e-3)
+
+    def jac(t, y):
+        return np.array([[0.0, 1.0], [-1.0, np.nan if t > 0.5 else 0.0]])
+
+    r = pmd.solve_ivp(lambda t, y: np.array([y[1], -y[0]]), (0, 1), [1.0, 0.0],
+                      method="Radau", jac=jac)
+    assert not r.success and "the Jacobian returned a non-finite value" in r.message
+    assert r.t_reached > 0.5
+    # f = 1e20 sin y with a zero Jacobian: Newton contracts only for h below ~1e-20, under
+    # the minimum step 10 ulp(1) = 2.2e-15 of a run starting at t = 1.
+    r = pmd.solve_ivp(lambda t, y: 1e20 * np.sin(y), (1, 2), [1.0], method="Radau",
+                      jac=np.zeros((1, 1)))
+    assert not r.success and "Newton iteration did not converge" in r.message
+    assert r.t_reached == 1.0
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2, viewer: mesh files with non-finite vertices, a FIFO, a name with a NUL, a shape
+# beyond float32. Each is drawn as far as it can be (or as its inertia box) with one
+# VisualWarning naming it; never a ValueError from the camera, a hang, or NaN in the page.
+# --------------------------------------------------------------------------------------------
+def _binary_stl(path, triangles):
+    import struct
+
+    with open(path, "wb") as fh:
+        fh.write(b" " * 80 + struct.pack("<I", len(triangles)))
+        for t in triangles:
+            fh.write(struct.pack("<12fH", 0, 0, 1, *np.ravel(t), 0))
+
+
+def test_animate_survives_broken_visuals(tmp_path, monkeypatch):
+    import os
+    import pickle
+    import warnings
+
+    from pointmass_dyn.errors import VisualWarning
+    from pointmass_dyn.viewer import _meshes as viewer_meshes
+
+    monkeypatch.setenv("PMD_MESH_CACHE", "0")
+    viewer_meshes._read_cached.cache_clear()
+    good = np.array([[0, 0, 0], [0.1, 0, 0], [0, 0.1, 0]])
+    _binary_stl(tmp_path / "nan.stl", [good, good + np.nan])
+    os.mkfifo(tmp_path / "fifo.stl")
+    scene = pmd.load_scene("pendulum_planar")
+    eye = np.eye(3).tolist()
+
+    def mesh(path):
+        return {"body": 0, "kind": "mesh", "rotation": eye, "translation": [0, 0, 0],
+                "uri": path, "path": path, "scale": [1, 1, 1], "rgba": None}
+
+    model = pickle.loads(pickle.dumps(scene.model))
+    model.set_visuals([
+        mesh(str(tmp_path / "nan.stl")),
+        mesh(str(tmp_path / "fifo.stl")),
+        mesh(str(tmp_path / "a\x00b.stl")),
+        {"body": 0, "kind": "box", "size": [1e308] * 3, "rotation": eye,
+         "translation": [0, 0, 0], "rgba": None},
+    ])
+    vs = viewer_meshes.visual_scene(model, warn=False)
+    # The one finite triangle of nan.stl is kept, exactly (float32 of the file's values).
+    drawn = [m for m in vs.meshes if len(m.faces) == 1]
+    assert len(drawn) == 1
+    np.testing.assert_array_equal(np.sort(drawn[0].vertices, axis=0),
+                                  np.sort(good.astype(np.float32), axis=0))
+    assert all(np.isfinite(m.vertices).all() for m in vs.meshes)
+    assert set(vs.failed) == {str(tmp_path / "fifo.stl"), str(tmp_path / "a\x00b.stl"),
+                              "box of body 'rod'"}
+    sol = pmd.simulate(scene, (0, 0.2))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        pmd.animate(sol, pmd.Scene(model, scene.q0, scene.v0, scene.effects),
+                    tmp_path / "x.html")
+    msgs = [str(w.message) for w in caught if issubclass(w.category, VisualWarning)]
+    assert len(msgs) == 1 and "3 mesh file(s) or shape(s)" in msgs[0]
+    assert "not a regular file" in msgs[0] and "beyond float32" in msgs[0]
+    page = (tmp_path / "x.html").read_text()
+    assert "NaN" not in page and "Infinity" not in page
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2, CLI: an output in a missing directory, a --trail body the model does not have,
+# a bad --size are refused before the run (they were found after it, the run lost).
+# --------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("argv, named", [
+    (["simulate", "pendulum_planar", "--out", "{d}/missing/x.csv"], "--out"),
+    (["simulate", "pendulum_planar", "--plot", "{d}/missing/x.png"], "--plot"),
+    (["simulate", "pendulum_planar", "--animate", "{d}/x.html", "--trail", "nobody"], "--trail"),
+    (["simulate", "pendulum_planar", "--animate", "{d}/x.gif", "--size", "big"], "--size"),
+    (["animate", "pendulum_planar", "--out", "{d}/missing/x.html"], "--out"),
+    (["sweep", "pendulum_planar", "--runs", "2", "--q0-noise", "0.1",
+      "--out", "{d}/missing/x.npz"], "--out"),
+])
+def test_cli_refuses_bad_outputs_before_running(argv, named, tmp_path, monkeypatch, capsys):
+    from pointmass_dyn import cli
+    from pointmass_dyn.cli import _animate, _simulate, _sweep
+
+    def no_run(*args, **kwargs):
+        raise AssertionError("the run started before the arguments were checked")
+
+    for module, name in ((_simulate, "simulate"), (_animate, "simulate"),
+                         (_sweep, "simulate_batch")):
+        monkeypatch.setattr(module, name, no_run)
+    assert cli.main([a.format(d=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert f"error: {named}: expected" in err
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2: a batch whose results alone exceed the machine's memory is refused at once with
+# OutOfMemoryError (10^8 runs built 10^8 scenes in Python, then ran out of memory).
+# --------------------------------------------------------------------------------------------
+def test_simulate_batch_beyond_memory_is_refused_up_front(monkeypatch):
+    from pointmass_dyn import _batch
+    from pointmass_dyn.errors import OutOfMemoryError
+
+    scene = pmd.load_scene("pendulum_planar")
+    # A machine of 1 GiB: 10^6 runs need 4.4 GB (the bound measured per run).
+    monkeypatch.setattr(_batch, "_physical_memory", lambda: 2**30)
+    with pytest.raises(OutOfMemoryError, match=r"1000000 runs need at least 4\.1 GiB"):
+        pmd.simulate_batch(scene, (0, 0.1), params={"rod.mass": np.ones(10**6)})
+    with pytest.raises(OutOfMemoryError, match=r"1000 runs .* 10000 output times of 6"):
+        pmd.simulate_batch(scene, (0, 0.1), q0=np.tile(scene.q0, (1000, 1)),
+                           t_eval=np.linspace(0, 0.1, 10**4))
+    monkeypatch.undo()
+    ok = pmd.simulate_batch(scene, (0, 0.1), q0=np.tile(scene.q0, (3, 1)))
+    assert ok.success.all()
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2, loops: max_iterations < 1 is our error (a builtin OverflowError for -1).
+# --------------------------------------------------------------------------------------------
+def test_assemble_refuses_iteration_counts_below_one():
+    scene = pmd.load_scene("fourbar")
+    for bad in (-1, 0, True, 10**30):
+        with pytest.raises(InvalidInputError, match="max_iterations: expected a whole number"):
+            scene.model.assemble(scene.q0, max_iterations=bad)
+    q = scene.model.assemble(scene.q0 + 0.05, fixed=[0])
+    assert np.abs(scene.model.constraint_residual(q)).max() < 1e-12
+    assert q[0] == scene.q0[0] + 0.05
+
+
+# --------------------------------------------------------------------------------------------
+# Round 2 (found by the fuzz): assemble_velocity of a guess near the largest double gave
+# [-inf, -inf, inf] without a word.
+# --------------------------------------------------------------------------------------------
+def test_assemble_velocity_overflow_is_a_numerical_error():
+    from pointmass_dyn.errors import NumericalError
+
+    scene = pmd.load_scene("fourbar")
+    model = scene.model
+    with pytest.raises(NumericalError, match="assemble_velocity: the result is not finite"):
+        model.assemble_velocity(scene.q0, np.full(model.nv, 1e308))
+    # Linear in the guess: 1e200 × the projection of ones, to rounding.
+    unit = model.assemble_velocity(scene.q0, np.ones(model.nv))
+    big = model.assemble_velocity(scene.q0, np.full(model.nv, 1e200))
+    np.testing.assert_allclose(big / 1e200, unit, rtol=1e-12)
+    assert np.abs(model.constraint_jacobian(scene.q0) @ unit).max() < 1e-12

@@ -346,7 +346,8 @@ def test_cli_reports_unreadable_and_unwritable_files(tmp_path, capsys):
     assert "directory" in capsys.readouterr().err
     out = tmp_path / "missing" / "traj.csv"
     assert main(["simulate", "pendulum_planar", "--t-end", "0.01", "--out", str(out)]) == 2
-    assert "cannot write the output file" in capsys.readouterr().err
+    # Refused before the run (issue 29, round 2), naming the option.
+    assert "--out: expected a file in an existing directory" in capsys.readouterr().err
 
 if __name__ == "__main__":  # pragma: no cover
     sys.exit(pytest.main([__file__, "-q"]))

@@ -691,10 +691,12 @@ def simulate_batch(
     progress: Callable[[int, int], Any] | None = None,
     method: _Integrator | None = None,
     dt: float | None = None,
-) -> list[dict[str, Any]]:
+) -> tuple[list[dict[str, Any]], BaseException | None]:
     """Runs B scenes (or one scene from B initial states ``q0`` (B, nq), ``v0`` (B, nv)) on
     ``threads`` threads, the GIL released once; one dict per run as ``simulate_scene``
-    returns, or ``{"error": exception}`` for a run whose input was refused."""
+    returns, or ``{"error": exception}`` for a run whose input was refused or that did not
+    start; with the exception (Ctrl-C, or one ``progress`` raised) that stopped the batch,
+    else None."""
 
 def effect_forces(
     scene: Scene,

@@ -106,6 +106,9 @@ pub(crate) fn auto<S: OdeSystem, J: Integrator<System = S>>(
     events: &mut [Event<'_>],
     target: StiffTarget<S, J>,
 ) -> Result<Solution, InputError> {
+    // Refused up front, not at the switch: whether `auto` needs Radau is not known yet.
+    let (_, atol, _) = super::common::tolerances(opts, sys.dim())?;
+    super::radau::check_atol_positive(&atol, "auto")?;
     if starts_on_dop853(opts) {
         auto_from::<S, J, Dop853Tableau>(sys, t_span, y0, opts, events, target)
     } else {

@@ -353,6 +353,16 @@ pub enum InputError {
         index: usize,
         value: f64,
     },
+    #[error(
+        "atol: component {index} must be > 0 for method '{method}' (Radau's Newton iteration \
+         measures its corrections by atol + rtol·|y|, which is 0 wherever a component is 0; \
+         Hairer's RADAU5 refuses it alike), got {value}"
+    )]
+    AtolZeroImplicit {
+        method: &'static str,
+        index: usize,
+        value: f64,
+    },
     #[error("max_step: must be positive, got {0}")]
     MaxStep(f64),
     #[error("t_eval: {points} output times of {dim} components need {bytes} bytes, which cannot be allocated")]
@@ -409,6 +419,7 @@ impl InputError {
             | InputError::Y0NonFinite { .. } => "y0",
             InputError::TSpanNonFinite { .. } | InputError::TSpanEmpty(_) => "t_span",
             InputError::TolLength { name, .. } | InputError::TolInvalid { name, .. } => name,
+            InputError::AtolZeroImplicit { .. } => "atol",
             InputError::MaxStep(_) => "max_step",
             InputError::MaxSteps => "max_steps",
             InputError::FirstStepNotPositive(_) | InputError::FirstStepBeyondSpan { .. } => {
@@ -436,6 +447,8 @@ pub enum NonFiniteKind {
     Derivative,
     /// The integrated state (a stage or an accepted step).
     State,
+    /// An entry of the Jacobian `∂f/∂y` (the system's or a `jac` given).
+    Jacobian,
 }
 
 /// How an integration ended. In every variant `t` is the time reached (last accepted
@@ -448,6 +461,13 @@ pub enum Status {
     TerminalEvent { event: usize, t: f64 },
     /// The required step fell below `min_step = 10 * ulp(t)` (SciPy's failure).
     StepTooSmall { t: f64, min_step: f64 },
+    /// Radau's simplified Newton iteration failed at every step size down to `min_step`
+    /// (`singular`: the last Newton matrix could not be factorised).
+    NewtonFailed {
+        t: f64,
+        min_step: f64,
+        singular: bool,
+    },
     /// `max_steps` accepted steps were taken before reaching `t_end`.
     MaxSteps { t: f64, max_steps: usize },
     /// A derivative or the state became NaN/inf.
@@ -498,6 +518,22 @@ impl Status {
                     f(*t)
                 )
             }
+            Status::NewtonFailed {
+                t,
+                min_step,
+                singular,
+            } => format!(
+                "Radau's Newton iteration did not converge ({}) at any step size down to the \
+                 minimum {min_step:.3e} at t = {}; the implicit stage equations have no nearby \
+                 solution there (a singularity or a discontinuity of the right-hand side, or a \
+                 Jacobian far from the true one)",
+                if *singular {
+                    "its matrix was singular"
+                } else {
+                    "the corrections did not contract"
+                },
+                f(*t)
+            ),
             Status::MaxSteps { t, max_steps } => {
                 format!(
                     "maximum number of steps ({max_steps}) reached at t = {}",
@@ -510,6 +546,9 @@ impl Status {
                         "the right-hand side returned a non-finite value (NaN or inf)"
                     }
                     NonFiniteKind::State => "the state became non-finite (NaN or inf)",
+                    NonFiniteKind::Jacobian => {
+                        "the Jacobian returned a non-finite value (NaN or inf)"
+                    }
                 };
                 format!(
                     "{what} at t = {}; integration reached t = {}",

@@ -185,6 +185,10 @@ pub struct Radau<S: OdeSystem> {
     n_newton_failures: usize,
     /// Why the step size fell: the last attempt of a failed step was a Newton failure.
     last_attempt_newton_failure: bool,
+    /// That failure's cause: a stage derivative that was not finite (its time), or a
+    /// singular Newton matrix; neither: the corrections did not contract.
+    newton_nonfinite_at: Option<f64>,
+    newton_singular: bool,
 }
 
 /// SciPy `predict_factor` (Gustafsson's predictive controller, Hairer & Wanner IV.8).
@@ -234,6 +238,7 @@ impl<S: OdeSystem> Radau<S> {
             return Err(InputError::ControllerUnsupported { method: "Radau" });
         }
         let tols = tolerances(opts, dim)?;
+        check_atol_positive(&tols.1, "Radau")?;
         if let JacobianSource::Constant(m) = &jacobian {
             if m.len() != dim * dim {
                 return Err(InputError::JacobianShape {
@@ -279,6 +284,8 @@ impl<S: OdeSystem> Radau<S> {
             nlu: 0,
             n_newton_failures: 0,
             last_attempt_newton_failure: false,
+            newton_nonfinite_at: None,
+            newton_singular: false,
         })
     }
 
@@ -381,7 +388,7 @@ impl<S: OdeSystem> Radau<S> {
             Err(Status::NonFinite {
                 t: self.st.t,
                 at: self.st.t,
-                what: NonFiniteKind::Derivative,
+                what: NonFiniteKind::Jacobian,
             })
         }
     }
@@ -457,7 +464,10 @@ impl<S: OdeSystem> Radau<S> {
                         at,
                         message,
                     })?;
-                finite &= fs.iter().all(|v| v.is_finite());
+                if !fs.iter().all(|v| v.is_finite()) {
+                    finite = false;
+                    self.newton_nonfinite_at = Some(at);
+                }
             }
             if !finite {
                 break;
@@ -546,11 +556,13 @@ impl<S: OdeSystem> Radau<S> {
         let mut rejected = false;
         let (t_new, error_norm, n_iter, rate) = loop {
             if h_abs < min_step {
-                return Err(Status::StepTooSmall { t, min_step });
+                return Err(self.too_small(t, min_step));
             }
             let (t_new, h) = self.st.attempt(h_abs);
             h_abs = h.abs();
             self.predict_z0(t, h);
+            self.newton_nonfinite_at = None;
+            self.newton_singular = false;
             let (converged, n_iter, rate) = self.newton(t, h, &mut current_jac)?;
             self.last_attempt_newton_failure = !converged;
             if !converged {
@@ -599,6 +611,26 @@ impl<S: OdeSystem> Radau<S> {
         Ok(self.st.outcome())
     }
 
+    /// The failure when the step size fell below `min_step`: named after Newton when its
+    /// failures drove the step down (a non-finite stage derivative as such).
+    fn too_small(&self, t: f64, min_step: f64) -> Status {
+        if !self.last_attempt_newton_failure {
+            return Status::StepTooSmall { t, min_step };
+        }
+        match self.newton_nonfinite_at {
+            Some(at) => Status::NonFinite {
+                t,
+                at,
+                what: NonFiniteKind::Derivative,
+            },
+            None => Status::NewtonFailed {
+                t,
+                min_step,
+                singular: self.newton_singular,
+            },
+        }
+    }
+
     /// Simplified Newton for `Z` at step `h`: factorise if need be, iterate, and on failure
     /// with an old Jacobian re-evaluate it once and retry. Returns (converged, iterations,
     /// rate).
@@ -618,6 +650,7 @@ impl<S: OdeSystem> Radau<S> {
             } else {
                 true
             };
+            self.newton_singular = !factored;
             let r = if factored {
                 self.solve_collocation_system(t, h)?
             } else {
@@ -867,6 +900,19 @@ fn newton_tolerance(rtol: &Tol) -> f64 {
         100.0 * f64::EPSILON
     };
     (10.0 * f64::EPSILON / r).max(0.03f64.min(r.powf(0.5)))
+}
+
+/// Every `atol` entry positive (Radau, or `auto` that may continue with it): a zero one
+/// makes the Newton scale `atol + rtol·|y|` vanish where `y` does (RADAU5's check).
+pub(crate) fn check_atol_positive(atol: &[f64], method: &'static str) -> Result<(), InputError> {
+    match atol.iter().enumerate().find(|(_, a)| !(**a > 0.0)) {
+        Some((index, &value)) => Err(InputError::AtolZeroImplicit {
+            method,
+            index,
+            value,
+        }),
+        None => Ok(()),
+    }
 }
 
 /// The step-size safety factor after `n_iter` Newton iterations, `0.9 (2 N + 1)/(2 N + iters)`.

@@ -3,6 +3,7 @@ use pyo3::prelude::*;
 
 use super::convert::{array, shape_str};
 use super::errors::{invalid, IntoPyResult};
+use super::signals::detach_interruptible;
 use crate::model::Model;
 
 /// One state or a stack of them: `q` (nq,) or (N, nq), `v` and `a` (nv,) or (N, nv), the same
@@ -44,19 +45,31 @@ pub fn states(
             ));
         }
     }
+    // Row by row (a loop model's check closes its loops): long for many states, so with the
+    // interpreter released and Ctrl-C honoured.
+    detach_interruptible(py, || check_rows(model, count, &q, &vv, &av))?;
+    Ok((count, q, vv, av))
+}
+
+fn check_rows(
+    model: &Model,
+    count: Option<usize>,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+) -> crate::error::Result<()> {
     for k in 0..count.unwrap_or(1) {
+        crate::interrupt::check("checking the states")?;
         let qk = &q[k * model.nq..(k + 1) * model.nq];
-        let vk = &vv[k * model.nv..(k + 1) * model.nv];
+        let vk = &v[k * model.nv..(k + 1) * model.nv];
         let row = |e: crate::error::Error| match count {
             Some(_) => e.map_arg(|name| format!("{name}[{k}]")),
             None => e,
         };
-        model.check_state(qk, Some(vk)).map_err(row).py(py)?;
-        crate::error::check_finite("a", &av[k * model.nv..(k + 1) * model.nv])
-            .map_err(row)
-            .py(py)?;
+        model.check_state(qk, Some(vk)).map_err(row)?;
+        crate::error::check_finite("a", &a[k * model.nv..(k + 1) * model.nv]).map_err(row)?;
     }
-    Ok((count, q, vv, av))
+    Ok(())
 }
 
 /// `frame`: "joint" (each link's own axes) or "world".

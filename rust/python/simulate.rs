@@ -357,7 +357,7 @@ pub fn simulate_batch<'py>(
     progress: Option<Py<PyAny>>,
     method: Option<&str>,
     dt: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Bound<'py, PyList>> {
+) -> PyResult<(Bound<'py, PyList>, Option<Py<PyAny>>)> {
     use crate::simulate::batch::{broadcast, run_batch_polled};
     if scenes.is_empty() {
         return Err(invalid(py, "scenes", "at least one Scene", "none"));
@@ -418,12 +418,14 @@ pub fn simulate_batch<'py>(
             })
         })
     });
-    if let Some(e) = watch.error.take().or(take_callback_error()) {
-        return Err(e);
-    }
+    // Ctrl-C or a raising `progress` stopped the batch: the caller gets it back with every
+    // run's result so far (finished, stopped midway, not started).
+    let mut stopped = watch.error.take().or(take_callback_error());
     // A last report at the end, so a caller's progress bar always reaches B.
-    if let Some(cb) = &progress {
-        cb.bind(py).call1((count, count))?;
+    if let (None, Some(cb)) = (&stopped, &progress) {
+        if let Err(e) = cb.bind(py).call1((count, count)) {
+            stopped = Some(e);
+        }
     }
     let results = results
         .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
@@ -438,7 +440,7 @@ pub fn simulate_batch<'py>(
             }
         }
     }
-    Ok(out)
+    Ok((out, stopped.map(|e| e.into_value(py).into_any())))
 }
 
 /// Per-run initial states: one (1-D) for every run, or a row per run (2-D `(B, width)`).

@@ -4,6 +4,7 @@ also the ``--animate`` option of ``simulate``."""
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -81,6 +82,24 @@ def _trails(specs) -> list:
     return out
 
 
+def check_outputs(model, files, trails=None, size=None) -> None:
+    """Refuses, before any run, what would only fail after it: ``files`` ((option, path or
+    None) pairs) in directories that do not exist, ``--trail`` bodies the model does not
+    have, a ``--size`` that does not parse."""
+    for option, path in files:
+        if path and not Path(path).resolve().parent.is_dir():
+            raise InvalidInputError(
+                f"{option}: expected a file in an existing directory, got '{path}'"
+            )
+    names = list(model.body_names)
+    for spec in _trails(trails):
+        body = spec[0] if isinstance(spec, tuple) else spec
+        if body not in names:
+            raise InvalidInputError(f"--trail: expected a body of {names}, got '{body}'")
+    if size is not None:
+        _size(size)
+
+
 def write(args, result, scene, path: str) -> None:
     """Writes the animation of ``result`` that ``args`` (``add_options``) describe."""
     info = animate(result, scene, path, fps=args.fps, frames=args.frames,
@@ -91,6 +110,7 @@ def write(args, result, scene, path: str) -> None:
 
 def cmd_animate(args) -> int:
     scene = load_scene(args.scene)
+    check_outputs(scene.model, [("--out", args.out)], args.trail, args.size)
     t_span = scene.t_span or (0.0, 10.0)
     if args.t_end is not None:
         t_span = (t_span[0], args.t_end)

@@ -14,6 +14,7 @@ from ..errors import PointMassDynError
 from ..plotting import coordinate_labels, plot_trajectory
 from ..scenes import load_scene
 from ._animate import add_options as add_animate_options
+from ._animate import check_outputs
 from ._animate import write as write_animation
 
 
@@ -78,6 +79,11 @@ def _write_trajectory(path: Path, result, model) -> None:
 
 def cmd_simulate(args) -> int:
     scene = load_scene(args.scene)
+    if args.out and Path(args.out).suffix not in (".csv", ".npz"):
+        raise PointMassDynError(f"--out: expected a .csv or .npz file name, got '{args.out}'")
+    check_outputs(scene.model, [("--out", args.out), ("--plot", args.plot),
+                                ("--animate", args.animate)],
+                  args.trail if args.animate else None, args.size if args.animate else None)
     t_span = scene.t_span or (0.0, 10.0)
     if args.t_end is not None:
         t_span = (t_span[0], args.t_end)

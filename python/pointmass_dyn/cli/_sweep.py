@@ -23,6 +23,7 @@ from .._helpers import quaternion_slices, scene_gravity
 from ..errors import InvalidInputError
 from ..plotting import coordinate_labels, plot_sweep
 from ..scenes import load_scene
+from ._animate import check_outputs
 from ._progress import progress_bar
 
 PARAM_SPEC = "KEY=START:STOP:COUNT[:log] | KEY=V1,V2,..."
@@ -323,6 +324,7 @@ def cmd_sweep(args) -> int:
         raise InvalidInputError(f"--out: expected a .npz file name, got '{args.out}'")
     scene = load_scene(args.scene)
     model = scene.model
+    check_outputs(model, [("--out", args.out), ("--plot", args.plot)])
     t0, t_end = scene.t_span or (0.0, 10.0)
     if args.t_end is not None:
         t_end = args.t_end

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import hashlib
 import os
+import stat
 import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -215,6 +216,8 @@ def _welded(v: np.ndarray, f: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return v[:0], f
     used = v[f.reshape(-1)]
     lo = used.min(axis=0)
+    # Vertices no face uses any more (non-finite ones) merge into the corner `lo`.
+    v = np.where(np.isfinite(v).all(axis=1)[:, None], v, lo)
     span = float(np.max(used.max(axis=0) - lo)) or 1.0
     # Positions on a grid of span/2^20 (finer than any screen), as one 60-bit integer each:
     # a 1-D unique, far faster than unique rows.
@@ -257,9 +260,12 @@ def _read_stl(path: str, size: int) -> list:
 def _read(path: str) -> list:
     """(vertices, faces, rgb or None) of each part of the file, in the file's frame."""
     try:
-        size = os.stat(path).st_size
+        st = os.stat(path)
     except OSError as exc:
         raise MeshReadError(f"cannot be read ({exc.strerror})") from exc
+    if not stat.S_ISREG(st.st_mode):  # a FIFO or device would block or never end
+        raise MeshReadError("not a regular file")
+    size = st.st_size
     if size > MAX_MESH_BYTES:
         raise MeshReadError(f"{size} bytes, more than the {MAX_MESH_BYTES} read for display")
     ext = os.path.splitext(path)[1].lower().lstrip(".")
@@ -373,6 +379,8 @@ def _file_mesh(path: str, mtime: int, size: int, scale: tuple, target: int) -> M
         nv += len(v)
         nf += len(f)
     mesh = Mesh(np.concatenate(verts).astype(np.float32), np.concatenate(faces), spans)
+    if not np.isfinite(mesh.vertices).all():
+        raise MeshReadError(f"coordinates beyond the page's float32 range (scale {scale})")
     if np.prod(np.sign(scale)) < 0:  # a mirroring scale turns the faces inside out
         mesh.faces = mesh.faces[:, ::-1].copy()
     _cache_save(cache, vertices=mesh.vertices, faces=mesh.faces.astype(np.int64),
@@ -395,7 +403,10 @@ def _triangle_count(path: str, mtime: int, size: int) -> int:
 
 
 def _stat(path: str) -> tuple[int, int]:
-    st = os.stat(path)
+    try:
+        st = os.stat(path)
+    except ValueError as exc:  # an embedded NUL: no file has that name
+        raise MeshReadError(f"not a file name ({exc})") from exc
     return st.st_mtime_ns, st.st_size
 
 
@@ -426,7 +437,13 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -
                                np.asarray(v["translation"], dtype=float)[:, None]], axis=1)
         rgba = tuple(v["rgba"]) if v["rgba"] is not None else None
         if v["kind"] != "mesh":
-            meshes.append(primitive(v))
+            with np.errstate(over="ignore"):
+                shape = primitive(v)
+            if not np.isfinite(shape.vertices).all():  # sizes beyond float32 (1e308 m)
+                failed[f"{v['kind']} of body '{v['body_name']}'"] = "sizes beyond float32"
+                broken_bodies.add(v["body"])
+                continue
+            meshes.append(shape)
             instances.append(Instance(v["body"], len(meshes) - 1, pose, rgba or DEFAULT_RGBA))
             continue
         path = v["path"]
@@ -463,7 +480,7 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -
         shown = [f"{k} ({why})" for k, why in list(failed.items())[:8]]
         more = f" and {len(failed) - 8} more" if len(failed) > 8 else ""
         warnings.warn(
-            f"{len(failed)} mesh file(s) not drawn, their bodies are shown as inertia boxes: "
+            f"{len(failed)} mesh file(s) or shape(s) not drawn, their bodies are shown as inertia boxes: "
             + "; ".join(shown) + more,
             VisualWarning,
             stacklevel=3,

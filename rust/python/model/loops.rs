@@ -102,14 +102,14 @@ impl PyModel {
     }
 
     /// The closed configuration nearest `q_guess`, the coordinates in `fixed` held.
-    #[pyo3(signature = (q_guess, fixed=None, tol=1e-12, max_iterations=50))]
+    #[pyo3(signature = (q_guess, fixed=None, tol=1e-12, max_iterations=None))]
     fn assemble<'py>(
         &self,
         py: Python<'py>,
         q_guess: &Bound<'_, PyAny>,
         fixed: Option<&Bound<'_, PyAny>>,
         tol: f64,
-        max_iterations: usize,
+        max_iterations: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let (model, q) = self
             .state_only(py, q_guess)
@@ -117,6 +117,16 @@ impl PyModel {
         if !(tol > 0.0 && tol.is_finite()) {
             return Err(invalid(py, "tol", "a positive finite number", tol));
         }
+        let max_iterations = match max_iterations.filter(|m| !m.is_none()) {
+            Some(m) => crate::python::convert::int_arg(
+                m,
+                "max_iterations",
+                1,
+                i64::MAX,
+                "a whole number of iterations >= 1",
+            )? as usize,
+            None => 50,
+        };
         let mask = crate::python::loops::fixed_mask(&model, fixed)?;
         let q = py
             .detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))
@@ -138,6 +148,7 @@ impl PyModel {
             .map_err(|e| rename(py, e, "v", "v_guess"))?;
         let mask = crate::python::loops::fixed_mask(&model, fixed)?;
         loops::project_velocity_like(&model, &q, None, &mut v, &mask).py(py)?;
+        check_result(py, "assemble_velocity", &v)?;
         Ok(to_array1(py, &v).into_any())
     }
 
@@ -156,6 +167,7 @@ impl PyModel {
         crate::error::check_finite("a_guess", &a).py(py)?;
         let mask = crate::python::loops::fixed_mask(&model, fixed)?;
         loops::project_velocity_like(&model, &q, Some(&v), &mut a, &mask).py(py)?;
+        check_result(py, "assemble_acceleration", &a)?;
         Ok(to_array1(py, &a).into_any())
     }
 
