@@ -10,12 +10,13 @@
 //!   `v_eps` (smooth, no stick-slip switching), `μ F_n` when sliding.
 //!
 //! Generalized forces `τ = Σ Jᵀ f` through each point's Jacobian along its body's path
-//! (`body_point::End`, as a point spring's ends): no link wrench, O(depth) per point.
+//! (`body_point::PointSet`: the points' paths walked once per evaluation, a point's columns
+//! built only while it touches): no link wrench, O(depth) per point.
 //! The elastic part has the potential `V = k δ^(e+1) / (e + 1)` (in `energies`); the power
 //! is `−dV/dt − c δᵉ δ̇² + F_t · v_t ≤ −dV/dt` (with the `max` active too): contact never
 //! adds energy. The derivatives are analytic (`add_derivatives`), which Radau needs: a
 //! stiff contact makes a scene stiff.
-use super::body_point::End;
+use super::body_point::{add_force, velocity, PointSet};
 use super::{label_repr, one_number, Effect, TomlType};
 use super::{required, Context, Declaration, Fields, ForceLaw, JointRef, Kind};
 use crate::error::{check_finite, Error, Result};
@@ -304,24 +305,11 @@ impl GroundContact {
     /// The law, resolved against `model` (also used to report the contact forces along a
     /// trajectory, [`GroundContactLaw::evaluate`]).
     pub fn law(&self, model: &Model) -> Result<GroundContactLaw> {
-        let mut ends = Vec::with_capacity(self.points.len());
-        let mut radii = Vec::with_capacity(self.points.len());
-        for (k, p) in self.points.iter().enumerate() {
-            let arg = format!("points[{k}]");
-            let end = End::resolve(model, &Some(p.body.clone()), &p.point, &arg)?;
-            if end.link.is_none() {
-                return Err(Error::arg(
-                    arg,
-                    "a point on a body that moves (a body welded to the world never touches the ground differently)",
-                    end.what,
-                ));
-            }
-            ends.push(end);
-            radii.push(p.radius);
-        }
+        let points = self.points.iter().map(|p| (&p.body, &p.point));
+        let set = PointSet::resolve(model, points, |k| format!("points[{k}]"))?;
         Ok(GroundContactLaw {
-            ends,
-            radii,
+            set,
+            radii: self.points.iter().map(|p| p.radius).collect(),
             normal: self.normal,
             height: self.height,
             k: self.stiffness,
@@ -397,7 +385,7 @@ pub struct PointForce {
 }
 
 pub struct GroundContactLaw {
-    ends: Vec<End>,
+    set: PointSet,
     /// Per point, the sphere's radius (0: a point).
     radii: Vec<f64>,
     normal: Vec3,
@@ -427,6 +415,20 @@ fn tanh_ratio(x: f64) -> (f64, f64) {
 }
 
 impl GroundContactLaw {
+    /// `(δᵉ, δᵉ⁻¹)`, without `powf` for the usual exponents (Hertz's 1.5 and the linear 1).
+    #[inline]
+    fn powers(&self, delta: f64) -> (f64, f64) {
+        if self.e == 1.5 {
+            let r = delta.sqrt();
+            (delta * r, r)
+        } else if self.e == 1.0 {
+            (delta, 1.0)
+        } else {
+            let d1 = delta.powf(self.e - 1.0);
+            (d1 * delta, d1)
+        }
+    }
+
     /// The force on a point (a sphere's centre of radius `r`) at world position `p` moving
     /// at `pd`, with its Jacobians.
     #[inline]
@@ -444,14 +446,14 @@ impl GroundContactLaw {
             return zero;
         }
         let delta_dot = -n.dot(pd);
-        let de = delta.powf(self.e);
+        let (de, de1) = self.powers(delta);
         let fn_ = de * (self.k + self.c * delta_dot);
         if fn_ <= 0.0 {
             // The damping would pull: the contact lets go (`max(0, ·)`).
             return zero;
         }
         // ∂F_n/∂p = ∂F_n/∂δ (−nᵀ), ∂F_n/∂ṗ = c δᵉ (−nᵀ).
-        let dfn_ddelta = self.e * delta.powf(self.e - 1.0) * (self.k + self.c * delta_dot);
+        let dfn_ddelta = self.e * de1 * (self.k + self.c * delta_dot);
         let dfn_dp = -n * dfn_ddelta;
         let dfn_dv = -n * (self.c * de);
         let vt = pd + n * delta_dot; // ṗ − (n·ṗ) n
@@ -483,16 +485,17 @@ impl GroundContactLaw {
         v: &[f64],
         mut each: impl FnMut(usize, &Vec3, &PointForce),
     ) {
-        for k in 0..self.ends.len() {
-            let p = self.ends[k].place(model, q);
-            let pd = self.ends[k].velocity(v);
+        self.set.place(model, q);
+        for k in 0..self.set.len() {
+            let p = self.set.position(k);
+            let pd = velocity(self.set.jacobian(model, k, &p), v);
             let pf = self.point_force(&p, &pd, self.radii[k]);
             each(k, &p, &pf);
         }
     }
 
     pub fn npoints(&self) -> usize {
-        self.ends.len()
+        self.set.len()
     }
 }
 
@@ -504,16 +507,16 @@ impl ForceLaw for GroundContactLaw {
         tau: &mut [f64],
         _wrenches: &mut [Vec6],
     ) -> std::result::Result<bool, String> {
-        for k in 0..self.ends.len() {
-            let end = &mut self.ends[k];
-            let p = end.place(cx.model, cx.q);
+        self.set.place(cx.model, cx.q);
+        for k in 0..self.set.len() {
+            let p = self.set.position(k);
             let delta = self.height + self.radii[k] - self.normal.dot(&p);
             if delta <= 0.0 {
-                continue; // in the air: the point's velocity is never needed
+                continue; // in the air: neither its Jacobian nor its velocity is needed
             }
-            let pd = self.ends[k].velocity(cx.v);
+            let pd = velocity(self.set.jacobian(cx.model, k, &p), cx.v);
             let f = self.point_force(&p, &pd, self.radii[k]).force;
-            self.ends[k].add_force(&f, tau);
+            add_force(self.set.columns(k), &f, tau);
         }
         Ok(false)
     }
@@ -528,17 +531,18 @@ impl ForceLaw for GroundContactLaw {
         dq: &mut nalgebra::DMatrix<f64>,
         dv: &mut nalgebra::DMatrix<f64>,
     ) -> std::result::Result<bool, String> {
-        for k in 0..self.ends.len() {
-            let p = self.ends[k].place(cx.model, cx.q);
+        self.set.place(cx.model, cx.q);
+        for k in 0..self.set.len() {
+            let p = self.set.position(k);
             if self.height + self.radii[k] - self.normal.dot(&p) <= 0.0 {
                 continue;
             }
-            let pd = self.ends[k].velocity(cx.v);
+            let pd = velocity(self.set.jacobian(cx.model, k, &p), cx.v);
             let pf = self.point_force(&p, &pd, self.radii[k]);
             if pf.normal == 0.0 {
                 continue;
             }
-            let cols = &self.ends[k].columns;
+            let cols = self.set.columns(k);
             for (ci, c) in cols.iter().enumerate() {
                 let wc = angular(&c.s);
                 let mut hc = Vec3::zeros();
@@ -565,8 +569,8 @@ impl ForceLaw for GroundContactLaw {
     /// `Σ k δ^(e+1) / (e + 1)` over the penetrating points: the elastic part's potential.
     fn potential_energy(&self, _cx: &Context<'_>, links: &[LinkState]) -> Option<f64> {
         let mut v = 0.0;
-        for (end, r) in self.ends.iter().zip(&self.radii) {
-            let delta = self.height + r - self.normal.dot(&end.position(links));
+        for (k, r) in self.radii.iter().enumerate() {
+            let delta = self.height + r - self.normal.dot(&self.set.position_from(links, k));
             if delta > 0.0 {
                 v += self.k * delta.powf(self.e + 1.0) / (self.e + 1.0);
             }

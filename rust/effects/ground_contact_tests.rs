@@ -319,7 +319,7 @@ fn potential_is_the_elastic_work() {
         v: &[],
     };
     let v0 = law.potential_energy(&cx, &links).unwrap();
-    let delta = law.height - law.normal.dot(&law.ends[0].position(&links));
+    let delta = law.height - law.normal.dot(&law.set.position_from(&links, 0));
     assert!(delta > 0.0);
     let expected = law.k * delta.powf(law.e + 1.0) / (law.e + 1.0);
     assert!((v0 - expected).abs() <= 1e-12 * expected);
