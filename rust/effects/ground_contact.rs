@@ -338,7 +338,7 @@ impl GroundContact {
     /// The force is a function of the state, so these are exact wherever the states are.
     pub fn states(&self, model: &Model, q: &[f64], v: &[f64]) -> Result<ContactStates> {
         let (nq, nv) = (model.nq, model.nv);
-        let n = if nq == 0 { 0 } else { q.len() / nq };
+        let n = q.len().checked_div(nq).unwrap_or(0);
         if q.len() != n * nq || v.len() != n * nv {
             return Err(Error::arg(
                 "q, v",
