@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 6;
+pub const FORMAT_VERSION: u8 = 7;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
@@ -255,7 +255,10 @@ mod tests {
     /// One of everything that can be serialised, from literal numbers only (no arithmetic, so
     /// the bytes are the same on every platform).
     fn one_of_everything() -> Vec<u8> {
-        use crate::effects::{Damper, Disabled, External, Frame, Friction, JointRef, Kind};
+        use crate::effects::{
+            ContactPoint, Damper, Disabled, External, Frame, Friction, GroundContact, JointLimit,
+            JointRef, Kind, PerJoint, TorqueLimit,
+        };
         use crate::joint::Joint;
         use crate::model::{BodyRecord, Link};
         use crate::point_masses::EquimomentalSet;
@@ -362,7 +365,11 @@ mod tests {
             Effect::Friction(Friction::new(None, None, each.clone(), Some(0.25)).unwrap()),
             Effect::Torque(Torque::constant(None, refs.clone(), each.clone()).unwrap()),
             Effect::Torque(Torque::tabulated(None, None, table.clone()).unwrap()),
-            Effect::Torque(Torque::pd(None, refs, each.clone(), each, table).unwrap()),
+            Effect::Torque(
+                Torque::pd(None, refs, each.clone(), each, table)
+                    .unwrap()
+                    .with_limit(Some(TorqueLimit::Given(PerJoint::All(2.0)))),
+            ),
             Effect::Torque(Torque::function(Some("f".into()), f)),
             Effect::External(
                 External::constant(
@@ -402,6 +409,35 @@ mod tests {
                     4.5,
                     0.25,
                     0.5,
+                )
+                .unwrap(),
+            ),
+            Effect::GroundContact(
+                GroundContact::new(
+                    Some("c".into()),
+                    vec![ContactPoint {
+                        body: JointRef::Index(0),
+                        point: v(0.5),
+                        radius: 0.125,
+                    }],
+                    v(1.0),
+                    0.25,
+                    1.0e4,
+                    1.5,
+                    20.0,
+                    0.75,
+                    1e-3,
+                )
+                .unwrap(),
+            ),
+            Effect::JointLimit(
+                JointLimit::new(
+                    None,
+                    Some(vec![JointRef::Index(0)]),
+                    Some(PerJoint::All(-1.0)),
+                    None,
+                    PerJoint::All(100.0),
+                    PerJoint::Each(vec![2.0]),
                 )
                 .unwrap(),
             ),
@@ -472,7 +508,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (6, 2808, 0xe807_66c2_601c_a4d0),
+            (7, 2969, 0x5366_dab3_9f99_3677),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

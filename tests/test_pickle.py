@@ -221,6 +221,10 @@ def every_effect() -> list[pmd.Effect]:
         pmd.TorqueFunction(torque, name="motor"),
         pmd.PointSpring("wrist", (0.1, 0, 0), "world", (0, 0.5, -0.5), 30.0, rest_length=0.2, damping=0.5),
         pmd.PointSpring("base", (0, 0, 0.1), 1, (0.2, 0, 0), 12.0, name="tendon"),
+        pmd.GroundContact([("wrist", (0.1, 0, 0)), ("elbow", (0, 0, 0), 0.02)], normal=(0, 0.1, 1),
+                          height=-0.5, stiffness=1e5, damping=1e3, friction=0.8),
+        pmd.JointLimit(["elbow", "slide"], [-1.0, 0.0], [1.0, 0.3], stiffness=100.0, damping=1.0),
+        pmd.PDTorque("elbow", kp=10, kd=1, time=t, reference=[0, 0.1, 0.2], limit=2.0, name="sat"),
     ]
 
 

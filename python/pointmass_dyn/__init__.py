@@ -11,6 +11,14 @@ import sys
 
 from . import _pickle, benchmarking, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
+from ._contact import (
+    ContactForces,
+    GroundContact,
+    JointLimit,
+    contact_forces,
+    torque_saturation,
+    urdf_contact_points,
+)
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from ._simulation import (
     Damper,
@@ -134,6 +142,7 @@ __all__ = [
     "example_robot",
     "Balance",
     "BatchResult",
+    "ContactForces",
     "Counterweight",
     "LinkShape",
     "Shape",
@@ -143,11 +152,13 @@ __all__ = [
     "Fixed",
     "FreeFlyer",
     "Gravity",
+    "GroundContact",
     "InertiaError",
     "InertiaRepair",
     "InvalidInputError",
     "Joint",
     "JointFriction",
+    "JointLimit",
     "JointTorque",
     "LoopClosureError",
     "Model",
@@ -179,6 +190,7 @@ __all__ = [
     "analyze_motion",
     "balance",
     "builtin_scenes",
+    "contact_forces",
     "effect_forces",
     "effect_power",
     "from_mujoco",
@@ -196,5 +208,7 @@ __all__ = [
     "solve_ivp",
     "sweep",
     "to_mjcf",
+    "torque_saturation",
+    "urdf_contact_points",
     "work_precision",
 ]

@@ -407,9 +407,12 @@ class Model:
         (``link``, ``joint``, ``rules``, ``mass`` and ``principal_moments`` as (before,
         after), ``joint_type`` (before, after) for welds). Empty otherwise."""
     @staticmethod
-    def _from_parts(parts: list[tuple[Any, ...]]) -> Model:
+    def _from_parts(
+        parts: list[tuple[Any, ...]], ranges: Sequence[tuple[float, float] | None] | None = None
+    ) -> Model:
         """For :mod:`pointmass_dyn.importers`: bodies in tree order, each ``(name, parent,
-        joint, translation, rotation, joint_name, mass, com, inertia)``."""
+        joint, translation, rotation, joint_name, mass, com, inertia)``; ``ranges``: per part,
+        its joint's ``(lower, upper)`` or None."""
     @property
     def joint_names(self) -> list[str]:
         """Names of the moving joints in q/v order (URDF joint names; for models built with
@@ -426,7 +429,9 @@ _Joints: TypeAlias = str | int | Sequence[str | int] | None
 #: One number for all selected joints, or one per joint.
 _PerJoint: TypeAlias = float | ArrayLike
 #: Effect families, as ``disable`` names them.
-_Family: TypeAlias = Literal["gravity", "springs", "dampers", "friction", "torques", "external"]
+_Family: TypeAlias = Literal[
+    "gravity", "springs", "dampers", "friction", "torques", "external", "contact", "limits"
+]
 
 @final
 class Effect:
@@ -508,6 +513,42 @@ class Effect:
     ) -> Effect:
         """A spring–damper ``k (l − l0) + c l̇`` along the line between a point of body a and
         one of body b (each in its body's frame; ``"world"``/-1/None: the ground)."""
+    @staticmethod
+    def ground_contact(
+        points: Sequence[Any],
+        normal: ArrayLike,
+        height: float,
+        stiffness: float,
+        exponent: float,
+        damping: float,
+        friction: float,
+        v_eps: float,
+        name: str | None = None,
+    ) -> Effect:
+        """Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
+        force ``max(0, k δⁿ + c δⁿ δ̇)``, regularised Coulomb friction."""
+    @staticmethod
+    def joint_limit(
+        joints: str | int | Sequence[str | int] | None,
+        lower: ArrayLike | None,
+        upper: ArrayLike | None,
+        stiffness: ArrayLike,
+        damping: ArrayLike,
+        name: str | None = None,
+    ) -> Effect:
+        """One-sided spring–dampers outside ``[lower, upper]`` (None: the model's limits)."""
+    def with_torque_limit(self, limit: ArrayLike | str | None) -> Effect:
+        """A torque effect clamped per speed at ``±limit`` (``"effort"``: the URDF's)."""
+    @property
+    def torque_limit(self) -> NDArray[np.float64] | float | str | None:
+        """A torque effect's limit (``"effort"`` until a scene fills it in), else None."""
+    def torque_limit_per_speed(self, model: Model) -> NDArray[np.float64]:
+        """The limit on each of ``model``'s speeds (inf where unlimited or not driven)."""
+    def contact_state(
+        self, model: Model, q: ArrayLike, v: ArrayLike
+    ) -> dict[str, NDArray[np.float64]]:
+        """A ground contact's ``position`` (N, P, 3), ``penetration`` (N, P),
+        ``normal_force`` (N, P) and ``force`` (N, P, 3) along states ``q`` (N, nq), ``v``."""
     @property
     def name(self) -> str:
         """The effect's name: the one given, else its family's, e.g. ``'gravity'``."""

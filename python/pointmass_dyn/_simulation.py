@@ -20,7 +20,13 @@ factory                family       law
                                     or tabulated, world or body axes
 ``PointSpring``        springs      ``k (l − l0) + c l̇`` along the line between a
                                     point of body a and one of body b (or the world)
+``GroundContact``      contact      Hunt–Crossley contact of body points with a plane
+``JointLimit``         limits       one-sided spring–damper outside a joint's range
 =====================  ===========  ================================================
+
+The torque factories take ``limit=`` (actuator limits: the output clamped per speed, or
+``"effort"``: the URDF's); ``GroundContact`` and ``JointLimit`` are in ``_contact.py``
+(docs/contact.md).
 
 ``joints`` selects joints by body name or body index (as ``Model.add_body`` returns), one or
 a sequence; ``None`` means every moving joint. Per-joint parameters are one number or one per
@@ -38,6 +44,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core
+from ._contact import contact_forces, torque_saturation
 from ._core import Effect, Scene, StateEvent
 from .errors import SimulationError
 
@@ -75,40 +82,61 @@ def JointFriction(
     return Effect.friction(joints, friction, v_eps, name)
 
 
-def JointTorque(joints: Any, tau: Any, *, name: str | None = None) -> Effect:
+def JointTorque(joints: Any, tau: Any, *, limit: Any = None, name: str | None = None) -> Effect:
     """Constant joint torques (forces on prismatic joints), family ``torques``: one number
-    for every speed of the selected joints, or one per speed (3 for a spherical joint)."""
-    return Effect.joint_torque(joints, tau, name)
+    for every speed of the selected joints, or one per speed (3 for a spherical joint).
+    ``limit``: as :func:`PDTorque`'s, per speed."""
+    return _limited(Effect.joint_torque(joints, tau, name), limit)
 
 
-def TabulatedTorque(joints: Any, time: Any, values: Any, *, name: str | None = None) -> Effect:
+def TabulatedTorque(
+    joints: Any, time: Any, values: Any, *, limit: Any = None, name: str | None = None
+) -> Effect:
     """Joint torques tabulated in time, family ``torques``: ``time`` (N,) strictly
     increasing, ``values`` (N, n) with one column per speed of the selected joints ((N,)
     for one). Linear interpolation between rows (as ``numpy.interp``), the end rows held
-    outside the table."""
-    return Effect.tabulated_torque(joints, time, values, name)
+    outside the table. ``limit``: as :func:`PDTorque`'s, per speed."""
+    return _limited(Effect.tabulated_torque(joints, time, values, name), limit)
 
 
 def PDTorque(
-    joints: Any, kp: Any, kd: Any, time: Any, reference: Any, *, name: str | None = None
+    joints: Any,
+    kp: Any,
+    kd: Any,
+    time: Any,
+    reference: Any,
+    *,
+    limit: Any = None,
+    name: str | None = None,
 ) -> Effect:
     """A PD law tracking a tabulated reference on revolute/prismatic joints, family
     ``torques``: ``τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)``. ``reference`` (N, n) holds one
     column per joint at the times ``time`` (N,); ``q_ref`` is interpolated linearly (held
     outside the table) and ``q̇_ref`` is the slope of the current segment (right-continuous
-    at the breakpoints, zero outside the table)."""
-    return Effect.pd_torque(joints, kp, kd, time, reference, name)
+    at the breakpoints, zero outside the table). ``limit``: actuator limits, the output
+    clamped per joint at ``±limit`` (one number, one per joint, or ``"effort"``: each joint's
+    URDF ``<limit effort>``, taken when the scene is built); :func:`simulate` then reports
+    where it saturated (``.saturated``)."""
+    return _limited(Effect.pd_torque(joints, kp, kd, time, reference, name), limit)
 
 
-def TorqueFunction(f: Callable[[float, np.ndarray, np.ndarray], Any], *, name: str | None = None) -> Effect:
+def TorqueFunction(
+    f: Callable[[float, np.ndarray, np.ndarray], Any], *, limit: Any = None, name: str | None = None
+) -> Effect:
     """Generalized forces from a Python callable ``f(t, q, v) -> tau`` (nv,), family
     ``torques``. It has a price the Rust effects do not: every right-hand-side evaluation
     re-attaches to the interpreter (takes the GIL), builds two arrays and calls Python —
     about 1 µs per evaluation measured on chain7, some 40 % of its whole right-hand side,
     and more if other threads hold the GIL. Prefer ``JointTorque``/``TabulatedTorque``/
     ``PDTorque`` when they fit. An exception it raises stops the run and is re-raised by
-    :func:`simulate`."""
-    return Effect.torque_function(f, name)
+    :func:`simulate`. ``limit``: as :func:`PDTorque`'s, one number or one per speed (all
+    ``nv``)."""
+    return _limited(Effect.torque_function(f, name), limit)
+
+
+def _limited(effect: Effect, limit: Any) -> Effect:
+    """``effect`` clamped at ``limit`` (see :func:`PDTorque`), or as it is for None."""
+    return effect if limit is None else effect.with_torque_limit(limit)
 
 
 def ExternalForce(
@@ -192,6 +220,12 @@ class SimulationResult:
     #: ``method="auto"``: the method it switched to once the problem was found stiff, and when.
     switched_to: str | None = None
     t_switch: float | None = None
+    #: ``simulate(..., contact=True)``: each ground contact's points, penetrations and forces
+    #: at the output times (:class:`pointmass_dyn.ContactForces`), by effect name.
+    contact: dict | None = None
+    #: Torques with a ``limit``: where each was at its limit, (N, nv) booleans at the output
+    #: times by effect name (columns of the speeds it does not drive are False).
+    saturated: dict | None = None
 
     @property
     def nsteps(self) -> int:
@@ -241,6 +275,7 @@ def simulate(
     progress_interval: float | None = None,
     method: str | None = None,
     dt: float | None = None,
+    contact: bool = False,
 ) -> SimulationResult:
     """Integrates a scene, entirely in Rust with the GIL released.
 
@@ -259,8 +294,11 @@ def simulate(
     kinetic energy plus the potential energy of the enabled gravity and springs at every
     output time; ``power=True`` records each enabled effect's power ``τ_e · v`` (``.power``,
     a dict by effect name), so that ``dE/dt = Σ`` power of the non-conservative effects can
-    be checked. ``disable`` names effect families to switch off (``"gravity"``,
-    ``"springs"``, ``"dampers"``, ``"friction"``, ``"torques"``, ``"external"``); ``None``
+    be checked. ``contact=True`` records each ground contact's points, penetrations and
+    forces at the output times (``.contact``, see :func:`pointmass_dyn.contact_forces`); a
+    scene with torque limits reports where they saturated (``.saturated``). ``disable`` names
+    effect families to switch off (``"gravity"``, ``"springs"``, ``"dampers"``,
+    ``"friction"``, ``"torques"``, ``"external"``, ``"contact"``, ``"limits"``); ``None``
     takes the scene's ``[simulate] disable`` list, ``()`` switches nothing off.
     ``progress(t)`` is called when the run looks for Ctrl-C: by elapsed time, every 50 ms
     (every 250 ms at most while another Python thread keeps the interpreter busy, so that
@@ -305,6 +343,9 @@ def simulate(
     )
     error = out.pop("error")
     result = SimulationResult(scene=scene.name, **out)
+    result.saturated = torque_saturation(scene, result, disable)
+    if contact:
+        result.contact = contact_forces(scene, result)
     if error is not None:
         raise _with_partial_result(error, result)
     return result

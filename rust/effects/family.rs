@@ -11,16 +11,20 @@ pub enum Kind {
     Friction,
     Torques,
     External,
+    Contact,
+    Limits,
 }
 
 impl Kind {
-    pub const ALL: [Kind; 6] = [
+    pub const ALL: [Kind; 8] = [
         Kind::Gravity,
         Kind::Springs,
         Kind::Dampers,
         Kind::Friction,
         Kind::Torques,
         Kind::External,
+        Kind::Contact,
+        Kind::Limits,
     ];
 
     pub fn name(self) -> &'static str {
@@ -31,6 +35,8 @@ impl Kind {
             Kind::Friction => "friction",
             Kind::Torques => "torques",
             Kind::External => "external",
+            Kind::Contact => "contact",
+            Kind::Limits => "limits",
         }
     }
 
@@ -40,6 +46,7 @@ impl Kind {
             Kind::Springs => "spring",
             Kind::Dampers => "damper",
             Kind::Torques => "torque",
+            Kind::Limits => "limit",
             other => other.name(),
         }
     }

@@ -23,9 +23,10 @@
 //! on the moving links, which the O(n) forward dynamics takes as `external`.
 //!
 //! Families (the names of the global disable switch, MuJoCo-style): `gravity`, `springs`,
-//! `dampers`, `friction`, `torques` (constant, tabulated, PD and callback torques) and
-//! `external`. All effect parameters are SI with angles in radians, whatever a scene's
-//! `angles` key says (that key is about `q0`, `v0` and `rpy`).
+//! `dampers`, `friction`, `torques` (constant, tabulated, PD and callback torques, each
+//! optionally clamped at an actuator limit: `torque_limit.rs`), `external`, `contact` (ground
+//! contact) and `limits` (joint ranges). All effect parameters are SI with angles in radians,
+//! whatever a scene's `angles` key says (that key is about `q0`, `v0` and `rpy`).
 //!
 //! Energy: gravity and springs are conservative ([`ForceLaw::potential_energy`]); for every
 //! effect `e` its power is `P_e = τ_e · v`, so along any motion
@@ -43,19 +44,28 @@
 //! | `spring`           | `joints`, `stiffness`, `rest` (number, or coordinates)      |
 //! | `damper`           | `joints`, `damping`                                         |
 //! | `friction`         | `joints`, `friction`, `v_eps` (default 1e-3)                |
-//! | `torque`           | `joints`, `tau` (number, or one per speed)                  |
-//! | `tabulated_torque` | `joints`, `time = [...]`, `values` (list, or rows per time) |
-//! | `pd_torque`        | `joints`, `kp`, `kd`, `time`, `reference` (rows per time)   |
+//! | `torque`           | `joints`, `tau` (number, or one per speed), `limit`         |
+//! | `tabulated_torque` | `joints`, `time = [...]`, `values` (list, or rows per time), `limit` |
+//! | `pd_torque`        | `joints`, `kp`, `kd`, `time`, `reference` (rows per time), `limit` |
 //! | `external`         | `body`, `point`, `frame` ("world"/"body"), `force`, `moment`; with `time`, `force`/`moment` are rows per time |
 //! | `point_spring`     | `body_a`, `point_a`, `body_b`, `point_b` (a body name or index, or "world"/-1; each point in its body's frame), `stiffness`, `rest_length` (default 0), `damping` (default 0) |
+//! | `ground_contact`   | `points = [[body, [x, y, z]] or [body, [x, y, z], radius], ...]`, `normal` (default [0, 0, 1]), `height` (0), `stiffness`, `exponent` (1.5), `damping`, `friction`, `v_eps` (1e-3) |
+//! | `joint_limit`      | `joints` (default: every revolute/prismatic joint), `lower`, `upper` (default: the model's limits), `stiffness`, `damping` |
+//!
+//! A torque's `limit` is one number, one per speed, or `"effort"` (the URDF's `<limit effort>`);
+//! a joint limit's missing bounds and a torque's `"effort"` are the model's, filled in when a
+//! scene is built ([`fill_model_limits`]).
 //!
 //! `[simulate] disable = ["gravity", "springs"]` switches families off.
+mod body_point;
 pub mod damper;
 pub mod derivatives;
 pub mod external;
 mod family;
 pub mod friction;
 pub mod gravity;
+pub mod ground_contact;
+pub mod joint_limit;
 mod law;
 pub mod point_spring;
 mod scene_file;
@@ -63,6 +73,7 @@ mod select;
 pub mod spring;
 pub mod table;
 pub mod torque;
+pub mod torque_limit;
 
 use crate::error::{Error, Result};
 use crate::model::Model;
@@ -73,6 +84,8 @@ pub use external::{External, ExternalLoad, Frame};
 pub use family::{Disabled, Kind};
 pub use friction::Friction;
 pub use gravity::Gravity;
+pub use ground_contact::{ContactPoint, GroundContact};
+pub use joint_limit::{fill_model_limits, limits_by_link, JointLimit};
 pub use law::{Context, Effects, ForceLaw, Probe, RESERVED_LABELS};
 pub use point_spring::PointSpring;
 pub use scene_file::{required, Fields, Matrix, TomlType};
@@ -83,6 +96,7 @@ pub use select::{
 pub use spring::Spring;
 pub use table::Table;
 pub use torque::{Torque, TorqueFunction, TorqueLaw, TorqueSource};
+pub use torque_limit::TorqueLimit;
 
 /// A declared effect (see the module docs). Each variant's data lives in its own file;
 /// variants are appended (serialisation writes the variant's index).
@@ -98,6 +112,8 @@ pub enum Effect {
     Torque(Torque),
     External(External),
     PointSpring(PointSpring),
+    GroundContact(GroundContact),
+    JointLimit(JointLimit),
 }
 
 /// What each declared effect type implements, in its own file. Every method is required, so
@@ -155,6 +171,8 @@ registry! {
     Effect::Torque(e) => e; Torque,
     Effect::External(e) => e; External,
     Effect::PointSpring(e) => e; PointSpring,
+    Effect::GroundContact(e) => e; GroundContact,
+    Effect::JointLimit(e) => e; JointLimit,
 }
 
 impl Effect {

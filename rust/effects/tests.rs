@@ -615,7 +615,7 @@ fn toml_tables_parse_and_refuse() {
 fn error_messages_list_every_type_and_family() {
     let parse = |s: &str| Effect::from_toml(&s.parse::<toml::Table>().unwrap());
     let types = "one of \"gravity\", \"spring\", \"damper\", \"friction\", \"torque\", \
-\"tabulated_torque\", \"pd_torque\", \"external\", \"point_spring\"";
+\"tabulated_torque\", \"pd_torque\", \"external\", \"point_spring\", \"ground_contact\", \"joint_limit\"";
     for (text, got) in [
         ("type = \"springs\"", "\"springs\""),
         ("g = [0, 0, 1]", "nothing"),
@@ -639,7 +639,7 @@ fn error_messages_list_every_type_and_family() {
     };
     assert_eq!(
         expected,
-        "one of \"gravity\", \"springs\", \"dampers\", \"friction\", \"torques\", \"external\""
+        "one of \"gravity\", \"springs\", \"dampers\", \"friction\", \"torques\", \"external\", \"contact\", \"limits\""
     );
     for (name, kind) in [
         ("spring", Kind::Springs),
@@ -648,6 +648,9 @@ fn error_messages_list_every_type_and_family() {
         ("torque", Kind::Torques),
         ("friction", Kind::Friction),
         ("external", Kind::External),
+        ("contact", Kind::Contact),
+        ("limit", Kind::Limits),
+        ("limits", Kind::Limits),
         ("gravity", Kind::Gravity),
     ] {
         assert_eq!(Kind::parse(name), Some(kind), "{name}");

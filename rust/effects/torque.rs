@@ -9,6 +9,7 @@ use std::any::Any;
 use std::sync::Arc;
 
 use super::table::Table;
+use super::torque_limit::{Saturated, TorqueLimit};
 use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, JointSlot, Kind,
@@ -117,9 +118,9 @@ pub enum TorqueLaw {
 }
 
 /// Keys of `type = "torque"`, `"tabulated_torque"` and `"pd_torque"` tables.
-const KEYS_CONSTANT: &[&str] = &["name", "joints", "tau"];
-const KEYS_TABULATED: &[&str] = &["name", "joints", "time", "values"];
-const KEYS_PD: &[&str] = &["name", "joints", "kp", "kd", "time", "reference"];
+const KEYS_CONSTANT: &[&str] = &["name", "joints", "tau", "limit"];
+const KEYS_TABULATED: &[&str] = &["name", "joints", "time", "values", "limit"];
+const KEYS_PD: &[&str] = &["name", "joints", "kp", "kd", "time", "reference", "limit"];
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Torque {
@@ -127,6 +128,8 @@ pub struct Torque {
     /// `None`: every moving joint.
     pub joints: Option<Vec<JointRef>>,
     pub law: TorqueLaw,
+    /// Actuator limits: the output clamped per speed (`torque_limit.rs`); `None`: unlimited.
+    pub limit: Option<TorqueLimit>,
 }
 
 impl Torque {
@@ -140,6 +143,7 @@ impl Torque {
             name,
             joints,
             law: TorqueLaw::Constant(tau),
+            limit: None,
         })
     }
 
@@ -152,6 +156,7 @@ impl Torque {
             name,
             joints,
             law: TorqueLaw::Tabulated(table),
+            limit: None,
         })
     }
 
@@ -168,6 +173,7 @@ impl Torque {
             name,
             joints,
             law: TorqueLaw::Pd { kp, kd, reference },
+            limit: None,
         })
     }
 
@@ -176,10 +182,81 @@ impl Torque {
             name,
             joints: None,
             law: TorqueLaw::Function(f),
+            limit: None,
         }
     }
 
+    /// The same torques clamped at `limit` per speed.
+    pub fn with_limit(mut self, limit: Option<TorqueLimit>) -> Torque {
+        self.limit = limit;
+        self
+    }
+
+    /// The speeds this torque drives, in order (every speed for a function).
+    fn speeds(&self, model: &Model) -> Result<Vec<usize>> {
+        Ok(match &self.law {
+            TorqueLaw::Function(_) => (0..model.nv).collect(),
+            _ => resolve_joints(model, &self.joints, "joints")?
+                .iter()
+                .flat_map(JointSlot::speeds)
+                .collect(),
+        })
+    }
+
+    /// The limit on each of the model's `nv` speeds (inf where unlimited or not driven).
+    pub fn limit_per_speed(&self, model: &Model) -> Result<Vec<f64>> {
+        let mut out = vec![f64::INFINITY; model.nv];
+        let Some(TorqueLimit::Given(limit)) = &self.limit else {
+            return Ok(out);
+        };
+        let speeds = self.speeds(model)?;
+        let values = limit.expand(speeds.len(), "limit", "speed of the selected joints")?;
+        for (s, l) in speeds.into_iter().zip(values) {
+            out[s] = l;
+        }
+        Ok(out)
+    }
+
+    /// A copy whose `Effort` limit is the model's: `effort(link)` of each driven joint (inf
+    /// where the file gives none), one value per speed.
+    pub fn with_model_effort(
+        &self,
+        model: &Model,
+        effort: impl Fn(usize) -> f64,
+    ) -> Result<Torque> {
+        if self.limit != Some(TorqueLimit::Effort) {
+            return Ok(self.clone());
+        }
+        let values = match &self.law {
+            TorqueLaw::Function(_) => model
+                .links
+                .iter()
+                .enumerate()
+                .flat_map(|(i, l)| std::iter::repeat_n(effort(i), l.joint.nv()))
+                .collect(),
+            _ => resolve_joints(model, &self.joints, "joints")?
+                .iter()
+                .flat_map(|s| std::iter::repeat_n(effort(s.link), s.joint.nv()))
+                .collect(),
+        };
+        let mut out = self.clone();
+        out.limit = Some(TorqueLimit::Given(PerJoint::Each(values)));
+        Ok(out)
+    }
+
     pub(super) fn from_toml(ty: &str, f: &mut Fields<'_>) -> Result<Torque> {
+        let limit = match f.get("limit") {
+            None => None,
+            Some(toml::Value::String(s)) if s == "effort" => Some(TorqueLimit::Effort),
+            Some(_) => match f.per_joint("limit")? {
+                Some(l) => Some(TorqueLimit::given(l)?),
+                None => None,
+            },
+        };
+        Ok(Self::from_toml_unlimited(ty, f)?.with_limit(limit))
+    }
+
+    fn from_toml_unlimited(ty: &str, f: &mut Fields<'_>) -> Result<Torque> {
         let (name, joints) = f.name_and_joints()?;
         let times = "a list of increasing times";
         match ty {
@@ -244,10 +321,14 @@ impl Declaration for Torque {
             // Constant (`tau`; a function has no parameter, `Effect::with_parameter` says so).
             _ => Torque::constant(name, joints, PerJoint::from_values(values))?,
         };
-        Ok(Effect::Torque(e))
+        Ok(Effect::Torque(e.with_limit(self.limit.clone())))
     }
     fn repr(&self) -> String {
-        let label = label_repr(self.label());
+        let label = match &self.limit {
+            None => label_repr(self.label()),
+            Some(TorqueLimit::Effort) => format!(", limit='effort'{}", label_repr(self.label())),
+            Some(TorqueLimit::Given(_)) => format!(", limited{}", label_repr(self.label())),
+        };
         let joints = joints_repr(&self.joints);
         match &self.law {
             TorqueLaw::Constant(_) => format!("JointTorque(joints={joints}{label})"),
@@ -257,10 +338,7 @@ impl Declaration for Torque {
             TorqueLaw::Pd { reference, .. } => {
                 format!("PDTorque(joints={joints}, {} rows{label})", reference.len())
             }
-            TorqueLaw::Function(_) => match self.label() {
-                Some(l) => format!("TorqueFunction(name='{l}')"),
-                None => "TorqueFunction()".to_string(),
-            },
+            TorqueLaw::Function(_) => format!("TorqueFunction({})", label.trim_start_matches(", ")),
         }
     }
     fn toml_types() -> &'static [TomlType] {
@@ -290,6 +368,24 @@ impl Declaration for Torque {
         self.name.as_deref()
     }
     fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
+        let law = self.build_unlimited(model)?;
+        match &self.limit {
+            None => Ok(law),
+            Some(TorqueLimit::Given(_)) => {
+                let per_speed = self.limit_per_speed(model)?;
+                Ok(Box::new(Saturated::new(law, &per_speed)))
+            }
+            Some(TorqueLimit::Effort) => Err(Error::arg(
+                "limit",
+                "numbers, or 'effort' with a model that has joint efforts (from_urdf)",
+                "'effort' without the model's efforts",
+            )),
+        }
+    }
+}
+
+impl Torque {
+    fn build_unlimited(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         if let TorqueLaw::Function(f) = &self.law {
             if self.joints.is_some() {
                 return Err(Error::arg(

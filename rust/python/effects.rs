@@ -10,8 +10,8 @@ use super::convert::{array, int_arg, opt_real, real, shape_str, vec3, vector};
 use super::errors::{invalid, IntoPyResult};
 use super::options::given;
 use crate::effects::{
-    Damper, Effect, External, Frame, Friction, JointRef, Matrix, PerJoint, PointSpring, Spring,
-    Table, Torque, TorqueFunction,
+    ContactPoint, Damper, Effect, External, Frame, Friction, GroundContact, JointLimit, JointRef,
+    Matrix, PerJoint, PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLimit,
 };
 
 #[pyclass(
@@ -63,6 +63,48 @@ pub(super) fn joint_ref(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<JointRef>
         "a body name (str) or body index (int >= 0)",
         repr_of(obj),
     ))
+}
+
+/// Contact points: a sequence of `(body, [x, y, z])` or `(body, [x, y, z], radius)`.
+fn contact_points_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<ContactPoint>> {
+    const EXPECTED: &str =
+        "a sequence of (body, [x, y, z]) or (body, [x, y, z], radius): a body name or index, a point in its frame";
+    let py = obj.py();
+    if obj.extract::<String>().is_ok() {
+        return Err(invalid(py, "points", EXPECTED, repr_of(obj)));
+    }
+    let items = obj
+        .try_iter()
+        .map_err(|_| invalid(py, "points", EXPECTED, repr_of(obj)))?;
+    let mut out = Vec::new();
+    for (k, item) in items.enumerate() {
+        let item = item?;
+        let arg = format!("points[{k}]");
+        let parts: Vec<Bound<'_, PyAny>> = match item.try_iter() {
+            Ok(it) if item.extract::<String>().is_err() => it.collect::<PyResult<_>>()?,
+            _ => return Err(invalid(py, &arg, EXPECTED, repr_of(&item))),
+        };
+        let (body, point, radius) = match parts.as_slice() {
+            [b, p] => (b, p, 0.0),
+            [b, p, r] => (b, p, real(r, &format!("{arg} radius"))?),
+            _ => return Err(invalid(py, &arg, EXPECTED, repr_of(&item))),
+        };
+        out.push(ContactPoint {
+            body: joint_ref(body, &arg)?,
+            point: vec3(point, &arg)?,
+            radius,
+        });
+    }
+    Ok(out)
+}
+
+/// A torque limit: None, `"effort"` or one number / one per speed.
+fn torque_limit_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<TorqueLimit>> {
+    Ok(match given(obj) {
+        None => None,
+        Some(x) if x.extract::<String>().is_ok_and(|s| s == "effort") => Some(TorqueLimit::Effort),
+        Some(x) => Some(TorqueLimit::given(per_joint_arg(x, "limit")?).py(x.py())?),
+    })
 }
 
 /// A body name or index, or the world (`"world"`, −1 or `None`): `None` for the world.
@@ -388,6 +430,151 @@ impl PyEffect {
         let c = opt_real(damping, "damping")?.unwrap_or(0.0);
         let inner = PointSpring::new(name, body_a, point_a, body_b, point_b, k, rest, c).py(py)?;
         Ok(Effect::PointSpring(inner).into())
+    }
+
+    /// Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
+    /// force, regularised Coulomb friction.
+    #[staticmethod]
+    #[pyo3(signature = (points, normal, height, stiffness, exponent, damping, friction, v_eps, name=None))]
+    #[allow(clippy::too_many_arguments)]
+    fn ground_contact(
+        py: Python<'_>,
+        points: &Bound<'_, PyAny>,
+        normal: &Bound<'_, PyAny>,
+        height: &Bound<'_, PyAny>,
+        stiffness: &Bound<'_, PyAny>,
+        exponent: &Bound<'_, PyAny>,
+        damping: &Bound<'_, PyAny>,
+        friction: &Bound<'_, PyAny>,
+        v_eps: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let inner = GroundContact::new(
+            name,
+            contact_points_arg(points)?,
+            vec3(normal, "normal")?,
+            real(height, "height")?,
+            real(stiffness, "stiffness")?,
+            real(exponent, "exponent")?,
+            real(damping, "damping")?,
+            real(friction, "friction")?,
+            real(v_eps, "v_eps")?,
+        )
+        .py(py)?;
+        Ok(Effect::GroundContact(inner).into())
+    }
+
+    /// Compliant joint ranges (one-sided spring–dampers outside `[lower, upper]`); bounds
+    /// `None`: the model's own, filled in when a scene is built.
+    #[staticmethod]
+    #[pyo3(signature = (joints, lower, upper, stiffness, damping, name=None))]
+    fn joint_limit(
+        py: Python<'_>,
+        joints: Option<&Bound<'_, PyAny>>,
+        lower: Option<&Bound<'_, PyAny>>,
+        upper: Option<&Bound<'_, PyAny>>,
+        stiffness: &Bound<'_, PyAny>,
+        damping: &Bound<'_, PyAny>,
+        name: Option<String>,
+    ) -> PyResult<Self> {
+        let joints = joints_arg(joints)?;
+        let lower = given(lower)
+            .map(|x| per_joint_arg(x, "lower"))
+            .transpose()?;
+        let upper = given(upper)
+            .map(|x| per_joint_arg(x, "upper"))
+            .transpose()?;
+        let k = per_joint_arg(stiffness, "stiffness")?;
+        let c = per_joint_arg(damping, "damping")?;
+        Ok(Effect::JointLimit(JointLimit::new(name, joints, lower, upper, k, c).py(py)?).into())
+    }
+
+    /// A ground contact's points along states `q` (N, nq), `v` (N, nv): a dict of
+    /// `position` (N, P, 3), `penetration` (N, P), `normal_force` (N, P), `force` (N, P, 3).
+    fn contact_state<'py>(
+        &self,
+        py: Python<'py>,
+        model: PyRef<'_, super::model::PyModel>,
+        q: &Bound<'py, PyAny>,
+        v: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
+        let Effect::GroundContact(c) = &self.inner else {
+            return Err(invalid(
+                py,
+                "self",
+                "a GroundContact effect",
+                format!("a {} effect", self.inner.kind().name()),
+            ));
+        };
+        let m = model.model();
+        let (qs, qv) = array(q, "q")?;
+        let (vs, vv) = array(v, "v")?;
+        if qs.len() != 2 || qs[1] != m.nq || vs.len() != 2 || vs[1] != m.nv || vs[0] != qs[0] {
+            return Err(invalid(
+                py,
+                "q, v",
+                format!("arrays (N, {}) and (N, {})", m.nq, m.nv),
+                format!("{} and {}", shape_str(&qs), shape_str(&vs)),
+            ));
+        }
+        let s = c.states(&m, &qv, &vv).py(py)?;
+        let (n, np) = (qs[0], s.points);
+        let d = pyo3::types::PyDict::new(py);
+        let to = super::convert::to_array;
+        d.set_item("position", to(py, s.position, &[n, np, 3])?)?;
+        d.set_item("penetration", to(py, s.penetration, &[n, np])?)?;
+        d.set_item("normal_force", to(py, s.normal_force, &[n, np])?)?;
+        d.set_item("force", to(py, s.force, &[n, np, 3])?)?;
+        Ok(d)
+    }
+
+    /// A torque effect clamped per speed at `limit`: one number or one per speed of its
+    /// joints (all `nv` for a torque function), or `"effort"` (the model's URDF `effort`,
+    /// filled in when a scene is built); None removes the limit.
+    fn with_torque_limit(
+        &self,
+        py: Python<'_>,
+        limit: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let Effect::Torque(t) = &self.inner else {
+            return Err(invalid(
+                py,
+                "limit",
+                "a torque effect (JointTorque, TabulatedTorque, PDTorque, TorqueFunction)",
+                format!("a {} effect", self.inner.kind().name()),
+            ));
+        };
+        let limit = torque_limit_arg(limit)?;
+        Ok(Effect::Torque(t.clone().with_limit(limit)).into())
+    }
+
+    /// A torque effect's limit on each of `model`'s speeds (inf where unlimited or not
+    /// driven; all inf for another effect).
+    fn torque_limit_per_speed<'py>(
+        &self,
+        py: Python<'py>,
+        model: PyRef<'_, super::model::PyModel>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let m = model.model();
+        let out = match &self.inner {
+            Effect::Torque(t) => t.limit_per_speed(&m).py(py)?,
+            _ => vec![f64::INFINITY; m.nv],
+        };
+        Ok(super::convert::to_array1(py, &out).into_any())
+    }
+
+    /// A torque effect's limit: a number or an array (per speed), `"effort"` (until a scene
+    /// fills it in), or None.
+    #[getter]
+    fn torque_limit<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+        let Effect::Torque(t) = &self.inner else {
+            return None;
+        };
+        Some(match t.limit.as_ref()? {
+            TorqueLimit::Effort => pyo3::types::PyString::new(py, "effort").into_any(),
+            TorqueLimit::Given(PerJoint::All(x)) => pyo3::types::PyFloat::new(py, *x).into_any(),
+            TorqueLimit::Given(PerJoint::Each(v)) => super::convert::to_array1(py, v).into_any(),
+        })
     }
 
     /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).

@@ -69,6 +69,9 @@ impl PyScene {
                 }
             }
         }
+        // Joint limits without bounds and torques limited at "effort" take the model's
+        // (URDF <limit>, MJCF range).
+        crate::effects::fill_model_limits(&m, &model.urdf_joints(), &mut list, "effects").py(py)?;
         // Joint and body names, table widths and effect names must fit the model.
         Effects::new(&m, &list, Disabled::none(), "effects").py(py)?;
         let settings = Settings {
@@ -105,6 +108,9 @@ impl PyScene {
         effects: Option<Vec<PyRef<'_, PyEffect>>>,
     ) -> PyResult<Self> {
         let mut inner = self.inner.clone();
+        // New effects take their missing limits from the new model's URDF joints (none for
+        // the scene's own model, which keeps no URDF: give bounds then).
+        let urdf_joints = model.as_ref().map(|m| m.urdf_joints()).unwrap_or_default();
         if let Some(m) = model {
             let m = m.model();
             if (m.nq, m.nv) != (inner.model.nq, inner.model.nv) {
@@ -122,6 +128,8 @@ impl PyScene {
         }
         if let Some(list) = effects {
             inner.effects = list.iter().map(|e| e.inner.clone()).collect();
+            let (m, list) = (&inner.model, &mut inner.effects);
+            crate::effects::fill_model_limits(m, &urdf_joints, list, "effects").py(py)?;
         }
         Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").py(py)?;
         Ok(PyScene { inner })

@@ -108,7 +108,7 @@ pub(super) fn cross(a: &Vec3, b: &Vec3) -> Vec3 {
 }
 
 #[inline(always)]
-pub(super) fn mul(m: &Mat3, x: &Vec3) -> Vec3 {
+pub(crate) fn mul(m: &Mat3, x: &Vec3) -> Vec3 {
     Vec3::new(
         m[(0, 0)] * x.x + m[(0, 1)] * x.y + m[(0, 2)] * x.z,
         m[(1, 0)] * x.x + m[(1, 1)] * x.y + m[(1, 2)] * x.z,
@@ -127,7 +127,7 @@ pub(super) fn tr_mul(m: &Mat3, x: &Vec3) -> Vec3 {
 
 /// `a b` for 3×3 matrices, written out.
 #[inline(always)]
-pub(super) fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
+pub(crate) fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
     let mut c = Mat3::zeros();
     for j in 0..3 {
         for i in 0..3 {

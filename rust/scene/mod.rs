@@ -164,7 +164,7 @@ impl Scene {
         if sf.body.is_empty() && sf.urdf.is_none() {
             return Err(ctx.err("body", "a scene needs at least one [[body]] (or a urdf)"));
         }
-        let (mut model, urdf_effects) = urdf_model(&ctx, dir, &sf)?;
+        let (mut model, urdf_effects, urdf_joints) = urdf_model(&ctx, dir, &sf)?;
         let mut q0 = model.neutral();
         let mut v0 = vec![0.0; model.nv];
         bodies::add_bodies(&ctx, &mut model, &sf.body, units, &mut q0, &mut v0)?;
@@ -179,7 +179,7 @@ impl Scene {
             .map(|i| i.fixed.as_slice())
             .unwrap_or(&[]);
         loops::close_initial_state(&ctx, &model, fixed, &mut q0, &mut v0)?;
-        let effects = scene_effects(&ctx, &model, &sf.effect, urdf_effects)?;
+        let effects = scene_effects(&ctx, &model, &sf.effect, urdf_effects, &urdf_joints)?;
         let settings = match sf.simulate {
             Some(s) => settings(&ctx, s)?,
             None => Settings::default(),
@@ -260,9 +260,15 @@ impl Units {
     }
 }
 
-/// The model the `urdf` key starts (empty without one) and the effects its `urdf_dynamics`
-/// asks for.
-fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effect>)> {
+/// The model the `urdf` key starts (empty without one), the effects its `urdf_dynamics`
+/// asks for, and its joints (their `<limit>`s: joint limits without bounds, torques limited
+/// at `"effort"`).
+#[allow(clippy::type_complexity)]
+fn urdf_model(
+    ctx: &Ctx,
+    dir: &Path,
+    sf: &SceneFile,
+) -> Result<(Model, Vec<Effect>, Vec<crate::urdf::UrdfJoint>)> {
     let Some(rel) = &sf.urdf else {
         if sf.urdf_dynamics.is_some() {
             return Err(ctx.err("urdf_dynamics", "needs a urdf key"));
@@ -273,7 +279,7 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
         if sf.urdf_repair.is_some() {
             return Err(ctx.err("urdf_repair", "needs a urdf key"));
         }
-        return Ok((Model::new(), Vec::new()));
+        return Ok((Model::new(), Vec::new(), Vec::new()));
     };
     let root = match sf.root_joint.as_deref() {
         None | Some("fixed") => crate::urdf::RootJoint::Fixed,
@@ -293,7 +299,7 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
     let urdf = crate::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref(), &[])
         .map_err(|e| ctx.core("urdf", e))?;
     let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
-    Ok((urdf.model, effects))
+    Ok((urdf.model, effects, urdf.joints))
 }
 
 /// `[initial]`: the whole state (overriding the bodies' `q0`/`v0`), angular coordinates in
@@ -350,10 +356,17 @@ fn scene_effects(
     model: &Model,
     tables: &[EffectFile],
     mut effects: Vec<Effect>,
+    urdf_joints: &[crate::urdf::UrdfJoint],
 ) -> Result<Vec<Effect>> {
+    let from_urdf = effects.len();
     for (k, e) in tables.iter().enumerate() {
         effects.push(Effect::from_toml(e).map_err(|x| ctx.at_arg(format!("effect[{k}]"), x))?);
     }
+    // Joint limits without bounds and torques limited at "effort" take the URDF's (bodies
+    // added by [[body]] have none).
+    let tabled = &mut effects[from_urdf..];
+    crate::effects::fill_model_limits(model, urdf_joints, tabled, "effect")
+        .map_err(|x| ctx.at_arg("", x))?;
     Effects::new(model, &effects, Disabled::none(), "effect").map_err(|x| ctx.at_arg("", x))?;
     Ok(effects)
 }

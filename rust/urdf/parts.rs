@@ -22,6 +22,8 @@ pub struct Part {
     pub mass: f64,
     pub com: Vec3,
     pub inertia: Mat3,
+    /// The joint's range `(lower, upper)` (MJCF `range` of a limited joint), if any.
+    pub range: Option<(f64, f64)>,
 }
 
 fn kind(j: &Joint) -> &'static str {
@@ -121,7 +123,12 @@ pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
                     Joint::Revolute { axis } | Joint::Prismatic { axis } => axis,
                     _ => Vec3::x(),
                 },
-                limit: None,
+                limit: p.range.map(|(lower, upper)| super::Limit {
+                    lower,
+                    upper,
+                    effort: f64::INFINITY,
+                    velocity: f64::INFINITY,
+                }),
                 damping: 0.0,
                 friction: 0.0,
                 mimic: None,

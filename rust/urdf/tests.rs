@@ -564,6 +564,7 @@ fn parts_keep_order_and_allow_massless_intermediates() {
         mass,
         com: Vec3::new(0.1, 0.0, 0.0),
         inertia: Mat3::identity() * mass * 0.01,
+        range: None,
     };
     let x = Joint::revolute(Vec3::x()).unwrap();
     let z = Joint::revolute(Vec3::z()).unwrap();

@@ -70,7 +70,9 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     MuJoCo's: ``dof_armature``, passive forces, contacts, actuators and equality constraints
     are not imported (a :class:`ModelImportWarning` names those present), but for
     ``<equality connect>`` and ``<equality weld>`` between bodies, which become loops
-    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md).
+    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md). The ``range`` of a limited hinge
+    or slide becomes the joint's limit (``Model.joint_limits()``, what ``pmd.JointLimit``
+    without bounds enforces).
 
     The geoms of the bodies (groups 0-2) become ``model.visuals`` (mesh files looked for as
     MuJoCo recorded them and in ``mesh_dirs``), and the model is named after
@@ -88,6 +90,7 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     m = mj_model
     J = mujoco.mjtJoint
     parts: list[tuple] = []
+    ranges: list[tuple[float, float] | None] = []  # per part, its joint's range
     last_of_body = {0: -1}  # MuJoCo body id -> our index of its last part (world: -1)
     anchor_of_body = {0: np.zeros(3)}  # the last part's frame origin in the MuJoCo body frame
     for b in range(1, m.nbody):
@@ -104,6 +107,7 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
         ipos = np.asarray(m.body_ipos[b], float)
         if not jids:
             parts.append((bname, parent, Joint.fixed(), t_body, r_body, bname, mass, ipos, inertia))
+            ranges.append(None)
             last_of_body[b], anchor_of_body[b] = len(parts) - 1, np.zeros(3)
             continue
         prev_anchor = np.zeros(3)
@@ -141,10 +145,12 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
             name = bname if last else f"{bname}/{jname}"
             body = (mass, ipos - anchor, inertia) if last else (0.0, np.zeros(3), np.zeros((3, 3)))
             parts.append((name, parent, joint, t, r, jname, *body))
+            limited = jtype in (J.mjJNT_HINGE, J.mjJNT_SLIDE) and bool(m.jnt_limited[j])
+            ranges.append((float(m.jnt_range[j][0]), float(m.jnt_range[j][1])) if limited else None)
             parent = len(parts) - 1
             prev_anchor, trans, rot = anchor, np.zeros(3), np.eye(3)
         last_of_body[b], anchor_of_body[b] = parent, prev_anchor
-    model = Model._from_parts(parts)
+    model = Model._from_parts(parts, ranges)
     visuals, missing = geom_visuals(m, last_of_body, anchor_of_body, mesh_dirs_of(mesh_dirs))
     model.set_visuals(visuals, name=model_name(m))
     ignored = []

@@ -79,9 +79,24 @@ impl PyModel {
 
     /// For the importers (python/pointmass_dyn/io/_importers.py): a model from bodies in tree
     /// order, each `(name, parent, joint, translation, rotation, joint_name, mass, com,
-    /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body.
+    /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body. `ranges`:
+    /// per part, its joint's range `(lower, upper)` or None (`Model.joint_limits()`).
     #[staticmethod]
-    fn _from_parts(py: Python<'_>, parts: Vec<Bound<'_, PyAny>>) -> PyResult<Self> {
+    #[pyo3(signature = (parts, ranges=None))]
+    fn _from_parts(
+        py: Python<'_>,
+        parts: Vec<Bound<'_, PyAny>>,
+        ranges: Option<Vec<Option<(f64, f64)>>>,
+    ) -> PyResult<Self> {
+        let ranges = ranges.unwrap_or_else(|| vec![None; parts.len()]);
+        if ranges.len() != parts.len() {
+            return Err(invalid(
+                py,
+                "ranges",
+                format!("one (lower, upper) or None per part ({})", parts.len()),
+                format!("{} entries", ranges.len()),
+            ));
+        }
         let mut out = Vec::with_capacity(parts.len());
         for (k, p) in parts.iter().enumerate() {
             #[allow(clippy::type_complexity)]
@@ -124,6 +139,7 @@ impl PyModel {
                 mass,
                 com: vec3(&com, "com")?,
                 inertia: mat3(&inertia, "inertia")?,
+                range: ranges[k],
             });
         }
         let built = crate::urdf::model_from_parts(&out).py(py)?;

@@ -1,0 +1,173 @@
+"""Ground contact and joint ranges: the effects that make a robot stand (docs/contact.md).
+
+=====================  ===========  ================================================
+factory                family       law
+=====================  ===========  ================================================
+``GroundContact``      contact      Hunt–Crossley ``max(0, k δⁿ + c δⁿ δ̇)`` along the
+                                    plane's normal, regularised Coulomb friction
+``JointLimit``         limits       one-sided spring–damper outside ``[lower, upper]``
+=====================  ===========  ================================================
+
+:func:`urdf_contact_points` takes contact points (sphere centres and radii) from a URDF's
+``<collision>`` elements; :func:`contact_forces` evaluates a contact's points, penetrations
+and forces along a trajectory (what ``simulate(..., contact=True)`` records);
+:func:`torque_saturation` says where limited torques were at their limit (a result's
+``.saturated``).
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from . import _core
+from ._core import Effect, Scene
+from .errors import InvalidInputError
+
+
+def GroundContact(
+    points: Sequence[Any],
+    *,
+    normal: Sequence[float] = (0.0, 0.0, 1.0),
+    height: float = 0.0,
+    stiffness: float,
+    exponent: float = 1.5,
+    damping: float,
+    friction: float,
+    v_eps: float = 1e-3,
+    name: str | None = None,
+) -> Effect:
+    """Compliant contact of body points with the plane ``normal · x = height``, family
+    ``contact``.
+
+    ``points``: ``[(body, [x, y, z]), …]`` (a body name or index, a point in its frame), or
+    ``(body, [x, y, z], radius)`` for a sphere centred there (it touches the plane when its
+    centre is ``radius`` above it). With the penetration ``δ = height + radius − normal · p``
+    and its rate ``δ̇``, a point below the plane feels the Hunt–Crossley normal force
+    ``F_n = max(0, k δⁿ + c δⁿ δ̇)`` (``stiffness`` k > 0, ``exponent`` n ≥ 1, 1.5 for Hertz;
+    ``damping`` c ≥ 0; it never pulls) and regularised Coulomb friction
+    ``−μ F_n tanh(|v_t| / v_eps) v_t / |v_t|`` on its tangential velocity (``friction``
+    μ ≥ 0). The elastic part's potential ``k δⁿ⁺¹ / (n + 1)`` counts in ``energies``;
+    damping and friction only dissipate. Its derivatives are analytic (Radau, ``auto``).
+    How to choose k and c: docs/contact.md."""
+    return Effect.ground_contact(
+        points, normal, height, stiffness, exponent, damping, friction, v_eps, name
+    )
+
+
+def JointLimit(
+    joints: Any = None,
+    lower: Any = None,
+    upper: Any = None,
+    *,
+    stiffness: Any,
+    damping: Any,
+    name: str | None = None,
+) -> Effect:
+    """Compliant joint ranges on revolute and prismatic joints, family ``limits``: below
+    ``lower``, ``τ = max(0, k (lower − q) − c q̇)``; above ``upper``,
+    ``τ = −max(0, k (q − upper) + c q̇)``; nothing inside. ``joints=None``: every revolute
+    and prismatic joint. ``lower``/``upper``: one number or one per joint (±inf: no bound);
+    ``None`` takes the model's own (``Model.joint_limits()``: URDF ``<limit>``, MJCF
+    ``range``) when the scene is built. Potential ``½ k δ²`` (in ``energies``)."""
+    return Effect.joint_limit(joints, lower, upper, stiffness, damping, name)
+
+
+def urdf_contact_points(
+    urdf: str | os.PathLike, links: Sequence[str]
+) -> list[tuple[str, list[float], float]]:
+    """Contact points ``(link, [x, y, z], radius)`` for :func:`GroundContact`, from the
+    ``<collision>`` elements of the named links of a URDF file: every ``<sphere>`` gives its
+    centre (its ``<origin>``, in the link's frame) and radius; a link without a sphere (a mesh
+    foot, say) gives its origin with radius 0. Bodies of ``Model.from_urdf`` carry the link
+    names, so the points can be used as they are."""
+    path = os.fspath(urdf)
+    try:
+        root = ET.parse(path).getroot()
+    except (OSError, ET.ParseError) as e:
+        raise InvalidInputError(f"urdf: a readable URDF file; got {path!r} ({e})") from None
+    if isinstance(links, str):
+        links = [links]
+    by_name = {link.get("name"): link for link in root.findall("link")}
+    out: list[tuple[str, list[float], float]] = []
+    for k, name in enumerate(links):
+        link = by_name.get(name)
+        if link is None:
+            raise InvalidInputError(
+                f"links[{k}]: the name of a link of {path} ({', '.join(sorted(map(str, by_name)))}); "
+                f"got {name!r}"
+            )
+        spheres = []
+        for col in link.findall("collision"):
+            sphere = col.find("geometry/sphere")
+            if sphere is None:
+                continue
+            origin = col.find("origin")
+            xyz = [0.0, 0.0, 0.0]
+            if origin is not None and origin.get("xyz"):
+                xyz = [float(x) for x in origin.get("xyz", "").split()]
+            spheres.append((name, xyz, float(sphere.get("radius", "0"))))
+        out.extend(spheres or [(name, [0.0, 0.0, 0.0], 0.0)])
+    return out
+
+
+@dataclass
+class ContactForces:
+    """One ground contact along a trajectory: per output time and point, the point's world
+    ``position`` (N, P, 3), its ``penetration`` (N, P; negative above the plane), the
+    ``normal_force`` (N, P) and the whole ``force`` on it (N, P, 3, world; normal plus
+    friction). Drawable: ``position`` and ``force`` are plain arrays."""
+
+    name: str
+    position: np.ndarray
+    penetration: np.ndarray
+    normal_force: np.ndarray
+    force: np.ndarray
+
+    @property
+    def total_force(self) -> np.ndarray:
+        """Sum over the points (N, 3)."""
+        return self.force.sum(axis=1)
+
+
+def contact_forces(scene: Scene, result: Any) -> dict[str, ContactForces]:
+    """Every ground contact of ``scene`` evaluated at the output states of ``result`` (its
+    ``q`` and ``v``), by effect name. The contact force is a function of the state, so these
+    are exact at the output times."""
+    q = np.atleast_2d(np.asarray(result.q, dtype=float))
+    v = np.atleast_2d(np.asarray(result.v, dtype=float))
+    model = scene.model
+    out: dict[str, ContactForces] = {}
+    for e in scene.effects:
+        if e.kind == "contact":
+            d = e.contact_state(model, q, v)
+            out[e.name] = ContactForces(name=e.name, **d)
+    return out
+
+
+def torque_saturation(scene: Scene, result: Any, disable: Any = None) -> dict | None:
+    """Where each torque effect of ``scene`` with a ``limit`` was at it along ``result``:
+    (N, nv) booleans at the output times, by effect name (False on the speeds it does not
+    drive); None when no enabled torque has a limit. ``disable`` as :func:`simulate`'s."""
+    model = scene.model
+    limits = {
+        e.name: e.torque_limit_per_speed(model)
+        for e in scene.effects
+        if e.torque_limit is not None
+    }
+    if not limits:
+        return None
+    q, v = np.asarray(result.q), np.asarray(result.v)
+    out: dict[str, np.ndarray] = {}
+    for k, t in enumerate(np.asarray(result.t)):
+        forces = _core.effect_forces(scene, float(t), q[k], v[k], disable)
+        for name, lim in limits.items():
+            if name in forces:
+                row = out.setdefault(name, np.zeros(v.shape, dtype=bool))
+                row[k] = np.abs(forces[name]) >= lim * (1 - 1e-12)
+    return out or None
