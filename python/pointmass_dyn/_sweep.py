@@ -16,6 +16,7 @@ Needs the ``dask`` extra: ``pip install "pointmass-dyn[dask]"``.
 from __future__ import annotations
 
 import math
+import socket
 import uuid
 from collections.abc import Sequence
 from typing import Any, Callable
@@ -118,6 +119,13 @@ def _connect(distributed, scheduler, timeout: float):
             f"{scheduler!r}"
         )
     try:
+        if protocol == "tcp":
+            # A plain socket first: a Client whose __init__ fails can deadlock in its own
+            # __del__ (seen with distributed 2025 under load), so do not build one for a
+            # scheduler that cannot be reached at all.
+            from distributed.comm import get_address_host_port
+
+            socket.create_connection(get_address_host_port(scheduler), timeout=timeout).close()
         return distributed.Client(scheduler, timeout=timeout)
     except ValueError as exc:
         raise InvalidInputError(f"scheduler: expected {expected}, got {scheduler!r} ({exc})") from exc
