@@ -255,29 +255,41 @@ pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Ve
         .collect()
 }
 
-/// What the file says that is not loaded as said: mimic constraints (not enforced), moving
-/// joints without `<limit>`, elements the dynamics does not use.
+/// `<mimic joint multiplier offset>` as couplings `q = multiplier · q_joint + offset` (the
+/// loop solver holds them, `crate::loops::coupling`); a mimic of an unknown joint, of a
+/// fixed joint, or in a cycle is an error naming the joint.
+pub(super) fn add_mimics(ctx: &Ctx, model: &mut Model, joints: &[UrdfJoint]) -> Result<()> {
+    for j in joints {
+        let Some(m) = &j.mimic else { continue };
+        let at = |e: Error| in_element(ctx, format!("joint '{}' <mimic>", j.name), e);
+        let reference = joints.iter().find(|r| r.name == m.joint).ok_or_else(|| {
+            at(Error::arg(
+                "joint",
+                "the name of a joint of the robot",
+                format!("'{}'", m.joint),
+            ))
+        })?;
+        model
+            .add_coupling(
+                j.body,
+                reference.body,
+                m.multiplier,
+                m.offset,
+                Some(j.name.clone()),
+            )
+            .map_err(at)?;
+    }
+    Ok(())
+}
+
+/// What the file says that is not loaded as said: moving joints without `<limit>`, elements
+/// the dynamics does not use.
 pub(super) fn joint_warnings(
     file: &str,
     joints: &[UrdfJoint],
     ignored: &BTreeMap<String, usize>,
 ) -> Vec<String> {
     let mut warnings = Vec::new();
-    let mimics: Vec<String> = joints
-        .iter()
-        .filter_map(|j| {
-            j.mimic
-                .as_ref()
-                .map(|m| format!("'{}' (mimics '{}')", j.name, m.joint))
-        })
-        .collect();
-    if !mimics.is_empty() {
-        warnings.push(format!(
-            "{file}: mimic constraints are not supported: {} joint(s) are loaded as independent joints: {}",
-            mimics.len(),
-            mimics.join(", ")
-        ));
-    }
     let unlimited: Vec<String> = joints
         .iter()
         .filter(|j| matches!(j.kind, "revolute" | "prismatic") && j.limit.is_none())

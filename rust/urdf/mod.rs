@@ -14,8 +14,9 @@
 //!   `fixed` → [`Joint::Fixed`] (welded into the parent's link). `<origin xyz rpy>` places the
 //!   joint frame in the parent link's frame, `R = Rz(y) Ry(p) Rx(r)`; `<axis xyz>` (default
 //!   x) is normalised. `floating` and `planar` joints are refused with an error naming the
-//!   joint. `<limit>`, `<dynamics damping friction>` and `<mimic>` are kept in [`UrdfJoint`]
-//!   (mimic constraints are not applied: such joints are independent, with a warning).
+//!   joint. `<limit>`, `<dynamics damping friction>` and `<mimic>` are kept in [`UrdfJoint`];
+//!   each `<mimic>` becomes a coupling `q = multiplier · q_joint + offset` (named after the
+//!   mimicking joint; `crate::loops::coupling`), as Pinocchio's `mimic=True` models them.
 //! * Inertia. `<inertial>`: `com = origin.xyz`, `I_link = R I Rᵀ` with `R` from
 //!   `origin.rpy`; each link's inertial is validated like any [`RigidBody`] (a negative or
 //!   non-physical tensor is an error naming the link).
@@ -62,7 +63,7 @@ pub struct Limit {
     pub velocity: f64,
 }
 
-/// `<mimic joint multiplier offset>`: recorded, not enforced.
+/// `<mimic joint multiplier offset>`: loaded as a coupling (`build::add_mimics`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mimic {
     pub joint: String,
@@ -182,7 +183,7 @@ pub struct Urdf {
     pub name: String,
     pub model: Model,
     pub joints: Vec<UrdfJoint>,
-    /// Things loaded differently from what the file says (mimic joints, ignored elements).
+    /// Things loaded differently from what the file says (ignored elements, missing limits).
     pub warnings: Vec<String>,
     /// What a `repair` changed, one record per link or welded joint (empty without repair).
     pub repairs: Vec<RepairRecord>,
@@ -262,6 +263,7 @@ pub fn model_from_urdf_with(
     }
     let mut built = build::build_model(&ctx, &robot, &tree, root)?;
     let joints = build::joint_records(&robot, &tree, &built);
+    build::add_mimics(&ctx, &mut built.model, &joints)?;
     let meshes = visuals::attach(&robot, &mut built.model, file, base_dir, package_dirs);
     let warnings = std::mem::take(&mut robot.notes)
         .into_iter()
