@@ -182,6 +182,10 @@ def test_talos_mimic_joints_load_as_couplings():
     j = m.constraint_jacobian(q)
     assert np.abs(m.constraint_residual(q)).max() <= 1e-12
     assert np.abs(j @ a).max() <= 1e-9 * (1 + np.abs(a).max())
+    # The reduced Talos welds its grippers: their <mimic> has nothing to couple.
+    with pytest.warns(pmd.errors.UrdfWarning, match=r"<mimic> on or of fixed joints.*gripper"):
+        m = pmd.Model.from_urdf(str(path.parent / "talos_reduced.urdf"))
+    assert m.ncouplings == 0
 
 
 # ------------------------------------------------------------------------------ armature
@@ -387,3 +391,27 @@ def test_derivatives_of_coupled_models_are_refused_by_name():
     m = arm(0.5, 0.2)
     with pytest.raises(InvalidInputError, match=r"model: expected a tree .*1 coupling"):
         m.forward_dynamics_derivatives([0.3, 0.35], [0, 0], [0, 0])
+
+
+def test_to_mjcf_writes_armature_and_refuses_couplings():
+    mujoco = pytest.importorskip("mujoco")
+    m = arm(0.5, 0.2)
+    with pytest.raises(pmd.errors.ModelStructureError, match=r"1 coupling\(s\): not supported"):
+        pmd.to_mjcf(m)
+    m = chain3()
+    m.set_armature("a", 0.3)
+    m.set_armature("ball", 0.02)
+    mj = mujoco.MjModel.from_xml_string(pmd.to_mjcf(m, gravity=G))
+    rng = np.random.default_rng(6)
+    q = np.r_[rng.normal(size=2), [0.1, 0.2, 0.3, 0.9] / np.linalg.norm([0.1, 0.2, 0.3, 0.9]), 0.05]
+    v, tau = rng.normal(size=m.nv), rng.normal(size=m.nv)
+    d = mujoco.MjData(mj)
+    d.qpos[:], d.qvel[:] = pmd.io.to_mujoco_state(m, q, v)
+    perm = [j.v for j in pmd.io.layout(m).joints]
+    d.qfrc_applied[:] = tau  # every joint here is revolute/ball/slide in our v order
+    mujoco.mj_forward(mj, d)
+    a = m.forward_dynamics(q, v, tau, gravity=G)
+    assert perm == [0, 1, 2, 5] and rel_err(a, d.qacc) <= 1e-10
+    m.set_armature("ball", [0.01, 0.02, 0.03])
+    with pytest.raises(pmd.errors.ModelStructureError, match=r"armature .* differs by axis"):
+        pmd.to_mjcf(m)

@@ -256,9 +256,15 @@ pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Ve
 }
 
 /// `<mimic joint multiplier offset>` as couplings `q = multiplier · q_joint + offset` (the
-/// loop solver holds them, `crate::loops::coupling`); a mimic of an unknown joint, of a
-/// fixed joint, or in a cycle is an error naming the joint.
-pub(super) fn add_mimics(ctx: &Ctx, model: &mut Model, joints: &[UrdfJoint]) -> Result<()> {
+/// loop solver holds them, `crate::loops::coupling`). A mimic of an unknown joint or in a
+/// cycle is an error naming the joint; one on or of a fixed joint (a reduced model welds
+/// them) has nothing to couple and is skipped, with the warning returned.
+pub(super) fn add_mimics(
+    ctx: &Ctx,
+    model: &mut Model,
+    joints: &[UrdfJoint],
+) -> Result<Option<String>> {
+    let mut skipped = Vec::new();
     for j in joints {
         let Some(m) = &j.mimic else { continue };
         let at = |e: Error| in_element(ctx, format!("joint '{}' <mimic>", j.name), e);
@@ -269,6 +275,10 @@ pub(super) fn add_mimics(ctx: &Ctx, model: &mut Model, joints: &[UrdfJoint]) -> 
                 format!("'{}'", m.joint),
             ))
         })?;
+        if j.q_index.is_none() || reference.q_index.is_none() {
+            skipped.push(format!("'{}' (mimics '{}')", j.name, m.joint));
+            continue;
+        }
         model
             .add_coupling(
                 j.body,
@@ -279,7 +289,13 @@ pub(super) fn add_mimics(ctx: &Ctx, model: &mut Model, joints: &[UrdfJoint]) -> 
             )
             .map_err(at)?;
     }
-    Ok(())
+    Ok((!skipped.is_empty()).then(|| {
+        format!(
+            "{}: <mimic> on or of fixed joints, nothing to couple: {}",
+            ctx.file,
+            skipped.join(", ")
+        )
+    }))
 }
 
 /// What the file says that is not loaded as said: moving joints without `<limit>`, elements

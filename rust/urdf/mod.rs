@@ -199,6 +199,26 @@ impl Urdf {
     pub fn joint(&self, name: &str) -> Option<&UrdfJoint> {
         self.joints.iter().find(|j| j.name == name)
     }
+
+    /// Drops the couplings the `<mimic>` elements made: the mimic joints move independently
+    /// (Pinocchio's `buildModelFromUrdf` without `mimic=True`), which one warning says.
+    pub fn independent_mimics(&mut self, file: &str) {
+        let names: Vec<String> = self
+            .model
+            .couplings
+            .iter()
+            .map(|c| format!("'{}'", c.name))
+            .collect();
+        if names.is_empty() {
+            return;
+        }
+        self.model.couplings.clear();
+        self.warnings.push(format!(
+            "{file}: mimic=False: {} mimic joint(s) loaded as independent joints: {}",
+            names.len(),
+            names.join(", ")
+        ));
+    }
 }
 
 /// Reads and loads a URDF file; errors name `path` as given.
@@ -263,13 +283,14 @@ pub fn model_from_urdf_with(
     }
     let mut built = build::build_model(&ctx, &robot, &tree, root)?;
     let joints = build::joint_records(&robot, &tree, &built);
-    build::add_mimics(&ctx, &mut built.model, &joints)?;
+    let mimics = build::add_mimics(&ctx, &mut built.model, &joints)?;
     let meshes = visuals::attach(&robot, &mut built.model, file, base_dir, package_dirs);
     let warnings = std::mem::take(&mut robot.notes)
         .into_iter()
         .chain(built.warning)
         .chain(meshes)
         .chain(build::joint_warnings(file, &joints, &robot.ignored))
+        .chain(mimics)
         .collect();
     Ok(Urdf {
         name: robot.name,
