@@ -315,6 +315,14 @@ mod tests {
         model.nq = 1;
         model.nv = 1;
         model.name = "m".into();
+        model.armature = vec![0.25];
+        model.couplings = vec![crate::loops::Coupling {
+            name: "c".into(),
+            joint: 0,
+            reference: 0,
+            ratio: -0.5,
+            offset: 0.125,
+        }];
         use crate::visual::{Shape, Visual};
         let shapes = [
             Shape::Box {
@@ -472,7 +480,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (6, 2808, 0xe807_66c2_601c_a4d0),
+            (7, 2838, 0xbc68_cc30_06f1_1dbf),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }
