@@ -391,6 +391,7 @@ class Model:
         root_joint: Literal["fixed", "free"] | None = None,
         repair: bool | dict[str, Any] | Any | None = None,
         package_dirs: Any | None = None,
+        mimic: bool = True,
     ) -> Model:
         """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
         (q = angle), prismatic and fixed joints; joint order and body (link) names as
@@ -399,8 +400,9 @@ class Model:
         ``"root_joint"``, first in q and v (``"free"``, as
         ``buildModelFromUrdf(path, JointModelFreeFlyer())``). Raises
         :class:`pointmass_dyn.errors.UrdfError` naming the file and the element; warns with
-        :class:`pointmass_dyn.errors.UrdfWarning` (mimic joints loaded as independent,
-        ignored elements, undeclared namespace prefixes).
+        :class:`pointmass_dyn.errors.UrdfWarning` (ignored elements, undeclared namespace
+        prefixes). ``<mimic>`` joints are couplings (:meth:`add_coupling`, as Pinocchio's
+        ``mimic=True``); ``mimic=False`` loads them as independent joints, with a warning.
 
         ``repair`` (``True``, a dict or :class:`pointmass_dyn.InertiaRepair`) allows
         MuJoCo-style repairs of non-physical inertials (``balance_inertia``, ``bound_mass``,
