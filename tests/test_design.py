@@ -5,6 +5,7 @@ SciPy's differential evolution on the same design space, and against the envelop
 
 from __future__ import annotations
 
+import pickle
 import time
 
 import numpy as np
@@ -337,3 +338,230 @@ def test_bad_design_input_is_a_clear_error(fourbar):
         pmd.pareto_front(motion, count=-1, counterweights=ring)
     with pytest.raises(err, match="counterweights"):
         pmd.balance(motion, counterweights=[pmd.Counterweight(99, [[0.01, 0, 0]])])
+
+
+def test_an_infeasible_limit_says_by_how_much(fourbar):
+    """Phase 1: with one limit, the least relaxation is the least value any design within
+    the bounds reaches — the optimum of that quantity alone (a separate program)."""
+    _, motion = fourbar
+    ring = [pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8, max_mass=0.01)]
+    best = pmd.balance(motion, counterweights=ring, norm="peak", objective={"force": 1.0})
+    least = best.solver["values"]["force"]
+    with pytest.raises(pmd.errors.InfeasibleDesignError, match="limits") as info:
+        pmd.balance(motion, counterweights=ring, norm="peak", limits={"force": 1e-6})
+    err = info.value
+    assert err.binding == ("force",)
+    asked, needed = err.relaxation["force"]
+    assert asked == 1e-6
+    assert needed == pytest.approx(least, rel=1e-6)
+    assert "force <= 1.0000e-6 needs" in str(err)
+    # A zero quantity too (RMS; two rings can cancel the force, but not with 1 g each): how
+    # close to zero the bounds let it come.
+    rings = [pmd.Counterweight.ring(body, [0, 0, 0], 0.02, 8, max_mass=0.001) for body in ("crank", "rocker")]
+    best = pmd.balance(motion, counterweights=rings, objective={"force": 1.0})
+    with pytest.raises(pmd.errors.InfeasibleDesignError, match="zero") as info:
+        pmd.balance(motion, counterweights=rings, zero=("force",), objective={"moment": 1.0})
+    assert info.value.relaxation["force"][1] == pytest.approx(best.solver["values"]["force"], rel=1e-6)
+    assert isinstance(info.value, pmd.errors.InvalidInputError)
+    # The mass limit: force balance needs at least the least-mass force balance's mass.
+    rings = [pmd.Counterweight.ring(body, [0, 0, 0], 0.02, 8) for body in ("crank", "rocker")]
+    lightest = pmd.balance(motion, counterweights=rings, zero=("force",), objective={"mass": 1.0})
+    with pytest.raises(pmd.errors.InfeasibleDesignError, match="Relaxing one alone") as info:
+        pmd.balance(motion, counterweights=rings, zero=("force",), limits={"mass": 1e-4})
+    err = info.value
+    assert err.alone["mass"] == pytest.approx(lightest.masses.sum(), rel=1e-6)
+    assert "mass <= 1.0000e-4 needs" in str(err)
+    # ...or the force relaxed alone: the least RMS force with 0.1 g of counterweights.
+    light = pmd.balance(motion, counterweights=rings, objective={"force": 1.0}, limits={"mass": 1e-4})
+    assert err.alone["force"] == pytest.approx(light.solver["values"]["force"], rel=1e-6)
+    # Together (the least summed relative relaxation): whichever is cheaper relative to its
+    # scale, here the force (relaxing the mass costs more than the model's mass).
+    assert err.binding == ("force",)
+    assert pickle.loads(pickle.dumps(err)).alone == err.alone
+
+
+def test_the_epsilon_constraint_front_is_not_dominated_by_the_weighted_one(fourbar):
+    _, motion = fourbar
+    rings = [
+        pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 12),
+        pmd.Counterweight.ring("rocker", [0, 0, 0], 0.02, 12),
+    ]
+    pair = ("force", "moment")
+    eps = pmd.pareto_front(motion, pair, 6, counterweights=rings, method="epsilon")
+    weighted = pmd.pareto_front(motion, pair, 6, counterweights=rings)
+    value = pmd.design.objective_value
+    f = np.array([value(b, "force") for b in eps])
+    m = np.array([value(b, "moment") for b in eps])
+    # ε falls evenly from the moment at the force optimum to the moment's own optimum: each
+    # limit met, the force rising as the moment is asked to fall.
+    levels = np.linspace(m[0], m[-1], 6)
+    assert np.all(m[1:-1] <= levels[1:-1] * (1 + 1e-6))
+    assert np.all(np.diff(f) >= -1e-7 * f.max())
+    # The ends are the single-objective optima (each matched by the weighted front's ends).
+    before = eps[0].solver["before"]
+    assert f[0] == pytest.approx(value(weighted[0], "force"), abs=1e-9 * before["force"])
+    assert m[-1] == pytest.approx(value(weighted[-1], "moment"), rel=1e-6)
+    # Neither front dominates a point of the other (beyond the solver's tolerance).
+    for a in eps:
+        for b in weighted:
+            fa, ma, fb, mb = value(a, "force"), value(a, "moment"), value(b, "force"), value(b, "moment")
+            tol = 1e-6 * (f.max() + m.max())
+            assert not (fb < fa - tol and mb < ma - tol)
+            assert not (fa < fb - tol and ma < mb - tol)
+    with pytest.raises(pmd.errors.InvalidInputError, match="method"):
+        pmd.pareto_front(motion, pair, 3, counterweights=rings, method="genetic")
+
+
+def same_dynamics(a, b, rng, scale):
+    for _ in range(3):
+        q = rng.uniform(-1, 1, a.nq)
+        v, acc = rng.uniform(-1, 1, a.nv), rng.uniform(-1, 1, a.nv)
+        np.testing.assert_allclose(b.mass_matrix(q), a.mass_matrix(q), rtol=0, atol=1e-12 * scale)
+        np.testing.assert_allclose(
+            b.inverse_dynamics(q, v, acc), a.inverse_dynamics(q, v, acc), rtol=0, atol=1e-12 * scale
+        )
+
+
+def test_the_designed_model_written_back_reloads_with_the_same_dynamics(tmp_path, fourbar):
+    scene, motion = fourbar
+    b = pmd.balance(motion, links=shapes(0.005), objective={"force": 1.0, "moment": 0.3})
+    path = b.write_scene("fourbar", tmp_path / "designed.toml")
+    again = pmd.load_scene(path)
+    assert again.model.body_names == b.model.body_names
+    for name, body in b.bodies.items():
+        got = again.model.body(name)
+        assert got.mass == pytest.approx(body.mass, rel=1e-15)
+        np.testing.assert_allclose(got.inertia, body.inertia, rtol=0, atol=1e-16 * np.abs(body.inertia).max())
+    rng = np.random.default_rng(1)
+    for _ in range(3):
+        q = rng.uniform(-1, 1, 3)
+        np.testing.assert_allclose(again.model.mass_matrix(q), b.model.mass_matrix(q), rtol=0, atol=1e-15)
+    # The mechanism (loop closed) along the motion: driving torque and bearing forces.
+    redo = pmd.analyze_motion(again.model, motion.t, motion.q, motion.v, motion.a, actuated=motion.actuated,
+                              gravity=motion.gravity)
+    for got, ref in ((redo.tau, b.after.tau), (redo.bearing, b.after.bearing), (redo.cut, b.after.cut)):
+        np.testing.assert_allclose(got, ref, rtol=0, atol=1e-12 * np.abs(ref).max())
+    # The rest of the scene is kept: loops, gravity, the initial state.
+    np.testing.assert_array_equal(again.q0, scene.q0)
+    assert again.model.nloops == 1
+
+
+def test_bodies_from_a_urdf_are_written_into_a_copy_of_it(tmp_path):
+    scene = pmd.load_scene("panda")
+    model = scene.model
+    rng = np.random.default_rng(2)
+    bodies = {}
+    for name in model.link_names[2:5]:
+        old = model.body(name)
+        a = rng.normal(size=(3, 3)) * 0.01
+        bodies[name] = pmd.RigidBody(old.mass * 1.3, np.asarray(old.com) + 0.01, old.inertia + a @ a.T)
+    designed = model
+    for name, body in bodies.items():
+        designed = designed.with_body(name, body)
+    path = pmd.design.write_scene(bodies, "panda", tmp_path / "arm.toml")
+    assert (tmp_path / "arm.urdf").exists()
+    again = pmd.load_scene(path)
+    same_dynamics(designed, again.model, rng, 10.0)
+    # And the URDF alone.
+    urdf = pmd.design.write_urdf(bodies, tmp_path / "arm.urdf", tmp_path / "arm2.urdf")
+    with pytest.raises(pmd.errors.InvalidInputError, match="links"):
+        pmd.design.write_urdf({"nowhere": bodies[model.link_names[2]]}, urdf, tmp_path / "x.urdf")
+
+
+SPEC = """
+speed = 30.0
+samples = 60
+norm = "peak"
+objective = {{ bearing = 1.0 }}
+limits = {{ force = {limit} }}
+
+[[link]]
+body = "crank"
+box = [[-0.05, -0.02, -0.006], [0.045, 0.02, 0.006]]
+cell = 0.005
+
+[[counterweight]]
+body = "rocker"
+ring = {{ center = [0, 0, 0], radius = 0.02, count = 12 }}
+max_mass = {max_mass}
+"""
+
+
+def test_the_design_command_writes_csv_stl_maps_and_the_designed_scene(tmp_path, capsys):
+    import csv
+
+    from pointmass_dyn.cli import main
+
+    scene = pmd.load_scene("fourbar")
+    motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=60, q_guess=scene.q0, gravity=G)
+    limit = 0.2 * motion.summary()["shaking force"]["peak"]
+    spec = tmp_path / "spec.toml"
+    spec.write_text(SPEC.format(limit=limit, max_mass=0.05))
+    out = tmp_path / "out"
+    assert main(["design", "fourbar", str(spec), "--out", str(out)]) == 0
+    # The same design from the API.
+    b = pmd.balance(
+        motion,
+        links=[pmd.LinkShape("crank", box=([-0.05, -0.02, -0.006], [0.045, 0.02, 0.006]), cell=0.005)],
+        counterweights=[pmd.Counterweight.ring("rocker", [0, 0, 0], 0.02, 12, max_mass=0.05)],
+        objective={"bearing": 1.0}, norm="peak", limits={"force": limit},
+    )
+    with open(out / "bodies.csv") as f:
+        rows = {r["body"]: r for r in csv.DictReader(f)}
+    for name, body in b.bodies.items():
+        m = float(rows[name]["mass"])
+        assert m == pytest.approx(body.mass, rel=1e-6)
+        h = [float(rows[name][k]) for k in ("mcx", "mcy", "mcz")]
+        np.testing.assert_allclose(h, body.mass * np.asarray(body.com), atol=1e-6 * np.abs(h).max())
+    with open(out / "design.csv") as f:
+        cells = list(csv.DictReader(f))
+    crank = [r for r in cells if r["body"] == "crank"]
+    assert len(crank) == len(b.shapes["crank"].masses)
+    assert all(-1e-12 <= float(r["mass"]) <= float(r["bound"]) * (1 + 1e-12) for r in cells)
+    assert sum(float(r["mass"]) for r in crank) == pytest.approx(float(rows["crank"]["mass"]), rel=1e-9)
+    assert (out / "crank.stl").stat().st_size > 84
+    assert (out / "density_crank.png").exists()
+    designed = pmd.load_scene(out / "designed.toml")
+    assert designed.model.body("crank").mass == pytest.approx(float(rows["crank"]["mass"]), rel=1e-12)
+    # Infeasible: exit status 2, the limit named and by how much.
+    spec.write_text(SPEC.format(limit=1e-6, max_mass=0.001))
+    capsys.readouterr()
+    assert main(["design", "fourbar", str(spec), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "force <= 1.0000e-6 needs" in err
+    # A front instead: pareto.csv, one row per point, the ε levels met.
+    spec.write_text(SPEC.format(limit=limit, max_mass=0.05).replace("limits = ", "# ")
+                    + '[pareto]\nobjectives = ["bearing", "force"]\ncount = 3\nmethod = "epsilon"\n')
+    assert main(["design", "fourbar", str(spec), "--out", str(out)]) == 0
+    with open(out / "pareto.csv") as f:
+        front = [(float(r["bearing"]), float(r["force"])) for r in csv.DictReader(f)]
+    assert len(front) == 3 and front[0][1] >= front[1][1] >= front[2][1]
+    assert front[0][0] <= front[1][0] <= front[2][0]
+    spec.write_text("colour = 3\n")
+    assert main(["design", "fourbar", str(spec)]) == 2
+    assert "colour" in capsys.readouterr().err
+
+
+def test_issue_29_balance_defects_stay_fixed(fourbar):
+    """Issue 29 #7, #12–#15 against the conic balance: −1 is no body, a candidate on the
+    driving axis changes nothing (no counterweight placed), a motion that shakes nothing, an
+    unknown body and a non-positive max_mass are errors naming the argument."""
+    scene, motion = fourbar
+    err = pmd.errors.InvalidInputError
+    with pytest.raises(err, match=r"counterweights\[0\]: expected a body name or an index"):
+        pmd.balance(motion, counterweights=[pmd.Counterweight.ring(-1, [0, 0, 0], 0.02, 8)])
+    with pytest.raises(err, match="links: expected a body name or an index"):
+        pmd.balance(motion, links=[-1])
+    # #12: a point on the crank's axis (the ground pivot) moves with no link: force and
+    # moment about the origin cannot change (its weight is the ground's), so nothing is placed.
+    b = pmd.balance(motion, counterweights=[pmd.Counterweight("crank", [[0.0, 0.0, 0.0]])])
+    assert b.counterweights == []
+    assert b.after.shaking.rms["force"] == pytest.approx(motion.shaking.rms["force"], rel=1e-9)
+    still = pmd.prescribed_motion(scene.model, "crank", speed=1e-300, samples=8, q_guess=scene.q0)
+    with pytest.raises(err, match="zero along this motion"):
+        pmd.balance(still, counterweights=[pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8)])
+    with pytest.raises(err, match=r"counterweights\[0\].*index 0\.\.2, got 99"):
+        pmd.balance(motion, counterweights=[pmd.Counterweight(99, [[0.01, 0, 0]])])
+    for bad in (0, -1):
+        with pytest.raises(err, match="max_mass must be positive"):
+            pmd.balance(motion, counterweights=[pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8, max_mass=bad)])

@@ -28,6 +28,30 @@ class LoopClosureError(InvalidInputError):
     message names the loop."""
 
 
+class InfeasibleDesignError(InvalidInputError):
+    """A design (``pmd.balance``) whose limits or zero quantities no design within the bounds
+    meets. ``relaxation``: for each limit and zero quantity, ``(asked, needed)`` in the
+    problem's norm — the least summed relaxation (each relative to its value before) some
+    design meets; ``binding``: the names relaxed there beyond the solver's tolerance;
+    ``alone``: the least value of each when only it is relaxed, the others held (None when
+    that does not suffice)."""
+
+    def __init__(
+        self,
+        message: str,
+        relaxation: dict | None = None,
+        binding: tuple = (),
+        alone: dict | None = None,
+    ):
+        super().__init__(message)
+        self.relaxation = dict(relaxation or {})
+        self.binding = tuple(binding)
+        self.alone = dict(alone or {})
+
+    def __reduce__(self):
+        return (type(self), (str(self), self.relaxation, self.binding, self.alone))
+
+
 class NumericalError(PointMassDynError, ArithmeticError):
     """Finite inputs gave a non-finite or meaningless result (overflow, singular matrix)."""
 
@@ -101,6 +125,7 @@ __all__ = [
     "AnimationWriterError",
     "ClusterError",
     "InertiaError",
+    "InfeasibleDesignError",
     "InvalidInputError",
     "LoopClosureError",
     "ModelStructureError",

@@ -6,14 +6,18 @@
 //! and counterweight candidates. [`cells`] turns an envelope into cells, [`regressor`] gives
 //! the linear maps along a motion, [`problem`] states the trade-off as a conic program and
 //! solves it with Clarabel (in place of a hand-written interior point).
+mod active;
 pub mod cells;
 pub mod pins;
 pub mod problem;
+mod program;
 pub mod regressor;
 
 pub use cells::{cube_moments, fill, point_moments, Envelope};
 pub use pins::pins;
-pub use problem::{solve, Norm, Problem, Quantity, Solution};
+pub use problem::{
+    solve, solve_outcome, Norm, Outcome, Problem, Quantity, Relaxation, Relaxed, Solution,
+};
 pub use regressor::{model_parameters, regressor, Layout, Regressor, NPARAM};
 
 #[cfg(test)]

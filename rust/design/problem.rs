@@ -1,16 +1,13 @@
-//! The design as a conic program for Clarabel: RMS objectives make a QP, peak (minimax over
-//! time of vector norms) objectives an SOCP, `limits` are ε-constraints in the same norm.
-//!
-//! Variables: the design masses `x` (bounded), the change `δ = M x` of the designed links'
-//! inertial parameters (the objectives depend on `x` only through it: ten numbers per link,
-//! so the dense rows stay narrow however many cells or candidates there are), and one
-//! epigraph variable per peak objective. Each quantity is `y = R δ + c` (blocks of `dim`
-//! rows, one vector per block) divided by its `reference` (its unbalanced value), so the
-//! weights compare relative changes.
-use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+//! The design as a conic program: RMS objectives make a QP, peak (minimax over time of
+//! vector norms) objectives an SOCP, `limits` are ε-constraints in the same norm. The
+//! programs themselves are built in [`super::program`]; peak ones are solved by cutting
+//! planes over the motion's samples ([`super::active`]). An infeasible program is followed
+//! by a phase-1 program giving the least relaxation of the requirements that some design
+//! meets, which names the binding ones and by how much.
 use nalgebra::{DMatrix, DVector};
 
+use super::active::{initial, solve_cut};
+use super::program::{Layout, Raw, Stage};
 use crate::error::{Error, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -75,95 +72,12 @@ pub struct Solution {
     pub objective: f64,
     pub gap_abs: f64,
     pub gap_rel: f64,
+    /// Interior-point iterations, summed over the programs solved.
     pub iterations: u32,
+    /// Clarabel's time, summed over the programs solved.
     pub solve_time: f64,
-    /// Whether the final active-set refinement was kept (RMS problems without limits).
-    pub refined: bool,
-}
-
-/// Rows and values of the conic program, built block by block (cones in order).
-#[derive(Default)]
-struct Builder {
-    rows: Vec<usize>,
-    cols: Vec<usize>,
-    vals: Vec<f64>,
-    b: Vec<f64>,
-    cones: Vec<SupportedConeT<f64>>,
-}
-
-impl Builder {
-    fn m(&self) -> usize {
-        self.b.len()
-    }
-    /// Starts a row with right-hand side `b` (entries added with `put`).
-    fn row(&mut self, b: f64) -> usize {
-        self.b.push(b);
-        self.b.len() - 1
-    }
-    fn put(&mut self, r: usize, c: usize, v: f64) {
-        if v != 0.0 {
-            self.rows.push(r);
-            self.cols.push(c);
-            self.vals.push(v);
-        }
-    }
-    fn cone(&mut self, cone: SupportedConeT<f64>) {
-        // Merge runs of zero and nonnegative rows.
-        match (self.cones.last_mut(), &cone) {
-            (Some(SupportedConeT::ZeroConeT(n)), SupportedConeT::ZeroConeT(k)) => *n += k,
-            (Some(SupportedConeT::NonnegativeConeT(n)), SupportedConeT::NonnegativeConeT(k)) => {
-                *n += k
-            }
-            _ => self.cones.push(cone),
-        }
-    }
-}
-
-/// `U_rᵀ [R | c]` for the rows of R that matter: an orthonormal basis of R's row space with
-/// the matching right-hand side, and the part of `c` outside R's column space (which no
-/// design removes).
-fn row_space(r: &DMatrix<f64>, c: &DVector<f64>) -> (DMatrix<f64>, DVector<f64>, f64) {
-    // Tall: first a QR (its R factor has the same row space), then an SVD of the square.
-    let (rr, cc, lost) = if r.nrows() > r.ncols() + 1 {
-        let mut aug = DMatrix::zeros(r.nrows(), r.ncols() + 1);
-        aug.view_mut((0, 0), (r.nrows(), r.ncols())).copy_from(r);
-        aug.column_mut(r.ncols()).copy_from(c);
-        let t = aug.qr().r();
-        let n = r.ncols();
-        let lost = if t.nrows() > n { t[(n, n)].abs() } else { 0.0 };
-        let rr = t.view((0, 0), (n.min(t.nrows()), n)).into_owned();
-        let cc = t.view((0, n), (n.min(t.nrows()), 1)).column(0).into_owned();
-        (rr, cc, lost)
-    } else {
-        (r.clone(), c.clone(), 0.0)
-    };
-    let svd = rr.clone().svd(true, true);
-    let (u, vt) = (svd.u.unwrap_or_default(), svd.v_t.unwrap_or_default());
-    let smax = svd.singular_values.amax();
-    let keep: Vec<usize> = (0..svd.singular_values.len())
-        .filter(|&k| svd.singular_values[k] > 1e-11 * smax)
-        .collect();
-    let mut rows = DMatrix::zeros(keep.len(), r.ncols());
-    let mut rhs = DVector::zeros(keep.len());
-    let mut inside = DVector::zeros(cc.len());
-    for (k, &j) in keep.iter().enumerate() {
-        let uj = u.column(j);
-        let s = svd.singular_values[j];
-        rows.row_mut(k).copy_from(&(vt.row(j) * s));
-        rhs[k] = uj.dot(&cc);
-        inside += uj * rhs[k];
-    }
-    let outside = (lost * lost + (cc - inside).norm_squared()).sqrt();
-    (rows, rhs, outside)
-}
-
-/// `T` with `‖T [δ; 1]‖² = Σ ‖R δ + c‖²` (the R factor of `[R | c]`), scaled by `scale`.
-fn compress(r: &DMatrix<f64>, c: &DVector<f64>, scale: f64) -> DMatrix<f64> {
-    let n = r.ncols();
-    let mut aug = DMatrix::zeros(r.nrows().max(n + 1), n + 1);
-    aug.view_mut((0, 0), (r.nrows(), n)).copy_from(r);
-    aug.view_mut((0, n), (r.nrows(), 1)).copy_from(c);
-    aug.qr().r() * scale
+    /// Programs solved: one per stage for RMS, one per cutting-plane round for peak.
+    pub rounds: u32,
 }
 
 /// Each quantity's value at `δ` in `norm` (absolute units).
@@ -225,315 +139,195 @@ fn check(problem: &Problem) -> Result<()> {
     Ok(())
 }
 
-/// Builds and solves the program (twice with `least_mass`). Errors: infeasible limits or
-/// equalities (naming them and by how much where it can), or the solver's status.
+/// One requirement relaxed by phase 1: asked, and the least value reachable together with
+/// the others' relaxations (in the problem's norm, absolute units; kg for the mass).
+#[derive(Debug, Clone)]
+pub struct Relaxed {
+    /// The quantity's name, or "mass".
+    pub name: String,
+    /// Zero asked (`zero`), else a limit.
+    pub zero: bool,
+    pub asked: f64,
+    pub needed: f64,
+    /// The value before the design (the scale of the relaxation).
+    pub before: f64,
+    /// The least value when only this requirement is relaxed (the others held); None when
+    /// relaxing it alone does not make the design feasible.
+    pub alone: Option<f64>,
+}
+
+impl Relaxed {
+    /// Whether it binds: relaxed by more than the solver's tolerance.
+    pub fn binding(&self) -> bool {
+        self.needed - self.asked > 1e-8 * self.before.abs().max(self.asked.abs())
+    }
+}
+
+/// What makes an infeasible design feasible: the least summed relaxation (each relative to
+/// its value before) of its limits and zero quantities.
+#[derive(Debug, Clone)]
+pub struct Relaxation {
+    pub items: Vec<Relaxed>,
+}
+
+impl Relaxation {
+    /// The error naming the binding requirements and by how much.
+    pub fn error(&self) -> Error {
+        let binding: Vec<&Relaxed> = self.items.iter().filter(|r| r.binding()).collect();
+        let arg = if binding.iter().any(|r| !r.zero) || binding.is_empty() {
+            "limits"
+        } else {
+            "zero"
+        };
+        let what = |r: &Relaxed| {
+            if r.zero {
+                format!("{} = 0", r.name)
+            } else {
+                format!("{} <= {:.4e}", r.name, r.asked)
+            }
+        };
+        let needs = |r: &Relaxed, needed: f64| {
+            let share = if r.name == "mass" {
+                "kg".to_string()
+            } else {
+                format!(
+                    "{:.2} % of its value before, {:.4e}",
+                    100.0 * (needed - r.asked) / r.before.max(1e-300),
+                    r.before
+                )
+            };
+            format!("{} needs {needed:.4e} at least ({share})", what(r))
+        };
+        let together: Vec<String> = binding.iter().map(|r| needs(r, r.needed)).collect();
+        let alone: Vec<String> = self
+            .items
+            .iter()
+            .map(|r| match r.alone {
+                Some(v) => needs(r, v),
+                None => format!("{} alone does not suffice", what(r)),
+            })
+            .collect();
+        let got = if together.is_empty() {
+            "requirements infeasible by less than the solver's tolerance (Clarabel's certificate)"
+                .to_string()
+        } else {
+            format!(
+                "requirements none meets (Clarabel's certificate). Relaxing one alone: {}. The \
+                 least summed relaxation (phase 1, each relative to its value before): {}. Or \
+                 give the design more room (candidates, envelopes, mass ranges)",
+                alone.join("; "),
+                together.join("; ")
+            )
+        };
+        Error::arg(
+            arg,
+            "requirements some design within the masses' bounds (and link mass ranges) meets",
+            got,
+        )
+    }
+}
+
+/// The result of a design: a solution, or what an infeasible one needs.
+#[derive(Debug, Clone)]
+pub enum Outcome {
+    Solved(Solution),
+    Infeasible(Relaxation),
+}
+
+/// Builds and solves the design (twice with `least_mass`). Errors: infeasible limits or
+/// equalities (naming the binding ones and by how much), or the solver's status.
 pub fn solve(problem: &Problem) -> Result<Solution> {
+    match solve_outcome(problem)? {
+        Outcome::Solved(s) => Ok(s),
+        Outcome::Infeasible(r) => Err(r.error()),
+    }
+}
+
+/// [`solve`], with an infeasible design's least relaxation as a value.
+pub fn solve_outcome(problem: &Problem) -> Result<Outcome> {
     check(problem)?;
-    let first = solve_stage(problem, None)?;
+    let mut active = initial(problem);
+    let Some((raw, rounds)) = solve_cut(problem, Stage::Optimum, &mut active)? else {
+        return relax(problem, active).map(Outcome::Infeasible);
+    };
+    let first = solution(problem, raw, rounds);
     if !problem.least_mass {
-        return Ok(first);
+        return Ok(Outcome::Solved(first));
     }
     // Among the optima, the least mass: the objective held at its optimum (to the solver's
     // accuracy) and the total mass minimised.
-    match solve_stage(problem, Some(&first)) {
-        Ok(second) => Ok(second),
+    match solve_cut(problem, Stage::LeastMass(&first), &mut active) {
+        Ok(Some((raw, rounds))) => {
+            let mut second = solution(problem, raw, rounds);
+            second.objective = first.objective;
+            second.iterations += first.iterations;
+            second.solve_time += first.solve_time;
+            second.rounds += first.rounds;
+            Ok(Outcome::Solved(second))
+        }
         // The second solve only refines; its failure leaves the optimum found.
         Err(Error::Interrupted(w)) => Err(Error::Interrupted(w)),
-        Err(_) => Ok(first),
+        _ => Ok(Outcome::Solved(first)),
     }
 }
 
-/// What no design meets, named: the zero quantities, the limits, the masses' bounds.
-fn infeasible(problem: &Problem) -> Error {
-    let zero: Vec<&str> = problem
-        .quantities
-        .iter()
-        .filter(|q| q.zero)
-        .map(|q| q.name.as_str())
-        .collect();
-    let mut limits: Vec<String> = problem
-        .quantities
-        .iter()
-        .filter_map(|q| {
-            q.limit
-                .map(|l| format!("{} <= {l:.4e} (before: {:.4e})", q.name, q.reference))
-        })
-        .collect();
-    if let Some(m) = problem.mass_limit {
-        limits.push(format!("mass <= {m:.4e} kg"));
-    }
-    let arg = if zero.is_empty() { "limits" } else { "zero" };
-    Error::arg(
-        arg,
-        "requirements some design within the masses' bounds (and link mass ranges) meets",
-        format!(
-            "zero {zero:?} and limits [{}] that none meets (Clarabel's certificate of primal \
-             infeasibility): relax them, or give the design more room (candidates, envelopes, \
-             mass ranges)",
-            limits.join(", ")
-        ),
-    )
-}
-
-struct Layout {
-    nx: usize,
-    nd: usize,
-    /// Peak objectives: quantity index and its epigraph variable.
-    peaks: Vec<(usize, usize)>,
-}
-
-#[allow(clippy::too_many_lines)]
-fn solve_stage(problem: &Problem, optimum: Option<&Solution>) -> Result<Solution> {
-    // One function: the blocks of the program in cone order (zero, nonnegative, SOC);
-    // splitting it would pass the same builder and layout through every piece.
+fn solution(problem: &Problem, raw: Raw, rounds: u32) -> Solution {
     let (nx, nd) = (problem.lower.len(), problem.ndelta);
-    let weighted: Vec<usize> = (0..problem.quantities.len())
-        .filter(|&k| problem.quantities[k].weight > 0.0 && !problem.quantities[k].zero)
-        .collect();
-    let peaks: Vec<(usize, usize)> = match problem.norm {
-        Norm::Peak => weighted
-            .iter()
-            .enumerate()
-            .map(|(j, &k)| (k, nx + nd + j))
-            .collect(),
-        Norm::Rms => vec![],
-    };
-    let lay = Layout { nx, nd, peaks };
-    let nz = lay.nx + lay.nd + lay.peaks.len();
-    let mut bld = Builder::default();
-    // Zero cone: δ = M x, the zero quantities, equal pairs.
-    for j in 0..nd {
-        let r = bld.row(0.0);
-        bld.put(r, nx + j, 1.0);
-    }
-    for &(r, c, v) in &problem.map {
-        bld.put(r, c, -v);
-    }
-    bld.cone(SupportedConeT::ZeroConeT(nd));
-    for q in problem.quantities.iter().filter(|q| q.zero) {
-        let scale = 1.0 / q.reference.max(1e-300);
-        let (rows, rhs, outside) = row_space(&(&q.rows * scale), &(&q.constant * scale));
-        let total = (&q.constant * scale).norm();
-        if outside > 1e-9 * (1.0 + total) {
-            return Err(Error::arg(
-                "zero",
-                format!(
-                    "a quantity the design masses can make vanish ('{}')",
-                    q.name
-                ),
-                format!(
-                    "a part no design reaches ({:.3e} of its unbalanced value)",
-                    outside / total.max(1e-300)
-                ),
-            ));
-        }
-        for k in 0..rows.nrows() {
-            let r = bld.row(-rhs[k]);
-            for j in 0..nd {
-                bld.put(r, nx + j, rows[(k, j)]);
-            }
-        }
-        bld.cone(SupportedConeT::ZeroConeT(rows.nrows()));
-    }
-    for &(a, b) in &problem.equal {
-        let r = bld.row(0.0);
-        bld.put(r, a, 1.0);
-        bld.put(r, b, -1.0);
-        bld.cone(SupportedConeT::ZeroConeT(1));
-    }
-    // The RMS optimum's objective vector is unique: the second stage holds it.
-    let mut p_dense = DMatrix::<f64>::zeros(nd, nd);
-    let mut q_vec = vec![0.0; nz];
-    let mut constant = 0.0;
-    if problem.norm == Norm::Rms {
-        let mut stacked: Vec<DMatrix<f64>> = Vec::new();
-        for &k in &weighted {
-            let q = &problem.quantities[k];
-            let s = 1.0 / (q.reference.max(1e-300) * (q.samples.max(1) as f64).sqrt());
-            let t = compress(&q.rows, &q.constant, s * q.weight.sqrt());
-            let (td, t1) = (t.columns(0, nd).into_owned(), t.column(nd).into_owned());
-            p_dense += td.transpose() * &td * 2.0;
-            let g = td.transpose() * &t1 * 2.0;
-            for j in 0..nd {
-                q_vec[nx + j] += g[j];
-            }
-            constant += t1.norm_squared();
-            stacked.push(t);
-        }
-        if let Some(opt) = optimum {
-            let d = DVector::from_column_slice(&opt.delta);
-            for t in &stacked {
-                let td = t.columns(0, nd);
-                let target = td * &d;
-                let (rows, rhs, _) = row_space(&td.into_owned(), &(-target));
-                for k in 0..rows.nrows() {
-                    let r = bld.row(-rhs[k]);
-                    for j in 0..nd {
-                        bld.put(r, nx + j, rows[(k, j)]);
-                    }
-                }
-                bld.cone(SupportedConeT::ZeroConeT(rows.nrows()));
-            }
-        }
-    }
-    // Nonnegative cone: bounds, groups, mass limit, peak limits with a weight.
-    let n0 = bld.m();
-    for j in 0..nx {
-        let r = bld.row(-problem.lower[j]);
-        bld.put(r, j, -1.0);
-        if problem.upper[j].is_finite() {
-            let r = bld.row(problem.upper[j]);
-            bld.put(r, j, 1.0);
-        }
-    }
-    for (set, lo, hi) in &problem.groups {
-        let r = bld.row(*hi);
-        set.iter().for_each(|&j| bld.put(r, j, 1.0));
-        let r = bld.row(-*lo);
-        set.iter().for_each(|&j| bld.put(r, j, -1.0));
-    }
-    if let Some(limit) = problem.mass_limit {
-        let r = bld.row(limit);
-        (0..nx).for_each(|j| bld.put(r, j, 1.0));
-    }
-    for &(k, t) in &lay.peaks {
-        let q = &problem.quantities[k];
-        if let Some(limit) = q.limit {
-            let r = bld.row(limit / q.reference.max(1e-300));
-            bld.put(r, t, 1.0);
-        }
-        q_vec[t] += q.weight;
-    }
-    if let (Some(opt), Norm::Peak) = (optimum, problem.norm) {
-        // Σ w t ≤ the optimum, with the solver's own slack.
-        let bound = opt.objective * (1.0 + 1e-9) + 1e-12;
-        let r = bld.row(bound);
-        for &(k, t) in &lay.peaks {
-            bld.put(r, t, problem.quantities[k].weight);
-        }
-    }
-    let nonneg = bld.m() - n0;
-    bld.cone(SupportedConeT::NonnegativeConeT(nonneg));
-    // Second-order cones: peak objectives and limits, RMS limits.
-    for (k, q) in problem.quantities.iter().enumerate() {
-        if q.zero {
-            continue;
-        }
-        let s = 1.0 / q.reference.max(1e-300);
-        let t_var = lay.peaks.iter().find(|(kk, _)| *kk == k).map(|(_, t)| *t);
-        match problem.norm {
-            Norm::Peak if t_var.is_some() || q.limit.is_some() => {
-                let blocks = q.rows.nrows() / q.dim;
-                for b in 0..blocks {
-                    match t_var {
-                        Some(t) => {
-                            let r = bld.row(0.0);
-                            bld.put(r, t, -1.0);
-                        }
-                        None => {
-                            bld.row(q.limit.unwrap_or(0.0) * s);
-                        }
-                    }
-                    for i in 0..q.dim {
-                        let row = b * q.dim + i;
-                        let r = bld.row(q.constant[row] * s);
-                        for j in 0..nd {
-                            bld.put(r, nx + j, -q.rows[(row, j)] * s);
-                        }
-                    }
-                    bld.cone(SupportedConeT::SecondOrderConeT(q.dim + 1));
-                }
-            }
-            Norm::Rms if q.limit.is_some() => {
-                let scale = s / (q.samples.max(1) as f64).sqrt();
-                let t = compress(&q.rows, &q.constant, scale);
-                bld.row(q.limit.unwrap_or(0.0) * s);
-                for i in 0..t.nrows() {
-                    let r = bld.row(t[(i, nd)]);
-                    for j in 0..nd {
-                        bld.put(r, nx + j, -t[(i, j)]);
-                    }
-                }
-                bld.cone(SupportedConeT::SecondOrderConeT(t.nrows() + 1));
-            }
-            _ => {}
-        }
-    }
-    // The mass term: the objective's own, or the whole objective of the second stage.
-    let mass_scale = 1.0 / problem.mass_reference.max(1e-300);
-    let (p_dense, q_vec, constant) = if optimum.is_some() {
-        let mut q2 = vec![0.0; nz];
-        q2[..nx].iter_mut().for_each(|x| *x = mass_scale);
-        (DMatrix::zeros(nd, nd), q2, 0.0)
-    } else {
-        let mut q1 = q_vec;
-        q1[..nx]
-            .iter_mut()
-            .for_each(|x| *x += problem.mass_weight * mass_scale);
-        (p_dense, q1, constant)
-    };
-    let mut pr = vec![];
-    let mut pc = vec![];
-    let mut pv = vec![];
-    for c in 0..nd {
-        for r in 0..=c {
-            let v = 0.5 * (p_dense[(r, c)] + p_dense[(c, r)]);
-            if v != 0.0 {
-                pr.push(nx + r);
-                pc.push(nx + c);
-                pv.push(v);
-            }
-        }
-    }
-    let p = CscMatrix::new_from_triplets(nz, nz, pr, pc, pv);
-    let a = CscMatrix::new_from_triplets(bld.m(), nz, bld.rows, bld.cols, bld.vals);
-    let mut settings = DefaultSettings::<f64>::default();
-    settings.verbose = false;
-    settings.max_iter = 200;
-    settings.tol_gap_abs = 1e-10;
-    settings.tol_gap_rel = 1e-10;
-    settings.tol_feas = 1e-10;
-    settings.max_threads = 1;
-    let mut solver =
-        DefaultSolver::new(&p, &q_vec, &a, &bld.b, &bld.cones, settings).map_err(|e| {
-            Error::Singular(format!(
-                "design: the conic program could not be set up: {e}"
-            ))
-        })?;
-    solver.set_termination_callback(|_info| crate::interrupt::check("design").is_err());
-    solver.solve();
-    let sol = &solver.solution;
-    let status = sol.status;
-    match status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => {}
-        SolverStatus::CallbackTerminated => return Err(Error::Interrupted("design".into())),
-        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
-            return Err(infeasible(problem));
-        }
-        other => {
-            return Err(Error::Singular(format!(
-                "design: the conic solver stopped with status {other:?} after {} iterations (gap {:.2e})",
-                sol.iterations, solver.info.gap_rel
-            )))
-        }
-    }
-    let x: Vec<f64> = sol.x[..nx].to_vec();
-    let delta: Vec<f64> = sol.x[nx..nx + nd].to_vec();
-    let mut out = Solution {
+    let delta = raw.z[nx..nx + nd].to_vec();
+    Solution {
         values: values(problem, &delta),
-        x,
+        x: raw.z[..nx].to_vec(),
         delta,
-        status: format!("{status:?}"),
-        objective: sol.obj_val + constant,
-        gap_abs: solver.info.gap_abs,
-        gap_rel: solver.info.gap_rel,
-        iterations: sol.iterations,
-        solve_time: sol.solve_time,
-        refined: false,
-    };
-    if let Some(first) = optimum {
-        // The objective is that of the first stage.
-        out.objective = first.objective;
+        status: format!("{:?}", raw.status),
+        objective: raw.objective,
+        gap_abs: raw.gap_abs,
+        gap_rel: raw.gap_rel,
+        iterations: raw.iterations,
+        solve_time: raw.solve_time,
+        rounds,
     }
-    Ok(out)
+}
+
+/// Phase 1: the least relaxation of the requirements that some design meets, together and
+/// each alone.
+fn relax(problem: &Problem, active: Vec<Vec<usize>>) -> Result<Relaxation> {
+    let lay = Layout::new(problem, Stage::Relax(None));
+    let Some((raw, _)) = solve_cut(problem, Stage::Relax(None), &mut active.clone())? else {
+        return Err(Error::arg(
+            "links, counterweights",
+            "bounds, link mass ranges and symmetry some design masses meet together",
+            "ones that conflict (Clarabel's certificate, with every limit and zero relaxed)",
+        ));
+    };
+    let mut items = Vec::with_capacity(lay.slacks.len());
+    for (j, &(k, sl)) in lay.slacks.iter().enumerate() {
+        let alone = match lay.slacks.len() {
+            1 => Some(raw.z[sl].max(0.0)),
+            _ => solve_cut(problem, Stage::Relax(Some(j)), &mut active.clone())?
+                .map(|(r, _)| r.z[sl].max(0.0)),
+        };
+        let (name, zero, asked, before, unit) = match k {
+            Some(k) => {
+                let q = &problem.quantities[k];
+                let asked = if q.zero { 0.0 } else { q.limit.unwrap_or(0.0) };
+                (q.name.clone(), q.zero, asked, q.reference, q.reference)
+            }
+            None => (
+                "mass".to_string(),
+                false,
+                problem.mass_limit.unwrap_or(0.0),
+                problem.mass_reference,
+                1.0,
+            ),
+        };
+        items.push(Relaxed {
+            name,
+            zero,
+            asked,
+            needed: asked + raw.z[sl].max(0.0) * unit,
+            before,
+            alone: alone.map(|s| asked + s * unit),
+        });
+    }
+    Ok(Relaxation { items })
 }

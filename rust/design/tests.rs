@@ -186,6 +186,14 @@ fn the_program_finds_known_optima() {
     // A limit no bounded design meets.
     let err = solve(&toy(Norm::Peak, Some(0.1), 1.5)).unwrap_err();
     assert!(err.to_string().contains("limits"), "{err}");
+    // ...by how much: the least peak within the bounds is 0.5 (x = (1, 1.5)).
+    let Ok(Outcome::Infeasible(r)) = solve_outcome(&toy(Norm::Peak, Some(0.1), 1.5)) else {
+        panic!("expected an infeasible outcome");
+    };
+    assert!(r.items.len() == 1 && r.items[0].binding());
+    assert!((r.items[0].needed - 0.5).abs() < 1e-7, "{r:?}");
+    assert_eq!(r.items[0].alone, Some(r.items[0].needed));
+    assert!(err.to_string().contains("needs 5.0000e-1"), "{err}");
     // Least mass among equal optima: y depends on x₁ + 2 x₂ only, so x = (0, ½).
     let mut p = toy(Norm::Rms, None, 10.0);
     p.quantities[0].constant = DVector::from_vec(vec![-1.0, 0.0]);
@@ -197,4 +205,41 @@ fn the_program_finds_known_optima() {
         "{:?}",
         s.x
     );
+}
+
+/// Cutting planes over samples: y_b = x − p_b for 360 points on an arc of 0.9π of a unit
+/// circle about (3, 4) (its ends the first and last samples); the least peak is the
+/// smallest enclosing circle's radius, sin 0.45π, centred on the ends' chord — found from a
+/// subset of the samples (the last end is not in the first one), every sample then within.
+#[test]
+fn peak_programs_by_active_samples_reach_the_full_optimum() {
+    let n = 360;
+    let arc = 0.9 * std::f64::consts::PI;
+    let mut rows = DMatrix::zeros(2 * n, 2);
+    let mut constant = DVector::zeros(2 * n);
+    for b in 0..n {
+        let a = arc * b as f64 / (n - 1) as f64;
+        rows[(2 * b, 0)] = 1.0;
+        rows[(2 * b + 1, 1)] = 1.0;
+        constant[2 * b] = -(3.0 + a.cos());
+        constant[2 * b + 1] = -(4.0 + a.sin());
+    }
+    let mut p = toy(Norm::Peak, None, 10.0);
+    p.quantities[0].rows = rows;
+    p.quantities[0].constant = constant;
+    p.quantities[0].samples = n;
+    p.quantities[0].reference = 1.0;
+    let s = solve(&p).unwrap();
+    assert!(
+        (s.values[0] - (arc / 2.0).sin()).abs() < 1e-8,
+        "{:?}",
+        s.values
+    );
+    let center = [3.0 + (1.0 + arc.cos()) / 2.0, 4.0 + arc.sin() / 2.0];
+    assert!(
+        (s.x[0] - center[0]).abs() < 1e-4 && (s.x[1] - center[1]).abs() < 1e-4,
+        "{:?}",
+        s.x
+    );
+    assert!(s.rounds > 1, "{}", s.rounds);
 }

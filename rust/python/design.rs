@@ -259,8 +259,32 @@ pub fn design_solve<'py>(
         mass_limit: get("mass_limit")?.extract()?,
         least_mass: get("least_mass")?.extract()?,
     };
-    let sol = detach_interruptible(py, || design::solve(&problem))?;
+    let outcome = detach_interruptible(py, || design::solve_outcome(&problem))?;
     let d = PyDict::new(py);
+    let sol = match outcome {
+        design::Outcome::Solved(sol) => sol,
+        design::Outcome::Infeasible(relaxation) => {
+            d.set_item("status", "Infeasible")?;
+            d.set_item("message", relaxation.error().to_string())?;
+            let items = relaxation
+                .items
+                .iter()
+                .map(|r| {
+                    (
+                        r.name.clone(),
+                        r.zero,
+                        r.asked,
+                        r.needed,
+                        r.before,
+                        r.binding(),
+                        r.alone,
+                    )
+                })
+                .collect::<Vec<_>>();
+            d.set_item("relaxation", items)?;
+            return Ok(d);
+        }
+    };
     d.set_item("x", to_array1(py, &sol.x))?;
     d.set_item("delta", to_array1(py, &sol.delta))?;
     d.set_item("values", to_array1(py, &sol.values))?;
@@ -269,6 +293,7 @@ pub fn design_solve<'py>(
     d.set_item("gap_abs", sol.gap_abs)?;
     d.set_item("gap_rel", sol.gap_rel)?;
     d.set_item("iterations", sol.iterations)?;
+    d.set_item("rounds", sol.rounds)?;
     d.set_item("solve_time", sol.solve_time)?;
     Ok(d)
 }

@@ -1,5 +1,5 @@
 """``pointmass-dyn``, the command line: one module per command (``_simulate``, ``_animate``,
-``_sweep``, ``_balance``, ``_work_precision``, ``_scenes``, ``_point_masses``), each with its
+``_sweep``, ``_balance``, ``_design``, ``_work_precision``, ``_scenes``, ``_point_masses``), each with its
 ``add_parser`` and ``cmd_*``; :func:`main` is the console entry point."""
 
 from __future__ import annotations
@@ -8,12 +8,23 @@ import argparse
 import sys
 
 from ..errors import PointMassDynError
-from . import _animate, _balance, _point_masses, _scenes, _simulate, _sweep, _work_precision
+from . import (
+    _animate,
+    _balance,
+    _design,
+    _point_masses,
+    _scenes,
+    _simulate,
+    _sweep,
+    _work_precision,
+)
 
 __all__ = ["COMMANDS", "build_parser", "main"]
 
 #: The subcommands in the order ``--help`` lists them.
-COMMANDS = (_simulate, _point_masses, _scenes, _work_precision, _balance, _sweep, _animate)
+COMMANDS = (
+    _simulate, _point_masses, _scenes, _work_precision, _balance, _design, _sweep, _animate,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

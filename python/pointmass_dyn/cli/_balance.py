@@ -114,7 +114,7 @@ def _one_dof_links(model) -> list[str]:
             if nq == nv == 1]
 
 
-def _balance_driver(args, scene) -> str:
+def driver_of(args, scene) -> str:
     """The driving body: --driver, else the scene's one ``[initial] fixed`` body, else the
     only joint of a one-dof model without loops."""
     model = scene.model
@@ -292,7 +292,7 @@ def _print_balance(b, model) -> None:
 def cmd_balance(args) -> int:
     scene = load_scene(args.scene)
     model = scene.model
-    driver = _balance_driver(args, scene)
+    driver = driver_of(args, scene)
     _, iv, _, _ = model.joint_slices()[model.link_names.index(driver)]
     revolute = model.body_info(model.body_names.index(driver))[1] == "Revolute"
     unit = "rad/s" if revolute else "m/s"

@@ -9,9 +9,10 @@ driving torque, bearing forces and mass — a convex program (QP or SOCP) solved
 """
 
 from ._balance import Balance, Counterweight
-from ._problem import OBJECTIVES, balance, pareto_front
+from ._problem import OBJECTIVES, balance, objective_value, pareto_front
 from ._shaking import MotionAnalysis, Shaking, analyze_motion, prescribed_motion, shaking
 from ._shapes import LinkShape, Shape, read_stl
+from ._write import write_scene, write_urdf
 
 __all__ = [
     "OBJECTIVES",
@@ -23,8 +24,11 @@ __all__ = [
     "Shaking",
     "analyze_motion",
     "balance",
+    "objective_value",
     "pareto_front",
     "prescribed_motion",
     "read_stl",
     "shaking",
+    "write_scene",
+    "write_urdf",
 ]

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ._shaking import MotionAnalysis
+from ._write import write_scene, write_urdf
 
 
 @dataclass(frozen=True)
@@ -75,6 +76,17 @@ class Balance:
     #: The conic solver's report: status, duality gaps, iterations, times, the values it
     #: predicts in the problem's norm and those before.
     solver: dict = field(default_factory=dict)
+
+    def write_scene(self, source: Any, path: Any) -> Any:
+        """The designed model as a scene file: a copy of ``source`` (the scene the motion's
+        model came from: a path or a bundled name) with the designed bodies' mass, COM and
+        inertia; bodies from a URDF go into a copy of it beside ``path``
+        (:func:`~pointmass_dyn.design.write_scene`)."""
+        return write_scene(self.bodies, source, path)
+
+    def write_urdf(self, source: Any, path: Any) -> Any:
+        """A copy of the URDF ``source`` with the designed bodies' ``<inertial>`` elements."""
+        return write_urdf(self.bodies, source, path)
 
     def table(self) -> str:
         """Before/after RMS and peaks, as text."""

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from ..errors import InvalidInputError
+from ..errors import InfeasibleDesignError, InvalidInputError
 from ._balance import Balance, Counterweight
 from ._shaking import MotionAnalysis, analyze_motion
 from ._shapes import LinkShape, Shape
@@ -325,6 +325,12 @@ def balance(
     }
     say(f"conic program: {var.count} design masses, {len(quantities)} quantities ({norm})")
     sol = _core.design_solve(spec)
+    if sol["status"] == "Infeasible":
+        items = sol["relaxation"]
+        relaxation = {name: (asked, needed) for name, _z, asked, needed, *_ in items}
+        binding = tuple(name for name, _z, _a, _n, _b, on, _alone in items if on)
+        alone = {name: value for name, *_, value in items}
+        raise InfeasibleDesignError(sol["message"], relaxation, binding, alone)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
     # The parameters of the masses found (the solver's δ = M x holds to its tolerance only):
@@ -339,6 +345,7 @@ def balance(
             "gap_abs": float(sol["gap_abs"]),
             "gap_rel": float(sol["gap_rel"]),
             "iterations": int(sol["iterations"]),
+            "rounds": int(sol["rounds"]),
             "solve_time": float(sol["solve_time"]),
             "values": dict(zip([q["name"] for q in quantities], sol["values"].tolist())),
             "before": before,
@@ -371,7 +378,9 @@ def _build(motion, var: _Variables, x, phi, designed) -> Balance:
             shapes[name] = (spec, sl)
         if kind == "counterweight":
             pts = np.atleast_2d(np.asarray(spec.points, float))
-            big = max(float(np.max(x)), 1e-300)
+            # Placed: above 1e-9 of the largest design mass or of the model's mass (the
+            # solver's round-off otherwise lists a 1e-26 kg "counterweight").
+            big = max(float(np.max(x)), float(model.total_mass), 1e-300)
             cws += [(name, p, float(m)) for p, m in zip(pts, x[sl]) if m > 1e-9 * big]
     out_shapes = {}
     for name, (spec, sl) in shapes.items():
@@ -426,12 +435,19 @@ def pareto_front(
     objectives: tuple[str, str] = ("force", "moment"),
     count: int = 11,
     progress: Callable[[str], Any] | None = None,
+    method: str = "weighted",
     **kwargs,
 ) -> list[Balance]:
-    """Designs trading two objectives: weights ``(1 − s, s)`` for ``s`` from 0 to 1 in
-    ``count`` steps (each a :func:`balance` with those weights, in the chosen ``norm``;
-    other arguments passed on). Each point is Pareto-optimal (a weighted sum of convex
-    objectives)."""
+    """Designs trading two objectives, each Pareto-optimal.
+
+    ``method="weighted"``: weights ``(1 − s, s)`` for ``s`` from 0 to 1 in ``count`` steps
+    (each a :func:`balance` with those weights). ``method="epsilon"``: the ε-constraint
+    method — the two objectives' own optima as the ends, and ``count − 2`` levels ε of the
+    second evenly between its values there, each design minimising the first objective
+    with the second limited to ε (``limits``, in the chosen ``norm``; for
+    ``"mass"``, kg of design material); it also reaches the non-convex-looking parts of a
+    front that weights skip, and spaces the points along the second objective. Other
+    arguments are passed on to :func:`balance`."""
     if "objective" in kwargs:
         raise InvalidInputError(
             "objective: pareto_front sets the weights itself; give the two objectives as "
@@ -445,10 +461,57 @@ def pareto_front(
         or objectives[0] == objectives[1]
     ):
         raise InvalidInputError(f"objectives: expected two different objectives, got {objectives!r}")
+    if method not in ("weighted", "epsilon"):
+        raise InvalidInputError(f"method: expected 'weighted' or 'epsilon', got {method!r}")
     first, second = objectives
+    say = progress or (lambda _s: None)
+    if method == "epsilon":
+        return _epsilon_front(motion, first, second, int(count), say, kwargs)
     out = []
     for k, s in enumerate(np.linspace(0.0, 1.0, int(count))):
-        if progress is not None:
-            progress(f"Pareto point {k + 1}/{count}")
+        say(f"Pareto point {k + 1}/{count}")
         out.append(balance(motion, objective={first: 1.0 - s, second: s}, **kwargs))
+    return out
+
+
+def objective_value(b: Balance, name: str) -> float:
+    """A design's value of objective ``name`` in its problem's norm (absolute units; kg of
+    design material for ``"mass"``)."""
+    if name == "mass":
+        return float(np.sum(b.masses))
+    if name in b.solver.get("values", {}):
+        return float(b.solver["values"][name])
+    # Not in its program: from the prediction along the motion (which `after` reproduces).
+    if name.startswith("bearing:"):
+        model, joint = b.model, name.split(":", 1)[1]
+        names = list(model.link_names) + list(model.loop_names)
+        if joint not in names:
+            raise InvalidInputError(f"name: '{name}' names no joint (joints: {names})")
+        y = b.predicted["bearing"][:, names.index(joint)]
+    elif name in QUANTITIES:
+        y = b.predicted[name].reshape(len(b.predicted[name]), -1, b.predicted[name].shape[-1])
+    else:
+        raise InvalidInputError(f"name: expected one of {OBJECTIVES} or 'bearing:<joint>', got {name!r}")
+    size = y.shape[-1] if name != "torque" else b.predicted["torque"].shape[1]
+    return _norm_value(np.asarray(y).reshape(-1), size, len(b.predicted["force"]), b.solver["norm"])
+
+
+def _epsilon_front(motion, first, second, count, say, kwargs) -> list[Balance]:
+    limits = dict(kwargs.pop("limits", None) or {})
+    if second in limits:
+        raise InvalidInputError(f"limits: the ε-constraint front sets the limit of '{second}' itself")
+    # The ends: each objective's own optimum (the payoff table); the levels ε of the second
+    # lie evenly between its values there. (Holding the first at its optimum to refine the
+    # first end is a thin, ill-conditioned cone when that optimum is zero, as in force
+    # balance: Clarabel stops for lack of progress.)
+    say(f"Pareto point 1/{count}")
+    start = balance(motion, objective={first: 1.0}, limits=limits or None, **kwargs)
+    say(f"Pareto point {count}/{count}")
+    end = balance(motion, objective={second: 1.0}, limits=limits or None, **kwargs)
+    hi, lo = objective_value(start, second), objective_value(end, second)
+    out = [start]
+    for k, eps in enumerate(np.linspace(hi, lo, count)[1:-1]):
+        say(f"Pareto point {k + 2}/{count}")
+        out.append(balance(motion, objective={first: 1.0}, limits={**limits, second: float(eps)}, **kwargs))
+    out.append(end)
     return out
