@@ -183,7 +183,7 @@ def test_talos_mimic_joints_load_as_couplings():
     assert np.abs(m.constraint_residual(q)).max() <= 1e-12
     assert np.abs(j @ a).max() <= 1e-9 * (1 + np.abs(a).max())
     # The reduced Talos welds its grippers: their <mimic> has nothing to couple.
-    with pytest.warns(pmd.errors.UrdfWarning, match=r"<mimic> on or of fixed joints.*gripper"):
+    with pytest.warns(pmd.errors.UrdfWarning, match=r"<mimic> elements with nothing to couple.*on or of fixed joints: 'gripper"):
         m = pmd.Model.from_urdf(str(path.parent / "talos_reduced.urdf"))
     assert m.ncouplings == 0
 
@@ -415,3 +415,20 @@ def test_to_mjcf_writes_armature_and_refuses_couplings():
     m.set_armature("ball", [0.01, 0.02, 0.03])
     with pytest.raises(pmd.errors.ModelStructureError, match=r"armature .* differs by axis"):
         pmd.to_mjcf(m)
+
+
+def test_urdf_mimic_cycles_are_errors_and_unknown_references_warn(tmp_path):
+    cyclic = GRIPPER.replace(
+        '<limit lower="-1" upper="1" effort="10" velocity="5"/></joint>',
+        '<limit lower="-1" upper="1" effort="10" velocity="5"/>'
+        '<mimic joint="c_finger_b" multiplier="2"/></joint>',
+        1,
+    )
+    path = tmp_path / "cyclic.urdf"
+    path.write_text(cyclic)
+    with pytest.raises(pmd.errors.UrdfError, match=r"joint 'c_finger_b' <mimic>.*cycle of couplings"):
+        pmd.Model.from_urdf(str(path))
+    path.write_text(GRIPPER.replace('mimic joint="b_finger_a" multiplier="-1"', 'mimic joint="nope" multiplier="-1"'))
+    with pytest.warns(pmd.errors.UrdfWarning, match=r"of unknown joints: 'c_finger_b' \(mimics 'nope'\)"):
+        m = pmd.Model.from_urdf(str(path))
+    assert [c[0] for c in m.couplings] == ["d_tip_a"]

@@ -256,27 +256,25 @@ pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Ve
 }
 
 /// `<mimic joint multiplier offset>` as couplings `q = multiplier · q_joint + offset` (the
-/// loop solver holds them, `crate::loops::coupling`). A mimic of an unknown joint or in a
-/// cycle is an error naming the joint; one on or of a fixed joint (a reduced model welds
-/// them) has nothing to couple and is skipped, with the warning returned.
+/// loop solver holds them, `crate::loops::coupling`). A mimic in a cycle or of itself is an
+/// error naming the joint; one of an unknown joint (a broken file, which loaded before mimic
+/// joints were coupled) or on or of a fixed joint (a reduced model welds them) has nothing to
+/// couple and is skipped, with the warning returned.
 pub(super) fn add_mimics(
     ctx: &Ctx,
     model: &mut Model,
     joints: &[UrdfJoint],
 ) -> Result<Option<String>> {
-    let mut skipped = Vec::new();
+    let (mut unknown, mut fixed) = (Vec::new(), Vec::new());
     for j in joints {
         let Some(m) = &j.mimic else { continue };
-        let at = |e: Error| in_element(ctx, format!("joint '{}' <mimic>", j.name), e);
-        let reference = joints.iter().find(|r| r.name == m.joint).ok_or_else(|| {
-            at(Error::arg(
-                "joint",
-                "the name of a joint of the robot",
-                format!("'{}'", m.joint),
-            ))
-        })?;
+        let what = format!("'{}' (mimics '{}')", j.name, m.joint);
+        let Some(reference) = joints.iter().find(|r| r.name == m.joint) else {
+            unknown.push(what);
+            continue;
+        };
         if j.q_index.is_none() || reference.q_index.is_none() {
-            skipped.push(format!("'{}' (mimics '{}')", j.name, m.joint));
+            fixed.push(what);
             continue;
         }
         model
@@ -287,13 +285,20 @@ pub(super) fn add_mimics(
                 m.offset,
                 Some(j.name.clone()),
             )
-            .map_err(at)?;
+            .map_err(|e| in_element(ctx, format!("joint '{}' <mimic>", j.name), e))?;
     }
-    Ok((!skipped.is_empty()).then(|| {
+    let mut parts = Vec::new();
+    if !unknown.is_empty() {
+        parts.push(format!("of unknown joints: {}", unknown.join(", ")));
+    }
+    if !fixed.is_empty() {
+        parts.push(format!("on or of fixed joints: {}", fixed.join(", ")));
+    }
+    Ok((!parts.is_empty()).then(|| {
         format!(
-            "{}: <mimic> on or of fixed joints, nothing to couple: {}",
+            "{}: <mimic> elements with nothing to couple, loaded as independent joints: {}",
             ctx.file,
-            skipped.join(", ")
+            parts.join("; ")
         )
     }))
 }
