@@ -312,12 +312,14 @@ fn nt_m(den: &Denoc, x: &DMatrix<f64>, what: &str) -> Result<DMatrix<f64>> {
     product(&den.n.transpose(), &mx, what)
 }
 
-/// Generalized inertia matrix `Nᵀ M N`.
+/// Generalized inertia matrix `Nᵀ M N` (plus the joints' armature on its diagonal).
 pub fn mass_matrix(model: &Model, q: &[f64]) -> Result<DMatrix<f64>> {
     let st = states(model, q, None);
     let (den, _) = assemble(model, &st, false, "mass_matrix")?;
     let gim = nt_m(&den, &den.n, "mass_matrix")?;
-    Ok((&gim + gim.transpose()) * 0.5)
+    let mut gim = (&gim + gim.transpose()) * 0.5;
+    crate::recursive::armature::add_to_mass_matrix(model, &mut gim);
+    Ok(gim)
 }
 
 /// Convective matrix `C = Nᵀ M Ṅ` (so that `İ − 2C` is skew-symmetric).

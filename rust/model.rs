@@ -58,6 +58,14 @@ pub struct Model {
     /// Cut joints closing kinematic loops (`crate::loops`); empty for a tree.
     #[serde(default)]
     pub loops: Vec<crate::loops::LoopJoint>,
+    /// Joint couplings `q_joint = ratio · q_reference + offset` (`crate::loops::coupling`),
+    /// holonomic constraints solved with the loops; empty for most models.
+    #[serde(default)]
+    pub couplings: Vec<crate::loops::Coupling>,
+    /// Rotor inertia (armature) per speed, added to the mass matrix's diagonal in every
+    /// algorithm (`crate::recursive::armature`); empty when no joint has any.
+    #[serde(default)]
+    pub armature: Vec<f64>,
     /// What a viewer draws for each body (URDF `<visual>`, MJCF geoms); no part of the
     /// dynamics. Checked against `bodies` by `check_structure`.
     #[serde(default)]
@@ -86,6 +94,10 @@ struct ModelData {
     #[serde(default)]
     loops: Vec<crate::loops::LoopJoint>,
     #[serde(default)]
+    couplings: Vec<crate::loops::Coupling>,
+    #[serde(default)]
+    armature: Vec<f64>,
+    #[serde(default)]
     visuals: Vec<crate::visual::Visual>,
     #[serde(default)]
     name: String,
@@ -106,6 +118,8 @@ impl TryFrom<ModelData> for Model {
             nq: d.nq,
             nv: d.nv,
             loops: d.loops,
+            couplings: d.couplings,
+            armature: d.armature,
             visuals: d.visuals,
             name: d.name,
             names,
@@ -113,6 +127,8 @@ impl TryFrom<ModelData> for Model {
         };
         m.check_structure()?;
         m.check_loops()?;
+        m.check_couplings()?;
+        m.check_armature()?;
         Ok(m)
     }
 }
@@ -237,6 +253,11 @@ impl Model {
         self.compiled.get_or_init(|| Compiled::new(self))
     }
 
+    /// Drops the recursions' constants after a change they depend on (armature).
+    pub(crate) fn drop_compiled(&mut self) {
+        self.compiled = OnceLock::new();
+    }
+
     pub fn nbodies(&self) -> usize {
         self.bodies.len()
     }
@@ -347,6 +368,9 @@ impl Model {
             check_link(&link, &name, &name)?;
             self.nq += joint.nq();
             self.nv += joint.nv();
+            if !self.armature.is_empty() {
+                self.armature.resize(self.nv, 0.0);
+            }
             self.links.push(link);
             (Some(self.links.len() - 1), Placement::identity())
         };

@@ -318,6 +318,14 @@ mod tests {
         model.nq = 1;
         model.nv = 1;
         model.name = "m".into();
+        model.armature = vec![0.25];
+        model.couplings = vec![crate::loops::Coupling {
+            name: "c".into(),
+            joint: 0,
+            reference: 0,
+            ratio: -0.5,
+            offset: 0.125,
+        }];
         use crate::visual::{Shape, Visual};
         let shapes = [
             Shape::Box {
@@ -508,7 +516,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (7, 2969, 0x5366_dab3_9f99_3677),
+            (7, 2999, 0xe21b_43a8_c7ff_ffe2),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

@@ -67,7 +67,7 @@ impl Workspace {
             v: vec![0.0; nv],
             x: vec![0.0; nv],
             out: vec![0.0; nv],
-            loops: (!m.loops.is_empty()).then(|| Box::new(LoopSolver::new(m))),
+            loops: m.has_constraints().then(|| Box::new(LoopSolver::new(m))),
             deriv: None,
             version,
         }
@@ -144,6 +144,19 @@ impl Workspace {
             .loops
             .get_or_insert_with(|| Box::new(LoopSolver::new(model)));
         loops::constraint_forces(model, data, solver, q, v, out)
+    }
+
+    /// Every constraint multiplier (cut joints' rows, then couplings') under the loaded
+    /// `tau = x` (forward dynamics first).
+    pub fn constraint_multipliers(&mut self, g: &Vec3) -> Result<Vec<f64>> {
+        let model: &Model = &self.version.model;
+        let (data, q, v, x, out) = (&mut self.data, &self.q, &self.v, &self.x, &mut self.out);
+        recursive::forward_dynamics(model, data, q, v, x, g, None, out)?;
+        let solver = self
+            .loops
+            .get_or_insert_with(|| Box::new(LoopSolver::new(model)));
+        loops::constraint_forces(model, data, solver, q, v, out)?;
+        Ok(solver.lambda.as_slice().to_vec())
     }
 
     /// Forward or inverse dynamics derivatives at the loaded `(q, v, x)` into the

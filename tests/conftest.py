@@ -408,7 +408,8 @@ def robots_dir():
 
 @pytest.fixture(scope="module", params=sorted(FLOATING))
 def floating_robot(request):
-    """(name, our model, Pinocchio's model with gravity (0, 0, -9.81)), joint names equal."""
+    """(name, our model, Pinocchio's model with gravity (0, 0, -9.81)), joint names equal;
+    mimic joints independent in both (Pinocchio's default)."""
     import warnings
 
     import pinocchio as pin
@@ -419,7 +420,7 @@ def floating_robot(request):
     path = str(root / FLOATING[request.param])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
-        model = pmd.Model.from_urdf(path, root_joint="free")
+        model = pmd.Model.from_urdf(path, root_joint="free", mimic=False)
     pm = pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer())
     pm.gravity.linear = np.array([0.0, 0.0, -9.81])
     assert model.joint_names == list(pm.names)[1:]

@@ -52,13 +52,13 @@ def mj_random_state(m, rng):
 
 
 def mj_dynamics(m, qpos, qvel):
-    """MuJoCo's mass matrix (armature removed: not imported) and bias forces."""
+    """MuJoCo's mass matrix (armature included: imported as rotor inertia) and bias forces."""
     d = mujoco.MjData(m)
     d.qpos[:], d.qvel[:] = qpos, qvel
     mujoco.mj_forward(m, d)
     full = np.zeros((m.nv, m.nv))
     mujoco.mj_fullM(m, d, full)
-    return full - np.diag(m.dof_armature), d.qfrc_bias.copy()
+    return full, d.qfrc_bias.copy()
 
 
 def ours_in_mujoco_coordinates(model, m, qpos, qvel, gravity):
@@ -135,7 +135,8 @@ def test_from_mujoco_equals_mujoco(path):
 
 def test_from_mujoco_joint_kinds_ref_and_warning():
     """Hinge and slide with `ref`, off-centre anchors, a ball, several joints in one body, a
-    free body, a connect constraint (a loop) and armature (warned about)."""
+    free body, a connect constraint (a loop) and armature (imported: in MuJoCo's mass
+    matrix and ours)."""
     xml = """<mujoco><option gravity="0.3 -0.2 -9.81"/>
       <worldbody>
         <body name="a" pos="0.1 0.2 0.3" quat="0.9 0.1 0.3 0.2">
@@ -160,9 +161,11 @@ def test_from_mujoco_joint_kinds_ref_and_warning():
       <equality><connect body1="c" body2="world" anchor="0 0 0"/></equality>
     </mujoco>"""
     m = mj_compile(xml)
-    with pytest.warns(pmd.errors.ModelImportWarning, match="not imported: dof_armature"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", pmd.errors.ModelImportWarning)
         model = pmd.from_mujoco(m)
     assert model.nloops == 1
+    assert model.armature[0] == 0.1 and not np.any(model.armature[1:])
     assert model.joint_names == ["h1", "s1", "ball", "h2", "root", "h3"]
     assert "a" in model.body_names and "a/h1" in model.body_names
     check_against_mujoco("kinds", model, m, seeds=(0, 1, 2))
@@ -186,12 +189,14 @@ LOOPS_XML = """<mujoco><worldbody>
 def test_from_mujoco_equalities_become_loops():
     """connect → Spherical cut joint, weld → Fixed cut joint: the position rows have the
     norm of MuJoCo's (efc_pos, world axes where ours are in frame a's) and the same Gram
-    matrix JᵀJ; the orientation rows vanish where MuJoCo's do; a joint equality is warned
-    about (not imported)."""
+    matrix JᵀJ; the orientation rows vanish where MuJoCo's do; the joint equality becomes
+    a coupling (its row last)."""
     m = mj_compile(LOOPS_XML)
-    with pytest.warns(pmd.errors.ModelImportWarning, match="1 joint equality constraint"):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", pmd.errors.ModelImportWarning)
         model = pmd.from_mujoco(m)
-    assert model.nloops == 3 and model.nconstraints == 15
+    assert model.nloops == 3 and model.ncouplings == 1 and model.nconstraints == 16
+    assert model.couplings == [("equality3", "a", "c", 1.0, 0.0)]
     d = mujoco.MjData(m)
     rows = {"connect": slice(0, 3), "weld a-c": slice(3, 6), "weld b-world": slice(9, 12)}
     for k, qpos in enumerate([m.qpos0.copy(), np.random.default_rng(0).uniform(-1, 1, m.nq)]):

@@ -65,11 +65,12 @@ ROBOTS = {
 needs_robots = pytest.mark.skipif(ROBOTS_DIR is None, reason="example-robot-data not installed")
 
 
-def load(path) -> tuple[pmd.Model, list[str]]:
-    """Our model and the UrdfWarning messages it gave."""
+def load(path, mimic=False) -> tuple[pmd.Model, list[str]]:
+    """Our model and the UrdfWarning messages it gave; mimic joints independent by default,
+    as in Pinocchio's `buildModelFromUrdf` that these tests compare with."""
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        model = pmd.Model.from_urdf(path)
+        model = pmd.Model.from_urdf(path, mimic=mimic)
     msgs = [str(w.message) for w in caught if issubclass(w.category, pmd.errors.UrdfWarning)]
     return model, msgs
 
@@ -187,10 +188,15 @@ def test_denoc_path_matches_pinocchio(robot_name):
 
 
 @needs_robots
-def test_mimic_joints_warn_and_stay_independent():
+def test_mimic_joints_are_couplings_or_independent_with_mimic_false():
+    model, msgs = load(ROBOTS_DIR / ROBOTS["panda"], mimic=True)
+    assert not any("mimic" in m for m in msgs), msgs
+    assert model.couplings == [
+        ("panda_finger_joint2", "panda_rightfinger", "panda_leftfinger", 1.0, 0.0)
+    ]
     model, msgs = load(ROBOTS_DIR / ROBOTS["panda"])
-    assert any("mimic" in m and "'panda_finger_joint2'" in m for m in msgs), msgs
-    assert "panda_finger_joint2" in model.joint_names
+    assert any("mimic=False" in m and "'panda_finger_joint2'" in m for m in msgs), msgs
+    assert "panda_finger_joint2" in model.joint_names and model.ncouplings == 0
     _, msgs = load(ROBOTS_DIR / ROBOTS["talos"])
     assert sum("mimic" in m for m in msgs) == 1, msgs  # one warning lists them all
 
@@ -205,9 +211,11 @@ def test_mimic_warning_category(tmp_path):
         joint("j2", "revolute", "a", "b",
               '<limit effort="1" velocity="1"/><mimic joint="j1" multiplier="-1" offset="0.1"/>'),
     )
-    with pytest.warns(pmd.errors.UrdfWarning, match=r"robot\.urdf: mimic .*'j2' \(mimics 'j1'\)"):
-        model = pmd.Model.from_urdf(path)
-    assert model.nv == 2
+    with pytest.warns(pmd.errors.UrdfWarning, match=r"robot\.urdf: mimic=False: 1 mimic joint.*'j2'"):
+        model = pmd.Model.from_urdf(path, mimic=False)
+    assert model.nv == 2 and model.ncouplings == 0
+    model = pmd.Model.from_urdf(path)
+    assert model.couplings == [("j2", "b", "a", -1.0, 0.1)]
 
 
 @needs_robots

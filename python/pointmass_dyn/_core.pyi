@@ -233,7 +233,7 @@ class Model:
         """``(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)``, each (nv, nv), as Pinocchio's
         ``computeABADerivatives`` (docs/derivatives.md). Trees only."""
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
-        """Kinetic energy ``½ vᵀ I v`` (J)."""
+        """Kinetic energy ``½ vᵀ I v`` (J), rotor inertia included."""
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:
         """Gravitational potential energy ``−Σ m_ij g·x_ij`` (J), zero at the world origin."""
     def velocity_to_qdot(self, q: ArrayLike, v: ArrayLike) -> _Array:
@@ -310,6 +310,38 @@ class Model:
         the cut joint applies to body b (minus those on body a) at frame b's origin, in frame
         a's axes, under ``tau``. Components along the joint's free motion are zero; where
         constraints are redundant the minimum-norm set (only their resultant is defined)."""
+    def add_coupling(
+        self,
+        joint: int | str,
+        reference: int | str,
+        ratio: float = 1.0,
+        offset: float = 0.0,
+        name: str | None = None,
+    ) -> int:
+        """Couples two revolute/prismatic joints, ``q_joint = ratio · q_reference + offset``
+        (a mimic joint, a gear), as one holonomic constraint row after the loops' (the loop
+        solver holds it: docs/couplings.md). Joints by body index, body name or URDF joint
+        name. Returns the coupling's index. Raises ``InvalidInputError`` naming the argument
+        for a joint coupled to itself or already coupled, a cycle of couplings, an unknown
+        joint, a joint that is not 1-dof and a non-finite ratio or offset."""
+    @property
+    def ncouplings(self) -> int:
+        """Number of joint couplings."""
+    @property
+    def couplings(self) -> list[tuple[str, str, str, float, float]]:
+        """``(name, joint body, reference body, ratio, offset)`` of each coupling."""
+    def coupling_forces(
+        self, q: ArrayLike, v: ArrayLike, tau: ArrayLike, gravity: ArrayLike | None = None
+    ) -> _Array:
+        """Each coupling's generalized force on its joint under ``tau`` (shape
+        (ncouplings,)); the reference joint feels ``−ratio`` times it."""
+    def set_armature(self, joint: int | str, value: float | ArrayLike) -> None:
+        """Sets a joint's rotor inertia (armature, kg m² or kg): one number, or one per speed
+        (3 for a spherical joint), finite and ≥ 0; added to the mass matrix's diagonal in
+        every algorithm. Refused on a free flyer and a fixed joint."""
+    @property
+    def armature(self) -> _Array:
+        """Rotor inertia of every speed, shape (nv,) (zeros where none is set)."""
     def body(self, body: int | str) -> RigidBody:
         """Body ``body``'s own rigid body (mass, COM, inertia in its frame), as added."""
     def with_body(self, body: int | str, rigid_body: RigidBody) -> Model:
@@ -359,6 +391,7 @@ class Model:
         root_joint: Literal["fixed", "free"] | None = None,
         repair: bool | dict[str, Any] | Any | None = None,
         package_dirs: Any | None = None,
+        mimic: bool = True,
     ) -> Model:
         """A robot from a URDF file (``path``: str or os.PathLike): revolute, continuous
         (q = angle), prismatic and fixed joints; joint order and body (link) names as
@@ -367,8 +400,9 @@ class Model:
         ``"root_joint"``, first in q and v (``"free"``, as
         ``buildModelFromUrdf(path, JointModelFreeFlyer())``). Raises
         :class:`pointmass_dyn.errors.UrdfError` naming the file and the element; warns with
-        :class:`pointmass_dyn.errors.UrdfWarning` (mimic joints loaded as independent,
-        ignored elements, undeclared namespace prefixes).
+        :class:`pointmass_dyn.errors.UrdfWarning` (ignored elements, undeclared namespace
+        prefixes). ``<mimic>`` joints are couplings (:meth:`add_coupling`, as Pinocchio's
+        ``mimic=True``); ``mimic=False`` loads them as independent joints, with a warning.
 
         ``repair`` (``True``, a dict or :class:`pointmass_dyn.InertiaRepair`) allows
         MuJoCo-style repairs of non-physical inertials (``balance_inertia``, ``bound_mass``,

@@ -25,6 +25,8 @@ pub struct LoopKinematics {
     bias: Vec<Vec6>,
     /// Each cut joint's ends and row directions at the last `positions`.
     rows: Vec<LoopRows>,
+    /// Each coupling's residual at the last `positions`.
+    coupled: Vec<f64>,
 }
 
 /// Residual, Jacobian (`m × nv`) and `γ = J̇ q̇` of all cut joints.
@@ -69,6 +71,7 @@ impl LoopKinematics {
             links: vec![LinkState::default(); model.links.len()],
             bias: vec![Vec6::zeros(); model.links.len()],
             rows: Vec::with_capacity(model.loops.len()),
+            coupled: vec![0.0; model.couplings.len()],
         }
     }
 
@@ -80,6 +83,7 @@ impl LoopKinematics {
             let rows = LoopRows::new(self, model, lp);
             self.rows.push(rows);
         }
+        super::coupling::residual(model, q, &mut self.coupled);
     }
 
     /// Twists and the velocity-product twist rates; needs `positions` first.
@@ -270,6 +274,7 @@ pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
             }
         }
     }
+    out[r..r + kin.coupled.len()].copy_from_slice(&kin.coupled);
 }
 
 /// Fills the velocity Jacobian (`nconstraints × nv`); needs `kin.positions`.
@@ -299,6 +304,7 @@ pub fn jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
             r += 1;
         }
     }
+    super::coupling::jacobian(model, r, jac);
 }
 
 /// Writes `γ = J̇ q̇` (length `nconstraints`): `J q̈ + γ = 0` on the manifold. Needs
@@ -338,6 +344,8 @@ pub fn gamma(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
             }
         }
     }
+    // A coupling's row is constant: J̇ = 0.
+    out[r..r + model.couplings.len()].fill(0.0);
 }
 
 /// The cut joints' wrenches from the multipliers: per loop `[force; moment]` that the cut
@@ -375,7 +383,7 @@ pub fn wrenches(model: &Model, kin: &LoopKinematics, lambda: &[f64]) -> Vec<[f64
     out
 }
 
-/// Index of the loop owning constraint row `row`.
+/// Index of the loop owning constraint row `row` (a loop's row, not a coupling's).
 pub fn loop_of_row(model: &Model, row: usize) -> usize {
     let starts = model.constraint_rows();
     starts.windows(2).position(|w| row < w[1]).unwrap_or(0)

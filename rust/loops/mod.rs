@@ -10,12 +10,14 @@
 //!   constraint wrenches, the driving forces of chosen actuated joints, and the projections
 //!   onto the position, velocity and acceleration manifolds (`assemble`).
 mod constraints;
+pub mod coupling;
 mod factor;
 mod solve;
 #[cfg(test)]
 mod tests;
 
 pub use constraints::{gamma, jacobian, residual, wrenches, Constraints, LoopKinematics};
+pub use coupling::Coupling;
 pub use solve::{
     assemble, check_mobility, constrained_forward_dynamics, constraint_forces, driving_forces,
     project_state, project_velocity_like, LoopSolver,
@@ -95,12 +97,13 @@ impl Model {
         self.loops.len()
     }
 
-    /// Number of scalar constraints of all cut joints (rows of the constraint Jacobian).
+    /// Number of scalar constraints of all cut joints and couplings (rows of the constraint
+    /// Jacobian; the couplings' rows come last, one each).
     pub fn nconstraints(&self) -> usize {
-        self.loops.iter().map(|l| l.kind().rows()).sum()
+        self.loops.iter().map(|l| l.kind().rows()).sum::<usize>() + self.couplings.len()
     }
 
-    /// First constraint row of each loop, and the total.
+    /// First constraint row of each loop, and the first row after the loops'.
     pub fn constraint_rows(&self) -> Vec<usize> {
         let mut rows = Vec::with_capacity(self.loops.len() + 1);
         let mut r = 0;

@@ -207,9 +207,15 @@ fn locked(model: &Model, rank: usize) -> Error {
         .loops
         .iter()
         .map(|l| format!("'{}'", l.name))
+        .chain(
+            model
+                .couplings
+                .iter()
+                .map(|c| format!("coupling '{}'", c.name)),
+        )
         .collect();
     Error::Singular(format!(
-        "the cut joint(s) {} leave the mechanism no freedom of motion: the constraint Jacobian has rank {rank} = nv = {} (a locked mechanism, a structure); remove a cut joint or a constraint",
+        "the cut joint(s) and couplings {} leave the mechanism no freedom of motion: the constraint Jacobian has rank {rank} = nv = {} (a locked mechanism, a structure); remove a cut joint or a constraint",
         names.join(", "),
         model.nv
     ))
@@ -297,9 +303,9 @@ pub fn driving_forces(
             "a",
             "accelerations that keep the loops closed (J a + J̇ v = 0; see assemble_acceleration)",
             format!(
-                "J a + J̇ v = {:.3e} in row {row} (loop '{}')",
+                "J a + J̇ v = {:.3e} in row {row} ({})",
                 ja[row],
-                model.loops[constraints::loop_of_row(model, row)].name
+                model.constraint_name(row)
             ),
         ));
     }
@@ -449,10 +455,9 @@ pub fn assemble(
     res = solver.residual_at(model, &q);
     if res > tol {
         let row = solver.cons.residual.iamax();
-        let lp = &model.loops[constraints::loop_of_row(model, row)];
         return Err(Error::Closure(format!(
-            "loop '{}' cannot be closed from this guess: after {iterations} Newton iterations its residual is still {res:.3e} (> tol = {tol:.1e}); the bodies may be unable to reach each other, or the fixed coordinates ask for a position the mechanism cannot take",
-            lp.name
+            "{} cannot be closed from this guess: after {iterations} Newton iterations its residual is still {res:.3e} (> tol = {tol:.1e}); the bodies may be unable to reach each other, or the fixed coordinates ask for a position the mechanism cannot take",
+            model.constraint_name(row)
         )));
     }
     solver.kin.positions(model, &q);
@@ -498,8 +503,8 @@ pub fn project_velocity_like(
     if after.amax() > 1e-9 * scale {
         let row = after.iamax();
         return Err(Error::Closure(format!(
-            "loop '{}': the held (fixed) entries leave no {} that keeps the loop closed (constraint row {row} stays at {:.3e}); hold fewer coordinates, or ones that can move independently",
-            model.loops[constraints::loop_of_row(model, row)].name,
+            "{}: the held (fixed) entries leave no {} that keeps the loop closed (constraint row {row} stays at {:.3e}); hold fewer coordinates, or ones that can move independently",
+            model.constraint_name(row),
             if v_for_gamma.is_some() { "acceleration" } else { "velocity" },
             after[row]
         )));

@@ -23,14 +23,18 @@ fn time_arg(py: Python<'_>, t: f64) -> PyResult<f64> {
 }
 
 fn refuse_loops(py: Python<'_>, s: &Scene, name: &str) -> PyResult<()> {
-    if s.model.loops.is_empty() {
+    if !s.model.has_constraints() {
         return Ok(());
     }
     Err(invalid(
         py,
         "scene",
-        format!("a scene without closed loops for {name}"),
-        format!("a model with {} loop(s)", s.model.loops.len()),
+        format!("a scene without closed loops or couplings for {name}"),
+        format!(
+            "a model with {} loop(s) and {} coupling(s)",
+            s.model.loops.len(),
+            s.model.couplings.len()
+        ),
     ))
 }
 

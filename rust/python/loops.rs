@@ -144,16 +144,18 @@ pub fn loop_actuation(
     actuated: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<Vec<usize>>> {
     let actuated = actuated.filter(|x| !x.is_none());
-    match (model.loops.is_empty(), actuated) {
-        (true, None) => Ok(None),
-        (true, Some(x)) => Err(invalid(
+    // With couplings alone `None` gives the tree's forces (each joint driven on its own);
+    // with loops the cut joints' forces are otherwise undetermined.
+    match (model.has_constraints(), actuated) {
+        (_, None) if model.loops.is_empty() => Ok(None),
+        (false, Some(x)) => Err(invalid(
             x.py(),
             "actuated",
-            "None for a model without loops (every joint is actuated)",
+            "None for a model without loops or couplings (every joint is actuated)",
             x.repr()?.to_string(),
         )),
-        (false, Some(x)) => actuated_indices(model, x).map(Some),
-        (false, None) => Err(invalid(
+        (true, Some(x)) => actuated_indices(model, x).map(Some),
+        (_, None) => Err(invalid(
             py,
             "actuated",
             format!("the actuated joints (v indices or body names) for a model with {} loop(s): the cut joints' forces are otherwise undetermined", model.loops.len()),

@@ -135,10 +135,15 @@ fn backward_other(
     tau: &[f64],
 ) -> bool {
     let (e, form) = (General(w.rot), c.offset_form);
+    let arm = &c.armature;
     match c.motion {
-        MotionClass::Angular1 => backward_1::<_, 3, true>(e, form, w, parent, start, tau[0]),
-        MotionClass::Linear1 => backward_1::<_, 3, false>(e, form, w, parent, start, tau[0]),
-        MotionClass::Angular3 => backward_3(form, w, parent, start, tau),
+        MotionClass::Angular1 => {
+            backward_1::<_, 3, true>(e, form, w, parent, start, tau[0], arm[0])
+        }
+        MotionClass::Linear1 => {
+            backward_1::<_, 3, false>(e, form, w, parent, start, tau[0], arm[0])
+        }
+        MotionClass::Angular3 => backward_3(form, w, parent, start, tau, arm),
         MotionClass::Free => backward_free(form, w, parent, start, tau),
         MotionClass::Rigid => {
             if let Some(p) = parent {
@@ -169,9 +174,9 @@ fn forward_other(c: &LinkConsts, w: &mut LinkWork, pacc: &Vec6, out: &mut [f64])
     }
 }
 
-/// One 1-dof joint inward: `U = M̂ S`, `D`, `u`, then `M^a`, `b^a` into the parent. `AX < 3`:
-/// a revolute joint about coordinate axis `AX` (S = e_AX, no products); `ANG`: the joint
-/// moves along an angular (else linear) axis.
+/// One 1-dof joint inward: `U = M̂ S`, `D = Sᵀ U + armature`, `u`, then `M^a`, `b^a` into
+/// the parent. `AX < 3`: a revolute joint about coordinate axis `AX` (S = e_AX, no
+/// products); `ANG`: the joint moves along an angular (else linear) axis.
 #[inline(always)]
 fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
     e: R,
@@ -180,6 +185,7 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
     parent: Option<&mut LinkWork>,
     start: Option<&LocalInertia>,
     tau: f64,
+    armature: f64,
 ) -> bool {
     let m = &cur.inertia;
     let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
@@ -201,6 +207,7 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
     } else {
         (s0.dot(&ul), s0.dot(&bl))
     };
+    let d = d + armature;
     if d.is_nan() || d <= 0.0 {
         return false;
     }
@@ -326,6 +333,7 @@ fn backward_3(
     parent: Option<&mut LinkWork>,
     start: Option<&LocalInertia>,
     tau: &[f64],
+    armature: &[f64; 3],
 ) -> bool {
     let m = &cur.inertia;
     let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
@@ -343,6 +351,7 @@ fn backward_3(
             d[(r, c)] = x;
             d[(c, r)] = x;
         }
+        d[(r, r)] += armature[r];
     }
     let d_inv = match d.cholesky() {
         Some(ch) => ch.inverse(),

@@ -125,6 +125,9 @@ pub struct LinkConsts {
     pub first_child: bool,
     /// The link's own inertia about its origin, in the recursion's link frame.
     pub inertia: LocalInertia,
+    /// Rotor inertia of the joint's speeds (`super::armature`); a link with any takes the
+    /// `Other` path, whose joint block `D` adds it.
+    pub armature: [f64; 3],
 }
 
 /// All constants of a model for the body-frame recursions.
@@ -143,9 +146,9 @@ impl Compiled {
         let n = model.links.len();
         let mut links = Vec::with_capacity(n);
         let mut frames: Vec<Mat3> = Vec::with_capacity(n);
-        for l in &model.links {
+        for (i, l) in model.links.iter().enumerate() {
             let frame_p = l.parent.map_or(Mat3::identity(), |p| frames[p]);
-            let (link, frame) = link_consts(l, &frame_p);
+            let (link, frame) = link_consts(l, &frame_p, model.link_armature(i));
             links.push(link);
             frames.push(frame);
         }
@@ -223,7 +226,7 @@ fn placement_turn(p: &Mat3) -> (PlacementTurn, (f64, f64)) {
 /// permutation absorbs `P` into the link frame: `Q = Q_p P`. Otherwise `Q = Q_p` and the
 /// placement becomes `Q_p P Q_pᵀ` (a plane rotation stays one, about the permuted axis).
 /// Other joints keep their own frame (`Q = 1`) and take `Q_p P` as placement.
-pub(super) fn link_consts(l: &Link, frame_p: &Mat3) -> (LinkConsts, Mat3) {
+pub(super) fn link_consts(l: &Link, frame_p: &Mat3, armature: [f64; 3]) -> (LinkConsts, Mat3) {
     let pl = &l.placement;
     // Signed permutations: these products are exact.
     let offset = frame_p * pl.translation;
@@ -250,11 +253,14 @@ pub(super) fn link_consts(l: &Link, frame_p: &Mat3) -> (LinkConsts, Mat3) {
         leaf: true,
         first_child: false,
         inertia: LocalInertia::default(),
+        armature,
     };
+    // The coordinate-axis cases drop the joint row of the articulated inertia, which
+    // armature keeps: a link with armature takes the general path.
     let on_axis = l
         .joint
         .revolute_axis()
-        .filter(|a| coordinate_axis(a).is_some());
+        .filter(|a| coordinate_axis(a).is_some() && armature == [0.0; 3]);
     let mut frame = Mat3::identity();
     let mut other = true;
     if let Some(axis) = on_axis {

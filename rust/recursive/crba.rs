@@ -41,6 +41,9 @@ fn mass_matrix_body(model: &Model, data: &mut Data, q: &[f64], gim: &mut DMatrix
     } else {
         columns::<false>(consts, work, gim);
     }
+    if !model.armature.is_empty() {
+        super::armature::add_to_mass_matrix(model, gim);
+    }
 }
 
 /// Joint rotations and offsets: the plane turns' (cos, sin), the other joints' matrices

@@ -19,6 +19,7 @@
 pub mod aba;
 pub mod aba_derivatives;
 pub(crate) mod algebra;
+pub mod armature;
 pub mod compiled;
 pub mod crba;
 #[cfg(test)]

@@ -117,4 +117,7 @@ fn inverse_dynamics_body(
             }
         });
     }
+    if !model.armature.is_empty() {
+        super::armature::add_to_forces(model, a, tau);
+    }
 }

@@ -165,6 +165,10 @@ fn derivatives_body(
             parent.f += lk.f;
         }
     }
+    if !model.armature.is_empty() {
+        super::armature::add_to_forces(model, a, &mut dd.tau);
+        super::armature::add_to_mass_matrix(model, &mut dd.mass);
+    }
 }
 
 /// One link of the outward pass: its velocity and acceleration, its dofs' directions and

@@ -455,7 +455,7 @@ fn placement_kinds_are_recognised() {
             model
                 .add_body(body, joint, None, place, None, None)
                 .unwrap();
-            let l = compiled::link_consts(&model.links[0], &Mat3::identity()).0;
+            let l = compiled::link_consts(&model.links[0], &Mat3::identity(), [0.0; 3]).0;
             (l.kind, l.sign)
         })
         .collect();

@@ -87,8 +87,8 @@ pub(super) fn add_loops(
     Ok(())
 }
 
-/// Closes the loops from the file's initial state, holding the joint coordinates of the
-/// bodies named in `fixed`.
+/// Closes the loops (and couplings, from URDF mimic joints) from the file's initial state,
+/// holding the joint coordinates of the bodies named in `fixed`.
 pub(super) fn close_initial_state(
     ctx: &Ctx,
     model: &Model,
@@ -96,9 +96,12 @@ pub(super) fn close_initial_state(
     q0: &mut Vec<f64>,
     v0: &mut [f64],
 ) -> Result<()> {
-    if model.loops.is_empty() {
+    if !model.has_constraints() {
         if !fixed.is_empty() {
-            return Err(ctx.err("initial.fixed", "only for a scene with [[loop]] entries"));
+            return Err(ctx.err(
+                "initial.fixed",
+                "only for a scene with [[loop]] entries or couplings (URDF mimic joints)",
+            ));
         }
         return Ok(());
     }

@@ -66,10 +66,11 @@ impl Dynamics<'_> {
         w: &mut DerivativeWork,
     ) -> crate::error::Result<()> {
         let model = self.model;
-        if !model.loops.is_empty() {
+        if model.has_constraints() {
             return Err(Error::Numerical(format!(
-                "the dynamics derivatives are for trees: this model has {} closed loop(s)",
-                model.loops.len()
+                "the dynamics derivatives are for trees: this model has {} closed loop(s) and {} coupling(s)",
+                model.loops.len(),
+                model.couplings.len()
             )));
         }
         let cx = Context { model, t, q, v };
@@ -133,10 +134,11 @@ impl Dynamics<'_> {
         w: &mut DerivativeWork,
     ) -> crate::error::Result<()> {
         let model = self.model;
-        if !model.loops.is_empty() {
+        if model.has_constraints() {
             return Err(Error::Numerical(format!(
-                "the dynamics derivatives are for trees: this model has {} closed loop(s)",
-                model.loops.len()
+                "the dynamics derivatives are for trees: this model has {} closed loop(s) and {} coupling(s)",
+                model.loops.len(),
+                model.couplings.len()
             )));
         }
         let g = self.effects.gravity;
@@ -165,7 +167,7 @@ impl Dynamics<'_> {
         w: &mut DerivativeWork,
     ) -> Result<bool, String> {
         let model = self.model;
-        if !model.loops.is_empty() {
+        if model.has_constraints() {
             return Ok(false);
         }
         let (nq, nv) = (model.nq, model.nv);

@@ -60,7 +60,9 @@ impl<'a> Dynamics<'a> {
             progress: None,
             calls: 0,
             probe: None,
-            loops: (!model.loops.is_empty()).then(|| Box::new(LoopSolver::new(model))),
+            loops: model
+                .has_constraints()
+                .then(|| Box::new(LoopSolver::new(model))),
             deriv: None,
         }
     }
@@ -76,7 +78,9 @@ impl<'a> Dynamics<'a> {
     pub fn energy(&mut self, q: &[f64], v: &[f64]) -> f64 {
         self.move_links(q, v);
         let cx = context(self.model, 0.0, q, v);
-        recursive::kinetic_energy(&self.data) + self.effects.potential_energy(&cx, &self.data.links)
+        recursive::kinetic_energy(&self.data)
+            + recursive::armature::kinetic_energy(self.model, v)
+            + self.effects.potential_energy(&cx, &self.data.links)
     }
 
     /// Kinetic energy and `(label, V)` of each conservative effect.
@@ -84,7 +88,8 @@ impl<'a> Dynamics<'a> {
         self.move_links(q, v);
         let cx = context(self.model, 0.0, q, v);
         (
-            recursive::kinetic_energy(&self.data),
+            recursive::kinetic_energy(&self.data)
+                + recursive::armature::kinetic_energy(self.model, v),
             self.effects.potentials(&cx, &self.data.links),
         )
     }

@@ -198,14 +198,10 @@ fn close_initial_state(
     kin.positions(model, q0);
     let mut r = vec![0.0; model.nconstraints()];
     crate::loops::residual(model, &kin, &mut r);
-    let name = |row: usize| {
-        let starts = model.constraint_rows();
-        let k = starts.windows(2).position(|w| row < w[1]).unwrap_or(0);
-        model.loops[k].name.clone()
-    };
+    let name = |row: usize| model.constraint_name(row);
     if let Some((row, x)) = r.iter().enumerate().find(|(_, x)| x.abs() > 1e-8) {
         return Err(Error::Closure(format!(
-            "q0: loop '{}' is open by {x:.3e} (constraint row {row}): close it first with model.assemble(q0, fixed=[...])",
+            "q0: {} is open by {x:.3e} (constraint row {row}): close it first with model.assemble(q0, fixed=[...])",
             name(row)
         )));
     }
@@ -218,7 +214,7 @@ fn close_initial_state(
         return Err(Error::arg(
             "v0",
             "speeds that keep the loops closed (J v0 = 0; see model.assemble_velocity)",
-            format!("J v0 = {:.3e} in row {row} (loop '{}')", jv[row], name(row)),
+            format!("J v0 = {:.3e} in row {row} ({})", jv[row], name(row)),
         ));
     }
     crate::loops::project_state(model, solver, y0).map_err(Error::Closure)?;

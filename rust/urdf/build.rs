@@ -255,29 +255,62 @@ pub(super) fn joint_records(robot: &RobotData, tree: &Tree, built: &Built) -> Ve
         .collect()
 }
 
-/// What the file says that is not loaded as said: mimic constraints (not enforced), moving
-/// joints without `<limit>`, elements the dynamics does not use.
+/// `<mimic joint multiplier offset>` as couplings `q = multiplier · q_joint + offset` (the
+/// loop solver holds them, `crate::loops::coupling`). A mimic in a cycle or of itself is an
+/// error naming the joint; one of an unknown joint (a broken file, which loaded before mimic
+/// joints were coupled) or on or of a fixed joint (a reduced model welds them) has nothing to
+/// couple and is skipped, with the warning returned.
+pub(super) fn add_mimics(
+    ctx: &Ctx,
+    model: &mut Model,
+    joints: &[UrdfJoint],
+) -> Result<Option<String>> {
+    let (mut unknown, mut fixed) = (Vec::new(), Vec::new());
+    for j in joints {
+        let Some(m) = &j.mimic else { continue };
+        let what = format!("'{}' (mimics '{}')", j.name, m.joint);
+        let Some(reference) = joints.iter().find(|r| r.name == m.joint) else {
+            unknown.push(what);
+            continue;
+        };
+        if j.q_index.is_none() || reference.q_index.is_none() {
+            fixed.push(what);
+            continue;
+        }
+        model
+            .add_coupling(
+                j.body,
+                reference.body,
+                m.multiplier,
+                m.offset,
+                Some(j.name.clone()),
+            )
+            .map_err(|e| in_element(ctx, format!("joint '{}' <mimic>", j.name), e))?;
+    }
+    let mut parts = Vec::new();
+    if !unknown.is_empty() {
+        parts.push(format!("of unknown joints: {}", unknown.join(", ")));
+    }
+    if !fixed.is_empty() {
+        parts.push(format!("on or of fixed joints: {}", fixed.join(", ")));
+    }
+    Ok((!parts.is_empty()).then(|| {
+        format!(
+            "{}: <mimic> elements with nothing to couple, loaded as independent joints: {}",
+            ctx.file,
+            parts.join("; ")
+        )
+    }))
+}
+
+/// What the file says that is not loaded as said: moving joints without `<limit>`, elements
+/// the dynamics does not use.
 pub(super) fn joint_warnings(
     file: &str,
     joints: &[UrdfJoint],
     ignored: &BTreeMap<String, usize>,
 ) -> Vec<String> {
     let mut warnings = Vec::new();
-    let mimics: Vec<String> = joints
-        .iter()
-        .filter_map(|j| {
-            j.mimic
-                .as_ref()
-                .map(|m| format!("'{}' (mimics '{}')", j.name, m.joint))
-        })
-        .collect();
-    if !mimics.is_empty() {
-        warnings.push(format!(
-            "{file}: mimic constraints are not supported: {} joint(s) are loaded as independent joints: {}",
-            mimics.len(),
-            mimics.join(", ")
-        ));
-    }
     let unlimited: Vec<String> = joints
         .iter()
         .filter(|j| matches!(j.kind, "revolute" | "prismatic") && j.limit.is_none())

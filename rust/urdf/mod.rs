@@ -14,8 +14,9 @@
 //!   `fixed` → [`Joint::Fixed`] (welded into the parent's link). `<origin xyz rpy>` places the
 //!   joint frame in the parent link's frame, `R = Rz(y) Ry(p) Rx(r)`; `<axis xyz>` (default
 //!   x) is normalised. `floating` and `planar` joints are refused with an error naming the
-//!   joint. `<limit>`, `<dynamics damping friction>` and `<mimic>` are kept in [`UrdfJoint`]
-//!   (mimic constraints are not applied: such joints are independent, with a warning).
+//!   joint. `<limit>`, `<dynamics damping friction>` and `<mimic>` are kept in [`UrdfJoint`];
+//!   each `<mimic>` becomes a coupling `q = multiplier · q_joint + offset` (named after the
+//!   mimicking joint; `crate::loops::coupling`), as Pinocchio's `mimic=True` models them.
 //! * Inertia. `<inertial>`: `com = origin.xyz`, `I_link = R I Rᵀ` with `R` from
 //!   `origin.rpy`; each link's inertial is validated like any [`RigidBody`] (a negative or
 //!   non-physical tensor is an error naming the link).
@@ -62,7 +63,7 @@ pub struct Limit {
     pub velocity: f64,
 }
 
-/// `<mimic joint multiplier offset>`: recorded, not enforced.
+/// `<mimic joint multiplier offset>`: loaded as a coupling (`build::add_mimics`).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mimic {
     pub joint: String,
@@ -182,7 +183,7 @@ pub struct Urdf {
     pub name: String,
     pub model: Model,
     pub joints: Vec<UrdfJoint>,
-    /// Things loaded differently from what the file says (mimic joints, ignored elements).
+    /// Things loaded differently from what the file says (ignored elements, missing limits).
     pub warnings: Vec<String>,
     /// What a `repair` changed, one record per link or welded joint (empty without repair).
     pub repairs: Vec<RepairRecord>,
@@ -197,6 +198,26 @@ impl Urdf {
     }
     pub fn joint(&self, name: &str) -> Option<&UrdfJoint> {
         self.joints.iter().find(|j| j.name == name)
+    }
+
+    /// Drops the couplings the `<mimic>` elements made: the mimic joints move independently
+    /// (Pinocchio's `buildModelFromUrdf` without `mimic=True`), which one warning says.
+    pub fn independent_mimics(&mut self, file: &str) {
+        let names: Vec<String> = self
+            .model
+            .couplings
+            .iter()
+            .map(|c| format!("'{}'", c.name))
+            .collect();
+        if names.is_empty() {
+            return;
+        }
+        self.model.couplings.clear();
+        self.warnings.push(format!(
+            "{file}: mimic=False: {} mimic joint(s) loaded as independent joints: {}",
+            names.len(),
+            names.join(", ")
+        ));
     }
 }
 
@@ -262,12 +283,14 @@ pub fn model_from_urdf_with(
     }
     let mut built = build::build_model(&ctx, &robot, &tree, root)?;
     let joints = build::joint_records(&robot, &tree, &built);
+    let mimics = build::add_mimics(&ctx, &mut built.model, &joints)?;
     let meshes = visuals::attach(&robot, &mut built.model, file, base_dir, package_dirs);
     let warnings = std::mem::take(&mut robot.notes)
         .into_iter()
         .chain(built.warning)
         .chain(meshes)
         .chain(build::joint_warnings(file, &joints, &robot.ignored))
+        .chain(mimics)
         .collect();
     Ok(Urdf {
         name: robot.name,

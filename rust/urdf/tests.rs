@@ -285,7 +285,7 @@ fn rounding_noise_in_an_inertia_is_projected_away() {
 }
 
 #[test]
-fn mimic_and_ignored_elements_warn() {
+fn mimic_loads_as_coupling_and_ignored_elements_warn() {
     let text = robot(&[
         link("base", 1.0),
         link("a", 1.0),
@@ -316,11 +316,16 @@ fn mimic_and_ignored_elements_warn() {
             offset: 0.0
         })
     );
-    assert_eq!(u.warnings.len(), 2, "{:?}", u.warnings);
-    assert!(u.warnings[0].contains("'j2' (mimics 'j1')"));
-    assert!(u.warnings[1].contains("<gazebo>") && u.warnings[1].contains("<transmission>"));
-    assert!(u.warnings[1].contains("<joint><calibration>"));
-    assert!(!u.warnings[1].contains("material"));
+    let c = &u.model.couplings[0];
+    assert_eq!(
+        (c.joint, c.reference, c.ratio, c.offset),
+        (u.joints[1].body, u.joints[0].body, 2.0, 0.0)
+    );
+    assert_eq!(c.name, "j2");
+    assert_eq!(u.warnings.len(), 1, "{:?}", u.warnings);
+    assert!(u.warnings[0].contains("<gazebo>") && u.warnings[0].contains("<transmission>"));
+    assert!(u.warnings[0].contains("<joint><calibration>"));
+    assert!(!u.warnings[0].contains("material"));
 }
 
 #[test]

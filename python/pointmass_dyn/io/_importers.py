@@ -67,12 +67,14 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     frame); ball q is ``qpos`` reordered to ``(x, y, z, w)``; a free joint's q is ``(pos,
     quat xyzw)`` and its linear speed is in the body frame where MuJoCo's ``qvel`` has it in
     the world frame (:func:`mujoco_state` converts). Only the mass matrix and bias forces are
-    MuJoCo's: ``dof_armature``, passive forces, contacts, actuators and equality constraints
-    are not imported (a :class:`ModelImportWarning` names those present), but for
-    ``<equality connect>`` and ``<equality weld>`` between bodies, which become loops
-    (``Spherical`` and ``Fixed`` cut joints, docs/loops.md). The ``range`` of a limited hinge
-    or slide becomes the joint's limit (``Model.joint_limits()``, what ``pmd.JointLimit``
-    without bounds enforces).
+    MuJoCo's, plus ``dof_armature`` (rotor inertia, :meth:`Model.set_armature`); passive
+    forces, contacts, actuators and equality constraints are not imported (a
+    :class:`ModelImportWarning` names those present), but for ``<equality connect>`` and
+    ``<equality weld>`` between bodies, which become loops (``Spherical`` and ``Fixed`` cut
+    joints, docs/loops.md), and ``<equality joint>`` with a linear ``polycoef``, which
+    becomes a coupling (docs/couplings.md). The ``range`` of a limited hinge or slide becomes
+    the joint's limit (``Model.joint_limits()``, what ``pmd.JointLimit`` without bounds
+    enforces).
 
     The geoms of the bodies (groups 0-2) become ``model.visuals`` (mesh files looked for as
     MuJoCo recorded them and in ``mesh_dirs``), and the model is named after
@@ -91,6 +93,7 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     J = mujoco.mjtJoint
     parts: list[tuple] = []
     ranges: list[tuple[float, float] | None] = []  # per part, its joint's range
+    part_of_joint: dict[int, int] = {}  # MuJoCo joint id -> our body index
     last_of_body = {0: -1}  # MuJoCo body id -> our index of its last part (world: -1)
     anchor_of_body = {0: np.zeros(3)}  # the last part's frame origin in the MuJoCo body frame
     for b in range(1, m.nbody):
@@ -148,6 +151,7 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
             limited = jtype in (J.mjJNT_HINGE, J.mjJNT_SLIDE) and bool(m.jnt_limited[j])
             ranges.append((float(m.jnt_range[j][0]), float(m.jnt_range[j][1])) if limited else None)
             parent = len(parts) - 1
+            part_of_joint[j] = parent
             prev_anchor, trans, rot = anchor, np.zeros(3), np.eye(3)
         last_of_body[b], anchor_of_body[b] = parent, prev_anchor
     model = Model._from_parts(parts, ranges)
@@ -157,9 +161,8 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     if missing:
         ignored.append(f"{len(missing)} mesh file(s) not found (their bodies are drawn as "
                        f"inertia boxes; pass mesh_dirs=[...]): " + ", ".join(missing[:8]))
-    if np.any(np.asarray(m.dof_armature) != 0):
-        ignored.append("dof_armature (added to MuJoCo's mass matrix)")
-    ignored += _mujoco_loops(m, model, parts, last_of_body, anchor_of_body)
+    ignored += _mujoco_armature(m, model, part_of_joint)
+    ignored += _mujoco_loops(m, model, parts, last_of_body, anchor_of_body, part_of_joint)
     if ignored:
         warnings.warn(
             "from_mujoco: not imported: " + "; ".join(ignored),
@@ -169,16 +172,70 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     return model
 
 
-def _mujoco_loops(m, model, parts, last_of_body, anchor_of_body) -> list[str]:
+def _mujoco_armature(m, model, part_of_joint) -> list[str]:
+    """Each joint's ``dof_armature`` as its rotor inertia; returns what was not imported (a
+    free joint's: a free body has no rotor)."""
+    import mujoco
+
+    arm = np.asarray(m.dof_armature, float)
+    skipped = []
+    for j, body in part_of_joint.items():
+        d = int(m.jnt_dofadr[j])
+        nv = {0: 6, 1: 3}.get(int(m.jnt_type[j]), 1)
+        values = arm[d : d + nv]
+        if not np.any(values != 0):
+            continue
+        if int(m.jnt_type[j]) == mujoco.mjtJoint.mjJNT_FREE:
+            skipped.append(f"dof_armature of free joint '{parts_name(m, j)}'")
+            continue
+        model.set_armature(body, values)
+    return skipped
+
+
+def parts_name(m, j: int) -> str:
+    import mujoco
+
+    return _name(m, mujoco.mjtObj.mjOBJ_JOINT, j, f"jnt{j}")
+
+
+def _mujoco_joint_coupling(m, model, e: int, name: str, part_of_joint) -> str | None:
+    """An active ``<equality joint>`` as a coupling: MuJoCo's ``q1 − q1₀ = Σ cₖ (q2 −
+    q2₀)ᵏ`` with ``c2 = c3 = c4 = 0`` is ``q1 = c1 q2 + (q1₀ + c0 − c1 q2₀)`` (``q₀`` =
+    ``qpos0``). Returns why it was not imported, or None."""
+    j1, j2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+    poly = np.asarray(m.eq_data[e][:5], float)
+    if j2 < 0:
+        return "joint equality constraint(s) locking one joint"
+    if np.any(poly[2:] != 0):
+        return "joint equality constraint(s) with a nonlinear polycoef (only c0 + c1 x is a coupling)"
+    q10 = float(m.qpos0[m.jnt_qposadr[j1]])
+    q20 = float(m.qpos0[m.jnt_qposadr[j2]])
+    model.add_coupling(
+        part_of_joint[j1],
+        part_of_joint[j2],
+        ratio=float(poly[1]),
+        offset=q10 + float(poly[0]) - float(poly[1]) * q20,
+        name=name,
+    )
+    return None
+
+
+def _mujoco_loops(m, model, parts, last_of_body, anchor_of_body, part_of_joint) -> list[str]:
     """Active body-to-body ``<equality connect>`` and ``<equality weld>`` as cut joints
     (docs/loops.md): connect → ``Spherical`` between its two anchors, weld → ``Fixed``
-    between a frame at MuJoCo's ``relpose`` on body 1 and body 2's anchor. Returns what was not imported."""
+    between a frame at MuJoCo's ``relpose`` on body 1 and body 2's anchor; active linear
+    ``<equality joint>`` as couplings. Returns what was not imported."""
     import mujoco
 
     skipped: dict[str, int] = {}
     for e in range(m.neq):
         kind = int(m.eq_type[e])
         name = _name(m, mujoco.mjtObj.mjOBJ_EQUALITY, e, f"equality{e}")
+        if kind == mujoco.mjtEq.mjEQ_JOINT and m.eq_active0[e]:
+            why = _mujoco_joint_coupling(m, model, e, name, part_of_joint)
+            if why is not None:
+                skipped[why] = skipped.get(why, 0) + 1
+            continue
         spatial = kind in (mujoco.mjtEq.mjEQ_CONNECT, mujoco.mjtEq.mjEQ_WELD)
         by_body = int(m.eq_objtype[e]) == mujoco.mjtObj.mjOBJ_BODY
         if not (spatial and by_body):
@@ -274,8 +331,9 @@ def _pin_joint(jm) -> tuple[Joint, bool]:
 def from_pinocchio(pin_model: Any) -> Model:
     """Our model of a ``pinocchio.Model``: one body per joint (named after the joint's first
     BODY frame at its origin, else the joint), its placement and inertia, joint names and
-    order kept. q equals Pinocchio's but for unbounded revolute joints (``RUBX``..., q =
-    (cos, sin) there, the angle here: :func:`pinocchio_q` converts); v equals Pinocchio's."""
+    order kept, and ``model.armature`` as each joint's rotor inertia. q equals Pinocchio's
+    but for unbounded revolute joints (``RUBX``..., q = (cos, sin) there, the angle here:
+    :func:`pinocchio_q` converts); v equals Pinocchio's."""
     try:
         import pinocchio as pin
     except ImportError as e:  # pragma: no cover - optional dependency
@@ -313,7 +371,14 @@ def from_pinocchio(pin_model: Any) -> Model:
                 np.asarray(y.inertia),
             )
         )
-    return Model._from_parts(parts)
+    model = Model._from_parts(parts)
+    armature = np.asarray(getattr(pm, "armature", np.zeros(pm.nv)), float)
+    for j in range(1, pm.njoints):
+        jm = pm.joints[j]
+        values = armature[jm.idx_v : jm.idx_v + jm.nv]
+        if np.any(values != 0):
+            model.set_armature(j - 1, values)
+    return model
 
 
 def pinocchio_q(pin_model: Any, q) -> np.ndarray:

@@ -33,11 +33,9 @@ depth-first walk of the tree; the helpers here permute accordingly.
 Scene effects: gravity (summed), joint springs on revolute/prismatic joints (``stiffness``,
 ``springref``) and on quaternion joints resting at the identity (MuJoCo's ball spring), and
 dampers (``damping``) on every joint but ZYZ ones (ours damp Euler rates, MuJoCo the angular
-velocity). Parameters are read back by probing :func:`pointmass_dyn.effect_forces`, so
-whatever the scene declares is what MuJoCo gets. Any other effect, closed loops and FreeFlyer
-joints below a moving body (MuJoCo allows free joints only at the top level) are refused with
-:class:`~pointmass_dyn.errors.InvalidInputError`. Contact is disabled; nothing else of
-MuJoCo's (armature, friction loss, limits) is added.
+velocity), read back by probing :func:`pointmass_dyn.effect_forces`; rotor inertia as
+``armature``. Other effects, loops, couplings and FreeFlyer joints below a moving body are
+refused (``InvalidInputError``). Contact is disabled; friction loss, limits are not added.
 
 Accuracy: MuJoCo's ``mj_forward`` ``qacc`` equals our forward dynamics (with the scene's
 springs and dampers) to ~1e-14 relative on chain7, Panda and random trees of every joint
@@ -186,11 +184,10 @@ def _model_of(model_or_scene: Any) -> tuple[Any, Any]:
 
 def _tree(model) -> tuple[list[tuple[str, str, int, int]], list[list[int]], list[int]]:
     """Body infos, children lists and the depth-first order the MJCF writes the bodies in."""
-    if model.nloops:
+    if model.nloops or model.ncouplings:
         raise ModelStructureError(
-            f"model: MJCF export handles kinematic trees; this model has {model.nloops} closed "
-            f"loop(s) ({', '.join(model.loop_names)}), which MuJoCo would need as equality "
-            f"constraints: not supported")
+            f"model: MJCF export handles kinematic trees; this model has {model.nloops} loop(s) "
+            f"({', '.join(model.loop_names)}) and {model.ncouplings} coupling(s): not supported")
     infos = [model.body_info(i) for i in range(model.nbodies)]
     children: list[list[int]] = [[] for _ in infos]
     roots = []
@@ -411,6 +408,10 @@ def to_mjcf(
             attrs += ' type="free"'
         if damp[j.v]:
             attrs += f' damping="{float(damp[j.v])!r}"'
+        arm = model.armature[j.v : j.v + (3 if kind.startswith("Spherical") else 1)]
+        if np.any(arm != arm[0]):  # MuJoCo has one value per joint
+            raise ModelStructureError(f"model: body {bname!r}: armature {arm} differs by axis")
+        attrs += f' armature="{float(arm[0])!r}"' if arm[0] else ""
         return f"<joint name={quoteattr('j_' + bname)}{attrs}/>"
 
     def carried_into(b: int) -> int | None:

@@ -186,7 +186,8 @@ impl PyModel {
             let model: &Model = &ws.version.model;
             kinematics::positions(model, &ws.q, &mut ws.data.links);
             kinematics::velocities(model, &ws.q, &ws.v, &mut ws.data.links);
-            let e = recursive::kinetic_energy(&ws.data);
+            let e = recursive::kinetic_energy(&ws.data)
+                + recursive::armature::kinetic_energy(model, &ws.v);
             check_result(py, "kinetic_energy", &[e])?;
             Ok(e)
         })
@@ -278,12 +279,18 @@ impl PyModel {
             Direction::Inverse => "inverse_dynamics_derivatives",
         };
         self.with_workspace(|ws: &mut Workspace| {
-            if !ws.model().loops.is_empty() {
+            if ws.model().has_constraints() {
                 return Err(invalid(
                     py,
                     "model",
-                    format!("a tree for {name} (closed loops are not differentiated)"),
-                    format!("a model with {} loop(s)", ws.model().loops.len()),
+                    format!(
+                        "a tree for {name} (closed loops and couplings are not differentiated)"
+                    ),
+                    format!(
+                        "a model with {} loop(s) and {} coupling(s)",
+                        ws.model().loops.len(),
+                        ws.model().couplings.len()
+                    ),
                 ));
             }
             load_state(ws, py, q, Some(v))?;

@@ -20,16 +20,18 @@ impl PyModel {
     /// `repair` (None/False, True, a dict or `pmd.InertiaRepair`) allows MuJoCo-style
     /// inertia repairs (docs/robots.md); each change is listed in one `UrdfRepairWarning` and
     /// in `model.repairs`. Raises `UrdfError`; warnings go through `warnings.warn` as
-    /// `UrdfWarning`. Mesh URIs (`package://...`) are looked for in `package_dirs` (a path
+    /// `UrdfWarning`. `<mimic>` joints are couplings; `mimic=False` loads them as independent
+    /// joints (Pinocchio's default), with a warning. Mesh URIs (`package://...`) are looked for in `package_dirs` (a path
     /// or a list of paths), `ROS_PACKAGE_PATH` and the file's ancestors (`model.visuals`).
     #[staticmethod]
-    #[pyo3(signature = (path, *, root_joint=None, repair=None, package_dirs=None))]
+    #[pyo3(signature = (path, *, root_joint=None, repair=None, package_dirs=None, mimic=true))]
     fn from_urdf(
         py: Python<'_>,
         path: std::path::PathBuf,
         root_joint: Option<&Bound<'_, PyAny>>,
         repair: Option<&Bound<'_, PyAny>>,
         package_dirs: Option<&Bound<'_, PyAny>>,
+        mimic: bool,
     ) -> PyResult<Self> {
         let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
         let root = match root_joint {
@@ -48,8 +50,11 @@ impl PyModel {
             },
         };
         let repair = repair_options(py, repair)?;
-        let urdf =
+        let mut urdf =
             crate::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
+        if !mimic {
+            urdf.independent_mimics(&crate::files::display_path(&path));
+        }
         let warnings = py.import("warnings")?;
         if !urdf.warnings.is_empty() {
             let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;

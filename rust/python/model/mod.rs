@@ -14,6 +14,7 @@ use crate::python::errors::{invalid, IntoPyResult};
 use crate::shared::{SharedModel, Version, Workspace};
 use crate::spatial::{Vec3, Vec6};
 
+mod couplings;
 mod dynamics;
 mod import;
 mod kinematics;

@@ -219,10 +219,13 @@ impl PyModel {
 
     fn __repr__(&self) -> String {
         let m = self.model();
-        let loops = match m.nloops() {
+        let mut loops = match m.nloops() {
             0 => String::new(),
             n => format!(", nloops={n}"),
         };
+        if m.ncouplings() > 0 {
+            loops += &format!(", ncouplings={}", m.ncouplings());
+        }
         format!(
             "Model(nbodies={}, nlinks={}, nq={}, nv={}{loops})",
             m.nbodies(),

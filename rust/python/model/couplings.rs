@@ -1,0 +1,160 @@
+//! `Model`'s joint couplings (`add_coupling`, their forces) and rotor inertia
+//! (`set_armature`, `armature`): argument conversion around `crate::loops::coupling` and
+//! `crate::recursive::armature`.
+use pyo3::prelude::*;
+use pyo3::types::PyString;
+
+use super::{gravity_arg, load_state, load_x, PyModel};
+use crate::loops;
+use crate::python::convert::{int_arg, to_array1};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::shared::Version;
+
+/// A joint given as a body index, a URDF joint name or a body name: its body's index.
+fn joint_ref(ver: &Version, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<usize> {
+    let py = obj.py();
+    let model = &ver.model;
+    if let Ok(name) = obj.cast::<PyString>() {
+        let name = name.to_cow()?;
+        if let Some(j) = ver.urdf_joints.iter().find(|j| j.name == name.as_ref()) {
+            return Ok(j.body);
+        }
+        return model.body_index(name.as_ref()).ok_or_else(|| {
+            let mut names: Vec<String> = model
+                .links
+                .iter()
+                .take(20)
+                .map(|l| format!("'{}'", model.bodies[l.body].name))
+                .collect();
+            if model.links.len() > 20 {
+                names.push("…".into());
+            }
+            invalid(
+                py,
+                arg,
+                format!(
+                    "a joint name or the name of its body ({})",
+                    names.join(", ")
+                ),
+                format!("'{name}'"),
+            )
+        });
+    }
+    let n = model.nbodies();
+    let k = int_arg(
+        obj,
+        arg,
+        0,
+        i64::MAX,
+        "a body index, a joint name or a body name",
+    )?;
+    if (k as usize) < n {
+        Ok(k as usize)
+    } else {
+        Err(invalid(
+            py,
+            arg,
+            format!("a body index 0..{n}, a joint name or a body name"),
+            k,
+        ))
+    }
+}
+
+#[pymethods]
+impl PyModel {
+    /// Couples two 1-dof joints: `q_joint = ratio · q_reference + offset` (docs/couplings.md).
+    /// Returns the coupling's index.
+    #[pyo3(signature = (joint, reference, ratio=1.0, offset=0.0, name=None))]
+    fn add_coupling(
+        &self,
+        py: Python<'_>,
+        joint: &Bound<'_, PyAny>,
+        reference: &Bound<'_, PyAny>,
+        ratio: f64,
+        offset: f64,
+        name: Option<String>,
+    ) -> PyResult<usize> {
+        let ver = self.version();
+        let j = joint_ref(&ver, joint, "joint")?;
+        let r = joint_ref(&ver, reference, "reference")?;
+        drop(ver);
+        self.shared
+            .update(|m| m.add_coupling(j, r, ratio, offset, name))
+            .py(py)
+    }
+
+    /// Number of joint couplings.
+    #[getter]
+    fn ncouplings(&self) -> usize {
+        self.model().ncouplings()
+    }
+
+    /// The couplings as `(name, joint body, reference body, ratio, offset)`.
+    #[getter]
+    fn couplings(&self) -> Vec<(String, String, String, f64, f64)> {
+        let m = self.model();
+        m.couplings
+            .iter()
+            .map(|c| {
+                (
+                    c.name.clone(),
+                    m.bodies[c.joint].name.clone(),
+                    m.bodies[c.reference].name.clone(),
+                    c.ratio,
+                    c.offset,
+                )
+            })
+            .collect()
+    }
+
+    /// Each coupling's generalized force on its joint under the forces `tau` (the reference
+    /// joint feels `−ratio` times it).
+    #[pyo3(signature = (q, v, tau, gravity=None))]
+    fn coupling_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        gravity: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let g = gravity_arg(py, gravity)?;
+        self.with_workspace(|ws| {
+            load_state(ws, py, q, Some(v))?;
+            load_x(ws, py, tau, "tau")?;
+            let lambda = ws.constraint_multipliers(&g).py(py)?;
+            let f = loops::coupling::forces(ws.model(), &lambda);
+            check_result(py, "coupling_forces", &f)?;
+            Ok(to_array1(py, &f).into_any())
+        })
+    }
+
+    /// Sets the rotor inertia (armature) of a joint: one number, or one per speed of the joint.
+    fn set_armature(
+        &self,
+        py: Python<'_>,
+        joint: &Bound<'_, PyAny>,
+        value: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let ver = self.version();
+        let j = joint_ref(&ver, joint, "joint")?;
+        drop(ver);
+        let values = match value.extract::<f64>() {
+            Ok(x) => vec![x],
+            Err(_) => crate::python::convert::vector(value, "value", None)?,
+        };
+        self.shared.update(|m| m.set_armature(j, &values)).py(py)
+    }
+
+    /// The rotor inertia of every speed (length nv; zeros when none is set).
+    #[getter]
+    fn armature<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        let m = self.model();
+        let a = if m.armature.is_empty() {
+            vec![0.0; m.nv]
+        } else {
+            m.armature.clone()
+        };
+        to_array1(py, &a).into_any()
+    }
+}
