@@ -3,7 +3,9 @@ arguments. The contract, whatever the input:
 
 * no ``PanicException`` (or any other exception) from outside ``pmd.errors``, except
   ``TypeError`` for an argument of the wrong Python type;
-* no NaN or inf in a result unless an exception says why.
+* no NaN or inf in a result unless an exception says why;
+* no call that allocates without bound: the module runs under an address-space limit, so a
+  count taken from a huge number fails here as a MemoryError instead of exhausting the machine.
 """
 
 from __future__ import annotations
@@ -18,6 +20,31 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 ALLOWED = (pmd.errors.PointMassDynError, TypeError)
+
+# Headroom over what the process has mapped when the module starts: far more than any sane
+# call here needs, far less than a machine has.
+ADDRESS_SPACE_HEADROOM = 6 << 30
+
+
+@pytest.fixture(autouse=True, scope="module")
+def bounded_address_space():
+    try:
+        import resource
+
+        with open("/proc/self/statm") as f:
+            mapped = int(f.read().split()[0]) * resource.getpagesize()
+        soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+    except (ImportError, OSError):  # not Linux: run unbounded
+        yield
+        return
+    limit = mapped + ADDRESS_SPACE_HEADROOM
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    resource.setrlimit(resource.RLIMIT_AS, (limit, hard))
+    try:
+        yield
+    finally:
+        resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 
 # Numbers a user might pass, good and bad: the float edge cases, not just random bits.
 edge_floats = st.sampled_from(

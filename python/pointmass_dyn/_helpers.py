@@ -1,10 +1,14 @@
 """Small helpers that several parts of the package share (one definition each): RMS and peak
 magnitudes, matplotlib's pyplot on demand, rotation matrices of quaternions, the gravity a
-scene feels and where a model's quaternions sit in q."""
+scene feels, where a model's quaternions sit in q, and sample counts checked before allocating."""
 
 from __future__ import annotations
 
+import operator
+
 import numpy as np
+
+from .errors import InvalidInputError
 
 
 def rms(x) -> float:
@@ -70,3 +74,25 @@ def quaternion_slices(model) -> list[slice]:
         if nq == nv + 1:  # Spherical (q = xyzw) or FreeFlyer (q = xyz, xyzw)
             out.append(slice(iq + nq - 4, iq + nq))
     return out
+
+
+def sample_count(name: str, value, lowest: int = 1, largest: int = 10_000_000) -> int:
+    """``value`` as a whole number of samples in [lowest, largest], or our error naming ``name``.
+
+    The upper bound keeps a mistyped count (a float where an int was meant) from allocating
+    gigabytes before anything can fail.
+    """
+    try:
+        count = operator.index(value)
+    except TypeError:
+        if isinstance(value, float) and value.is_integer():
+            count = int(value)
+        else:
+            raise InvalidInputError(
+                f"{name}: expected a whole number of samples, got {value!r}"
+            ) from None
+    if not lowest <= count <= largest:
+        raise InvalidInputError(
+            f"{name}: expected a number of samples in [{lowest}, {largest:,}], got {count:,}"
+        )
+    return count

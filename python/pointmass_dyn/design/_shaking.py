@@ -20,7 +20,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import _core
-from .._helpers import peak, rms, scene_gravity
+from .._helpers import peak, rms, sample_count, scene_gravity
 from ..errors import InvalidInputError
 
 
@@ -198,6 +198,9 @@ def _reporter(progress, total: int, scale: int = 1):
 def _state_rows(model, t, q, v, a):
     """``t`` (N,) finite, and ``q``, ``v``, ``a`` as (N, nq), (N, nv), (N, nv): one state per
     time; anything else is an :class:`InvalidInputError` naming the array and both shapes."""
+    for name, x in (("t", t), ("q", q), ("v", v), ("a", a)):
+        if np.iscomplexobj(x):  # NumPy would drop the imaginary part with only a warning
+            raise InvalidInputError(f"{name}: expected real numbers, got complex values")
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
         raise InvalidInputError(
@@ -316,8 +319,7 @@ def prescribed_motion(
     else:
         if speed is None or not np.isfinite(speed) or speed == 0.0:
             raise InvalidInputError(f"speed: expected a finite non-zero driver speed, got {speed}")
-        if samples < 2:
-            raise InvalidInputError(f"samples: expected at least 2, got {samples}")
+        samples = sample_count("samples", samples, lowest=2)
         if not (np.isfinite(revolutions) and revolutions > 0):
             raise InvalidInputError(
                 f"revolutions: expected a finite positive number of turns, got {revolutions}"
