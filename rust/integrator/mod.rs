@@ -8,7 +8,8 @@
 //! * `explicit_rk.rs` – the one explicit Runge–Kutta engine [`ExplicitRk`] over a [`Tableau`].
 //! * `stepper.rs`    – the RK45 tableau ([`Rk45`]; [`Stepper`] = the engine with it).
 //! * `dop853.rs`     – DOP853 ([`Dop853`]), its tableau in `dop853_tableau.rs`.
-//! * `radau.rs`      – Radau IIA ([`Radau`]), finite-difference Jacobians in `num_jac.rs`.
+//! * `radau.rs`      – Radau IIA ([`Radau`]), its coefficients in `radau_tableau.rs`,
+//!   finite-difference Jacobians in `num_jac.rs`.
 //! * `fixed_step.rs` – the fixed-step methods ([`FixedStep`] with [`Rk4`] or [`Euler`]).
 //! * `dense.rs`      – the interpolants ([`Interpolant`]) and the piecewise [`DenseOutput`].
 //! * `events.rs`     – [`Event`] functions and SciPy's `brentq` root finder.
@@ -35,6 +36,7 @@ mod fixed_step;
 mod method;
 mod num_jac;
 mod radau;
+mod radau_tableau;
 mod stepper;
 
 pub use common::{StepOutcome, StepState};

@@ -44,84 +44,16 @@ use super::common::{
 use super::dense::Interpolant;
 use super::method::{Counts, Integrator};
 use super::num_jac::NumJac;
+use super::radau_tableau::{mu_complex, mu_real, C, E, P, T, TI};
 use super::{
     Controller, InputError, NonFiniteKind, OdeSystem, SolverOptions, Status, StepOutcome, Tol,
 };
 use crate::linalg::lu::Lu;
 
-const S6: f64 = 2.449_489_742_783_178; // √6
-/// Collocation nodes.
-pub(crate) const C: [f64; 3] = [(4.0 - S6) / 10.0, (4.0 + S6) / 10.0, 1.0];
-/// Error-estimate weights (SciPy `E`).
-const E: [f64; 3] = [
-    (-13.0 - 7.0 * S6) / 3.0,
-    (-13.0 + 7.0 * S6) / 3.0,
-    -1.0 / 3.0,
-];
-
-/// SciPy's `T`, `TI` (eigenvectors of `A⁻¹` and their inverse).
-const T: [[f64; 3]; 3] = [
-    [
-        0.094_438_762_488_975_24,
-        -0.141_255_295_020_954_21,
-        0.030_029_194_105_147_42,
-    ],
-    [
-        0.250_213_122_965_333_32,
-        0.204_129_352_293_799_94,
-        -0.382_942_112_757_261_92,
-    ],
-    [1.0, 1.0, 0.0],
-];
-const TI: [[f64; 3]; 3] = [
-    [
-        4.178_718_591_551_904_28,
-        0.327_682_820_761_062_37,
-        0.523_376_445_499_449_51,
-    ],
-    [
-        -4.178_718_591_551_904_28,
-        -0.327_682_820_761_062_37,
-        0.476_623_554_500_550_44,
-    ],
-    [
-        0.502_872_634_945_786_82,
-        -2.571_926_949_855_605_22,
-        0.596_039_204_828_224_92,
-    ],
-];
-
-/// Dense-output coefficients (SciPy `P`, 3 stages × powers x, x², x³).
-const P: [[f64; 3]; 3] = [
-    [
-        13.0 / 3.0 + 7.0 * S6 / 3.0,
-        -23.0 / 3.0 - 22.0 * S6 / 3.0,
-        10.0 / 3.0 + 5.0 * S6,
-    ],
-    [
-        13.0 / 3.0 - 7.0 * S6 / 3.0,
-        -23.0 / 3.0 + 22.0 * S6 / 3.0,
-        10.0 / 3.0 - 5.0 * S6,
-    ],
-    [1.0 / 3.0, -8.0 / 3.0, 10.0 / 3.0],
-];
-
 /// Maximum number of simplified Newton iterations per attempt.
 pub const NEWTON_MAXITER: usize = 6;
 const MIN_FACTOR: f64 = 0.2;
 const MAX_FACTOR: f64 = 10.0;
-
-/// The real eigenvalue of `A⁻¹`, `3 + 3^(2/3) − 3^(1/3)`, and the complex pair
-/// `3 + (3^(1/3) − 3^(2/3))/2 − i (3^(5/6) + 3^(7/6))/2`, evaluated as SciPy does.
-fn mu_real() -> f64 {
-    3.0 + 3f64.powf(2.0 / 3.0) - 3f64.powf(1.0 / 3.0)
-}
-fn mu_complex() -> Complex<f64> {
-    Complex::new(
-        3.0 + 0.5 * (3f64.powf(1.0 / 3.0) - 3f64.powf(2.0 / 3.0)),
-        -(0.5 * (3f64.powf(5.0 / 6.0) + 3f64.powf(7.0 / 6.0))),
-    )
-}
 
 /// Where the Jacobian `∂f/∂y` comes from.
 #[derive(Debug, Clone, PartialEq, Default)]
