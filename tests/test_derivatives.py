@@ -339,12 +339,12 @@ def test_loops_and_bad_input_are_refused():
     q, v = np.array([0.3, 0.5, 0.7]), np.zeros(3)
     with pytest.raises(pmd.errors.InvalidInputError, match="loop"):
         m.forward_dynamics_derivatives(q, v, np.zeros(3))
-    # Scenes with loops: no analytic state Jacobian (the integrator differentiates
-    # numerically), and the derivatives are refused.
+    # Scenes with loops: the constrained dynamics' derivatives (tests/test_iftomm.py); the
+    # inverse ones are refused (they depend on the actuated joints).
     s = pmd.Scene(m, effects=[E.gravity()])
-    assert s.state_jacobian(np.concatenate([q, v])) is None
+    assert s.state_jacobian(np.concatenate([q, v])) is not None
     with pytest.raises(pmd.errors.InvalidInputError, match="loop"):
-        s.forward_dynamics_derivatives(q, v)
+        s.inverse_dynamics_derivatives(q, v, np.zeros(3))
     tree = random_tree(1, 5, kinds=("Revolute",))
     model = build_model(tree)
     with pytest.raises(pmd.errors.InvalidInputError, match="v"):

@@ -249,6 +249,89 @@ def test_locked_mechanism_names_its_cut_joints_and_rank():
         m.forward_dynamics(q, np.zeros(2), np.zeros(2))
 
 
+# --- Derivatives of the constrained dynamics ------------------------------------------------
+
+
+def loop_rhs(scene, t=0.0):
+    m = scene.model
+
+    def rhs(y):
+        q, v = y[: m.nq], y[m.nq :]
+        tau = sum(pmd.effect_forces(scene, t, q, v).values())
+        return np.concatenate([m.velocity_to_qdot(q, v), m.forward_dynamics(q, v, tau)])
+
+    return rhs
+
+
+def state_along_motion(sc, t=0.01):
+    r = pmd.simulate(sc, (0, t), t_eval=[t], method="DOP853", rtol=1e-10, atol=1e-12)
+    return np.concatenate([np.asarray(r.q)[-1], np.asarray(r.v)[-1]])
+
+
+def central(f, y, directions, rel=1e-6):
+    """Central differences of f along each direction, the step scaled to the coordinates
+    the direction moves."""
+    return np.column_stack([
+        (f(y + h * d) - f(y - h * d)) / (2 * h)
+        for d in directions for h in [rel * max(1.0, np.abs(y[d != 0]).max())]
+    ])
+
+
+@pytest.mark.parametrize("name", ["andrews", "iftomm_a05_governor"])
+def test_loop_state_jacobian_matches_central_differences(name):
+    # The constrained forward dynamics' state Jacobian (docs/mechanisms.md section 4)
+    # against central differences of the constrained dynamics themselves, at a state along
+    # the motion (Andrews: driven, with a spring; the governor: stiff spring-dampers).
+    sc = pmd.load_scene(name)
+    y = state_along_motion(sc)
+    jac = sc.state_jacobian(y)
+    assert jac is not None and jac.shape == (len(y), len(y))
+    num = central(loop_rhs(sc), y, np.eye(len(y)))
+    err = np.abs(jac - num).max() / np.abs(num).max()
+    assert err < 1e-6, err
+
+
+def test_redundant_loop_state_jacobian_along_the_mechanism():
+    # Bricard's mechanism (a redundant row): off the closed configuration the redundant row
+    # is dropped or kept by the rank test, so the constrained dynamics are differentiable
+    # only along the closed configurations -- the mechanism's own direction (the null
+    # vector of J, closures by assemble) -- and in v (any direction: q, hence the rank,
+    # unchanged).
+    sc = pmd.load_scene("iftomm_a04_bricard")
+    m = sc.model
+    y = state_along_motion(sc, 0.3)
+    nq = m.nq
+    jac = sc.state_jacobian(y)
+    rhs = loop_rhs(sc)
+    q, v = y[:nq], y[nq:]
+    num_v = central(lambda x: rhs(np.concatenate([q, x])), v, np.eye(m.nv))
+    assert np.abs(jac[:, nq:] - num_v).max() < 1e-7 * np.abs(num_v).max()
+    tangent = np.linalg.svd(m.constraint_jacobian(q))[2][-1]
+    h = 1e-5
+
+    def along(s):
+        closed = m.assemble(q + s * tangent, fixed=["b1"])
+        return rhs(np.concatenate([closed, v]))
+
+    num_q = (along(h) - along(-h)) / (2 * h)
+    got = jac[:, :nq] @ tangent
+    assert np.abs(got - num_q).max() < 1e-6 * np.abs(num_q).max()
+
+
+def test_loop_scene_derivatives_keep_the_loops_closed():
+    # dq/dtau, dv: the accelerations they predict keep J q'' + gamma = 0 to first order, so
+    # J (dq''/dtau) = 0 (a joint force cannot open a loop); dq''/dtau is symmetric (the
+    # constrained compliance M^-1 - M^-1 J^T (J M^-1 J^T)^+ J M^-1).
+    sc = pmd.load_scene("iftomm_a04_bricard")
+    m = sc.model
+    d = sc.forward_dynamics_derivatives(sc.q0, sc.v0)
+    j = m.constraint_jacobian(sc.q0)
+    assert np.abs(j @ d["dtau"]).max() < 1e-12 * np.abs(d["dtau"]).max()
+    np.testing.assert_allclose(d["dtau"], d["dtau"].T, atol=1e-12 * np.abs(d["dtau"]).max())
+    with pytest.raises(pmd.errors.InvalidInputError, match="loop"):
+        sc.inverse_dynamics_derivatives(sc.q0, sc.v0, np.zeros(m.nv))
+
+
 # --- A01 and A05 ---------------------------------------------------------------------------
 
 

@@ -642,8 +642,9 @@ class Scene:
     ) -> dict[str, Any]:
         """``{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [names]}`` of the scene's
         accelerations with its enabled effects (plus ``tau``); ``numerical`` names the effects
-        differentiated by central differences (torque callbacks, external loads).
-        Scenes without loops (docs/derivatives.md)."""
+        differentiated by central differences (torque callbacks, external loads). With closed
+        loops, those of the constrained dynamics (``dtau`` the constrained compliance;
+        docs/mechanisms.md)."""
     def inverse_dynamics_derivatives(
         self,
         q: ArrayLike,
@@ -652,12 +653,13 @@ class Scene:
         t: float = 0.0,
         disable: _Family | Sequence[_Family] | None = None,
     ) -> dict[str, Any]:
-        """``{"dq", "dv", "da", "numerical"}`` of ``τ = ID(q, v, a) − τ_effects(t, q, v)``."""
+        """``{"dq", "dv", "da", "numerical"}`` of ``τ = ID(q, v, a) − τ_effects(t, q, v)``.
+        Scenes without closed loops."""
     def state_jacobian(
         self, y: ArrayLike, t: float = 0.0, disable: _Family | Sequence[_Family] | None = None
     ) -> _Array | None:
         """``∂ẏ/∂y`` of ``y = [q; v]`` (q's own coordinates), shape (nq+nv, nq+nv), as the
-        implicit integrators use it; ``None`` for a scene with closed loops."""
+        implicit integrators use it (with closed loops, of the constrained dynamics)."""
     def replace(
         self, model: Model | None = None, effects: Sequence[Effect] | None = None
     ) -> Scene:

@@ -38,10 +38,17 @@ impl PivotedQr {
     /// taken in order. Returns the rank; a NaN stops it (the callers check their results).
     pub fn factor(&mut self, cols: usize, pivot: bool, rel_tol: f64, abs_tol: f64) -> usize {
         let rows = self.a.nrows();
-        let a = &mut self.a;
+        let data = self.a.as_mut_slice();
         for (k, p) in self.perm[..cols].iter_mut().enumerate() {
             *p = k;
         }
+        let tail_norm = |data: &[f64], j: usize, k: usize| {
+            data[j * rows + k..(j + 1) * rows]
+                .iter()
+                .map(|x| x * x)
+                .sum::<f64>()
+                .sqrt()
+        };
         let mut tol = abs_tol;
         let mut rank = 0;
         for k in 0..rows.min(cols) {
@@ -49,11 +56,7 @@ impl PivotedQr {
                 // Exact remaining norms each step (no downdating, which loses accuracy exactly
                 // at the near-dependent columns this is for).
                 for j in k..cols {
-                    let mut s = 0.0;
-                    for i in k..rows {
-                        s += a[(i, j)] * a[(i, j)];
-                    }
-                    self.norms[j] = s.sqrt();
+                    self.norms[j] = tail_norm(data, j, k);
                 }
                 (k..cols)
                     .max_by(|&i, &j| self.norms[i].total_cmp(&self.norms[j]))
@@ -64,7 +67,7 @@ impl PivotedQr {
             let norm = if pivot {
                 self.norms[p]
             } else {
-                (k..rows).map(|i| a[(i, k)] * a[(i, k)]).sum::<f64>().sqrt()
+                tail_norm(data, k, k)
             };
             if k == 0 {
                 tol = tol.max(rel_tol * norm);
@@ -73,28 +76,35 @@ impl PivotedQr {
                 break;
             }
             if p != k {
-                a.swap_columns(k, p);
+                for i in 0..rows {
+                    data.swap(k * rows + i, p * rows + i);
+                }
                 self.perm.swap(k, p);
             }
-            let x0 = a[(k, k)];
+            let (head, rest) = data.split_at_mut((k + 1) * rows);
+            let col = &mut head[k * rows..];
+            let x0 = col[k];
             // β of the sign opposite to x0: `x0 − β` does not cancel.
             let beta = if x0 >= 0.0 { -norm } else { norm };
             let tau = (beta - x0) / beta;
             let inv = 1.0 / (x0 - beta);
-            a[(k, k)] = beta;
-            for i in k + 1..rows {
-                a[(i, k)] *= inv;
+            col[k] = beta;
+            for x in &mut col[k + 1..] {
+                *x *= inv;
             }
             self.tau[k] = tau;
-            for j in k + 1..cols {
-                let mut s = a[(k, j)];
-                for i in k + 1..rows {
-                    s += a[(i, k)] * a[(i, j)];
+            let u = &col[k + 1..];
+            // Columns are contiguous; a column orthogonal to the reflector (a constraint row
+            // on other coordinates: J is sparse) is left as it is.
+            for target in rest.chunks_exact_mut(rows).take(cols - k - 1) {
+                let dot: f64 = u.iter().zip(&target[k + 1..]).map(|(a, b)| a * b).sum();
+                let s = tau * (target[k] + dot);
+                if s == 0.0 {
+                    continue;
                 }
-                let s = tau * s;
-                a[(k, j)] -= s;
-                for i in k + 1..rows {
-                    a[(i, j)] -= s * a[(i, k)];
+                target[k] -= s;
+                for (t, ui) in target[k + 1..].iter_mut().zip(u) {
+                    *t -= s * ui;
                 }
             }
             rank += 1;
@@ -106,44 +116,45 @@ impl PivotedQr {
     /// `R₁₁ᵀ w = b` (forward substitution) for the first `rank` pivoted columns: `b[k]` is the
     /// right-hand side of pivoted column k. In place in `w` (length ≥ rank).
     pub fn solve_rt(&self, w: &mut [f64]) {
-        let a = &self.a;
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
         for i in 0..self.rank {
-            let mut s = w[i];
-            for k in 0..i {
-                s -= a[(k, i)] * w[k];
-            }
-            w[i] = s / a[(i, i)];
+            let col = &data[i * rows..i * rows + i + 1];
+            let s: f64 = col[..i].iter().zip(&w[..i]).map(|(a, b)| a * b).sum();
+            w[i] = (w[i] - s) / col[i];
         }
     }
 
-    /// `R₁₁ y = w` (back substitution), in place.
+    /// `R₁₁ y = w` (back substitution), in place; column-oriented.
     pub fn solve_r(&self, w: &mut [f64]) {
-        let a = &self.a;
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
         for i in (0..self.rank).rev() {
-            let mut s = w[i];
-            for k in i + 1..self.rank {
-                s -= a[(i, k)] * w[k];
+            let col = &data[i * rows..i * rows + i + 1];
+            let wi = w[i] / col[i];
+            w[i] = wi;
+            if wi != 0.0 {
+                for (x, r) in w[..i].iter_mut().zip(&col[..i]) {
+                    *x -= wi * r;
+                }
             }
-            w[i] = s / a[(i, i)];
         }
     }
 
     /// `x = Q [w; 0]` (x of length rows; w the first `rank` entries).
     pub fn apply_q(&self, w: &[f64], x: &mut [f64]) {
-        let a = &self.a;
-        let rows = a.nrows();
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
         x.fill(0.0);
         x[..self.rank].copy_from_slice(&w[..self.rank]);
         // Q = H₀ H₁ ⋯ H_{r−1}: the last reflector first.
         for k in (0..self.rank).rev() {
-            let mut s = x[k];
-            for i in k + 1..rows {
-                s += a[(i, k)] * x[i];
-            }
-            let s = self.tau[k] * s;
+            let u = &data[k * rows + k + 1..(k + 1) * rows];
+            let dot: f64 = u.iter().zip(&x[k + 1..]).map(|(a, b)| a * b).sum();
+            let s = self.tau[k] * (x[k] + dot);
             x[k] -= s;
-            for i in k + 1..rows {
-                x[i] -= s * a[(i, k)];
+            for (xi, ui) in x[k + 1..].iter_mut().zip(u) {
+                *xi -= s * ui;
             }
         }
     }

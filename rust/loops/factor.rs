@@ -6,49 +6,70 @@
 use nalgebra::{DMatrix, DMatrixViewMut};
 
 /// `m = L Lᵀ` in place (lower triangle; the upper is left as it was). `Err(k)` if the k-th
-/// pivot is not positive.
+/// pivot is not positive. Right-looking on contiguous columns, skipping zero entries: a
+/// tree's mass matrix is zero between bodies on different branches, and the factor keeps
+/// that sparsity (no fill outside the ancestor pairs).
 pub fn cholesky(m: &mut DMatrix<f64>) -> Result<(), usize> {
     let n = m.nrows();
+    let data = m.as_mut_slice();
     for j in 0..n {
-        let mut d = m[(j, j)];
-        for k in 0..j {
-            d -= m[(j, k)] * m[(j, k)];
-        }
+        let (left, right) = data.split_at_mut((j + 1) * n);
+        let col = &mut left[j * n..];
+        let d = col[j];
         if d <= 0.0 || !d.is_finite() {
             return Err(j);
         }
         let d = d.sqrt();
-        m[(j, j)] = d;
-        for i in j + 1..n {
-            let mut s = m[(i, j)];
-            for k in 0..j {
-                s -= m[(i, k)] * m[(j, k)];
+        col[j] = d;
+        let inv = 1.0 / d;
+        for x in &mut col[j + 1..] {
+            *x *= inv;
+        }
+        // Trailing update of the lower triangle: column k -= l_kj · l[k.., j].
+        for k in j + 1..n {
+            let lkj = col[k];
+            if lkj == 0.0 {
+                continue;
             }
-            m[(i, j)] = s / d;
+            let target = &mut right[(k - j - 1) * n + k..(k - j) * n];
+            for (t, l) in target.iter_mut().zip(&col[k..]) {
+                *t -= lkj * l;
+            }
         }
     }
     Ok(())
 }
 
-/// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`]).
+/// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`]); column-oriented,
+/// skipping zero entries of `x` (a constraint row touches a few coordinates).
 pub fn forward_substitute(l: &DMatrix<f64>, x: &mut [f64]) {
-    for i in 0..x.len() {
-        let mut s = x[i];
-        for k in 0..i {
-            s -= l[(i, k)] * x[k];
+    let n = x.len();
+    let data = l.as_slice();
+    for k in 0..n {
+        if x[k] == 0.0 {
+            continue;
         }
-        x[i] = s / l[(i, i)];
+        let col = &data[k * n..(k + 1) * n];
+        let xk = x[k] / col[k];
+        x[k] = xk;
+        for (xi, lik) in x[k + 1..].iter_mut().zip(&col[k + 1..]) {
+            *xi -= xk * lik;
+        }
     }
 }
 
 /// Solves `Lᵀ x = b` in place.
 pub fn back_substitute(l: &DMatrix<f64>, x: &mut [f64]) {
-    for i in (0..x.len()).rev() {
-        let mut s = x[i];
-        for k in i + 1..x.len() {
-            s -= l[(k, i)] * x[k];
-        }
-        x[i] = s / l[(i, i)];
+    let n = x.len();
+    let data = l.as_slice();
+    for i in (0..n).rev() {
+        let col = &data[i * n..(i + 1) * n];
+        let s: f64 = col[i + 1..]
+            .iter()
+            .zip(&x[i + 1..])
+            .map(|(a, b)| a * b)
+            .sum();
+        x[i] = (x[i] - s) / col[i];
     }
 }
 

@@ -9,8 +9,10 @@
 //! * [`solve`]: the constrained forward dynamics (redundant constraints included), the
 //!   constraint wrenches, the driving forces of chosen actuated joints, and the projections
 //!   onto the position, velocity and acceleration manifolds (`assemble`).
+//! * [`derivatives`]: the constrained forward dynamics' derivatives (state Jacobian).
 mod constraints;
 pub mod coupling;
+mod derivatives;
 mod factor;
 mod solve;
 #[cfg(test)]
@@ -18,6 +20,7 @@ mod tests;
 
 pub use constraints::{gamma, jacobian, residual, wrenches, Constraints, LoopKinematics};
 pub use coupling::Coupling;
+pub use derivatives::{constrained_derivatives, LoopDerivativeWork};
 pub use solve::{
     assemble, check_mobility, constrained_forward_dynamics, constraint_forces, driving_forces,
     project_state, project_velocity_like, LoopSolver,

@@ -42,6 +42,11 @@ pub struct LoopSolver {
     pub rank: usize,
     /// Largest residual met before a projection (the integrator's drift).
     pub max_drift: f64,
+    /// The configuration `qr_j` was last factored at by [`project_state`]'s velocity step,
+    /// when nothing has refactored it since: the dynamics at the same `q` (a projected
+    /// stage) reuse it.
+    qr_q: Vec<f64>,
+    qr_valid: bool,
 }
 
 /// Relative size of a pivot of `Jᵀ`'s QR below which its row counts as dependent: exactly
@@ -74,6 +79,8 @@ impl LoopSolver {
             qdot: vec![0.0; model.nq],
             rank: 0,
             max_drift: 0.0,
+            qr_q: vec![0.0; model.nq],
+            qr_valid: false,
         }
     }
 
@@ -100,6 +107,7 @@ impl LoopSolver {
     /// pivoted QR of their transpose with the rank tolerance for a configuration off its
     /// manifold by `residual`. Returns the rank.
     fn factor_jacobian(&mut self, residual: f64) -> usize {
+        self.qr_valid = false;
         let (m, n) = self.cons.jacobian.shape();
         let j = &self.cons.jacobian;
         self.active.clear();
@@ -152,7 +160,13 @@ pub fn constrained_forward_dynamics(
             "the mass matrix is not positive definite (pivot {k}): a massless chain, or a body too slender"
         )));
     }
-    let rank = solver.factor_jacobian(residual);
+    // The velocity projection of this very configuration factored the same J with the
+    // same tolerance (a projected stage): its QR stands.
+    let rank = if solver.qr_valid && solver.qr_q.as_slice() == q {
+        solver.qr_j.rank
+    } else {
+        solver.factor_jacobian(residual)
+    };
     solver.rank = rank;
     if n > 0 && rank >= n {
         return Err(locked(model, rank));
@@ -200,6 +214,43 @@ pub fn constrained_forward_dynamics(
         *ai += si;
     }
     Ok(())
+}
+
+/// With the factorisations of the last [`constrained_forward_dynamics`] (same state): `x`
+/// holds `M⁻¹ r` on entry (unconstrained accelerations of some forces `r`) and, on return,
+/// the constrained ones, `M x' = r + Jᵀ μ` with `J_B x' = b_B` on the independent rows
+/// (`b` indexed by constraint row). The derivatives' solve: the same operator, other
+/// right-hand sides.
+pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: &[f64]) {
+    let n = x.len();
+    let LoopSolver {
+        cons,
+        mass,
+        qr_j,
+        qr_y,
+        work,
+        step,
+        active,
+        rank,
+        ..
+    } = solver;
+    for k in 0..*rank {
+        let r = active[qr_j.perm[k]];
+        let jx: f64 = (0..n).map(|c| cons.jacobian[(r, c)] * x[c]).sum();
+        work[k] = b[r] - jx;
+    }
+    qr_y.solve_rt(work);
+    qr_y.apply_q(work, step);
+    back_substitute(mass, step);
+    for (xi, si) in x.iter_mut().zip(step.iter()) {
+        *xi += si;
+    }
+}
+
+/// `x = M⁻¹ x` with the Cholesky factor of the last [`constrained_forward_dynamics`].
+pub(super) fn mass_solve(solver: &LoopSolver, x: &mut [f64]) {
+    forward_substitute(&solver.mass, x);
+    back_substitute(&solver.mass, x);
 }
 
 fn locked(model: &Model, rank: usize) -> Error {
@@ -547,7 +598,8 @@ pub fn project_state(
         retract(model, q, &solver.step, &mut qdot);
         solver.qdot = qdot;
         let r_new = solver.residual_at(model, q);
-        let converged = r_new > 0.5 * res;
+        // Quadratic convergence has stopped, or the closure is at round-off.
+        let converged = r_new > 0.5 * res || r_new <= ROUND_OFF;
         res = r_new;
         if converged {
             break;
@@ -566,5 +618,11 @@ pub fn project_state(
     for (x, s) in v.iter_mut().zip(&solver.step[..nv]) {
         *x += s;
     }
+    solver.qr_q.copy_from_slice(q);
+    solver.qr_valid = true;
     Ok(true)
 }
+
+/// A position residual (metres, or radians of axis misalignment) at which Newton stops:
+/// round-off of coordinates of order one.
+const ROUND_OFF: f64 = 1e-14;

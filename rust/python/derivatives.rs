@@ -50,7 +50,6 @@ fn run<'py>(
     f: impl FnOnce(&mut crate::simulate::Dynamics<'_>, &mut DerivativeWork) -> crate::error::Result<()>,
     pick: impl Fn(&DerivativeWork) -> [&DMatrix<f64>; 3],
 ) -> PyResult<Bound<'py, PyDict>> {
-    refuse_loops(py, s, name)?;
     let mut sys = scene_system(py, s, disable)?;
     let mut w = DerivativeWork::new(&sys);
     take_callback_error();
@@ -119,6 +118,8 @@ pub(super) fn inverse<'py>(
 ) -> PyResult<Bound<'py, PyDict>> {
     let t = time_arg(py, t)?;
     let (q, v) = scene_state(py, s, q, v)?;
+    // A mechanism's driving forces depend on which joints are actuated (driving_forces).
+    refuse_loops(py, s, "inverse_dynamics_derivatives")?;
     let a = vector(a, "a", Some(s.model.nv))?;
     crate::error::check_finite("a", &a).py(py)?;
     run(

@@ -4,13 +4,15 @@
 //! [`Effects::add_derivatives`](crate::effects::Effects::add_derivatives), gravity through
 //! the base acceleration), and the state Jacobian `∂ẏ/∂y` for implicit integrators,
 //! `y = [q; v]` in the coordinates of `q` (nq of them): `[[∂q̇/∂q, ∂q̇/∂v], [∂q̈/∂δ · ∂δ/∂q,
-//! ∂q̈/∂v]]`. Trees only: with closed loops the Jacobian is not given (`Ok(false)`, the
-//! integrator differentiates numerically) and the derivatives are refused.
+//! ∂q̈/∂v]]`. With closed loops the forward derivatives are those of the constrained
+//! dynamics ([`crate::loops::constrained_derivatives`]); the inverse ones are refused (the
+//! driving forces of a mechanism depend on which joints are actuated).
 use super::dynamics::Dynamics;
 use crate::effects::derivatives::EffectDerivatives;
 use crate::effects::Context;
 use crate::error::Error;
 use crate::linalg::spd_inverse;
+use crate::loops::{self, LoopDerivativeWork};
 use crate::recursive::{self, tangent, DerivativeData};
 use crate::spatial::Vec6;
 use nalgebra::DMatrix;
@@ -31,6 +33,8 @@ pub struct DerivativeWork {
     ddq_dcoords: DMatrix<f64>,
     /// nv zeros: the joint forces of the state Jacobian (the effects' only).
     zeros: Vec<f64>,
+    /// The cut joints' terms (models with loops only).
+    loops: Option<Box<LoopDerivativeWork>>,
 }
 
 impl DerivativeWork {
@@ -47,6 +51,9 @@ impl DerivativeWork {
             tmap: DMatrix::zeros(nv, nq),
             ddq_dcoords: DMatrix::zeros(nv, nq),
             zeros: vec![0.0; nv],
+            loops: m
+                .has_constraints()
+                .then(|| Box::new(LoopDerivativeWork::new(m))),
         }
     }
 }
@@ -55,8 +62,9 @@ impl Dynamics<'_> {
     /// `∂q̈/∂q` (tangent columns), `∂q̈/∂v`, `M⁻¹` of the scene's accelerations at
     /// `(t, q, v)` with the extra joint forces `tau` (length nv) on top of the effects'; into
     /// `w.dd.ddq_dq`, `w.dd.ddq_dv`, `w.dd.minv` (accelerations into `w.dd.qdd`). Which
-    /// effects were differentiated numerically: `w.effects.numerical`. Errors with closed
-    /// loops, at a singular configuration, or when an effect fails.
+    /// effects were differentiated numerically: `w.effects.numerical`. With closed loops,
+    /// those of the constrained dynamics. Errors at a singular configuration, a locked
+    /// mechanism, or when an effect fails.
     pub fn derivatives(
         &mut self,
         t: f64,
@@ -66,13 +74,6 @@ impl Dynamics<'_> {
         w: &mut DerivativeWork,
     ) -> crate::error::Result<()> {
         let model = self.model;
-        if model.has_constraints() {
-            return Err(Error::Numerical(format!(
-                "the dynamics derivatives are for trees: this model has {} closed loop(s) and {} coupling(s)",
-                model.loops.len(),
-                model.couplings.len()
-            )));
-        }
         let cx = Context { model, t, q, v };
         w.tau.fill(0.0);
         let applied = self.effects.apply(&cx, &mut w.tau, &mut w.wrenches);
@@ -87,13 +88,16 @@ impl Dynamics<'_> {
         let g = self.effects.gravity;
         let dd = &mut w.dd;
         let mut qdd = std::mem::take(&mut dd.qdd);
-        let fd =
+        let mut fd =
             recursive::forward_dynamics(model, &mut self.data, q, v, &w.tau, &g, ext, &mut qdd);
+        if let (Ok(()), Some(solver)) = (&fd, self.loops.as_mut()) {
+            fd = loops::constrained_forward_dynamics(model, &mut self.data, solver, q, v, &mut qdd);
+        }
         if fd.is_ok() {
             recursive::inverse_dynamics_derivatives(model, &mut self.data, dd, q, v, &qdd, &g);
         }
         dd.qdd = qdd;
-        fd?; // typed: a singular configuration stays a `Singular` error
+        fd?; // typed: a singular configuration (or a locked mechanism) stays `Singular`
         w.rq.as_mut_slice().fill(0.0);
         w.rv.as_mut_slice().fill(0.0);
         self.effects
@@ -104,6 +108,22 @@ impl Dynamics<'_> {
         }
         for (r, x) in w.rv.as_mut_slice().iter_mut().zip(dd.dtau_dv.as_slice()) {
             *r -= x;
+        }
+        if let (Some(solver), Some(lw)) = (self.loops.as_mut(), w.loops.as_mut()) {
+            loops::constrained_derivatives(
+                model,
+                solver,
+                lw,
+                q,
+                v,
+                &dd.qdd,
+                &mut w.rq,
+                &mut w.rv,
+                &mut dd.minv,
+            );
+            dd.ddq_dq.copy_from(&w.rq);
+            dd.ddq_dv.copy_from(&w.rv);
+            return Ok(());
         }
         dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
         spd_inverse(
@@ -136,7 +156,7 @@ impl Dynamics<'_> {
         let model = self.model;
         if model.has_constraints() {
             return Err(Error::Numerical(format!(
-                "the dynamics derivatives are for trees: this model has {} closed loop(s) and {} coupling(s)",
+                "the inverse dynamics derivatives are for trees: this model has {} closed loop(s) and {} coupling(s) (a mechanism's driving forces depend on which joints are actuated)",
                 model.loops.len(),
                 model.couplings.len()
             )));
@@ -158,7 +178,7 @@ impl Dynamics<'_> {
         Ok(())
     }
 
-    /// The state Jacobian (see the module) into the row-major `jac`; `Ok(false)` with loops.
+    /// The state Jacobian (see the module) into the row-major `jac`.
     pub fn state_jacobian(
         &mut self,
         t: f64,
@@ -167,9 +187,6 @@ impl Dynamics<'_> {
         w: &mut DerivativeWork,
     ) -> Result<bool, String> {
         let model = self.model;
-        if model.has_constraints() {
-            return Ok(false);
-        }
         let (nq, nv) = (model.nq, model.nv);
         let dim = nq + nv;
         let (q, v) = y.split_at(nq);

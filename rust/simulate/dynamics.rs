@@ -26,6 +26,8 @@ pub struct Dynamics<'a> {
     pub loops: Option<Box<LoopSolver>>,
     /// The derivatives' buffers (built on the first `jacobian` call).
     deriv: Option<Box<super::derivatives::DerivativeWork>>,
+    /// With loops: the stage state projected onto the constraint manifolds (docs/mechanisms.md §3).
+    stage: Vec<f64>,
 }
 
 /// The effects' view of the state `(t, q, v)`.
@@ -64,6 +66,11 @@ impl<'a> Dynamics<'a> {
                 .has_constraints()
                 .then(|| Box::new(LoopSolver::new(model))),
             deriv: None,
+            stage: if !model.has_constraints() {
+                Vec::new()
+            } else {
+                vec![0.0; model.nq + model.nv]
+            },
         }
     }
 
@@ -165,6 +172,31 @@ impl<'a> Dynamics<'a> {
     }
 }
 
+/// With loops the right-hand side is evaluated at the stage's projection onto the position
+/// and velocity manifolds, `f(P(y))` (the index-3 information every stage keeps): the
+/// index-1 equations extended off the manifold keep `Φ(q)` at the stage's error `δ`, whose
+/// level set near a singular position bends sharply (accelerations ~ `δ/σ³` at a distance
+/// `σ` from it, docs/mechanisms.md §3), while on the manifold the motion goes straight
+/// through. A stage too far off for the projection (a rejected trial step) is evaluated
+/// where it is; the error estimate rejects it.
+fn project_stage<'y>(
+    model: &Model,
+    solver: &mut LoopSolver,
+    y: &'y [f64],
+    stage: &'y mut [f64],
+) -> &'y [f64] {
+    stage.copy_from_slice(y);
+    // The integrator's drift figure counts accepted steps only.
+    let drift = solver.max_drift;
+    let projected = loops::project_state(model, solver, stage).is_ok();
+    solver.max_drift = drift;
+    if projected && stage.iter().all(|x| x.is_finite()) {
+        stage
+    } else {
+        y
+    }
+}
+
 impl OdeSystem for Dynamics<'_> {
     fn dim(&self) -> usize {
         self.model.nq + self.model.nv
@@ -178,10 +210,17 @@ impl OdeSystem for Dynamics<'_> {
                 return Err("interrupted".into());
             }
         }
+        let mut stage = std::mem::take(&mut self.stage);
+        let y = match self.loops.as_mut() {
+            Some(solver) => project_stage(self.model, solver, y, &mut stage),
+            None => y,
+        };
         let (q, v) = y.split_at(nq);
         let (qdot, vdot) = dydt.split_at_mut(nq);
         self.model.velocity_to_qdot(q, v, qdot);
-        self.accelerations(t, q, v, vdot)
+        let r = self.accelerations(t, q, v, vdot);
+        self.stage = stage;
+        r
     }
 
     /// `y = [q; v]`: the semi-implicit Euler updates `v`, then `q` with the new `v`.
@@ -196,7 +235,8 @@ impl OdeSystem for Dynamics<'_> {
         Ok(true)
     }
 
-    /// The analytic state Jacobian (`super::derivatives`); `Ok(false)` with closed loops.
+    /// The analytic state Jacobian (`super::derivatives`; with closed loops, of the
+    /// constrained dynamics).
     fn jacobian(
         &mut self,
         t: f64,
