@@ -109,9 +109,21 @@ def urdf_contact_points(
                 continue
             origin = col.find("origin")
             xyz = [0.0, 0.0, 0.0]
-            if origin is not None and origin.get("xyz"):
-                xyz = [float(x) for x in origin.get("xyz", "").split()]
-            spheres.append((name, xyz, float(sphere.get("radius", "0"))))
+            try:
+                if origin is not None and origin.get("xyz"):
+                    xyz = [float(x) for x in origin.get("xyz", "").split()]
+                radius = float(sphere.get("radius", "0"))
+            except ValueError:
+                raise InvalidInputError(
+                    f"urdf: link '{name}' of {path}: expected a <collision> <origin xyz> of three "
+                    f"numbers and a <sphere radius> number, got xyz={origin.get('xyz') if origin is not None else None!r}, "
+                    f"radius={sphere.get('radius')!r}"
+                ) from None
+            if len(xyz) != 3:
+                raise InvalidInputError(
+                    f"urdf: link '{name}' of {path}: expected <origin xyz> of three numbers, got {xyz}"
+                )
+            spheres.append((name, xyz, radius))
         out.extend(spheres or [(name, [0.0, 0.0, 0.0], 0.0)])
     return out
 

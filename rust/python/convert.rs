@@ -10,7 +10,7 @@ use numpy::{
     AllowTypeChange, PyArray1, PyArrayDescrMethods, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::PyOverflowError;
+use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString, PyType};
@@ -221,6 +221,11 @@ pub fn int_arg(
         Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
             Err(invalid(py, arg, expected, short_repr(obj)))
         }
+        // A float, None, a list…: still a TypeError, but one naming the argument.
+        Err(e) if e.is_instance_of::<PyTypeError>(py) => Err(PyTypeError::new_err(format!(
+            "{arg}: expected {expected}, got {}",
+            short_repr(obj)
+        ))),
         Err(e) => Err(e),
     }
 }

@@ -130,6 +130,18 @@ def _links(spec: dict, base: Path) -> list[LinkShape]:
     return out
 
 
+def _spec_number(table: dict, key: str, default, cast, where: str):
+    """``table[key]`` as a number of type ``cast`` (``int``: a whole number), or an error
+    naming the key, where it is and what was given."""
+    value = table.get(key, default)
+    kind = "an integer" if cast is int else "a number"
+    if value is None or isinstance(value, bool) or not isinstance(value, (int, float)) or (
+        cast is int and isinstance(value, float) and not value.is_integer()
+    ):
+        raise InvalidInputError(f"spec: '{key}' in {where}: expected {kind}, got {value!r}")
+    return cast(value)
+
+
 def _counterweights(spec: dict) -> list[Counterweight]:
     out = []
     for k, item in enumerate(spec.get("counterweight", [])):
@@ -141,8 +153,8 @@ def _counterweights(spec: dict) -> list[Counterweight]:
             )
         max_mass = item.get("max_mass")
         if ring is not None:
-            out.append(Counterweight.ring(body, ring.get("center", (0, 0, 0)), ring["radius"],
-                                          int(ring.get("count", 24)),
+            out.append(Counterweight.ring(body, ring.get("center", (0, 0, 0)), _spec_number(ring, "radius", None, float, f"[[counterweight]] {k + 1} ring"),
+                                          _spec_number(ring, "count", 24, int, f"[[counterweight]] {k + 1} ring"),
                                           normal=ring.get("normal", (0, 0, 1)), max_mass=max_mass))
         else:
             out.append(Counterweight(body, np.asarray(points, float), max_mass))
@@ -217,7 +229,7 @@ def _density_maps(b, out: Path) -> list[Path]:
 def _front(motion, spec, kwargs, out: Path) -> None:
     pareto = spec["pareto"]
     names = tuple(pareto.get("objectives", ()))
-    count = int(pareto.get("count", 11))
+    count = _spec_number(pareto, "count", 11, int, "[pareto]")
     method = pareto.get("method", "weighted")
     front = pareto_front(motion, names, count, method=method, **kwargs)
     rows = [[objective_value(b, names[0]), objective_value(b, names[1]), float(np.sum(b.masses))]
@@ -248,8 +260,8 @@ def _motion(args, scene, spec):
     driver = driver_of(args, scene)
     _, iv, _, _ = model.joint_slices()[model.link_names.index(driver)]
     default = float(scene.v0[iv]) if scene.v0[iv] != 0.0 else 2.0 * math.pi
-    speed = float(spec.get("speed", default))
-    samples = int(spec.get("samples", 360))
+    speed = _spec_number(spec, "speed", default, float, "the top level")
+    samples = _spec_number(spec, "samples", 360, int, "the top level")
     if not (math.isfinite(speed) and speed != 0.0) or samples < 2:
         raise InvalidInputError(
             f"spec: expected a finite non-zero speed and samples >= 2, got {speed}, {samples}"

@@ -9,8 +9,11 @@ from typing import Any
 
 import numpy as np
 
+from ..errors import InvalidInputError
 from ._shaking import MotionAnalysis
 from ._write import write_scene, write_urdf
+
+MAX_RING_COUNT = 1_000_000  # as many candidates as a design takes cells (rust/design/cells.rs)
 
 
 @dataclass(frozen=True)
@@ -35,7 +38,14 @@ class Counterweight:
     ) -> Counterweight:
         """``count`` candidates on a circle of ``radius`` about ``center`` in the plane normal
         to ``normal`` (body frame)."""
+        if (isinstance(count, bool) or not isinstance(count, (int, np.integer))
+                or not 1 <= count <= MAX_RING_COUNT):
+            raise InvalidInputError(
+                f"count: expected an integer number of candidates in [1, {MAX_RING_COUNT}], got {count!r}"
+            )
         n = np.asarray(normal, dtype=float)
+        if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.linalg.norm(n) > 0:
+            raise InvalidInputError(f"normal: expected a finite non-zero (x, y, z), got {normal!r}")
         n = n / np.linalg.norm(n)
         u = np.cross(n, [1.0, 0.0, 0.0])
         if np.linalg.norm(u) < 1e-8:

@@ -26,6 +26,12 @@ from ._shapes import LinkShape, Shape
 QUANTITIES = ("force", "moment", "torque", "bearing")
 OBJECTIVES = (*QUANTITIES, "mass")
 NPARAM = 10
+MAX_PARETO_POINTS = 10_000  # each point is one (or two) conic programs: more is a typo
+
+
+def _check_progress(progress: Any) -> None:
+    if progress is not None and not callable(progress):
+        raise TypeError(f"progress: expected None or a callable taking a str, got {type(progress).__name__}")
 
 
 def _moments(points: np.ndarray, side: float = 0.0) -> np.ndarray:
@@ -79,6 +85,15 @@ def _link_of(model, body: Any, arg: str) -> tuple[str, int]:
     return name, model.link_names.index(name)
 
 
+def _mass_range(mass: Any) -> tuple[float, float]:
+    """A ``LinkShape``'s ``mass=(low, high)`` as two floats, or an error naming it."""
+    try:
+        lo_m, hi_m = (float(v) for v in mass)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"mass: expected None or (low, high) in kg, got {mass!r}") from None
+    return lo_m, hi_m
+
+
 class _Variables:
     """The design masses: bounds, their map to the designed links' parameters, groups."""
 
@@ -115,7 +130,7 @@ def _collect(model, links, counterweights, link_mass) -> _Variables:
             sl = var.add("shape", name, link, item, _moments(centers, item.cell), lo, cap)
             var.replaced.add(link)
             if item.mass is not None:
-                lo_m, hi_m = (float(v) for v in item.mass)
+                lo_m, hi_m = _mass_range(item.mass)
                 if not 0.0 <= lo_m <= hi_m:
                     raise InvalidInputError(f"mass: expected 0 <= low <= high kg, got {item.mass}")
                 if hi_m < lo.sum() or lo_m > cap.sum():
@@ -144,13 +159,22 @@ def _collect(model, links, counterweights, link_mass) -> _Variables:
                 f"counterweights[{k}]: expected a Counterweight, got {type(cw).__name__}"
             )
         name, link = _link_of(model, cw.body, f"counterweights[{k}]")
-        pts = np.asarray(cw.points, dtype=float)
+        try:
+            pts = np.asarray(cw.points, dtype=float)
+        except (TypeError, ValueError):
+            raise InvalidInputError(
+                f"counterweights[{k}]: points of '{name}' must be a finite (K, 3) array of numbers, "
+                f"got {cw.points!r}"
+            ) from None
         if pts.ndim == 1:
             pts = pts.reshape(1, -1)
-        if pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not np.all(np.isfinite(pts)):
+        # Beyond 1e100 m the second moments overflow; no mechanism has such a point.
+        if (pts.ndim != 2 or pts.shape[1] != 3 or len(pts) == 0 or not np.all(np.isfinite(pts))
+                or np.abs(pts).max() > 1e100):
             raise InvalidInputError(
-                f"counterweights[{k}]: points of '{name}' must be a finite (K, 3) array, got "
-                f"shape {pts.shape}"
+                f"counterweights[{k}]: points of '{name}' must be a finite (K, 3) array within "
+                f"1e100 m of the body origin, got shape {pts.shape}"
+                + (f" reaching {np.abs(pts).max():.3g}" if pts.size and np.all(np.isfinite(pts)) else "")
             )
         hi = np.inf if cw.max_mass is None else float(cw.max_mass)
         if not hi > 0:
@@ -233,6 +257,7 @@ def balance(
     optima the least design mass is taken (``least_mass``). ``progress`` is called with a
     short text at each stage."""
     t0 = time.perf_counter()
+    _check_progress(progress)
     say = progress or (lambda _s: None)
     model = motion.model
     objective = {"force": 1.0} if objective is None else dict(objective)
@@ -447,14 +472,18 @@ def pareto_front(
     with the second limited to ε (``limits``, in the chosen ``norm``; for
     ``"mass"``, kg of design material); it also reaches the non-convex-looking parts of a
     front that weights skip, and spaces the points along the second objective. Other
-    arguments are passed on to :func:`balance`."""
+    arguments are passed on to :func:`balance`. Interrupted (Ctrl-C) or failing at a point,
+    the exception carries the points already solved as ``.result`` (a list, in order)."""
     if "objective" in kwargs:
         raise InvalidInputError(
             "objective: pareto_front sets the weights itself; give the two objectives as "
             "`objectives` (and equalities as `zero`)"
         )
-    if isinstance(count, bool) or not isinstance(count, (int, np.integer)) or count < 2:
-        raise InvalidInputError(f"count: expected an integer >= 2, got {count!r}")
+    if (isinstance(count, bool) or not isinstance(count, (int, np.integer))
+            or not 2 <= count <= MAX_PARETO_POINTS):
+        raise InvalidInputError(
+            f"count: expected an integer in [2, {MAX_PARETO_POINTS}] (one program each), got {count!r}"
+        )
     if (
         not isinstance(objectives, (tuple, list))
         or len(objectives) != 2
@@ -464,13 +493,19 @@ def pareto_front(
     if method not in ("weighted", "epsilon"):
         raise InvalidInputError(f"method: expected 'weighted' or 'epsilon', got {method!r}")
     first, second = objectives
+    _check_progress(progress)
     say = progress or (lambda _s: None)
     if method == "epsilon":
         return _epsilon_front(motion, first, second, int(count), say, kwargs)
-    out = []
-    for k, s in enumerate(np.linspace(0.0, 1.0, int(count))):
-        say(f"Pareto point {k + 1}/{count}")
-        out.append(balance(motion, objective={first: 1.0 - s, second: s}, **kwargs))
+    out: list[Balance] = []
+    try:
+        for k, s in enumerate(np.linspace(0.0, 1.0, int(count))):
+            say(f"Pareto point {k + 1}/{count}")
+            out.append(balance(motion, objective={first: 1.0 - s, second: s}, **kwargs))
+    except BaseException as exc:
+        # An interrupt or a failing point keeps the points already solved (in order).
+        exc.result = out
+        raise
     return out
 
 
@@ -504,14 +539,20 @@ def _epsilon_front(motion, first, second, count, say, kwargs) -> list[Balance]:
     # lie evenly between its values there. (Holding the first at its optimum to refine the
     # first end is a thin, ill-conditioned cone when that optimum is zero, as in force
     # balance: Clarabel stops for lack of progress.)
-    say(f"Pareto point 1/{count}")
-    start = balance(motion, objective={first: 1.0}, limits=limits or None, **kwargs)
-    say(f"Pareto point {count}/{count}")
-    end = balance(motion, objective={second: 1.0}, limits=limits or None, **kwargs)
-    hi, lo = objective_value(start, second), objective_value(end, second)
-    out = [start]
-    for k, eps in enumerate(np.linspace(hi, lo, count)[1:-1]):
-        say(f"Pareto point {k + 2}/{count}")
-        out.append(balance(motion, objective={first: 1.0}, limits={**limits, second: float(eps)}, **kwargs))
+    out: list[Balance] = []
+    try:
+        say(f"Pareto point 1/{count}")
+        out.append(balance(motion, objective={first: 1.0}, limits=limits or None, **kwargs))
+        say(f"Pareto point {count}/{count}")
+        end = balance(motion, objective={second: 1.0}, limits=limits or None, **kwargs)
+        hi, lo = objective_value(out[0], second), objective_value(end, second)
+        for k, eps in enumerate(np.linspace(hi, lo, count)[1:-1]):
+            say(f"Pareto point {k + 2}/{count}")
+            out.append(balance(motion, objective={first: 1.0}, limits={**limits, second: float(eps)}, **kwargs))
+    except BaseException as exc:
+        # The points already solved, in order along the front (the far end, if solved, is
+        # left out: it is not adjacent to them).
+        exc.result = out
+        raise
     out.append(end)
     return out

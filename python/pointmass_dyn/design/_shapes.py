@@ -31,14 +31,22 @@ def _box(value: Any, arg: str) -> np.ndarray:
 
 def read_stl(path: str | Path) -> np.ndarray:
     """The triangles (T, 3, 3) of a binary or ASCII STL file."""
-    data = Path(path).read_bytes()
+    try:
+        data = Path(path).read_bytes()
+    except OSError as exc:
+        raise InvalidInputError(f"stl: expected a readable STL file, got '{path}' ({exc})") from None
     if len(data) >= 84:
         count = struct.unpack("<I", data[80:84])[0]
         if 84 + 50 * count == len(data):
             rec = np.frombuffer(data, dtype=np.dtype([("n", "<f4", 3), ("v", "<f4", (3, 3)), ("a", "<u2")]), offset=84)
             return rec["v"].astype(float)
     text = data.decode("ascii", errors="replace").split()
-    verts = [[float(text[i + 1]), float(text[i + 2]), float(text[i + 3])] for i, w in enumerate(text) if w == "vertex"]
+    try:
+        verts = [[float(text[i + 1]), float(text[i + 2]), float(text[i + 3])] for i, w in enumerate(text) if w == "vertex"]
+    except (IndexError, ValueError):
+        raise InvalidInputError(
+            f"stl: expected 'vertex x y z' lines of numbers, got '{path}' with a malformed vertex"
+        ) from None
     if not verts or len(verts) % 3:
         raise InvalidInputError(f"stl: expected a binary or ASCII STL file, got '{path}' without triangles")
     return np.asarray(verts).reshape(-1, 3, 3)
@@ -95,8 +103,13 @@ class LinkShape:
         """Centres (K, 3), lower and upper bounds (K,) of the cells, body frame."""
         for arg in ("density", "cell"):
             v = getattr(self, arg)
-            if not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
+            if isinstance(v, bool) or not (isinstance(v, (int, float)) and np.isfinite(v) and v > 0):
                 raise InvalidInputError(f"{arg}: expected a positive number, got {v!r}")
+        b = self.boss
+        if b is not None and (
+            isinstance(b, bool) or not (isinstance(b, (int, float)) and np.isfinite(b) and b >= 0)
+        ):
+            raise InvalidInputError(f"boss: expected None or a finite radius >= 0 (m), got {b!r}")
         env = self._envelope()
         centers = np.asarray(_core.design_cells(float(self.cell), **env), dtype=float).reshape(-1, 3)
         for b in _boxes(self.keep_out, "keep_out"):

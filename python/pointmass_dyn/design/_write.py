@@ -123,7 +123,11 @@ def write_urdf(bodies: dict[str, Any], source: str | os.PathLike, path: str | os
             izz=_num(i[2, 2]),
         )
         link.insert(0, inertial)
-    tree.write(path, encoding="utf-8", xml_declaration=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tree.write(path, encoding="utf-8", xml_declaration=True)
+    except OSError as exc:
+        raise InvalidInputError(f"path: expected a writable file path, got '{path}' ({exc})") from None
     return path
 
 
@@ -133,7 +137,12 @@ def write_scene(bodies: dict[str, Any], source: str | os.PathLike, path: str | o
     ``inertia`` replaced; a body from the scene's ``urdf`` is written into a copy of that URDF
     beside ``path`` (``<stem>.urdf``), which the new scene then loads. Returns ``path``."""
     source, path = resolve_scene_path(source), Path(path)
-    text = source.read_text(encoding="utf-8")
+    try:
+        text = source.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise SceneError(
+            f"source: expected a bundled scene name or a readable scene file, got '{source}' ({exc})"
+        ) from None
     try:
         data = _toml().loads(text)
     except ValueError as exc:
@@ -152,5 +161,15 @@ def write_scene(bodies: dict[str, Any], source: str | os.PathLike, path: str | o
         write_urdf(rest, urdf, target)
         pattern = re.compile(r"^\s*urdf\s*=")
         lines = [f'urdf = "{target.name}"' if pattern.match(ln) else ln for ln in lines]
-    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    _write_text(path, "\n".join(lines) + "\n")
     return path
+
+
+def _write_text(path: Path, text: str) -> None:
+    """Writes ``text`` to ``path``, creating its directory (as ``Shape.write_stl`` does); a
+    path that cannot be written is an ``InvalidInputError`` naming it."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+    except OSError as exc:
+        raise InvalidInputError(f"path: expected a writable file path, got '{path}' ({exc})") from None

@@ -2,11 +2,11 @@
 //! (`set_armature`, `armature`): argument conversion around `crate::loops::coupling` and
 //! `crate::recursive::armature`.
 use pyo3::prelude::*;
-use pyo3::types::PyString;
+use pyo3::types::{PyBool, PyString};
 
 use super::{gravity_arg, load_state, load_x, PyModel};
 use crate::loops;
-use crate::python::convert::{int_arg, to_array1};
+use crate::python::convert::{int_arg, real, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::shared::Version;
 
@@ -64,16 +64,22 @@ fn joint_ref(ver: &Version, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<usize
 impl PyModel {
     /// Couples two 1-dof joints: `q_joint = ratio · q_reference + offset` (docs/couplings.md).
     /// Returns the coupling's index.
-    #[pyo3(signature = (joint, reference, ratio=1.0, offset=0.0, name=None))]
+    #[pyo3(signature = (joint, reference, ratio=None, offset=None, name=None))]
     fn add_coupling(
         &self,
         py: Python<'_>,
         joint: &Bound<'_, PyAny>,
         reference: &Bound<'_, PyAny>,
-        ratio: f64,
-        offset: f64,
+        ratio: Option<&Bound<'_, PyAny>>,
+        offset: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
     ) -> PyResult<usize> {
+        // `real` refuses bools and strings with the argument's name (a bare f64 took True as 1).
+        let ratio = ratio.map(|x| real(x, "ratio")).transpose()?.unwrap_or(1.0);
+        let offset = offset
+            .map(|x| real(x, "offset"))
+            .transpose()?
+            .unwrap_or(0.0);
         let ver = self.version();
         let j = joint_ref(&ver, joint, "joint")?;
         let r = joint_ref(&ver, reference, "reference")?;
@@ -139,6 +145,14 @@ impl PyModel {
         let ver = self.version();
         let j = joint_ref(&ver, joint, "joint")?;
         drop(ver);
+        if value.is_instance_of::<PyBool>() {
+            return Err(invalid(
+                py,
+                "value",
+                "a number >= 0, or one per speed of the joint",
+                format!("the bool {value}"),
+            ));
+        }
         let values = match value.extract::<f64>() {
             Ok(x) => vec![x],
             Err(_) => crate::python::convert::vector(value, "value", None)?,
