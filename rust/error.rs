@@ -270,14 +270,76 @@ pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
         Some(k) => Err(Error::arg(
             arg,
             "finite numbers",
-            format!("{} at index {}", values[k], k),
+            format!("{} at index {}", num(values[k]), k),
         )),
     }
 }
 
+/// `x` for a message: as Rust prints it for ordinary magnitudes, in exponent form
+/// (`1e-300`, `-2.5e300`) beyond them, where plain decimals run to hundreds of digits.
+pub fn num(x: f64) -> String {
+    let a = x.abs();
+    if x == 0.0 || (1e-4..1e15).contains(&a) || !x.is_finite() {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
+/// `message` with every decimal number written with more than [`LONG_NUMBER`] digits (how
+/// `{}` prints an f64 such as 1e-300) rewritten as [`num`] does; what every error message
+/// passes through on its way to the caller.
+pub fn compact_numbers(message: &str) -> String {
+    let b = message.as_bytes();
+    let mut out = String::with_capacity(message.len());
+    let (mut i, mut copied) = (0, 0);
+    while i < b.len() {
+        let starts = b[i].is_ascii_digit()
+            && (i == 0
+                || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'.' || b[i - 1] == b'_'));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < b.len() && (b[j].is_ascii_digit() || b[j] == b'.') {
+            j += 1;
+        }
+        let digits = b[i..j].iter().filter(|c| c.is_ascii_digit()).count();
+        if digits > LONG_NUMBER {
+            if let Ok(x) = message[i..j].parse::<f64>() {
+                out.push_str(&message[copied..i]);
+                out.push_str(&num(x));
+                copied = j;
+            }
+        }
+        i = j;
+    }
+    out.push_str(&message[copied..]);
+    out
+}
+
+/// More digits than any integer index or count has (`u64::MAX` has 20).
+const LONG_NUMBER: usize = 24;
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_decimals_are_compacted_and_others_kept() {
+        let tiny = format!("mass: expected > 0, got -{}", 1e-300);
+        assert_eq!(compact_numbers(&tiny), "mass: expected > 0, got -1e-300");
+        let huge = format!("lower {} > upper {} (entry 3)", 1e300, 2.5e299);
+        assert_eq!(
+            compact_numbers(&huge),
+            "lower 1e300 > upper 2.5e299 (entry 3)"
+        );
+        let plain = "q[12]: got 0.125 at index 3 of 18446744073709551615, v2 1e-300";
+        assert_eq!(compact_numbers(plain), plain);
+        assert_eq!(num(1e-320), "1e-320");
+        assert_eq!(num(0.5), "0.5");
+    }
 
     #[test]
     fn in_arg_prefixes_names_and_messages_and_file_keys() {

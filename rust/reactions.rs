@@ -220,25 +220,44 @@ impl<'a> States<'a> {
     }
 }
 
-/// Shaking force and moment about `about` at every state: `(forces, moments)`, 3 per row.
+/// A computation over stacked states that may stop early (an interrupt): `value` holds the
+/// results of the first `rows` states, and `stopped` why it stopped, if it did.
+pub struct Rows<T> {
+    pub value: T,
+    pub rows: usize,
+    pub stopped: Option<crate::error::Error>,
+}
+
+/// Shaking force and moment about `about` at every state: `(forces, moments)`, 3 per row
+/// (of the states done when interrupted).
 pub fn shaking_of_states(
     model: &Model,
     states: &States<'_>,
     about: &Vec3,
-) -> Result<(Vec<f64>, Vec<f64>)> {
+) -> Rows<(Vec<f64>, Vec<f64>)> {
     let mut ws = Workspace::new(model);
     let mut pm = PointMotion::default();
     let rows = states.rows;
     let (mut force, mut moment) = (Vec::with_capacity(3 * rows), Vec::with_capacity(3 * rows));
     for k in 0..rows {
-        crate::interrupt::check("shaking")?;
+        if let Err(e) = crate::interrupt::check("shaking") {
+            return Rows {
+                value: (force, moment),
+                rows: k,
+                stopped: Some(e),
+            };
+        }
         let (q, v, a) = states.row(model, k);
         point_motion(model, &mut ws, q, v, a, &mut pm);
         let (f, m) = shaking(&pm, about);
         force.extend_from_slice(f.as_slice());
         moment.extend_from_slice(m.as_slice());
     }
-    Ok((force, moment))
+    Rows {
+        value: (force, moment),
+        rows,
+        stopped: None,
+    }
 }
 
 /// What the balancing regressors need per point and state ([`point_regressor`]), row-major
@@ -254,12 +273,14 @@ pub struct PointRegressor {
 
 /// Per state and point `(link, offset in the link frame)`: its world position, acceleration
 /// and the joint forces a unit mass there needs under gravity `g` (docs/balancing.md).
+/// `Err` only when the arrays cannot be allocated; an interrupt keeps the states done (the
+/// arrays are cut to them).
 pub fn point_regressor(
     model: &Model,
     states: &States<'_>,
     points: &[(usize, Vec3)],
     g: &Vec3,
-) -> Result<PointRegressor> {
+) -> Result<Rows<PointRegressor>> {
     let (rows, nv, np) = (states.rows, model.nv, points.len());
     // The sizes are the caller's to choose: requested fallibly (OutOfMemory, not an abort).
     let entries = |width: usize| {
@@ -275,7 +296,16 @@ pub fn point_regressor(
     };
     let mut ws = Workspace::new(model);
     for k in 0..rows {
-        crate::interrupt::check("point_regressor")?;
+        if let Err(e) = crate::interrupt::check("point_regressor") {
+            out.positions.truncate(k * np * 3);
+            out.accelerations.truncate(k * np * 3);
+            out.generalized.truncate(k * np * nv);
+            return Ok(Rows {
+                value: out,
+                rows: k,
+                stopped: Some(e),
+            });
+        }
         let (q, v, a) = states.row(model, k);
         link_accelerations(model, &mut ws, q, v, a);
         for (j, (r, _, ap)) in carried_points(&ws, points).enumerate() {
@@ -286,7 +316,11 @@ pub fn point_regressor(
             add_point_force(model, &ws, points[j].0, &r, &(ap - g), row);
         }
     }
-    Ok(out)
+    Ok(Rows {
+        value: out,
+        rows,
+        stopped: None,
+    })
 }
 
 /// What every joint transmits at one state ([`bearing_forces`]).

@@ -28,8 +28,9 @@ import numpy as np
 
 from . import _core
 from ._core import Scene
+from ._helpers import interrupt_reason, interrupted_message
 from ._simulation import SimulationResult
-from .errors import InvalidInputError, OutOfMemoryError
+from .errors import InvalidInputError, OutOfMemoryError, PointMassDynError
 
 #: Memory a run of a batch holds at least, besides its outputs at ``t_eval``: its result's
 #: Python objects (measured: a 100,000-run batch of a small scene took 438 MB).
@@ -121,6 +122,43 @@ def check_batch_memory(count: int, nq: int, nv: int, t_eval: Any = None) -> None
         )
 
 
+def _run_scene(scene: Scene, per: dict, count: int, b: int, bodies: set) -> Scene:
+    """Run ``b``'s scene: ``scene`` with row ``b`` of each per-run parameter."""
+    m = scene.model
+    effects = list(scene.effects)
+    for key, arr in per.items():
+        if key == "gravity":
+            g = _rows(key, arr, count, (3,))[b]
+            grav = [k for k, e in enumerate(effects) if e.g is not None]
+            if grav:
+                # The gravity the bodies feel is the sum of the gravity effects: the
+                # first carries g, any others none (kept, so the effects keep their order).
+                for k in grav:
+                    effects[k] = effects[k].with_parameter("g", g if k == grav[0] else 0 * g)
+            else:
+                effects.append(_core.Effect.gravity(g))
+            continue
+        head, _, tail = key.rpartition(".")
+        if head in bodies and tail in ("mass", "com", "inertia"):
+            body = m.body(head)
+            mass, com, inertia = body.mass, np.asarray(body.com), np.asarray(body.inertia)
+            if tail == "mass":
+                mass = float(_rows(key, arr, count, ())[b])
+            elif tail == "com":
+                com = _rows(key, arr, count, (3,))[b]
+            else:
+                inertia = _rows(key, arr, count, (3, 3))[b]
+            m = m.with_body(head, _core.RigidBody(mass, com=com, inertia=inertia))
+        elif head:
+            effects = _effect_param(effects, head, tail, arr[b])
+        else:
+            raise InvalidInputError(
+                f"params: expected 'gravity', '<effect>.<parameter>' or '<body>.mass'/"
+                f"'.com'/'.inertia', got '{key}'"
+            )
+    return scene.replace(model=m, effects=effects)
+
+
 def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
     """One scene per run, from ``scene`` with the per-run ``params``."""
     model = scene.model
@@ -141,39 +179,13 @@ def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
     bodies = set(model.body_names)
     out = []
     for b in range(count or 0):
-        m = model
-        effects = list(scene.effects)
-        for key, arr in per.items():
-            if key == "gravity":
-                g = _rows(key, arr, count, (3,))[b]
-                grav = [k for k, e in enumerate(effects) if e.g is not None]
-                if grav:
-                    # The gravity the bodies feel is the sum of the gravity effects: the
-                    # first carries g, any others none (kept, so the effects keep their order).
-                    for k in grav:
-                        effects[k] = effects[k].with_parameter("g", g if k == grav[0] else 0 * g)
-                else:
-                    effects.append(_core.Effect.gravity(g))
-                continue
-            head, _, tail = key.rpartition(".")
-            if head in bodies and tail in ("mass", "com", "inertia"):
-                body = m.body(head)
-                mass, com, inertia = body.mass, np.asarray(body.com), np.asarray(body.inertia)
-                if tail == "mass":
-                    mass = float(_rows(key, arr, count, ())[b])
-                elif tail == "com":
-                    com = _rows(key, arr, count, (3,))[b]
-                else:
-                    inertia = _rows(key, arr, count, (3, 3))[b]
-                m = m.with_body(head, _core.RigidBody(mass, com=com, inertia=inertia))
-            elif head:
-                effects = _effect_param(effects, head, tail, arr[b])
-            else:
-                raise InvalidInputError(
-                    f"params: expected 'gravity', '<effect>.<parameter>' or '<body>.mass'/"
-                    f"'.com'/'.inertia', got '{key}'"
-                )
-        out.append(scene.replace(model=m, effects=effects))
+        try:
+            out.append(_run_scene(scene, per, count, b, bodies))
+        except PointMassDynError as e:
+            if str(e).startswith("params:"):  # a key no run can take
+                raise
+            # Name the run: its row of params is the one at fault.
+            raise type(e)(f"params (run {b}): {e}") from None
     return out
 
 
@@ -248,22 +260,30 @@ def simulate_batch(
         method,
         dt,
     )
-    batch = _batch_result(scenes, out, t_eval)
+    batch = _batch_result(scenes, out, t_eval, stopped)
     if stopped is not None:
         raise _with_batch(stopped, batch)
     return batch
 
 
-def _batch_result(scenes: list[Scene], out: list[dict], t_eval: Any) -> BatchResult:
-    """The core's per-run dicts as a :class:`BatchResult`."""
+def _batch_result(
+    scenes: list[Scene], out: list[dict], t_eval: Any, stopped: BaseException | None = None
+) -> BatchResult:
+    """The core's per-run dicts as a :class:`BatchResult`; ``stopped``: what stopped the
+    batch (Ctrl-C, a raising ``progress``), which the runs it cut short name."""
     names = [s.name for s in scenes]
     results = []
     for k, d in enumerate(out):
         name = names[0] if len(names) == 1 else names[k]
         error = d.pop("error")
         if "t" not in d:
-            results.append(_failed(name, error))
+            if stopped is not None and isinstance(error, KeyboardInterrupt):
+                why = f"the batch was stopped before this run started, by {interrupt_reason(stopped)}"
+                results.append(_failed(name, error, why))
+            else:
+                results.append(_failed(name, error))
         else:
+            d["message"] = interrupted_message(d["message"], stopped)
             results.append(SimulationResult(scene=name, **d))
     success = np.array([r.success for r in results], dtype=bool)
     t = q = v = None
@@ -310,7 +330,7 @@ def _with_batch(error: BaseException, batch: BatchResult) -> BaseException:
     return error
 
 
-def _failed(name: str, error: BaseException) -> SimulationResult:
+def _failed(name: str, error: BaseException, message: str | None = None) -> SimulationResult:
     """The result of a run that could not start (its input was refused)."""
     return SimulationResult(
         t=np.zeros(0),
@@ -324,7 +344,7 @@ def _failed(name: str, error: BaseException) -> SimulationResult:
         n_accepted=0,
         n_rejected=0,
         status=-1,
-        message=f"{type(error).__name__}: {error}",
+        message=message or f"{type(error).__name__}: {error}",
         success=False,
         t_reached=float("nan"),
         scene=name,

@@ -5,6 +5,7 @@ scene feels, where a model's quaternions sit in q, and sample counts checked bef
 from __future__ import annotations
 
 import operator
+import re
 
 import numpy as np
 
@@ -96,3 +97,50 @@ def sample_count(name: str, value, lowest: int = 1, largest: int = 10_000_000) -
             f"{name}: expected a number of samples in [{lowest}, {largest:,}], got {count:,}"
         )
     return count
+
+
+def attach_partial(error: BaseException, result, note: str) -> BaseException:
+    """Attaches what a stopped computation had done (``result``) to the exception that
+    stopped it as ``.result``, with ``note`` in its traceback (``__notes__``); an exception
+    type that takes no attributes is left as it is."""
+    try:
+        error.result = result
+        notes = getattr(error, "__notes__", None)
+        if notes is None:
+            error.__notes__ = [note]
+        else:
+            notes.append(note)
+    except (AttributeError, TypeError):
+        pass
+    return error
+
+
+def stop_reason(error: BaseException) -> str:
+    """Why a computation stopped, for a partial result's ``message``: Ctrl-C or a
+    ``progress`` callback raising ``KeyboardInterrupt`` read as an interrupt, anything else
+    as the exception's type and text."""
+    if isinstance(error, KeyboardInterrupt):
+        return "interrupted (Ctrl-C, or KeyboardInterrupt raised by progress)"
+    text = str(error)
+    return f"{type(error).__name__}: {text}" if text else type(error).__name__
+
+
+_INTERRUPTED = re.compile(r"^interrupted at t = (\S+) \(.*?\); integration reached t = (\S+)$")
+
+
+def interrupted_message(message: str, error: BaseException | None) -> str:
+    """A run's message ``interrupted at t = … (…)`` (the core's, which cannot tell Ctrl-C
+    from a raising ``progress``) with the real reason, ``error``, put in."""
+    m = _INTERRUPTED.match(message)
+    if m is None or error is None:
+        return message
+    return f"interrupted at t = {m[1]} by {interrupt_reason(error)}; integration reached t = {m[2]}"
+
+
+def interrupt_reason(error: BaseException) -> str:
+    """What stopped a run from its progress hook: Ctrl-C, or the exception ``progress``
+    raised."""
+    if isinstance(error, KeyboardInterrupt):
+        return "Ctrl-C (or a KeyboardInterrupt raised by progress)"
+    text = str(error)
+    return f"{type(error).__name__}{': ' + text if text else ''}, raised by progress"

@@ -46,6 +46,7 @@ import numpy as np
 from . import _core
 from ._contact import contact_forces, torque_saturation
 from ._core import Effect, Scene, StateEvent
+from ._helpers import interrupted_message
 from .errors import SimulationError
 
 
@@ -342,6 +343,7 @@ def simulate(
         dt,
     )
     error = out.pop("error")
+    out["message"] = interrupted_message(out["message"], error)
     result = SimulationResult(scene=scene.name, **out)
     result.saturated = torque_saturation(scene, result, disable)
     if contact:

@@ -73,6 +73,10 @@ pub struct GroundContact {
     pub v_eps: f64,
 }
 
+/// The largest contact offset, radius and plane height (m): a thousand kilometres, beyond
+/// any mechanism; at 1e300 the penetration overflows at run time.
+pub const MAX_LENGTH: f64 = 1e6;
+
 impl GroundContact {
     #[allow(clippy::too_many_arguments)]
     pub fn new(
@@ -95,11 +99,18 @@ impl GroundContact {
         }
         for (k, p) in points.iter().enumerate() {
             check_finite(&format!("points[{k}]"), p.point.as_slice())?;
-            if !(p.radius.is_finite() && p.radius >= 0.0) {
+            if let Some(x) = p.point.iter().find(|x| x.abs() > MAX_LENGTH) {
                 return Err(Error::arg(
                     format!("points[{k}]"),
-                    "a radius that is a finite number >= 0",
-                    p.radius.to_string(),
+                    format!("an offset within ±{MAX_LENGTH:e} m of its body's origin"),
+                    crate::error::num(*x),
+                ));
+            }
+            if !(p.radius.is_finite() && (0.0..=MAX_LENGTH).contains(&p.radius)) {
+                return Err(Error::arg(
+                    format!("points[{k}]"),
+                    format!("a radius that is a number in [0, {MAX_LENGTH:e}] m"),
+                    crate::error::num(p.radius),
                 ));
             }
         }
@@ -113,18 +124,29 @@ impl GroundContact {
             ));
         }
         check_finite("height", &[height])?;
+        if height.abs() > MAX_LENGTH {
+            return Err(Error::arg(
+                "height",
+                format!("a plane within ±{MAX_LENGTH:e} m of the origin"),
+                crate::error::num(height),
+            ));
+        }
         let positive = |arg: &str, x: f64| {
             if x.is_finite() && x > 0.0 {
                 Ok(())
             } else {
-                Err(Error::arg(arg, "a finite number > 0", x.to_string()))
+                Err(Error::arg(arg, "a finite number > 0", crate::error::num(x)))
             }
         };
         let non_negative = |arg: &str, x: f64| {
             if x.is_finite() && x >= 0.0 {
                 Ok(())
             } else {
-                Err(Error::arg(arg, "a finite number >= 0", x.to_string()))
+                Err(Error::arg(
+                    arg,
+                    "a finite number >= 0",
+                    crate::error::num(x),
+                ))
             }
         };
         positive("stiffness", stiffness)?;

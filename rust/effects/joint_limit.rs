@@ -37,17 +37,28 @@ pub struct JointLimit {
     pub damping: PerJoint,
 }
 
-/// A bound may be any number but NaN (±inf: no bound on that side).
+/// The largest finite bound (rad or m): a billion radians is 160 million turns, a billion
+/// metres beyond any mechanism; larger finite bounds overflow `k δ` at run time. ±inf is
+/// the way to say "no bound".
+pub const MAX_BOUND: f64 = 1e9;
+
+/// A bound may be ±inf (no bound on that side) or a number within ±[`MAX_BOUND`], not NaN.
 fn check_bound(arg: &str, b: &Option<PerJoint>) -> Result<()> {
-    let bad =
-        |x: f64, at: String| Error::arg(arg, "numbers (±inf allowed), not NaN", format!("{x}{at}"));
+    let fine = |x: &f64| x.is_infinite() || x.abs() <= MAX_BOUND;
+    let bad = |x: f64, at: String| {
+        Error::arg(
+            arg,
+            format!("numbers within ±{MAX_BOUND:e} (rad or m), or ±inf for no bound"),
+            format!("{}{at}", crate::error::num(x)),
+        )
+    };
     match b {
         None => Ok(()),
-        Some(PerJoint::All(x)) if x.is_nan() => Err(bad(*x, String::new())),
+        Some(PerJoint::All(x)) if !fine(x) => Err(bad(*x, String::new())),
         Some(PerJoint::Each(v)) if v.is_empty() => {
             Err(Error::arg(arg, "a number or a non-empty list", "[]"))
         }
-        Some(PerJoint::Each(v)) => match v.iter().position(|x| x.is_nan()) {
+        Some(PerJoint::Each(v)) => match v.iter().position(|x| !fine(x)) {
             Some(k) => Err(bad(v[k], format!(" at index {k}"))),
             None => Ok(()),
         },
@@ -109,7 +120,15 @@ impl JointLimit {
     fn slots(&self, model: &Model) -> Result<Vec<JointSlot>> {
         let slots = resolve_joints(model, &self.joints, "joints")?;
         if self.joints.is_none() {
-            return Ok(slots.into_iter().filter(|s| one_dof(s.joint)).collect());
+            let slots: Vec<JointSlot> = slots.into_iter().filter(|s| one_dof(s.joint)).collect();
+            if slots.is_empty() {
+                return Err(Error::arg(
+                    "joints",
+                    "a model with revolute or prismatic joints (the only joints a JointLimit acts on)",
+                    "a model that has no 1-dof joints",
+                ));
+            }
+            return Ok(slots);
         }
         if let Some(s) = slots.iter().find(|s| !one_dof(s.joint)) {
             return Err(Error::arg(
@@ -172,7 +191,12 @@ fn check_order(lower: &[f64], upper: &[f64], at: impl Fn(usize) -> String) -> Re
         Some(k) => Err(Error::arg(
             "lower",
             "bounds with lower <= upper",
-            format!("lower {} > upper {} ({})", lower[k], upper[k], at(k)),
+            format!(
+                "lower {} > upper {} ({})",
+                crate::error::num(lower[k]),
+                crate::error::num(upper[k]),
+                at(k)
+            ),
         )),
     }
 }

@@ -2,8 +2,8 @@
 //! −L_i, L_i)` (MuJoCo's `forcerange`, a URDF joint's `effort`). A wrapper around any torque
 //! law, so constant, tabulated, PD and callback torques saturate alike; the derivatives are the
 //! inner law's with the saturated rows zeroed (the clamp's slope there).
-use super::{Context, ForceLaw, PerJoint, Sign};
-use crate::error::Result;
+use super::{Context, ForceLaw, PerJoint};
+use crate::error::{num, Error, Result};
 use crate::spatial::Vec6;
 
 /// How a torque effect is limited.
@@ -16,19 +16,21 @@ pub enum TorqueLimit {
 }
 
 impl TorqueLimit {
+    /// `limit`: numbers > 0, inf allowed (no limit on that speed); NaN, 0 and negatives
+    /// are refused, and the message says what is allowed.
     pub fn given(limit: PerJoint) -> Result<TorqueLimit> {
-        limit.check("limit", Sign::Positive).or_else(|e| {
-            // inf is allowed (no limit on that speed); NaN, 0 and negatives are not.
-            let ok = match &limit {
-                PerJoint::All(x) => *x == f64::INFINITY,
-                PerJoint::Each(v) => !v.is_empty() && v.iter().all(|x| *x > 0.0),
-            };
-            if ok {
-                Ok(())
-            } else {
-                Err(e)
+        const EXPECTED: &str = "numbers > 0, one or one per speed (inf: no limit on that speed)";
+        let bad = |x: f64, at: String| Error::arg("limit", EXPECTED, format!("{}{at}", num(x)));
+        match &limit {
+            PerJoint::All(x) if !(*x > 0.0) => return Err(bad(*x, String::new())),
+            PerJoint::Each(v) if v.is_empty() => return Err(Error::arg("limit", EXPECTED, "[]")),
+            PerJoint::Each(v) => {
+                if let Some(k) = v.iter().position(|x| !(*x > 0.0)) {
+                    return Err(bad(v[k], format!(" at index {k}")));
+                }
             }
-        })?;
+            PerJoint::All(_) => {}
+        }
         Ok(TorqueLimit::Given(limit))
     }
 }

@@ -101,6 +101,16 @@ fn check_dtype(arr: &Bound<'_, PyUntypedArray>, arg: &str) -> PyResult<()> {
     Err(invalid(arr.py(), arg, "real numbers", what))
 }
 
+/// A conversion's failure as `fallback()`, except Ctrl-C (a `KeyboardInterrupt` that NumPy
+/// raised while converting), which stays itself.
+fn unless_interrupt(py: Python<'_>, e: PyErr, fallback: impl FnOnce() -> PyErr) -> PyErr {
+    if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+        e
+    } else {
+        fallback()
+    }
+}
+
 /// `obj` as a NumPy array of real (integer or floating) dtype, or `InvalidInputError`.
 pub fn real_array<'py>(obj: &Bound<'py, PyAny>, arg: &str) -> PyResult<Bound<'py, PyAny>> {
     let py = obj.py();
@@ -138,7 +148,7 @@ pub fn real_array<'py>(obj: &Bound<'py, PyAny>, arg: &str) -> PyResult<Bound<'py
     let a = py
         .import("numpy")
         .and_then(|np| np.call_method1("asarray", (obj,)))
-        .map_err(|_| not_an_array())?;
+        .map_err(|e| unless_interrupt(py, e, not_an_array))?;
     let arr = a.cast::<PyUntypedArray>().map_err(|_| not_an_array())?;
     if is_masked(&a) {
         return Err(invalid(
@@ -251,7 +261,12 @@ pub fn opt_count(
 pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let py = obj.py();
     let obj = &real_array(obj, arg)?;
-    let arr: PyArrayLikeDyn<'_, f64, AllowTypeChange> = obj.extract().map_err(|_| {
+    let extracted = obj.extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>();
+    let arr = extracted.map_err(|e| {
+        let e: PyErr = e.into();
+        if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+            return e;
+        }
         let ty = obj
             .get_type()
             .name()

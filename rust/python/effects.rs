@@ -517,6 +517,16 @@ impl PyEffect {
                 format!("{} and {}", shape_str(&qs), shape_str(&vs)),
             ));
         }
+        for (arg, x, width) in [("q", &qv, m.nq), ("v", &vv, m.nv)] {
+            if let Some(i) = x.iter().position(|x| !x.is_finite()) {
+                return Err(invalid(
+                    py,
+                    arg,
+                    "finite states",
+                    format!("{} in state {} (entry {})", x[i], i / width, i % width),
+                ));
+            }
+        }
         let s = c.states(&m, &qv, &vv).py(py)?;
         let (n, np) = (qs[0], s.points);
         let d = pyo3::types::PyDict::new(py);

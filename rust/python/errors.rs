@@ -40,7 +40,7 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
             return pyo3::exceptions::PyKeyboardInterrupt::new_err(err.to_string());
         }
     };
-    py_error(py, class, err.to_string())
+    py_error(py, class, crate::error::compact_numbers(&err.to_string()))
 }
 
 pub trait IntoPyResult<T> {

@@ -91,16 +91,40 @@ pub fn detach_interruptible<T: Send>(
     py: Python<'_>,
     f: impl FnOnce() -> crate::error::Result<T> + Send,
 ) -> PyResult<T> {
-    let (result, raised) = py.detach(|| {
+    let (result, raised) = detach_watched(py, f);
+    match raised {
+        Some(e) => Err(e),
+        None => result.py(py),
+    }
+}
+
+/// As [`detach_interruptible`], but returns what `f` computed beside the exception a signal
+/// handler raised (if one did): for computations that keep their partial results.
+pub fn detach_watched<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> (T, Option<PyErr>) {
+    py.detach(|| {
         let watch = Rc::new(RefCell::new(Watch::default()));
         let poller = watch.clone();
         let result =
             interrupt::with_poller(Box::new(move || poller.borrow_mut().poll(|_| Ok(()))), f);
         let raised = watch.borrow_mut().error.take();
         (result, raised)
-    });
-    match raised {
-        Some(e) => Err(e),
-        None => result.py(py),
-    }
+    })
+}
+
+/// The exception that stopped a computation that keeps its partial results: the one a
+/// signal handler raised (Ctrl-C's `KeyboardInterrupt`), else `stopped` as our error; with
+/// `partial` attached as `.result` and a note saying so.
+pub fn stopped_with_partial(
+    py: Python<'_>,
+    raised: Option<PyErr>,
+    stopped: crate::error::Error,
+    partial: &Bound<'_, PyAny>,
+    note: &str,
+) -> PyErr {
+    let err = raised.unwrap_or_else(|| super::errors::to_py(py, stopped));
+    let value = err.value(py);
+    // An exception type that takes no attributes keeps its own message.
+    let _ = value.setattr("result", partial);
+    let _ = value.call_method1("add_note", (format!("pointmass_dyn: {note}"),));
+    err
 }

@@ -197,6 +197,10 @@ fn project_stage<'y>(
     }
 }
 
+/// The right-hand side's "error" when the progress hook asks to stop (Ctrl-C, a raising
+/// `progress`, a stopped batch); `simulate` words the run's message from it.
+pub const INTERRUPTED: &str = "interrupted";
+
 impl OdeSystem for Dynamics<'_> {
     fn dim(&self) -> usize {
         self.model.nq + self.model.nv
@@ -207,7 +211,7 @@ impl OdeSystem for Dynamics<'_> {
         if let Some(hook) = self.progress.as_mut() {
             self.calls += 1;
             if self.calls % PROGRESS_EVERY == 0 && !hook(t) {
-                return Err("interrupted".into());
+                return Err(INTERRUPTED.into());
             }
         }
         let mut stage = std::mem::take(&mut self.stage);

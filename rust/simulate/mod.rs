@@ -112,6 +112,16 @@ pub fn simulate(
         integrator::solve(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
     drop(events);
     report_euler_singularity(model, &guarded, n_user, &mut sol);
+    if let Status::RhsError { t, at, message } = &sol.status {
+        if message == dynamics::INTERRUPTED {
+            sol.message = format!(
+                "interrupted at t = {} (Ctrl-C, or the progress callback raised or the batch \
+                 was stopped); integration reached t = {}",
+                integrator::fmt_time(*at),
+                integrator::fmt_time(*t)
+            );
+        }
+    }
     sol.t_events.truncate(n_user);
     sol.y_events.truncate(n_user);
     let (mut q, mut v) = split_states(model, &sol);

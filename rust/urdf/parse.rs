@@ -557,6 +557,17 @@ fn parse_joint(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> 
         _ => None,
     };
     let (damping, friction) = joint_dynamics(ctx, el, node)?;
+    // One coupling per joint: a second <mimic> would be dropped without a word.
+    let mut mimics = node
+        .children()
+        .filter(|c| c.is_element() && c.tag_name().name() == "mimic" && foreign(*c).is_none());
+    if let (Some(_), Some(second)) = (mimics.next(), mimics.next()) {
+        return Err(ctx.at(
+            el,
+            second,
+            "a second <mimic>: a joint mimics at most one joint (q = multiplier · q_joint + offset); keep one",
+        ));
+    }
     let mimic = match child(node, "mimic") {
         None => None,
         Some(m) => Some(Mimic {

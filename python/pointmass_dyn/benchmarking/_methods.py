@@ -280,12 +280,13 @@ def _numpy_rk4(sc, span, rhs, y0, ref, dts, say) -> list[dict]:
 
 
 def measure(sc, span, ref_sol, methods, tolerances, dts, repeats, scipy_repeats,
-            say) -> list[dict]:
-    """All rows of the listed methods (see :func:`pointmass_dyn.work_precision`)."""
+            say, rows: list[dict] | None = None) -> list[dict]:
+    """All rows of the listed methods (see :func:`pointmass_dyn.work_precision`), appended
+    to ``rows`` as each method is measured (so a stopped run keeps the methods done)."""
     ref = _Reference(ref_sol, span, N_CHECK)
     y0 = np.concatenate([sc.q0, sc.v0])
     rhs = scene_rhs(sc)
-    rows: list[dict] = []
+    rows = [] if rows is None else rows
     for m in methods:
         steps = list(dts) if dts is not None else default_dts(span, m)
         if m in OURS_ADAPTIVE:

@@ -33,15 +33,16 @@ from __future__ import annotations
 import csv
 import os
 from collections.abc import Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
 import numpy as np
 
 from .. import _core
-from .._helpers import pyplot
+from .._helpers import attach_partial, pyplot, stop_reason
 from .._simulation import energies, simulate
-from ..errors import InvalidInputError
+from ..errors import InvalidInputError, SimulationError
 from ..scenes import load_scene
 from ._methods import DECADES, cheapest, cheapest_text, measure, methods_text, parse_methods
 from ._rhs import best_time, rk4_fixed, scene_rhs
@@ -76,6 +77,10 @@ class WorkPrecision:
     #: ``work_precision(..., methods=...)``: one dict per method and setting (see
     #: :mod:`pointmass_dyn.benchmarking`).
     method_rows: list[dict] = field(default_factory=list)
+    #: False for the rows of a run that stopped (attached to its exception as ``.result``);
+    #: ``message`` then says at which measurement and why.
+    success: bool = True
+    message: str = "complete"
 
     def methods_table(self) -> str:
         """Every method's rows (``methods=``), as text."""
@@ -129,6 +134,29 @@ class WorkPrecision:
     def plot(self, path: str | os.PathLike | None = None):
         """Error against wall time and against tolerance; saves to ``path`` if given."""
         return plot_work_precision([self], path)
+
+
+@contextmanager
+def _keeping_partial(out: WorkPrecision, progress):
+    """Yields ``say(msg)`` (``progress``, remembering the measurement under way); any exception
+    inside (Ctrl-C and a raising ``progress`` included) leaves with ``out``, the rows measured
+    so far, as its ``.result`` (``success=False``, ``message``: where and why it stopped)."""
+    doing = ["setting up"]
+
+    def say(msg: str) -> None:
+        doing[0] = msg
+        if progress is not None:
+            progress(msg)
+
+    try:
+        yield say
+    except BaseException as exc:
+        done = len(out.rows) + len(out.method_rows)
+        out.success = False
+        out.message = f"stopped at '{doing[0]}' after {done} rows: {stop_reason(exc)}"
+        attach_partial(exc, out, f"pointmass_dyn: work_precision {out.message}; the rows "
+                       "measured are in this exception's .result")
+        raise
 
 
 def _tolerances_arg(tolerances) -> list[float]:
@@ -196,7 +224,12 @@ def work_precision(
     ``rows`` above are then not measured): adaptive ones over ``tolerances``, fixed-step ones
     over ``dts`` (default :func:`~pointmass_dyn.benchmarking.default_dts`); see
     :mod:`pointmass_dyn.benchmarking` for the definitions, and
-    ``cheapest_table()`` for the cheapest method per accuracy decade."""
+    ``cheapest_table()`` for the cheapest method per accuracy decade.
+
+    Ctrl-C, or a ``progress`` that raises, stops it (between or within measurements): the
+    exception propagates as itself with the rows measured so far attached as ``.result`` (a
+    :class:`WorkPrecision` with ``success=False`` and ``message`` naming the measurement
+    under way and the reason)."""
     try:
         from scipy.integrate import solve_ivp
     except ImportError as exc:
@@ -219,78 +252,78 @@ def work_precision(
             raise InvalidInputError(f"t_end: expected a real number, got {t_end!r}")
         t1 = float(t_end)
     span = (float(t0), float(t1))
-    say = progress or (lambda msg: None)
     model = sc.model
     nq = model.nq
     y0 = np.concatenate([sc.q0, sc.v0])
     rhs = scene_rhs(sc)
     t_grid = np.linspace(span[0], span[1], n_dense)
 
-    say(f"{sc.name}: reference (DOP853, rtol = atol = {REFERENCE_TOL:g})")
-    ref = solve_ivp(rhs, span, y0, method="DOP853", rtol=REFERENCE_TOL, atol=REFERENCE_TOL,
-                    dense_output=True)
-    if not ref.success:
-        raise RuntimeError(f"{sc.name}: the DOP853 reference failed: {ref.message}")
-    y_ref_end = ref.y[:, -1]
-    y_ref_grid = ref.sol(t_grid).T
-    kinetic = max(model.kinetic_energy(y[:nq], y[nq:]) for y in y_ref_grid)
-    e_scale = kinetic if kinetic > 0 else 1.0
-
-    def total_energy(y):
-        return energies(sc, y[:nq], y[nq:])["total"]
-
     out = WorkPrecision(scene=sc.name, t_span=span)
-    out.reference_check = {"method": f"DOP853 rtol=atol={REFERENCE_TOL:g}",
-                           "nfev": int(ref.nfev), "energy_scale": float(e_scale)}
-    if reference_check:
-        say(f"{sc.name}: cross-check, simulate at {REFERENCE_TOL:g}")
-        ours = simulate(sc, span, rtol=REFERENCE_TOL, atol=REFERENCE_TOL, t_eval=t_grid)
-        y_ours = np.hstack([ours.q, ours.v])
-        out.reference_check.update(
-            err_final=_rel(y_ours[-1] - y_ref_end, y_ref_end),
-            err_dense=_rel(y_ours - y_ref_grid, y_ref_grid),
-            ours_nfev=int(ours.nfev),
-        )
-    if methods is not None:
-        out.method_rows = measure(sc, span, ref.sol, methods, tolerances, dts, repeats,
-                                  scipy_repeats, say)
-        return out
+    with _keeping_partial(out, progress) as say:
+        say(f"{sc.name}: reference (DOP853, rtol = atol = {REFERENCE_TOL:g})")
+        ref = solve_ivp(rhs, span, y0, method="DOP853", rtol=REFERENCE_TOL, atol=REFERENCE_TOL,
+                        dense_output=True)
+        if not ref.success:
+            raise SimulationError(f"{sc.name}: the DOP853 reference failed: {ref.message}")
+        y_ref_end = ref.y[:, -1]
+        y_ref_grid = ref.sol(t_grid).T
+        kinetic = max(model.kinetic_energy(y[:nq], y[nq:]) for y in y_ref_grid)
+        e_scale = kinetic if kinetic > 0 else 1.0
 
-    for tol in tolerances:
-        row: dict[str, Any] = {"tol": float(tol)}
-        say(f"{sc.name}: simulate at {tol:g}")
-        t_run, r = best_time(lambda: simulate(sc, span, rtol=tol, atol=tol), repeats)
-        if not r.success:
-            row.update(tol=float(tol), nfev=r.nfev, steps=r.n_accepted, rejected=r.n_rejected,
-                       time=t_run, err_final=np.nan, err_dense=np.nan, err_energy=np.nan,
-                       message=r.message)
+        def total_energy(y):
+            return energies(sc, y[:nq], y[nq:])["total"]
+
+        out.reference_check = {"method": f"DOP853 rtol=atol={REFERENCE_TOL:g}",
+                               "nfev": int(ref.nfev), "energy_scale": float(e_scale)}
+        if reference_check:
+            say(f"{sc.name}: cross-check, simulate at {REFERENCE_TOL:g}")
+            ours = simulate(sc, span, rtol=REFERENCE_TOL, atol=REFERENCE_TOL, t_eval=t_grid)
+            y_ours = np.hstack([ours.q, ours.v])
+            out.reference_check.update(
+                err_final=_rel(y_ours[-1] - y_ref_end, y_ref_end),
+                err_dense=_rel(y_ours - y_ref_grid, y_ref_grid),
+                ours_nfev=int(ours.nfev),
+            )
+        if methods is not None:
+            measure(sc, span, ref.sol, methods, tolerances, dts, repeats, scipy_repeats, say,
+                    out.method_rows)
+            return out
+
+        for tol in tolerances:
+            row: dict[str, Any] = {"tol": float(tol)}
+            say(f"{sc.name}: simulate at {tol:g}")
+            t_run, r = best_time(lambda: simulate(sc, span, rtol=tol, atol=tol), repeats)
+            if not r.success:
+                row.update(tol=float(tol), nfev=r.nfev, steps=r.n_accepted, rejected=r.n_rejected,
+                           time=t_run, err_final=np.nan, err_dense=np.nan, err_energy=np.nan,
+                           message=r.message)
+                out.rows.append(row)
+                continue
+            y_end = np.concatenate([r.q[-1], r.v[-1]])
+            dense = simulate(sc, span, rtol=tol, atol=tol, t_eval=t_grid)
+            y_dense = np.hstack([dense.q, dense.v])
+            withe = simulate(sc, span, rtol=tol, atol=tol, energy=True)
+            e = np.asarray(withe.energy)
+            row.update(
+                nfev=int(r.nfev), steps=int(r.n_accepted), rejected=int(r.n_rejected), time=t_run,
+                err_final=_rel(y_end - y_ref_end, y_ref_end),
+                err_dense=_rel(y_dense - y_ref_grid, y_ref_grid),
+                err_energy=float(np.max(np.abs(e - e[0])) / e_scale),
+                message=r.message,
+            )
+            if scipy:
+                say(f"{sc.name}: SciPy RK45 at {tol:g}")
+                t_sp, s = best_time(
+                    lambda: solve_ivp(rhs, span, y0, method="RK45", rtol=tol, atol=tol),
+                    scipy_repeats)
+                row.update(scipy_time=t_sp, scipy_nfev=int(s.nfev),
+                           scipy_err_final=_rel(s.y[:, -1] - y_ref_end, y_ref_end),
+                           speedup=t_sp / t_run)
+            if rk4:
+                say(f"{sc.name}: RK4 with {r.nfev} evaluations")
+                row.update(_rk4_row(rhs, span, y0, r.nfev, ref, total_energy, e_scale))
             out.rows.append(row)
-            continue
-        y_end = np.concatenate([r.q[-1], r.v[-1]])
-        dense = simulate(sc, span, rtol=tol, atol=tol, t_eval=t_grid)
-        y_dense = np.hstack([dense.q, dense.v])
-        withe = simulate(sc, span, rtol=tol, atol=tol, energy=True)
-        e = np.asarray(withe.energy)
-        row.update(
-            nfev=int(r.nfev), steps=int(r.n_accepted), rejected=int(r.n_rejected), time=t_run,
-            err_final=_rel(y_end - y_ref_end, y_ref_end),
-            err_dense=_rel(y_dense - y_ref_grid, y_ref_grid),
-            err_energy=float(np.max(np.abs(e - e[0])) / e_scale),
-            message=r.message,
-        )
-        if scipy:
-            say(f"{sc.name}: SciPy RK45 at {tol:g}")
-            t_sp, s = best_time(
-                lambda: solve_ivp(rhs, span, y0, method="RK45", rtol=tol, atol=tol),
-                scipy_repeats)
-            row.update(scipy_time=t_sp, scipy_nfev=int(s.nfev),
-                       scipy_err_final=_rel(s.y[:, -1] - y_ref_end, y_ref_end),
-                       speedup=t_sp / t_run)
-        if rk4:
-            say(f"{sc.name}: RK4 with {r.nfev} evaluations")
-            row.update(_rk4_row(rhs, span, y0, r.nfev, ref, total_energy, e_scale))
-        out.rows.append(row)
-    return out
+        return out
 
 
 def write_csv(results: Sequence[WorkPrecision], path: str | os.PathLike) -> None:

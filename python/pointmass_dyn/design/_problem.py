@@ -119,6 +119,21 @@ class _Variables:
         return sl
 
 
+def _link_mass_arg(link_mass) -> tuple[float, float]:
+    """``(low, high)``, factors ``0 < low <= high`` (``high`` may be inf), checked whether or not a link
+    uses them (a wrong value is a mistake either way)."""
+    try:
+        lo, hi = (float(f) for f in link_mass)
+    except (TypeError, ValueError):
+        lo = hi = float("nan")
+    if not (np.isfinite(lo) and not np.isnan(hi) and 0.0 < lo <= hi):
+        raise InvalidInputError(
+            f"link_mass: expected factors (low, high), 0 < low <= high, low finite (high may "
+            f"be inf), got {link_mass!r}"
+        )
+    return lo, hi
+
+
 def _collect(model, links, counterweights, link_mass) -> _Variables:
     var = _Variables(model)
     for item in links:
@@ -148,9 +163,7 @@ def _collect(model, links, counterweights, link_mass) -> _Variables:
             pos = np.asarray(pm.positions, float)
             sl = var.add("points", name, link, None, _moments(pos), np.zeros(7), np.full(7, np.inf))
             var.replaced.add(link)
-            lo, hi = (float(f) for f in link_mass)
-            if not 0.0 < lo <= hi:
-                raise InvalidInputError(f"link_mass: expected factors 0 < low <= high, got {link_mass}")
+            lo, hi = link_mass
             m0 = model.body(name).mass
             var.groups.append((list(range(sl.start, sl.stop)), lo * m0, hi * m0))
     for k, cw in enumerate(counterweights):
@@ -278,6 +291,9 @@ def balance(
     names = set(objective) | set(limits) | set(zero)
     if zero and "mass" in zero:
         raise InvalidInputError("zero: the design mass cannot be zero; give a limit instead")
+    if not isinstance(least_mass, (bool, np.bool_)):
+        raise InvalidInputError(f"least_mass: expected True or False, got {least_mass!r}")
+    link_mass = _link_mass_arg(link_mass)
     var = _collect(model, list(links), list(counterweights), link_mass)
     actuated = motion.actuated if motion.actuated is not None else list(range(model.nv))
     say("maps along the motion")

@@ -14,13 +14,14 @@ mass (gravity excluded: the weight is steady and reported apart).
 
 from __future__ import annotations
 
+from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
 
 from .. import _core
-from .._helpers import peak, rms, sample_count, scene_gravity
+from .._helpers import attach_partial, peak, rms, sample_count, scene_gravity, stop_reason
 from ..errors import InvalidInputError
 
 
@@ -97,7 +98,13 @@ class MotionAnalysis:
     ``tau`` (N, nv): the driving forces (nonzero at the actuated coordinates only, for a
     mechanism with loops); ``bearing`` (N, nlinks, 6): each joint's ``[force; moment]`` on its
     link at the link origin, link axes; ``cut`` (N, nloops, 6): each cut joint's wrench
-    (frame a axes, as ``constraint_forces``); ``shaking``: force and moment."""
+    (frame a axes, as ``constraint_forces``); ``shaking``: force and moment.
+
+    A run that stopped (Ctrl-C, a ``progress`` callback that raised, an instant that could
+    not be closed) raises with the instants done so far attached to the exception as
+    ``.result``: a ``MotionAnalysis`` with ``success=False``, ``t_reached`` (the time of the
+    last instant analysed; None for none) and ``message`` (how many instants of how many,
+    and why it stopped)."""
 
     model: Any
     t: np.ndarray
@@ -112,6 +119,9 @@ class MotionAnalysis:
     gravity: np.ndarray | None
     input: np.ndarray | None = None
     input_name: str | None = None
+    success: bool = True
+    t_reached: float | None = None
+    message: str = "complete"
 
     def summary(self) -> dict[str, dict[str, float]]:
         """RMS and peak of the shaking force and moment, the driving force(s) and each
@@ -152,45 +162,84 @@ def analyze_motion(
 ) -> MotionAnalysis:
     """Driving forces, bearing forces and shaking along given states (N, nq), (N, nv), (N, nv)
     at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``).
-    ``progress(done, N)``, if given, is called as the states are analysed."""
+    ``progress(done, N)``, if given, is called as the states are analysed. A run that stops
+    (Ctrl-C, ``progress`` raising) raises with the states analysed so far as the exception's
+    ``.result`` (a :class:`MotionAnalysis` with ``success=False``, ``t_reached``,
+    ``message``)."""
     t, q, v, a = _state_rows(model, t, q, v, a)
     report = _reporter(progress, len(t))
-    g = None if gravity is None else np.asarray(gravity, dtype=float)
-    act = None if model.nloops == 0 else actuated
-    actuated_idx = None if act is None else _actuated_indices(model, act)
-    tau, bearing, cut = [], [], []
-    for k, (qk, vk, ak) in enumerate(zip(q, v, a)):
-        report(k)
-        b = model.bearing_forces(qk, vk, ak, gravity=g, actuated=act)
-        tau.append(b["tau"])
-        bearing.append(b["joints"])
-        cut.append(b["loops"])
-    sh = shaking(model, q, v, a, about=about, gravity=g)
-    report(len(t))
-    return MotionAnalysis(
-        model=model,
-        t=t,
-        q=q,
-        v=v,
-        a=a,
-        tau=np.array(tau).reshape(len(t), model.nv),
-        bearing=np.array(bearing).reshape(len(t), model.nlinks, 6),
-        cut=np.array(cut).reshape(len(t), model.nloops, 6),
-        shaking=sh,
-        actuated=actuated_idx,
-        gravity=g,
-    )
+    rows = _Rows(model, actuated, gravity, about, len(t))
+    with rows.keeping_partial():
+        for k, (tk, qk, vk, ak) in enumerate(zip(t, q, v, a)):
+            report(k)
+            rows.add(tk, qk, vk, ak)
+        report(len(t))
+    return rows.analysis()
+
+
+class _Rows:
+    """The instants analysed so far (kept when a run stops: :meth:`keeping_partial`)."""
+
+    def __init__(self, model, actuated, gravity, about, total: int, driver=None):
+        self.model, self.about, self.total, self.driver = model, about, total, driver
+        self.g = None if gravity is None else np.asarray(gravity, dtype=float)
+        self.act = None if model.nloops == 0 else actuated
+        self.actuated = None if self.act is None else _actuated_indices(model, self.act)
+        self.t, self.q, self.v, self.a, self.tau, self.bearing, self.cut = ([] for _ in range(7))
+
+    def add(self, t, q, v, a) -> None:
+        b = self.model.bearing_forces(q, v, a, gravity=self.g, actuated=self.act)
+        for out, x in zip((self.t, self.q, self.v, self.a, self.tau, self.bearing, self.cut),
+                          (t, q, v, a, b["tau"], b["joints"], b["loops"])):
+            out.append(x)
+
+    def analysis(self, stopped: BaseException | None = None) -> MotionAnalysis:
+        m, n = self.model, len(self.t)
+        t = np.array(self.t, dtype=float).reshape(n)
+        q, v, a = (np.array(x, dtype=float).reshape(n, w)
+                   for x, w in ((self.q, m.nq), (self.v, m.nv), (self.a, m.nv)))
+        out = MotionAnalysis(
+            model=m, t=t, q=q, v=v, a=a,
+            tau=np.array(self.tau).reshape(n, m.nv),
+            bearing=np.array(self.bearing).reshape(n, m.nlinks, 6),
+            cut=np.array(self.cut).reshape(n, m.nloops, 6),
+            shaking=shaking(m, q, v, a, about=self.about, gravity=self.g),
+            actuated=self.actuated, gravity=self.g,
+            t_reached=float(t[-1]) if n else None,
+        )
+        if self.driver is not None:
+            out.input, out.input_name = self.driver[0][:n], self.driver[1]
+        if stopped is not None:
+            out.success = False
+            out.message = (f"stopped after {n} of {self.total} instants"
+                           + (f" (t = {t[-1]:.6g} s)" if n else "") + f": {stop_reason(stopped)}")
+        return out
+
+    @contextmanager
+    def keeping_partial(self):
+        """Any exception inside (Ctrl-C included) leaves with the instants done as its
+        ``.result``."""
+        try:
+            yield
+        except BaseException as exc:
+            try:
+                partial = self.analysis(stopped=exc)
+            except Exception:  # nothing to keep: the original exception says why
+                raise exc from None
+            attach_partial(exc, partial, f"pointmass_dyn: {partial.message}; the instants "
+                           "analysed are in this exception's .result")
+            raise
 
 
 def _reporter(progress, total: int, scale: int = 1):
-    """``report(k)``: calls ``progress(k, scale * total)`` every 64th state and at the end
-    (a callback per state would cost more than a short model's state)."""
+    """``report(k)``: calls ``progress(scale * k, scale * total)`` every 64th state and at
+    the end (a callback per state would cost more than a short model's state)."""
     if progress is None:
         return lambda k: None
 
     def report(k: int) -> None:
         if k % 64 == 0 or k == total:
-            progress(k, scale * total)
+            progress(scale * k, scale * total)
 
     return report
 
@@ -297,8 +346,12 @@ def prescribed_motion(
     ``q0``), so the mechanism stays on one assembly branch. Freedoms the driver leaves
     (the idle spin of an RSSR's coupler) take minimum-norm speeds and the accelerations the
     dynamics gives them. Returns a :class:`MotionAnalysis`. ``progress(done, 2 N)``, if given,
-    is called as the N instants are closed, then analysed (long runs show it; Ctrl-C stops
-    them)."""
+    is called as the N instants are closed and analysed (two steps each; long runs show it).
+
+    Ctrl-C, a ``progress`` callback that raises, or an instant that cannot be closed stops
+    the run: the exception propagates as itself with the instants done so far attached as
+    ``.result`` (a :class:`MotionAnalysis` with ``success=False``, ``t_reached`` the last
+    instant's time and ``message`` saying how many instants of how many and why)."""
     name, iq, iv = _driver_slot(model, driver)
     kind = model.body_info(model.body_names.index(name))[1]
     if input is None and kind != "Revolute":
@@ -331,9 +384,6 @@ def prescribed_motion(
         rate = np.full(samples, float(speed))
         acc = np.zeros(samples)
     n = len(t)
-    q = np.empty((n, model.nq))
-    v = np.empty((n, model.nv))
-    a = np.empty((n, model.nv))
     guess = q0
     loops = model.nloops > 0
     # Freedoms the driver does not set (an RSSR coupler's spin about its own axis) move as
@@ -349,36 +399,45 @@ def prescribed_motion(
     )
     g = None if gravity is None else np.asarray(gravity, dtype=float)
     report = _reporter(progress, n, scale=2)
-    for k in range(n):
-        report(k)
-        guess = guess.copy()
-        guess[iq] = pos[k]
-        vk = np.zeros(model.nv)
-        vk[iv] = rate[k]
-        ak = np.zeros(model.nv)
-        ak[iv] = acc[k]
-        if loops:
-            guess = model.assemble(guess, fixed=[name])
-            vk = model.assemble_velocity(guess, vk, fixed=[name])
-            if idle:
-                zero = np.zeros(model.nv)
-                a0 = model.forward_dynamics(guess, vk, zero, gravity=g)
-                unit = zero.copy()
-                unit[iv] = 1.0
-                per_unit = model.forward_dynamics(guess, vk, unit, gravity=g) - a0
-                ak = a0 + per_unit * ((acc[k] - a0[iv]) / per_unit[iv])
-                ak[iv] = acc[k]
-            else:
-                ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
-        elif model.nv != 1:
-            raise InvalidInputError(
-                f"driver: a model without loops moves with one input only if it has one degree "
-                f"of freedom (this one has nv = {model.nv}); give every coordinate's motion to "
-                f"analyze_motion instead"
-            )
-        q[k], v[k], a[k] = guess, vk, ak
-    after = None if progress is None else (lambda k, _n: progress(n + k, 2 * n))
-    out = analyze_motion(model, t, q, v, a, actuated=[name], gravity=gravity, about=about,
-                         progress=after)
-    out.input, out.input_name = pos, name
-    return out
+    rows = _Rows(model, [name], gravity, about, n, driver=(pos, name))
+    with rows.keeping_partial():
+        for k in range(n):
+            report(k)
+            guess, vk, ak = _closed_instant(model, name, (iq, iv), guess, (pos[k], rate[k], acc[k]),
+                                            loops, idle, g)
+            rows.add(t[k], guess, vk, ak)
+        report(n)
+    return rows.analysis()
+
+
+def _closed_instant(model, name, slot, guess, driven, loops, idle, g):
+    """The state ``(q, v, a)`` of one instant with the driver (q and v index ``slot``) at
+    ``driven = (position, rate, acceleration)``, closed from ``guess`` (see
+    :func:`prescribed_motion`)."""
+    (iq, iv), (pos, rate, acc) = slot, driven
+    guess = guess.copy()
+    guess[iq] = pos
+    vk = np.zeros(model.nv)
+    vk[iv] = rate
+    ak = np.zeros(model.nv)
+    ak[iv] = acc
+    if loops:
+        guess = model.assemble(guess, fixed=[name])
+        vk = model.assemble_velocity(guess, vk, fixed=[name])
+        if idle:
+            zero = np.zeros(model.nv)
+            a0 = model.forward_dynamics(guess, vk, zero, gravity=g)
+            unit = zero.copy()
+            unit[iv] = 1.0
+            per_unit = model.forward_dynamics(guess, vk, unit, gravity=g) - a0
+            ak = a0 + per_unit * ((acc - a0[iv]) / per_unit[iv])
+            ak[iv] = acc
+        else:
+            ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
+    elif model.nv != 1:
+        raise InvalidInputError(
+            f"driver: a model without loops moves with one input only if it has one degree "
+            f"of freedom (this one has nv = {model.nv}); give every coordinate's motion to "
+            f"analyze_motion instead"
+        )
+    return guess, vk, ak

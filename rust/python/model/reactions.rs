@@ -5,9 +5,9 @@ use pyo3::types::PyDict;
 
 use super::{external_wrenches, gravity_arg, PyModel};
 use crate::python::convert::{to_array, to_array1, vec3};
-use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::errors::{check_result, invalid, to_py, IntoPyResult};
 use crate::python::loops::loop_actuation;
-use crate::python::signals::detach_interruptible;
+use crate::python::signals::{detach_watched, stopped_with_partial};
 use crate::reactions;
 use crate::recursive;
 use crate::spatial::Vec3;
@@ -57,6 +57,8 @@ impl PyModel {
     /// the joint forces that a unit mass at the point needs. `points`: None for every link's
     /// seven point masses (P = 7 n, link by link), or `[(body, [x, y, z]), ...]` points given in
     /// their bodies' frames. q (N, nq), v and a (N, nv), or one state (then N is dropped).
+    /// Ctrl-C stops it: the `KeyboardInterrupt` carries the states done as `.result`, this
+    /// dict cut to them, with `states` (how many of N) and `message`.
     #[pyo3(signature = (q, v, a, points=None, gravity=None))]
     fn point_regressor<'py>(
         &self,
@@ -87,9 +89,17 @@ impl PyModel {
             v: &vs,
             a: &accs,
         };
-        let out =
-            detach_interruptible(py, || reactions::point_regressor(&model, &states, &pts, &g))?;
-        let (pos, acc, gen) = (out.positions, out.accelerations, out.generalized);
+        let (done, raised) =
+            detach_watched(py, || reactions::point_regressor(&model, &states, &pts, &g));
+        let reactions::Rows {
+            value,
+            rows: reached,
+            stopped,
+        } = match done {
+            Ok(done) => done,
+            Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
+        };
+        let (pos, acc, gen) = (value.positions, value.accelerations, value.generalized);
         for (k, x) in [
             ("positions", &pos),
             ("accelerations", &acc),
@@ -97,17 +107,30 @@ impl PyModel {
         ] {
             check_result(py, &format!("point_regressor['{k}']"), x)?;
         }
-        let lead: Vec<usize> = count.into_iter().collect();
+        let lead: Vec<usize> = count.map(|_| reached).into_iter().collect();
         let shape = |tail: &[usize]| [lead.as_slice(), tail].concat();
         let d = PyDict::new(py);
         d.set_item("positions", to_array(py, pos, &shape(&[np, 3]))?)?;
         d.set_item("accelerations", to_array(py, acc, &shape(&[np, 3]))?)?;
         d.set_item("generalized", to_array(py, gen, &shape(&[np, nv]))?)?;
-        Ok(d)
+        match stopped {
+            None => Ok(d),
+            Some(why) => Err(partial_rows(
+                py,
+                &d,
+                "point_regressor",
+                reached,
+                rows,
+                raised,
+                why,
+            )),
+        }
     }
 
     /// Shaking force and moment about `about` at one state (q (nq,), v, a (nv,)) or at N
-    /// (q (N, nq), v, a (N, nv)): `(force, moment)`, each (3,) or (N, 3).
+    /// (q (N, nq), v, a (N, nv)): `(force, moment)`, each (3,) or (N, 3). Ctrl-C stops it:
+    /// the `KeyboardInterrupt` carries the states done as `.result`, a dict with `force`,
+    /// `moment` (states done, 3), `states` (how many of N) and `message`.
     #[pyo3(signature = (q, v, a, about=None))]
     fn shaking<'py>(
         &self,
@@ -133,15 +156,26 @@ impl PyModel {
             v: &vs,
             a: &accs,
         };
-        let (force, moment) =
-            detach_interruptible(py, || reactions::shaking_of_states(&model, &states, &about))?;
+        let (done, raised) =
+            detach_watched(py, || reactions::shaking_of_states(&model, &states, &about));
+        let (force, moment) = done.value;
         check_result(py, "shaking", &force)?;
         check_result(py, "shaking", &moment)?;
         let shape: Vec<usize> = match count {
-            Some(n) => vec![n, 3],
+            Some(_) => vec![done.rows, 3],
             None => vec![3],
         };
-        Ok((to_array(py, force, &shape)?, to_array(py, moment, &shape)?))
+        let (force, moment) = (to_array(py, force, &shape)?, to_array(py, moment, &shape)?);
+        match done.stopped {
+            None => Ok((force, moment)),
+            Some(why) => {
+                let d = PyDict::new(py);
+                d.set_item("force", force)?;
+                d.set_item("moment", moment)?;
+                let n = count.unwrap_or(1);
+                Err(partial_rows(py, &d, "shaking", done.rows, n, raised, why))
+            }
+        }
     }
 
     /// The wrench every joint transmits at `(q, v, a)`: dict with `joints` (nlinks, 6),
@@ -195,4 +229,22 @@ impl PyModel {
         d.set_item("tau", to_array1(py, &out.tau))?;
         Ok(d)
     }
+}
+
+/// The exception of a computation over `total` states stopped after `reached`: `partial`
+/// (completed with `states` and `message`) attached as `.result`.
+fn partial_rows(
+    py: Python<'_>,
+    partial: &Bound<'_, PyDict>,
+    what: &str,
+    reached: usize,
+    total: usize,
+    raised: Option<PyErr>,
+    why: crate::error::Error,
+) -> PyErr {
+    let message = format!("{what} stopped after {reached} of {total} states: interrupted");
+    let _ = partial.set_item("states", reached);
+    let _ = partial.set_item("message", &message);
+    let note = format!("{message}; the states done are in this exception's .result");
+    stopped_with_partial(py, raised, why, partial.as_any(), &note)
 }
