@@ -347,3 +347,87 @@ def test_an_empty_loop_name_is_refused(fourbar):
     assert m.nloops == 0
     m.add_loop("b", -1, pmd.Revolute([0, 0, 1]), translation_a=[1, 0, 0], translation_b=[1, 0, 0])
     assert m.nloops == 1 and m.loop_names[0]
+
+
+# --------------------------------------------------------------------------------------------
+# Found by tests/test_fuzz_api_wave.py (this round's fuzzing of the newer entry points).
+# --------------------------------------------------------------------------------------------
+@pytest.mark.filterwarnings("error::numpy.exceptions.ComplexWarning")
+def test_counterweight_ring_checks_its_centre_radius_and_normal():
+    # A string centre was a builtin ValueError, a complex one lost its imaginary part, a
+    # radius of NaN gave NaN candidates, a normal of 1e300 overflowed its norm.
+    ring = pmd.Counterweight.ring
+    for center in ("", [0, 0], [0, 0, np.nan], [0j, 1j, 0]):
+        with pytest.raises(InvalidInputError, match="center: expected a finite"):
+            ring("crank", center, 0.02, 4)
+    for radius in (np.nan, -0.01, 0.0, "0.02", np.inf):
+        with pytest.raises(InvalidInputError, match="radius: expected a finite number > 0"):
+            ring("crank", [0, 0, 0], radius, 4)
+    for normal in ("", [1j, 0, 1], [0, 0, 0]):
+        with pytest.raises(InvalidInputError, match="normal: expected a finite non-zero"):
+            ring("crank", [0, 0, 0], 0.02, 4, normal=normal)
+    big = ring("crank", [0, 0, 0], 0.02, 4, normal=[0, 0, 1e300])
+    flat = ring("crank", [0, 0, 0], 0.02, 4, normal=[0, 0, 1])
+    np.testing.assert_allclose(big.points, flat.points, rtol=0, atol=1e-15)
+
+
+def test_balance_objective_and_limits_must_be_dicts(motion):
+    ring = [pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8)]
+    # dict("0.3") was a builtin ValueError.
+    for arg in ("objective", "limits"):
+        with pytest.raises(InvalidInputError, match=f"{arg}: expected None or a dict"):
+            pmd.balance(motion, counterweights=ring, **{arg: "0.3"})
+
+
+def test_link_shape_envelopes_of_strings_are_refused(fourbar):
+    # np.asarray("", float): a builtin ValueError from LinkShape.cells.
+    with pytest.raises(InvalidInputError, match=r"box: expected \(lower, upper\) corners"):
+        pmd.LinkShape("crank", box="", cell=0.01).cells(fourbar.model)
+    with pytest.raises(InvalidInputError, match="polygon: expected"):
+        pmd.LinkShape("crank", polygon="ab", z=(0, 1), cell=0.01).cells(fourbar.model)
+
+
+@pytest.mark.filterwarnings("error::numpy.exceptions.ComplexWarning")
+def test_contact_forces_refuses_states_it_cannot_read():
+    scene = _contact_ball()
+    bad = [
+        (np.array([[""]]), np.zeros((1, 1)), "result: expected a result with numeric q"),
+        (np.array([[0.1 + 1j]]), np.zeros((1, 1)), "result: expected real q and v"),
+    ]
+    for q, v, message in bad:
+        with pytest.raises(InvalidInputError, match=message):
+            pmd.contact_forces(scene, type("R", (), {"q": q, "v": v}))
+
+
+def test_contact_forces_at_a_zero_quaternion_or_an_overflowing_law_are_refused():
+    # NaN positions for a zero quaternion; inf forces for a damping of 3e307 (both silent).
+    m = pmd.Model()
+    m.add_body(pmd.RigidBody(1.0, [0, 0, 0], np.eye(3) * 0.01), pmd.Spherical(), name="ball")
+    contact = pmd.GroundContact([("ball", [0, 0, -0.1], 0.05)], stiffness=1e3, damping=3e307,
+                                friction=0.0)
+    scene = pmd.Scene(m, effects=[contact])
+
+    class State:
+        q = np.zeros((1, 4))
+        v = np.zeros((1, 3))
+
+    with pytest.raises(InvalidInputError, match=r"q \(state 0\): expected a quaternion"):
+        pmd.contact_forces(scene, State)
+    # A point 1.05 m deep moving into the ground at 10 m/s: c δ^e v overflows.
+    State.q = np.array([[0.0, 0.0, 0.0, 1.0]])
+    State.v = np.array([[0.0, 100.0, 0.0]])
+    contact_low = pmd.GroundContact([("ball", [0.1, 0, 0], 0.05)], stiffness=1e3, damping=3e307,
+                                    friction=0.0, height=1.0)
+    with pytest.raises(pmd.errors.NumericalError, match=r"contact_state\['.*'\]: the result is not finite"):
+        pmd.contact_forces(pmd.Scene(m, effects=[contact_low]), State)
+
+
+def test_urdf_contact_spheres_of_nan_or_inf_are_refused(tmp_path):
+    # float("inf") read a sphere of infinite radius, returned as it was.
+    for radius, xyz in (("inf", "0 0 0"), ("nan", "0 0 0"), ("-0.1", "0 0 0"), ("0.1", "nan 0 0")):
+        path = tmp_path / "r.urdf"
+        path.write_text(
+            f'<robot name="r"><link name="a"><collision><origin xyz="{xyz}"/><geometry>'
+            f'<sphere radius="{radius}"/></geometry></collision></link></robot>')
+        with pytest.raises(InvalidInputError, match="expected a finite <origin xyz> and a finite"):
+            pmd.urdf_contact_points(path, ["a"])

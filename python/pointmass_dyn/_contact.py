@@ -123,6 +123,12 @@ def urdf_contact_points(
                 raise InvalidInputError(
                     f"urdf: link '{name}' of {path}: expected <origin xyz> of three numbers, got {xyz}"
                 )
+            # float() reads "nan" and "inf": a sphere no contact can use.
+            if not (np.all(np.isfinite(xyz)) and np.isfinite(radius) and radius >= 0):
+                raise InvalidInputError(
+                    f"urdf: link '{name}' of {path}: expected a finite <origin xyz> and a finite "
+                    f"<sphere radius> >= 0, got xyz={xyz}, radius={radius}"
+                )
             spheres.append((name, xyz, radius))
         out.extend(spheres or [(name, [0.0, 0.0, 0.0], 0.0)])
     return out
@@ -151,8 +157,16 @@ def contact_forces(scene: Scene, result: Any) -> dict[str, ContactForces]:
     """Every ground contact of ``scene`` evaluated at the output states of ``result`` (its
     ``q`` and ``v``), by effect name. The contact force is a function of the state, so these
     are exact at the output times."""
-    q = np.atleast_2d(np.asarray(result.q, dtype=float))
-    v = np.atleast_2d(np.asarray(result.v, dtype=float))
+    if np.iscomplexobj(result.q) or np.iscomplexobj(result.v):  # NumPy would drop the imaginary part
+        raise InvalidInputError("result: expected real q and v, got complex values")
+    try:
+        q = np.atleast_2d(np.asarray(result.q, dtype=float))
+        v = np.atleast_2d(np.asarray(result.v, dtype=float))
+    except (TypeError, ValueError):  # NumPy's refusal of strings and ragged lists
+        raise InvalidInputError(
+            f"result: expected a result with numeric q (N, nq) and v (N, nv), got q = "
+            f"{result.q!r:.60}, v = {result.v!r:.60}"
+        ) from None
     model = scene.model
     out: dict[str, ContactForces] = {}
     for e in scene.effects:

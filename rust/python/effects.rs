@@ -527,7 +527,23 @@ impl PyEffect {
                 ));
             }
         }
+        // A finite state can still be none (a zero quaternion): as every model call checks it.
+        for k in 0..qs[0] {
+            let (q, v) = (&qv[k * m.nq..(k + 1) * m.nq], &vv[k * m.nv..(k + 1) * m.nv]);
+            m.check_state(q, Some(v))
+                .map_err(|e| e.map_arg(|a| format!("{a} (state {k})")))
+                .py(py)?;
+        }
         let s = c.states(&m, &qv, &vv).py(py)?;
+        // Finite states, but a law whose numbers overflow there (a damping of 1e307).
+        for (what, x) in [
+            ("position", &s.position),
+            ("penetration", &s.penetration),
+            ("normal_force", &s.normal_force),
+            ("force", &s.force),
+        ] {
+            super::errors::check_result(py, &format!("contact_state['{what}']"), x)?;
+        }
         let (n, np) = (qs[0], s.points);
         let d = pyo3::types::PyDict::new(py);
         let to = super::convert::to_array;

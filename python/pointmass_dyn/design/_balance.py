@@ -43,9 +43,17 @@ class Counterweight:
             raise InvalidInputError(
                 f"count: expected an integer number of candidates in [1, {MAX_RING_COUNT}], got {count!r}"
             )
-        n = np.asarray(normal, dtype=float)
-        if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.linalg.norm(n) > 0:
+        c = _vector(center, "center")
+        if isinstance(radius, bool) or not isinstance(radius, (int, float, np.integer, np.floating)) \
+                or not (np.isfinite(radius) and radius > 0):
+            raise InvalidInputError(f"radius: expected a finite number > 0 (m), got {radius!r}")
+        try:
+            n = np.zeros(0) if np.iscomplexobj(normal) else np.asarray(normal, dtype=float)
+        except (TypeError, ValueError):  # a string, a ragged list
+            n = np.zeros(0)
+        if n.shape != (3,) or not np.all(np.isfinite(n)) or not np.any(n != 0):
             raise InvalidInputError(f"normal: expected a finite non-zero (x, y, z), got {normal!r}")
+        n = n / np.max(np.abs(n))  # first, so a normal of 1e300 does not overflow the norm
         n = n / np.linalg.norm(n)
         u = np.cross(n, [1.0, 0.0, 0.0])
         if np.linalg.norm(u) < 1e-8:
@@ -53,10 +61,21 @@ class Counterweight:
         u /= np.linalg.norm(u)
         w = np.cross(n, u)
         ang = 2 * np.pi * np.arange(count) / count
-        pts = np.asarray(center, float) + radius * (
+        pts = c + float(radius) * (
             np.outer(np.cos(ang), u) + np.outer(np.sin(ang), w)
         )
         return Counterweight(body, pts, max_mass)
+
+
+def _vector(x, arg: str) -> np.ndarray:
+    """``x`` as a finite (x, y, z), or our error naming ``arg``."""
+    try:  # (complex values: NumPy would drop the imaginary part with only a warning)
+        v = None if np.iscomplexobj(x) else np.asarray(x, dtype=float)
+    except (TypeError, ValueError):
+        v = None
+    if v is None or v.shape != (3,) or not np.all(np.isfinite(v)):
+        raise InvalidInputError(f"{arg}: expected a finite (x, y, z) in the body frame, got {x!r}")
+    return v
 
 
 @dataclass

@@ -273,10 +273,11 @@ def balance(
     _check_progress(progress)
     say = progress or (lambda _s: None)
     model = motion.model
+    for arg, value in (("objective", objective), ("limits", limits)):
+        if value is not None and not isinstance(value, dict):  # dict("0.3") is a ValueError
+            raise InvalidInputError(f"{arg}: expected None or a dict by quantity, got {value!r}")
     objective = {"force": 1.0} if objective is None else dict(objective)
     limits = dict(limits or {})
-    if not isinstance(objective, dict):
-        raise InvalidInputError(f"objective: expected a dict of weights, got {objective!r}")
     for k, w in objective.items():
         _number(w, f"objective['{k}']")
     for k, v in limits.items():

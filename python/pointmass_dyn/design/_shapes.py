@@ -20,8 +20,16 @@ from .. import _core
 from ..errors import InvalidInputError
 
 
+def _numbers(value: Any, arg: str, expected: str) -> np.ndarray:
+    """``value`` as a float array, or our error naming ``arg`` (NumPy's is a ValueError)."""
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidInputError(f"{arg}: expected {expected}, got {value!r:.80}") from None
+
+
 def _box(value: Any, arg: str) -> np.ndarray:
-    b = np.asarray(value, dtype=float)
+    b = _numbers(value, arg, "(lower, upper) corners, two (x, y, z)")
     if b.shape != (2, 3) or not np.all(np.isfinite(b)):
         raise InvalidInputError(f"{arg}: expected (lower, upper) corners, two (x, y, z), got {value!r}")
     if np.any(b[1] <= b[0]):
@@ -88,8 +96,8 @@ class LinkShape:
         if self.box is not None:
             return {"box": _box(self.box, "box")}
         if self.polygon is not None:
-            poly = np.asarray(self.polygon, dtype=float)
-            z = np.asarray(self.z if self.z is not None else (), dtype=float)
+            poly = _numbers(self.polygon, "polygon", "(P, 2) vertices")
+            z = _numbers(self.z if self.z is not None else (), "z", "(low, high)")
             if poly.ndim != 2 or poly.shape[1] != 2 or z.shape != (2,):
                 raise InvalidInputError(
                     "polygon, z: expected (P, 2) vertices and z=(low, high), got "
