@@ -163,7 +163,8 @@ pub(super) fn set_outcome(
     d.set_item("n_accepted", n_accepted)?;
     d.set_item("n_rejected", n_rejected)?;
     d.set_item("status", status.code())?;
-    d.set_item("message", message)?;
+    // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
+    d.set_item("message", crate::error::compact_numbers(message))?;
     d.set_item("success", status.is_success())?;
     d.set_item("t_reached", t_reached)
 }
