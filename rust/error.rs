@@ -121,22 +121,23 @@ impl Error {
         expected: impl Into<String>,
         got: impl Into<String>,
     ) -> Self {
+        // Numbers printed with `{}` (1e-300 as 0.000…1) in exponent form, here once for all.
         Error::InvalidArgument {
             arg: arg.into(),
-            expected: expected.into(),
-            got: got.into(),
+            expected: compact_numbers(&expected.into()),
+            got: compact_numbers(&got.into()),
         }
     }
     pub fn inertia(arg: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::InvalidInertia {
             arg: arg.into(),
-            reason: reason.into(),
+            reason: compact_numbers(&reason.into()),
         }
     }
     pub fn model(arg: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::InvalidModel {
             arg: arg.into(),
-            reason: reason.into(),
+            reason: compact_numbers(&reason.into()),
         }
     }
     pub fn file(kind: FileKind, at: Location, message: impl Into<String>) -> Self {
@@ -287,8 +288,8 @@ pub fn num(x: f64) -> String {
 }
 
 /// `message` with every decimal number written with more than [`LONG_NUMBER`] digits (how
-/// `{}` prints an f64 such as 1e-300) rewritten as [`num`] does; what every error message
-/// passes through on its way to the caller.
+/// `{}` prints an f64 such as 1e-300) rewritten as [`num`] does: what the argument errors'
+/// constructors do with their text, and every message on its way to Python.
 pub fn compact_numbers(message: &str) -> String {
     let b = message.as_bytes();
     let mut out = String::with_capacity(message.len());
@@ -306,7 +307,9 @@ pub fn compact_numbers(message: &str) -> String {
             j += 1;
         }
         let digits = b[i..j].iter().filter(|c| c.is_ascii_digit()).count();
-        if digits > LONG_NUMBER {
+        // A number, not the start of a word or a hexadecimal digest.
+        let ends = j == b.len() || !(b[j].is_ascii_alphanumeric() || b[j] == b'_');
+        if digits > LONG_NUMBER && ends {
             if let Ok(x) = message[i..j].parse::<f64>() {
                 out.push_str(&message[copied..i]);
                 out.push_str(&num(x));
@@ -337,8 +340,15 @@ mod tests {
         );
         let plain = "q[12]: got 0.125 at index 3 of 18446744073709551615, v2 1e-300";
         assert_eq!(compact_numbers(plain), plain);
+        let digest = "checksum 12345678901234567890123456789abc differs";
+        assert_eq!(compact_numbers(digest), digest);
         assert_eq!(num(1e-320), "1e-320");
         assert_eq!(num(0.5), "0.5");
+        let e = Error::arg("mass", "a finite number > 0", format!("{}", -1e-300));
+        assert_eq!(
+            e.to_string(),
+            "mass: expected a finite number > 0, got -1e-300"
+        );
     }
 
     #[test]
