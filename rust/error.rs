@@ -276,6 +276,19 @@ pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
     }
 }
 
+/// A name given for a body, loop or coupling: None (one is generated) or not blank (a blank
+/// one would leave it unnamed in every listing and message).
+pub fn check_name(what: &str, name: Option<&str>) -> Result<()> {
+    match name {
+        Some(s) if s.trim().is_empty() => Err(Error::arg(
+            "name",
+            format!("a non-empty {what} name (or None for a generated one)"),
+            format!("{s:?}"),
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// `x` for a message: as Rust prints it for ordinary magnitudes, in exponent form
 /// (`1e-300`, `-2.5e300`) beyond them, where plain decimals run to hundreds of digits.
 pub fn num(x: f64) -> String {

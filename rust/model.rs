@@ -328,6 +328,7 @@ impl Model {
         if let Some(c) = &point_mass_center {
             check_finite("point_mass_center", c.as_slice())?;
         }
+        crate::error::check_name("body", name.as_deref())?;
         let name = name.unwrap_or_else(|| format!("body{index}"));
         if self.body_index(&name).is_some() {
             return Err(Error::model(

@@ -349,6 +349,21 @@ def test_an_empty_loop_name_is_refused(fourbar):
     assert m.nloops == 1 and m.loop_names[0]
 
 
+def test_empty_body_and_coupling_names_are_refused():
+    # Found by this round's probes: a body and a coupling named "" (unnamed in every listing).
+    m = pmd.Model()
+    body = pmd.RigidBody(1.0, [0.5, 0, 0], np.eye(3) * 0.01)
+    with pytest.raises(InvalidInputError, match="name: expected a non-empty body name"):
+        m.add_body(body, pmd.Revolute([0, 0, 1]), name="")
+    m.add_body(body, pmd.Revolute([0, 0, 1]), name="a")
+    m.add_body(body, pmd.Revolute([0, 0, 1]), parent="a", translation=[1, 0, 0], name="b")
+    with pytest.raises(InvalidInputError, match="name: expected a non-empty coupling name"):
+        m.add_coupling("b", "a", ratio=2.0, name=" ")
+    assert m.couplings == []
+    m.add_coupling("b", "a", ratio=2.0)
+    assert m.couplings[0][0]
+
+
 # --------------------------------------------------------------------------------------------
 # Found by tests/test_fuzz_api_wave.py (this round's fuzzing of the newer entry points).
 # --------------------------------------------------------------------------------------------

@@ -57,6 +57,7 @@ impl Model {
         offset: f64,
         name: Option<String>,
     ) -> Result<usize> {
+        crate::error::check_name("coupling", name.as_deref())?;
         let n = self.bodies.len();
         for (arg, b) in [("joint", joint), ("reference", reference)] {
             if b >= n {

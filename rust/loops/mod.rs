@@ -131,13 +131,7 @@ impl Model {
         frame_b: Placement,
         name: Option<String>,
     ) -> Result<usize> {
-        if name.as_deref().is_some_and(|s| s.trim().is_empty()) {
-            return Err(Error::arg(
-                "name",
-                "a non-empty loop name (or None for a generated one)",
-                format!("{:?}", name.unwrap_or_default()),
-            ));
-        }
+        crate::error::check_name("loop", name.as_deref())?;
         let n = self.bodies.len();
         for (arg, b) in [("body_a", body_a), ("body_b", body_b)] {
             if let Some(k) = b {
