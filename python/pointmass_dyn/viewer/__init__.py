@@ -14,6 +14,7 @@ from ._animation import AnimationInfo, animate, frame_times, prepare, sample
 from ._drawing import (
     BOX_EDGES,
     COLOURS,
+    CONTACT_SHARE,
     LAYERS,
     TRAIL_COLOURS,
     VIEWS,
@@ -28,11 +29,12 @@ from ._drawing import (
 from ._html import page, write_html
 from ._meshcat import show
 from ._meshes import inertia_box, visual_scene
-from ._video import figure, write_video
+from ._video import contact_segments, figure, write_video
 
 __all__ = [
     "BOX_EDGES",
     "COLOURS",
+    "CONTACT_SHARE",
     "LAYERS",
     "TRAIL_COLOURS",
     "VIEWS",
@@ -42,6 +44,7 @@ __all__ = [
     "box_corners",
     "build_drawing",
     "camera_at",
+    "contact_segments",
     "default_camera",
     "figure",
     "frame_times",
