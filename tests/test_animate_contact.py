@@ -143,6 +143,11 @@ def test_contact_arguments_are_checked(resting, tmp_path):
     sol = pmd.simulate(pend, (0.0, 0.1))
     with pytest.raises(InvalidInputError, match="contact: True needs.*Scene"):
         viewer.prepare(sol, pend, contact=True)
+    # A scene whose contact is switched off has none to draw.
+    off = pmd.Scene(scene.model, q0=scene.q0, effects=scene.effects, disable="contact")
+    assert viewer.has_contact(scene) and not viewer.has_contact(off)
+    with pytest.raises(InvalidInputError, match=r"contact: True needs.*not disabled"):
+        viewer.prepare(plain, off, contact=True)
     with pytest.raises(InvalidInputError, match="contact: expected None"):
         viewer.prepare(res, scene, contact="yes")
     for bad in (0, -1.0, float("nan"), "1", True):

@@ -11,7 +11,7 @@ import numpy as np
 from .._simulation import simulate
 from ..errors import InvalidInputError
 from ..scenes import load_scene
-from ..viewer import animate
+from ..viewer import animate, has_contact
 
 TRAIL_SPEC = "BODY[:X,Y,Z]"
 
@@ -109,8 +109,7 @@ def check_outputs(model, files, trails=None, size=None) -> None:
 def write(args, result, scene, path: str) -> None:
     """Writes the animation of ``result`` that ``args`` (``add_options``) describe."""
     # A scene with a ground contact: its forces at the frames' states (False: none).
-    contact = (False if args.no_contact_forces
-               else any(e.kind == "contact" for e in scene.effects) or None)
+    contact = False if args.no_contact_forces else has_contact(scene) or None
     info = animate(result, scene, path, fps=args.fps, frames=args.frames,
                    duration=args.duration, size=_size(args.size), trails=_trails(args.trail),
                    shaking=args.shaking, contact=contact, contact_scale=args.contact_scale)

@@ -10,7 +10,7 @@ A model's visual geometry (``Model.visuals``: URDF ``<visual>``, MJCF geoms) is 
 triangles (:func:`visual_scene`; mesh files need the extra ``pointmass-dyn[mesh]``).
 """
 
-from ._animation import AnimationInfo, animate, frame_times, prepare, sample
+from ._animation import AnimationInfo, animate, frame_times, has_contact, prepare, sample
 from ._drawing import (
     BOX_EDGES,
     COLOURS,
@@ -48,6 +48,7 @@ __all__ = [
     "default_camera",
     "figure",
     "frame_times",
+    "has_contact",
     "inertia_box",
     "page",
     "prepare",

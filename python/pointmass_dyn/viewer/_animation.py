@@ -201,6 +201,14 @@ def prepare(
                          contact_scale=contact_scale)
 
 
+def has_contact(scene) -> bool:
+    """Whether ``scene`` (a Scene or None) has a ground contact its runs feel (not switched
+    off by ``[simulate] disable``)."""
+    if not isinstance(scene, _core.Scene) or "contact" in (scene.disable or ()):
+        return False
+    return any(e.kind == "contact" for e in scene.effects)
+
+
 def _contact(result, scene, contact, t, times, qf, v):
     """The contact points and forces ``(position, force)`` (F, K, 3) at the frame times, or
     None. ``contact``: None draws the result's ``.contact`` (``simulate(..., contact=True)``)
@@ -233,10 +241,10 @@ def _contact(result, scene, contact, t, times, qf, v):
         return both[:, :n], both[:, n:]
     if contact is not True:
         return None
-    if scene is None or not any(e.kind == "contact" for e in scene.effects) or v is None:
+    if not has_contact(scene) or v is None:
         raise InvalidInputError(
             "contact: True needs contact forces on the result (simulate(..., contact=True)) "
-            "or the Scene with a ground contact and the result's speeds v, got "
+            "or the Scene with a ground contact (not disabled) and the result's speeds v, got "
             f"{'a Model' if scene is None else 'a Scene'} and a result without them")
     frames = contact_forces(scene, _Sampled(times, qf, sample(t, v, times)))
     return (np.concatenate([c.position for c in frames.values()], axis=1),
