@@ -151,12 +151,14 @@ def analyze_motion(
     progress: Callable[[int, int], Any] | None = None,
 ) -> MotionAnalysis:
     """Driving forces, bearing forces and shaking along given states (N, nq), (N, nv), (N, nv)
-    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``).
+    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``); a
+    model with joint couplings only takes it too (the driven joints' forces, the coupled
+    joints held by their couplings), else each joint's own force.
     ``progress(done, N)``, if given, is called as the states are analysed."""
     t, q, v, a = _state_rows(model, t, q, v, a)
     report = _reporter(progress, len(t))
     g = None if gravity is None else np.asarray(gravity, dtype=float)
-    act = None if model.nloops == 0 else actuated
+    act = actuated if model.nloops or model.ncouplings else None
     actuated_idx = None if act is None else _actuated_indices(model, act)
     tau, bearing, cut = [], [], []
     for k, (qk, vk, ak) in enumerate(zip(q, v, a)):
@@ -335,7 +337,7 @@ def prescribed_motion(
     v = np.empty((n, model.nv))
     a = np.empty((n, model.nv))
     guess = q0
-    loops = model.nloops > 0
+    loops = model.nloops > 0 or model.ncouplings > 0  # constrained: closed at each instant
     # Freedoms the driver does not set (an RSSR coupler's spin about its own axis) move as
     # the dynamics says: their speeds are taken at minimum norm, their accelerations from
     # forward dynamics under the driver force that gives the prescribed acceleration.
@@ -372,9 +374,9 @@ def prescribed_motion(
                 ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
         elif model.nv != 1:
             raise InvalidInputError(
-                f"driver: a model without loops moves with one input only if it has one degree "
-                f"of freedom (this one has nv = {model.nv}); give every coordinate's motion to "
-                f"analyze_motion instead"
+                f"driver: a model without loops or couplings moves with one input only if it "
+                f"has one degree of freedom (this one has nv = {model.nv}); give every "
+                f"coordinate's motion to analyze_motion instead"
             )
         q[k], v[k], a[k] = guess, vk, ak
     after = None if progress is None else (lambda k, _n: progress(n + k, 2 * n))
