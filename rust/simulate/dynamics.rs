@@ -301,7 +301,7 @@ impl OdeSystem for Dynamics<'_> {
 
     /// With loops: the error estimate's part along the manifolds, `P(y + err) − y` (the
     /// accepted state is projected, so the estimate's components across the manifolds are
-    /// not errors the step keeps; docs/mechanisms.md §4). Left as it is when the projection
+    /// not errors the step keeps; docs/mechanisms.md §6). Left as it is when the projection
     /// fails (an estimate too large to matter: the step is rejected either way).
     fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
         let Some(solver) = self.loops.as_mut() else {
