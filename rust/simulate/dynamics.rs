@@ -32,7 +32,7 @@ pub struct Dynamics<'a> {
     /// its first call).
     chain: Option<Box<(Vec<f64>, Vec<f64>)>>,
     /// With loops: a second state-sized buffer (`P(y)` in `projection_derivative`).
-    tau_scratch: Vec<f64>,
+    stage_base: Vec<f64>,
 }
 
 /// The effects' view of the state `(t, q, v)`.
@@ -77,7 +77,7 @@ impl<'a> Dynamics<'a> {
             } else {
                 vec![0.0; model.nq + model.nv]
             },
-            tau_scratch: if !model.has_constraints() {
+            stage_base: if !model.has_constraints() {
                 Vec::new()
             } else {
                 vec![0.0; model.nq + model.nv]
@@ -193,7 +193,7 @@ impl Dynamics<'_> {
         };
         let drift = solver.max_drift;
         let mut buf = std::mem::take(&mut self.stage);
-        let mut base = std::mem::take(&mut self.tau_scratch);
+        let mut base = std::mem::take(&mut self.stage_base);
         let project = |x: &mut [f64], solver: &mut LoopSolver| {
             model.normalize(&mut x[..model.nq]);
             loops::project_state(model, solver, x).is_ok() && x.iter().all(|v| v.is_finite())
@@ -214,7 +214,7 @@ impl Dynamics<'_> {
         }
         solver.max_drift = drift;
         self.stage = buf;
-        self.tau_scratch = base;
+        self.stage_base = base;
         ok
     }
 }
