@@ -133,7 +133,7 @@ fn in_polygon(poly: &[[f64; 2]], x: f64, y: f64, slack: f64) -> bool {
 /// Parity of a ray's crossings with the mesh (Möller–Trumbore), along a direction no
 /// axis-aligned face or edge of a voxel grid shares.
 fn in_mesh(triangles: &[[Vec3; 3]], p: &Vec3) -> bool {
-    let dir = Vec3::new(0.577_215_664_9, 0.301_029_995_6, 0.758_863_542_1).normalize();
+    let dir = Vec3::new(0.577_215_664_9, std::f64::consts::LOG10_2, 0.758_863_542_1).normalize();
     let mut crossings = 0usize;
     for t in triangles {
         let (e1, e2) = (t[1] - t[0], t[2] - t[0]);

@@ -108,7 +108,8 @@ fn basis() -> ([Vec3; NPARAM], SMatrix<f64, NPARAM, NPARAM>) {
     (pts, inv)
 }
 
-/// The loops' share of a change `δτ` of the tree's joint forces: `[S_a | Jᵀ] (τ_a, λ) = δτ`
+/// The constraints' (loops' and couplings') share of a change `δτ` of the tree's joint forces:
+/// `[S_a | Jᵀ] (τ_a, λ) = δτ`
 /// in the least-squares minimum-norm sense, then the cut wrenches' effect on every tree
 /// joint's force. Columns per unit `δτ`: `(τ_a (na × nv), cut forces (3 nloops × nv),
 /// bearing forces (3 nlinks × nv))`.
@@ -220,6 +221,11 @@ pub fn regressor(
             "none",
         ));
     }
+    // Loops, or couplings with some joints not driven (those follow through their
+    // couplings): the driving forces share δτ with the constraints. Couplings with every
+    // joint driven: each joint's own (tree) force, as `inverse_dynamics` without `actuated`.
+    let constrained =
+        !model.loops.is_empty() || (!model.couplings.is_empty() && actuated.len() < nv);
     let layout = Layout {
         nactuated: actuated.len(),
         nlinks: nl,
@@ -241,7 +247,7 @@ pub fn regressor(
             &a[k * nv..(k + 1) * nv],
         );
         link_accelerations(model, &mut ws, qk, vk, ak);
-        let loop_share = if model.loops.is_empty() {
+        let loop_share = if !constrained {
             None
         } else {
             Some(share.at(model, &ws, qk, actuated)?)

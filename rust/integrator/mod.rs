@@ -86,6 +86,20 @@ pub trait OdeSystem {
     fn position_rate(&mut self, _y: &[f64], _qdot: &mut [f64]) -> Result<bool, String> {
         Ok(false)
     }
+    /// Radau's error estimate `err` of a step from the accepted state `y`, reduced to the
+    /// part the step keeps: a system whose [`OdeSystem::project`] moves each accepted state
+    /// onto a manifold removes the estimate's components across it (the projection discards
+    /// them). Returns whether `err` was changed. Default: no-op (plain ODEs: SciPy's estimate).
+    fn filter_error(&mut self, _y: &[f64], _err: &mut [f64]) -> bool {
+        false
+    }
+    /// The Jacobian of the system as integrated when [`OdeSystem::rhs`] evaluates `f` at a
+    /// projection `P(y)` of the state: `jac ← jac · P′(y)` for the `jac` = `∂f/∂y` that
+    /// [`OdeSystem::jacobian`] filled (Radau's Newton matrices; finite differences see
+    /// `f ∘ P` already). Returns whether `jac` was changed. Default: no-op.
+    fn chain_projection(&mut self, _y: &[f64], _jac: &mut [f64]) -> bool {
+        false
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
@@ -107,6 +121,12 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
         (**self).position_rate(y, qdot)
     }
+    fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
+        (**self).filter_error(y, err)
+    }
+    fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
+        (**self).chain_projection(y, jac)
+    }
 }
 
 impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
@@ -127,6 +147,12 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     }
     fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
         (**self).position_rate(y, qdot)
+    }
+    fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
+        (**self).filter_error(y, err)
+    }
+    fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
+        (**self).chain_projection(y, jac)
     }
 }
 

@@ -267,6 +267,7 @@ impl<S: OdeSystem> Radau<S> {
                     .map_err(|m| jacobian_error(t0, m))?;
                 if has {
                     self.njev += 1;
+                    self.sys.chain_projection(&self.st.y, &mut self.jac);
                     self.check_jacobian()?;
                 } else {
                     self.jac_mode = JacMode::FiniteDifference;
@@ -289,6 +290,7 @@ impl<S: OdeSystem> Radau<S> {
                     .jacobian(t, &self.st.y, &mut self.jac)
                     .map_err(|m| jacobian_error(t, m))?;
                 if filled {
+                    self.sys.chain_projection(&self.st.y, &mut self.jac);
                     return self.check_jacobian();
                 }
                 // Not provided here (though it was at t0): differences this time.
@@ -610,6 +612,7 @@ impl<S: OdeSystem> Radau<S> {
             self.err[i] = self.st.f[i] + self.ze[i];
         }
         self.lu_real.solve(&mut self.err);
+        self.sys.filter_error(&self.st.y, &mut self.err);
         for i in 0..n {
             let (a, b) = (self.st.y[i].abs(), self.st.y_new[i].abs());
             self.scale[i] = self.st.atol[i] + a.max(b) * self.st.rtol[i];
@@ -687,6 +690,7 @@ impl<S: OdeSystem> Radau<S> {
             self.err[i] += self.ze[i];
         }
         self.lu_real.solve(&mut self.err);
+        self.sys.filter_error(&self.st.y, &mut self.err);
         Ok(rms((0..n).map(|i| self.err[i] / self.scale[i]), n))
     }
 

@@ -12,6 +12,7 @@ use crate::error::{Error, FileKind, Location, Result};
 use crate::model::Model;
 
 mod bodies;
+mod couplings;
 mod loops;
 
 /// Integrator settings a scene may carry; the caller's arguments override them.
@@ -74,6 +75,11 @@ struct SceneFile {
     /// Cut joints closing kinematic loops (`loops.rs`).
     #[serde(default, rename = "loop")]
     loops: Vec<loops::LoopFile>,
+    /// Joint couplings (`couplings.rs`): `joint`, `reference`, `ratio`, `offset`, `name`.
+    #[serde(default)]
+    coupling: Vec<toml::Table>,
+    /// Rotor inertia by joint or body name (`couplings.rs`).
+    armature: Option<toml::Table>,
     simulate: Option<SimulateFile>,
 }
 
@@ -104,6 +110,8 @@ struct BodyFile {
     point_mass_center: Option<[f64; 3]>,
     q0: Option<Vec<f64>>,
     v0: Option<Vec<f64>>,
+    /// Rotor inertia of the body's joint: one number or one per speed.
+    armature: Option<toml::Value>,
 }
 
 #[derive(Deserialize)]
@@ -169,6 +177,16 @@ impl Scene {
         let mut v0 = vec![0.0; model.nv];
         bodies::add_bodies(&ctx, &mut model, &sf.body, units, &mut q0, &mut v0)?;
         loops::add_loops(&ctx, &mut model, &sf.loops, units)?;
+        couplings::add_couplings(&ctx, &mut model, &urdf_joints, &sf.coupling, units)?;
+        for (k, b) in sf.body.iter().enumerate() {
+            if let (Some(value), Some(index)) = (&b.armature, model.body_index(&b.name)) {
+                let key = format!("body[{k}] ('{}').armature", b.name);
+                couplings::set_armature(&ctx, &mut model, index, &key, value)?;
+            }
+        }
+        if let Some(table) = &sf.armature {
+            couplings::set_armatures(&ctx, &mut model, &urdf_joints, table)?;
+        }
         if let Some(init) = &sf.initial {
             initial_state(&ctx, &model, init, units, &mut q0, &mut v0)?;
         }

@@ -87,3 +87,59 @@ fn errors_carry_their_location() {
         other => panic!("not a file error: {other}"),
     }
 }
+
+const GEARED: &str = r#"
+angles = "degrees"
+[[body]]
+name = "upper"
+joint = { type = "Revolute", axis = [0, 0, 1] }
+mass = 1.0
+inertia_diag = [0.01, 0.01, 0.01]
+armature = 0.05
+[[body]]
+name = "slider"
+parent = "upper"
+joint = { type = "Prismatic", axis = [1, 0, 0] }
+mass = 0.5
+inertia_diag = [0.01, 0.01, 0.01]
+[[coupling]]
+joint = "slider"
+reference = "upper"
+ratio = 0.001
+offset = 0.1
+[armature]
+slider = [0.2]
+"#;
+
+#[test]
+fn couplings_and_armature_in_file_units() {
+    let s = Scene::from_toml(GEARED, "g.toml").unwrap();
+    let c = &s.model.couplings[0];
+    // 1 mm per degree of the revolute reference: 0.001 · 180/π m per radian; the
+    // prismatic joint's offset is in metres.
+    assert!((c.ratio - 0.001 * 180.0 / std::f64::consts::PI).abs() < 1e-15);
+    assert_eq!(c.offset, 0.1);
+    assert_eq!(s.model.armature, vec![0.05, 0.2]);
+    // The initial state is put on the coupling.
+    assert!((s.q0[1] - c.ratio * s.q0[0] - 0.1).abs() < 1e-12);
+    for (from, to, key) in [
+        (
+            "ratio = 0.001",
+            "ratio = true",
+            "g.toml: coupling[0].ratio: expected a number",
+        ),
+        (
+            "slider = [0.2]",
+            "slider = -1",
+            "g.toml: armature.slider: expected finite numbers >= 0",
+        ),
+        (
+            "reference = \"upper\"",
+            "reference = \"world\"",
+            "g.toml: coupling[0].reference",
+        ),
+    ] {
+        let e = Scene::from_toml(&GEARED.replace(from, to), "g.toml").unwrap_err();
+        assert!(e.to_string().starts_with(key), "{e}");
+    }
+}

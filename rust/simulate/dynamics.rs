@@ -28,6 +28,11 @@ pub struct Dynamics<'a> {
     deriv: Option<Box<super::derivatives::DerivativeWork>>,
     /// With loops: the stage state projected onto the constraint manifolds (docs/mechanisms.md §3).
     stage: Vec<f64>,
+    /// With loops: `P′(y)` and a product buffer for [`OdeSystem::chain_projection`] (built on
+    /// its first call).
+    chain: Option<Box<(Vec<f64>, Vec<f64>)>>,
+    /// With loops: a second state-sized buffer (`P(y)` in `projection_derivative`).
+    stage_base: Vec<f64>,
 }
 
 /// The effects' view of the state `(t, q, v)`.
@@ -66,7 +71,13 @@ impl<'a> Dynamics<'a> {
                 .has_constraints()
                 .then(|| Box::new(LoopSolver::new(model))),
             deriv: None,
+            chain: None,
             stage: if !model.has_constraints() {
+                Vec::new()
+            } else {
+                vec![0.0; model.nq + model.nv]
+            },
+            stage_base: if !model.has_constraints() {
                 Vec::new()
             } else {
                 vec![0.0; model.nq + model.nv]
@@ -172,6 +183,42 @@ impl<'a> Dynamics<'a> {
     }
 }
 
+impl Dynamics<'_> {
+    /// `P′(y)` row-major into `pd` (`dim × dim`): column `k` is `(P(y + ε e_k) − P(y))/ε`
+    /// with `ε = √EPS · max(1, |y_k|)`. False (and `pd` meaningless) if a projection fails.
+    fn projection_derivative(&mut self, y: &[f64], pd: &mut [f64]) -> bool {
+        let (model, n) = (self.model, y.len());
+        let Some(solver) = self.loops.as_mut() else {
+            return false;
+        };
+        let drift = solver.max_drift;
+        let mut buf = std::mem::take(&mut self.stage);
+        let mut base = std::mem::take(&mut self.stage_base);
+        let project = |x: &mut [f64], solver: &mut LoopSolver| {
+            model.normalize(&mut x[..model.nq]);
+            loops::project_state(model, solver, x).is_ok() && x.iter().all(|v| v.is_finite())
+        };
+        base.copy_from_slice(y);
+        let mut ok = project(&mut base, solver);
+        for k in 0..n {
+            if !ok {
+                break;
+            }
+            let eps = f64::EPSILON.sqrt() * y[k].abs().max(1.0);
+            buf.copy_from_slice(y);
+            buf[k] += eps;
+            ok = project(&mut buf, solver);
+            for i in 0..n {
+                pd[i * n + k] = (buf[i] - base[i]) / eps;
+            }
+        }
+        solver.max_drift = drift;
+        self.stage = buf;
+        self.stage_base = base;
+        ok
+    }
+}
+
 /// With loops the right-hand side is evaluated at the stage's projection onto the position
 /// and velocity manifolds, `f(P(y))` (the index-3 information every stage keeps): the
 /// index-1 equations extended off the manifold keep `Φ(q)` at the stage's error `δ`, whose
@@ -256,6 +303,66 @@ impl OdeSystem for Dynamics<'_> {
         r
     }
 
+    /// With loops: the error estimate's part along the manifolds, `P(y + err) − y` (the
+    /// accepted state is projected, so the estimate's components across the manifolds are
+    /// not errors the step keeps; docs/mechanisms.md §6). Left as it is when the projection
+    /// fails (an estimate too large to matter: the step is rejected either way).
+    fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
+        let Some(solver) = self.loops.as_mut() else {
+            return false;
+        };
+        let nq = self.model.nq;
+        let mut buf = std::mem::take(&mut self.stage);
+        for ((b, a), e) in buf.iter_mut().zip(y).zip(err.iter()) {
+            *b = a + e;
+        }
+        self.model.normalize(&mut buf[..nq]);
+        let drift = solver.max_drift;
+        let ok = loops::project_state(self.model, solver, &mut buf).is_ok()
+            && buf.iter().all(|x| x.is_finite());
+        solver.max_drift = drift;
+        if ok {
+            for ((e, b), a) in err.iter_mut().zip(&buf).zip(y) {
+                *e = b - a;
+            }
+        }
+        self.stage = buf;
+        ok
+    }
+
+    /// With loops: `jac · P′(y)`, the Jacobian of `f(P(y))` that `rhs` evaluates, `P′`'s
+    /// columns as differences `(P(y + ε e_k) − P(y))/ε` (exact in the speeds, where `P` is
+    /// linear). Without it Radau's simplified Newton sees `∂f/∂y` across the manifolds, where
+    /// `f ∘ P` is constant: slow contraction and a Jacobian re-evaluated nearly every step.
+    fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
+        if self.loops.is_none() {
+            return false;
+        }
+        let n = y.len();
+        let mut chain = self
+            .chain
+            .take()
+            .unwrap_or_else(|| Box::new((vec![0.0; n * n], vec![0.0; n * n])));
+        let ok = self.projection_derivative(y, &mut chain.0);
+        if ok {
+            let (pd, prod) = &mut *chain;
+            for i in 0..n {
+                let row = &jac[i * n..(i + 1) * n];
+                let out = &mut prod[i * n..(i + 1) * n];
+                out.fill(0.0);
+                for (k, &a) in row.iter().enumerate() {
+                    if a != 0.0 {
+                        let pk = &pd[k * n..(k + 1) * n];
+                        out.iter_mut().zip(pk).for_each(|(o, p)| *o += a * p);
+                    }
+                }
+            }
+            jac.copy_from_slice(prod);
+        }
+        self.chain = Some(chain);
+        ok
+    }
+
     /// Unit quaternions (the right-hand side normalises them too, so FSAL stays valid);
     /// with loops, the state back onto the position and velocity manifolds.
     fn project(&mut self, y: &mut [f64]) -> std::result::Result<bool, String> {
@@ -266,3 +373,7 @@ impl OdeSystem for Dynamics<'_> {
         }
     }
 }
+
+#[cfg(test)]
+#[path = "dynamics_tests.rs"]
+mod tests;

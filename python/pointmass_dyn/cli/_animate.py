@@ -11,7 +11,7 @@ import numpy as np
 from .._simulation import simulate
 from ..errors import InvalidInputError
 from ..scenes import load_scene
-from ..viewer import animate
+from ..viewer import animate, has_contact
 
 TRAIL_SPEC = "BODY[:X,Y,Z]"
 
@@ -31,6 +31,12 @@ def add_options(p: argparse.ArgumentParser) -> None:
                         "frame); repeatable")
     p.add_argument("--shaking", action="store_true",
                    help="draw the shaking force (−Σ m a) as an arrow at the world origin")
+    p.add_argument("--no-contact-forces", action="store_true",
+                   help="do not draw the ground-contact forces (drawn by default for a scene "
+                        "with a ground contact, as arrows at the points in contact)")
+    p.add_argument("--contact-scale", type=float, default=None, metavar="M_PER_N",
+                   help="length of a contact-force arrow per newton, in metres (default: the "
+                        "largest force is a quarter of the scene's size)")
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
@@ -102,10 +108,15 @@ def check_outputs(model, files, trails=None, size=None) -> None:
 
 def write(args, result, scene, path: str) -> None:
     """Writes the animation of ``result`` that ``args`` (``add_options``) describe."""
+    # A scene with a ground contact: its forces at the frames' states (False: none).
+    contact = False if args.no_contact_forces else has_contact(scene) or None
     info = animate(result, scene, path, fps=args.fps, frames=args.frames,
                    duration=args.duration, size=_size(args.size), trails=_trails(args.trail),
-                   shaking=args.shaking)
-    print(f"  animation written to {path} ({info.frames} frames, {info.bytes / 1e3:.0f} kB)")
+                   shaking=args.shaking, contact=contact, contact_scale=args.contact_scale)
+    forces = ("" if info.contact_scale is None
+              else f", contact forces at {1e3 * info.contact_scale:.3g} mm/N")
+    print(f"  animation written to {path} ({info.frames} frames, {info.bytes / 1e3:.0f} kB"
+          f"{forces})")
 
 
 def cmd_animate(args) -> int:

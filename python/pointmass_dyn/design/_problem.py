@@ -454,7 +454,7 @@ def _build(motion, var: _Variables, x, phi, designed) -> Balance:
         motion.q,
         motion.v,
         motion.a,
-        actuated=motion.actuated if model.nloops else None,
+        actuated=motion.actuated if model.nloops or model.ncouplings else None,
         gravity=motion.gravity,
         about=motion.shaking.about,
     )

@@ -161,7 +161,9 @@ def analyze_motion(
     progress: Callable[[int, int], Any] | None = None,
 ) -> MotionAnalysis:
     """Driving forces, bearing forces and shaking along given states (N, nq), (N, nv), (N, nv)
-    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``).
+    at times ``t`` (N,). A model with loops needs ``actuated`` (as ``inverse_dynamics``); a
+    model with joint couplings only takes it too (the driven joints' forces, the coupled
+    joints held by their couplings), else each joint's own force.
     ``progress(done, N)``, if given, is called as the states are analysed. A run that stops
     (Ctrl-C, ``progress`` raising) raises with the states analysed so far as the exception's
     ``.result`` (a :class:`MotionAnalysis` with ``success=False``, ``t_reached``,
@@ -183,7 +185,7 @@ class _Rows:
     def __init__(self, model, actuated, gravity, about, total: int, driver=None):
         self.model, self.about, self.total, self.driver = model, about, total, driver
         self.g = None if gravity is None else np.asarray(gravity, dtype=float)
-        self.act = None if model.nloops == 0 else actuated
+        self.act = actuated if model.nloops or model.ncouplings else None
         self.actuated = None if self.act is None else _actuated_indices(model, self.act)
         self.t, self.q, self.v, self.a, self.tau, self.bearing, self.cut = ([] for _ in range(7))
 
@@ -385,7 +387,7 @@ def prescribed_motion(
         acc = np.zeros(samples)
     n = len(t)
     guess = q0
-    loops = model.nloops > 0
+    loops = model.nloops > 0 or model.ncouplings > 0  # constrained: closed at each instant
     # Freedoms the driver does not set (an RSSR coupler's spin about its own axis) move as
     # the dynamics says: their speeds are taken at minimum norm, their accelerations from
     # forward dynamics under the driver force that gives the prescribed acceleration.
@@ -436,8 +438,8 @@ def _closed_instant(model, name, slot, guess, driven, loops, idle, g):
             ak = model.assemble_acceleration(guess, vk, ak, fixed=[name])
     elif model.nv != 1:
         raise InvalidInputError(
-            f"driver: a model without loops moves with one input only if it has one degree "
-            f"of freedom (this one has nv = {model.nv}); give every coordinate's motion to "
-            f"analyze_motion instead"
+            f"driver: a model without loops or couplings moves with one input only if it "
+            f"has one degree of freedom (this one has nv = {model.nv}); give every "
+            f"coordinate's motion to analyze_motion instead"
         )
     return guess, vk, ak

@@ -10,10 +10,11 @@ A model's visual geometry (``Model.visuals``: URDF ``<visual>``, MJCF geoms) is 
 triangles (:func:`visual_scene`; mesh files need the extra ``pointmass-dyn[mesh]``).
 """
 
-from ._animation import AnimationInfo, animate, frame_times, prepare, sample
+from ._animation import AnimationInfo, animate, frame_times, has_contact, prepare, sample
 from ._drawing import (
     BOX_EDGES,
     COLOURS,
+    CONTACT_SHARE,
     LAYERS,
     TRAIL_COLOURS,
     VIEWS,
@@ -28,11 +29,12 @@ from ._drawing import (
 from ._html import page, write_html
 from ._meshcat import show
 from ._meshes import inertia_box, visual_scene
-from ._video import figure, write_video
+from ._video import contact_segments, figure, write_video
 
 __all__ = [
     "BOX_EDGES",
     "COLOURS",
+    "CONTACT_SHARE",
     "LAYERS",
     "TRAIL_COLOURS",
     "VIEWS",
@@ -42,9 +44,11 @@ __all__ = [
     "box_corners",
     "build_drawing",
     "camera_at",
+    "contact_segments",
     "default_camera",
     "figure",
     "frame_times",
+    "has_contact",
     "inertia_box",
     "page",
     "prepare",

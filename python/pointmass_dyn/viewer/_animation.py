@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
+from .._contact import contact_forces
 from .._helpers import quaternion_slices, scene_gravity
 from ..design import shaking as shaking_of
 from ..errors import InvalidInputError
@@ -28,8 +29,8 @@ class AnimationInfo:
     """What :func:`animate` made: the file (None: nothing written), its frame count and
     times, the frame size in pixels, the initial camera (see
     :func:`~pointmass_dyn.viewer.view_projection`; ``camera_at`` for a following camera),
-    the size in bytes, how many triangles the robot's shapes have, and for a page its HTML,
-    which a notebook shows inline."""
+    the size in bytes, how many triangles the robot's shapes have, for a page its HTML,
+    which a notebook shows inline, and the contact-force arrows' scale (m/N) if drawn."""
 
     path: Path | None
     frames: int
@@ -39,6 +40,8 @@ class AnimationInfo:
     bytes: int
     triangles: int = 0
     html: str | None = field(default=None, repr=False)
+    #: Metres of contact-force arrow per newton; None when no contact force is drawn.
+    contact_scale: float | None = None
 
     def _repr_html_(self) -> str | None:
         """The page in an ``<iframe srcdoc>``: self-contained (no server, no network), so it
@@ -146,6 +149,8 @@ def prepare(
     camera: Any = "auto",
     show=None,
     triangles: int | None = None,
+    contact: Any = None,
+    contact_scale: float | None = None,
 ) -> Drawing:
     """The :class:`Drawing` :func:`animate` writes (same arguments)."""
     scene = model_or_scene if isinstance(model_or_scene, _core.Scene) else None
@@ -177,6 +182,13 @@ def prepare(
         if v is None:
             raise InvalidInputError("shaking: needs the result's speeds v, got none")
         force = np.asarray(shaking_of(scene, _Sampled(times, qf, sample(t, v, times))).force)
+    arrows = _contact(result, scene, contact, t, times, qf, v)
+    if contact_scale is not None and not (
+            isinstance(contact_scale, (int, float, np.floating)) and not isinstance(
+                contact_scale, bool) and math.isfinite(contact_scale) and contact_scale > 0):
+        raise InvalidInputError(
+            f"contact_scale: expected None or a positive number (metres per newton), "
+            f"got {contact_scale!r}")
     if triangles is not None and not (isinstance(triangles, (int, np.integer))
                                       and 0 <= triangles <= 10_000_000):
         raise InvalidInputError(f"triangles: expected an integer 0..10000000, got {triangles!r}")
@@ -185,7 +197,58 @@ def prepare(
                  else model.name or "pointmass_dyn")
     return build_drawing(model, times, qf, trails=trails, shaking=force, title=title,
                          gravity=None if scene is None else scene_gravity(scene),
-                         camera=camera, show=show, triangles=triangles)
+                         camera=camera, show=show, triangles=triangles, contact=arrows,
+                         contact_scale=contact_scale)
+
+
+def has_contact(scene) -> bool:
+    """Whether ``scene`` (a Scene or None) has a ground contact its runs feel (not switched
+    off by ``[simulate] disable``)."""
+    if not isinstance(scene, _core.Scene) or "contact" in (scene.disable or ()):
+        return False
+    return any(e.kind == "contact" for e in scene.effects)
+
+
+def _contact(result, scene, contact, t, times, qf, v):
+    """The contact points and forces ``(position, force)`` (F, K, 3) at the frame times, or
+    None. ``contact``: None draws the result's ``.contact`` (``simulate(..., contact=True)``)
+    when it has some; False nothing; True the result's, else the scene's ground contacts
+    evaluated at the frames' states; or a dict of :class:`~pointmass_dyn.ContactForces`
+    (anything with ``position`` and ``force`` (N, P, 3)) at the result's times."""
+    if contact is False:
+        return None
+    data = contact if isinstance(contact, dict) else getattr(result, "contact", None)
+    if contact is not None and not isinstance(contact, (bool, dict)):
+        raise InvalidInputError(
+            "contact: expected None (draw the result's contact forces if it has any), True, "
+            f"False or a dict of ContactForces, got {type(contact).__name__}")
+    if data:
+        pos, force = [], []
+        for name, c in data.items():
+            p = np.asarray(getattr(c, "position", None), dtype=float)
+            f = np.asarray(getattr(c, "force", None), dtype=float)
+            if (p.ndim != 3 or p.shape[0] != len(t) or p.shape[2] != 3 or f.shape != p.shape
+                    or not (np.all(np.isfinite(p)) and np.all(np.isfinite(f)))):
+                raise InvalidInputError(
+                    f"contact['{name}']: expected finite position and force of shape "
+                    f"({len(t)}, P, 3) (one row per result time), got {p.shape} and {f.shape}")
+            pos.append(p)
+            force.append(f)
+        pos, force = np.concatenate(pos, axis=1), np.concatenate(force, axis=1)
+        n = pos.shape[1]
+        both = sample(t, np.concatenate([pos, force], axis=1).reshape(len(t), -1), times)
+        both = both.reshape(len(times), 2 * n, 3)
+        return both[:, :n], both[:, n:]
+    if contact is not True:
+        return None
+    if not has_contact(scene) or v is None:
+        raise InvalidInputError(
+            "contact: True needs contact forces on the result (simulate(..., contact=True)) "
+            "or the Scene with a ground contact (not disabled) and the result's speeds v, got "
+            f"{'a Model' if scene is None else 'a Scene'} and a result without them")
+    frames = contact_forces(scene, _Sampled(times, qf, sample(t, v, times)))
+    return (np.concatenate([c.position for c in frames.values()], axis=1),
+            np.concatenate([c.force for c in frames.values()], axis=1))
 
 
 def animate(
@@ -204,6 +267,8 @@ def animate(
     camera: Any = "auto",
     show: Any = None,
     triangles: int | None = None,
+    contact: Any = None,
+    contact_scale: float | None = None,
 ) -> AnimationInfo:
     """Writes an animation of ``result`` to ``path``: ``.html`` (one self-contained WebGL
     page, works offline: play/pause, scrub, orbit/zoom, layer toggles), ``.gif`` (Pillow) or
@@ -223,7 +288,12 @@ def animate(
     "fixed", "follow" or a dict of ``target``, ``distance``, ``azimuth``, ``elevation``,
     ``fov``. ``show``: the layers shown at first (``LAYERS``: "robot", "masses", "links",
     "axes", "frames", "forces"). ``triangles``: the budget the model's meshes are
-    simplified to (default 60,000). Returns :class:`AnimationInfo`. Raises
+    simplified to (default 60,000). ``contact``: ground-contact forces as arrows at their
+    points, in the "forces" layer: None (default) draws them when ``result`` carries them
+    (``simulate(..., contact=True)``), False never, True also computes them from the
+    Scene's ground contacts; a point without force draws nothing. ``contact_scale``: metres
+    of arrow per newton (default: the largest force is 25 % of the scene's size; the scale
+    used is ``AnimationInfo.contact_scale``). Returns :class:`AnimationInfo`. Raises
     :class:`~pointmass_dyn.errors.AnimationWriterError` for a format this machine cannot
     write (MP4 without ffmpeg); a mesh that cannot be drawn is a
     :class:`~pointmass_dyn.errors.VisualWarning`."""
@@ -246,7 +316,7 @@ def animate(
         )
     drawing = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
                       trails=trails, shaking=shaking, title=title, camera=camera, show=show,
-                      triangles=triangles)
+                      triangles=triangles, contact=contact, contact_scale=contact_scale)
     width, height = int(size[0]), int(size[1])
     html = None
     if kind == ".html":
@@ -258,7 +328,9 @@ def animate(
     nbytes = len(html.encode()) if path is None else Path(path).stat().st_size
     return AnimationInfo(path=None if path is None else Path(path), frames=drawing.nframes,
                          times=drawing.times, size=(width, height), camera=drawing.camera,
-                         bytes=nbytes, triangles=drawing.triangles, html=html)
+                         bytes=nbytes, triangles=drawing.triangles, html=html,
+                         contact_scale=drawing.contact_scale if drawing.contact is not None
+                         else None)
 
 
 @dataclass

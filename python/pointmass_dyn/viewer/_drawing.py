@@ -3,7 +3,7 @@
 
 Links between joint origins, joint axes, the seven point masses of every link (radius ∝
 |m|^(1/3), colour by sign) and the box they are corners of, cut joints, trails, the
-shaking-force arrow, the world frame and a ground grid.
+shaking-force arrow, contact-force arrows, the world frame and a ground grid.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ COLOURS = {
     "axis": (0.95, 0.70, 0.05),  # revolute / prismatic joint axes
     "cut": (0.80, 0.10, 0.80),  # cut joints closing loops
     "shaking": (0.85, 0.05, 0.45),
+    "contact": (0.0, 0.62, 0.58),  # ground-contact forces, one arrow per point in contact
     "grid": (0.78, 0.78, 0.80),
     "box": (0.55, 0.62, 0.78),  # edges of each link's point-mass box
 }
@@ -42,7 +43,10 @@ class Drawing:
     ``box_corners`` (nlinks, 2, 3), lowest and highest corner in the link frame), ``axes``: (F, A, 2, 3) joint
     axis segments, ``cuts``: (F, C, 2, 3) the two ends of each cut joint (plus its axis as
     an ``axes`` segment). ``trails``: (F, T, 3) with ``trail_colour`` (T, 3). ``arrow``:
-    (F, 2, 3) shaking-force arrow (tail, head) or None. ``camera``: the initial view."""
+    (F, 2, 3) shaking-force arrow (tail, head) or None. ``contact``: (F, K, 2, 3) contact-force
+    arrows (tail at the contact point, head at point + ``contact_scale`` · force; tail = head
+    where a point carries no force, which draws nothing) or None, ``contact_scale`` in m/N.
+    ``camera``: the initial view."""
 
     times: np.ndarray
     spheres: np.ndarray
@@ -70,6 +74,9 @@ class Drawing:
     visuals: dict | None = None
     #: Layers shown when the page opens (:data:`LAYERS`).
     show: tuple = ()
+    #: Contact-force arrows (F, K, 2, 3) or None, and their scale (metres per newton).
+    contact: np.ndarray | None = None
+    contact_scale: float = 0.0
 
     @property
     def triangles(self) -> int:
@@ -236,9 +243,14 @@ def build_drawing(
     camera: Any = "auto",
     show=None,
     triangles: int | None = None,
+    contact: tuple[np.ndarray, np.ndarray] | None = None,
+    contact_scale: float | None = None,
 ) -> Drawing:
     """The :class:`Drawing` of ``model`` at configurations ``q`` (F, nq) and ``times`` (F,).
-    ``shaking``: the shaking force (F, 3) to draw as an arrow, or None. ``gravity``: sets
+    ``shaking``: the shaking force (F, 3) to draw as an arrow, or None. ``contact``: the
+    contact points and their forces, ``(position, force)`` each (F, K, 3), drawn as arrows
+    scaled by ``contact_scale`` (m/N; None: the largest force is 25 % of the scene's size),
+    or None. ``gravity``: sets
     "up" (−g) for the camera and the ground. ``camera``, ``show``, ``triangles``: as in
     :func:`~pointmass_dyn.viewer.animate`."""
     poses = model.body_poses(q)
@@ -327,6 +339,7 @@ def build_drawing(
         scale = 0.35 * size / fmax if fmax > 0 else 0.0
         base = np.zeros((nf, 3))
         arrow = np.stack([base, base + scale * f], axis=1)
+    arrows, cscale = _contact_arrows(contact, contact_scale, size)
 
     return Drawing(
         times=np.asarray(times, dtype=float),
@@ -352,4 +365,23 @@ def build_drawing(
         labels={"links": model.link_names, "loops": model.loop_names},
         visuals=visuals,
         show=_layers(show, visuals is not None),
+        contact=arrows,
+        contact_scale=cscale,
     )
+
+
+#: Share of the scene's size the largest contact force is drawn at by default.
+CONTACT_SHARE = 0.25
+
+
+def _contact_arrows(contact, scale, size: float) -> tuple[np.ndarray | None, float]:
+    """Contact-force arrows (F, K, 2, 3): tail at each point, head at point + scale · force
+    (a point without force: tail = head). ``scale`` None: :data:`CONTACT_SHARE` of ``size``
+    for the largest force (1 when every force is zero)."""
+    if contact is None:
+        return None, 0.0
+    pos, force = (np.asarray(a, dtype=float) for a in contact)
+    if scale is None:
+        fmax = float(np.max(np.linalg.norm(force, axis=-1), initial=0.0))
+        scale = CONTACT_SHARE * size / fmax if fmax > 0 else 1.0
+    return np.stack([pos, pos + scale * force], axis=2), float(scale)

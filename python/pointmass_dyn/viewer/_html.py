@@ -76,6 +76,9 @@ def _legend(d: Drawing) -> str:
         items.append(f'<span style="color:{hexc["cut"]}">●</span> cut joints')
     if d.arrow is not None:
         items.append(f'<span style="color:{hexc["shaking"]}">➜</span> shaking force')
+    if d.contact is not None:
+        items.append(f'<span style="color:{hexc["contact"]}">➜</span> contact forces '
+                     f'({1e3 * d.contact_scale:.3g} mm/N)')
     return " &nbsp; ".join(items) + "<br>drag: orbit · wheel: zoom · space: play/pause"
 
 
@@ -133,6 +136,10 @@ def page(d: Drawing, fps: float) -> str:
             "radius": 0.015 * d.size,
         },
         "arrow": None if d.arrow is None else _b64(d.arrow),
+        # Contact-force arrows (F, K, 2, 3): tail at the point; tail = head draws nothing.
+        "contact": None if d.contact is None else {
+            "pos": _b64(d.contact), "count": d.contact.shape[1], "radius": 0.7 * d.link_radius,
+            "scale": d.contact_scale},
         "grid": d.grid,
         "camera": {**d.camera, "track": None if d.camera.get("track") is None
                    else _b64(np.asarray(d.camera["track"]))},

@@ -52,10 +52,12 @@ def show(
     shaking: bool = False,
     play: bool = True,
     path: str = "pointmass_dyn",
+    contact: Any = None,
+    contact_scale: float | None = None,
 ):
     """Draws ``result`` in a Meshcat ``vis`` (a new ``meshcat.Visualizer()`` if None) under
-    ``path`` and sets its animation (frames as :func:`pointmass_dyn.animate`); returns the
-    visualizer. Raises :class:`~pointmass_dyn.errors.AnimationWriterError` without meshcat."""
+    ``path`` and sets its animation (frames, ``contact`` and ``contact_scale`` as
+    :func:`pointmass_dyn.animate`); returns the visualizer. Raises :class:`~pointmass_dyn.errors.AnimationWriterError` without meshcat."""
     try:
         import meshcat
         import meshcat.animation as mc_anim
@@ -66,7 +68,7 @@ def show(
             "an .html animation with pmd.animate, which needs nothing)"
         ) from exc
     d = prepare(result, model_or_scene, fps=fps, frames=frames, duration=duration,
-                trails=trails, shaking=shaking)
+                trails=trails, shaking=shaking, contact=contact, contact_scale=contact_scale)
     if vis is None:
         vis = meshcat.Visualizer()
     root = vis[path]
@@ -98,6 +100,9 @@ def show(
             g.LineBasicMaterial(color=_hex(COLOURS["box"]))))
     if d.arrow is not None:
         root["shaking"].set_object(g.Cylinder(1.0, 1.2 * d.link_radius), mat("shaking"))
+    ncontact = 0 if d.contact is None else d.contact.shape[1]
+    for i in range(ncontact):  # a point without force: a cylinder of length ~0
+        root[f"contact/{i}"].set_object(g.Cylinder(1.0, 0.7 * d.link_radius), mat("contact"))
 
     def pose(k: int, transform, scale) -> None:
         """Every moving object at frame ``k``: ``transform(name, 4×4)``, ``scale(name, y)``."""
@@ -123,6 +128,8 @@ def show(
             transform(f"boxes/{i}", t)
         if d.arrow is not None:
             segment("shaking", *d.arrow[k])
+        for i in range(ncontact):
+            segment(f"contact/{i}", *d.contact[k, i])
 
     # Frame 0 as the still scene (before and without playing), then the clip.
     pose(0, lambda n, t: root[n].set_transform(t),

@@ -126,6 +126,12 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
             for _ in range(d.axes.shape[1] if on["axes"] else 0)]
     arrow = (ax.plot([], [], [], color=COLOURS["shaking"], lw=2.5, zorder=2.2)[0]
              if d.arrow is not None and on["forces"] else None)
+    # Contact forces: all arrows as one NaN-separated line, a dot at each point in contact.
+    contact = None
+    if d.contact is not None and on["forces"]:
+        contact = (ax.plot([], [], [], color=COLOURS["contact"], lw=2.2, zorder=2.3)[0],
+                   ax.plot([], [], [], color=COLOURS["contact"], ls="none", marker="o",
+                           ms=3.5, zorder=2.3)[0])
     # Disc diameter in points ∝ sphere radius / scene size.
     diam = 2 * d.sphere_radius / d.size * min(width, height) * 1.2 * 72 / dpi
     # Drawing order by zorder (computed_zorder is off): grid, frame, trails, point-mass
@@ -153,6 +159,9 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
         legend.append(("● m = 0", COLOURS["zero"]))
     if on["masses"]:
         legend.append(("disc ∝ |m|^(1/3)", (0.35, 0.35, 0.35)))
+    if contact is not None:
+        legend.append((f"→ contact forces ({1e3 * d.contact_scale:.3g} mm/N)",
+                       COLOURS["contact"]))
     for k, (text, colour) in enumerate(reversed(legend)):
         ax.text2D(0.98, 0.03 + 0.05 * k, text, transform=ax.transAxes, color=colour,
                   fontsize=8, ha="right")
@@ -173,6 +182,11 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
         if arrow is not None:
             a, b = d.arrow[k]
             arrow.set_data_3d([a[0], b[0]], [a[1], b[1]], [a[2], b[2]])
+        if contact is not None:
+            a = contact_segments(d, k)
+            path = np.concatenate([a, np.full((len(a), 1, 3), np.nan)], axis=1).reshape(-1, 3)
+            contact[0].set_data_3d(path[:, 0], path[:, 1], path[:, 2])
+            contact[1].set_data_3d(a[:, 0, 0], a[:, 0, 1], a[:, 0, 2])
         for i, art in masses.items():
             x = d.spheres[k, i]
             art._offsets3d = ([x[0]], [x[1]], [x[2]])
@@ -191,7 +205,14 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
 
     update(0)
     fig.pmd_masses = masses  # the artist of each point mass, for tests
+    fig.pmd_contact = contact  # the contact arrows' line and dots, for tests
     return fig, ax, update
+
+
+def contact_segments(d: Drawing, k: int) -> np.ndarray:
+    """The contact arrows drawn at frame ``k``, (K', 2, 3): those of points with a force."""
+    a = d.contact[k]
+    return a[np.linalg.norm(a[:, 1] - a[:, 0], axis=1) > 1e-9 * d.size]
 
 
 def write_video(d: Drawing, path: Path, *, fps: float, size: tuple[int, int], dpi: int) -> None:

@@ -21,6 +21,7 @@
   const CU = f32(D.cuts.pos), NC = D.cuts.count;
   const TR = f32(D.trails.pos), NT = D.trails.colour.length;
   const AR = D.arrow ? f32(D.arrow) : null;
+  const CF = D.contact ? f32(D.contact.pos) : null, NK = D.contact ? D.contact.count : 0;
   const VIS = D.visuals;
   const VP = VIS ? f32(VIS.pose) : null, NV = VIS ? VIS.nbodies : 0;
   const TRACK = D.camera.track ? f32(D.camera.track) : null;
@@ -33,6 +34,7 @@
     "segments: wrong length");
   check(BP.length === 12 * F * NB, "boxes: wrong length");
   check(TR.length === 3 * F * NT && (!AR || AR.length === 6 * F), "trails/arrow: wrong length");
+  check(!CF || (Number.isInteger(NK) && CF.length === 6 * F * NK), "contact: wrong length");
   check(!VIS || VP.length === 12 * F * NV, "visuals.pose: wrong length");
   check(!TRACK || TRACK.length === 3 * F, "camera.track: wrong length");
   // Layers shown (toggles in the bar; `#show=robot,masses` in the address overrides).
@@ -335,7 +337,7 @@
   }
 
   // ---- drawing one frame
-  let frame = 0;
+  let frame = 0, contactDrawn = 0;
   const c3 = (arr, i) => [arr[i], arr[i + 1], arr[i + 2]];
   function draw() {
     const w = canvas.clientWidth, h = canvas.clientHeight;
@@ -365,13 +367,27 @@
     tubes(LK, NL, shown.has("links"), D.links.radius, D.colours.link);
     tubes(AX, NA, shown.has("axes"), D.axes.radius, D.colours.axis);
     tubes(CU, NC, shown.has("links"), D.cuts.radius, D.colours.cut);
-    let shaft = null;
+    // Arrows: a shaft (cylinder) now, the heads (cones) after the spheres' mesh is bound.
+    const heads = [];
+    function shaftOf(a, b, r, col) {
+      const k = [0, 1, 2].map((c) => a[c] + 0.8 * (b[c] - a[c]));
+      const m = tubeMatrix(a, k, r);
+      if (!m) return;
+      drawMesh(CYL, m, col, true);
+      heads.push([k, b, Math.min(2.5 * r, 0.4 * Math.hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2])), col]);
+    }
     if (AR && shown.has("forces")) {
       const a = c3(AR, frame * 6), b = c3(AR, frame * 6 + 3);
-      const k = [0, 1, 2].map((c) => a[c] + 0.8 * (b[c] - a[c]));
-      shaft = [k, b];
-      const m = tubeMatrix(a, k, D.links.radius * 1.2);
-      if (m) drawMesh(CYL, m, D.colours.shaking, true);
+      shaftOf(a, b, D.links.radius * 1.2, D.colours.shaking);
+    }
+    contactDrawn = 0;
+    for (let i = 0; CF && shown.has("forces") && i < NK; i++) {
+      const o = (frame * NK + i) * 6;
+      const a = c3(CF, o), b = c3(CF, o + 3);
+      // A point without force (tail = head) draws nothing.
+      if (Math.hypot(b[0] - a[0], b[1] - a[1], b[2] - a[2]) < 1e-9 * D.size) continue;
+      shaftOf(a, b, D.contact.radius, D.colours.contact);
+      contactDrawn++;
     }
     bindMesh(SPHERE);
     for (let i = 0; masses && i < NS; i++) {
@@ -383,10 +399,10 @@
       const o = (frame * NC + i) * 6;
       drawMesh(SPHERE, sphereMatrix(CU[o], CU[o + 1], CU[o + 2], D.cuts.radius * 2.2), D.colours.cut, true);
     }
-    if (shaft) {
-      bindMesh(CONE);
-      const m = tubeMatrix(shaft[0], shaft[1], D.links.radius * 3);
-      if (m) drawMesh(CONE, m, D.colours.shaking, true);
+    if (heads.length) bindMesh(CONE);
+    for (const [k, b, r, col] of heads) {
+      const m = tubeMatrix(k, b, r);
+      if (m) drawMesh(CONE, m, col, true);
     }
     // Trail heads last, over everything, in flat colour: a tracked point stays visible (and
     // is a disc of exactly that colour on screen).
@@ -404,7 +420,7 @@
   // ---- controls
   const hash = new URLSearchParams(location.hash.slice(1));
   if (hash.has("show")) { shown.clear(); for (const n of hash.get("show").split(",")) if (n) shown.add(n); }
-  const present = { robot: !!VIS, masses: NS > 0, links: NL + NC > 0, axes: NA > 0, frames: NB > 0, forces: !!AR };
+  const present = { robot: !!VIS, masses: NS > 0, links: NL + NC > 0, axes: NA > 0, frames: NB > 0, forces: !!AR || NK > 0 };
   for (const [name, label] of Object.entries(LAYERS)) {
     if (!present[name]) continue;
     const box = document.createElement("input");
@@ -465,7 +481,7 @@
   window.__firstFrame = frame;
   // For tests and the console: the frame shown and the box edges the page draws for it.
   window.__pmd = { frame: () => frame, boxEdges: () => Array.from(boxEdges()),
-    shown: () => Array.from(shown).sort(), triangles: () => (VIS ? VIS.instances.reduce((n, i) => n + ROBOT[i.mesh].n / 3, 0) : 0) };
+    shown: () => Array.from(shown).sort(), contactArrows: () => contactDrawn, triangles: () => (VIS ? VIS.instances.reduce((n, i) => n + ROBOT[i.mesh].n / 3, 0) : 0) };
   window.__status = "ok";
   $("status").textContent = window.__errors.length ? "error: " + window.__errors.join("; ") : "";
   document.title = (window.__errors.length ? "pmd error: " + window.__errors.join("; ") : "pmd ok") +
