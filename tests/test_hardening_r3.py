@@ -353,6 +353,19 @@ def test_empty_body_and_coupling_names_are_refused():
     assert m.couplings[0][0]
 
 
+def test_blank_effect_names_are_refused_by_the_scene():
+    # An effect's name is its output key: "" and "  " would be unnamed columns.
+    m = pmd.Model()
+    m.add_body(pmd.RigidBody(1.0, [0.5, 0, 0], np.eye(3) * 0.01), pmd.Revolute([0, 0, 1]),
+               name="a")
+    for name in ("", "  "):
+        with pytest.raises(InvalidInputError, match=r"effects\[1\]\.name: expected a non-empty"):
+            pmd.Scene(m, effects=[pmd.Gravity([0, 0, -9.81]), pmd.Spring("a", 1.0, name=name)])
+    spring = pmd.Spring("a", 1.0, name="k")
+    pmd.Scene(m, effects=[spring])
+    assert "name='k'" in repr(spring)
+
+
 # --------------------------------------------------------------------------------------------
 # Found by tests/test_fuzz_api_wave.py (this round's fuzzing of the newer entry points).
 # --------------------------------------------------------------------------------------------

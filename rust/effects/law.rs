@@ -104,7 +104,7 @@ impl Effects {
         for (k, s) in specs.iter().enumerate() {
             if let Some(l) = s.label() {
                 let arg = format!("{list}[{k}].name");
-                if l.is_empty() || RESERVED_LABELS.contains(&l) {
+                if l.trim().is_empty() || RESERVED_LABELS.contains(&l) {
                     return Err(Error::arg(
                         arg,
                         "a non-empty name other than 'kinetic' and 'total'",
