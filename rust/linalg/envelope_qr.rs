@@ -1,20 +1,20 @@
 //! Householder QR of a sparse matrix held in a dense buffer, working only inside each
 //! column's envelope (the row range that can hold its nonzeros), with threshold rank
 //! detection: the large, banded constraint Jacobians `Jᵀ` of long mechanisms (a chain of
-//! loops: each constraint row touches a few neighbouring coordinates). By hand because the
-//! rank test must stop at a caller's tolerance with no allocation per call, as
-//! `pivoted_qr`; faer's sparse QR has no rank detection at a given tolerance.
+//! loops: each constraint row touches a few neighbouring coordinates). By hand, as
+//! `pivoted_qr`: the rank test stops at a caller's tolerance, nothing is allocated per call,
+//! and a band of width `w` costs `O(rows · w²)` (faer's dense QR is `O(rows · cols²)`; a
+//! general sparse QR's symbolic analysis is more than this whole factorisation here).
 //!
 //! Columns are taken in the caller's order (order them by the last row they touch, and a
 //! band stays a band): a column whose remaining norm, after the reflectors of the columns
 //! kept before it, is at or below the tolerance depends on them (to that tolerance) and is
-//! set aside, as sparse QR codes do ("Heath's method", SuiteSparseQR's dead columns); the
+//! set aside, as sparse QR codes do (Eigen's SparseQR, SuiteSparseQR: "Heath's method"); the
 //! others are factored in place. The tolerance is that of [`super::pivoted_qr`]: `rel_tol`
 //! times the largest column norm, or `abs_tol`. Where column pivoting takes the largest
 //! remaining column first, this keeps the caller's order: the rank is the same count of
 //! columns whose part independent of the others exceeds the tolerance, the kept set may be a
-//! different (equally valid) basis. Cost `O(rows · w²)` for envelopes of width `w`, against
-//! `O(rows · cols²)` dense.
+//! different (equally valid) basis.
 use nalgebra::DMatrix;
 
 /// A `rows × cols` factorisation kept in `a`: each kept column holds its column of `R` from
