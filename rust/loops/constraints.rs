@@ -279,7 +279,32 @@ pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
 
 /// Fills the velocity Jacobian (`nconstraints × nv`); needs `kin.positions`.
 pub fn jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
-    jac.fill(0.0);
+    // On the contiguous storage: a memset (`DMatrix::fill` goes entry by entry).
+    jac.as_mut_slice().fill(0.0);
+    add_jacobian(model, kin, jac);
+}
+
+/// [`jacobian`] into a `jac` that is zero outside each row's coordinates `lo[r]..hi[r]`
+/// (those it can touch: the loop solver's long mechanisms): only those are cleared.
+pub(super) fn jacobian_within(
+    model: &Model,
+    kin: &LoopKinematics,
+    jac: &mut DMatrix<f64>,
+    lo: &[usize],
+    hi: &[usize],
+) {
+    let m = jac.nrows();
+    let data = jac.as_mut_slice();
+    for r in 0..m {
+        for c in lo[r]..hi[r] {
+            data[c * m + r] = 0.0;
+        }
+    }
+    add_jacobian(model, kin, jac);
+}
+
+/// Adds each cut joint's and coupling's rows to `jac`.
+fn add_jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
     let zero = Vec3::zeros();
     let mut r = 0;
     for (lp, rows) in model.loops.iter().zip(&kin.rows) {

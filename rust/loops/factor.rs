@@ -40,33 +40,53 @@ pub fn cholesky(m: &mut DMatrix<f64>) -> Result<(), usize> {
     Ok(())
 }
 
-/// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`]); column-oriented,
-/// skipping zero entries of `x` (a constraint row touches a few coordinates).
-pub fn forward_substitute(l: &DMatrix<f64>, x: &mut [f64]) {
-    let n = x.len();
+/// `ends[k]`: one past the last nonzero row of column `k` of `L` (from [`cholesky`]), so
+/// that the triangular solves stop there: a tree's factor is zero below each column's
+/// descendants.
+pub fn column_ends(l: &DMatrix<f64>, ends: &mut [usize]) {
+    let n = l.nrows();
     let data = l.as_slice();
-    for k in 0..n {
-        if x[k] == 0.0 {
-            continue;
-        }
+    for (k, e) in ends.iter_mut().enumerate() {
         let col = &data[k * n..(k + 1) * n];
-        let xk = x[k] / col[k];
-        x[k] = xk;
-        for (xi, lik) in x[k + 1..].iter_mut().zip(&col[k + 1..]) {
-            *xi -= xk * lik;
-        }
+        *e = col[k + 1..]
+            .iter()
+            .rposition(|&x| x != 0.0)
+            .map_or(k + 1, |i| k + i + 2);
     }
 }
 
+/// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`], `ends` its
+/// [`column_ends`]); column-oriented, skipping zero entries of `x` (a constraint row touches
+/// a few coordinates) and starting at `from` (`x` is zero before). Returns one past the
+/// last entry of `x` that can be nonzero.
+pub fn forward_substitute(l: &DMatrix<f64>, ends: &[usize], x: &mut [f64], from: usize) -> usize {
+    let n = x.len();
+    let data = l.as_slice();
+    let mut end = from;
+    for k in from..n {
+        if x[k] == 0.0 {
+            continue;
+        }
+        let col = &data[k * n..k * n + ends[k]];
+        let xk = x[k] / col[k];
+        x[k] = xk;
+        for (xi, lik) in x[k + 1..ends[k]].iter_mut().zip(&col[k + 1..]) {
+            *xi -= xk * lik;
+        }
+        end = end.max(ends[k]);
+    }
+    end
+}
+
 /// Solves `Lᵀ x = b` in place.
-pub fn back_substitute(l: &DMatrix<f64>, x: &mut [f64]) {
+pub fn back_substitute(l: &DMatrix<f64>, ends: &[usize], x: &mut [f64]) {
     let n = x.len();
     let data = l.as_slice();
     for i in (0..n).rev() {
-        let col = &data[i * n..(i + 1) * n];
+        let col = &data[i * n..i * n + ends[i]];
         let s: f64 = col[i + 1..]
             .iter()
-            .zip(&x[i + 1..])
+            .zip(&x[i + 1..ends[i]])
             .map(|(a, b)| a * b)
             .sum();
         x[i] = (x[i] - s) / col[i];

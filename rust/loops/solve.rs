@@ -13,7 +13,7 @@ use nalgebra::{DMatrix, DVector};
 use super::constraints::{self, Constraints, LoopKinematics};
 use super::factor::{self, back_substitute, forward_substitute};
 use crate::error::{Error, Result};
-use crate::linalg::pivoted_qr::PivotedQr;
+use crate::linalg::rank_qr::RankQr;
 use crate::model::Model;
 use crate::recursive::{self, Data};
 
@@ -23,11 +23,22 @@ pub struct LoopSolver {
     pub cons: Constraints,
     /// The mass matrix, then its Cholesky factor (lower triangle).
     mass: DMatrix<f64>,
-    /// `Jᵀ` of the active rows, factored with column pivoting: the rank and the independent
-    /// rows, decided on the Jacobian itself.
-    qr_j: PivotedQr,
+    /// One past the last nonzero row of each column of the Cholesky factor.
+    mass_ends: Vec<usize>,
+    /// `Jᵀ` of the active rows, factored rank-revealing: the rank and the independent rows,
+    /// decided on the Jacobian itself (dense with column pivoting, or banded: [`RankQr`]).
+    qr_j: RankQr,
     /// `L⁻¹ J_Bᵀ` of the independent rows, factored (no pivoting) for the multipliers.
-    qr_y: PivotedQr,
+    qr_y: RankQr,
+    /// Whether the QRs are the banded ones (a long mechanism with a sparse Jacobian).
+    pub envelope: bool,
+    /// Each constraint row's nonzero coordinates at the last factorisation: `lo..hi`.
+    row_lo: Vec<usize>,
+    row_hi: Vec<usize>,
+    /// The coordinates each row can touch (its cut joint's two paths to the root; all for
+    /// a coupling): `struct_lo..struct_hi`.
+    struct_lo: Vec<usize>,
+    struct_hi: Vec<usize>,
     pub lambda: DVector<f64>,
     rhs: DVector<f64>,
     /// Constraint rows with a non-zero Jacobian row at the last solve.
@@ -43,8 +54,8 @@ pub struct LoopSolver {
     /// Largest residual met before a projection (the integrator's drift).
     pub max_drift: f64,
     /// The configuration `qr_j` was last factored at by [`project_state`]'s velocity step,
-    /// when nothing has refactored it since: the dynamics at the same `q` (a projected
-    /// stage) reuse it.
+    /// when nothing has refactored it nor moved `kin` since: the dynamics at the same `q`
+    /// (a projected stage) reuse it, `cons.jacobian` and `kin`'s positions.
     qr_q: Vec<f64>,
     qr_valid: bool,
 }
@@ -62,15 +73,82 @@ pub const SPURIOUS: f64 = 1.0;
 /// The residual-scaled tolerance never exceeds this fraction of the largest row of `J`.
 pub const SPURIOUS_CAP: f64 = 1e-3;
 
+/// Fewest speeds for the banded QRs: below, the dense ones cost microseconds anyway, and
+/// their column pivoting picks the best-conditioned independent rows.
+pub const ENVELOPE_MIN_NV: usize = 24;
+
+/// Whether the banded QRs pay: a long mechanism whose constraint rows touch at most a
+/// quarter of the coordinates on average (structurally: a cut joint's rows touch the joints
+/// on its two bodies' paths to the root, a coupling's two).
+fn envelope_pays(model: &Model) -> bool {
+    let (m, n) = (model.nconstraints(), model.nv);
+    if n < ENVELOPE_MIN_NV || m == 0 {
+        return false;
+    }
+    let mut seen = vec![usize::MAX; model.links.len()];
+    let mut touched = 2 * model.couplings.len();
+    for (k, lp) in model.loops.iter().enumerate() {
+        let mut cols = 0;
+        for body in [lp.body_a, lp.body_b].into_iter().flatten() {
+            let mut next = model.bodies.get(body).and_then(|b| b.link);
+            while let Some(l) = next {
+                if seen[l] != k {
+                    seen[l] = k;
+                    cols += model.links[l].joint.nv();
+                }
+                next = model.links[l].parent;
+            }
+        }
+        touched += cols * lp.kind().rows();
+    }
+    4 * touched <= m * n
+}
+
+/// The coordinates each constraint row can touch, `lo[r]..hi[r]`: a cut joint's rows
+/// those of the joints on its two bodies' paths to the root (as `constraints::jacobian`
+/// fills them); a coupling's rows keep the caller's full range.
+fn structural_rows(model: &Model, lo: &mut [usize], hi: &mut [usize]) {
+    let mut r = 0;
+    for lp in &model.loops {
+        let (mut a, mut b) = (model.nv, 0);
+        for body in [lp.body_a, lp.body_b].into_iter().flatten() {
+            let mut next = model.bodies.get(body).and_then(|x| x.link);
+            while let Some(l) = next {
+                let link = &model.links[l];
+                a = a.min(link.v_index);
+                b = b.max(link.v_index + link.joint.nv());
+                next = link.parent;
+            }
+        }
+        for _ in 0..lp.kind().rows() {
+            (lo[r], hi[r]) = (a, b.max(a));
+            r += 1;
+        }
+    }
+}
+
 impl LoopSolver {
     pub fn new(model: &Model) -> Self {
+        Self::with_envelope(model, envelope_pays(model))
+    }
+
+    /// The solver with the banded (`envelope`) or the dense QRs; [`LoopSolver::new`] picks.
+    pub fn with_envelope(model: &Model, envelope: bool) -> Self {
         let (m, n) = (model.nconstraints(), model.nv);
+        let (mut struct_lo, mut struct_hi) = (vec![0; m], vec![n; m]);
+        structural_rows(model, &mut struct_lo, &mut struct_hi);
         LoopSolver {
             kin: LoopKinematics::new(model),
             cons: Constraints::new(model),
             mass: DMatrix::zeros(n, n),
-            qr_j: PivotedQr::new(n, m),
-            qr_y: PivotedQr::new(n, m.min(n)),
+            mass_ends: vec![0; n],
+            qr_j: RankQr::new(n, m, envelope),
+            qr_y: RankQr::new(n, m.min(n), envelope),
+            envelope,
+            row_lo: vec![0; m],
+            row_hi: vec![0; m],
+            struct_lo,
+            struct_hi,
             lambda: DVector::zeros(m),
             rhs: DVector::zeros(m),
             active: Vec::with_capacity(m),
@@ -89,7 +167,8 @@ impl LoopSolver {
     fn constraints_at(&mut self, model: &Model, q: &[f64], v: Option<&[f64]>) -> f64 {
         self.kin.positions(model, q);
         constraints::residual(model, &self.kin, self.cons.residual.as_mut_slice());
-        constraints::jacobian(model, &self.kin, &mut self.cons.jacobian);
+        self.qr_valid = false;
+        self.fill_jacobian(model);
         if let Some(v) = v {
             self.kin.velocities(model, q, v);
             constraints::gamma(model, &self.kin, self.cons.gamma.as_mut_slice());
@@ -97,7 +176,28 @@ impl LoopSolver {
         self.cons.residual.norm()
     }
 
+    /// The Jacobian at the positions of the last [`LoopSolver::residual_at`] (whose residual
+    /// `cons.residual` holds); returns the residual's 2-norm.
+    fn jacobian_here(&mut self, model: &Model) -> f64 {
+        self.qr_valid = false;
+        self.fill_jacobian(model);
+        self.cons.residual.norm()
+    }
+
+    /// `cons.jacobian` at the positions of `kin`, clearing only the coordinates each row
+    /// can touch (the others stay zero).
+    fn fill_jacobian(&mut self, model: &Model) {
+        constraints::jacobian_within(
+            model,
+            &self.kin,
+            &mut self.cons.jacobian,
+            &self.struct_lo,
+            &self.struct_hi,
+        );
+    }
+
     fn residual_at(&mut self, model: &Model, q: &[f64]) -> f64 {
+        self.qr_valid = false;
         self.kin.positions(model, q);
         constraints::residual(model, &self.kin, self.cons.residual.as_mut_slice());
         self.cons.residual.amax()
@@ -109,19 +209,40 @@ impl LoopSolver {
     fn factor_jacobian(&mut self, residual: f64) -> usize {
         self.qr_valid = false;
         let (m, n) = self.cons.jacobian.shape();
-        let j = &self.cons.jacobian;
-        self.active.clear();
+        let LoopSolver {
+            cons,
+            qr_j,
+            active,
+            row_lo,
+            row_hi,
+            struct_lo,
+            struct_hi,
+            ..
+        } = self;
+        // Each row's nonzero coordinates, within those it can touch.
+        let j = cons.jacobian.as_slice();
         for r in 0..m {
-            if (0..n).any(|c| j[(r, c)] != 0.0) {
-                self.active.push(r);
-            }
+            let nonzero = |&c: &usize| j[c * m + r] != 0.0;
+            let mut range = struct_lo[r]..struct_hi[r];
+            row_lo[r] = range.clone().find(nonzero).unwrap_or(n);
+            row_hi[r] = range.rfind(nonzero).map_or(0, |c| c + 1);
+        }
+        active.clear();
+        active.extend((0..m).filter(|&r| row_hi[r] > 0));
+        if self.envelope {
+            // By the last coordinate touched: a chain of loops gives a banded Jᵀ.
+            active.sort_unstable_by_key(|&r| (row_hi[r], row_lo[r], r));
         }
         let mut largest: f64 = 0.0;
-        for (k, &r) in self.active.iter().enumerate() {
+        for (k, &r) in active.iter().enumerate() {
+            qr_j.set_envelope(k, row_lo[r], row_hi[r]);
+            let col = &mut qr_j.a_mut().as_mut_slice()[k * n..(k + 1) * n];
+            col.fill(0.0);
             let mut s = 0.0;
-            for c in 0..n {
-                self.qr_j.a[(c, k)] = j[(r, c)];
-                s += j[(r, c)] * j[(r, c)];
+            for c in row_lo[r]..row_hi[r] {
+                let x = j[c * m + r];
+                col[c] = x;
+                s += x * x;
             }
             largest = largest.max(s);
         }
@@ -153,17 +274,25 @@ pub fn constrained_forward_dynamics(
     a: &mut [f64],
 ) -> Result<()> {
     let n = model.nv;
-    let residual = solver.constraints_at(model, q, Some(v));
+    // The velocity projection of this very configuration factored the same J with the
+    // same tolerance (a projected stage): the positions, J and its QR stand.
+    let reuse = solver.qr_valid && solver.qr_q.as_slice() == q;
+    let residual = if reuse {
+        solver.kin.velocities(model, q, v);
+        constraints::gamma(model, &solver.kin, solver.cons.gamma.as_mut_slice());
+        0.0
+    } else {
+        solver.constraints_at(model, q, Some(v))
+    };
     recursive::mass_matrix(model, data, q, &mut solver.mass);
     if let Err(k) = factor::cholesky(&mut solver.mass) {
         return Err(Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k}): a massless chain, or a body too slender"
         )));
     }
-    // The velocity projection of this very configuration factored the same J with the
-    // same tolerance (a projected stage): its QR stands.
-    let rank = if solver.qr_valid && solver.qr_q.as_slice() == q {
-        solver.qr_j.rank
+    factor::column_ends(&solver.mass, &mut solver.mass_ends);
+    let rank = if reuse {
+        solver.qr_j.rank()
     } else {
         solver.factor_jacobian(residual)
     };
@@ -174,31 +303,39 @@ pub fn constrained_forward_dynamics(
     let LoopSolver {
         cons,
         mass,
+        mass_ends,
         qr_j,
         qr_y,
         lambda,
         work,
-        step,
         active,
+        row_lo,
+        row_hi,
+        step,
         ..
     } = solver;
+    let m = cons.jacobian.nrows();
+    let j = cons.jacobian.as_slice();
     for k in 0..rank {
-        let r = active[qr_j.perm[k]];
-        for c in 0..n {
-            step[c] = cons.jacobian[(r, c)];
+        let r = active[qr_j.perm()[k]];
+        let col = &mut qr_y.a_mut().as_mut_slice()[k * n..(k + 1) * n];
+        col.fill(0.0);
+        let mut ja = 0.0;
+        for c in row_lo[r]..row_hi[r] {
+            col[c] = j[c * m + r];
+            ja += col[c] * a[c];
         }
-        let ja: f64 = step.iter().zip(a.iter()).map(|(j, x)| j * x).sum();
         work[k] = -cons.gamma[r] - ja;
-        forward_substitute(mass, step);
-        qr_y.a.column_mut(k).copy_from_slice(step);
+        let end = forward_substitute(mass, mass_ends, col, row_lo[r]);
+        qr_y.set_envelope(k, row_lo[r], end);
     }
     qr_y.factor(rank, false, 0.0, 0.0);
     // Independent rows of J and a nonsingular L keep every column of Y independent; a
     // NaN state is the only way to lose one.
-    if qr_y.rank < rank {
+    if qr_y.rank() < rank {
         return Err(Error::Singular(format!(
             "the constrained dynamics could not be solved at this state (a non-finite configuration?): {} of {rank} independent constraint rows remain",
-            qr_y.rank
+            qr_y.rank()
         )));
     }
     // Y_Bᵀ z = b for z in range(Y_B): z = Q R⁻ᵀ b; λ_B = R⁻¹ R⁻ᵀ b (Y_B λ_B = z).
@@ -207,9 +344,9 @@ pub fn constrained_forward_dynamics(
     qr_y.solve_r(work);
     lambda.fill(0.0);
     for k in 0..rank {
-        lambda[active[qr_j.perm[k]]] = work[k];
+        lambda[active[qr_j.perm()[k]]] = work[k];
     }
-    back_substitute(mass, step);
+    back_substitute(mass, mass_ends, step);
     for (ai, si) in a.iter_mut().zip(step.iter()) {
         *ai += si;
     }
@@ -226,6 +363,7 @@ pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: 
     let LoopSolver {
         cons,
         mass,
+        mass_ends,
         qr_j,
         qr_y,
         work,
@@ -235,13 +373,13 @@ pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: 
         ..
     } = solver;
     for k in 0..*rank {
-        let r = active[qr_j.perm[k]];
+        let r = active[qr_j.perm()[k]];
         let jx: f64 = (0..n).map(|c| cons.jacobian[(r, c)] * x[c]).sum();
         work[k] = b[r] - jx;
     }
     qr_y.solve_rt(work);
     qr_y.apply_q(work, step);
-    back_substitute(mass, step);
+    back_substitute(mass, mass_ends, step);
     for (xi, si) in x.iter_mut().zip(step.iter()) {
         *xi += si;
     }
@@ -249,8 +387,8 @@ pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: 
 
 /// `x = M⁻¹ x` with the Cholesky factor of the last [`constrained_forward_dynamics`].
 pub(super) fn mass_solve(solver: &LoopSolver, x: &mut [f64]) {
-    forward_substitute(&solver.mass, x);
-    back_substitute(&solver.mass, x);
+    forward_substitute(&solver.mass, &solver.mass_ends, x, 0);
+    back_substitute(&solver.mass, &solver.mass_ends, x);
 }
 
 fn locked(model: &Model, rank: usize) -> Error {
@@ -427,7 +565,7 @@ fn min_norm_step(solver: &mut LoopSolver, residual: f64) -> usize {
         ..
     } = solver;
     for k in 0..rank {
-        work[k] = -rhs[active[qr_j.perm[k]]];
+        work[k] = -rhs[active[qr_j.perm()[k]]];
     }
     qr_j.solve_rt(work);
     qr_j.apply_q(work, step);
@@ -591,7 +729,8 @@ pub fn project_state(
         if res == 0.0 {
             break;
         }
-        let norm = solver.constraints_at(model, q, None);
+        // The residual's positions stand: the Jacobian at the same q.
+        let norm = solver.jacobian_here(model);
         solver.rhs.copy_from(&solver.cons.residual);
         min_norm_step(solver, norm);
         let mut qdot = std::mem::take(&mut solver.qdot);
@@ -610,9 +749,14 @@ pub fn project_state(
             "the loops drifted open beyond repair (residual {res:.3e} after projection): tighten rtol/atol"
         ));
     }
-    let norm = solver.constraints_at(model, q, None);
-    for r in 0..solver.rhs.len() {
-        solver.rhs[r] = (0..nv).map(|c| solver.cons.jacobian[(r, c)] * v[c]).sum();
+    // The last residual was at this q: its positions stand.
+    let norm = solver.jacobian_here(model);
+    let m = solver.rhs.len();
+    let j = solver.cons.jacobian.as_slice();
+    for r in 0..m {
+        solver.rhs[r] = (solver.struct_lo[r]..solver.struct_hi[r])
+            .map(|c| j[c * m + r] * v[c])
+            .sum();
     }
     min_norm_step(solver, norm);
     for (x, s) in v.iter_mut().zip(&solver.step[..nv]) {

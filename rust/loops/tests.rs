@@ -151,3 +151,127 @@ fn min_norm_solve_fits_inconsistent_systems_in_least_squares_and_zero_ones_with_
     assert_eq!(rank, 0);
     assert_eq!(x.as_slice(), &[0.0; 3]);
 }
+
+/// The benchmark's N-four-bar (tests/test_iftomm.py, `n_fourbar`): vertical bars v_k pinned
+/// at x = k, horizontal bar h_k on v_k's top, cut revolute h_k's end — v_(k+1)'s top.
+fn n_fourbar(n: usize) -> Model {
+    let i = 1.0 / 12.0;
+    let rod = || {
+        RigidBody::new(
+            1.0,
+            Vec3::new(0.5, 0.0, 0.0),
+            Mat3::from_diagonal(&Vec3::new(1e-8, i, i)),
+        )
+        .unwrap()
+    };
+    let at = |x: f64| Placement::new(Mat3::identity(), Vec3::new(x, 0.0, 0.0));
+    let z = Joint::Revolute { axis: Vec3::z() };
+    let mut m = Model::new();
+    for k in 0..=n {
+        m.add_body(rod(), z.clone(), None, at(k as f64), None, None)
+            .unwrap();
+        if k < n {
+            m.add_body(rod(), z.clone(), Some(2 * k), at(1.0), None, None)
+                .unwrap();
+        }
+    }
+    for k in 0..n {
+        m.add_loop(
+            Some(2 * k + 1),
+            Some(2 * k + 2),
+            z.clone(),
+            at(1.0),
+            at(1.0),
+            None,
+        )
+        .unwrap();
+    }
+    m
+}
+
+/// Every vertical bar at `phi`, every horizontal one level, turning at `rate`.
+fn parallel_state(n: usize, phi: f64, rate: f64) -> (Vec<f64>, Vec<f64>) {
+    let q = (0..2 * n + 1)
+        .map(|k| if k % 2 == 0 { phi } else { -phi })
+        .collect();
+    let v = (0..2 * n + 1)
+        .map(|k| if k % 2 == 0 { rate } else { -rate })
+        .collect();
+    (q, v)
+}
+
+/// Constrained accelerations with the banded or the dense QRs.
+fn accelerations(m: &Model, q: &[f64], v: &[f64], envelope: bool) -> (Vec<f64>, usize) {
+    let mut data = crate::recursive::Data::new(m);
+    let mut solver = super::LoopSolver::with_envelope(m, envelope);
+    let mut a = vec![0.0; m.nv];
+    let g = Vec3::new(0.0, -9.81, 0.0);
+    let tau = vec![0.0; m.nv];
+    crate::recursive::forward_dynamics(m, &mut data, q, v, &tau, &g, None, &mut a).unwrap();
+    super::constrained_forward_dynamics(m, &mut data, &mut solver, q, v, &mut a).unwrap();
+    (a, solver.rank)
+}
+
+#[test]
+fn long_loop_chains_take_the_banded_qr_and_agree_with_the_dense_one() {
+    let n = 12;
+    let m = n_fourbar(n);
+    assert!(super::LoopSolver::new(&m).envelope);
+    assert!(!super::LoopSolver::new(&n_fourbar(4)).envelope);
+    // φ'' = −c cos φ for the parallel motion (tests/test_iftomm.py, `n_fourbar_rate`).
+    let nf = n as f64;
+    let c = 9.81 * ((nf + 1.0) / 2.0 + nf) / ((nf + 1.0) / 3.0 + nf);
+    for (phi, rank) in [(0.7, 2 * n), (1e-3, 2 * n), (1e-7, 2 * n), (0.0, n)] {
+        let (q, v) = parallel_state(n, phi, 0.0);
+        let (banded, rank_b) = accelerations(&m, &q, &v, true);
+        let (dense, rank_d) = accelerations(&m, &q, &v, false);
+        assert_eq!((rank_b, rank_d), (rank, rank), "{phi}");
+        for (b, d) in banded.iter().zip(&dense) {
+            assert!((b - d).abs() < 1e-9 * (1.0 + d.abs()), "{phi}: {b} {d}");
+        }
+        if phi > 0.0 {
+            // Near the singular position the motion stays the parallel one.
+            assert!(
+                (banded[0] + c * phi.cos()).abs() < 1e-8,
+                "{phi}: {}",
+                banded[0]
+            );
+        }
+    }
+    // Moving off the parallel motion: generic speeds made to keep the loops closed.
+    let (q, _) = parallel_state(n, 0.4, 0.0);
+    let mut v: Vec<f64> = (0..m.nv).map(|k| (k as f64 * 1.7).sin()).collect();
+    super::project_velocity_like(&m, &q, None, &mut v, &vec![false; m.nv]).unwrap();
+    let (banded, _) = accelerations(&m, &q, &v, true);
+    let (dense, _) = accelerations(&m, &q, &v, false);
+    for (b, d) in banded.iter().zip(&dense) {
+        assert!((b - d).abs() < 1e-9 * (1.0 + d.abs()), "{b} {d}");
+    }
+}
+
+#[test]
+fn banded_projection_closes_the_loops_as_the_dense_one() {
+    let n = 12;
+    let m = n_fourbar(n);
+    let (q, v) = parallel_state(n, 0.3, -0.8);
+    let mut y0: Vec<f64> = q.iter().chain(&v).copied().collect();
+    // Off both manifolds by ~1e-6.
+    for (k, x) in y0.iter_mut().enumerate() {
+        *x += 1e-6 * ((k * 7 % 11) as f64 - 5.0);
+    }
+    let mut out = Vec::new();
+    for envelope in [true, false] {
+        let mut solver = super::LoopSolver::with_envelope(&m, envelope);
+        let mut y = y0.clone();
+        super::project_state(&m, &mut solver, &mut y).unwrap();
+        out.push(y);
+    }
+    for (b, d) in out[0].iter().zip(&out[1]) {
+        assert!((b - d).abs() < 1e-12, "{b} {d}");
+    }
+    let mut kin = super::LoopKinematics::new(&m);
+    kin.positions(&m, &out[0][..m.nq]);
+    let mut r = vec![0.0; m.nconstraints()];
+    super::residual(&m, &kin, &mut r);
+    assert!(r.iter().all(|x| x.abs() < 1e-13), "{r:?}");
+}
