@@ -122,15 +122,7 @@ impl EnvelopeQr {
             }
             let (head, rest) = data.split_at_mut((j + 1) * rows);
             let col = &mut head[j * rows..];
-            let x0 = col[r];
-            // β of the sign opposite to x0: `x0 − β` does not cancel.
-            let beta = if x0 >= 0.0 { -norm } else { norm };
-            let tau = (beta - x0) / beta;
-            let inv = 1.0 / (x0 - beta);
-            col[r] = beta;
-            for x in &mut col[r + 1..hi] {
-                *x *= inv;
-            }
+            let tau = super::pivoted_qr::householder(&mut col[r..hi], norm);
             self.tau[r] = tau;
             self.start[r] = self.lo[j].min(r);
             self.end[r] = hi;

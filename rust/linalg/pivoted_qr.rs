@@ -83,15 +83,7 @@ impl PivotedQr {
             }
             let (head, rest) = data.split_at_mut((k + 1) * rows);
             let col = &mut head[k * rows..];
-            let x0 = col[k];
-            // β of the sign opposite to x0: `x0 − β` does not cancel.
-            let beta = if x0 >= 0.0 { -norm } else { norm };
-            let tau = (beta - x0) / beta;
-            let inv = 1.0 / (x0 - beta);
-            col[k] = beta;
-            for x in &mut col[k + 1..] {
-                *x *= inv;
-            }
+            let tau = householder(&mut col[k..], norm);
             self.tau[k] = tau;
             let u = &col[k + 1..];
             // Columns are contiguous; a column orthogonal to the reflector (a constraint row
@@ -158,6 +150,23 @@ impl PivotedQr {
             }
         }
     }
+}
+
+/// Turns `col` (of 2-norm `norm > 0`) into its Householder reflector in place: `β` in
+/// `col[0]`, the vector `v` (with `v₀ = 1` implied) below it; returns `τ` (`H = I − τ v vᵀ`).
+/// Shared by the dense pivoted and the banded QR.
+#[inline]
+pub(crate) fn householder(col: &mut [f64], norm: f64) -> f64 {
+    let x0 = col[0];
+    // β of the sign opposite to x0: `x0 − β` does not cancel.
+    let beta = if x0 >= 0.0 { -norm } else { norm };
+    let tau = (beta - x0) / beta;
+    let inv = 1.0 / (x0 - beta);
+    col[0] = beta;
+    for x in &mut col[1..] {
+        *x *= inv;
+    }
+    tau
 }
 
 #[cfg(test)]
