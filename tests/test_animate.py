@@ -4,7 +4,6 @@ body, no JavaScript error), the GIF's frames and point masses, subsampling of lo
 
 from __future__ import annotations
 
-import base64
 import json
 import re
 import shutil
@@ -18,6 +17,7 @@ import pointmass_dyn as pmd
 import pytest
 from pointmass_dyn import animation
 from pointmass_dyn.errors import AnimationWriterError, InvalidInputError
+from viewer_page import f32, page_data
 
 needs_chromium = pytest.mark.skipif(
     chromium_driver.find() is None,
@@ -25,16 +25,6 @@ needs_chromium = pytest.mark.skipif(
 )
 
 CYAN = "#00ffff"
-
-
-def _page_data(path) -> dict:
-    text = path.read_text(encoding="utf-8")
-    m = re.search(r'<script id="pmd-data" type="application/json">(.*?)</script>', text, re.S)
-    return json.loads(m.group(1).replace("<\\/", "</"))
-
-
-def _f32(b64: str) -> np.ndarray:
-    return np.frombuffer(base64.b64decode(b64), dtype="<f4")
 
 
 @pytest.fixture(scope="module")
@@ -131,11 +121,11 @@ def test_long_result_is_subsampled_to_the_frame_rate(tmp_path):
     assert result.success and len(result.t) >= 10_000
     info = pmd.animate(result, scene, tmp_path / "long.html", fps=30)
     assert info.frames == 300  # duration · fps, not one frame per step
-    data = _page_data(tmp_path / "long.html")
+    data = page_data(tmp_path / "long.html")
     assert data["nframes"] == 300
-    times = _f32(data["times"])
+    times = f32(data["times"])
     np.testing.assert_allclose(times, np.linspace(0, 10, 300), atol=1e-5)
-    assert _f32(data["spheres"]["pos"]).size == 300 * 7 * 3
+    assert f32(data["spheres"]["pos"]).size == 300 * 7 * 3
     assert info.bytes < 200_000
     # Self-contained: nothing fetched (no URL, no src=, no link element).
     text = (tmp_path / "long.html").read_text()
@@ -240,10 +230,10 @@ def test_page_with_loops_and_shaking_arrow_and_its_error_report(tmp_path):
     path = tmp_path / "fourbar.html"
     info = pmd.animate(result, scene, path, fps=50, shaking=True, trails=["coupler"])
     assert info.frames == 10
-    data = _page_data(path)
+    data = page_data(path)
     assert data["cuts"]["count"] == 1 and data["arrow"] is not None
     # The arrow is the shaking force −Σ m a, scaled: its direction at each frame.
-    arrow = _f32(data["arrow"]).reshape(10, 2, 3)
+    arrow = f32(data["arrow"]).reshape(10, 2, 3)
     sub = SimpleNamespace(t=info.times, q=animation.sample(result.t, result.q, info.times),
                           v=animation.sample(result.t, result.v, info.times))
     force = pmd.shaking(scene, sub).force
@@ -446,7 +436,7 @@ def test_cli_animate_and_simulate_animate(tmp_path, capsys):
     out = tmp_path / "a.html"
     assert main(["animate", "pendulum_spatial", "--out", str(out), "--t-end", "1",
                  "--fps", "12", "--trail", "rod:1,0,0"]) == 0
-    data = _page_data(out)
+    data = page_data(out)
     assert data["nframes"] == 12 and len(data["trails"]["colour"]) == 1
     gif = tmp_path / "b.gif"
     assert main(["simulate", "pendulum_spatial", "--t-end", "0.5", "--animate", str(gif),

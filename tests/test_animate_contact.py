@@ -4,16 +4,13 @@ box whose corners carry m g / 4 each (closed form); the page in headless Chromiu
 
 from __future__ import annotations
 
-import base64
-import json
-import re
-
 import chromium_driver
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
 from pointmass_dyn import viewer
 from pointmass_dyn.errors import InvalidInputError
+from viewer_page import f32, page_data
 
 needs_chromium = pytest.mark.skipif(
     chromium_driver.find() is None,
@@ -24,16 +21,6 @@ MASS, K, N, G = 2.0, 1e5, 1.5, 9.81
 CORNERS = np.array([[sx * 0.1, sy * 0.05, -0.05] for sx in (1, -1) for sy in (1, -1)])
 #: Static penetration of each corner: k δⁿ = m g / 4.
 DEPTH = (MASS * G / 4 / K) ** (1 / N)
-
-
-def _page_data(path) -> dict:
-    text = path.read_text(encoding="utf-8")
-    m = re.search(r'<script id="pmd-data" type="application/json">(.*?)</script>', text, re.S)
-    return json.loads(m.group(1).replace("<\\/", "</"))
-
-
-def _f32(b64: str) -> np.ndarray:
-    return np.frombuffer(base64.b64decode(b64), dtype="<f4")
 
 
 def _box_scene(lift: float = 0.0) -> pmd.Scene:
@@ -95,9 +82,9 @@ def test_page_carries_the_arrows_and_their_legend(resting, tmp_path):
     path = tmp_path / "box.html"
     info = pmd.animate(res, scene, path, frames=6, contact_scale=0.01)
     assert info.contact_scale == 0.01
-    data = _page_data(path)
+    data = page_data(path)
     assert data["contact"]["count"] == 5 and data["contact"]["scale"] == 0.01
-    arrows = _f32(data["contact"]["pos"]).reshape(6, 5, 2, 3)
+    arrows = f32(data["contact"]["pos"]).reshape(6, 5, 2, 3)
     c = res.contact["contact"]
     np.testing.assert_allclose(arrows[:, :, 0], c.position, rtol=1e-6, atol=1e-7)
     np.testing.assert_allclose(arrows[:, :, 1], c.position + 0.01 * c.force, rtol=1e-6,
@@ -115,7 +102,7 @@ def test_nothing_changes_without_contact_data_and_opt_out(resting, tmp_path):
     assert d.contact is None
     info = pmd.animate(sol, pend, tmp_path / "p.html", frames=4)
     assert info.contact_scale is None
-    assert _page_data(tmp_path / "p.html")["contact"] is None
+    assert page_data(tmp_path / "p.html")["contact"] is None
     assert "contact forces" not in (tmp_path / "p.html").read_text(encoding="utf-8")
     # A result of a contact scene without contact=True: no arrows unless asked for.
     plain = pmd.simulate(scene, (0.0, 0.05), t_eval=res.t, method="Radau", rtol=1e-10,
@@ -219,11 +206,11 @@ def test_cli_draws_contact_forces_unless_told_not_to(tmp_path, capsys):
     assert main(["animate", "box_incline", "--out", str(out), "--t-end", "0.1", "--fps", "30",
                  "--contact-scale", "0.005"]) == 0
     assert "contact forces at 5 mm/N" in capsys.readouterr().out
-    data = _page_data(out)
+    data = page_data(out)
     assert data["contact"]["count"] == 4 and data["contact"]["scale"] == 0.005
     assert main(["simulate", "box_incline", "--t-end", "0.1", "--animate", str(out),
                  "--no-contact-forces"]) == 0
-    assert _page_data(out)["contact"] is None
+    assert page_data(out)["contact"] is None
 
 
 def test_meshcat_sends_one_cylinder_per_contact_point(resting):
