@@ -11,7 +11,10 @@
 //! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
 //! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state;
 //! `sim` N ITERS: ITERS runs of `simulate` (RK45, rtol 1e-6, t in (0, 1)) of the chain, gravity
-//! on (the integrator's whole loop: stages, error norm, output). Subtract a
+//! on (the integrator's whole loop: stages, error norm, output); `loopsim` PATH ITERS: ITERS
+//! runs of `simulate` of a scene with loops (its effects, q0, v0; DOP853, rtol 1e-10,
+//! atol 1e-12, t in (0, 20): IFToMM A02's high-precision run), printing the time per
+//! right-hand side. Subtract a
 //! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
 //! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::cpu`).
 use std::hint::black_box;
@@ -31,7 +34,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         _ => return Err(usage.into()),
     };
     let scene = match what {
-        "scene" | "loops" => Some(Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?),
+        "scene" | "loops" | "loopsim" => {
+            Some(Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?)
+        }
         _ => None,
     };
     let model: Model = match &scene {
@@ -40,12 +45,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let nv = model.nv;
     let q: Vec<f64> = match (what, &scene) {
-        ("loops", Some(s)) => s.q0.clone(),
+        ("loops" | "loopsim", Some(s)) => s.q0.clone(),
         ("scene", _) => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
         _ => vec![0.3; model.nq],
     };
     let v: Vec<f64> = match (what, &scene) {
-        ("loops", Some(s)) => s.v0.clone(),
+        ("loops" | "loopsim", Some(s)) => s.v0.clone(),
         _ => (0..nv).map(|k| (k as f64 * 0.7).sin()).collect(),
     };
     let mut solver = pointmass_dyn::loops::LoopSolver::new(&model);
@@ -55,6 +60,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut out = vec![0.0; nv];
     let mut gim = DMatrix::zeros(nv, nv);
     let start = std::time::Instant::now();
+    let mut nfev = 0;
     for _ in 0..iters {
         match what {
             "fd" | "scene" => {
@@ -87,6 +93,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 )?;
                 out[0] = tr.q[tr.q.len() - 1];
             }
+            "loopsim" => {
+                let Some(s) = &scene else {
+                    return Err(usage.into());
+                };
+                let opts = pointmass_dyn::integrator::SolverOptions {
+                    method: pointmass_dyn::integrator::Method::Dop853,
+                    rtol: 1e-10.into(),
+                    atol: 1e-12.into(),
+                    max_steps: 2_000_000,
+                    ..Default::default()
+                };
+                let tr = pointmass_dyn::simulate::simulate(
+                    &model,
+                    &s.effects,
+                    Default::default(),
+                    black_box(&q),
+                    &v,
+                    (0.0, 20.0),
+                    &opts,
+                    &[],
+                    Vec::new(),
+                    Default::default(),
+                    None,
+                )?;
+                nfev += tr.nfev;
+                out[0] = tr.q[tr.q.len() - 1];
+            }
             "loops" => {
                 let q = black_box(&q);
                 recursive::forward_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)?;
@@ -104,6 +137,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let per_call = start.elapsed().as_secs_f64() / iters.max(1) as f64;
     println!("{what} {arg}: {:.1} ns per call", per_call * 1e9);
+    if nfev > 0 {
+        let per_rhs = start.elapsed().as_secs_f64() / nfev as f64;
+        println!("{nfev} right-hand sides: {:.2} µs each", per_rhs * 1e6);
+        println!("last state's q[0] = {:.17e}", out[0]);
+    }
     black_box((&out, &gim));
     Ok(())
 }

@@ -34,6 +34,17 @@ impl Default for LinkState {
 
 /// Positions: orientation, origin, joint columns and world-axes inertia of every link.
 pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    poses::<true>(model, q, st);
+}
+
+/// [`positions`] without the world-axes inertias (`inertia` is left as it was): what the
+/// loops' constraints read (orientations, origins, joint columns).
+pub fn frames(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    poses::<false>(model, q, st);
+}
+
+#[inline(always)]
+fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
     for (i, l) in model.links.iter().enumerate() {
         let (r_parent, o_parent) = match l.parent {
             Some(p) => (st[p].rotation, st[p].origin),
@@ -55,7 +66,9 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
             s.origin += r_joint * t_q;
         }
         s.s = l.joint.subspace(qi, &r_joint, &s.rotation);
-        s.inertia = l.inertia.rotated(&s.rotation);
+        if INERTIA {
+            s.inertia = l.inertia.rotated(&s.rotation);
+        }
     }
 }
 

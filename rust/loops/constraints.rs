@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use super::{CutKind, LoopJoint};
 use crate::kinematics::{self, body_placement, LinkState};
 use crate::model::Model;
-use crate::spatial::{angular, linear, Mat3, Vec3, Vec6};
+use crate::spatial::{angular, linear, Mat3, Placement, Vec3, Vec6};
 
 /// The tree's world-frame kinematics for the constraints, reused across calls.
 pub struct LoopKinematics {
@@ -27,6 +27,34 @@ pub struct LoopKinematics {
     rows: Vec<LoopRows>,
     /// Each coupling's residual at the last `positions`.
     coupled: Vec<f64>,
+    /// Per cut joint, what does not change with `q` (built with the model's loops).
+    fixed: Vec<LoopConsts>,
+}
+
+/// A cut joint's constant part: its row axes in frame a ([`local_axes`]) and, per end,
+/// whether the body's placement in its link and the joint frame turn (the rotation
+/// products are skipped for those that do not: the same numbers).
+#[derive(Clone, Copy)]
+struct LoopConsts {
+    axes: Option<[Vec3; 3]>,
+    turns_a: [bool; 2],
+    turns_b: [bool; 2],
+}
+
+impl LoopConsts {
+    fn new(model: &Model, lp: &LoopJoint) -> Self {
+        let turns = |body: Option<usize>, frame: &crate::spatial::Placement| {
+            let in_link = body
+                .and_then(|b| model.bodies.get(b))
+                .is_some_and(|b| b.in_link.rotation != Mat3::identity());
+            [in_link, frame.rotation != Mat3::identity()]
+        };
+        LoopConsts {
+            axes: local_axes(lp),
+            turns_a: turns(lp.body_a, &lp.frame_a),
+            turns_b: turns(lp.body_b, &lp.frame_b),
+        }
+    }
 }
 
 /// Residual, Jacobian (`m × nv`) and `γ = J̇ q̇` of all cut joints.
@@ -72,15 +100,26 @@ impl LoopKinematics {
             bias: vec![Vec6::zeros(); model.links.len()],
             rows: Vec::with_capacity(model.loops.len()),
             coupled: vec![0.0; model.couplings.len()],
+            fixed: model
+                .loops
+                .iter()
+                .map(|lp| LoopConsts::new(model, lp))
+                .collect(),
         }
     }
 
     /// The links' world poses and, from them, each cut joint's ends and row directions.
     pub fn positions(&mut self, model: &Model, q: &[f64]) {
-        kinematics::positions(model, q, &mut self.links);
+        kinematics::frames(model, q, &mut self.links);
+        if self.fixed.len() != model.loops.len() {
+            // Built for another model's loops (never in the solvers).
+            self.fixed.clear();
+            self.fixed
+                .extend(model.loops.iter().map(|lp| LoopConsts::new(model, lp)));
+        }
         self.rows.clear();
-        for lp in &model.loops {
-            let rows = LoopRows::new(self, model, lp);
+        for (lp, fixed) in model.loops.iter().zip(&self.fixed) {
+            let rows = LoopRows::new(self, model, lp, fixed);
             self.rows.push(rows);
         }
         super::coupling::residual(model, q, &mut self.coupled);
@@ -102,7 +141,14 @@ impl LoopKinematics {
         }
     }
 
-    fn end(&self, model: &Model, body: Option<usize>, frame: &crate::spatial::Placement) -> End {
+    /// `turns`: whether body `b`'s placement in its link and `frame` turn ([`LoopConsts`]).
+    fn end(
+        &self,
+        model: &Model,
+        body: Option<usize>,
+        frame: &crate::spatial::Placement,
+        turns: [bool; 2],
+    ) -> End {
         match body {
             None => End {
                 rotation: frame.rotation,
@@ -110,7 +156,15 @@ impl LoopKinematics {
                 link: None,
             },
             Some(b) => {
-                let p = body_placement(model, &self.links, b).compose(frame);
+                let p = match model.bodies[b].link {
+                    Some(l) => {
+                        let s = &self.links[l];
+                        let at_link = Placement::new(s.rotation, s.origin);
+                        let in_link = compose(&at_link, &model.bodies[b].in_link, turns[0]);
+                        compose(&in_link, frame, turns[1])
+                    }
+                    None => body_placement(model, &self.links, b).compose(frame),
+                };
                 End {
                     rotation: p.rotation,
                     point: p.translation,
@@ -135,17 +189,19 @@ impl LoopKinematics {
         }
     }
 
-    /// Adds `lin · (velocity of point p)` + `ang · (angular velocity)` of `link`'s body, as
-    /// a function of `v`, to row `row` of `jac`.
-    fn add_to_row(
+    /// For each `(lin, ang)` of `dirs`, adds `lin · (velocity of point p)` + `ang ·
+    /// (angular velocity)` of `link`'s body, as a function of `v`, to row `first + k` of
+    /// `jac` (column-major, `m` rows). Each joint column's motion at `p` is formed once for
+    /// all the rows.
+    fn add_to_rows(
         &self,
         model: &Model,
-        jac: &mut DMatrix<f64>,
-        row: usize,
+        jac: &mut [f64],
+        m: usize,
+        first: usize,
         link: Option<usize>,
         p: &Vec3,
-        lin: &Vec3,
-        ang: &Vec3,
+        dirs: &[(Vec3, Vec3)],
     ) {
         let mut next = link;
         while let Some(j) = next {
@@ -156,16 +212,34 @@ impl LoopKinematics {
                 let col = &s.s[k];
                 let w = angular(col);
                 let v = linear(col) + w.cross(&r);
-                jac[(row, l.v_index + k)] += lin.dot(&v) + ang.dot(&w);
+                let column = &mut jac[(l.v_index + k) * m + first..][..dirs.len()];
+                for (x, (lin, ang)) in column.iter_mut().zip(dirs) {
+                    *x += lin.dot(&v) + ang.dot(&w);
+                }
             }
             next = l.parent;
         }
     }
 }
 
-/// Frame a's axes in the world, ordered so that the joint axis comes last: the two normals
-/// `u₁, u₂` (`u₁ × u₂ = axis`) and the axis for revolute and prismatic joints.
-fn row_axes(lp: &LoopJoint, rotation_a: &Mat3) -> [Vec3; 3] {
+/// `parent ∘ child`; with `turns` false (`child`'s rotation the identity) the rotation
+/// product is left out: it would give `parent`'s rotation exactly.
+#[inline]
+fn compose(parent: &Placement, child: &Placement, turns: bool) -> Placement {
+    if turns {
+        parent.compose(child)
+    } else {
+        Placement {
+            rotation: parent.rotation,
+            translation: parent.rotation * child.translation + parent.translation,
+        }
+    }
+}
+
+/// For revolute and prismatic joints, the row axes in frame a, ordered so that the joint
+/// axis comes last: the two normals `u₁, u₂` (`u₁ × u₂ = axis`) and the axis; `None` for
+/// the others (frame a's own axes).
+fn local_axes(lp: &LoopJoint) -> Option<[Vec3; 3]> {
     match lp.kind() {
         CutKind::Revolute | CutKind::Prismatic => {
             let a = lp.axis().normalize();
@@ -173,9 +247,17 @@ fn row_axes(lp: &LoopJoint, rotation_a: &Mat3) -> [Vec3; 3] {
             let k = a.iamin();
             let u1 = a.cross(&Vec3::ith(k, 1.0)).normalize();
             let u2 = a.cross(&u1);
-            [rotation_a * u1, rotation_a * u2, rotation_a * a]
+            Some([u1, u2, a])
         }
-        _ => [
+        _ => None,
+    }
+}
+
+/// Frame a's row axes in the world ([`local_axes`] turned by frame a's orientation).
+fn row_axes(local: &Option<[Vec3; 3]>, rotation_a: &Mat3) -> [Vec3; 3] {
+    match local {
+        Some([u1, u2, a]) => [rotation_a * u1, rotation_a * u2, rotation_a * a],
+        None => [
             rotation_a.column(0).into(),
             rotation_a.column(1).into(),
             rotation_a.column(2).into(),
@@ -194,10 +276,10 @@ struct LoopRows {
 }
 
 impl LoopRows {
-    fn new(kin: &LoopKinematics, model: &Model, lp: &LoopJoint) -> Self {
-        let a = kin.end(model, lp.body_a, &lp.frame_a);
-        let b = kin.end(model, lp.body_b, &lp.frame_b);
-        let axes = row_axes(lp, &a.rotation);
+    fn new(kin: &LoopKinematics, model: &Model, lp: &LoopJoint, fixed: &LoopConsts) -> Self {
+        let a = kin.end(model, lp.body_a, &lp.frame_a, fixed.turns_a);
+        let b = kin.end(model, lp.body_b, &lp.frame_b, fixed.turns_b);
+        let axes = row_axes(&fixed.axes, &a.rotation);
         let npos = if lp.kind() == CutKind::Prismatic {
             2
         } else {
@@ -303,18 +385,15 @@ pub(super) fn jacobian_within(
     add_jacobian(model, kin, jac);
 }
 
-/// Adds each cut joint's and coupling's rows to `jac`.
+/// Adds each cut joint's and coupling's rows to `jac`: per cut joint, body b's end then
+/// body a's, each row's `(lin, ang)` directions for `add_to_rows`.
 fn add_jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
     let zero = Vec3::zeros();
+    let m = jac.nrows();
     let mut r = 0;
     for (lp, rows) in model.loops.iter().zip(&kin.rows) {
         let (a, b) = (&rows.a, &rows.b);
         let d = b.point - a.point;
-        for e in &rows.axes[..rows.npos] {
-            kin.add_to_row(model, jac, r, b.link, &b.point, e, &zero);
-            kin.add_to_row(model, jac, r, a.link, &a.point, &-e, &e.cross(&d));
-            r += 1;
-        }
         let angular_dirs: &[Vec3] = match lp.kind() {
             CutKind::Spherical => &[],
             CutKind::Revolute => &[
@@ -323,11 +402,22 @@ fn add_jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
             ],
             CutKind::Prismatic | CutKind::Fixed => &rows.axes,
         };
-        for c in angular_dirs {
-            kin.add_to_row(model, jac, r, b.link, &b.point, &zero, c);
-            kin.add_to_row(model, jac, r, a.link, &a.point, &zero, &-c);
-            r += 1;
+        let (mut dirs_b, mut dirs_a) = ([(zero, zero); 6], [(zero, zero); 6]);
+        let mut n = 0;
+        for e in &rows.axes[..rows.npos] {
+            dirs_b[n] = (*e, zero);
+            dirs_a[n] = (-e, e.cross(&d));
+            n += 1;
         }
+        for c in angular_dirs {
+            dirs_b[n] = (zero, *c);
+            dirs_a[n] = (zero, -c);
+            n += 1;
+        }
+        let data = jac.as_mut_slice();
+        kin.add_to_rows(model, data, m, r, b.link, &b.point, &dirs_b[..n]);
+        kin.add_to_rows(model, data, m, r, a.link, &a.point, &dirs_a[..n]);
+        r += n;
     }
     super::coupling::jacobian(model, r, jac);
 }
