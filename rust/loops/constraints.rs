@@ -224,7 +224,7 @@ impl LoopKinematics {
 
 /// `parent ∘ child`; with `turns` false (`child`'s rotation the identity) the rotation
 /// product is left out: it would give `parent`'s rotation exactly.
-#[inline]
+#[inline(always)]
 fn compose(parent: &Placement, child: &Placement, turns: bool) -> Placement {
     if turns {
         parent.compose(child)

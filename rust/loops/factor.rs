@@ -22,11 +22,16 @@ pub fn cholesky(m: &mut DMatrix<f64>) -> Result<(), usize> {
         let d = d.sqrt();
         col[j] = d;
         let inv = 1.0 / d;
-        for x in &mut col[j + 1..] {
+        // Past the column's last nonzero there is nothing to scale or update with.
+        let last = col[j + 1..]
+            .iter()
+            .rposition(|&x| x != 0.0)
+            .map_or(j + 1, |i| j + i + 2);
+        for x in &mut col[j + 1..last] {
             *x *= inv;
         }
         // Trailing update of the lower triangle: column k -= l_kj · l[k.., j].
-        for k in j + 1..n {
+        for k in j + 1..last {
             let lkj = col[k];
             if lkj == 0.0 {
                 continue;
@@ -57,13 +62,23 @@ pub fn column_ends(l: &DMatrix<f64>, ends: &mut [usize]) {
 
 /// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`], `ends` its
 /// [`column_ends`]); column-oriented, skipping zero entries of `x` (a constraint row touches
-/// a few coordinates) and starting at `from` (`x` is zero before). Returns one past the
-/// last entry of `x` that can be nonzero.
-pub fn forward_substitute(l: &DMatrix<f64>, ends: &[usize], x: &mut [f64], from: usize) -> usize {
+/// a few coordinates) and starting at `from` and ending at `to` (`x` is zero outside
+/// `from..to` on entry; past both `to` and the columns' fill it stays zero). Returns one
+/// past the last entry of `x` that can be nonzero.
+pub fn forward_substitute(
+    l: &DMatrix<f64>,
+    ends: &[usize],
+    x: &mut [f64],
+    from: usize,
+    to: usize,
+) -> usize {
     let n = x.len();
     let data = l.as_slice();
     let mut end = from;
     for k in from..n {
+        if k >= end.max(to) {
+            break;
+        }
         if x[k] == 0.0 {
             continue;
         }

@@ -326,7 +326,7 @@ pub fn constrained_forward_dynamics(
             ja += col[c] * a[c];
         }
         work[k] = -cons.gamma[r] - ja;
-        let end = forward_substitute(mass, mass_ends, col, row_lo[r]);
+        let end = forward_substitute(mass, mass_ends, col, row_lo[r], row_hi[r]);
         qr_y.set_envelope(k, row_lo[r], end);
     }
     qr_y.factor(rank, false, 0.0, 0.0);
@@ -387,7 +387,7 @@ pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: 
 
 /// `x = M⁻¹ x` with the Cholesky factor of the last [`constrained_forward_dynamics`].
 pub(super) fn mass_solve(solver: &LoopSolver, x: &mut [f64]) {
-    forward_substitute(&solver.mass, &solver.mass_ends, x, 0);
+    forward_substitute(&solver.mass, &solver.mass_ends, x, 0, x.len());
     back_substitute(&solver.mass, &solver.mass_ends, x);
 }
 
