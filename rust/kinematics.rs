@@ -38,7 +38,9 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
 }
 
 /// [`positions`] without the world-axes inertias (`inertia` is left as it was): what the
-/// loops' constraints read (orientations, origins, joint columns).
+/// loops' constraints read (orientations, origins, joint columns). Only each joint's own
+/// columns `s[..nv]` are written: `st` must have the others zero (as
+/// `LinkState::default()` has, and every earlier `frames` of the same model leaves them).
 pub fn frames(model: &Model, q: &[f64], st: &mut [LinkState]) {
     poses::<false>(model, q, st);
 }
@@ -65,7 +67,14 @@ fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
         if let crate::joint::Joint::Prismatic { .. } | crate::joint::Joint::FreeFlyer = l.joint {
             s.origin += r_joint * t_q;
         }
-        s.s = l.joint.subspace(qi, &r_joint, &s.rotation);
+        let columns = l.joint.subspace(qi, &r_joint, &s.rotation);
+        if INERTIA {
+            s.s = columns;
+        } else {
+            // The columns past the joint's speeds are zero, as they started.
+            let nv = l.joint.nv();
+            s.s[..nv].copy_from_slice(&columns[..nv]);
+        }
         if INERTIA {
             s.inertia = l.inertia.rotated(&s.rotation);
         }

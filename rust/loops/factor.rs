@@ -9,7 +9,11 @@ use nalgebra::{DMatrix, DMatrixViewMut};
 /// pivot is not positive. Right-looking on contiguous columns, skipping zero entries: a
 /// tree's mass matrix is zero between bodies on different branches, and the factor keeps
 /// that sparsity (no fill outside the ancestor pairs).
-pub fn cholesky(m: &mut DMatrix<f64>) -> Result<(), usize> {
+///
+/// `ends[k]` (unless `ends` is empty): one past the last nonzero row of column `k` of `L`,
+/// so that the triangular solves stop there (a tree's factor is zero below each column's
+/// descendants); each is set as its column is finished.
+pub fn cholesky(m: &mut DMatrix<f64>, ends: &mut [usize]) -> Result<(), usize> {
     let n = m.nrows();
     let data = m.as_mut_slice();
     for j in 0..n {
@@ -30,6 +34,13 @@ pub fn cholesky(m: &mut DMatrix<f64>) -> Result<(), usize> {
         for x in &mut col[j + 1..last] {
             *x *= inv;
         }
+        if let Some(e) = ends.get_mut(j) {
+            // Column j is final: later steps update the columns after it.
+            *e = col[j + 1..last]
+                .iter()
+                .rposition(|&x| x != 0.0)
+                .map_or(j + 1, |i| j + i + 2);
+        }
         // Trailing update of the lower triangle: column k -= l_kj · l[k.., j].
         for k in j + 1..last {
             let lkj = col[k];
@@ -45,23 +56,7 @@ pub fn cholesky(m: &mut DMatrix<f64>) -> Result<(), usize> {
     Ok(())
 }
 
-/// `ends[k]`: one past the last nonzero row of column `k` of `L` (from [`cholesky`]), so
-/// that the triangular solves stop there: a tree's factor is zero below each column's
-/// descendants.
-pub fn column_ends(l: &DMatrix<f64>, ends: &mut [usize]) {
-    let n = l.nrows();
-    let data = l.as_slice();
-    for (k, e) in ends.iter_mut().enumerate() {
-        let col = &data[k * n..(k + 1) * n];
-        *e = col[k + 1..]
-            .iter()
-            .rposition(|&x| x != 0.0)
-            .map_or(k + 1, |i| k + i + 2);
-    }
-}
-
-/// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`], `ends` its
-/// [`column_ends`]); column-oriented, skipping zero entries of `x` (a constraint row touches
+/// Solves `L x = b` in place (`L` lower triangular, from [`cholesky`], with its `ends`); column-oriented, skipping zero entries of `x` (a constraint row touches
 /// a few coordinates) and starting at `from` and ending at `to` (`x` is zero outside
 /// `from..to` on entry; past both `to` and the columns' fill it stays zero). Returns one
 /// past the last entry of `x` that can be nonzero.

@@ -285,12 +285,11 @@ pub fn constrained_forward_dynamics(
         solver.constraints_at(model, q, Some(v))
     };
     recursive::mass_matrix(model, data, q, &mut solver.mass);
-    if let Err(k) = factor::cholesky(&mut solver.mass) {
+    if let Err(k) = factor::cholesky(&mut solver.mass, &mut solver.mass_ends) {
         return Err(Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k}): a massless chain, or a body too slender"
         )));
     }
-    factor::column_ends(&solver.mass, &mut solver.mass_ends);
     let rank = if reuse {
         solver.qr_j.rank()
     } else {

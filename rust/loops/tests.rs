@@ -13,11 +13,39 @@ fn cholesky_reproduces_the_matrix_and_refuses_indefinite_ones() {
     });
     let m0 = &b * b.transpose();
     let mut m = m0.clone();
-    cholesky(&mut m).unwrap();
+    cholesky(&mut m, &mut []).unwrap();
     let l = m.lower_triangle();
     assert!((&l * l.transpose() - &m0).amax() < 1e-13);
     let mut bad = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]);
-    assert_eq!(cholesky(&mut bad), Err(1));
+    assert_eq!(cholesky(&mut bad, &mut []), Err(1));
+}
+
+/// The factor's column ends as `cholesky` reports them, against a scan of the factor: a
+/// tree-like mass matrix (two branches, zero between them) keeps its zeros.
+#[test]
+fn cholesky_column_ends_match_the_factor() {
+    // Coordinates 0-1-2 a chain, 3-4 another branch; 5 alone.
+    let pairs = [(0, 1), (0, 2), (1, 2), (3, 4)];
+    let mut m0 = DMatrix::from_diagonal_element(6, 6, 3.0);
+    for (k, &(i, j)) in pairs.iter().enumerate() {
+        let x = 0.3 + 0.1 * k as f64;
+        (m0[(i, j)], m0[(j, i)]) = (x, x);
+    }
+    let mut m = m0.clone();
+    let mut ends = vec![usize::MAX; 6];
+    cholesky(&mut m, &mut ends).unwrap();
+    let l = m.lower_triangle();
+    assert!((&l * l.transpose() - &m0).amax() < 1e-13);
+    let scanned: Vec<usize> = (0..6)
+        .map(|k| {
+            (k + 1..6)
+                .rev()
+                .find(|&i| l[(i, k)] != 0.0)
+                .map_or(k + 1, |i| i + 1)
+        })
+        .collect();
+    assert_eq!(ends, scanned);
+    assert_eq!(ends, [3, 3, 3, 5, 5, 6]);
 }
 
 #[test]
