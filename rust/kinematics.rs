@@ -72,8 +72,9 @@ fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
             s.s = columns;
         } else {
             // The columns past the joint's speeds are zero, as they started.
-            let nv = l.joint.nv();
-            s.s[..nv].copy_from_slice(&columns[..nv]);
+            for k in 0..l.joint.nv() {
+                s.s[k] = columns[k];
+            }
         }
         if INERTIA {
             s.inertia = l.inertia.rotated(&s.rotation);

@@ -117,11 +117,17 @@ impl LoopKinematics {
             self.fixed
                 .extend(model.loops.iter().map(|lp| LoopConsts::new(model, lp)));
         }
-        self.rows.clear();
-        for (lp, fixed) in model.loops.iter().zip(&self.fixed) {
-            let rows = LoopRows::new(self, model, lp, fixed);
-            self.rows.push(rows);
+        // In place (a `LoopRows` is a few hundred bytes: no copy through a temporary).
+        let mut rows = std::mem::take(&mut self.rows);
+        rows.truncate(model.loops.len());
+        for (k, (lp, fixed)) in model.loops.iter().zip(&self.fixed).enumerate() {
+            let (a, b) = self.ends(model, lp, fixed);
+            match rows.get_mut(k) {
+                Some(r) => r.set(lp, fixed, a, b),
+                None => rows.push(LoopRows::new(lp, fixed, a, b)),
+            }
         }
+        self.rows = rows;
         super::coupling::residual(model, q, &mut self.coupled);
     }
 
@@ -139,6 +145,15 @@ impl LoopKinematics {
             };
             self.bias[i] = parent + self.links[i].xi;
         }
+    }
+
+    /// The two ends of `lp` at the last positions.
+    #[inline]
+    fn ends(&self, model: &Model, lp: &LoopJoint, fixed: &LoopConsts) -> (End, End) {
+        (
+            self.end(model, lp.body_a, &lp.frame_a, fixed.turns_a),
+            self.end(model, lp.body_b, &lp.frame_b, fixed.turns_b),
+        )
     }
 
     /// `turns`: whether body `b`'s placement in its link and `frame` turn ([`LoopConsts`]).
@@ -189,10 +204,12 @@ impl LoopKinematics {
         }
     }
 
-    /// For each `(lin, ang)` of `dirs`, adds `lin · (velocity of point p)` + `ang ·
-    /// (angular velocity)` of `link`'s body, as a function of `v`, to row `first + k` of
-    /// `jac` (column-major, `m` rows). Each joint column's motion at `p` is formed once for
-    /// all the rows.
+    /// For each of the `n` rows `(lin, ang) = dirs(k)`, adds `lin · (velocity of point p)`
+    /// + `ang · (angular velocity)` of `link`'s body, as a function of `v`, to row
+    /// `first + k` of `jac` (column-major, `m` rows). Each joint column's motion at `p` is
+    /// formed once for all the rows.
+    #[allow(clippy::too_many_arguments)]
+    #[inline]
     fn add_to_rows(
         &self,
         model: &Model,
@@ -201,7 +218,8 @@ impl LoopKinematics {
         first: usize,
         link: Option<usize>,
         p: &Vec3,
-        dirs: &[(Vec3, Vec3)],
+        n: usize,
+        dirs: impl Fn(usize) -> (Vec3, Vec3),
     ) {
         let mut next = link;
         while let Some(j) = next {
@@ -212,8 +230,9 @@ impl LoopKinematics {
                 let col = &s.s[k];
                 let w = angular(col);
                 let v = linear(col) + w.cross(&r);
-                let column = &mut jac[(l.v_index + k) * m + first..][..dirs.len()];
-                for (x, (lin, ang)) in column.iter_mut().zip(dirs) {
+                let column = &mut jac[(l.v_index + k) * m + first..][..n];
+                for (i, x) in column.iter_mut().enumerate() {
+                    let (lin, ang) = dirs(i);
                     *x += lin.dot(&v) + ang.dot(&w);
                 }
             }
@@ -276,16 +295,28 @@ struct LoopRows {
 }
 
 impl LoopRows {
-    fn new(kin: &LoopKinematics, model: &Model, lp: &LoopJoint, fixed: &LoopConsts) -> Self {
-        let a = kin.end(model, lp.body_a, &lp.frame_a, fixed.turns_a);
-        let b = kin.end(model, lp.body_b, &lp.frame_b, fixed.turns_b);
-        let axes = row_axes(&fixed.axes, &a.rotation);
-        let npos = if lp.kind() == CutKind::Prismatic {
+    fn new(lp: &LoopJoint, fixed: &LoopConsts, a: End, b: End) -> Self {
+        let mut rows = LoopRows {
+            a,
+            b,
+            axes: [Vec3::zeros(); 3],
+            npos: 0,
+        };
+        rows.set(lp, fixed, a, b);
+        rows
+    }
+
+    /// The rows for the ends `a`, `b` of `lp`.
+    #[inline]
+    fn set(&mut self, lp: &LoopJoint, fixed: &LoopConsts, a: End, b: End) {
+        self.axes = row_axes(&fixed.axes, &a.rotation);
+        self.a = a;
+        self.b = b;
+        self.npos = if lp.kind() == CutKind::Prismatic {
             2
         } else {
             3
         };
-        LoopRows { a, b, axes, npos }
     }
 
     /// Frame b's copy of the joint axis, in the world.
@@ -402,21 +433,27 @@ fn add_jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
             ],
             CutKind::Prismatic | CutKind::Fixed => &rows.axes,
         };
-        let (mut dirs_b, mut dirs_a) = ([(zero, zero); 6], [(zero, zero); 6]);
-        let mut n = 0;
-        for e in &rows.axes[..rows.npos] {
-            dirs_b[n] = (*e, zero);
-            dirs_a[n] = (-e, e.cross(&d));
-            n += 1;
+        let npos = rows.npos;
+        let mut moments = [zero; 3];
+        for (t, e) in moments.iter_mut().zip(&rows.axes[..npos]) {
+            *t = e.cross(&d);
         }
-        for c in angular_dirs {
-            dirs_b[n] = (zero, *c);
-            dirs_a[n] = (zero, -c);
-            n += 1;
-        }
+        let n = npos + angular_dirs.len();
         let data = jac.as_mut_slice();
-        kin.add_to_rows(model, data, m, r, b.link, &b.point, &dirs_b[..n]);
-        kin.add_to_rows(model, data, m, r, a.link, &a.point, &dirs_a[..n]);
+        kin.add_to_rows(model, data, m, r, b.link, &b.point, n, |k| {
+            if k < npos {
+                (rows.axes[k], zero)
+            } else {
+                (zero, angular_dirs[k - npos])
+            }
+        });
+        kin.add_to_rows(model, data, m, r, a.link, &a.point, n, |k| {
+            if k < npos {
+                (-rows.axes[k], moments[k])
+            } else {
+                (zero, -angular_dirs[k - npos])
+            }
+        });
         r += n;
     }
     super::coupling::jacobian(model, r, jac);
