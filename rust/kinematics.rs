@@ -3,7 +3,9 @@
 //! twist rate, `ξ_i = Ȧ_{i,λ} t_λ + Ṗ_i q̇_i` — all in world coordinates as in the paper (docs/method.md §2).
 use crate::joint::Subspace;
 use crate::model::Model;
-use crate::spatial::{angular, linear, stack, BodyInertia, Mat3, Placement, Vec3, Vec6};
+use crate::spatial::{
+    angular, linear, mat_mat, mat_vec, stack, BodyInertia, Mat3, Placement, Vec3, Vec6,
+};
 
 #[derive(Debug, Clone)]
 pub struct LinkState {
@@ -62,8 +64,14 @@ fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
         let (r_q, t_q) = l.joint.transform(qi);
         let s = &mut st[i];
         s.joint_rotation = r_joint;
-        s.rotation = r_joint * r_q;
-        s.origin = o_parent + r_parent * l.placement.translation;
+        if INERTIA {
+            s.rotation = r_joint * r_q;
+            s.origin = o_parent + r_parent * l.placement.translation;
+        } else {
+            // The same products, inlined without LTO too.
+            s.rotation = mat_mat(&r_joint, &r_q);
+            s.origin = o_parent + mat_vec(&r_parent, &l.placement.translation);
+        }
         if let crate::joint::Joint::Prismatic { .. } | crate::joint::Joint::FreeFlyer = l.joint {
             s.origin += r_joint * t_q;
         }

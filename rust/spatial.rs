@@ -8,6 +8,25 @@ pub type Mat3 = Matrix3<f64>;
 pub type Vec6 = Vector6<f64>;
 pub type Mat6 = Matrix6<f64>;
 
+/// `r v` written out, summed as nalgebra's product sums it (`(r₀v₀ + r₁v₁) + r₂v₂` with
+/// `rₖ` the columns: the same numbers), so that every build profile inlines it (without
+/// LTO nalgebra's generic product is a call per use).
+#[inline(always)]
+pub fn mat_vec(r: &Mat3, v: &Vec3) -> Vec3 {
+    Vec3::new(
+        r[(0, 0)] * v.x + r[(0, 1)] * v.y + r[(0, 2)] * v.z,
+        r[(1, 0)] * v.x + r[(1, 1)] * v.y + r[(1, 2)] * v.z,
+        r[(2, 0)] * v.x + r[(2, 1)] * v.y + r[(2, 2)] * v.z,
+    )
+}
+
+/// `a b` as [`mat_vec`] on each column of `b`.
+#[inline(always)]
+pub fn mat_mat(a: &Mat3, b: &Mat3) -> Mat3 {
+    let c = |j: usize| mat_vec(a, &Vec3::new(b[(0, j)], b[(1, j)], b[(2, j)]));
+    Mat3::from_columns(&[c(0), c(1), c(2)])
+}
+
 /// Cross-product matrix: `skew(a) * b == a × b`.
 #[inline]
 pub fn skew(a: &Vec3) -> Mat3 {

@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use super::{CutKind, LoopJoint};
 use crate::kinematics::{self, body_placement, LinkState};
 use crate::model::Model;
-use crate::spatial::{angular, linear, Mat3, Placement, Vec3, Vec6};
+use crate::spatial::{angular, linear, mat_vec, Mat3, Placement, Vec3, Vec6};
 
 /// The tree's world-frame kinematics for the constraints, reused across calls.
 pub struct LoopKinematics {
@@ -209,7 +209,7 @@ impl LoopKinematics {
     /// `first + k` of `jac` (column-major, `m` rows). Each joint column's motion at `p` is
     /// formed once for all the rows.
     #[allow(clippy::too_many_arguments)]
-    #[inline]
+    #[inline(always)]
     fn add_to_rows(
         &self,
         model: &Model,
@@ -233,12 +233,19 @@ impl LoopKinematics {
                 let column = &mut jac[(l.v_index + k) * m + first..][..n];
                 for (i, x) in column.iter_mut().enumerate() {
                     let (lin, ang) = dirs(i);
-                    *x += lin.dot(&v) + ang.dot(&w);
+                    *x += dot3(&lin, &v) + dot3(&ang, &w);
                 }
             }
             next = l.parent;
         }
     }
+}
+
+/// `a · b` as nalgebra's `dot` forms it for 3-vectors (`a₀b₀ + a₁b₁ + a₂b₂`), inlined in
+/// every build profile.
+#[inline(always)]
+fn dot3(a: &Vec3, b: &Vec3) -> f64 {
+    a.x * b.x + a.y * b.y + a.z * b.z
 }
 
 /// `parent ∘ child`; with `turns` false (`child`'s rotation the identity) the rotation
@@ -250,7 +257,7 @@ fn compose(parent: &Placement, child: &Placement, turns: bool) -> Placement {
     } else {
         Placement {
             rotation: parent.rotation,
-            translation: parent.rotation * child.translation + parent.translation,
+            translation: mat_vec(&parent.rotation, &child.translation) + parent.translation,
         }
     }
 }
@@ -275,7 +282,11 @@ fn local_axes(lp: &LoopJoint) -> Option<[Vec3; 3]> {
 /// Frame a's row axes in the world ([`local_axes`] turned by frame a's orientation).
 fn row_axes(local: &Option<[Vec3; 3]>, rotation_a: &Mat3) -> [Vec3; 3] {
     match local {
-        Some([u1, u2, a]) => [rotation_a * u1, rotation_a * u2, rotation_a * a],
+        Some([u1, u2, a]) => [
+            mat_vec(rotation_a, u1),
+            mat_vec(rotation_a, u2),
+            mat_vec(rotation_a, a),
+        ],
         None => [
             rotation_a.column(0).into(),
             rotation_a.column(1).into(),
@@ -290,6 +301,8 @@ struct LoopRows {
     a: End,
     b: End,
     axes: [Vec3; 3],
+    /// Frame b's copy of the joint axis, in the world (revolute and prismatic joints).
+    axis_b: Vec3,
     /// Number of position rows (the first ones): 3, or 2 for a prismatic joint.
     npos: usize,
 }
@@ -300,6 +313,7 @@ impl LoopRows {
             a,
             b,
             axes: [Vec3::zeros(); 3],
+            axis_b: Vec3::zeros(),
             npos: 0,
         };
         rows.set(lp, fixed, a, b);
@@ -310,6 +324,9 @@ impl LoopRows {
     #[inline]
     fn set(&mut self, lp: &LoopJoint, fixed: &LoopConsts, a: End, b: End) {
         self.axes = row_axes(&fixed.axes, &a.rotation);
+        if let Some([_, _, axis]) = &fixed.axes {
+            self.axis_b = mat_vec(&b.rotation, axis);
+        }
         self.a = a;
         self.b = b;
         self.npos = if lp.kind() == CutKind::Prismatic {
@@ -317,11 +334,6 @@ impl LoopRows {
         } else {
             3
         };
-    }
-
-    /// Frame b's copy of the joint axis, in the world.
-    fn axis_b(&self, lp: &LoopJoint) -> Vec3 {
-        self.b.rotation * lp.axis().normalize()
     }
 }
 
@@ -368,7 +380,7 @@ pub fn residual(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
         match lp.kind() {
             CutKind::Spherical => {}
             CutKind::Revolute => {
-                let ab = rows.axis_b(lp);
+                let ab = rows.axis_b;
                 for u in &rows.axes[..2] {
                     out[r] = u.dot(&ab);
                     r += 1;
@@ -428,8 +440,8 @@ fn add_jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
         let angular_dirs: &[Vec3] = match lp.kind() {
             CutKind::Spherical => &[],
             CutKind::Revolute => &[
-                rows.axis_b(lp).cross(&rows.axes[0]),
-                rows.axis_b(lp).cross(&rows.axes[1]),
+                rows.axis_b.cross(&rows.axes[0]),
+                rows.axis_b.cross(&rows.axes[1]),
             ],
             CutKind::Prismatic | CutKind::Fixed => &rows.axes,
         };
@@ -479,7 +491,7 @@ pub fn gamma(model: &Model, kin: &LoopKinematics, out: &mut [f64]) {
         match lp.kind() {
             CutKind::Spherical => {}
             CutKind::Revolute => {
-                let ab = rows.axis_b(lp);
+                let ab = rows.axis_b;
                 let ab_rate = mb.w.cross(&ab);
                 for u in &rows.axes[..2] {
                     let c = ab.cross(u);
@@ -515,7 +527,7 @@ pub fn wrenches(model: &Model, kin: &LoopKinematics, lambda: &[f64]) -> Vec<[f64
         match lp.kind() {
             CutKind::Spherical => {}
             CutKind::Revolute => {
-                let ab = rows.axis_b(lp);
+                let ab = rows.axis_b;
                 for u in &rows.axes[..2] {
                     moment += ab.cross(u) * lambda[r];
                     r += 1;
@@ -545,6 +557,6 @@ pub fn loop_of_row(model: &Model, row: usize) -> usize {
 /// rows vanish for anti-parallel axes too, a closure the joint cannot have.
 pub fn flipped_axis(model: &Model, kin: &LoopKinematics) -> Option<usize> {
     model.loops.iter().zip(&kin.rows).position(|(lp, rows)| {
-        lp.kind() == CutKind::Revolute && rows.axis_b(lp).dot(&rows.axes[2]) <= 0.0
+        lp.kind() == CutKind::Revolute && rows.axis_b.dot(&rows.axes[2]) <= 0.0
     })
 }
