@@ -93,6 +93,11 @@ pub trait OdeSystem {
     fn filter_error(&mut self, _y: &[f64], _err: &mut [f64]) -> bool {
         false
     }
+    /// Whether [`OdeSystem::filter_error`] may change an estimate (the explicit methods then
+    /// form the estimate as displacements and filter them). Default `false`.
+    fn filters_error(&self) -> bool {
+        false
+    }
     /// The Jacobian of the system as integrated when [`OdeSystem::rhs`] evaluates `f` at a
     /// projection `P(y)` of the state: `jac ← jac · P′(y)` for the `jac` = `∂f/∂y` that
     /// [`OdeSystem::jacobian`] filled (Radau's Newton matrices; finite differences see
@@ -124,6 +129,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
     fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
         (**self).filter_error(y, err)
     }
+    fn filters_error(&self) -> bool {
+        (**self).filters_error()
+    }
     fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
         (**self).chain_projection(y, jac)
     }
@@ -150,6 +158,9 @@ impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
     }
     fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
         (**self).filter_error(y, err)
+    }
+    fn filters_error(&self) -> bool {
+        (**self).filters_error()
     }
     fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
         (**self).chain_projection(y, jac)
