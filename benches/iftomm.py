@@ -120,7 +120,8 @@ def a05():
 
 PROBLEMS = {"A01": a01, "A02": a02, "A03": a03, "A04": a04, "A05": a05}
 RUNS = [("RK45", 1e-8), ("DOP853", 1e-8), ("DOP853", 1e-10), ("Radau", 1e-8), ("auto", 1e-8)]
-RUNS_A02 = [("DOP853", 1e-6), ("DOP853", 1e-8), ("DOP853", 1e-10), ("DOP853", 1e-12)]
+RUNS_A02 = [("DOP853", 1e-6), ("DOP853", 1e-8), ("DOP853", 1e-9), ("DOP853", 1e-10), ("DOP853", 1e-11),
+            ("DOP853", 1e-12)]
 
 
 def run(name, method, rtol, setup, budget=60.0):

@@ -7,7 +7,7 @@
 
 use super::dense::Interpolant;
 use super::dop853_tableau::{A, B, C, D, E3, E5, INTERPOLATOR_POWER, N_STAGES, N_STAGES_EXTENDED};
-use super::explicit_rk::{ExplicitRk, Tableau};
+use super::explicit_rk::{error_scale, stage_sum, ExplicitRk, Tableau};
 use super::method::Method;
 use super::stepper::combine;
 
@@ -86,6 +86,36 @@ impl Tableau for Dop853Tableau {
         }
         let denom = e5n2 + 0.01 * e3n2;
         h.abs() * e5n2 / (denom * n as f64).sqrt()
+    }
+
+    const BLENDS_LOWER_ORDER: bool = true;
+
+    fn error_vectors(k: &[f64], h: f64, e: &mut [f64], e_low: &mut [f64]) {
+        let n = e.len();
+        for i in 0..n {
+            e[i] = stage_sum(k, n, i, &E5) * h;
+            e_low[i] = stage_sum(k, n, i, &E3) * h;
+        }
+    }
+
+    /// The norm above of `e = h Kᵀ E5`, `e_low = h Kᵀ E3`: `‖e‖² / sqrt((‖e‖² + 0.01
+    /// ‖e_low‖²) n)` (the factors `h` cancel).
+    fn norm_of_vectors(
+        e: &[f64],
+        e_low: &[f64],
+        ys: (&[f64], &[f64]),
+        tols: (&[f64], &[f64]),
+    ) -> f64 {
+        let (mut s5, mut s3) = (0.0f64, 0.0f64);
+        for i in 0..e.len() {
+            let scale = error_scale(i, ys, tols);
+            s5 += (e[i] / scale).powi(2);
+            s3 += (e_low[i] / scale).powi(2);
+        }
+        if s5 == 0.0 && s3 == 0.0 {
+            return 0.0;
+        }
+        s5 / ((s5 + 0.01 * s3) * e.len() as f64).sqrt()
     }
 
     /// SciPy `DOP853._dense_output_impl` (the extra stages 13..16 already in `k`):

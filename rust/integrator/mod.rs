@@ -93,6 +93,11 @@ pub trait OdeSystem {
     fn filter_error(&mut self, _y: &[f64], _err: &mut [f64]) -> bool {
         false
     }
+    /// Whether [`OdeSystem::filter_error`] may change an estimate (the explicit methods then
+    /// form the estimate as displacements and filter them). Default `false`.
+    fn filters_error(&self) -> bool {
+        false
+    }
     /// The Jacobian of the system as integrated when [`OdeSystem::rhs`] evaluates `f` at a
     /// projection `P(y)` of the state: `jac ← jac · P′(y)` for the `jac` = `∂f/∂y` that
     /// [`OdeSystem::jacobian`] filled (Radau's Newton matrices; finite differences see
@@ -102,59 +107,41 @@ pub trait OdeSystem {
     }
 }
 
-impl<S: OdeSystem + ?Sized> OdeSystem for &mut S {
-    fn dim(&self) -> usize {
-        (**self).dim()
-    }
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
-        (**self).rhs(t, y, dydt)
-    }
-    fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
-        (**self).project(y)
-    }
-    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
-        (**self).jacobian(t, y, jac)
-    }
-    fn split(&self) -> Option<usize> {
-        (**self).split()
-    }
-    fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
-        (**self).position_rate(y, qdot)
-    }
-    fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
-        (**self).filter_error(y, err)
-    }
-    fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
-        (**self).chain_projection(y, jac)
-    }
+/// A system behind a reference or a box is the system: every hook forwarded.
+macro_rules! forward_ode_system {
+    ($($ptr:ty),*) => {$(
+        impl<S: OdeSystem + ?Sized> OdeSystem for $ptr {
+            fn dim(&self) -> usize {
+                (**self).dim()
+            }
+            fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+                (**self).rhs(t, y, dydt)
+            }
+            fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
+                (**self).project(y)
+            }
+            fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+                (**self).jacobian(t, y, jac)
+            }
+            fn split(&self) -> Option<usize> {
+                (**self).split()
+            }
+            fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
+                (**self).position_rate(y, qdot)
+            }
+            fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
+                (**self).filter_error(y, err)
+            }
+            fn filters_error(&self) -> bool {
+                (**self).filters_error()
+            }
+            fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
+                (**self).chain_projection(y, jac)
+            }
+        }
+    )*};
 }
-
-impl<S: OdeSystem + ?Sized> OdeSystem for Box<S> {
-    fn dim(&self) -> usize {
-        (**self).dim()
-    }
-    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
-        (**self).rhs(t, y, dydt)
-    }
-    fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
-        (**self).project(y)
-    }
-    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
-        (**self).jacobian(t, y, jac)
-    }
-    fn split(&self) -> Option<usize> {
-        (**self).split()
-    }
-    fn position_rate(&mut self, y: &[f64], qdot: &mut [f64]) -> Result<bool, String> {
-        (**self).position_rate(y, qdot)
-    }
-    fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
-        (**self).filter_error(y, err)
-    }
-    fn chain_projection(&mut self, y: &[f64], jac: &mut [f64]) -> bool {
-        (**self).chain_projection(y, jac)
-    }
-}
+forward_ode_system!(&mut S, Box<S>);
 
 /// Adapter turning a closure `f(t, y, dydt) -> Result<(), String>` into an [`OdeSystem`].
 /// (A closure carries no dimension, hence an adapter instead of a blanket impl.)

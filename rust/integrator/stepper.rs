@@ -3,7 +3,7 @@
 //! stage and error kernels every tableau uses, in NumPy's order of summation.
 
 use super::dense::{self, Interpolant};
-use super::explicit_rk::{ExplicitRk, Tableau};
+use super::explicit_rk::{error_scale, stage_sum, ExplicitRk, Tableau};
 use super::method::Method;
 use super::OdeSystem;
 #[cfg(test)]
@@ -167,6 +167,27 @@ impl Tableau for Rk45 {
             sq += r * r;
         }
         sq.sqrt() / (scaled.len() as f64).sqrt()
+    }
+
+    const BLENDS_LOWER_ORDER: bool = false;
+
+    fn error_vectors(k: &[f64], h: f64, e: &mut [f64], _e_low: &mut [f64]) {
+        let n = e.len();
+        for (i, x) in e.iter_mut().enumerate() {
+            *x = stage_sum(k, n, i, &E) * h;
+        }
+    }
+
+    fn norm_of_vectors(
+        e: &[f64],
+        _e_low: &[f64],
+        ys: (&[f64], &[f64]),
+        tols: (&[f64], &[f64]),
+    ) -> f64 {
+        let sq: f64 = (0..e.len())
+            .map(|i| (e[i] / error_scale(i, ys, tols)).powi(2))
+            .sum();
+        sq.sqrt() / (e.len() as f64).sqrt()
     }
 
     /// `Q = Kᵀ P` (`q[4 i + j]`).

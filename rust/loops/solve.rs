@@ -725,7 +725,9 @@ pub fn project_state(
     let mut res = solver.residual_at(model, q);
     solver.max_drift = solver.max_drift.max(res);
     for _ in 0..4 {
-        if res == 0.0 {
+        // At round-off already (an accepted state projected again): a Newton step would only
+        // move it by the rounding amplified near a singular position, `~ ε/σ`.
+        if res <= ROUND_OFF {
             break;
         }
         // The residual's positions stand: the Jacobian at the same q.

@@ -33,6 +33,9 @@ pub struct Dynamics<'a> {
     chain: Option<Box<(Vec<f64>, Vec<f64>)>>,
     /// With loops: a second state-sized buffer (`P(y)` in `projection_derivative`).
     stage_base: Vec<f64>,
+    /// With loops: the last step's start `y` and its projection `P(y)`, the reference of
+    /// [`OdeSystem::filter_error`] (built on its first call; one projection per step).
+    filter_from: Option<Box<(Vec<f64>, Vec<f64>)>>,
 }
 
 /// The effects' view of the state `(t, q, v)`.
@@ -82,6 +85,7 @@ impl<'a> Dynamics<'a> {
             } else {
                 vec![0.0; model.nq + model.nv]
             },
+            filter_from: None,
         }
     }
 
@@ -191,13 +195,9 @@ impl Dynamics<'_> {
         let Some(solver) = self.loops.as_mut() else {
             return false;
         };
-        let drift = solver.max_drift;
         let mut buf = std::mem::take(&mut self.stage);
         let mut base = std::mem::take(&mut self.stage_base);
-        let project = |x: &mut [f64], solver: &mut LoopSolver| {
-            model.normalize(&mut x[..model.nq]);
-            loops::project_state(model, solver, x).is_ok() && x.iter().all(|v| v.is_finite())
-        };
+        let project = |x: &mut [f64], solver: &mut LoopSolver| project_aside(model, solver, x);
         base.copy_from_slice(y);
         let mut ok = project(&mut base, solver);
         for k in 0..n {
@@ -212,7 +212,6 @@ impl Dynamics<'_> {
                 pd[i * n + k] = (buf[i] - base[i]) / eps;
             }
         }
-        solver.max_drift = drift;
         self.stage = buf;
         self.stage_base = base;
         ok
@@ -242,6 +241,17 @@ fn project_stage<'y>(
     } else {
         y
     }
+}
+
+/// `x` projected onto the manifolds for a side computation (an error estimate, `P′`):
+/// quaternions normalised, the integrator's drift figure untouched (it counts accepted
+/// steps only). False if the projection fails or leaves a non-finite entry.
+fn project_aside(model: &Model, solver: &mut LoopSolver, x: &mut [f64]) -> bool {
+    model.normalize(&mut x[..model.nq]);
+    let drift = solver.max_drift;
+    let ok = loops::project_state(model, solver, x).is_ok() && x.iter().all(|v| v.is_finite());
+    solver.max_drift = drift;
+    ok
 }
 
 /// The right-hand side's "error" when the progress hook asks to stop (Ctrl-C, a raising
@@ -303,31 +313,44 @@ impl OdeSystem for Dynamics<'_> {
         r
     }
 
-    /// With loops: the error estimate's part along the manifolds, `P(y + err) − y` (the
+    /// With loops: the error estimate's part along the manifolds, `P(y + err) − P(y)` (the
     /// accepted state is projected, so the estimate's components across the manifolds are
-    /// not errors the step keeps; docs/mechanisms.md §6). Left as it is when the projection
-    /// fails (an estimate too large to matter: the step is rejected either way).
+    /// not errors the step keeps; docs/mechanisms.md §2, §6). `P(y)`, not `y`: near a
+    /// singular position the accepted `y` is on the manifolds only to the rounding amplified
+    /// there (`~ ε/σ`), an offset that does not shrink with the step. Left as it is when the
+    /// projection fails (an estimate too large to matter: the step is rejected either way).
     fn filter_error(&mut self, y: &[f64], err: &mut [f64]) -> bool {
         let Some(solver) = self.loops.as_mut() else {
             return false;
         };
-        let nq = self.model.nq;
+        let model = self.model;
+        let project = |x: &mut [f64], solver: &mut LoopSolver| project_aside(model, solver, x);
+        let from = self
+            .filter_from
+            .get_or_insert_with(|| Box::new((vec![f64::NAN; y.len()], vec![0.0; y.len()])));
+        if from.0 != y {
+            from.0.copy_from_slice(y);
+            from.1.copy_from_slice(y);
+            if !project(&mut from.1, solver) {
+                from.1.copy_from_slice(y);
+            }
+        }
         let mut buf = std::mem::take(&mut self.stage);
         for ((b, a), e) in buf.iter_mut().zip(y).zip(err.iter()) {
             *b = a + e;
         }
-        self.model.normalize(&mut buf[..nq]);
-        let drift = solver.max_drift;
-        let ok = loops::project_state(self.model, solver, &mut buf).is_ok()
-            && buf.iter().all(|x| x.is_finite());
-        solver.max_drift = drift;
+        let ok = project(&mut buf, solver);
         if ok {
-            for ((e, b), a) in err.iter_mut().zip(&buf).zip(y) {
-                *e = b - a;
+            for ((e, b), p) in err.iter_mut().zip(&buf).zip(&from.1) {
+                *e = b - p;
             }
         }
         self.stage = buf;
         ok
+    }
+
+    fn filters_error(&self) -> bool {
+        self.loops.is_some()
     }
 
     /// With loops: `jac · P′(y)`, the Jacobian of `f(P(y))` that `rhs` evaluates, `P′`'s
