@@ -166,6 +166,20 @@ def test_n_fourbar_at_tight_tolerances_passes_the_crossing_and_converges():
     assert errors[1e-12] < errors[1e-10] / 10
 
 
+def test_n_fourbar_stalled_run_keeps_its_trajectory_and_says_why():
+    # Beyond what the projection resolves at a crossing (rtol 1e-13): the run stops with
+    # success=False, the time reached, the step budget, a hint at the singular position and
+    # the trajectory so far (issue 27, "Bad input").
+    sc = pmd.load_scene("iftomm_a02_nfourbar")
+    res = pmd.simulate(sc, (0, 20), method="DOP853", rtol=1e-13, atol=1e-15, max_steps=300)
+    assert not res.success
+    assert "maximum number of steps (300)" in res.message
+    assert "singular position" in res.message and "rtol" in res.message
+    assert 0 < res.t[-1] < 20 and len(res.t) > 10
+    q = np.asarray(res.q)
+    assert np.all(np.isfinite(q)) and np.ptp(q[:, 0::2], axis=1).max() < 1e-6
+
+
 # --- A04: Bricard's mechanism, redundant constraints ---------------------------------------
 
 
