@@ -562,6 +562,7 @@ def test_issue_29_balance_defects_stay_fixed(fourbar):
         pmd.balance(still, counterweights=[pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8)])
     with pytest.raises(err, match=r"counterweights\[0\].*index 0\.\.2, got 99"):
         pmd.balance(motion, counterweights=[pmd.Counterweight(99, [[0.01, 0, 0]])])
-    for bad in (0, -1):
-        with pytest.raises(err, match="max_mass must be positive"):
-            pmd.balance(motion, counterweights=[pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8, max_mass=bad)])
+    for bad in (0, -1, float("nan"), "1"):
+        # Refused where it is written (the Counterweight), before any balance reads it.
+        with pytest.raises(err, match=r"max_mass: expected a number > 0 \(kg\) or None"):
+            pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8, max_mass=bad)

@@ -83,7 +83,8 @@ pub trait Tableau {
 /// off them that their projections (onto the branch nearest each stage, near a singular
 /// position) are outside the estimate's range; A02 took such a step over a crossing at rtol
 /// 1e-12 (plain 2.3e4, filtered 0.09, an energy jump of 3e-9). Rounding alone stays below
-/// it: A02 passes every rtol from 1e-6 to 1e-12 for values 1e-4 to 1e-3; 3e-3 crawls again.
+/// it: from its scene state A02 passes every rtol from 1e-6 to 1e-12 for values 1e-4 to 1e-3;
+/// 3e-3 crawls again (docs/mechanisms.md §2 for how far that holds near other states).
 pub(super) const OFF_MANIFOLD_TRUST: f64 = 3e-4;
 
 /// `Σ_s k_s w_s` of component `i` (`k`: rows of `n`), in stage order.

@@ -112,6 +112,17 @@ pub fn simulate(
         integrator::solve(&mut sys, t_span, &y0, opts, &mut events).map_err(input_error)?;
     drop(events);
     report_euler_singularity(model, &guarded, n_user, &mut sol);
+    let stalled = matches!(
+        sol.status,
+        Status::StepTooSmall { .. } | Status::MaxSteps { .. }
+    );
+    if sys.loops.is_some() && stalled {
+        sol.message.push_str(
+            "; if the mechanism is near a singular position there, rtol/atol may ask for more \
+             than the loops' projection can resolve (docs/mechanisms.md §2): loosen them \
+             (DOP853 passes the IFToMM N-four-bar down to rtol 1e-12)",
+        );
+    }
     if let Status::RhsError { t, at, message } = &sol.status {
         if message == dynamics::INTERRUPTED {
             sol.message = format!(

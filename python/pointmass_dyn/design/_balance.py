@@ -27,6 +27,15 @@ class Counterweight:
     points: Any
     max_mass: float | None = None
 
+    def __post_init__(self):
+        # Refused where it is written, not only when a design or balance reads it.
+        m = self.max_mass
+        if m is not None and (isinstance(m, bool) or not isinstance(m, (int, float, np.integer, np.floating))
+                              or not m > 0):
+            raise InvalidInputError(
+                f"max_mass: expected a number > 0 (kg) or None (unbounded), got {m!r}"
+            )
+
     @staticmethod
     def ring(
         body: Any,
