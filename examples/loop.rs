@@ -78,19 +78,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     atol: 1e-8.into(),
                     ..Default::default()
                 };
-                let tr = pointmass_dyn::simulate::simulate(
-                    &model,
-                    &[],
-                    Default::default(),
-                    black_box(&q),
-                    &v,
-                    (0.0, 1.0),
-                    &opts,
-                    &[],
-                    Vec::new(),
-                    Default::default(),
-                    None,
-                )?;
+                let tr = run(&model, &[], black_box(&q), &v, 1.0, &opts)?;
                 out[0] = tr.q[tr.q.len() - 1];
             }
             "loopsim" => {
@@ -104,19 +92,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     max_steps: 2_000_000,
                     ..Default::default()
                 };
-                let tr = pointmass_dyn::simulate::simulate(
-                    &model,
-                    &s.effects,
-                    Default::default(),
-                    black_box(&q),
-                    &v,
-                    (0.0, 20.0),
-                    &opts,
-                    &[],
-                    Vec::new(),
-                    Default::default(),
-                    None,
-                )?;
+                let tr = run(&model, &s.effects, black_box(&q), &v, 20.0, &opts)?;
                 nfev += tr.nfev;
                 out[0] = tr.q[tr.q.len() - 1];
             }
@@ -144,4 +120,28 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     black_box((&out, &gim));
     Ok(())
+}
+
+/// A run from `(q, v)` over `(0, t_end)` with `effects`, no events, default recording.
+fn run(
+    model: &pointmass_dyn::Model,
+    effects: &[pointmass_dyn::effects::Effect],
+    q: &[f64],
+    v: &[f64],
+    t_end: f64,
+    opts: &pointmass_dyn::integrator::SolverOptions,
+) -> pointmass_dyn::Result<pointmass_dyn::simulate::Trajectory> {
+    pointmass_dyn::simulate::simulate(
+        model,
+        effects,
+        Default::default(),
+        q,
+        v,
+        (0.0, t_end),
+        opts,
+        &[],
+        Vec::new(),
+        Default::default(),
+        None,
+    )
 }
