@@ -80,9 +80,8 @@ fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
             s.s = columns;
         } else {
             // The columns past the joint's speeds are zero, as they started.
-            for k in 0..l.joint.nv() {
-                s.s[k] = columns[k];
-            }
+            let n = l.joint.nv();
+            s.s[..n].copy_from_slice(&columns[..n]);
         }
         if INERTIA {
             s.inertia = l.inertia.rotated(&s.rotation);

@@ -2,6 +2,10 @@
 //!
 //! The core knows nothing of Python; `python` (behind the `python` feature) converts arrays
 //! and errors and nothing else.
+// `!(x > 0.0)` is how the checks reject NaN together with the out-of-range values.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+// The recursions walk several per-link arrays in step; an index reads clearer than zips.
+#![allow(clippy::needless_range_loop)]
 pub mod alloc;
 pub mod benchmark_models;
 pub mod body;

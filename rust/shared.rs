@@ -185,6 +185,8 @@ pub struct SharedModel {
     current: Mutex<Version>,
     /// `current.id`, readable without the lock on every call.
     current_id: AtomicU64,
+    // Boxed: a checked-out workspace moves in and out of the pool as one pointer.
+    #[allow(clippy::vec_box)]
     pool: Mutex<Vec<Box<Workspace>>>,
 }
 
@@ -225,6 +227,7 @@ impl SharedModel {
         self.current.lock().unwrap_or_else(|p| p.into_inner())
     }
 
+    #[allow(clippy::vec_box)]
     fn pool(&self) -> MutexGuard<'_, Vec<Box<Workspace>>> {
         self.pool.lock().unwrap_or_else(|p| p.into_inner())
     }

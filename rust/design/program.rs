@@ -444,8 +444,10 @@ pub(crate) fn solve_program(
     cones(&mut bld, problem, lay, stage, active);
     let (p, q, constant) = objective(problem, lay, stage);
     let a = CscMatrix::new_from_triplets(bld.m(), lay.nz, bld.rows, bld.cols, bld.vals);
-    let mut settings = DefaultSettings::<f64>::default();
-    settings.verbose = false;
+    let mut settings = DefaultSettings::<f64> {
+        verbose: false,
+        ..Default::default()
+    };
     settings.max_iter = 200;
     settings.tol_gap_abs = 1e-10;
     settings.tol_gap_rel = 1e-10;

@@ -199,7 +199,7 @@ pub fn regressor(
     actuated: &[usize],
 ) -> Result<Regressor> {
     let (nq, nv, nl) = (model.nq, model.nv, model.links.len());
-    let samples = if nq > 0 { q.len() / nq } else { 0 };
+    let samples = q.len().checked_div(nq).unwrap_or(0);
     if q.len() != samples * nq || v.len() != samples * nv || a.len() != samples * nv {
         return Err(Error::arg(
             "q, v, a",

@@ -205,7 +205,7 @@ impl LoopKinematics {
     }
 
     /// For each of the `n` rows `(lin, ang) = dirs(k)`, adds `lin · (velocity of point p)`
-    /// + `ang · (angular velocity)` of `link`'s body, as a function of `v`, to row
+    /// plus `ang · (angular velocity)` of `link`'s body, as a function of `v`, to row
     /// `first + k` of `jac` (column-major, `m` rows). Each joint column's motion at `p` is
     /// formed once for all the rows.
     #[allow(clippy::too_many_arguments)]

@@ -196,23 +196,16 @@ fn n_fourbar(n: usize) -> Model {
     let z = Joint::Revolute { axis: Vec3::z() };
     let mut m = Model::new();
     for k in 0..=n {
-        m.add_body(rod(), z.clone(), None, at(k as f64), None, None)
+        m.add_body(rod(), z, None, at(k as f64), None, None)
             .unwrap();
         if k < n {
-            m.add_body(rod(), z.clone(), Some(2 * k), at(1.0), None, None)
+            m.add_body(rod(), z, Some(2 * k), at(1.0), None, None)
                 .unwrap();
         }
     }
     for k in 0..n {
-        m.add_loop(
-            Some(2 * k + 1),
-            Some(2 * k + 2),
-            z.clone(),
-            at(1.0),
-            at(1.0),
-            None,
-        )
-        .unwrap();
+        m.add_loop(Some(2 * k + 1), Some(2 * k + 2), z, at(1.0), at(1.0), None)
+            .unwrap();
     }
     m
 }

@@ -263,7 +263,7 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
     let obj = &real_array(obj, arg)?;
     let extracted = obj.extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>();
     let arr = extracted.map_err(|e| {
-        let e: PyErr = e.into();
+        let e: PyErr = e;
         if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
             return e;
         }

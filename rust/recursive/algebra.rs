@@ -56,7 +56,7 @@ impl Sym3 {
         self.0[4] -= ka.x * a.z;
         self.0[5] -= ka.y * a.z;
     }
-    pub fn to_mat(&self) -> Mat3 {
+    pub fn to_mat(self) -> Mat3 {
         let [xx, yy, zz, xy, xz, yz] = self.0;
         Mat3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz)
     }
