@@ -8,7 +8,6 @@ error column measures convergence only.
     python benches/iftomm.py [--quick] [--only A02,A04]
     python benches/iftomm.py --opensim    # the settings OpenSim's pages report times for
 
-
 A02 (N = 40) runs DOP853 only, over a range of tolerances (the error must fall as the
 tolerance tightens); RK45 and Radau take minutes there.
 """
