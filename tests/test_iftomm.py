@@ -147,8 +147,7 @@ def test_n_fourbar_at_tight_tolerances_passes_the_crossing_and_converges():
     # tolerances the plain error estimate chased the projection's rounding there, amplified
     # ~1/sigma^3 across the manifolds, with ~1e-9 s steps (docs/mechanisms.md section 2): the
     # estimate is now filtered, so tightening the tolerance must shrink the error against the
-    # exact reduction, in few steps. (rtol 1e-12 passes from the scene's own state but not
-    # from every state 1e-13 near it: not asserted, see the docs' known limits.)
+    # exact reduction, in few steps. (rtol 1e-12 from a nearby state: the next test.)
     sc = pmd.load_scene("iftomm_a02_nfourbar")
     t = np.linspace(0, 4, 81)
     c = n_fourbar_rate(40)
