@@ -87,6 +87,23 @@ pub trait Tableau {
 /// 3e-3 crawls again (docs/mechanisms.md §2 for how far that holds near other states).
 pub(super) const OFF_MANIFOLD_TRUST: f64 = 3e-4;
 
+/// With loops, a rejection that leaves the step below this share of the reference step
+/// (`h_ref`: the last step accepted at the first try, or 0.9ⁿ times an earlier longer one
+/// n such steps before) means the controller may be trapped at a singular position: near
+/// one the accelerations carry the projection's rounding amplified `~ 1/σ³`, every stage
+/// within ~2e-4 s of the crossing fails the test at rtol 1e-12, and the shrinking steps
+/// approach the crossing geometrically instead of passing it (docs/mechanisms.md §2). A step
+/// about as long as before may put the crossing between its stages and pass the same test;
+/// once the state is itself within ~2e-4 s of it no step does, hence 0.35 (the first
+/// rejection that shrinks much), not a smaller share that waits for the approach.
+const TRAPPED: f64 = 0.35;
+/// The reference step's decay per step accepted at the first try.
+const REF_DECAY: f64 = 0.9;
+/// The trapped controller's attempts, in shares of the reference step: several, as where
+/// the stages fall relative to the crossing decides. Bounded: one round, then none until a
+/// step is accepted at the first try again.
+const JUMP_FACTORS: [f64; 5] = [1.0, 0.77, 1.3, 0.6, 0.45];
+
 /// `Σ_s k_s w_s` of component `i` (`k`: rows of `n`), in stage order.
 #[inline(always)]
 pub(super) fn stage_sum(k: &[f64], n: usize, i: usize, w: &[f64]) -> f64 {
@@ -132,6 +149,11 @@ pub struct ExplicitRk<S: OdeSystem, T: Tableau> {
     nonstiff_count: usize,
     /// `h·|λ|` of the last accepted step (NaN before the first, or with the check off).
     h_lambda: f64,
+    /// With loops: the step size the controller had before it was trapped at a singular
+    /// position (see [`ExplicitRk::jump`]); 0 before the first step.
+    h_ref: f64,
+    /// With loops: a step accepted at the first try since the last round of jumps.
+    jump_armed: bool,
     /// First detection.
     stiffness: Option<Stiffness>,
     /// `StiffnessCheck::Stop`: the failure the next `step` returns.
@@ -180,6 +202,8 @@ impl<S: OdeSystem, T: Tableau> ExplicitRk<S, T> {
             stiff_count: 0,
             nonstiff_count: 0,
             h_lambda: f64::NAN,
+            h_ref: 0.0,
+            jump_armed: false,
             stiffness: None,
             stop: None,
             _tableau: std::marker::PhantomData,
@@ -273,6 +297,34 @@ impl<S: OdeSystem, T: Tableau> ExplicitRk<S, T> {
                 T::norm_of_vectors(e, e_low, ys, tols).max(OFF_MANIFOLD_TRUST * raw)
             }
         }
+    }
+
+    /// Trapped at a singular position (loops only; see [`TRAPPED`]): a few attempts of
+    /// about the step the controller had before, each under the unchanged acceptance test
+    /// (a non-finite stage, as far off a manifold as a long step may land, fails the
+    /// attempt, not the run). The first that passes: `(t_new, next h_abs)`.
+    fn jump(&mut self, t: f64) -> Result<Option<(f64, f64)>, Status> {
+        let mut last = 0.0;
+        for f in JUMP_FACTORS {
+            let (t_new, h) = self.st.attempt((self.h_ref * f).min(self.st.max_step));
+            if h == last {
+                continue; // clipped to t_bound or max_step like the one before
+            }
+            last = h;
+            match self.rk_stages(t, h) {
+                Err(Status::NonFinite { .. }) => {}
+                Err(e) => return Err(e),
+                Ok(()) => {
+                    let error_norm = self.error_norm(h);
+                    if error_norm < 1.0 {
+                        let factor = self.accept_factor(error_norm).min(1.0);
+                        return Ok(Some((t_new, h.abs() * factor)));
+                    }
+                }
+            }
+            self.st.n_rejected += 1;
+        }
+        Ok(None)
     }
 
     fn accept_factor(&mut self, error_norm: f64) -> f64 {
@@ -462,7 +514,18 @@ impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {
             h_abs *= self.reject_factor(error_norm);
             rejected = true;
             self.st.n_rejected += 1;
+            if self.jump_armed && h_abs < self.h_ref * TRAPPED {
+                self.jump_armed = false;
+                if let Some((t_new, next)) = self.jump(t)? {
+                    h_abs = next;
+                    break t_new;
+                }
+            }
         };
+        if self.error_vectors.is_some() && !rejected {
+            self.h_ref = (t_new - t).abs().max(self.h_ref * REF_DECAY);
+            self.jump_armed = true;
+        }
         if self.stiffness_check != StiffnessCheck::Off {
             self.stiffness_test(t_new - t, t_new);
         }
