@@ -87,15 +87,15 @@ pub trait Tableau {
 /// 3e-3 crawls again (docs/mechanisms.md §2 for how far that holds near other states).
 pub(super) const OFF_MANIFOLD_TRUST: f64 = 3e-4;
 
-/// With loops, a rejection that leaves the step below this share of the reference step
+/// With loops, a step's second rejection that leaves it below this share of the reference step
 /// (`h_ref`: the last step accepted at the first try, or 0.9ⁿ times an earlier longer one
 /// n such steps before) means the controller may be trapped at a singular position: near
 /// one the accelerations carry the projection's rounding amplified `~ 1/σ³`, every stage
 /// within ~2e-4 s of the crossing fails the test at rtol 1e-12, and the shrinking steps
 /// approach the crossing geometrically instead of passing it (docs/mechanisms.md §2). A step
 /// about as long as before may put the crossing between its stages and pass the same test;
-/// once the state is itself within ~2e-4 s of it no step does, hence 0.35 (the first
-/// rejection that shrinks much), not a smaller share that waits for the approach.
+/// once the state is itself within ~2e-4 s of it no step does, hence 0.35 (early in the
+/// shrinking), not a smaller share that waits for the approach.
 const TRAPPED: f64 = 0.35;
 /// The reference step's decay per step accepted at the first try.
 const REF_DECAY: f64 = 0.9;
@@ -494,7 +494,7 @@ impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {
     fn advance(&mut self) -> Result<StepOutcome, Status> {
         let (mut h_abs, min_step, _) = self.st.step_bounds()?;
         let t = self.st.t;
-        let mut rejected = false;
+        let mut rejections = 0usize;
         let t_new = loop {
             if h_abs < min_step {
                 return Err(Status::StepTooSmall { t, min_step });
@@ -505,16 +505,18 @@ impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {
             let error_norm = self.error_norm(h);
             if error_norm < 1.0 {
                 let mut factor = self.accept_factor(error_norm);
-                if rejected {
+                if rejections > 0 {
                     factor = factor.min(1.0);
                 }
                 h_abs *= factor;
                 break t_new;
             }
             h_abs *= self.reject_factor(error_norm);
-            rejected = true;
+            rejections += 1;
             self.st.n_rejected += 1;
-            if self.jump_armed && h_abs < self.h_ref * TRAPPED {
+            // From the second rejection on: a first one that shrinks much is common on a
+            // regular mechanism (Andrews' transient) where the round only costs evaluations.
+            if self.jump_armed && rejections >= 2 && h_abs < self.h_ref * TRAPPED {
                 self.jump_armed = false;
                 if let Some((t_new, next)) = self.jump(t)? {
                     h_abs = next;
@@ -522,7 +524,7 @@ impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {
                 }
             }
         };
-        if self.error_vectors.is_some() && !rejected {
+        if self.error_vectors.is_some() && rejections == 0 {
             self.h_ref = (t_new - t).abs().max(self.h_ref * REF_DECAY);
             self.jump_armed = true;
         }
