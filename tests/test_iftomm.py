@@ -8,6 +8,8 @@ at) a singular position, and a redundant constraint judged off the constraint ma
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
@@ -197,6 +199,35 @@ def test_n_fourbar_at_rtol_1e12_jumps_the_crossing_from_nearby_states():
         e = np.asarray(res.energy)
         assert np.abs(e - e[0]).max() < 1e-8 * np.abs(e).max()
     assert passed >= 1
+
+
+@pytest.mark.parametrize("method,rtol,t_end", [("Radau", 1e-8, 2.0), ("RK45", 1e-12, 1.0),
+                                                ("DOP853", 1e-8, 5.0), ("Radau", 1e-6, 5.0)])
+def test_leaving_the_parallel_motion_at_a_crossing_is_reported(method, rtol, t_end):
+    # A run that crawls through a crossing of the N = 4 four-bar may leave the parallel
+    # motion (the bars' angles spread) for another branch the singular position allows,
+    # chosen by rounding: Radau at 1e-8 and RK45 at 1e-12 did (docs/mechanisms.md section 5).
+    # Whether a run crawls turns on rounding, so the invariant is asserted: a run that left
+    # the parallel motion reported, no later than where it left, a step ended at a singular
+    # position, and warned. (Here Radau 1e-8 and RK45 1e-12 leave it, at the crossings
+    # t = 1.236 s and 0.718 s; DOP853 and Radau at 1e-6 stay on it and report nothing.)
+    n = 4
+    q0, v0 = parallel_state(n, np.pi / 2, -1.0)
+    scene = pmd.Scene(n_fourbar(n), q0, v0, effects=[pmd.Effect.gravity([0, -G, 0])])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = pmd.simulate(scene, (0, t_end), method=method, rtol=rtol, atol=rtol * 1e-2,
+                           max_steps=3000)
+    spread = np.ptp(np.asarray(res.q)[:, 0::2], axis=1)
+    said = [w for w in caught if issubclass(w.category, pmd.errors.SingularPassageWarning)]
+    if spread.max() > 1e-6:
+        assert res.singular_passage is not None
+        t_left = np.asarray(res.t)[np.argmax(spread > 1e-6)]
+        assert res.singular_passage[0] <= t_left
+        assert res.singular_passage[1] < 1e-7
+        assert len(said) == 1 and "singular position" in str(said[0].message)
+    else:
+        assert (res.singular_passage is None) == (not said)
 
 
 def test_n_fourbar_stalled_run_keeps_its_trajectory_and_says_why():

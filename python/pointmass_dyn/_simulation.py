@@ -37,6 +37,7 @@ scene.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Callable
@@ -47,7 +48,7 @@ from . import _core
 from ._contact import contact_forces, torque_saturation
 from ._core import Effect, Scene, StateEvent
 from ._helpers import interrupted_message
-from .errors import SimulationError
+from .errors import SimulationError, SingularPassageWarning
 
 
 def Gravity(g: Sequence[float] = (0.0, 0.0, -9.81)) -> Effect:
@@ -213,6 +214,11 @@ class SimulationResult:
     #: Models with loops: the largest residual any accepted step had before projection (the
     #: integrator's drift, which the projection removed).
     constraint_drift: float | None = None
+    #: Models with loops: ``(t, ratio)`` when an accepted step ended at a singular position
+    #: within rounding (its loop rows' pivot ratio ``ratio`` times the run's best, below
+    #: 1e-7; the first such step): past it the motion may continue on another branch,
+    #: chosen by rounding. ``simulate`` then warns (:class:`SingularPassageWarning`).
+    singular_passage: tuple | None = None
     #: The integration method ("RK45", "DOP853", "Radau", "RK4", "Euler" or "auto").
     method: str = "RK45"
     #: Jacobian evaluations and LU decompositions (implicit methods; 0 otherwise).
@@ -346,11 +352,24 @@ def simulate(
     out["message"] = interrupted_message(out["message"], error)
     result = SimulationResult(scene=scene.name, **out)
     result.saturated = torque_saturation(scene, result, disable)
+    if result.singular_passage is not None:
+        warnings.warn(singular_passage_warning(result), stacklevel=2)
     if contact:
         result.contact = contact_forces(scene, result)
     if error is not None:
         raise _with_partial_result(error, result)
     return result
+
+
+def singular_passage_warning(result: SimulationResult) -> SingularPassageWarning:
+    """What ``simulate`` says when a step ended at a singular position of the loops."""
+    t, ratio = result.singular_passage
+    return SingularPassageWarning(
+        f"{result.method} ended a step at a singular position of the loops near t = {t:.9g} "
+        f"(their rows' pivot ratio {ratio:.1e} of the run's best): the motion past it may "
+        "continue on another branch, chosen by rounding. DOP853 and RK45 step over such "
+        "positions; check the run with method='DOP853' (docs/mechanisms.md §5)"
+    )
 
 
 def _with_partial_result(error: BaseException, result: Any) -> BaseException:

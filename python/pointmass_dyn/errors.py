@@ -121,6 +121,12 @@ class ModelImportWarning(UserWarning):
     does not enter the mass matrix or bias forces (equality constraints, limits, ...)."""
 
 
+class SingularPassageWarning(UserWarning):
+    """A run of a mechanism with loops ended a step at a singular position (within
+    rounding): past it the motion may continue on another branch, chosen by rounding
+    (``SimulationResult.singular_passage`` holds the time; docs/mechanisms.md §5)."""
+
+
 __all__ = [
     "AnimationWriterError",
     "ClusterError",
@@ -135,6 +141,7 @@ __all__ = [
     "SceneError",
     "SimulationError",
     "SingularityError",
+    "SingularPassageWarning",
     "UnpicklingError",
     "UrdfError",
     "UrdfWarning",

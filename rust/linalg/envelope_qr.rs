@@ -17,6 +17,8 @@
 //! different (equally valid) basis.
 use nalgebra::DMatrix;
 
+use super::rank_qr::pivot_ratio;
+
 /// A `rows × cols` factorisation kept in `a`: each kept column holds its column of `R` from
 /// row `start` to the diagonal and its reflector's vector (implicit leading 1) below it.
 pub struct EnvelopeQr {
@@ -177,6 +179,12 @@ impl EnvelopeQr {
 
     /// `R₁₁ᵀ w = b` (forward substitution): `b[k]` is the right-hand side of `R`'s column k
     /// (input column `perm[k]`). In place in `w` (length ≥ rank).
+    pub fn pivot_ratio(&self) -> f64 {
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
+        pivot_ratio((0..self.rank).map(|k| data[self.perm[k] * rows + k]))
+    }
+
     pub fn solve_rt(&self, w: &mut [f64]) {
         let rows = self.a.nrows();
         let data = self.a.as_slice();

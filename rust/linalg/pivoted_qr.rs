@@ -10,6 +10,8 @@
 //! columns are a well-conditioned basis of the column space and the others depend on them.
 use nalgebra::DMatrix;
 
+use super::rank_qr::pivot_ratio;
+
 /// A `rows × cols` factorisation kept in `a`: `R` on and above the diagonal, the reflectors'
 /// vectors (implicit leading 1) below it, their factors in `tau`.
 pub struct PivotedQr {
@@ -107,6 +109,12 @@ impl PivotedQr {
 
     /// `R₁₁ᵀ w = b` (forward substitution) for the first `rank` pivoted columns: `b[k]` is the
     /// right-hand side of pivoted column k. In place in `w` (length ≥ rank).
+    pub fn pivot_ratio(&self) -> f64 {
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
+        pivot_ratio((0..self.rank).map(|k| data[k * rows + k]))
+    }
+
     pub fn solve_rt(&self, w: &mut [f64]) {
         let rows = self.a.nrows();
         let data = self.a.as_slice();

@@ -63,6 +63,16 @@ impl RankQr {
         }
     }
 
+    /// `min |R_kk| / max |R_kk|` over the kept columns (1 with none): small when the kept
+    /// rows are close to dependent, as near a singular position (`σ_min ≤ min |R_kk|`, and
+    /// with pivoting the two are close).
+    pub fn pivot_ratio(&self) -> f64 {
+        match self {
+            RankQr::Dense(q) => q.pivot_ratio(),
+            RankQr::Envelope(q) => q.pivot_ratio(),
+        }
+    }
+
     /// `R₁₁ᵀ w = b` in place.
     pub fn solve_rt(&self, w: &mut [f64]) {
         match self {
@@ -85,5 +95,17 @@ impl RankQr {
             RankQr::Dense(q) => q.apply_q(w, x),
             RankQr::Envelope(q) => q.apply_q(w, x),
         }
+    }
+}
+
+/// `min |d| / max |d|` of a factor's diagonal (1 when empty).
+pub(super) fn pivot_ratio(diagonal: impl Iterator<Item = f64>) -> f64 {
+    let (lo, hi) = diagonal.fold((f64::INFINITY, 0.0_f64), |(lo, hi), d| {
+        (lo.min(d.abs()), hi.max(d.abs()))
+    });
+    if hi > 0.0 {
+        lo / hi
+    } else {
+        1.0
     }
 }

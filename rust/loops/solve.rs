@@ -176,6 +176,18 @@ impl LoopSolver {
         self.cons.residual.norm()
     }
 
+    /// How close to dependent the rows kept at the last factorisation are
+    /// ([`crate::linalg::rank_qr::RankQr::pivot_ratio`]); after [`project_state`], those of
+    /// the projected state.
+    pub fn pivot_ratio(&self) -> f64 {
+        self.qr_j.pivot_ratio()
+    }
+
+    /// The rank the last factorisation found.
+    pub fn rank(&self) -> usize {
+        self.qr_j.rank()
+    }
+
     /// The Jacobian at the positions of the last [`LoopSolver::residual_at`] (whose residual
     /// `cons.residual` holds); returns the residual's 2-norm.
     fn jacobian_here(&mut self, model: &Model) -> f64 {

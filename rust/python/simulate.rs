@@ -179,6 +179,7 @@ fn trajectory_dict<'py>(
             .map(|r| to_array1(py, &r).into_any()),
     )?;
     d.set_item("constraint_drift", traj.constraint_drift)?;
+    d.set_item("singular_passage", traj.singular_passage)?;
     match &traj.power {
         Some(p) => d.set_item("power", power_dict(py, p, n, &traj.effect_labels)?)?,
         None => d.set_item("power", py.None())?,

@@ -36,7 +36,22 @@ pub struct Dynamics<'a> {
     /// With loops: the last step's start `y` and its projection `P(y)`, the reference of
     /// [`OdeSystem::filter_error`] (built on its first call; one projection per step).
     filter_from: Option<Box<(Vec<f64>, Vec<f64>)>>,
+    /// The last right-hand side's time: the accepted state's, when the integrator projects it.
+    t_last: f64,
+    /// With loops: the largest pivot ratio of an accepted state so far, and the first
+    /// passage by a singular position, `(t, ratio / largest)`, once below [`SINGULAR_PASSAGE`].
+    pivot_max: f64,
+    rank_max: usize,
+    pub singular_passage: Option<(f64, f64)>,
 }
+
+/// An accepted state whose loop rows are this close to dependent, relative to the best
+/// conditioned state of the run so far, is at a singular position within rounding: there
+/// the branch the motion continues on is decided by rounding (docs/mechanisms.md §5). The
+/// N-four-bar's passes that stay on the parallel motion come no closer than 1e-4 (N = 4,
+/// RK45 and DOP853 at rtol 1e-8 … 1e-12, Radau at 1e-6, 1e-7); Radau's crawl at 1e-8 that
+/// left it, 1e-10.
+pub const SINGULAR_PASSAGE: f64 = 1e-7;
 
 /// The effects' view of the state `(t, q, v)`.
 #[inline]
@@ -86,6 +101,10 @@ impl<'a> Dynamics<'a> {
                 vec![0.0; model.nq + model.nv]
             },
             filter_from: None,
+            t_last: f64::NAN,
+            pivot_max: 0.0,
+            rank_max: 0,
+            singular_passage: None,
         }
     }
 
@@ -265,6 +284,7 @@ impl OdeSystem for Dynamics<'_> {
 
     fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> std::result::Result<(), String> {
         let nq = self.model.nq;
+        self.t_last = t;
         if let Some(hook) = self.progress.as_mut() {
             self.calls += 1;
             if self.calls % PROGRESS_EVERY == 0 && !hook(t) {
@@ -390,10 +410,24 @@ impl OdeSystem for Dynamics<'_> {
     /// with loops, the state back onto the position and velocity manifolds.
     fn project(&mut self, y: &mut [f64]) -> std::result::Result<bool, String> {
         self.model.normalize(&mut y[..self.model.nq]);
-        match self.loops.as_mut() {
-            Some(solver) => loops::project_state(self.model, solver, y),
-            None => Ok(false),
+        let Some(solver) = self.loops.as_mut() else {
+            return Ok(false);
+        };
+        let changed = loops::project_state(self.model, solver, y)?;
+        // At the position itself the rank test sets a row aside: a rank below the run's
+        // highest is a passage too.
+        let (rank, ratio) = (solver.rank(), solver.pivot_ratio());
+        self.rank_max = self.rank_max.max(rank);
+        self.pivot_max = self.pivot_max.max(ratio);
+        let relative = if rank < self.rank_max {
+            0.0
+        } else {
+            ratio / self.pivot_max
+        };
+        if relative < SINGULAR_PASSAGE && self.singular_passage.is_none() {
+            self.singular_passage = Some((self.t_last, relative));
         }
+        Ok(changed)
     }
 }
 

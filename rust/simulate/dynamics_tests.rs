@@ -125,3 +125,51 @@ fn loop_free_systems_keep_the_plain_estimate_and_jacobian() {
     assert!(!sys.chain_projection(&y, &mut jac));
     assert!(jac.iter().all(|&e| e == 0.5));
 }
+
+/// A parallelogram four-bar (all four bars 1 m): crank, coupler on its tip, rocker pinned
+/// 1 m along; the cut joint closes the coupler's end on the rocker's tip. With every bar
+/// turned by `phi` (the coupler level) it is closed for any `phi`; at `phi = 0` all bars are
+/// collinear, the change point.
+fn parallelogram_state(phi: f64) -> (Model, Vec<f64>) {
+    let z = || Joint::revolute(Vec3::z()).unwrap();
+    let mut m = Model::new();
+    m.add_body(rod(1.0, 1.0), z(), None, at(0.0), None, None)
+        .unwrap();
+    m.add_body(rod(1.0, 1.0), z(), Some(0), at(1.0), None, None)
+        .unwrap();
+    m.add_body(rod(1.0, 1.0), z(), None, at(1.0), None, None)
+        .unwrap();
+    m.add_loop(Some(1), Some(2), z(), at(1.0), at(1.0), None)
+        .unwrap();
+    let y = vec![phi, -phi, phi, 1.0, -1.0, 1.0];
+    (m, y)
+}
+
+#[test]
+fn a_step_ended_at_a_singular_position_is_reported_with_its_time() {
+    let (m, y_regular) = parallelogram_state(std::f64::consts::FRAC_PI_2);
+    let mut sys = Dynamics::try_new(&m, &gravity(), Disabled::none()).unwrap();
+    let mut dydt = vec![0.0; 6];
+    let mut accepted = |sys: &mut Dynamics, t: f64, y: &[f64]| {
+        let mut y = y.to_vec();
+        sys.rhs(t, &y, &mut dydt).unwrap();
+        sys.project(&mut y).unwrap();
+        assert!(residual(&m, &y[..3]) < 1e-12);
+    };
+    accepted(&mut sys, 0.5, &y_regular);
+    accepted(&mut sys, 0.7, &parallelogram_state(0.3).1);
+    assert_eq!(sys.singular_passage, None);
+    // 1e-9 rad from the change point (the rows' pivot ratio ~1e-9 of the upright state's),
+    // then exactly at it (a row set aside): the first is the one reported.
+    accepted(&mut sys, 1.25, &parallelogram_state(1e-9).1);
+    let (t, ratio) = sys.singular_passage.expect("the passage at 1e-9 rad");
+    assert_eq!(t, 1.25);
+    assert!(ratio < 1e-7, "{ratio}");
+    accepted(&mut sys, 1.5, &parallelogram_state(0.0).1);
+    assert_eq!(sys.singular_passage.map(|p| p.0), Some(1.25));
+    // A run that only starts there reports nothing: its best state so far is that one.
+    let mut fresh = Dynamics::try_new(&m, &gravity(), Disabled::none()).unwrap();
+    accepted(&mut fresh, 0.0, &parallelogram_state(0.0).1);
+    accepted(&mut fresh, 0.1, &parallelogram_state(1e-3).1);
+    assert_eq!(fresh.singular_passage, None);
+}

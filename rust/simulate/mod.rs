@@ -53,6 +53,9 @@ pub struct Trajectory {
     pub constraint_residual: Option<Vec<f64>>,
     /// With loops: the largest residual an accepted step had before it was projected.
     pub constraint_drift: Option<f64>,
+    /// With loops: the first accepted state at a singular position within rounding,
+    /// `(t, pivot ratio relative to the run's best so far)` ([`dynamics::SINGULAR_PASSAGE`]).
+    pub singular_passage: Option<(f64, f64)>,
     /// Output names of the enabled effects (the columns of `power`).
     pub effect_labels: Vec<String>,
     /// Row-major N × effect_labels.len().
@@ -161,6 +164,7 @@ pub fn simulate(
         energy,
         constraint_residual,
         constraint_drift,
+        singular_passage: sys.singular_passage,
         effect_labels: labels,
         power,
         t_events: sol.t_events,
