@@ -230,6 +230,29 @@ def test_leaving_the_parallel_motion_at_a_crossing_is_reported(method, rtol, t_e
         assert (res.singular_passage is None) == (not said)
 
 
+def test_batch_of_runs_that_left_the_parallel_motion_warns_once_naming_them():
+    # The same invariant for simulate_batch: one warning for the batch, naming the runs whose
+    # results hold a passage; each run that left the parallel motion holds one.
+    n = 4
+    q0, v0 = parallel_state(n, np.pi / 2, -1.0)
+    scene = pmd.Scene(n_fourbar(n), q0, v0, effects=[pmd.Effect.gravity([0, -G, 0])])
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        batch = pmd.simulate_batch(scene, (0, 2.0), v0=np.stack([v0, v0 * (1 + 1e-12)]),
+                                   method="Radau", rtol=1e-8, atol=1e-10, max_steps=3000)
+    said = [w for w in caught if issubclass(w.category, pmd.errors.SingularPassageWarning)]
+    passed = [k for k, r in enumerate(batch.results) if r.singular_passage is not None]
+    for k, r in enumerate(batch.results):
+        if np.ptp(np.asarray(r.q)[:, 0::2], axis=1).max() > 1e-6:
+            assert k in passed
+    if passed:
+        assert len(said) == 1
+        assert f"{len(passed)} of 2 runs" in str(said[0].message)
+        assert str(passed) in str(said[0].message)
+    else:
+        assert not said
+
+
 def test_n_fourbar_stalled_run_keeps_its_trajectory_and_says_why():
     # Beyond what the projection resolves at a crossing (rtol 1e-13): the run stops with
     # success=False, the time reached, the step budget, a hint at the singular position and

@@ -20,6 +20,7 @@ or by giving a list of scenes (one per run).
 from __future__ import annotations
 
 import os
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -30,7 +31,12 @@ from . import _core
 from ._core import Scene
 from ._helpers import interrupt_reason, interrupted_message
 from ._simulation import SimulationResult
-from .errors import InvalidInputError, OutOfMemoryError, PointMassDynError
+from .errors import (
+    InvalidInputError,
+    OutOfMemoryError,
+    PointMassDynError,
+    SingularPassageWarning,
+)
 
 #: Memory a run of a batch holds at least, besides its outputs at ``t_eval``: its result's
 #: Python objects (measured: a 100,000-run batch of a small scene took 438 MB).
@@ -285,6 +291,14 @@ def _batch_result(
         else:
             d["message"] = interrupted_message(d["message"], stopped)
             results.append(SimulationResult(scene=name, **d))
+    passed = [k for k, r in enumerate(results) if r.singular_passage is not None]
+    if passed:
+        # One warning for the batch, naming the runs (simulate warns per run).
+        warnings.warn(SingularPassageWarning(
+            f"{len(passed)} of {len(results)} runs ended a step at a singular position of the "
+            f"loops (runs {passed[:10]}{' ...' if len(passed) > 10 else ''}; their "
+            "results' singular_passage holds the time): past it the motion may continue on "
+            "another branch, chosen by rounding (docs/mechanisms.md §5)"), stacklevel=3)
     success = np.array([r.success for r in results], dtype=bool)
     t = q = v = None
     if t_eval is not None:
