@@ -177,14 +177,15 @@ impl EnvelopeQr {
         r
     }
 
-    /// `R₁₁ᵀ w = b` (forward substitution): `b[k]` is the right-hand side of `R`'s column k
-    /// (input column `perm[k]`). In place in `w` (length ≥ rank).
+    /// [`super::rank_qr::RankQr::pivot_ratio`] of this factorisation.
     pub fn pivot_ratio(&self) -> f64 {
         let rows = self.a.nrows();
         let data = self.a.as_slice();
         pivot_ratio((0..self.rank).map(|k| data[self.perm[k] * rows + k]))
     }
 
+    /// `R₁₁ᵀ w = b` (forward substitution): `b[k]` is the right-hand side of `R`'s column k
+    /// (input column `perm[k]`). In place in `w` (length ≥ rank).
     pub fn solve_rt(&self, w: &mut [f64]) {
         let rows = self.a.nrows();
         let data = self.a.as_slice();
