@@ -18,6 +18,7 @@ pub mod files;
 pub mod integrator;
 pub mod interrupt;
 pub mod joint;
+pub mod joint_records;
 pub mod kinematics;
 pub mod linalg;
 pub mod loops;

@@ -3,11 +3,12 @@
 //! carries its merged rigid body, its seven point masses and the 6×6 mass matrix about its
 //! origin built once from those points, in the link frame.
 use std::collections::HashMap;
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use crate::body::RigidBody;
 use crate::error::{check_finite, Error, Result};
 use crate::joint::Joint;
+use crate::joint_records::JointRecords;
 use crate::point_masses::EquimomentalSet;
 use crate::recursive::Compiled;
 use crate::spatial::{BodyInertia, Mat3, Placement, Vec3};
@@ -73,6 +74,10 @@ pub struct Model {
     /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; empty if none): titles.
     #[serde(default)]
     pub name: String,
+    /// The source file's joints (names, limits, damping, friction) and repairs
+    /// (`crate::joint_records`): no part of the dynamics, shared by every copy of the model.
+    #[serde(default)]
+    pub records: Arc<JointRecords>,
     /// Body index by name, kept by `add_body` (the only place bodies are added or named), so
     /// name lookups and duplicate checks cost O(1) and building a model is linear. Derived
     /// from `bodies`: not serialised, rebuilt when deserialising.
@@ -101,6 +106,8 @@ struct ModelData {
     visuals: Vec<crate::visual::Visual>,
     #[serde(default)]
     name: String,
+    #[serde(default)]
+    records: Arc<JointRecords>,
 }
 
 impl TryFrom<ModelData> for Model {
@@ -122,6 +129,7 @@ impl TryFrom<ModelData> for Model {
             armature: d.armature,
             visuals: d.visuals,
             name: d.name,
+            records: d.records,
             names,
             compiled: OnceLock::new(),
         };
@@ -129,6 +137,7 @@ impl TryFrom<ModelData> for Model {
         m.check_loops()?;
         m.check_couplings()?;
         m.check_armature()?;
+        m.check_records()?;
         Ok(m)
     }
 }
@@ -251,6 +260,24 @@ impl Model {
     #[inline]
     pub fn compiled(&self) -> &Compiled {
         self.compiled.get_or_init(|| Compiled::new(self))
+    }
+
+    /// Checks that the joint records point at bodies and coordinates of this model (a
+    /// deserialised model's may not).
+    fn check_records(&self) -> Result<()> {
+        let bad = self.records.joints.iter().find(|j| {
+            j.body >= self.bodies.len()
+                || j.link.is_some_and(|l| l >= self.links.len())
+                || j.q_index.is_some_and(|i| i >= self.nq)
+                || j.v_index.is_some_and(|i| i >= self.nv)
+        });
+        match bad {
+            Some(j) => Err(Error::model(
+                format!("joint record '{}'", j.name),
+                "its body or coordinate indices are outside the model",
+            )),
+            None => Ok(()),
+        }
     }
 
     /// Drops the recursions' constants after a change they depend on (armature).

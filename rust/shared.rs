@@ -11,7 +11,6 @@ use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::{self, Data, DerivativeData};
 use crate::spatial::{Vec3, Vec6};
-use crate::urdf::{RepairRecord, UrdfJoint};
 
 /// Workspaces kept for reuse per model (more threads than this allocate their own).
 const POOL: usize = 4;
@@ -21,10 +20,6 @@ const POOL: usize = 4;
 #[derive(Clone)]
 pub struct Version {
     pub model: Arc<Model>,
-    /// The URDF joints (names, limits, damping, friction) of a model from `from_urdf`.
-    pub urdf_joints: Arc<Vec<UrdfJoint>>,
-    /// What `from_urdf(..., repair=...)` changed (empty otherwise).
-    pub repairs: Arc<Vec<RepairRecord>>,
     id: u64,
 }
 
@@ -193,19 +188,10 @@ pub struct SharedModel {
 impl SharedModel {
     /// A model sharing `model` (a scene's, another model's): nothing is copied until one of
     /// them adds a body.
-    pub fn new(
-        model: Arc<Model>,
-        urdf_joints: Arc<Vec<UrdfJoint>>,
-        repairs: Arc<Vec<RepairRecord>>,
-    ) -> Self {
+    pub fn new(model: Arc<Model>) -> Self {
         let id = next_version();
         SharedModel {
-            current: Mutex::new(Version {
-                model,
-                urdf_joints,
-                repairs,
-                id,
-            }),
+            current: Mutex::new(Version { model, id }),
             current_id: AtomicU64::new(id),
             pool: Mutex::new(Vec::new()),
         }

@@ -335,7 +335,7 @@ def chain3():
     "args,kwargs,match",
     [
         (("a", "a"), {}, r"reference: expected a joint other than `joint`.*'a' for both"),
-        (("a", "nope"), {}, r"reference: expected a joint name or the name of its body.*got 'nope'"),
+        (("a", "nope"), {}, r"reference: expected a moving joint's name or its body's name.*got 'nope'"),
         (("a", 17), {}, r"reference: expected a body index 0\.\.5.*got 17"),
         (("a", "b"), {"ratio": float("nan")}, r"ratio: expected a finite number, got NaN"),
         (("a", "b"), {"offset": float("inf")}, r"offset: expected a finite number, got inf"),
@@ -370,7 +370,7 @@ def test_cycles_and_double_couplings_are_refused():
         ("a", float("nan"), r"value: expected finite numbers >= 0, got NaN"),
         ("ball", [0.1, 0.2], r"value: expected one number, or 3.*got 2 numbers"),
         ("welded", 0.1, r"joint: expected a body on a moving joint.*'welded' on a fixed joint"),
-        ("nope", 0.1, r"joint: expected a joint name or the name of its body.*'nope'"),
+        ("nope", 0.1, r"joint: expected a moving joint's name or its body's name.*'nope'"),
     ],
 )
 def test_bad_armature_is_refused(joint, value, match):

@@ -628,10 +628,22 @@ class Scene:
         name: str | None = None,
         description: str | None = None,
         disable: _Family | Sequence[_Family] | None = None,
+        *,
+        method: str | None = None,
+        dt: float | None = None,
+        max_step: float | None = None,
+        max_steps: int | None = None,
+        first_step: float | None = None,
     ) -> Scene:
         """``q0`` defaults to the neutral configuration, ``v0`` to zero; only the declared
         ``effects`` act (none: no gravity); joint and body names and table widths are checked
-        against the model here. ``disable``: families switched off by default."""
+        against the model here. ``disable``: families switched off by default.
+
+        A new scene has only the run settings given here (``t_span``, ``rtol``, ``atol``,
+        ``method``, ``dt``, ``max_step``, ``max_steps``, ``first_step``, ``disable``); the
+        others are ``None`` and ``simulate`` uses its defaults for them. A scene built from a
+        loaded scene's ``model`` therefore does not take that scene's settings: vary a
+        loaded scene with :meth:`replace`, which keeps every setting not given."""
     def forward_dynamics_derivatives(
         self,
         q: ArrayLike,
@@ -661,10 +673,28 @@ class Scene:
         """``∂ẏ/∂y`` of ``y = [q; v]`` (q's own coordinates), shape (nq+nv, nq+nv), as the
         implicit integrators use it (with closed loops, of the constrained dynamics)."""
     def replace(
-        self, model: Model | None = None, effects: Sequence[Effect] | None = None
+        self,
+        model: Model | None = None,
+        effects: Sequence[Effect] | None = None,
+        *,
+        q0: ArrayLike | None = None,
+        v0: ArrayLike | None = None,
+        t_span: ArrayLike | None = None,
+        rtol: float | None = None,
+        atol: float | None = None,
+        name: str | None = None,
+        description: str | None = None,
+        disable: _Family | Sequence[_Family] | None = None,
+        method: str | None = None,
+        dt: float | None = None,
+        max_step: float | None = None,
+        max_steps: int | None = None,
+        first_step: float | None = None,
     ) -> Scene:
-        """A copy with its model (of the same sizes) and/or effects replaced, every other
-        setting kept."""
+        """A copy with what is given replaced and everything else kept: the model (of the
+        same sizes), the effects (checked against it), the start state (``q0`` normalised),
+        name, description and any run setting. Raises ``InvalidInputError`` naming the
+        argument."""
     @staticmethod
     def from_toml(text: str, file: str = "<string>") -> Scene:
         """Parses a scene from TOML text; raises :class:`pointmass_dyn.errors.SceneError`

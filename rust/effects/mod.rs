@@ -90,8 +90,8 @@ pub use law::{Context, Effects, ForceLaw, Probe, RESERVED_LABELS};
 pub use point_spring::PointSpring;
 pub use scene_file::{required, Fields, Matrix, TomlType};
 pub use select::{
-    check_values, joints_repr, one_number, resolve_body, resolve_joints, JointRef, JointSlot,
-    PerJoint, Sign,
+    check_values, joints_repr, one_number, resolve_body, resolve_joint_body, resolve_joints,
+    JointRef, JointSlot, PerJoint, Sign,
 };
 pub use spring::Spring;
 pub use table::Table;

@@ -174,6 +174,43 @@ pub fn resolve_body(model: &Model, r: &JointRef, arg: &str) -> Result<usize> {
     }
 }
 
+/// Resolves a joint given by its name in the model's source file (a URDF joint), the name of
+/// its body or its body's index to the body's index. Errors name `arg` and list the joints
+/// that can be chosen (the moving ones), each with its body's name where that differs.
+pub fn resolve_joint_body(model: &Model, r: &JointRef, arg: &str) -> Result<usize> {
+    let JointRef::Name(n) = r else {
+        return resolve_body(model, r, arg);
+    };
+    if let Some(j) = model.records.joints.iter().find(|j| &j.name == n) {
+        return Ok(j.body);
+    }
+    if let Some(b) = model.body_index(n) {
+        return Ok(b);
+    }
+    const SHOWN: usize = 30;
+    let mut names: Vec<String> = model
+        .joint_names()
+        .into_iter()
+        .zip(&model.links)
+        .take(SHOWN)
+        .map(|(joint, l)| match &model.bodies[l.body].name {
+            body if *body == joint => format!("'{joint}'"),
+            body => format!("'{joint}' (body '{body}')"),
+        })
+        .collect();
+    if model.links.len() > SHOWN {
+        names.push(format!("… {} more", model.links.len() - SHOWN));
+    }
+    let expected = match names.is_empty() {
+        true => "a moving joint, but the model has none".to_string(),
+        false => format!(
+            "a moving joint's name or its body's name ({})",
+            names.join(", ")
+        ),
+    };
+    Err(Error::arg(arg, expected, format!("'{n}'")))
+}
+
 /// Resolves a selection (`None`: every moving joint, in q/v order) to coordinate slots.
 pub fn resolve_joints(
     model: &Model,
@@ -199,7 +236,7 @@ pub fn resolve_joints(
     }
     let mut out: Vec<JointSlot> = Vec::with_capacity(refs.len());
     for (k, r) in refs.iter().enumerate() {
-        let b = resolve_body(model, r, arg)?;
+        let b = resolve_joint_body(model, r, arg)?;
         let rec = &model.bodies[b];
         let link = match (rec.joint, rec.link) {
             (Joint::Fixed, _) | (_, None) => {

@@ -29,7 +29,6 @@ use crate::model::Model;
 use crate::point_masses::EquimomentalSet;
 use crate::scene::Scene;
 use crate::simulate::StateEvent;
-use crate::urdf::UrdfJoint;
 
 /// One pickled object. Append new variants at the end (postcard numbers them in order); any
 /// other change of a serialised type needs `persist::FORMAT_VERSION` bumped.
@@ -38,20 +37,12 @@ enum Payload {
     RigidBody(RigidBody),
     PointMasses(EquimomentalSet),
     Joint(Joint),
-    Model {
-        model: std::sync::Arc<Model>,
-        urdf_joints: std::sync::Arc<Vec<UrdfJoint>>,
-    },
+    /// A model, its joint records (names, limits, repairs) included.
+    Model(std::sync::Arc<Model>),
     Effect(Effect),
     StateEvent(StateEvent),
     Scene(Scene),
     DenseSolution(DenseOutput),
-    /// A model from `from_urdf(..., repair=...)` with the repairs it made.
-    RepairedModel {
-        model: std::sync::Arc<Model>,
-        urdf_joints: std::sync::Arc<Vec<UrdfJoint>>,
-        repairs: std::sync::Arc<Vec<crate::urdf::RepairRecord>>,
-    },
 }
 
 fn unpickling_error(py: Python<'_>, message: impl std::fmt::Display) -> PyErr {
@@ -126,20 +117,7 @@ pub fn _dumps<'py>(
     } else if let Ok(x) = obj.cast::<PyJoint>() {
         Payload::Joint(x.get().inner)
     } else if let Ok(x) = obj.cast::<PyModel>() {
-        let m = x.get();
-        let repairs = m.repair_records();
-        if repairs.is_empty() {
-            Payload::Model {
-                model: m.model(),
-                urdf_joints: m.urdf_joints(),
-            }
-        } else {
-            Payload::RepairedModel {
-                model: m.model(),
-                urdf_joints: m.urdf_joints(),
-                repairs,
-            }
-        }
+        Payload::Model(x.get().model())
     } else if let Ok(x) = obj.cast::<PyEffect>() {
         let e = x.get().inner.clone();
         extras = callables(py, std::slice::from_ref(&e))?;
@@ -186,18 +164,7 @@ pub fn _loads(
         Payload::RigidBody(inner) => Py::new(py, PyRigidBody { inner })?.into_any(),
         Payload::PointMasses(inner) => Py::new(py, PyPointMasses { inner })?.into_any(),
         Payload::Joint(inner) => Py::new(py, PyJoint { inner })?.into_any(),
-        Payload::Model { model, urdf_joints } => {
-            Py::new(py, PyModel::from_parts(model, urdf_joints))?.into_any()
-        }
-        Payload::RepairedModel {
-            model,
-            urdf_joints,
-            repairs,
-        } => Py::new(
-            py,
-            PyModel::from_parts_repaired(model, urdf_joints, repairs),
-        )?
-        .into_any(),
+        Payload::Model(model) => Py::new(py, PyModel::from_shared(model))?.into_any(),
         Payload::Effect(mut inner) => {
             restore(py, std::slice::from_mut(&mut inner), callables)?;
             Py::new(py, PyEffect { inner })?.into_any()

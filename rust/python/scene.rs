@@ -5,7 +5,7 @@ use super::convert::{opt_real, to_array1, vector};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use super::options::t_span_arg;
+use super::options::{given, method_args, step_args, t_span_arg};
 use crate::effects::{Disabled, Effects};
 use crate::scene::{Scene, Settings};
 
@@ -14,17 +14,10 @@ pub struct PyScene {
     pub inner: Scene,
 }
 
-pub(super) fn opt_positive(py: Python<'_>, x: Option<f64>, arg: &str) -> PyResult<Option<f64>> {
-    match x {
-        Some(v) if !(v > 0.0 && v.is_finite()) => Err(invalid(py, arg, "a finite number > 0", v)),
-        other => Ok(other),
-    }
-}
-
 #[pymethods]
 impl PyScene {
     #[new]
-    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None))]
+    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, *, method=None, dt=None, max_step=None, max_steps=None, first_step=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -38,8 +31,24 @@ impl PyScene {
         name: Option<String>,
         description: Option<String>,
         disable: Option<&Bound<'_, PyAny>>,
+        method: Option<&str>,
+        dt: Option<&Bound<'_, PyAny>>,
+        max_step: Option<&Bound<'_, PyAny>>,
+        max_steps: Option<&Bound<'_, PyAny>>,
+        first_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let (rtol, atol) = (opt_real(rtol, "rtol")?, opt_real(atol, "atol")?);
+        let given = SettingsArgs {
+            t_span,
+            rtol,
+            atol,
+            disable,
+            method,
+            dt,
+            max_step,
+            max_steps,
+            first_step,
+        };
+        let settings = given.over(py, Settings::default())?;
         let m = model.model();
         let mut q = match q0 {
             Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
@@ -71,19 +80,9 @@ impl PyScene {
         }
         // Joint limits without bounds and torques limited at "effort" take the model's
         // (URDF <limit>, MJCF range).
-        crate::effects::fill_model_limits(&m, &model.urdf_joints(), &mut list, "effects").py(py)?;
+        crate::effects::fill_model_limits(&m, &m.records.joints, &mut list, "effects").py(py)?;
         // Joint and body names, table widths and effect names must fit the model.
         Effects::new(&m, &list, Disabled::none(), "effects").py(py)?;
-        let settings = Settings {
-            t_span: match t_span {
-                Some(t) if !t.is_none() => Some(t_span_arg(py, t)?),
-                _ => None,
-            },
-            rtol: opt_positive(py, rtol, "rtol")?,
-            atol: opt_positive(py, atol, "atol")?,
-            disable: disable_arg(py, disable)?,
-            ..Settings::default()
-        };
         Ok(PyScene {
             inner: Scene {
                 name: name.unwrap_or_else(|| "scene".into()),
@@ -97,20 +96,45 @@ impl PyScene {
         })
     }
 
-    /// A copy with its model and/or effects replaced, every other setting kept (the
-    /// per-run variants of a batch). The model must have this scene's sizes; the effects
-    /// are checked against it as the constructor checks them.
-    #[pyo3(signature = (model=None, effects=None))]
+    /// A copy with what is given replaced and everything else kept: the model (of this
+    /// scene's sizes), the effects (checked against the model as the constructor checks
+    /// them), the start state (`q0`, `v0`: checked, `q0` normalised), the name and
+    /// description, and any run setting (`t_span`, `rtol`, `atol`, `method`, `dt`,
+    /// `max_step`, `max_steps`, `first_step`, `disable`).
+    #[pyo3(signature = (model=None, effects=None, *, q0=None, v0=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, method=None, dt=None, max_step=None, max_steps=None, first_step=None))]
+    #[allow(clippy::too_many_arguments)]
     fn replace(
         &self,
         py: Python<'_>,
         model: Option<PyRef<'_, PyModel>>,
         effects: Option<Vec<PyRef<'_, PyEffect>>>,
+        q0: Option<&Bound<'_, PyAny>>,
+        v0: Option<&Bound<'_, PyAny>>,
+        t_span: Option<&Bound<'_, PyAny>>,
+        rtol: Option<&Bound<'_, PyAny>>,
+        atol: Option<&Bound<'_, PyAny>>,
+        name: Option<String>,
+        description: Option<String>,
+        disable: Option<&Bound<'_, PyAny>>,
+        method: Option<&str>,
+        dt: Option<&Bound<'_, PyAny>>,
+        max_step: Option<&Bound<'_, PyAny>>,
+        max_steps: Option<&Bound<'_, PyAny>>,
+        first_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut inner = self.inner.clone();
-        // New effects take their missing limits from the new model's URDF joints (none for
-        // the scene's own model, which keeps no URDF: give bounds then).
-        let urdf_joints = model.as_ref().map(|m| m.urdf_joints()).unwrap_or_default();
+        let given = SettingsArgs {
+            t_span,
+            rtol,
+            atol,
+            disable,
+            method,
+            dt,
+            max_step,
+            max_steps,
+            first_step,
+        };
+        inner.settings = given.over(py, inner.settings)?;
         if let Some(m) = model {
             let m = m.model();
             if (m.nq, m.nv) != (inner.model.nq, inner.model.nv) {
@@ -129,9 +153,22 @@ impl PyScene {
         if let Some(list) = effects {
             inner.effects = list.iter().map(|e| e.inner.clone()).collect();
             let (m, list) = (&inner.model, &mut inner.effects);
-            crate::effects::fill_model_limits(m, &urdf_joints, list, "effects").py(py)?;
+            // New effects take their missing limits from the model's URDF joints.
+            crate::effects::fill_model_limits(m, &m.records.joints, list, "effects").py(py)?;
         }
         Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").py(py)?;
+        let m = &inner.model;
+        if let Some(q) = q0.filter(|q| !q.is_none()) {
+            inner.q0 = vector(q, "q0", Some(m.nq))?;
+        }
+        if let Some(v) = v0.filter(|v| !v.is_none()) {
+            inner.v0 = vector(v, "v0", Some(m.nv))?;
+        }
+        m.check_state(&inner.q0, Some(&inner.v0))
+            .map_err(|e| super::errors::to_py(py, e.map_arg(|a| format!("{a}0"))))?;
+        m.normalize(&mut inner.q0);
+        inner.name = name.unwrap_or(inner.name);
+        inner.description = description.unwrap_or(inner.description);
         Ok(PyScene { inner })
     }
 
@@ -157,7 +194,7 @@ impl PyScene {
     /// scene never changes).
     #[getter]
     fn model(&self) -> PyModel {
-        PyModel::from_parts(self.inner.model.clone(), Default::default())
+        PyModel::from_shared(self.inner.model.clone())
     }
     #[getter]
     fn q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
@@ -282,6 +319,44 @@ impl PyScene {
 }
 
 /// `None`, one family name, or a sequence of them.
+/// The run settings a `Scene` call was given (`None`: not given).
+struct SettingsArgs<'a, 'py> {
+    t_span: Option<&'a Bound<'py, PyAny>>,
+    rtol: Option<&'a Bound<'py, PyAny>>,
+    atol: Option<&'a Bound<'py, PyAny>>,
+    disable: Option<&'a Bound<'py, PyAny>>,
+    method: Option<&'a str>,
+    dt: Option<&'a Bound<'py, PyAny>>,
+    max_step: Option<&'a Bound<'py, PyAny>>,
+    max_steps: Option<&'a Bound<'py, PyAny>>,
+    first_step: Option<&'a Bound<'py, PyAny>>,
+}
+
+impl SettingsArgs<'_, '_> {
+    /// `base` with the given settings replaced, checked (`Settings::check`).
+    fn over(&self, py: Python<'_>, base: Settings) -> PyResult<Settings> {
+        let steps = step_args(self.first_step, self.max_step, self.max_steps)?;
+        let mut requested = steps.clone();
+        method_args(py, &mut requested, self.method, given(self.dt))?;
+        let settings = Settings {
+            t_span: match given(self.t_span) {
+                Some(t) => Some(t_span_arg(py, t)?),
+                None => base.t_span,
+            },
+            rtol: opt_real(self.rtol, "rtol")?.or(base.rtol),
+            atol: opt_real(self.atol, "atol")?.or(base.atol),
+            max_step: steps.max_step.or(base.max_step),
+            max_steps: steps.max_steps.or(base.max_steps),
+            first_step: steps.first_step.or(base.first_step),
+            disable: disable_arg(py, self.disable)?.or(base.disable),
+            method: requested.method.or(base.method),
+            dt: requested.dt.or(base.dt),
+        };
+        settings.check().py(py)?;
+        Ok(settings)
+    }
+}
+
 pub(super) fn disable_arg(
     py: Python<'_>,
     obj: Option<&Bound<'_, PyAny>>,

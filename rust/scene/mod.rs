@@ -32,6 +32,36 @@ pub struct Settings {
     pub dt: Option<f64>,
 }
 
+impl Settings {
+    /// Checks the values; errors name the setting (`rtol`, `t_span`, …). Times are finite
+    /// and different; tolerances and steps finite and > 0.
+    pub fn check(&self) -> Result<()> {
+        if let Some((a, b)) = self.t_span {
+            if !(a.is_finite() && b.is_finite()) || a == b {
+                return Err(Error::arg(
+                    "t_span",
+                    "two different finite times",
+                    format!("[{a}, {b}]"),
+                ));
+            }
+        }
+        for (name, x) in [
+            ("rtol", self.rtol),
+            ("atol", self.atol),
+            ("max_step", self.max_step),
+            ("first_step", self.first_step),
+            ("dt", self.dt),
+        ] {
+            if let Some(x) = x {
+                if x <= 0.0 || !x.is_finite() {
+                    return Err(Error::arg(name, "a finite number > 0", x.to_string()));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Scene {
     pub name: String,
@@ -172,12 +202,15 @@ impl Scene {
         if sf.body.is_empty() && sf.urdf.is_none() {
             return Err(ctx.err("body", "a scene needs at least one [[body]] (or a urdf)"));
         }
-        let (mut model, urdf_effects, urdf_joints) = urdf_model(&ctx, dir, &sf)?;
+        let (mut model, urdf_effects) = urdf_model(&ctx, dir, &sf)?;
+        // The URDF's joints (empty without a urdf), read while the model changes.
+        let records = model.records.clone();
+        let urdf_joints = records.joints.as_slice();
         let mut q0 = model.neutral();
         let mut v0 = vec![0.0; model.nv];
         bodies::add_bodies(&ctx, &mut model, &sf.body, units, &mut q0, &mut v0)?;
         loops::add_loops(&ctx, &mut model, &sf.loops, units)?;
-        couplings::add_couplings(&ctx, &mut model, &urdf_joints, &sf.coupling, units)?;
+        couplings::add_couplings(&ctx, &mut model, urdf_joints, &sf.coupling, units)?;
         for (k, b) in sf.body.iter().enumerate() {
             if let (Some(value), Some(index)) = (&b.armature, model.body_index(&b.name)) {
                 let key = format!("body[{k}] ('{}').armature", b.name);
@@ -185,7 +218,7 @@ impl Scene {
             }
         }
         if let Some(table) = &sf.armature {
-            couplings::set_armatures(&ctx, &mut model, &urdf_joints, table)?;
+            couplings::set_armatures(&ctx, &mut model, urdf_joints, table)?;
         }
         if let Some(init) = &sf.initial {
             initial_state(&ctx, &model, init, units, &mut q0, &mut v0)?;
@@ -197,7 +230,7 @@ impl Scene {
             .map(|i| i.fixed.as_slice())
             .unwrap_or(&[]);
         loops::close_initial_state(&ctx, &model, fixed, &mut q0, &mut v0)?;
-        let effects = scene_effects(&ctx, &model, &sf.effect, urdf_effects, &urdf_joints)?;
+        let effects = scene_effects(&ctx, &model, &sf.effect, urdf_effects, urdf_joints)?;
         let settings = match sf.simulate {
             Some(s) => settings(&ctx, s)?,
             None => Settings::default(),
@@ -282,11 +315,7 @@ impl Units {
 /// asks for, and its joints (their `<limit>`s: joint limits without bounds, torques limited
 /// at `"effort"`).
 #[allow(clippy::type_complexity)]
-fn urdf_model(
-    ctx: &Ctx,
-    dir: &Path,
-    sf: &SceneFile,
-) -> Result<(Model, Vec<Effect>, Vec<crate::urdf::UrdfJoint>)> {
+fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effect>)> {
     let Some(rel) = &sf.urdf else {
         if sf.urdf_dynamics.is_some() {
             return Err(ctx.err("urdf_dynamics", "needs a urdf key"));
@@ -297,7 +326,7 @@ fn urdf_model(
         if sf.urdf_repair.is_some() {
             return Err(ctx.err("urdf_repair", "needs a urdf key"));
         }
-        return Ok((Model::new(), Vec::new(), Vec::new()));
+        return Ok((Model::new(), Vec::new()));
     };
     let root = match sf.root_joint.as_deref() {
         None | Some("fixed") => crate::urdf::RootJoint::Fixed,
@@ -317,7 +346,7 @@ fn urdf_model(
     let urdf = crate::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref(), &[])
         .map_err(|e| ctx.core("urdf", e))?;
     let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
-    Ok((urdf.model, effects, urdf.joints))
+    Ok((urdf.model, effects))
 }
 
 /// `[initial]`: the whole state (overriding the bodies' `q0`/`v0`), angular coordinates in
@@ -399,30 +428,6 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
         (None, Some(b)) => Some((0.0, b)),
         (None, None) => None,
     };
-    if let Some((a, b)) = t_span {
-        if !(a.is_finite() && b.is_finite()) || a == b {
-            return Err(ctx.err(
-                "simulate.t_span",
-                format!("expected two different finite times, got [{a}, {b}]"),
-            ));
-        }
-    }
-    for (name, x) in [
-        ("rtol", s.rtol),
-        ("atol", s.atol),
-        ("max_step", s.max_step),
-        ("first_step", s.first_step),
-        ("dt", s.dt),
-    ] {
-        if let Some(x) = x {
-            if x <= 0.0 || !x.is_finite() {
-                return Err(ctx.err(
-                    format!("simulate.{name}"),
-                    format!("expected a finite number > 0, got {x}"),
-                ));
-            }
-        }
-    }
     let disable = match &s.disable {
         Some(names) => {
             Some(Disabled::parse(names, "simulate.disable").map_err(|x| ctx.at_arg("", x))?)
@@ -441,7 +446,7 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
         })?),
         None => None,
     };
-    Ok(Settings {
+    let settings = Settings {
         method,
         dt: s.dt,
         t_span,
@@ -451,7 +456,9 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
         max_steps: s.max_steps,
         first_step: s.first_step,
         disable,
-    })
+    };
+    settings.check().map_err(|e| ctx.at_arg("simulate", e))?;
+    Ok(settings)
 }
 
 /// Effects from the URDF's `<dynamics damping friction>` as the scene asks: a damper and/or
@@ -467,7 +474,7 @@ fn urdf_dynamics_effects(
     let mut out = Vec::new();
     for what in asked.unwrap_or(&[]) {
         let pick = |f: fn(&crate::urdf::UrdfJoint) -> f64| -> (Vec<JointRef>, Vec<f64>) {
-            urdf.joints
+            urdf.joints()
                 .iter()
                 .filter(|j| j.q_index.is_some() && f(j) != 0.0)
                 .map(|j| (JointRef::Index(j.body), f(j)))

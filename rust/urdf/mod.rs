@@ -48,28 +48,12 @@ mod repair;
 mod tree;
 mod visuals;
 
+pub use crate::joint_records::{Limit, Mimic, RepairRecord, UrdfJoint};
 pub use parts::{model_from_parts, Part};
-pub use repair::{Repair, RepairRecord};
+pub use repair::Repair;
 
 use parse::Ctx;
 use tree::Tree;
-
-/// `<limit>` of a joint. A continuous joint has `lower = −∞`, `upper = +∞`.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Limit {
-    pub lower: f64,
-    pub upper: f64,
-    pub effort: f64,
-    pub velocity: f64,
-}
-
-/// `<mimic joint multiplier offset>`: loaded as a coupling (`build::add_mimics`).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Mimic {
-    pub joint: String,
-    pub multiplier: f64,
-    pub offset: f64,
-}
 
 /// How the URDF's root link is attached to the world.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -84,120 +68,35 @@ pub enum RootJoint {
 /// The name Pinocchio gives the root joint it adds.
 pub const ROOT_JOINT_NAME: &str = "root_joint";
 
-/// One URDF joint, in the model's order (depth first; the moving ones in q/v order).
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct UrdfJoint {
-    pub name: String,
-    /// "revolute", "continuous", "prismatic" or "fixed" (or "floating": the root joint a
-    /// floating-base load adds, which is no element of the file).
-    pub kind: &'static str,
-    /// Parent and child link names.
-    pub parent: String,
-    pub child: String,
-    /// Index of the child link's body in `model.bodies`.
-    pub body: usize,
-    /// The model link the child belongs to (`None`: welded to the world).
-    pub link: Option<usize>,
-    /// Position of this joint's coordinate in q and v (`None` for fixed joints).
-    pub q_index: Option<usize>,
-    pub v_index: Option<usize>,
-    /// Unit axis in the joint frame (as given, or x, for fixed joints).
-    pub axis: Vec3,
-    pub limit: Option<Limit>,
-    /// `<dynamics damping>` (N·m·s/rad or N·s/m) and `friction` (N·m or N); 0 when absent.
-    pub damping: f64,
-    pub friction: f64,
-    pub mimic: Option<Mimic>,
-}
-
-/// A deserialised [`UrdfJoint`], its `kind` owned until matched to one of the four names.
-#[derive(serde::Deserialize)]
-struct UrdfJointData {
-    name: String,
-    kind: String,
-    parent: String,
-    child: String,
-    body: usize,
-    link: Option<usize>,
-    q_index: Option<usize>,
-    v_index: Option<usize>,
-    axis: Vec3,
-    limit: Option<Limit>,
-    damping: f64,
-    friction: f64,
-    mimic: Option<Mimic>,
-}
-
-// By hand: a derived impl would require `'de: 'static` for the `&'static str`.
-impl<'de> serde::Deserialize<'de> for UrdfJoint {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        <UrdfJointData as serde::Deserialize>::deserialize(d)?
-            .try_into()
-            .map_err(serde::de::Error::custom)
-    }
-}
-
-impl TryFrom<UrdfJointData> for UrdfJoint {
-    type Error = String;
-    fn try_from(j: UrdfJointData) -> std::result::Result<UrdfJoint, String> {
-        let kind = [
-            "revolute",
-            "continuous",
-            "prismatic",
-            "fixed",
-            "floating",
-            "spherical",
-            "spherical_zyz",
-        ]
-        .into_iter()
-        .find(|k| *k == j.kind)
-        .ok_or_else(|| format!("joint '{}': unknown kind '{}'", j.name, j.kind))?;
-        Ok(UrdfJoint {
-            name: j.name,
-            kind,
-            parent: j.parent,
-            child: j.child,
-            body: j.body,
-            link: j.link,
-            q_index: j.q_index,
-            v_index: j.v_index,
-            axis: j.axis,
-            limit: j.limit,
-            damping: j.damping,
-            friction: j.friction,
-            mimic: j.mimic,
-        })
-    }
-}
-
-impl UrdfJoint {
-    pub fn is_moving(&self) -> bool {
-        self.kind != "fixed"
-    }
-}
-
 /// A loaded URDF: the model, every joint (fixed ones included) and the warnings.
 #[derive(Debug, Clone)]
 pub struct Urdf {
     /// `<robot name>`.
     pub name: String,
+    /// The model; its [`Model::records`] hold every joint (fixed ones included) and the
+    /// repairs.
     pub model: Model,
-    pub joints: Vec<UrdfJoint>,
     /// Things loaded differently from what the file says (ignored elements, missing limits).
     pub warnings: Vec<String>,
-    /// What a `repair` changed, one record per link or welded joint (empty without repair).
-    pub repairs: Vec<RepairRecord>,
     /// Directory the file's relative resources (mesh files) are resolved against.
     pub base_dir: Option<PathBuf>,
 }
 
 impl Urdf {
+    /// Every joint (fixed ones included), in the model's order.
+    pub fn joints(&self) -> &[UrdfJoint] {
+        &self.model.records.joints
+    }
+    /// What a `repair` changed, one record per link or welded joint (empty without repair).
+    pub fn repairs(&self) -> &[RepairRecord] {
+        &self.model.records.repairs
+    }
     /// The moving joints, in q/v order.
     pub fn moving_joints(&self) -> impl Iterator<Item = &UrdfJoint> {
-        self.joints.iter().filter(|j| j.is_moving())
+        self.joints().iter().filter(|j| j.is_moving())
     }
     pub fn joint(&self, name: &str) -> Option<&UrdfJoint> {
-        self.joints.iter().find(|j| j.name == name)
+        self.joints().iter().find(|j| j.name == name)
     }
 
     /// Drops the couplings the `<mimic>` elements made: the mimic joints move independently
@@ -292,12 +191,11 @@ pub fn model_from_urdf_with(
         .chain(build::joint_warnings(file, &joints, &robot.ignored))
         .chain(mimics)
         .collect();
+    built.model.records = crate::joint_records::JointRecords::new(joints, repairs);
     Ok(Urdf {
         name: robot.name,
         model: built.model,
-        joints,
         warnings,
-        repairs,
         base_dir: base_dir.map(Path::to_path_buf),
     })
 }

@@ -4,7 +4,8 @@ use std::collections::BTreeMap;
 
 use roxmltree::{Document, Node, ParsingOptions};
 
-use super::repair::{repair_inertial, Repair, RepairRecord};
+use super::repair::{repair_inertial, Repair};
+use super::RepairRecord;
 use super::{rpy_matrix, Limit, Mimic};
 use crate::body::RigidBody;
 use crate::error::{Error, FileKind, Location, Result};

@@ -135,12 +135,11 @@ pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
             }
         })
         .collect();
+    model.records = crate::joint_records::JointRecords::new(joints, Vec::new());
     Ok(Urdf {
         name: String::new(),
         model,
-        joints,
         warnings: Vec::new(),
-        repairs: Vec::new(),
         base_dir: None,
     })
 }

@@ -4,6 +4,7 @@
 //! bodies), and the welding of moving joints that move no mass. Every change is recorded.
 use super::parse::{Inertial, Kind, RobotData};
 use super::tree::Tree;
+use super::RepairRecord;
 use crate::spatial::{Mat3, Vec3};
 
 /// Which repairs a load may make (`Model.from_urdf(..., repair=...)`).
@@ -29,55 +30,6 @@ impl Default for Repair {
             bound_inertia: 0.0,
             weld_massless: true,
         }
-    }
-}
-
-/// One link changed by a repair.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RepairRecord {
-    /// The link whose `<inertial>` changed, or the child link of a welded joint.
-    pub link: String,
-    /// The welded joint (`weld_massless`), else `None`.
-    pub joint: Option<String>,
-    /// The rules that changed it: "bound_mass", "bound_inertia", "balance_inertia",
-    /// "weld_massless".
-    pub rules: Vec<String>,
-    /// Mass before and after (kg); equal when only the tensor changed.
-    pub mass: (f64, f64),
-    /// Principal moments about the COM before and after, ascending (kg m²).
-    pub principal_moments: ([f64; 3], [f64; 3]),
-    /// Joint type before and after (`weld_massless` only).
-    pub joint_type: Option<(String, String)>,
-}
-
-impl RepairRecord {
-    /// One line of the warning: `link 'x': balance_inertia: mass …; moments (…) → (…)`.
-    pub fn describe(&self) -> String {
-        if let (Some(j), Some((from, to))) = (&self.joint, &self.joint_type) {
-            return format!(
-                "joint '{j}' (child link '{}'): {}: {from} → {to} (it moves no mass)",
-                self.link,
-                self.rules.join(", ")
-            );
-        }
-        let (m0, m1) = self.mass;
-        let (a, b) = self.principal_moments;
-        let mass = if m0 == m1 {
-            format!("mass {m0:e}")
-        } else {
-            format!("mass {m0:e} → {m1:e}")
-        };
-        format!(
-            "link '{}': {}: {mass}; principal moments ({:.6e}, {:.6e}, {:.6e}) → ({:.6e}, {:.6e}, {:.6e})",
-            self.link,
-            self.rules.join(", "),
-            a[0],
-            a[1],
-            a[2],
-            b[0],
-            b[1],
-            b[2]
-        )
     }
 }
 

@@ -98,7 +98,7 @@ fn rpy_is_z_y_x() {
     assert!((l.placement.rotation - expect).norm() < 1e-15);
     assert_eq!(l.placement.translation, Vec3::new(1.0, 2.0, 3.0));
     assert_eq!(l.joint, Joint::Revolute { axis: Vec3::z() });
-    let j = &u.joints[0];
+    let j = &u.joints()[0];
     assert_eq!(
         j.limit,
         Some(Limit {
@@ -142,8 +142,8 @@ fn inertial_origin_rotates_the_tensor() {
     // Rotating by 90° about z swaps the x and y moments.
     assert!((b.inertia - Mat3::from_diagonal(&Vec3::new(2.0, 1.0, 3.0))).norm() < 1e-14);
     assert!((u.model.links[0].rigid.inertia - b.inertia).norm() < 1e-14);
-    assert_eq!((u.joints[0].damping, u.joints[0].friction), (0.5, 0.25));
-    assert_eq!(u.joints[0].kind, "prismatic");
+    assert_eq!((u.joints()[0].damping, u.joints()[0].friction), (0.5, 0.25));
+    assert_eq!(u.joints()[0].kind, "prismatic");
     assert_eq!(u.model.links[0].joint, Joint::Prismatic { axis: Vec3::x() });
 }
 
@@ -199,7 +199,7 @@ fn siblings_follow_joint_name_order() {
         joint("M1", "fixed", "base", "aa", ""),
     ]);
     let u = load(&text);
-    let names: Vec<&str> = u.joints.iter().map(|j| j.name.as_str()).collect();
+    let names: Vec<&str> = u.joints().iter().map(|j| j.name.as_str()).collect();
     assert_eq!(names, ["M1", "j_c", "a1", "q1"]);
     let bodies: Vec<&str> = u.model.bodies.iter().map(|b| b.name.as_str()).collect();
     assert_eq!(bodies, ["base", "aa", "c", "zz", "mm"]);
@@ -309,7 +309,7 @@ fn mimic_loads_as_coupling_and_ignored_elements_warn() {
     let u = load(&text);
     assert_eq!(u.model.nv, 2);
     assert_eq!(
-        u.joints[1].mimic,
+        u.joints()[1].mimic,
         Some(Mimic {
             joint: "j1".into(),
             multiplier: 2.0,
@@ -319,7 +319,7 @@ fn mimic_loads_as_coupling_and_ignored_elements_warn() {
     let c = &u.model.couplings[0];
     assert_eq!(
         (c.joint, c.reference, c.ratio, c.offset),
-        (u.joints[1].body, u.joints[0].body, 2.0, 0.0)
+        (u.joints()[1].body, u.joints()[0].body, 2.0, 0.0)
     );
     assert_eq!(c.name, "j2");
     assert_eq!(u.warnings.len(), 1, "{:?}", u.warnings);
@@ -490,8 +490,8 @@ fn triangle_violation_refused_with_the_option_named_then_balanced() {
     let e = error(&bad);
     assert!(e.contains("triangle") && e.contains("repair=True"), "{e}");
     let u = load_repaired(&bad, &Repair::default()).unwrap();
-    assert_eq!(u.repairs.len(), 1);
-    assert_eq!(u.repairs[0].rules, ["balance_inertia"]);
+    assert_eq!(u.repairs().len(), 1);
+    assert_eq!(u.repairs()[0].rules, ["balance_inertia"]);
     // MuJoCo's rule: all three principal moments become their mean, 4e-3, about the COM.
     let body = u.model.link_bodies()[0];
     assert!((body.inertia - Mat3::identity() * 4e-3).abs().max() < 1e-17);
@@ -511,7 +511,7 @@ fn massless_leaf_welded_and_recorded() {
     let u = load_repaired(&text, &Repair::default()).unwrap();
     assert_eq!(u.model.nv, 1);
     assert_eq!(u.joint("k").unwrap().kind, "fixed");
-    let r = &u.repairs[0];
+    let r = &u.repairs()[0];
     assert_eq!(r.joint.as_deref(), Some("k"));
     assert_eq!(
         r.joint_type,
@@ -580,9 +580,9 @@ fn parts_keep_order_and_allow_massless_intermediates() {
     ])
     .unwrap();
     assert_eq!(u.model.nv, 5);
-    let names: Vec<&str> = u.joints.iter().map(|j| j.name.as_str()).collect();
+    let names: Vec<&str> = u.joints().iter().map(|j| j.name.as_str()).collect();
     assert_eq!(names, ["b/h1_j", "b_j", "c_j"]);
-    assert_eq!(u.joints[2].kind, "spherical");
+    assert_eq!(u.joints()[2].kind, "spherical");
     // A massless body that moves nothing is refused.
     let e = model_from_parts(&[part("lonely", None, x, 0.0)]).unwrap_err();
     assert!(e.to_string().contains("moves nothing"), "{e}");

@@ -6,6 +6,7 @@ the designed dynamics to round-off."""
 
 from __future__ import annotations
 
+import json
 import os
 import re
 import xml.etree.ElementTree as ET
@@ -151,16 +152,19 @@ def write_scene(bodies: dict[str, Any], source: str | os.PathLike, path: str | o
     in_toml = {n: b for n, b in bodies.items() if n in names}
     rest = {n: b for n, b in bodies.items() if n not in names}
     lines = _edit_sections(text.splitlines(), names, in_toml)
-    if rest:
-        if "urdf" not in data:
-            raise InvalidInputError(
-                f"bodies: {sorted(rest)} are neither [[body]] tables of '{source}' nor from a urdf"
-            )
+    if rest and "urdf" not in data:
+        raise InvalidInputError(
+            f"bodies: {sorted(rest)} are neither [[body]] tables of '{source}' nor from a urdf"
+        )
+    if "urdf" in data:
         urdf = (source.parent / str(data["urdf"])).resolve()
-        target = path.with_suffix(".urdf")
-        write_urdf(rest, urdf, target)
+        if rest:
+            urdf = path.with_suffix(".urdf")
+            write_urdf(rest, (source.parent / str(data["urdf"])).resolve(), urdf)
+        # The scene names its URDF relative to itself: the copy's path from where it is.
+        rel = Path(os.path.relpath(urdf, path.resolve().parent)).as_posix()
         pattern = re.compile(r"^\s*urdf\s*=")
-        lines = [f'urdf = "{target.name}"' if pattern.match(ln) else ln for ln in lines]
+        lines = [f"urdf = {json.dumps(rel)}" if pattern.match(ln) else ln for ln in lines]
     _write_text(path, "\n".join(lines) + "\n")
     return path
 

@@ -53,6 +53,15 @@ import numpy as np
 from .. import _core
 from .._helpers import rotation_of_wxyz, scene_gravity
 from ..errors import InvalidInputError, ModelStructureError
+from ._mjcf_rotations import (
+    axis_of,
+    qmul,
+    quat_wxyz_of,
+    zyz_of_rot,
+    zyz_quat,
+    zyz_rate,
+    zyz_rate_dot,
+)
 
 #: MuJoCo's integrators, as ``<option integrator=...>`` names them.
 MUJOCO_INTEGRATORS = ("Euler", "RK4", "implicit", "implicitfast")
@@ -81,92 +90,6 @@ class MujocoLayout:
     joints: tuple[_Joint, ...]
     #: bodies in the order the MJCF lists them (depth first, children by our index)
     order: tuple[int, ...]
-
-
-# ----------------------------------------------------------------------------- rotations
-
-
-def _quat_wxyz_of(r: np.ndarray) -> np.ndarray:
-    """Unit quaternion (w, x, y, z) of one rotation matrix (Shepperd's method)."""
-    t = np.trace(r)
-    if t > 0:
-        s = 2.0 * math.sqrt(1.0 + t)
-        q = [0.25 * s, (r[2, 1] - r[1, 2]) / s, (r[0, 2] - r[2, 0]) / s, (r[1, 0] - r[0, 1]) / s]
-    elif r[0, 0] > r[1, 1] and r[0, 0] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[0, 0] - r[1, 1] - r[2, 2])
-        q = [(r[2, 1] - r[1, 2]) / s, 0.25 * s, (r[0, 1] + r[1, 0]) / s, (r[0, 2] + r[2, 0]) / s]
-    elif r[1, 1] > r[2, 2]:
-        s = 2.0 * math.sqrt(1.0 + r[1, 1] - r[0, 0] - r[2, 2])
-        q = [(r[0, 2] - r[2, 0]) / s, (r[0, 1] + r[1, 0]) / s, 0.25 * s, (r[1, 2] + r[2, 1]) / s]
-    else:
-        s = 2.0 * math.sqrt(1.0 + r[2, 2] - r[0, 0] - r[1, 1])
-        q = [(r[1, 0] - r[0, 1]) / s, (r[0, 2] + r[2, 0]) / s, (r[1, 2] + r[2, 1]) / s, 0.25 * s]
-    q = np.array(q)
-    return q / np.linalg.norm(q)
-
-
-def _qmul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Hamilton product of (w, x, y, z) quaternions, broadcasting."""
-    aw, ax, ay, az = np.moveaxis(a, -1, 0)
-    bw, bx, by, bz = np.moveaxis(b, -1, 0)
-    return np.stack([aw * bw - ax * bx - ay * by - az * bz,
-                     aw * bx + ax * bw + ay * bz - az * by,
-                     aw * by - ax * bz + ay * bw + az * bx,
-                     aw * bz + ax * by - ay * bx + az * bw], -1)
-
-
-def _zyz_quat(e: np.ndarray) -> np.ndarray:
-    """(w, x, y, z) of Rz(φ) Ry(θ) Rz(ψ), for e (..., 3)."""
-    phi, th, psi = np.moveaxis(e, -1, 0)
-    c, s = np.cos(th / 2), np.sin(th / 2)
-    return np.stack([c * np.cos((phi + psi) / 2), -s * np.sin((phi - psi) / 2),
-                     s * np.cos((phi - psi) / 2), c * np.sin((phi + psi) / 2)], -1)
-
-
-def _zyz_rate(e: np.ndarray) -> np.ndarray:
-    """L(φ, θ) (..., 3, 3): relative angular velocity in the joint frame = L · Euler rates."""
-    phi, th = e[..., 0], e[..., 1]
-    z, o = np.zeros_like(phi), np.ones_like(phi)
-    sp, cp, st, ct = np.sin(phi), np.cos(phi), np.sin(th), np.cos(th)
-    return np.stack([np.stack([z, -sp, cp * st], -1), np.stack([z, cp, sp * st], -1),
-                     np.stack([o, z, ct], -1)], -2)
-
-
-def _zyz_rate_dot(e: np.ndarray, ed: np.ndarray) -> np.ndarray:
-    """dL/dt for Euler rates ed."""
-    phi, th = e[..., 0], e[..., 1]
-    dp, dt = ed[..., 0], ed[..., 1]
-    z = np.zeros_like(phi)
-    sp, cp, st, ct = np.sin(phi), np.cos(phi), np.sin(th), np.cos(th)
-    return np.stack([
-        np.stack([z, -cp * dp, -sp * st * dp + cp * ct * dt], -1),
-        np.stack([z, -sp * dp, cp * st * dp + sp * ct * dt], -1),
-        np.stack([z, z, -st * dt], -1)], -2)
-
-
-def _wrap_near(x: np.ndarray, like: np.ndarray) -> np.ndarray:
-    return x + 2 * np.pi * np.round((like - x) / (2 * np.pi))
-
-
-def _zyz_of_rot(r: np.ndarray, like: np.ndarray | None) -> np.ndarray:
-    """Euler angles of rotations r (..., 3, 3); of the two branches (θ > 0 or θ < 0) and the
-    2π-shifts the one nearest ``like`` (default θ ∈ [0, π], φ, ψ ∈ (−π, π])."""
-    th = np.arccos(np.clip(r[..., 2, 2], -1.0, 1.0))
-    phi = np.arctan2(r[..., 1, 2], r[..., 0, 2])
-    psi = np.arctan2(r[..., 2, 1], -r[..., 2, 0])
-    if like is None:
-        return np.stack([phi, th, psi], -1)
-    a = np.stack([_wrap_near(phi, like[..., 0]), _wrap_near(th, like[..., 1]),
-                  _wrap_near(psi, like[..., 2])], -1)
-    b = np.stack([_wrap_near(phi + np.pi, like[..., 0]), _wrap_near(-th, like[..., 1]),
-                  _wrap_near(psi + np.pi, like[..., 2])], -1)
-    pick_b = np.sum((b - like) ** 2, -1) < np.sum((a - like) ** 2, -1)
-    return np.where(pick_b[..., None], b, a)
-
-
-def _axis_of(d: np.ndarray, angle: float) -> np.ndarray:
-    a = np.array([d[2, 1] - d[1, 2], d[0, 2] - d[2, 0], d[1, 0] - d[0, 1]]) / (2 * math.sin(angle))
-    return a / np.linalg.norm(a)
 
 
 # ----------------------------------------------------------------------------- structure
@@ -330,7 +253,8 @@ def to_mjcf(
     """MJCF text of a :class:`Model` or :class:`Scene` (see the module docstring for the
     mapping). ``timestep`` and ``integrator`` (``"Euler"``, ``"RK4"``, ``"implicit"``,
     ``"implicitfast"``) go into ``<option>``; ``gravity`` (3,) only for a bare model (a
-    scene's comes from its effects). Joint ``j_<body>`` and body names are ours."""
+    scene's comes from its effects). Joints carry ``model.joint_names`` and 1-dof joints
+    their ranges (``limited="false"``: not enforced); bodies carry the model's names."""
     model, scene = _model_of(model_or_scene)
     if integrator not in MUJOCO_INTEGRATORS:
         raise InvalidInputError(f"integrator: expected one of {MUJOCO_INTEGRATORS}, got "
@@ -380,9 +304,11 @@ def to_mjcf(
            "  </option>",
            "  <worldbody>"]
 
+    joint_names, limits = model.joint_names, model.joint_limits()
     def joint_xml(b: int, frame: int) -> str:
         """Body b's joint, axis and anchor in the neutral frame of body ``frame``."""
-        bname, kind, parent, _ = infos[b]
+        bname, kind, parent, link = infos[b]
+        jname = joint_names[link]
         j, rf = by_body[b], rots[frame]
         attrs = "" if frame == b else f' pos="{_fmt(rf.T @ (origins[b] - origins[frame]))}"'
         if kind in ("Revolute", "Prismatic"):
@@ -391,13 +317,15 @@ def to_mjcf(
             opt = np.zeros(3) if parent < 0 else ot[parent]
             r0, p0 = rp.T @ rots[b], rp.T @ (origins[b] - op)
             if kind == "Revolute":
-                axis = _axis_of(r0.T @ (rpt.T @ rt[b]), math.pi / 2)
+                axis = axis_of(r0.T @ (rpt.T @ rt[b]), math.pi / 2)
             else:
                 axis = r0.T @ (rpt.T @ (ot[b] - opt) - p0) / (math.pi / 2)
                 axis = axis / np.linalg.norm(axis)
             axis = rf.T @ rots[b] @ axis
             mj = "hinge" if kind == "Revolute" else "slide"
             attrs += f' type="{mj}" axis="{_fmt(axis)}"'
+            lo, up = limits[jname][:2]  # enforced by our JointLimit effect only: not limited
+            attrs += f' range="{lo!r} {up!r}" limited="false"' if abs(lo) + abs(up) < math.inf else ""
             if stiff[j.v]:
                 attrs += f' stiffness="{float(stiff[j.v])!r}" springref="{float(rest[j.v])!r}"'
         elif kind in ("Spherical", "SphericalZYZ"):
@@ -412,7 +340,7 @@ def to_mjcf(
         if np.any(arm != arm[0]):  # MuJoCo has one value per joint
             raise ModelStructureError(f"model: body {bname!r}: armature {arm} differs by axis")
         attrs += f' armature="{float(arm[0])!r}"' if arm[0] else ""
-        return f"<joint name={quoteattr('j_' + bname)}{attrs}/>"
+        return f"<joint name={quoteattr(jname)}{attrs}/>"
 
     def carried_into(b: int) -> int | None:
         """The body a massless moving body's joint goes into, or None. MuJoCo refuses moving
@@ -438,7 +366,7 @@ def to_mjcf(
         r0 = rp.T @ rots[b]
         p0 = rp.T @ (origins[b] - op)
         xml.append(f"{pad}<body name={quoteattr(bname)} pos=\"{_fmt(p0)}\" "
-                   f"quat=\"{_fmt(_quat_wxyz_of(r0))}\">")
+                   f"quat=\"{_fmt(quat_wxyz_of(r0))}\">")
         for k in carried + ([b] if b in by_body else []):
             xml.append(f"{pad}  {joint_xml(k, b)}")
         body = model.body(b)
@@ -496,12 +424,12 @@ def to_mujoco_state(model, q, v) -> tuple[np.ndarray, np.ndarray]:
             qvel[..., d:d + 3] = v[..., b:b + 3]
         elif j.kind == "SphericalZYZ":
             e, ed = q[..., a:a + 3], v[..., b:b + 3]
-            qpos[..., p:p + 4] = _zyz_quat(e)
-            w_joint = np.einsum("...ij,...j->...i", _zyz_rate(e), ed)
-            qvel[..., d:d + 3] = np.einsum("...ji,...j->...i", rotation_of_wxyz(_zyz_quat(e)),
+            qpos[..., p:p + 4] = zyz_quat(e)
+            w_joint = np.einsum("...ij,...j->...i", zyz_rate(e), ed)
+            qvel[..., d:d + 3] = np.einsum("...ji,...j->...i", rotation_of_wxyz(zyz_quat(e)),
                                            w_joint)
         else:  # FreeFlyer below the world
-            quat = _qmul(_quat_wxyz_of(j.rot0), q[..., [a + 6, a + 3, a + 4, a + 5]])
+            quat = qmul(quat_wxyz_of(j.rot0), q[..., [a + 6, a + 3, a + 4, a + 5]])
             qpos[..., p:p + 3] = j.pos0 + q[..., a:a + 3] @ j.rot0.T
             qpos[..., p + 3:p + 7] = quat
             qvel[..., d:d + 3] = np.einsum("...ij,...j->...i", rotation_of_wxyz(quat),
@@ -544,13 +472,13 @@ def from_mujoco_state(model, qpos, qvel, q_like=None) -> tuple[np.ndarray, np.nd
             v[..., b:b + 3] = qvel[..., d:d + 3]
         elif j.kind == "SphericalZYZ":
             r = rotation_of_wxyz(qpos[..., p:p + 4])
-            e = _zyz_of_rot(r, None if like is None else like[..., a:a + 3])
+            e = zyz_of_rot(r, None if like is None else like[..., a:a + 3])
             w_joint = np.einsum("...ij,...j->...i", r, qvel[..., d:d + 3])
             q[..., a:a + 3] = e
-            v[..., b:b + 3] = np.linalg.solve(_zyz_rate(e), w_joint[..., None])[..., 0]
+            v[..., b:b + 3] = np.linalg.solve(zyz_rate(e), w_joint[..., None])[..., 0]
         else:
             r_w = rotation_of_wxyz(qpos[..., p + 3:p + 7])
-            rel = _qmul(_quat_wxyz_of(j.rot0.T), qpos[..., p + 3:p + 7])
+            rel = qmul(quat_wxyz_of(j.rot0.T), qpos[..., p + 3:p + 7])
             q[..., a:a + 3] = (qpos[..., p:p + 3] - j.pos0) @ j.rot0
             q[..., a + 3:a + 7] = near_sign(rel[..., [1, 2, 3, 0]], a + 3)
             v[..., b:b + 3] = np.einsum("...ji,...j->...i", r_w, qvel[..., d:d + 3])
@@ -577,12 +505,12 @@ def to_mujoco_acceleration(model, q, v, a) -> np.ndarray:
         elif j.kind == "SphericalZYZ":
             # ω_b = Rᵀ L ė, and d(Rᵀ)/dt ω_joint = 0, so ω̇_b = Rᵀ (L ë + L̇ ė).
             e, ed, edd = q[..., i:i + 3], v[..., b:b + 3], a[..., b:b + 3]
-            wdot = (np.einsum("...ij,...j->...i", _zyz_rate(e), edd)
-                    + np.einsum("...ij,...j->...i", _zyz_rate_dot(e, ed), ed))
-            qacc[..., d:d + 3] = np.einsum("...ji,...j->...i", rotation_of_wxyz(_zyz_quat(e)), wdot)
+            wdot = (np.einsum("...ij,...j->...i", zyz_rate(e), edd)
+                    + np.einsum("...ij,...j->...i", zyz_rate_dot(e, ed), ed))
+            qacc[..., d:d + 3] = np.einsum("...ji,...j->...i", rotation_of_wxyz(zyz_quat(e)), wdot)
         else:
             # world linear velocity R v_lin: its rate is R (a_lin + ω × v_lin)
-            quat = _qmul(_quat_wxyz_of(j.rot0), q[..., [i + 6, i + 3, i + 4, i + 5]])
+            quat = qmul(quat_wxyz_of(j.rot0), q[..., [i + 6, i + 3, i + 4, i + 5]])
             lin = a[..., b:b + 3] + np.cross(v[..., b + 3:b + 6], v[..., b:b + 3])
             qacc[..., d:d + 3] = np.einsum("...ij,...j->...i", rotation_of_wxyz(quat), lin)
             qacc[..., d + 3:d + 6] = a[..., b + 3:b + 6]

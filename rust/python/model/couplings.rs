@@ -10,54 +10,23 @@ use crate::python::convert::{int_arg, real, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::shared::Version;
 
-/// A joint given as a body index, a URDF joint name or a body name: its body's index.
+/// A joint given as a body index, a URDF joint name or a body name: its body's index
+/// (`crate::effects::resolve_joint_body`).
 fn joint_ref(ver: &Version, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<usize> {
     let py = obj.py();
-    let model = &ver.model;
-    if let Ok(name) = obj.cast::<PyString>() {
-        let name = name.to_cow()?;
-        if let Some(j) = ver.urdf_joints.iter().find(|j| j.name == name.as_ref()) {
-            return Ok(j.body);
-        }
-        return model.body_index(name.as_ref()).ok_or_else(|| {
-            let mut names: Vec<String> = model
-                .links
-                .iter()
-                .take(20)
-                .map(|l| format!("'{}'", model.bodies[l.body].name))
-                .collect();
-            if model.links.len() > 20 {
-                names.push("…".into());
-            }
-            invalid(
-                py,
-                arg,
-                format!(
-                    "a joint name or the name of its body ({})",
-                    names.join(", ")
-                ),
-                format!("'{name}'"),
-            )
-        });
-    }
-    let n = model.nbodies();
-    let k = int_arg(
-        obj,
-        arg,
-        0,
-        i64::MAX,
-        "a body index, a joint name or a body name",
-    )?;
-    if (k as usize) < n {
-        Ok(k as usize)
+    let r = if let Ok(name) = obj.cast::<PyString>() {
+        crate::effects::JointRef::Name(name.to_cow()?.into_owned())
     } else {
-        Err(invalid(
-            py,
+        let k = int_arg(
+            obj,
             arg,
-            format!("a body index 0..{n}, a joint name or a body name"),
-            k,
-        ))
-    }
+            0,
+            i64::MAX,
+            "a body index, a joint name or a body name",
+        )?;
+        crate::effects::JointRef::Index(k as usize)
+    };
+    crate::effects::resolve_joint_body(&ver.model, &r, arg).py(py)
 }
 
 #[pymethods]

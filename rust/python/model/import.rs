@@ -2,7 +2,6 @@
 //! Pinocchio), `Model._from_parts`, the core's constructor from bodies in tree order
 //! (`urdf::model_from_parts`). `Model.from_mujoco` and `Model.from_pinocchio` are those
 //! importers, attached to the class in Python: nothing here calls back into Python.
-use std::sync::Arc;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -62,24 +61,20 @@ impl PyModel {
                 warnings.call_method1("warn", (w.as_str(), &category, 1))?;
             }
         }
-        if !urdf.repairs.is_empty() {
+        if !urdf.repairs().is_empty() {
             let category = py
                 .import("pointmass_dyn.errors")?
                 .getattr("UrdfRepairWarning")?;
-            let lines: Vec<String> = urdf.repairs.iter().map(|r| r.describe()).collect();
+            let lines: Vec<String> = urdf.repairs().iter().map(|r| r.describe()).collect();
             let message = format!(
                 "{}: repaired {} link(s)/joint(s) (model.repairs lists them):\n  {}",
                 crate::files::display_path(&path),
-                urdf.repairs.len(),
+                urdf.repairs().len(),
                 lines.join("\n  ")
             );
             warnings.call_method1("warn", (message, &category, 1))?;
         }
-        Ok(PyModel::from_parts_repaired(
-            Arc::new(urdf.model),
-            Arc::new(urdf.joints),
-            Arc::new(urdf.repairs),
-        ))
+        Ok(PyModel::from_model(urdf.model))
     }
 
     /// For the importers (python/pointmass_dyn/io/_importers.py): a model from bodies in tree
@@ -148,10 +143,7 @@ impl PyModel {
             });
         }
         let built = crate::urdf::model_from_parts(&out).py(py)?;
-        Ok(PyModel::from_parts(
-            Arc::new(built.model),
-            Arc::new(built.joints),
-        ))
+        Ok(PyModel::from_model(built.model))
     }
 
     /// What `from_urdf(..., repair=...)` changed: one dict per link or welded joint with
@@ -161,7 +153,7 @@ impl PyModel {
     #[getter]
     fn repairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
         let out = pyo3::types::PyList::empty(py);
-        for r in self.repair_records().iter() {
+        for r in self.records().repairs.iter() {
             let d = PyDict::new(py);
             d.set_item("link", &r.link)?;
             d.set_item("joint", &r.joint)?;

@@ -83,23 +83,14 @@ fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -
 
 impl PyModel {
     pub fn from_model(model: Model) -> Self {
-        Self::from_parts(Arc::new(model), Arc::new(Vec::new()))
+        Self::from_shared(Arc::new(model))
     }
 
-    /// A model sharing `model` (a scene's, another model's): nothing is copied until one of
-    /// them adds a body.
-    pub fn from_parts(model: Arc<Model>, urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>) -> Self {
-        Self::from_parts_repaired(model, urdf_joints, Arc::new(Vec::new()))
-    }
-
-    /// [`PyModel::from_parts`] with the repairs a URDF load made.
-    pub fn from_parts_repaired(
-        model: Arc<Model>,
-        urdf_joints: Arc<Vec<crate::urdf::UrdfJoint>>,
-        repairs: Arc<Vec<crate::urdf::RepairRecord>>,
-    ) -> Self {
+    /// A model sharing `model` (a scene's, another model's), its joint records included:
+    /// nothing is copied until one of them adds a body.
+    pub fn from_shared(model: Arc<Model>) -> Self {
         PyModel {
-            shared: SharedModel::new(model, urdf_joints, repairs),
+            shared: SharedModel::new(model),
         }
     }
 
@@ -114,14 +105,9 @@ impl PyModel {
         self.shared.model()
     }
 
-    /// The URDF joints of a model from `from_urdf` (empty otherwise).
-    pub fn urdf_joints(&self) -> Arc<Vec<crate::urdf::UrdfJoint>> {
-        self.shared.version().urdf_joints
-    }
-
-    /// The repairs of a model from `from_urdf(..., repair=...)` (empty otherwise).
-    pub fn repair_records(&self) -> Arc<Vec<crate::urdf::RepairRecord>> {
-        self.shared.version().repairs
+    /// The source file's joints and repairs (empty for a model built body by body).
+    pub fn records(&self) -> Arc<crate::joint_records::JointRecords> {
+        self.model().records.clone()
     }
 
     fn version(&self) -> Version {

@@ -1,5 +1,4 @@
 //! `Model`'s tree: building it body by body, its sizes and names, bodies and joints.
-use std::sync::Arc;
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -210,11 +209,7 @@ impl PyModel {
             })?;
         let mut model = (*ver.model).clone();
         model.replace_body(b, rigid_body.inner).py(py)?;
-        Ok(PyModel::from_parts_repaired(
-            Arc::new(model),
-            ver.urdf_joints.clone(),
-            ver.repairs.clone(),
-        ))
+        Ok(PyModel::from_model(model))
     }
 
     fn __repr__(&self) -> String {
@@ -239,18 +234,16 @@ impl PyModel {
     /// `from_urdf`, otherwise the names of the bodies that define each link.
     #[getter]
     fn joint_names(&self) -> Vec<String> {
-        let v = self.version();
-        joint_names(&v.model, &v.urdf_joints)
+        self.model().joint_names()
     }
 
     /// `{joint name: (lower, upper, effort, velocity)}` for the moving joints in q/v order.
     /// What the file does not give is unbounded: ±inf position bounds (always, for
     /// continuous joints), inf effort and velocity.
     fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let ver = self.version();
+        let model = self.model();
         let d = PyDict::new(py);
-        let names = joint_names(&ver.model, &ver.urdf_joints);
-        for (joint, name) in link_joints(&ver.model, &ver.urdf_joints).zip(names) {
+        for (joint, name) in model.link_joints().zip(model.joint_names()) {
             let inf = f64::INFINITY;
             let lim = joint
                 .and_then(|j| j.limit)
@@ -264,38 +257,12 @@ impl PyModel {
     /// `{joint name: (damping, friction)}` from the URDF `<dynamics>` elements, for the
     /// moving joints in q/v order (0 where absent). Not applied by the model itself.
     fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let ver = self.version();
+        let model = self.model();
         let d = PyDict::new(py);
-        let names = joint_names(&ver.model, &ver.urdf_joints);
-        for (joint, name) in link_joints(&ver.model, &ver.urdf_joints).zip(names) {
+        for (joint, name) in model.link_joints().zip(model.joint_names()) {
             let dyn_ = joint.map(|j| (j.damping, j.friction)).unwrap_or((0.0, 0.0));
             d.set_item(name, dyn_)?;
         }
         Ok(d)
     }
-}
-
-fn joint_names(model: &Model, urdf_joints: &[crate::urdf::UrdfJoint]) -> Vec<String> {
-    model
-        .links
-        .iter()
-        .zip(link_joints(model, urdf_joints))
-        .map(|(l, joint)| match joint {
-            Some(j) => j.name.clone(),
-            None => model.bodies[l.body].name.clone(),
-        })
-        .collect()
-}
-
-/// The URDF joint (if any) of each moving link, in q/v order: one pass, not a search per link.
-fn link_joints<'a>(
-    model: &'a Model,
-    joints: &'a [crate::urdf::UrdfJoint],
-) -> impl Iterator<Item = Option<&'a crate::urdf::UrdfJoint>> + 'a {
-    let by_body: std::collections::HashMap<usize, &crate::urdf::UrdfJoint> =
-        joints.iter().map(|j| (j.body, j)).collect();
-    model
-        .links
-        .iter()
-        .map(move |l| by_body.get(&l.body).copied())
 }
