@@ -261,3 +261,58 @@ def test_plot_motion_picks_the_plane_and_the_moment_component(tmp_path):
         assert fig.axes[1].get_xlabel() == "t (s)"
     finally:
         plt.close(fig)
+
+
+# --------------------------------------------------------------------------------------------
+# Units (issue 38 #9): every figure the design and balance commands print has its unit
+# --------------------------------------------------------------------------------------------
+#: The SI unit of each quantity the tables print: the fourbar's driver is a revolute joint,
+#: so its driving force is a torque.
+EXPECTED_UNIT = {"shaking force": "N", "shaking moment": "N·m", "driving force": "N·m",
+                 "bearing": "N", "cut joint": "N"}
+
+
+def _table_units(text: str) -> dict[str, str]:
+    """The unit printed with each quantity row of a before/after or RMS/peak table."""
+    out = {}
+    for line in text.splitlines():
+        m = re.match(r"^((?:shaking|driving|bearing|cut joint)[^(]*?)\s*\(([^)]*)\)\s+[-\d.]",
+                     line)
+        if m:
+            out[m.group(1)] = m.group(2)
+        elif re.match(r"^(shaking|driving|bearing|cut joint)", line):
+            out[line.split("  ")[0]] = None  # a row without a unit
+    return out
+
+
+def _check_units(text: str) -> None:
+    units = _table_units(text)
+    assert len(units) == 7, text  # force, moment, one driver, three bearings, one cut joint
+    for name, unit in units.items():
+        kind = next(k for k in EXPECTED_UNIT if name.startswith(k))
+        assert unit == EXPECTED_UNIT[kind], (name, unit)
+
+
+def test_design_and_balance_print_every_figure_with_its_unit(tmp_path, capsys):
+    spec = tmp_path / "spec.toml"
+    spec.write_text('speed = 30.0\nsamples = 24\n[[counterweight]]\nbody = "rocker"\n'
+                    'ring = { center = [0, 0, 0], radius = 0.02, count = 8 }\nmax_mass = 0.05\n')
+    assert cli.main(["design", "fourbar", str(spec), "--out", str(tmp_path / "d")]) == 0
+    text = capsys.readouterr().out
+    assert "'crank' driven at 30 rad/s over one revolution" in text
+    _check_units(text)
+    # A front: each objective's value with its unit (bearing and shaking forces: N).
+    spec.write_text(spec.read_text() + '[pareto]\nobjectives = ["bearing", "moment"]\ncount = 2\n')
+    assert cli.main(["design", "fourbar", str(spec), "--out", str(tmp_path / "p")]) == 0
+    text = capsys.readouterr().out
+    assert "bearing (N) / moment (N·m)" in text
+    rows = [r for r in text.splitlines() if "design mass" in r]
+    assert len(rows) == 2
+    assert all(re.fullmatch(r"\s+\S+ N\s+\S+ N·m\s+design mass \S+ kg", r) for r in rows), rows
+    # The balance command's tables.
+    assert cli.main(["balance", "fourbar", "--samples", "24"]) == 0
+    _check_units(capsys.readouterr().out)
+    assert cli.main(["balance", "fourbar", "--samples", "24", *RINGS]) == 0
+    text = capsys.readouterr().out
+    _check_units(text)
+    assert "COM x (m)" in text and "Ixx (kg·m²)" in text

@@ -6,6 +6,8 @@ block, saying so, where the headless browser the animations need is missing."""
 
 from __future__ import annotations
 
+import ast
+import builtins
 import re
 import shutil
 from pathlib import Path
@@ -75,3 +77,35 @@ def test_python_blocks_run(page, tmp_path, monkeypatch):
             raise AssertionError(f"the python block at {where} fails: {e!r}") from e
     if skipped:
         pytest.skip("; ".join(skipped))
+
+
+def _names(tree) -> tuple[set, set]:
+    """(names a block defines, names it reads) at any depth."""
+    defined, used = set(), set()
+    for n in ast.walk(tree):
+        if isinstance(n, ast.Name):
+            (used if isinstance(n.ctx, ast.Load) else defined).add(n.id)
+        elif isinstance(n, (ast.Import, ast.ImportFrom)):
+            defined |= {(a.asname or a.name).split(".")[0] for a in n.names}
+        elif isinstance(n, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            defined.add(n.name)
+        elif isinstance(n, ast.arg):
+            defined.add(n.arg)
+        elif isinstance(n, ast.ExceptHandler) and n.name:
+            defined.add(n.name)
+    return defined, used
+
+
+def test_visualisation_runs_every_block_but_the_live_view():
+    # Issue 38 #9: the Panda block (the one that made docs/panda.gif) failed with
+    # NameError: robots, unnoticed because it was not run. Now only the Meshcat live view is
+    # left out (it starts a server and opens a browser tab), and it reads only names the
+    # page's blocks before it define, as a reader pasting them in order would.
+    page = ROOT / "docs" / "visualisation.md"
+    known = set(dir(builtins))
+    for line, marker, code in blocks(page):
+        defined, used = _names(ast.parse(code))
+        if marker == "not run":
+            assert "show_meshcat" in code, f"visualisation.md:{line} is not run"
+            assert used <= known | defined, (line, sorted(used - known - defined))
+        known |= defined

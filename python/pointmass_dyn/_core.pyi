@@ -480,6 +480,10 @@ class Effect:
     @property
     def g(self) -> _Array | None:
         """A gravity effect's ``g`` (3,); None for other effects."""
+    @property
+    def plane(self) -> tuple[_Array, float] | None:
+        """A ground contact's plane ``n · x = height`` as ``(n, height)``, ``n`` (3,) its unit
+        normal out of the ground; None for other effects."""
 
     __hash__: ClassVar[None]  # type: ignore[assignment]
     @staticmethod

@@ -634,6 +634,17 @@ impl PyEffect {
             _ => None,
         }
     }
+    /// A ground contact's plane `n · x = height`: `(n, height)`, `n` (3,) the unit normal out
+    /// of the ground; `None` for other effects.
+    #[getter]
+    fn plane<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, numpy::PyArray1<f64>>, f64)> {
+        match &self.inner {
+            Effect::GroundContact(c) => {
+                Some((super::convert::to_array1(py, c.normal.as_slice()), c.height))
+            }
+            _ => None,
+        }
+    }
     fn __repr__(&self) -> String {
         self.inner.repr()
     }

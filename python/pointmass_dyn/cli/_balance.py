@@ -279,13 +279,13 @@ def _print_balance(b, model) -> None:
     else:
         print("\nno counterweight placed")
     print("\nnew bodies (COM in the body's frame; inertia about the COM, diagonal)")
-    print(f"  {'body':<16}{'mass (kg)':>13}{'COM x':>12}{'COM y':>12}{'COM z':>12}"
-          f"{'Ixx':>12}{'Iyy':>12}{'Izz':>12}")
+    print(f"  {'body':<16}{'mass (kg)':>13}{'COM x (m)':>12}{'COM y (m)':>12}{'COM z (m)':>12}"
+          f"{'Ixx (kg·m²)':>14}{'Iyy (kg·m²)':>14}{'Izz (kg·m²)':>14}")
     for name, rb in b.bodies.items():
         c = [0.0 if abs(x) < 1e-15 else x for x in rb.com]
         d = np.diag(rb.inertia)
         print(f"  {name:<16}{rb.mass:>13.6g}{c[0]:>12.5g}{c[1]:>12.5g}{c[2]:>12.5g}"
-              f"{d[0]:>12.5g}{d[1]:>12.5g}{d[2]:>12.5g}")
+              f"{d[0]:>14.5g}{d[1]:>14.5g}{d[2]:>14.5g}")
     print(f"  mass added: {b.model.total_mass - model.total_mass:.6g} kg")
 
 
@@ -338,10 +338,10 @@ def cmd_balance(args) -> int:
     title = f"{scene.name}: '{driver}' at {speed:.4g} {unit}"
 
     if not designing:
-        summary = motion.summary()
-        print(f"{'quantity':<34}{'RMS':>13}{'peak':>13}")
+        summary, units = motion.summary(), motion.units()
+        print(f"{'quantity':<40}{'RMS':>13}{'peak':>13}")
         for k, v in summary.items():
-            print(f"{k:<34}{v['rms']:>13.5g}{v['peak']:>13.5g}")
+            print(f"{f'{k} ({units[k]})':<40}{v['rms']:>13.5g}{v['peak']:>13.5g}")
         if args.out:
             _write_rows(Path(args.out), ["quantity", "rms", "peak"],
                         [[k, v["rms"], v["peak"]] for k, v in summary.items()])
@@ -361,12 +361,16 @@ def cmd_balance(args) -> int:
             rows.append([b.objective[first] / total, b.objective[second] / total,
                          objective_rms(b.after, first), objective_rms(b.after, second),
                          b.model.total_mass - model.total_mass])
+        # The driving force is a torque (N·m) for a revolute driver, a force (N) for a slider.
+        u = {"force": "N", "moment": "N·m", "torque": "N·m" if revolute else "N",
+             "bearing": "N", "mass": "kg"}
         print(f"Pareto front, {count} balances (RMS over the cycle; unbalanced: {first} "
-              f"{objective_rms(motion, first):.5g}, {second} {objective_rms(motion, second):.5g})")
-        print(f"{'w ' + first:>10}{'w ' + second:>10}{'RMS ' + first:>15}{'RMS ' + second:>15}"
-              f"{'mass added':>14}")
+              f"{objective_rms(motion, first):.5g} {u[first]}, {second} "
+              f"{objective_rms(motion, second):.5g} {u[second]})")
+        print(f"{'w ' + first:>10}{'w ' + second:>10}{f'RMS {first} ({u[first]})':>20}"
+              f"{f'RMS {second} ({u[second]})':>20}{'mass added (kg)':>17}")
         for r in rows:
-            print(f"{r[0]:>10.3f}{r[1]:>10.3f}{r[2]:>15.5g}{r[3]:>15.5g}{r[4]:>14.5g}")
+            print(f"{r[0]:>10.3f}{r[1]:>10.3f}{r[2]:>20.5g}{r[3]:>20.5g}{r[4]:>17.5g}")
         if args.out:
             _write_rows(Path(args.out), [f"weight_{first}", f"weight_{second}", f"rms_{first}",
                                          f"rms_{second}", "mass_added"], rows)

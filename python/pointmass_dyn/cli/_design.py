@@ -226,6 +226,19 @@ def _density_maps(b, out: Path) -> list[Path]:
     return written
 
 
+def _objective_unit(motion, name: str) -> str:
+    """The unit of objective ``name``'s value: kg of design material, N·m for the shaking
+    moment and the driving torques (N for a prismatic driver), N for the forces."""
+    if name == "mass":
+        return "kg"
+    if name == "moment":
+        return "N·m"
+    if name == "torque":
+        units = {u for k, u in motion.units().items() if k.startswith("driving force")}
+        return units.pop() if len(units) == 1 else "N or N·m"
+    return "N"  # the shaking force, the bearing forces
+
+
 def _front(motion, spec, kwargs, out: Path) -> None:
     pareto = spec["pareto"]
     names = tuple(pareto.get("objectives", ()))
@@ -234,9 +247,12 @@ def _front(motion, spec, kwargs, out: Path) -> None:
     front = pareto_front(motion, names, count, method=method, **kwargs)
     rows = [[objective_value(b, names[0]), objective_value(b, names[1]), float(np.sum(b.masses))]
             for b in front]
-    print(f"Pareto front ({method}, {kwargs['norm']}): {names[0]} / {names[1]}")
+    units = [_objective_unit(motion, n) for n in names]
+    print(f"Pareto front ({method}, {kwargs['norm']}): {names[0]} ({units[0]}) / "
+          f"{names[1]} ({units[1]})")
     for r in rows:
-        print(f"  {r[0]:>13.6g} {r[1]:>13.6g}   design mass {r[2]:.6g} kg")
+        print(f"  {r[0]:>13.6g} {units[0]:<6}{r[1]:>13.6g} {units[1]:<6}  "
+              f"design mass {r[2]:.6g} kg")
     _write_csv(out / "pareto.csv", [names[0], names[1], "design_mass"], rows)
     try:
         import matplotlib
@@ -248,8 +264,8 @@ def _front(motion, spec, kwargs, out: Path) -> None:
         return
     fig, ax = plt.subplots(figsize=(5, 4))
     ax.plot([r[0] for r in rows], [r[1] for r in rows], "o-")
-    ax.set_xlabel(f"{names[0]} ({kwargs['norm']})")
-    ax.set_ylabel(f"{names[1]} ({kwargs['norm']})")
+    ax.set_xlabel(f"{names[0]}, {kwargs['norm']} ({units[0]})")
+    ax.set_ylabel(f"{names[1]}, {kwargs['norm']} ({units[1]})")
     fig.savefig(out / "pareto.png", dpi=120, bbox_inches="tight")
     plt.close(fig)
 
@@ -272,7 +288,9 @@ def _motion(args, scene, spec):
                                    gravity=scene_gravity(scene), progress=report)
     finally:
         finish()
-    print(f"{scene.name}: '{driver}' driven at {speed:.6g} over one revolution, {samples} samples")
+    revolute = model.body_info(model.body_names.index(driver))[1] == "Revolute"
+    print(f"{scene.name}: '{driver}' driven at {speed:.6g} {'rad/s' if revolute else 'm/s'} "
+          f"over one {'revolution' if revolute else 'cycle of 2π m'}, {samples} samples")
     return motion
 
 
@@ -294,7 +312,7 @@ def cmd_design(args) -> int:
         return 0
     b = balance(motion, objective=spec.get("objective"), **kwargs)
     s = b.solver
-    print(f"designed: {s['status']}, gap {s['gap_rel']:.1e}, {s['iterations']} iterations, "
+    print(f"designed: {s['status']}, relative gap {s['gap_rel']:.1e}, {s['iterations']} iterations, "
           f"{s['time']:.2f} s")
     print(b.table())
     _write_csv(out / "design.csv", ["kind", "body", "x", "y", "z", "mass", "bound"],

@@ -101,7 +101,7 @@ def cmd_simulate(args) -> int:
     drift = np.max(np.abs(e - e[0]))
     print(f"{scene.name}: {result.message}")
     print(f"  method {result.method}"
-          + (f" (switched to {result.switched_to} at t = {result.t_switch:g})" if result.switched_to else ""))
+          + (f" (switched to {result.switched_to} at t = {result.t_switch:g} s)" if result.switched_to else ""))
     print(f"  {result.n_accepted} steps ({result.n_rejected} rejected), {result.nfev} evaluations, "
           f"{wall * 1e3:.1f} ms")
     print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J "

@@ -21,7 +21,7 @@ import numpy as np
 from .._batch import scenes_from_params, simulate_batch
 from .._helpers import quaternion_slices, scene_gravity
 from ..errors import InvalidInputError
-from ..plotting import coordinate_labels, plot_sweep
+from ..plotting import coordinate_labels, coordinate_units, plot_sweep
 from ..scenes import load_scene
 from ._animate import check_outputs
 from ._progress import progress_bar
@@ -382,11 +382,14 @@ def cmd_sweep(args) -> int:
     final_q = res.q[ok, -1, :]
     final_v = res.v[ok, -1, :]
     if ok.any():
-        print(f"  final state at t = {t_end:g} s over the {int(ok.sum())} successful runs "
-              f"(angles in rad):")
-        width = max(12, *(len(s) for s in qlab + vlab))
+        print(f"  final state at t = {t_end:g} s over the {int(ok.sum())} successful runs:")
+        qu, vu = coordinate_units(model)
+        unit = {"angle": "rad", "length": "m", "quaternion": "1", "angular rate": "rad/s",
+                "linear rate": "m/s"}
+        labels = [f"{lab} ({unit[u]})" for lab, u in zip(qlab + vlab, qu + vu)]
+        width = max(12, *(len(s) for s in labels))
         print(f"    {'':<{width}}{'mean':>13}{'std':>12}{'min':>13}{'max':>13}")
-        for lab, col in itertools.chain(zip(qlab, final_q.T), zip(vlab, final_v.T)):
+        for lab, col in zip(labels, itertools.chain(final_q.T, final_v.T)):
             print(f"    {lab:<{width}}{col.mean():>13.5g}{col.std():>12.4g}{col.min():>13.5g}"
                   f"{col.max():>13.5g}")
     if args.out:

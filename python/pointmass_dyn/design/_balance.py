@@ -127,13 +127,15 @@ class Balance:
         return write_urdf(self.bodies, source, path)
 
     def table(self) -> str:
-        """Before/after RMS and peaks, as text."""
+        """Before/after RMS and peaks, as text, each quantity with its unit."""
         b, a = self.before.summary(), self.after.summary()
+        units = self.before.units()
         rows = [
-            f"{'quantity':<34}{'RMS before':>13}{'RMS after':>13}{'peak before':>13}{'peak after':>13}"
+            f"{'quantity':<40}{'RMS before':>13}{'RMS after':>13}{'peak before':>13}{'peak after':>13}"
         ]
         for k in b:
             rows.append(
-                f"{k:<34}{b[k]['rms']:>13.5g}{a[k]['rms']:>13.5g}{b[k]['peak']:>13.5g}{a[k]['peak']:>13.5g}"
+                f"{f'{k} ({units[k]})':<40}{b[k]['rms']:>13.5g}{a[k]['rms']:>13.5g}"
+                f"{b[k]['peak']:>13.5g}{a[k]['peak']:>13.5g}"
             )
         return "\n".join(rows)

@@ -147,6 +147,20 @@ class MotionAnalysis:
             out[f"cut joint '{name}'"] = {"rms": rms(f), "peak": peak(f)}
         return out
 
+    def units(self) -> dict[str, str]:
+        """The unit of each :meth:`summary` entry: N for forces, N·m for the shaking moment
+        and for the driving torque of an angular speed."""
+        from ..plotting import coordinate_units  # plotting imports matplotlib only when drawing
+
+        speed = coordinate_units(self.model)[1]
+        cols = self.actuated if self.actuated is not None else range(self.tau.shape[1])
+        out = {"shaking force": "N", "shaking moment": "N·m"}
+        out.update({f"driving force [{c}]": "N·m" if speed[c] == "angular rate" else "N"
+                    for c in cols})
+        out.update({f"bearing '{n}'": "N" for n in self.model.link_names})
+        out.update({f"cut joint '{n}'": "N" for n in self.model.loop_names})
+        return out
+
 
 def analyze_motion(
     model: Any,

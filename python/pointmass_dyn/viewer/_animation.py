@@ -193,12 +193,31 @@ def prepare(
                                       and 0 <= triangles <= 10_000_000):
         raise InvalidInputError(f"triangles: expected an integer 0..10000000, got {triangles!r}")
     if title is None:
-        title = (scene.name if scene is not None and scene.name
-                 else model.name or "pointmass_dyn")
+        title = default_title(scene, model)
     return build_drawing(model, times, qf, trails=trails, shaking=force, title=title,
                          gravity=None if scene is None else scene_gravity(scene),
                          camera=camera, show=show, triangles=triangles, contact=arrows,
-                         contact_scale=contact_scale)
+                         contact_scale=contact_scale, planes=contact_planes(scene))
+
+
+#: The name a Scene built without one gets: it names nothing, so a page says the robot's.
+DEFAULT_SCENE_NAME = "scene"
+
+
+def default_title(scene, model) -> str:
+    """The scene's name, or the model's (a URDF's robot name) when the scene has none of its
+    own (or there is no scene), else "pointmass_dyn"."""
+    if scene is not None and scene.name and scene.name != DEFAULT_SCENE_NAME:
+        return scene.name
+    return model.name or "pointmass_dyn"
+
+
+def contact_planes(scene) -> list[tuple[str, np.ndarray, float]]:
+    """``(name, unit normal, height)`` of each ground contact ``scene`` (a Scene or None)
+    feels: the planes ``normal · x = height`` the page draws."""
+    if not has_contact(scene):
+        return []
+    return [(e.name, *e.plane) for e in scene.effects if e.kind == "contact"]
 
 
 def has_contact(scene) -> bool:
@@ -287,8 +306,10 @@ def animate(
     subject over the motion; follow a floating base that travels farther than its size),
     "fixed", "follow" or a dict of ``target``, ``distance``, ``azimuth``, ``elevation``,
     ``fov``. ``show``: the layers shown at first (``LAYERS``: "robot", "masses", "links",
-    "axes", "frames", "forces"). ``triangles``: the budget the model's meshes are
-    simplified to (default 60,000). ``contact``: ground-contact forces as arrows at their
+    "axes", "frames", "forces"). ``triangles``: the most triangles the robot's shapes are
+    drawn with, every instance of a mesh and the unsimplified primitives counted (default
+    60,000; a :class:`~pointmass_dyn.errors.VisualWarning` when they cannot be simplified
+    that far). ``contact``: ground-contact forces as arrows at their
     points, in the "forces" layer: None (default) draws them when ``result`` carries them
     (``simulate(..., contact=True)``), False never, True also computes them from the
     Scene's ground contacts; a point without force draws nothing. ``contact_scale``: metres

@@ -177,3 +177,32 @@ def ground(lo, hi, up) -> dict:
     a, b = (round(float(centre @ e) / step) * step for e in (e1, e2))
     return {"origin": (a * e1 + b * e2 + low * u).tolist(), "u": e1.tolist(), "v": e2.tolist(),
             "half": half, "step": step}
+
+
+#: The most grid lines a plane's square has each way (a long walk widens the square, not the
+#: line count).
+MAX_GRID_LINES = 200
+
+
+def plane_grid(lo, hi, normal, height: float, size: float) -> dict:
+    """A square grid on the plane ``normal · x = height`` (``normal`` unit) under the box
+    ``[lo, hi]``: centred at the box centre's projection onto the plane, covering the box's
+    shadow along the normal with a margin; spacing 1, 2 or 5 × 10^k of about ``size`` / 8
+    (the subject's size), coarser when the square would need more than
+    :data:`MAX_GRID_LINES` lines. Same keys as :func:`ground`, with ``point`` (the plane's
+    point nearest the world origin, ``height · normal``) and ``normal``."""
+    lo, hi = np.asarray(lo, dtype=float), np.asarray(hi, dtype=float)
+    e1, e2, n = up_basis(normal)
+    corners = np.array([[(hi if c >> k & 1 else lo)[k] for k in range(3)] for c in range(8)])
+    shadow = np.stack([corners @ e1, corners @ e2], axis=1)
+    raw = max(float(size), 1e-3) / 8
+    step = min((f * 10 ** math.floor(math.log10(raw)) for f in (1, 2, 5, 10)),
+               key=lambda x: abs(math.log(x / raw)))
+    reach = float(np.max(shadow.max(axis=0) - shadow.min(axis=0))) / 2 + 2 * raw
+    while 2 * reach / step > MAX_GRID_LINES:
+        step *= 10
+    half = step * math.ceil(reach / step)
+    a, b = (round(float(c) / step) * step for c in (shadow.max(axis=0) + shadow.min(axis=0)) / 2)
+    return {"origin": (a * e1 + b * e2 + height * n).tolist(), "u": e1.tolist(),
+            "v": e2.tolist(), "half": half, "step": step, "point": (height * n).tolist(),
+            "normal": n.tolist()}

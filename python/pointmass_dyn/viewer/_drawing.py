@@ -3,7 +3,8 @@
 
 Links between joint origins, joint axes, the seven point masses of every link (radius ∝
 |m|^(1/3), colour by sign) and the box they are corners of, cut joints, trails, the
-shaking-force arrow, contact-force arrows, the world frame and a ground grid.
+shaking-force arrow, contact-force arrows, the world frame, and each contact plane with a
+grid on it (a ground grid under the motion when there is none).
 """
 
 from __future__ import annotations
@@ -46,7 +47,10 @@ class Drawing:
     (F, 2, 3) shaking-force arrow (tail, head) or None. ``contact``: (F, K, 2, 3) contact-force
     arrows (tail at the contact point, head at point + ``contact_scale`` · force; tail = head
     where a point carries no force, which draws nothing) or None, ``contact_scale`` in m/N.
-    ``camera``: the initial view."""
+    ``planes``: each ground contact's plane (:func:`._camera.plane_grid`: ``point``,
+    ``normal``, the square grid drawn on it, and its ``name``); ``grid``: the ground, the
+    first plane's grid or, without planes, one under the motion. ``camera``: the initial
+    view."""
 
     times: np.ndarray
     spheres: np.ndarray
@@ -77,6 +81,8 @@ class Drawing:
     #: Contact-force arrows (F, K, 2, 3) or None, and their scale (metres per newton).
     contact: np.ndarray | None = None
     contact_scale: float = 0.0
+    #: The contact planes, each a grid dict (:func:`._camera.plane_grid`) with its ``name``.
+    planes: list = field(default_factory=list)
 
     @property
     def triangles(self) -> int:
@@ -245,12 +251,15 @@ def build_drawing(
     triangles: int | None = None,
     contact: tuple[np.ndarray, np.ndarray] | None = None,
     contact_scale: float | None = None,
+    planes=None,
 ) -> Drawing:
     """The :class:`Drawing` of ``model`` at configurations ``q`` (F, nq) and ``times`` (F,).
     ``shaking``: the shaking force (F, 3) to draw as an arrow, or None. ``contact``: the
     contact points and their forces, ``(position, force)`` each (F, K, 3), drawn as arrows
     scaled by ``contact_scale`` (m/N; None: the largest force is 25 % of the scene's size),
-    or None. ``gravity``: sets
+    or None. ``planes``: ``(name, normal, height)`` of each contact plane ``normal · x =
+    height`` (``normal`` unit), drawn with a grid on it; without planes a ground grid lies
+    under the motion. ``gravity``: sets
     "up" (−g) for the camera and the ground. ``camera``, ``show``, ``triangles``: as in
     :func:`~pointmass_dyn.viewer.animate`."""
     poses = model.body_poses(q)
@@ -340,6 +349,8 @@ def build_drawing(
         base = np.zeros((nf, 3))
         arrow = np.stack([base, base + scale * f], axis=1)
     arrows, cscale = _contact_arrows(contact, contact_scale, size)
+    grids = [{**_camera.plane_grid(lo, hi, n, h, size), "name": name}
+             for name, n, h in planes or ()]
 
     return Drawing(
         times=np.asarray(times, dtype=float),
@@ -357,7 +368,7 @@ def build_drawing(
         trails=trail,
         trail_colour=trail_colour,
         arrow=arrow,
-        grid=_camera.ground(lo, hi, up),
+        grid=grids[0] if grids else _camera.ground(lo, hi, up),
         camera=cam,
         size=size,
         extent=max(float(np.max(hi - lo)), 1e-3),
@@ -367,6 +378,7 @@ def build_drawing(
         show=_layers(show, visuals is not None),
         contact=arrows,
         contact_scale=cscale,
+        planes=grids,
     )
 
 

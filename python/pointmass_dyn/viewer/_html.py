@@ -79,6 +79,9 @@ def _legend(d: Drawing) -> str:
     if d.contact is not None:
         items.append(f'<span style="color:{hexc["contact"]}">➜</span> contact forces '
                      f'({1e3 * d.contact_scale:.3g} mm/N)')
+    if d.planes:
+        items.append('<span style="color:#8c99ad">■</span> contact plane'
+                     + ("s" if len(d.planes) > 1 else ""))
     return " &nbsp; ".join(items) + "<br>drag: orbit · wheel: zoom · space: play/pause"
 
 
@@ -140,7 +143,11 @@ def page(d: Drawing, fps: float) -> str:
         "contact": None if d.contact is None else {
             "pos": _b64(d.contact), "count": d.contact.shape[1], "radius": 0.7 * d.link_radius,
             "scale": d.contact_scale},
+        # The ground: each contact plane (point, normal, its grid's square), drawn where it is,
+        # translucent, with the grid on it; without planes, the grid under the motion.
         "grid": d.grid,
+        "planes": [{k: p[k] for k in ("name", "point", "normal", "origin", "u", "v", "half",
+                                      "step")} for p in d.planes],
         "camera": {**d.camera, "track": None if d.camera.get("track") is None
                    else _b64(np.asarray(d.camera["track"]))},
         "visuals": _visual_data(d),

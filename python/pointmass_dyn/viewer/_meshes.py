@@ -23,6 +23,7 @@ import warnings
 from dataclasses import dataclass, field
 from functools import lru_cache
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,9 +33,11 @@ from ..errors import VisualWarning
 MAX_MESH_BYTES = 256 * 1024 * 1024
 #: Meshes above this many triangles before simplification are refused (memory).
 MAX_MESH_TRIANGLES = 20_000_000
-#: Default total triangle budget of a model's meshes.
+#: Default triangle budget of a model's shapes: every triangle drawn, each instance of a mesh
+#: counted (Go2's four legs share their files), primitives and inertia boxes included.
 DEFAULT_TRIANGLES = 60_000
-#: A simplified mesh keeps at least this many triangles (or all it has).
+#: A simplified mesh keeps at least this many triangles (or all it has) while the budget
+#: allows (a smaller budget shares itself in proportion, down to a few triangles each).
 MIN_TRIANGLES = 120
 #: Colour of shapes without one (URDF without <material>, STL files).
 DEFAULT_RGBA = (0.72, 0.74, 0.78, 1.0)
@@ -298,6 +301,12 @@ def _read(path: str) -> list:
     return parts
 
 
+def _has_simplifier() -> bool:
+    import importlib.util
+
+    return importlib.util.find_spec("fast_simplification") is not None
+
+
 def _simplify(v: np.ndarray, f: np.ndarray, target: int) -> tuple[np.ndarray, np.ndarray]:
     if len(f) <= target:
         return v, f
@@ -305,9 +314,13 @@ def _simplify(v: np.ndarray, f: np.ndarray, target: int) -> tuple[np.ndarray, np
         import fast_simplification
     except ImportError:
         return v, f  # drawn whole: bigger page, same picture
-    v2, f2 = fast_simplification.simplify(v.astype(np.float64), f.astype(np.int32),
-                                          target_count=int(target))
-    return (v2, f2) if len(f2) else (v, f)
+    # A tiny target may collapse a part to nothing: ask again for more before keeping it all.
+    for t in (target, 4 * target + 12, 16 * target + 60):
+        v2, f2 = fast_simplification.simplify(v.astype(np.float64), f.astype(np.int32),
+                                              target_count=int(min(t, len(f))))
+        if len(f2):
+            return v2, f2
+    return v, f
 
 
 # ---------------------------------------------------------------- the disk cache
@@ -367,11 +380,10 @@ def _file_mesh(path: str, mtime: int, size: int, scale: tuple, target: int) -> M
         return Mesh(z["vertices"], z["faces"],
                     [(int(a), int(n), c) for a, n, c in zip(z["start"], z["count"], rgb)])
     parts = _read_cached(path, mtime, size)
-    total = sum(len(p[1]) for p in parts)
+    shares = budget_shares([len(p[1]) for p in parts], [1] * len(parts), target)
     verts, faces, spans = [], [], []
     nv = nf = 0
-    for v, f, rgb in parts:
-        share = max(MIN_TRIANGLES, int(target * len(f) / total)) if total > target else len(f)
+    for (v, f, rgb), share in zip(parts, shares):
         v, f = _simplify(v, f, share)
         verts.append(v * np.asarray(scale))
         faces.append(f + nv)
@@ -413,12 +425,66 @@ def _stat(path: str) -> tuple[int, int]:
 # ---------------------------------------------------------------- a model's scene
 
 
+def budget_shares(counts, uses, budget: int) -> list[int]:
+    """Triangles each mesh is simplified to so that ``Σ uses · share ≤ budget`` (``uses``:
+    how many times each is drawn): all of them when that fits, else in proportion to its own
+    count, a mesh that would get less than :data:`MIN_TRIANGLES` keeping that many (or all
+    it has) while the others can pay for it; a budget too small even for that is shared in
+    proportion, at least four triangles each (the caller says if the budget is exceeded)."""
+    counts, uses = [int(c) for c in counts], [int(u) for u in uses]
+    if sum(c * u for c, u in zip(counts, uses)) <= budget:
+        return counts
+    floor = [min(c, MIN_TRIANGLES) for c in counts]
+    if sum(f * u for f, u in zip(floor, uses)) > budget:
+        floor = [min(c, 4) for c in counts]
+    pinned: dict[int, int] = {}
+    while True:
+        free = [k for k in range(len(counts)) if k not in pinned]
+        left = budget - sum(pinned[k] * uses[k] for k in pinned)
+        weight = sum(counts[k] * uses[k] for k in free)
+        rate = left / weight if weight > 0 else 0.0
+        low = [k for k in free if counts[k] * rate < floor[k]]
+        if not low:
+            break
+        pinned.update({k: floor[k] for k in low})
+    return [pinned.get(k, min(counts[k], int(counts[k] * rate))) for k in range(len(counts))]
+
+
+def _budgeted_meshes(uses: dict, counts: dict, budget: int) -> dict:
+    """Each file's mesh (or the error reading it) by ``(path, scale)`` key, simplified so
+    that ``Σ uses · triangles ≤ budget`` where the simplifier can: a mesh it leaves above its
+    share (a part that will not collapse further) keeps what it got, and the others share the
+    rest again (a few rounds)."""
+    out: dict[tuple, Any] = {}
+    kept: dict[tuple, int] = {}  # triangles of the meshes settled above their share
+    for _round in range(4):
+        free = [k for k in uses if k not in kept]
+        left = budget - sum(kept[k] * uses[k] for k in kept)
+        shares = budget_shares([counts[k[0]] for k in free], [uses[k] for k in free], left)
+        over = False
+        for key, share in zip(free, shares):
+            try:
+                out[key] = _file_mesh(key[0], *_stat(key[0]), key[1], share)
+            except (MeshReadError, OSError) as exc:
+                out[key], kept[key] = exc, 0
+                continue
+            if out[key].ntriangles > share:
+                kept[key], over = out[key].ntriangles, True
+        if not over:
+            break
+    return out
+
+
 def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -> VisualScene:
     """The triangles of ``model.visuals``: each mesh file read once (shared by the visuals
-    that use it at one scale), simplified so that all meshes together have about
-    ``triangles`` (each keeps a share in proportion to its own count). Bodies whose meshes
-    could not be drawn get their inertia box; one :class:`VisualWarning` names the files
-    that could not be read (those not found were named when the model was loaded)."""
+    that use it at one scale) and simplified so that everything drawn has at most
+    ``triangles`` triangles: each instance of a mesh counts (a file on four legs four
+    times), and so do the primitives and inertia boxes, which are not simplified; the meshes
+    share what is left in proportion to their own counts (:func:`budget_shares`). A budget
+    that cannot be kept (smaller than the primitives, or fast-simplification missing) is a
+    :class:`VisualWarning` saying how many triangles are drawn. Bodies whose meshes could
+    not be drawn get their inertia box; one :class:`VisualWarning` names the files that
+    could not be read (those not found were named when the model was loaded)."""
     visuals = model.visuals
     meshes, instances, failed = [], [], {}
     counts: dict[str, int] = {}
@@ -429,8 +495,9 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -
             except (MeshReadError, OSError) as exc:
                 failed[v["path"]] = str(exc) if isinstance(exc, MeshReadError) else (
                     f"cannot be read ({exc.strerror})")
-    total = sum(counts.values())
-    keys: dict[tuple, int] = {}
+    # What each visual draws: a primitive's triangles now, a file's (path, scale) key.
+    drawn: list = []
+    uses: dict[tuple, int] = {}
     broken_bodies = set()
     for v in visuals:
         pose = np.concatenate([np.asarray(v["rotation"], dtype=float),
@@ -443,39 +510,47 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -
                 failed[f"{v['kind']} of body '{v['body_name']}'"] = "sizes beyond float32"
                 broken_bodies.add(v["body"])
                 continue
-            meshes.append(shape)
+            drawn.append((v, pose, rgba, shape))
+        elif not v["path"] or v["path"] in failed:
+            # Not found when the model was loaded (which warned), or unreadable.
+            broken_bodies.add(v["body"])
+        else:
+            key = (v["path"], tuple(float(s) for s in v["scale"]))
+            uses[key] = uses.get(key, 0) + 1
+            drawn.append((v, pose, rgba, key))
+    fixed = sum(d[3].ntriangles for d in drawn if isinstance(d[3], Mesh))
+    fixed += 12 * len(broken_bodies)  # an inertia box each
+    loaded = _budgeted_meshes(uses, counts, triangles - fixed)
+    index: dict[tuple, int] = {}
+    for v, pose, rgba, what in drawn:
+        if isinstance(what, Mesh):
+            meshes.append(what)
             instances.append(Instance(v["body"], len(meshes) - 1, pose, rgba or DEFAULT_RGBA))
             continue
-        path = v["path"]
-        if not path:  # not found when the model was loaded, which warned about it
-            broken_bodies.add(v["body"])
-            continue
+        path = what[0]
         if path in failed:
             broken_bodies.add(v["body"])
             continue
-        share = counts[path]
-        if total > triangles:
-            share = max(MIN_TRIANGLES, int(triangles * counts[path] / total))
-        key = (path, tuple(v["scale"]), share)
-        if key not in keys:
-            try:
-                mesh = _file_mesh(path, *_stat(path), tuple(float(s) for s in v["scale"]), share)
-            except (MeshReadError, OSError) as exc:
-                failed[path] = str(exc)
+        if what not in index:
+            mesh = loaded[what]
+            if not isinstance(mesh, Mesh):
+                failed[path] = str(mesh) if isinstance(mesh, MeshReadError) else (
+                    f"cannot be read ({mesh.strerror})")
                 broken_bodies.add(v["body"])
                 continue
             meshes.append(mesh)
-            keys[key] = len(meshes) - 1
-        mesh = meshes[keys[key]]
+            index[what] = len(meshes) - 1
+        mesh = meshes[index[what]]
         own = any(rgb is not None for _s, _n, rgb in mesh.parts)
         # A file's own colours (COLLADA, OBJ materials) win over the URDF's, as in RViz.
-        instances.append(Instance(v["body"], keys[key], pose,
+        instances.append(Instance(v["body"], index[what], pose,
                                   None if own else (rgba or DEFAULT_RGBA)))
     for b in sorted(broken_bodies):
         box = inertia_box(model.body(b))
         if box is not None:
             meshes.append(box[0])
             instances.append(Instance(b, len(meshes) - 1, box[1], FALLBACK_RGBA, True))
+    scene = VisualScene(meshes, instances, failed)
     if failed and warn:
         shown = [f"{k} ({why})" for k, why in list(failed.items())[:8]]
         more = f" and {len(failed) - 8} more" if len(failed) > 8 else ""
@@ -485,7 +560,15 @@ def visual_scene(model, triangles: int = DEFAULT_TRIANGLES, warn: bool = True) -
             VisualWarning,
             stacklevel=3,
         )
-    return VisualScene(meshes, instances, failed)
+    if scene.triangles > triangles and warn:
+        why = ("fast-simplification is not installed (pip install \"pointmass-dyn[mesh]\")"
+               if not _has_simplifier() else
+               f"the shapes that are not simplified (primitives, inertia boxes) alone have "
+               f"{fixed}" if fixed > triangles else "the meshes cannot be simplified further")
+        warnings.warn(
+            f"triangles: expected at most {triangles} triangles drawn, the model's shapes have "
+            f"{scene.triangles}: {why}", VisualWarning, stacklevel=3)
+    return scene
 
 
 def bounds(scene: VisualScene) -> np.ndarray:

@@ -100,12 +100,14 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
         vertical = "z"  # mplot3d's vertical axis is a positive world axis
     ax.view_init(elev=cam["elevation"], azim=cam["azimuth"], vertical_axis=vertical)
 
-    g = d.grid
-    ks = np.arange(-g["half"], g["half"] + 1e-9 * g["half"], g["step"])
-    o, gu, gv, h = (np.asarray(g[k], dtype=float) for k in ("origin", "u", "v", "half"))
-    # The whole grid as one NaN-separated line (one artist: drawing cost is per artist).
-    seg = [[o + k * gu - h * gv, o + k * gu + h * gv] for k in ks]
-    seg += [[o - h * gu + k * gv, o + h * gu + k * gv] for k in ks]
+    # Every contact plane's grid where the plane is (else the ground grid), all as one
+    # NaN-separated line (one artist: drawing cost is per artist).
+    seg = []
+    for g in d.planes or [d.grid]:
+        ks = np.arange(-g["half"], g["half"] + 1e-9 * g["half"], g["step"])
+        o, gu, gv, h = (np.asarray(g[k], dtype=float) for k in ("origin", "u", "v", "half"))
+        seg += [[o + k * gu - h * gv, o + k * gu + h * gv] for k in ks]
+        seg += [[o - h * gu + k * gv, o + h * gu + k * gv] for k in ks]
     xyz = np.concatenate([np.array(seg), np.full((len(seg), 1, 3), np.nan)],
                          axis=1).reshape(-1, 3)
     ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], color=COLOURS["grid"], lw=0.5, zorder=0.5)

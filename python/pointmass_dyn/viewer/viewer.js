@@ -51,8 +51,8 @@
   const VS = "attribute vec3 aP;attribute vec3 aN;uniform mat4 uVP;uniform mat4 uM;" +
     "varying vec3 vN;void main(){vN=mat3(uM)*aN;gl_Position=uVP*uM*vec4(aP,1.0);}";
   const FS = "precision mediump float;varying vec3 vN;uniform vec3 uC;uniform float uLit;" +
-    "uniform vec3 uL;void main(){float d=abs(dot(normalize(vN+1e-9),uL));" +
-    "gl_FragColor=vec4(uLit>0.5?uC*(0.3+0.6*d):uC,1.0);}";
+    "uniform vec3 uL;uniform float uA;void main(){float d=abs(dot(normalize(vN+1e-9),uL));" +
+    "gl_FragColor=vec4(uLit>0.5?uC*(0.3+0.6*d):uC,uA);}";
   function shader(type, src) {
     const s = gl.createShader(type);
     gl.shaderSource(s, src);
@@ -68,7 +68,7 @@
   gl.useProgram(prog);
   const aP = gl.getAttribLocation(prog, "aP"), aN = gl.getAttribLocation(prog, "aN");
   const U = {};
-  for (const n of ["uVP", "uM", "uC", "uLit", "uL"]) U[n] = gl.getUniformLocation(prog, n);
+  for (const n of ["uVP", "uM", "uC", "uLit", "uL", "uA"]) U[n] = gl.getUniformLocation(prog, n);
 
   // ---- meshes: interleaved position + normal, drawn as triangles
   function mesh(verts) {
@@ -229,13 +229,25 @@
   }
 
   // ---- static lines: ground grid and world frame
-  // The ground: a square in the plane at right angles to gravity (axes u, v), under the motion.
-  const G = D.grid, gv = [];
-  const gp = (a, b) => [0, 1, 2].map((c) => G.origin[c] + a * G.u[c] + b * G.v[c]);
-  for (let k = -G.half; k <= G.half + 1e-9 * G.half; k += G.step) {
-    gv.push(...gp(k, -G.half), ...gp(k, G.half), ...gp(-G.half, k), ...gp(G.half, k));
+  // The ground: each contact plane where it is (a translucent square, axes u, v, with the grid
+  // on it); without contact planes, a grid at right angles to gravity under the motion.
+  const PLANES = D.planes || [];
+  for (const P of PLANES)
+    check(P.origin.length === 3 && P.u.length === 3 && P.v.length === 3 && P.half > 0 && P.step > 0,
+      "planes: bad plane");
+  const gv = [], fill = [];
+  for (const G of PLANES.length ? PLANES : [D.grid]) {
+    const gp = (a, b) => [0, 1, 2].map((c) => G.origin[c] + a * G.u[c] + b * G.v[c]);
+    for (let k = -G.half; k <= G.half + 1e-9 * G.half; k += G.step) {
+      gv.push(...gp(k, -G.half), ...gp(k, G.half), ...gp(-G.half, k), ...gp(G.half, k));
+    }
+    if (G !== D.grid) {
+      const h = G.half;
+      fill.push(...gp(-h, -h), ...gp(h, -h), ...gp(h, h), ...gp(-h, -h), ...gp(h, h), ...gp(-h, h));
+    }
   }
-  const GRID = new Float32Array(gv);
+  const GRID = new Float32Array(gv), PLANE_FILL = new Float32Array(fill);
+  const PLANE_RGB = [0.55, 0.6, 0.68];
   const W = 0.15 * D.size;
   const FRAME = [
     [new Float32Array([0, 0, 0, W, 0, 0]), [0.85, 0.1, 0.1]],
@@ -346,6 +358,7 @@
     gl.clearColor(1, 1, 1, 1);
     gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
     gl.enable(gl.DEPTH_TEST);
+    gl.uniform1f(U.uA, 1);
     gl.uniformMatrix4fv(U.uVP, false, viewProj(w / h));
     drawLines(GRID, D.colours.grid, gl.LINES);
     for (const [pts, col] of FRAME) drawLines(pts, col, gl.LINES);
@@ -403,6 +416,23 @@
     for (const [k, b, r, col] of heads) {
       const m = tubeMatrix(k, b, r);
       if (m) drawMesh(CONE, m, col, true);
+    }
+    // The contact planes after everything opaque: translucent (what lies under a plane shows
+    // through, tinted), not writing depth, pushed back a little so their grid lines stay crisp.
+    if (PLANE_FILL.length) {
+      gl.enable(gl.BLEND);
+      // The canvas stays opaque (alpha 1): a page composites its premultiplied colours
+      // over the white page, which would wash a translucent fill out to white.
+      gl.blendFuncSeparate(gl.SRC_ALPHA, gl.ONE_MINUS_SRC_ALPHA, gl.ZERO, gl.ONE);
+      gl.depthMask(false);
+      gl.enable(gl.POLYGON_OFFSET_FILL);
+      gl.polygonOffset(1, 1);
+      gl.uniform1f(U.uA, 0.28);
+      drawLines(PLANE_FILL, PLANE_RGB, gl.TRIANGLES);
+      gl.uniform1f(U.uA, 1);
+      gl.disable(gl.POLYGON_OFFSET_FILL);
+      gl.depthMask(true);
+      gl.disable(gl.BLEND);
     }
     // Trail heads last, over everything, in flat colour: a tracked point stays visible (and
     // is a disc of exactly that colour on screen).
@@ -481,7 +511,7 @@
   window.__firstFrame = frame;
   // For tests and the console: the frame shown and the box edges the page draws for it.
   window.__pmd = { frame: () => frame, boxEdges: () => Array.from(boxEdges()),
-    shown: () => Array.from(shown).sort(), contactArrows: () => contactDrawn, triangles: () => (VIS ? VIS.instances.reduce((n, i) => n + ROBOT[i.mesh].n / 3, 0) : 0) };
+    shown: () => Array.from(shown).sort(), contactArrows: () => contactDrawn, planes: () => PLANES.length, triangles: () => (VIS ? VIS.instances.reduce((n, i) => n + ROBOT[i.mesh].n / 3, 0) : 0) };
   window.__status = "ok";
   $("status").textContent = window.__errors.length ? "error: " + window.__errors.join("; ") : "";
   document.title = (window.__errors.length ? "pmd error: " + window.__errors.join("; ") : "pmd ok") +
