@@ -82,7 +82,17 @@ class CtrlC:
             self._cond.notify_all()
 
     def run(self, call) -> KeyboardInterrupt:
-        """``call()`` under this Ctrl-C: the ``KeyboardInterrupt`` it raised."""
+        """``call()`` under this Ctrl-C: the ``KeyboardInterrupt`` it raised (a failure if it
+        ended before it heard the press)."""
+        error = self.attempt(call)
+        if error is None:
+            pytest.fail(f"the computation ended before it heard Ctrl-C (heard {self.heard} "
+                        f"of {self.polls}): give it more work")
+        return error
+
+    def attempt(self, call) -> KeyboardInterrupt | None:
+        """``call()`` under this Ctrl-C: the ``KeyboardInterrupt`` it raised, or ``None`` if
+        it ended first."""
         previous = signal.signal(signal.SIGINT, self._handler)
         watcher = threading.Thread(target=self._watch, daemon=True)
         profile = sys.getprofile()
@@ -103,7 +113,4 @@ class CtrlC:
             while self._pending:  # a press not heard yet: heard here, by our handler
                 _noop()
             signal.signal(signal.SIGINT, previous)
-        if error is None:
-            pytest.fail(f"the computation ended before it heard Ctrl-C (heard {self.heard} "
-                        f"of {self.polls}): give it more work")
         return error

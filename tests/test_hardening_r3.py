@@ -111,8 +111,10 @@ def _stopped_after_some_states(name, call):
     doubles until the press lands in the computation after a state done (no delays: a
     loaded machine changes n, not the outcome)."""
     part = None
-    for polls in (2, 4, 8, 16, 32, 64):
-        error = CtrlC(inside=name, polls=polls).run(call)
+    for polls in (1, 2, 4, 8, 16, 32):
+        error = CtrlC(inside=name, polls=polls).attempt(call)
+        if error is None:
+            pytest.fail(f"{name} ended before its poll {polls} heard Ctrl-C (last: {part})")
         part = getattr(error, "result", None)
         if part is not None and part["states"] > 0:
             return part
@@ -121,10 +123,10 @@ def _stopped_after_some_states(name, call):
 
 def test_point_regressor_and_shaking_stopped_by_ctrl_c_keep_the_states_done():
     # A model without loops: a loop model's check of the states closes each one's loops, as
-    # long as the computation itself. Enough states for any CPU to poll several times.
+    # long as the computation itself. Enough states for any CPU to poll (every 50 ms).
     m = pmd.load_scene("chain7").model
     rng = np.random.default_rng(7)
-    q, v, a = (np.tile(rng.uniform(-1, 1, (100, n)), (3000, 1)) for n in (m.nq, m.nv, m.nv))
+    q, v, a = (np.tile(rng.uniform(-1, 1, (100, n)), (4000, 1)) for n in (m.nq, m.nv, m.nv))
     points = [(m.body_names[-1], [0.01, 0.0, 0.0])]
     for name, call in (
         ("point_regressor", lambda: m.point_regressor(q, v, a, points=points, gravity=G)),
