@@ -422,18 +422,18 @@ def test_simulate_batch_stopped_by_progress_keeps_every_run():
 
 
 def test_simulate_batch_stopped_by_ctrl_c_keeps_every_run():
-    import _thread
-    import threading
+    # Pressed once a run is done, heard by the batch's own poll (tests/ctrl_c.py).
+    from ctrl_c import CtrlC
 
     scene, q0, kw = _stoppable_batch_args()
-    timer = threading.Timer(0.4, _thread.interrupt_main)  # SIGINT's handler, as Ctrl-C
-    timer.start()
-    try:
-        with pytest.raises(KeyboardInterrupt) as info:
-            pmd.simulate_batch(scene, q0=q0, **kw)
-    finally:
-        timer.cancel()
-    _check_partial_batch(scene, q0, kw, info.value.result)
+    ctrl_c = CtrlC(inside="simulate_batch", armed=False)
+
+    def progress(done, total):
+        if done >= 1:
+            ctrl_c.arm()
+
+    error = ctrl_c.run(lambda: pmd.simulate_batch(scene, q0=q0, progress=progress, **kw))
+    _check_partial_batch(scene, q0, kw, error.result)
 
 
 # --------------------------------------------------------------------------------------------
