@@ -204,7 +204,6 @@ def _run_limited(code: str, limit_bytes: int) -> subprocess.CompletedProcess:
         import pointmass_dyn as pmd
         sys.path.insert(0, {os.path.dirname(__file__)!r})
         from conftest import revolute_chain as chain
-from ctrl_c import CtrlC
         """
     ) + textwrap.dedent(code).replace("__CAP__", str(limit_bytes))
     return subprocess.run(
