@@ -477,3 +477,12 @@ def test_urdf_contact_spheres_of_nan_or_inf_are_refused(tmp_path):
             f'<sphere radius="{radius}"/></geometry></collision></link></robot>')
         with pytest.raises(InvalidInputError, match="expected a finite <origin xyz> and a finite"):
             pmd.urdf_contact_points(path, ["a"])
+
+
+def test_analyze_motion_refuses_arrays_it_cannot_read(fourbar):
+    # Found by tests/test_fuzz_api.py: t = "" was NumPy's builtin ValueError.
+    m, z = fourbar.model, np.zeros((1, fourbar.model.nv))
+    for name, args in (("t", ("", z, z, z)), ("q", ([0.0], "ab", z, z)),
+                       ("a", ([0.0], z, z, [["x", 1.0, 2.0]]))):
+        with pytest.raises(InvalidInputError, match=f"{name}: expected an array of real numbers"):
+            pmd.analyze_motion(m, *args, actuated=["crank"])
