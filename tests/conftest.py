@@ -63,6 +63,27 @@ def rel_err(got, ref) -> float:
 PAPER_M, PAPER_A, PAPER_D = 2.51, 1.0, 0.02
 
 
+def assert_finite(what: str, value) -> None:
+    """Every float in a result (arrays, tuples, dicts, results) is finite: the fuzz
+    contract (tests/test_fuzz_api.py), no NaN or inf unless an exception says why."""
+    if isinstance(value, (bool, int, str, type(None))):
+        return
+    if isinstance(value, float):
+        assert math.isfinite(value), f"{what}: {value}"
+    elif isinstance(value, np.ndarray):
+        if value.dtype.kind == "f":
+            assert np.all(np.isfinite(value)), f"{what}: non-finite entries"
+    elif isinstance(value, (tuple, list)):
+        for k, v in enumerate(value):
+            assert_finite(f"{what}[{k}]", v)
+    elif isinstance(value, dict):
+        for k, v in value.items():
+            assert_finite(f"{what}[{k!r}]", v)
+    elif isinstance(value, pmd.SimulationResult):
+        for name in ("t", "q", "v", "energy"):
+            assert_finite(f"{what}.{name}", getattr(value, name))
+
+
 def rod_inertia(m: float, a: float, d: float) -> np.ndarray:
     """Solid cylinder of length a, diameter d, axis x, about its COM."""
     return np.diag(

@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
-from conftest import rod_body
+from conftest import assert_finite, rod_body
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -81,26 +81,6 @@ def arrays(draw, n: int | None = None):
     if kind == 8:
         return draw(st.lists(floats, min_size=length, max_size=length))
     return draw(junk)
-
-
-def assert_finite(what: str, value) -> None:
-    """Every float in a result (arrays, tuples, dicts, results) is finite."""
-    if isinstance(value, (bool, int, str, type(None))):
-        return
-    if isinstance(value, float):
-        assert math.isfinite(value), f"{what}: {value}"
-    elif isinstance(value, np.ndarray):
-        if value.dtype.kind == "f":
-            assert np.all(np.isfinite(value)), f"{what}: non-finite entries"
-    elif isinstance(value, (tuple, list)):
-        for k, v in enumerate(value):
-            assert_finite(f"{what}[{k}]", v)
-    elif isinstance(value, dict):
-        for k, v in value.items():
-            assert_finite(f"{what}[{k!r}]", v)
-    elif isinstance(value, pmd.SimulationResult):
-        for name in ("t", "q", "v", "energy"):
-            assert_finite(f"{what}.{name}", getattr(value, name))
 
 
 def model_zoo() -> list[pmd.Model]:

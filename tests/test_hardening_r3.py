@@ -6,13 +6,12 @@ and what was given; interrupted and failed runs keep what they computed."""
 
 from __future__ import annotations
 
-import _thread
 import re
-import threading
 
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
+from ctrl_c import CtrlC
 from pointmass_dyn.errors import InvalidInputError, UrdfError
 
 G = np.array([0.0, -9.81, 0.0])
@@ -28,12 +27,6 @@ def fourbar():
 def motion(fourbar):
     return pmd.prescribed_motion(fourbar.model, "crank", speed=30.0, samples=24,
                                  q_guess=fourbar.q0, gravity=G)
-
-
-def _ctrl_c_after(seconds: float) -> threading.Timer:
-    timer = threading.Timer(seconds, _thread.interrupt_main)  # SIGINT's handler, as Ctrl-C
-    timer.start()
-    return timer
 
 
 def _same_instants(part, full):
@@ -74,14 +67,23 @@ def test_prescribed_motion_stopped_by_progress_keeps_the_instants_done(fourbar):
 
 
 def test_prescribed_motion_stopped_by_ctrl_c_keeps_the_instants_done(fourbar):
-    part = _interrupted(lambda: pmd.prescribed_motion(
-        fourbar.model, "crank", speed=30.0, samples=10**6, q_guess=fourbar.q0, gravity=G)).result
-    assert not part.success and 0 < len(part.t) < 10**6
+    ctrl_c = CtrlC(armed=False)
+
+    def progress(done, total):
+        if done >= 2 * 64:  # the second report (every 64th instant): 64 instants done
+            ctrl_c.arm()
+
+    part = ctrl_c.run(lambda: pmd.prescribed_motion(
+        fourbar.model, "crank", speed=30.0, samples=10**6, q_guess=fourbar.q0, gravity=G,
+        progress=progress)).result
+    assert not part.success and 64 <= len(part.t) < 10**6
     # An independent check of the instants kept: every one is closed, and the driving torque
     # reproduces its accelerations through forward dynamics.
     m = fourbar.model
     for k in range(0, len(part.t), max(1, len(part.t) // 5)):
         assert np.max(np.abs(m.constraint_residual(part.q[k]))) < 1e-9
+        a = m.forward_dynamics(part.q[k], part.v[k], part.tau[k], gravity=G)
+        np.testing.assert_allclose(a, part.a[k], rtol=1e-8, atol=1e-8 * np.abs(part.a[k]).max())
     assert part.message.startswith(f"stopped after {len(part.t)} of 1000000 instants")
 
 
@@ -102,43 +104,47 @@ def test_analyze_motion_stopped_by_progress_keeps_the_states_done(fourbar, motio
     assert "RuntimeError: cancelled by the caller" in part.message
 
 
-def _interrupted(call) -> KeyboardInterrupt:
-    """The ``KeyboardInterrupt`` of ``call`` under Ctrl-C that landed in its computation (one
-    that lands while the arguments are converted or the run is set up, on a loaded machine,
-    has nothing to keep: tried again later)."""
-    for delay in (0.3, 0.6, 0.9, 0.15):
-        timer = _ctrl_c_after(delay)
-        try:
-            call()
-        except KeyboardInterrupt as e:
-            if hasattr(e, "result"):
-                return e
-        finally:
-            timer.cancel()
-    pytest.fail("no Ctrl-C landed inside the computation")
+def _stopped_after_some_states(name, call):
+    """The partial result of ``call`` stopped by Ctrl-C after some states. The press is
+    heard by the call's own polls of the signal handlers, at most one per state, and raises
+    at the n-th; the up-front check of the states polls too (and has nothing to keep), so n
+    doubles until the press lands in the computation after a state done (no delays: a
+    loaded machine changes n, not the outcome)."""
+    part = None
+    for polls in (1, 2, 4, 8, 16, 32):
+        error = CtrlC(inside=name, polls=polls).attempt(call)
+        if error is None:
+            pytest.fail(f"{name} ended before its poll {polls} heard Ctrl-C (last: {part})")
+        part = getattr(error, "result", None)
+        if part is not None and part["states"] > 0:
+            return part
+    pytest.fail(f"{name}: no Ctrl-C kept a state done (last: {part})")
 
 
-def test_point_regressor_and_shaking_stopped_by_ctrl_c_keep_the_states_done(fourbar, motion):
-    m = fourbar.model
-    q, v, a = (np.tile(x, (40_000, 1)) for x in (motion.q, motion.v, motion.a))
-    points = [("crank", [0.01, 0.0, 0.0])]
+def test_point_regressor_and_shaking_stopped_by_ctrl_c_keep_the_states_done():
+    # A model without loops: a loop model's check of the states closes each one's loops, as
+    # long as the computation itself. Enough states for any CPU to poll (every 50 ms).
+    m = pmd.load_scene("chain7").model
+    rng = np.random.default_rng(7)
+    q, v, a = (np.tile(rng.uniform(-1, 1, (100, n)), (4000, 1)) for n in (m.nq, m.nv, m.nv))
+    points = [(m.body_names[-1], [0.01, 0.0, 0.0])]
     for name, call in (
         ("point_regressor", lambda: m.point_regressor(q, v, a, points=points, gravity=G)),
         ("shaking", lambda: m.shaking(q, v, a)),
     ):
-        part = _interrupted(call).result
+        part = _stopped_after_some_states(name, call)
         k = part["states"]
-        assert 0 <= k < len(q) and f"{name} stopped after {k} of {len(q)} states" in part["message"]
+        assert 0 < k < len(q) and f"{name} stopped after {k} of {len(q)} states" in part["message"]
         if name == "point_regressor":
             assert part["generalized"].shape == (k, 1, m.nv)
-            if k:  # the rows kept are what the same states give alone
-                ref = m.point_regressor(q[:k], v[:k], a[:k], points=points, gravity=G)
-                np.testing.assert_allclose(part["generalized"], ref["generalized"], rtol=0, atol=0)
+            # The rows kept are what the same states give alone.
+            ref = m.point_regressor(q[:k], v[:k], a[:k], points=points, gravity=G)
+            np.testing.assert_allclose(part["generalized"], ref["generalized"], rtol=0, atol=0)
         else:
             assert part["force"].shape == (k, 3)
-            if k:  # −Σ m a of the point masses, as the one-state call gives it
-                f, _ = m.shaking(q[k - 1], v[k - 1], a[k - 1])
-                np.testing.assert_allclose(part["force"][-1], f, rtol=0, atol=0)
+            # −Σ m a of the point masses, as the one-state call gives it.
+            f, _ = m.shaking(q[k - 1], v[k - 1], a[k - 1])
+            np.testing.assert_allclose(part["force"][-1], f, rtol=0, atol=0)
 
 
 def test_work_precision_stopped_by_progress_keeps_the_rows_measured():
@@ -163,8 +169,31 @@ def test_work_precision_stopped_by_progress_keeps_the_rows_measured():
 
 
 def test_work_precision_stopped_by_ctrl_c_keeps_the_reference_check():
-    part = _interrupted(lambda: pmd.work_precision("chain7", t_end=20.0, repeats=1)).result
-    assert not part.success and "interrupted" in part.message and part.scene == "chain7"
+    # Ctrl-C pressed once the second tolerance's measurement has begun: the reference, its
+    # check and the first row are done, and are what an uninterrupted run measures.
+    ctrl_c = CtrlC(armed=False)
+
+    def progress(msg):
+        if "simulate at 0.0001" in msg:
+            ctrl_c.arm()
+
+    kw = dict(t_end=0.5, repeats=1, scipy=False, rk4=False, n_dense=11)
+    part = ctrl_c.run(lambda: pmd.work_precision(
+        "pendulum_planar", [1e-3, 1e-4, 1e-5], progress=progress, **kw)).result
+    assert not part.success and "interrupted" in part.message
+    assert part.scene == "pendulum_planar" and "simulate at 0.0001" in part.message
+    full = pmd.work_precision("pendulum_planar", [1e-3, 1e-4, 1e-5], **kw)
+    assert set(part.reference_check) == set(full.reference_check) and "err_final" in full.reference_check
+    for key, value in full.reference_check.items():
+        if key.startswith("err") or key == "energy_scale":
+            assert part.reference_check[key] == pytest.approx(value, rel=1e-9), key
+        else:
+            assert part.reference_check[key] == value, key
+    assert [r["tol"] for r in part.rows] == [1e-3]
+    first, again = part.rows[0], full.rows[0]
+    assert first["nfev"] == again["nfev"] and first["steps"] == again["steps"]
+    for key in ("err_final", "err_dense", "err_energy"):
+        assert first[key] == pytest.approx(again[key], rel=1e-9), key
 
 
 # --------------------------------------------------------------------------------------------
@@ -448,3 +477,12 @@ def test_urdf_contact_spheres_of_nan_or_inf_are_refused(tmp_path):
             f'<sphere radius="{radius}"/></geometry></collision></link></robot>')
         with pytest.raises(InvalidInputError, match="expected a finite <origin xyz> and a finite"):
             pmd.urdf_contact_points(path, ["a"])
+
+
+def test_analyze_motion_refuses_arrays_it_cannot_read(fourbar):
+    # Found by tests/test_fuzz_api.py: t = "" was NumPy's builtin ValueError.
+    m, z = fourbar.model, np.zeros((1, fourbar.model.nv))
+    for name, args in (("t", ("", z, z, z)), ("q", ([0.0], "ab", z, z)),
+                       ("a", ([0.0], z, z, [["x", 1.0, 2.0]]))):
+        with pytest.raises(InvalidInputError, match=f"{name}: expected an array of real numbers"):
+            pmd.analyze_motion(m, *args, actuated=["crank"])
