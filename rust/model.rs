@@ -571,6 +571,7 @@ impl Model {
                 format!("shape ({},)", q.len()),
             ));
         }
+        self.check_finite_coordinates("q", q, |l| l.q_index..l.q_index + l.joint.nq())?;
         for l in &self.links {
             l.joint
                 .check_configuration(&q[l.q_index..l.q_index + l.joint.nq()], "q")?;
@@ -589,7 +590,35 @@ impl Model {
                 format!("shape ({},)", x.len()),
             ));
         }
-        check_finite(arg, x)
+        self.check_finite_coordinates(arg, x, |l| l.v_index..l.v_index + l.joint.nv())
+    }
+
+    /// A non-finite entry of `x` (q-sized or v-sized, as `range` says) as an error naming its
+    /// index in `x` and the joint it belongs to.
+    fn check_finite_coordinates(
+        &self,
+        arg: &str,
+        x: &[f64],
+        range: impl Fn(&Link) -> std::ops::Range<usize>,
+    ) -> Result<()> {
+        let Err(e) = check_finite(arg, x) else {
+            return Ok(());
+        };
+        let Some(k) = x.iter().position(|v| !v.is_finite()) else {
+            return Err(e);
+        };
+        match self.links.iter().position(|l| range(l).contains(&k)) {
+            Some(link) => Err(Error::arg(
+                arg,
+                "finite numbers",
+                format!(
+                    "{} at index {k} (joint '{}')",
+                    x[k],
+                    self.joint_names()[link]
+                ),
+            )),
+            None => Err(e),
+        }
     }
 
     /// `q̇` from `v` for the whole model.

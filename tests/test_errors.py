@@ -536,3 +536,42 @@ def test_zyz_singularity_message_names_the_body():
     model = build_model(tree)
     with raises(errors.SingularityError, "b0", "theta"):
         model.forward_dynamics([0.0, 0.0, 0.0], [0, 0, 0], [0, 0, 0], G)
+
+
+@pytest.mark.parametrize("robot", ["chain7", "go2"])
+def test_a_non_finite_coordinate_is_named_by_its_index_in_q_and_its_joint(robot):
+    """The index is the one in q (not inside its joint) and the joint is the one Pinocchio
+    says owns that coordinate (`idx_qs`, `nqs`; `idx_vs`, `nvs` for v)."""
+    pin = pytest.importorskip("pinocchio")
+    if robot == "chain7":
+        model = pmd.load_scene("chain7").model
+        names = model.joint_names
+        ref = pin.Model()
+        parent = 0
+        for k, name in enumerate(names):
+            joint = pin.JointModelRY() if k % 2 == 0 else pin.JointModelRZ()
+            parent = ref.addJoint(parent, joint, pin.SE3.Identity(), name)
+    else:
+        from pointmass_dyn.robots import urdf_path
+
+        path = urdf_path("go2_description/urdf/go2.urdf")
+        model = pmd.example_robot("go2_description/urdf/go2.urdf", root_joint="free")
+        ref = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    assert model.nq == ref.nq and model.nv == ref.nv
+
+    def owner(k, starts, sizes):
+        return next(ref.names[j] for j in range(1, ref.njoints)
+                    if starts[j] <= k < starts[j] + sizes[j])
+
+    for k in range(model.nq):
+        q = model.neutral()
+        q[k] = np.nan
+        with pytest.raises(pmd.errors.InvalidInputError) as e:
+            model.mass_matrix(q)
+        assert f"at index {k} (joint '{owner(k, ref.idx_qs, ref.nqs)}')" in str(e.value)
+    for k in range(model.nv):
+        v = np.zeros(model.nv)
+        v[k] = np.inf
+        with pytest.raises(pmd.errors.InvalidInputError) as e:
+            model.forward_dynamics(model.neutral(), v, np.zeros(model.nv))
+        assert f"at index {k} (joint '{owner(k, ref.idx_vs, ref.nvs)}')" in str(e.value)

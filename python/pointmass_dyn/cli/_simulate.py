@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._simulation import simulate
+from .._simulation import energies, simulate
 from ..errors import PointMassDynError
 from ..plotting import coordinate_labels, plot_trajectory
 from ..scenes import load_scene
@@ -77,6 +77,20 @@ def _write_trajectory(path: Path, result, model) -> None:
         raise PointMassDynError(f"--out: expected a .csv or .npz file name, got '{path}'")
 
 
+def _work_of_other_effects(scene, result) -> tuple[np.ndarray, list[str]]:
+    """The work W(t) (J) done since t0 by the effects whose energy is not in
+    ``result.energy`` (dampers, friction, torques, contact: everything but gravity and
+    springs), by the trapezoid rule over the result's samples, and their names. The energy
+    balance ``E(t) - E(0) = W(t)`` then holds to the accuracy of the run and of that rule."""
+    stored = set(energies(scene, result.q[0], result.v[0]))
+    doers = [k for k in result.power if k not in stored]
+    if not doers:
+        return np.zeros(len(result.t)), []
+    p = np.sum([np.asarray(result.power[k]) for k in doers], axis=0)
+    dt = np.diff(result.t)
+    return np.concatenate([[0.0], np.cumsum(0.5 * dt * (p[1:] + p[:-1]))]), doers
+
+
 def cmd_simulate(args) -> int:
     scene = load_scene(args.scene)
     if args.out and Path(args.out).suffix not in (".csv", ".npz"):
@@ -89,8 +103,8 @@ def cmd_simulate(args) -> int:
         t_span = (t_span[0], args.t_end)
     report, finish = _progress_printer(t_span[0], t_span[1], sys.stderr)
     start = time.perf_counter()
-    result = simulate(scene, t_span, rtol=args.rtol, atol=args.atol, energy=True, progress=report,
-                      method=args.method, dt=args.dt)
+    result = simulate(scene, t_span, rtol=args.rtol, atol=args.atol, energy=True, power=True,
+                      progress=report, method=args.method, dt=args.dt)
     wall = time.perf_counter() - start
     finish()
     model = scene.model
@@ -98,14 +112,20 @@ def cmd_simulate(args) -> int:
     # Relative to the largest kinetic energy reached: the total may be ~0 (zero potential at
     # the pivot), which would make a ratio to |E| meaningless.
     kinetic = max(model.kinetic_energy(q, v) for q, v in zip(result.q, result.v))
-    drift = np.max(np.abs(e - e[0]))
+    work, doers = _work_of_other_effects(scene, result)
+    drift = np.max(np.abs(e - e[0] - work))
     print(f"{scene.name}: {result.message}")
     print(f"  method {result.method}"
           + (f" (switched to {result.switched_to} at t = {result.t_switch:g} s)" if result.switched_to else ""))
     print(f"  {result.n_accepted} steps ({result.n_rejected} rejected), {result.nfev} evaluations, "
           f"{wall * 1e3:.1f} ms")
-    print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J "
-          f"({drift / max(kinetic, 1e-300):.2e} of the largest kinetic energy)")
+    relative = f"({drift / max(kinetic, 1e-300):.2e} of the largest kinetic energy)"
+    if doers:
+        print(f"  energy balance: E(0) = {e[0]:.12g} J, E(end) - E(0) = {e[-1] - e[0]:.6g} J, "
+              f"work of {', '.join(doers)} = {work[-1]:.6g} J; max |E - E(0) - W| = "
+              f"{drift:.3e} J {relative} (W by the trapezoid rule over the steps)")
+    else:
+        print(f"  energy: E(0) = {e[0]:.12g} J, max |E - E(0)| = {drift:.3e} J {relative}")
     if result.constraint_residual is not None and len(result.constraint_residual):
         print(f"  loops: {model.nloops} closed, largest residual {result.constraint_residual.max():.3e} "
               f"(drift before projection at most {result.constraint_drift:.3e})")
