@@ -96,6 +96,12 @@ pub fn read_text(path: &Path, kind: FileKind) -> Result<String, Error> {
         FileKind::Urdf => "URDF",
         FileKind::Scene => "scene",
     };
+    read_text_named(path, kind, what)
+}
+
+/// [`read_text`] of a file whose errors are of `kind` but that messages call `what` (an
+/// SRDF beside its URDF).
+pub fn read_text_named(path: &Path, kind: FileKind, what: &str) -> Result<String, Error> {
     read_checked(path, what)
         .map_err(|message| Error::file(kind, Location::new(display_path(path), ""), message))
 }

@@ -68,3 +68,44 @@ def test_missing_package_says_how_to_install_it(monkeypatch):
         pmd.robots.directory()
     with pytest.raises(InvalidInputError, match="not installed"):
         pmd.example_robot("panda")
+
+
+@pytest.mark.parametrize("name, free", [("go1_description/urdf/go1.urdf", True),
+                                        ("solo12", True), ("panda", False), ("talos", True)])
+def test_reference_poses_of_the_shipped_srdf_equal_pinocchios(name, free):
+    """`pmd.robots.reference_poses` reads the SRDF's group states ("standing",
+    "half_sitting", …) as Pinocchio's `loadReferenceConfigurations` does, to the bit."""
+    import warnings
+
+    pin = pytest.importorskip("pinocchio")
+    from pointmass_dyn.robots import reference_poses, srdf_path, urdf_path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", pmd.errors.UrdfRepairWarning)
+        warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
+        model, poses = reference_poses(name, repair=True, **({"root_joint": "free"} if free else {}))
+    path = str(urdf_path(name))
+    ref = (pin.buildModelFromUrdf(path, pin.JointModelFreeFlyer()) if free
+           else pin.buildModelFromUrdf(path))
+    pin.loadReferenceConfigurations(ref, str(srdf_path(name)), False)
+    assert poses and len(poses) == len(ref.referenceConfigurations)
+    for k, q in poses.items():
+        np.testing.assert_array_equal(q, ref.referenceConfigurations[k])
+
+
+def test_a_bad_srdf_value_names_the_pose_and_the_joint(tmp_path):
+    model = pmd.load_scene("panda").model
+    srdf = tmp_path / "p.srdf"
+    srdf.write_text('<robot name="p"><group_state name="up" group="arm">'
+                    '<joint name="panda_joint2" value="0.1 0.2"/></group_state></robot>')
+    with pytest.raises(pmd.errors.UrdfError, match=r"group_state 'up' joint 'panda_joint2'.*"
+                                                   r"expected 1 finite number"):
+        model.reference_poses(str(srdf))
+    srdf.write_text('<robot name="p"><group_state name="up" group="arm">'
+                    '<joint name="panda_joint2" value="0.5"/><joint name="no_such" value="1"/>'
+                    '</group_state></robot>')
+    with pytest.warns(pmd.errors.UrdfWarning, match="no_such"):
+        q = model.reference_poses(str(srdf))["up"]
+    expected = model.neutral()
+    expected[1] = 0.5
+    np.testing.assert_array_equal(q, expected)

@@ -435,6 +435,11 @@ class Model:
     def from_pinocchio(pin_model: Any) -> Model:
         """Our model of a ``pinocchio.Model``: same as :func:`pointmass_dyn.from_pinocchio`
         (docs/robots.md)."""
+    def reference_poses(self, srdf: str | os.PathLike[str]) -> dict[str, _Array]:
+        """``{pose name: q}`` of the SRDF's ``<group_state>`` elements ("standing", …), as
+        Pinocchio's ``loadReferenceConfigurations``: from the neutral configuration, the named
+        joints set (URDF names); joints the model does not move are skipped with one
+        ``UrdfWarning``. Raises ``UrdfError`` naming the file, pose and joint."""
     @property
     def repairs(self) -> list[dict[str, Any]]:
         """What ``from_urdf(..., repair=...)`` changed: one dict per link or welded joint

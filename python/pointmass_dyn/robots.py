@@ -14,11 +14,12 @@ This module finds that folder through the package metadata and loads a robot by 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 from ._core import Model
 from .errors import InvalidInputError
 
-__all__ = ["NAMES", "directory", "example_robot", "urdf_path"]
+__all__ = ["NAMES", "directory", "example_robot", "reference_poses", "srdf_path", "urdf_path"]
 
 # Short names of the robots the tests load (tests/test_urdf.py, tests/test_free_flyer.py),
 # relative to the robots folder. Any other file there can be named by its relative path.
@@ -77,3 +78,33 @@ def example_robot(name: str, **kwargs):
     """``Model.from_urdf`` of the robot ``name`` (see :func:`urdf_path`); keyword arguments
     (``root_joint="free"``, ``repair=True``) go to ``from_urdf``."""
     return Model.from_urdf(str(urdf_path(name)), **kwargs)
+
+
+def srdf_path(name: str) -> Path:
+    """The SRDF that example-robot-data ships beside the URDF of ``name`` (its package's
+    ``srdf`` folder): the one named like the URDF, else the one whose name is the longest
+    prefix of the URDF's (``solo.srdf`` for ``solo12.urdf``), else the folder's only one.
+    ``InvalidInputError`` naming what is there when none fits."""
+    urdf = urdf_path(name)
+    package = directory() / urdf.relative_to(directory()).parts[0]
+    found = sorted((package / "srdf").glob("*.srdf"))
+    prefixes = [p for p in found if urdf.stem.startswith(p.stem)]
+    if prefixes:
+        return max(prefixes, key=lambda p: len(p.stem))
+    if len(found) == 1:
+        return found[0]
+    raise InvalidInputError(
+        f"name: {name!r} has no SRDF that fits its URDF '{urdf.name}' in {package / 'srdf'} "
+        f"(there: {[p.name for p in found] or 'none'})"
+    )
+
+
+def reference_poses(name: str, **kwargs) -> tuple[Any, dict[str, Any]]:
+    """The robot ``name`` (:func:`example_robot`, ``kwargs`` to ``from_urdf``) and its SRDF's
+    reference poses ``{"standing": q, ...}`` (``Model.reference_poses``)::
+
+        go1, poses = pmd.robots.reference_poses("go1_description/urdf/go1.urdf", root_joint="free")
+        scene = pmd.Scene(go1, poses["standing"])
+    """
+    model = example_robot(name, **kwargs)
+    return model, model.reference_poses(str(srdf_path(name)))

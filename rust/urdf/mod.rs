@@ -45,12 +45,14 @@ mod build;
 mod parse;
 mod parts;
 mod repair;
+mod srdf;
 mod tree;
 mod visuals;
 
 pub use crate::joint_records::{Limit, Mimic, RepairRecord, UrdfJoint};
 pub use parts::{model_from_parts, Part};
 pub use repair::Repair;
+pub use srdf::{load_reference_poses, reference_poses, ReferencePose};
 
 use parse::Ctx;
 use tree::Tree;

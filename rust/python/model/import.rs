@@ -146,6 +146,35 @@ impl PyModel {
         Ok(PyModel::from_model(built.model))
     }
 
+    /// `{pose name: q}` of the SRDF file `srdf`'s `<group_state>` elements (`"standing"`,
+    /// `"half_sitting"`, …) for this model, as Pinocchio's `loadReferenceConfigurations`:
+    /// each starts from the neutral configuration and sets the joints it names (URDF names).
+    /// Joints the model does not move are skipped, listed in one `UrdfWarning`. Raises
+    /// `UrdfError` naming the file, the pose and the joint.
+    fn reference_poses<'py>(
+        &self,
+        py: Python<'py>,
+        srdf: std::path::PathBuf,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let model = self.model();
+        let (poses, skipped) = crate::urdf::load_reference_poses(&model, &srdf).py(py)?;
+        if !skipped.is_empty() {
+            let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
+            let message = format!(
+                "{}: joints the model does not move, skipped: {}",
+                crate::files::display_path(&srdf),
+                skipped.join(", ")
+            );
+            py.import("warnings")?
+                .call_method1("warn", (message, &category, 1))?;
+        }
+        let out = PyDict::new(py);
+        for p in poses {
+            out.set_item(p.name, crate::python::convert::to_array1(py, &p.q))?;
+        }
+        Ok(out)
+    }
+
     /// What `from_urdf(..., repair=...)` changed: one dict per link or welded joint with
     /// `link`, `joint` (the welded joint, else None), `rules`, `mass` (before, after),
     /// `principal_moments` (before, after; ascending) and `joint_type` (before, after; welds
