@@ -6,6 +6,7 @@ sphere, force balance at rest, the linearised contact mode's critically damped r
 from __future__ import annotations
 
 import math
+import pickle
 import re
 import struct
 import sys
@@ -153,6 +154,7 @@ def test_default_contact_sinks_1_mm_with_a_critically_damped_mode(n):
     mass, r = 2.0, 0.05
     contact = pmd.GroundContact([("ball", [0, 0, 0], r)], exponent=n, friction=0.0)
     assert contact.contact_parameters["stiffness"] is None
+    assert pickle.loads(pickle.dumps(contact)) == contact  # defaults still to come
     scene = pmd.Scene(ball(mass, r), q0=[r - SINK + 1e-5],
                       effects=[contact, pmd.Gravity([0, 0, -G0])])
     used = scene.effects[0].contact_parameters

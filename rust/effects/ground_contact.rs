@@ -69,15 +69,32 @@ pub struct GroundContact {
     pub height: f64,
     /// `k` > 0, N/mᵉ; `None`: the default from the model's weight, filled in when a scene
     /// is built ([`GroundContact::resolved`]).
+    #[serde(with = "nan_is_none")]
     pub stiffness: Option<f64>,
     /// `e` ≥ 1.
     pub exponent: f64,
     /// `c` ≥ 0, N·s/m^(e+1); `None`: the default (critical damping at the static sink).
+    #[serde(with = "nan_is_none")]
     pub damping: Option<f64>,
     /// `μ` ≥ 0.
     pub friction: f64,
     /// > 0, m/s.
     pub v_eps: f64,
+}
+
+/// A parameter that may wait for its default, serialised as a plain number with NaN for
+/// `None` (no given value is NaN): the pickle format (`crate::persist`) keeps its layout.
+mod nan_is_none {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(x.unwrap_or(f64::NAN))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        let x = f64::deserialize(d)?;
+        Ok((!x.is_nan()).then_some(x))
+    }
 }
 
 /// The largest contact offset, radius and plane height (m): a thousand kilometres, beyond
@@ -365,7 +382,7 @@ impl GroundContact {
             return Err(Error::arg(
                 arg,
                 "a number: its default comes from the model's weight, and this model's total mass is not a positive number",
-                format!("None (total mass {})", crate::error::num(mass)),
+                format!("None (total mass {})", crate::error::num(mass + 0.0)), // not "-0"
             ));
         }
         let e = self.exponent;
