@@ -802,9 +802,9 @@ def resolve_mesh(
     uri: str,
     base_dir: str | os.PathLike[str] | None = None,
     package_dirs: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
-) -> str | None:
-    """Where a mesh ``uri`` of a model file in ``base_dir`` is, as ``from_urdf`` finds its
-    meshes; None when no candidate is a file."""
+) -> os.PathLike[str] | None:
+    """Where a mesh ``uri`` of a model file in ``base_dir`` is (a ``pathlib.Path``), as
+    ``from_urdf`` finds its meshes; None when no candidate is a file."""
 
 def rk45(
     fun: Callable[[float, _Array], ArrayLike],
