@@ -9,7 +9,7 @@ factory                family       law
 =====================  ===========  ================================================
 
 :func:`urdf_contact_points` takes contact points (sphere centres and radii) from a URDF's
-``<collision>`` elements; :func:`contact_forces` evaluates a contact's points, penetrations
+``<collision>`` elements (spheres, else the bounds of its meshes and shapes); :func:`contact_forces` evaluates a contact's points, penetrations
 and forces along a trajectory (what ``simulate(..., contact=True)`` records);
 :func:`torque_saturation` says where limited torques were at their limit (a result's
 ``.saturated``).
@@ -18,6 +18,7 @@ and forces along a trajectory (what ``simulate(..., contact=True)`` records);
 from __future__ import annotations
 
 import os
+import warnings
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -26,8 +27,9 @@ from typing import Any
 import numpy as np
 
 from . import _core
+from ._collision import MalformedGeometry, link_sphere
 from ._core import Effect, Scene
-from .errors import InvalidInputError
+from .errors import InvalidInputError, UrdfWarning
 
 
 def GroundContact(
@@ -35,9 +37,9 @@ def GroundContact(
     *,
     normal: Sequence[float] = (0.0, 0.0, 1.0),
     height: float = 0.0,
-    stiffness: float,
+    stiffness: float | None = None,
     exponent: float = 1.5,
-    damping: float,
+    damping: float | None = None,
     friction: float,
     v_eps: float = 1e-3,
     name: str | None = None,
@@ -54,7 +56,13 @@ def GroundContact(
     ``−μ F_n tanh(|v_t| / v_eps) v_t / |v_t|`` on its tangential velocity (``friction``
     μ ≥ 0). The elastic part's potential ``k δⁿ⁺¹ / (n + 1)`` counts in ``energies``;
     damping and friction only dissipate. Its derivatives are analytic (Radau, ``auto``).
-    How to choose k and c: docs/contact.md."""
+
+    ``stiffness=None`` and ``damping=None`` take defaults from the robot's weight when the
+    effect joins a scene: with the model's total mass ``M`` shared by the ``N`` points,
+    ``k = M g₀ / (N δ₀ⁿ)`` (each point sinks ``δ₀`` = 1 mm at rest, ``g₀`` = 9.81 m/s²) and
+    ``c`` the critical damping of the contact mode at that sink. The scene's effects hold
+    the values it runs with (``scene.effects[i].contact_parameters``, their repr). How to
+    choose k and c: docs/contact.md §1."""
     return Effect.ground_contact(
         points, normal, height, stiffness, exponent, damping, friction, v_eps, name
     )
@@ -79,13 +87,25 @@ def JointLimit(
 
 
 def urdf_contact_points(
-    urdf: str | os.PathLike, links: Sequence[str]
+    urdf: str | os.PathLike, links: Sequence[str], *, package_dirs: Any = None
 ) -> list[tuple[str, list[float], float]]:
     """Contact points ``(link, [x, y, z], radius)`` for :func:`GroundContact`, from the
-    ``<collision>`` elements of the named links of a URDF file: every ``<sphere>`` gives its
-    centre (its ``<origin>``, in the link's frame) and radius; a link without a sphere (a mesh
-    foot, say) gives its origin with radius 0. Bodies of ``Model.from_urdf`` carry the link
-    names, so the points can be used as they are."""
+    named links of a URDF file, in each link's frame:
+
+    * every ``<collision>`` ``<sphere>`` gives its centre (its ``<origin>``) and radius;
+    * a link without one (a mesh foot, say) gives one sphere from the bounding box of its
+      ``<collision>`` geometry (meshes, boxes, cylinders, with their ``<origin>`` and
+      ``scale``), or of its ``<visual>`` geometry when the collision's cannot be read: the
+      box's centre and half its smallest side, the largest sphere inside the box (exact
+      for a spherical foot; a flat foot's sole is its bottom);
+    * a link without geometry gives its origin with radius 0 (a point).
+
+    Meshes are found as ``Model.from_urdf`` finds them (``package://`` in ``package_dirs``
+    and the file's folders). STL and OBJ are read with NumPy; other formats (``.dae``) need
+    the extra ``pointmass-dyn[mesh]``: a link whose geometry cannot be read falls back to
+    its visual geometry, then to its origin with radius 0, with a :class:`UrdfWarning`
+    naming the files and why. Bodies of ``Model.from_urdf`` carry the link names, so the
+    points can be used as they are."""
     path = os.fspath(urdf)
     try:
         root = ET.parse(path).getroot()
@@ -130,8 +150,31 @@ def urdf_contact_points(
                     f"<sphere radius> >= 0, got xyz={xyz}, radius={radius}"
                 )
             spheres.append((name, xyz, radius))
-        out.extend(spheres or [(name, [0.0, 0.0, 0.0], 0.0)])
+        if not spheres:
+            spheres = [_bounding_sphere(link, name, path, package_dirs)]
+        out.extend(spheres)
     return out
+
+
+def _bounding_sphere(
+    link: ET.Element, name: str, path: str, package_dirs: Any
+) -> tuple[str, list[float], float]:
+    """A link's sphere from its geometry's bounds (``_collision.link_sphere``), else its
+    origin with radius 0, warned about when the link has geometry that could not be read."""
+    try:
+        found = link_sphere(link, os.path.dirname(os.path.abspath(path)), package_dirs)
+    except MalformedGeometry as e:
+        raise InvalidInputError(f"urdf: link '{name}' of {path}: {e}") from None
+    if isinstance(found, tuple):
+        return (name, *found)
+    if found is not None:
+        warnings.warn(
+            f"urdf_contact_points: link '{name}' of {path}: its geometry could not be read "
+            f"({found}); its contact point is the link's origin with radius 0",
+            UrdfWarning,
+            stacklevel=3,
+        )
+    return (name, [0.0, 0.0, 0.0], 0.0)
 
 
 @dataclass

@@ -561,15 +561,16 @@ class Effect:
         points: Sequence[Any],
         normal: ArrayLike,
         height: float,
-        stiffness: float,
+        stiffness: float | None,
         exponent: float,
-        damping: float,
+        damping: float | None,
         friction: float,
         v_eps: float,
         name: str | None = None,
     ) -> Effect:
         """Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
-        force ``max(0, k δⁿ + c δⁿ δ̇)``, regularised Coulomb friction."""
+        force ``max(0, k δⁿ + c δⁿ δ̇)``, regularised Coulomb friction. ``stiffness`` or
+        ``damping`` None: the defaults from the model's weight, filled in by a scene."""
     @staticmethod
     def joint_limit(
         joints: str | int | Sequence[str | int] | None,
@@ -587,6 +588,11 @@ class Effect:
         """A torque effect's limit (``"effort"`` until a scene fills it in), else None."""
     def torque_limit_per_speed(self, model: Model) -> NDArray[np.float64]:
         """The limit on each of ``model``'s speeds (inf where unlimited or not driven)."""
+    @property
+    def contact_parameters(self) -> dict[str, float | None] | None:
+        """A ground contact's ``height``, ``stiffness``, ``exponent``, ``damping``,
+        ``friction``, ``v_eps`` (``stiffness``/``damping`` None until a scene fills in their
+        defaults); None for other effects."""
     def contact_state(
         self, model: Model, q: ArrayLike, v: ArrayLike
     ) -> dict[str, NDArray[np.float64]]:
@@ -830,6 +836,14 @@ def energies(
     disable: _Family | Sequence[_Family] | None = None,
 ) -> dict[str, float]:
     """``kinetic``, each conservative effect's potential energy by name, and ``total``."""
+
+def resolve_mesh(
+    uri: str,
+    base_dir: str | os.PathLike[str] | None = None,
+    package_dirs: str | os.PathLike[str] | Sequence[str | os.PathLike[str]] | None = None,
+) -> os.PathLike[str] | None:
+    """Where a mesh ``uri`` of a model file in ``base_dir`` is (a ``pathlib.Path``), as
+    ``from_urdf`` finds its meshes; None when no candidate is a file."""
 
 def rk45(
     fun: Callable[[float, _Array], ArrayLike],

@@ -219,7 +219,8 @@ class SimulationResult:
     #: 1e-7; the first such step): past it the motion may continue on another branch,
     #: chosen by rounding. ``simulate`` then warns (:class:`SingularPassageWarning`).
     singular_passage: tuple | None = None
-    #: The integration method ("RK45", "DOP853", "Radau", "RK4", "Euler" or "auto").
+    #: The integration method that ran ("RK45", "DOP853", "Radau", "RK4", "Euler" or "auto";
+    #: the one ``simulate`` chose when none was named). ``"auto"``: see ``switched_to``.
     method: str = "RK45"
     #: Jacobian evaluations and LU decompositions (implicit methods; 0 otherwise).
     njev: int = 0
@@ -245,6 +246,9 @@ class SimulationResult:
         parts = [
             f"scene={self.scene!r}" if self.scene else None,
             f"method={self.method!r}",
+            f"switched_to={self.switched_to!r} at t={self.t_switch:.6g}"
+            if self.switched_to is not None and self.t_switch is not None
+            else None,
             f"success={self.success}",
             f"t={span} ({t.size} points)",
             f"q: {np.shape(self.q)}, v: {np.shape(self.v)}",
@@ -286,12 +290,15 @@ def simulate(
 ) -> SimulationResult:
     """Integrates a scene, entirely in Rust with the GIL released.
 
-    ``method``: ``"RK45"`` (default; SciPy's, step for step), ``"DOP853"`` (SciPy's, step for
+    ``method``: ``"RK45"`` (SciPy's, step for step), ``"DOP853"`` (SciPy's, step for
     step; better at tight tolerances), ``"RK4"`` or ``"Euler"`` (semi-implicit, MuJoCo's) at
     the fixed step ``dt`` (required by these two only), ``"Radau"`` (implicit) or ``"auto"``
     (RK45, or DOP853 at rtol ≤ 1e-8, then Radau from where the stiffness test fires;
     ``.switched_to``, ``.t_switch``).
-    ``None`` takes the scene's ``[simulate] method``/``dt``. See docs/integrators.md.
+    ``None`` takes the scene's ``[simulate] method``/``dt``; a scene that names none runs
+    ``"auto"`` when it has a ground contact or joint limits (enabled; stiff by design, where
+    RK45 takes 10–100× the evaluations), else ``"RK45"``. ``.method`` says which ran.
+    See docs/integrators.md.
 
     Settings not given here come from the scene (its ``[simulate]`` table), then SciPy's
     defaults (rtol 1e-3, atol 1e-6). ``events`` holds :class:`StateEvent` objects (a joint

@@ -41,6 +41,12 @@ const KEYS: &[&str] = &[
 pub const DEFAULT_EXPONENT: f64 = 1.5;
 /// Default friction regularisation speed (m/s).
 pub const DEFAULT_V_EPS: f64 = 1e-3;
+/// The static sink the default stiffness gives (m): the model at rest, its weight shared
+/// equally by the points, sinks 1 mm at each ([`GroundContact::resolved`]).
+pub const DEFAULT_SINK: f64 = 1e-3;
+/// The gravity the defaults weigh the model with (m/s², the library's `Gravity()`), whatever
+/// gravity the scene declares: the defaults depend on the model and the points only.
+pub const DEFAULT_GRAVITY: f64 = 9.81;
 
 /// A point fixed in a body, in the body's frame; with a radius it is the centre of a
 /// sphere, which touches the plane when the centre is `radius` above it (exact for a sphere
@@ -61,16 +67,34 @@ pub struct GroundContact {
     pub normal: Vec3,
     /// The plane's offset along `normal`: it holds the points `x` with `n · x = height`.
     pub height: f64,
-    /// `k` > 0, N/mᵉ.
-    pub stiffness: f64,
+    /// `k` > 0, N/mᵉ; `None`: the default from the model's weight, filled in when a scene
+    /// is built ([`GroundContact::resolved`]).
+    #[serde(with = "nan_is_none")]
+    pub stiffness: Option<f64>,
     /// `e` ≥ 1.
     pub exponent: f64,
-    /// `c` ≥ 0, N·s/m^(e+1).
-    pub damping: f64,
+    /// `c` ≥ 0, N·s/m^(e+1); `None`: the default (critical damping at the static sink).
+    #[serde(with = "nan_is_none")]
+    pub damping: Option<f64>,
     /// `μ` ≥ 0.
     pub friction: f64,
     /// > 0, m/s.
     pub v_eps: f64,
+}
+
+/// A parameter that may wait for its default, serialised as a plain number with NaN for
+/// `None` (no given value is NaN): the pickle format (`crate::persist`) keeps its layout.
+mod nan_is_none {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(x: &Option<f64>, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_f64(x.unwrap_or(f64::NAN))
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+        let x = f64::deserialize(d)?;
+        Ok((!x.is_nan()).then_some(x))
+    }
 }
 
 /// The largest contact offset, radius and plane height (m): a thousand kilometres, beyond
@@ -84,9 +108,9 @@ impl GroundContact {
         points: Vec<ContactPoint>,
         normal: Vec3,
         height: f64,
-        stiffness: f64,
+        stiffness: Option<f64>,
         exponent: f64,
-        damping: f64,
+        damping: Option<f64>,
         friction: f64,
         v_eps: f64,
     ) -> Result<GroundContact> {
@@ -149,8 +173,12 @@ impl GroundContact {
                 ))
             }
         };
-        positive("stiffness", stiffness)?;
-        non_negative("damping", damping)?;
+        if let Some(k) = stiffness {
+            positive("stiffness", k)?;
+        }
+        if let Some(c) = damping {
+            non_negative("damping", c)?;
+        }
         non_negative("friction", friction)?;
         if !(exponent.is_finite() && exponent >= 1.0) {
             return Err(Error::arg(
@@ -194,8 +222,6 @@ impl GroundContact {
         let friction = f.number("friction")?;
         let v_eps = f.number("v_eps")?;
         let points = required(points, "points", POINTS_EXPECTED)?;
-        let stiffness = required(stiffness, "stiffness", "a number > 0 (N/m^exponent)")?;
-        let damping = required(damping, "damping", "a number >= 0 (N·s/m^(exponent+1))")?;
         let friction = required(friction, "friction", "a number >= 0 (Coulomb μ)")?;
         GroundContact::new(
             name,
@@ -283,14 +309,15 @@ impl Declaration for GroundContact {
     fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect> {
         let x = one_number(key, values)?;
         let pick = |k: &str, now: f64| if k == key { x } else { now };
+        let pick_or_default = |k: &str, now: Option<f64>| if k == key { Some(x) } else { now };
         let e = GroundContact::new(
             self.name.clone(),
             self.points.clone(),
             self.normal,
             pick("height", self.height),
-            pick("stiffness", self.stiffness),
+            pick_or_default("stiffness", self.stiffness),
             pick("exponent", self.exponent),
-            pick("damping", self.damping),
+            pick_or_default("damping", self.damping),
             pick("friction", self.friction),
             pick("v_eps", self.v_eps),
         )?;
@@ -305,9 +332,9 @@ impl Declaration for GroundContact {
             n.y,
             n.z,
             self.height,
-            self.stiffness,
+            or_none(self.stiffness),
             self.exponent,
-            self.damping,
+            or_none(self.damping),
             self.friction,
             self.v_eps,
             label_repr(self.label()),
@@ -323,20 +350,90 @@ impl Declaration for GroundContact {
     }
 }
 
+/// A parameter for `repr`: its value, or `None` (the default, not yet computed).
+fn or_none(x: Option<f64>) -> String {
+    x.map_or_else(|| "None".into(), |x| x.to_string())
+}
+
 impl GroundContact {
+    /// `(stiffness, damping)`: the given ones, else the defaults from the weight `W = M g`
+    /// of the model (its total mass `M`, [`DEFAULT_GRAVITY`]) shared equally by the `N`
+    /// points, `w = W / N` each (docs/contact.md §1):
+    ///
+    /// * `k = w / δ₀ᵉ`: at rest each point sinks `δ₀` = [`DEFAULT_SINK`] (1 mm);
+    /// * `c = 2 sqrt(k_lin M / N) / δ_sᵉ`: critical damping of the contact mode linearised at
+    ///   the static sink `δ_s = (w / k)^(1/e)` (with the given or default `k`), where the
+    ///   law's stiffness is `k_lin = e k δ_sᵉ⁻¹ = e w / δ_s` and its damping `c δ_sᵉ`.
+    ///
+    /// A massless model has no default: the error names `stiffness` (or `damping`).
+    pub fn resolved(&self, model: &Model) -> Result<(f64, f64)> {
+        if let (Some(k), Some(c)) = (self.stiffness, self.damping) {
+            return Ok((k, c));
+        }
+        let n = self.points.len() as f64;
+        let mass = model.total_mass();
+        let w = mass * DEFAULT_GRAVITY / n;
+        if !(w.is_finite() && w > 0.0) {
+            let arg = if self.stiffness.is_none() {
+                "stiffness"
+            } else {
+                "damping"
+            };
+            return Err(Error::arg(
+                arg,
+                "a number: its default comes from the model's weight, and this model's total mass is not a positive number",
+                format!("None (total mass {})", crate::error::num(mass + 0.0)), // not "-0"
+            ));
+        }
+        let e = self.exponent;
+        let k = self.stiffness.unwrap_or_else(|| w / DEFAULT_SINK.powf(e));
+        let c = self.damping.unwrap_or_else(|| {
+            let sink_e = w / k; // δ_sᵉ
+            let k_lin = e * w / sink_e.powf(1.0 / e);
+            2.0 * (k_lin * mass / n).sqrt() / sink_e
+        });
+        // An extreme exponent or mass can overflow: the defaults checked as given ones are.
+        let defaulted = [
+            ("stiffness", k, self.stiffness.is_none()),
+            ("damping", c, self.damping.is_none()),
+        ];
+        for (arg, x, _) in defaulted.into_iter().filter(|d| d.2) {
+            if !(x.is_finite() && x > 0.0) {
+                return Err(Error::arg(
+                    arg,
+                    "a number: its default from the model's weight is not a finite number > 0",
+                    format!("None (default {})", crate::error::num(x)),
+                ));
+            }
+        }
+        Ok((k, c))
+    }
+
+    /// This contact with its default stiffness and damping computed for `model` (what a
+    /// scene keeps and reports); itself when both are given.
+    pub fn with_model_defaults(&self, model: &Model) -> Result<GroundContact> {
+        let (k, c) = self.resolved(model)?;
+        Ok(GroundContact {
+            stiffness: Some(k),
+            damping: Some(c),
+            ..self.clone()
+        })
+    }
+
     /// The law, resolved against `model` (also used to report the contact forces along a
     /// trajectory, [`GroundContactLaw::evaluate`]).
     pub fn law(&self, model: &Model) -> Result<GroundContactLaw> {
         let points = self.points.iter().map(|p| (&p.body, &p.point));
         let set = PointSet::resolve(model, points, |k| format!("points[{k}]"))?;
+        let (k, c) = self.resolved(model)?;
         Ok(GroundContactLaw {
             set,
             radii: self.points.iter().map(|p| p.radius).collect(),
             normal: self.normal,
             height: self.height,
-            k: self.stiffness,
+            k,
             e: self.exponent,
-            c: self.damping,
+            c,
             mu: self.friction,
             v_eps: self.v_eps,
         })

@@ -76,9 +76,9 @@ fn contact_at(points: &[(&str, [f64; 3])], mu: f64, height: f64) -> GroundContac
             .collect(),
         Vec3::new(0.1, -0.2, 1.0),
         height,
-        2.0e4,
+        Some(2.0e4),
         1.5,
-        300.0,
+        Some(300.0),
         mu,
         0.05,
     )
@@ -138,9 +138,9 @@ fn static_force_is_k_delta_to_the_n_along_the_normal() {
         }],
         Vec3::z(),
         0.0,
-        1.0e5,
+        Some(1.0e5),
         1.5,
-        50.0,
+        Some(50.0),
         0.8,
         1e-3,
     )
@@ -335,7 +335,7 @@ fn refusals_name_the_argument() {
         }]
     };
     let make = |k: f64, e: f64, c: f64, mu: f64, ve: f64, n: Vec3| {
-        GroundContact::new(None, p(), n, 0.0, k, e, c, mu, ve)
+        GroundContact::new(None, p(), n, 0.0, Some(k), e, Some(c), mu, ve)
             .unwrap_err()
             .to_string()
     };
@@ -346,7 +346,8 @@ fn refusals_name_the_argument() {
     assert!(make(1.0, 0.5, 1.0, 0.5, 1e-3, z).contains("exponent"));
     assert!(make(1.0, 1.5, 1.0, 0.5, 0.0, z).contains("v_eps"));
     assert!(make(1.0, 1.5, 1.0, 0.5, 1e-3, Vec3::zeros()).contains("normal"));
-    let e = GroundContact::new(None, vec![], z, 0.0, 1.0, 1.5, 1.0, 0.5, 1e-3).unwrap_err();
+    let e =
+        GroundContact::new(None, vec![], z, 0.0, Some(1.0), 1.5, Some(1.0), 0.5, 1e-3).unwrap_err();
     assert!(e.to_string().contains("points"));
     let bad = GroundContact::new(
         None,
@@ -357,9 +358,9 @@ fn refusals_name_the_argument() {
         }],
         z,
         0.0,
-        1.0,
+        Some(1.0),
         1.5,
-        1.0,
+        Some(1.0),
         0.5,
         1e-3,
     )
@@ -399,4 +400,79 @@ friction = 0.8"#,
         .unwrap_err()
         .to_string()
         .contains("points[0]"));
+}
+
+#[test]
+fn defaults_sink_one_millimetre_with_critical_damping() {
+    let m = leg();
+    let pts = ["base", "hip", "shin", "foot"].map(|b| ContactPoint {
+        body: JointRef::Name(b.into()),
+        point: Vec3::zeros(),
+        radius: 0.01,
+    });
+    let make = |k: Option<f64>, c: Option<f64>, e: f64| {
+        GroundContact::new(None, pts.to_vec(), Vec3::z(), 0.0, k, e, c, 0.5, 1e-3).unwrap()
+    };
+    let (mass, g, n) = (2.9, 9.81, 4.0); // leg(): 2 + 0.5 + 0.3 + 0.1 kg
+    for e in [1.0, 1.5, 2.0] {
+        let (k, c) = make(None, None, e).resolved(&m).unwrap();
+        // The law's static force at 1 mm carries a quarter of the weight each.
+        let law = make(None, None, e).law(&m).unwrap();
+        let down = law.point_force(&Vec3::new(0.0, 0.0, 0.01 - 1e-3), &Vec3::zeros(), 0.01);
+        assert!(
+            (down.normal - mass * g / n).abs() <= 1e-12 * mass * g,
+            "{e}"
+        );
+        // Linearised there (stiffness −∂F/∂z, damping −∂F/∂ż) on a quarter of the mass:
+        // damping ratio 1.
+        let (k_lin, c_lin) = (-down.dp[(2, 2)], -down.dv[(2, 2)]);
+        let zeta = c_lin / (2.0 * (k_lin * mass / n).sqrt());
+        assert!((zeta - 1.0).abs() < 1e-12, "e = {e}: ζ = {zeta}");
+        assert!((k_lin - e * mass * g / n / 1e-3).abs() < 1e-9 * k_lin);
+        // Given values are kept; a given stiffness sets the sink the damping is critical at.
+        assert_eq!(
+            make(Some(7.0), Some(0.0), e).resolved(&m).unwrap(),
+            (7.0, 0.0)
+        );
+        let (k2, c2) = make(Some(k * 8.0), None, e).resolved(&m).unwrap();
+        assert_eq!(k2, k * 8.0);
+        let sink = (mass * g / n / k2).powf(1.0 / e);
+        let at = make(Some(k2), Some(c2), e).law(&m).unwrap();
+        let f = at.point_force(&Vec3::new(0.0, 0.0, 0.01 - sink), &Vec3::zeros(), 0.01);
+        let zeta = -f.dv[(2, 2)] / (2.0 * (-f.dp[(2, 2)] * mass / n).sqrt());
+        assert!((zeta - 1.0).abs() < 1e-9, "e = {e}: ζ = {zeta}");
+        assert!(c > 0.0);
+        // A scene keeps the values (what its effects' repr shows).
+        let filled = make(None, None, e).with_model_defaults(&m).unwrap();
+        assert_eq!((filled.stiffness, filled.damping), (Some(k), Some(c)));
+        assert!(filled.repr().contains(&format!("stiffness={k}")));
+        assert!(make(None, None, e).repr().contains("stiffness=None"));
+    }
+    // No mass, no default: the error names the argument.
+    let massless = Model::new();
+    let one = GroundContact::new(
+        None,
+        pts[..1].to_vec(),
+        Vec3::z(),
+        0.0,
+        None,
+        1.5,
+        Some(1.0),
+        0.5,
+        1e-3,
+    );
+    let e = one.unwrap().resolved(&massless).unwrap_err().to_string();
+    assert!(
+        e.starts_with("stiffness:") && e.contains("total mass 0"),
+        "{e}"
+    );
+    // Scene files may leave them out.
+    let t: toml::Table = toml::from_str(
+        "type = \"ground_contact\"\npoints = [[\"foot\", [0, 0, 0]]]\nfriction = 0.8",
+    )
+    .unwrap();
+    let Effect::GroundContact(c) = Effect::from_toml(&t).unwrap() else {
+        panic!("not a contact")
+    };
+    assert_eq!((c.stiffness, c.damping), (None, None));
 }

@@ -375,8 +375,10 @@ pub fn limits_by_link(model: &Model, joints: &[crate::urdf::UrdfJoint]) -> Vec<[
 
 /// Fills what the declarations in `effects` take from the model: the missing bounds of
 /// joint limits and the `"effort"` limits of torques, from the model's URDF joints
-/// (`urdf_joints`, empty for a model built otherwise: no bounds, no effort). Errors name
-/// `{list}[k].field`.
+/// (`urdf_joints`, empty for a model built otherwise: no bounds, no effort), and a ground
+/// contact's default stiffness and damping, from the model's weight
+/// ([`super::GroundContact::resolved`]), so that the scene reports the values it runs with.
+/// Errors name `{list}[k].field`.
 pub fn fill_model_limits(
     model: &Model,
     urdf_joints: &[crate::urdf::UrdfJoint],
@@ -386,6 +388,7 @@ pub fn fill_model_limits(
     let needed = effects.iter().any(|e| match e {
         Effect::JointLimit(l) => l.lower.is_none() || l.upper.is_none(),
         Effect::Torque(t) => t.limit == Some(super::TorqueLimit::Effort),
+        Effect::GroundContact(c) => c.stiffness.is_none() || c.damping.is_none(),
         _ => false,
     });
     if !needed {
@@ -400,6 +403,7 @@ pub fn fill_model_limits(
             Effect::Torque(t) => t
                 .with_model_effort(model, |link| limits[link][2])
                 .map(Effect::Torque),
+            Effect::GroundContact(c) => c.with_model_defaults(model).map(Effect::GroundContact),
             _ => continue,
         };
         *e = filled.map_err(|x| x.in_arg(&format!("{list}[{k}]")))?;

@@ -49,7 +49,7 @@
 //! | `pd_torque`        | `joints`, `kp`, `kd`, `time`, `reference` (rows per time), `limit` |
 //! | `external`         | `body`, `point`, `frame` ("world"/"body"), `force`, `moment`; with `time`, `force`/`moment` are rows per time |
 //! | `point_spring`     | `body_a`, `point_a`, `body_b`, `point_b` (a body name or index, or "world"/-1; each point in its body's frame), `stiffness`, `rest_length` (default 0), `damping` (default 0) |
-//! | `ground_contact`   | `points = [[body, [x, y, z]] or [body, [x, y, z], radius], ...]`, `normal` (default [0, 0, 1]), `height` (0), `stiffness`, `exponent` (1.5), `damping`, `friction`, `v_eps` (1e-3) |
+//! | `ground_contact`   | `points = [[body, [x, y, z]] or [body, [x, y, z], radius], ...]`, `normal` (default [0, 0, 1]), `height` (0), `stiffness` (default: 1 mm static sink under the model's weight), `exponent` (1.5), `damping` (default: critical at that sink), `friction`, `v_eps` (1e-3) |
 //! | `joint_limit`      | `joints` (default: every revolute/prismatic joint), `lower`, `upper` (default: the model's limits), `stiffness`, `damping` |
 //!
 //! A torque's `limit` is one number, one per speed, or `"effort"` (the URDF's `<limit effort>`);

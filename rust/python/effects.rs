@@ -433,7 +433,8 @@ impl PyEffect {
     }
 
     /// Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
-    /// force, regularised Coulomb friction.
+    /// force, regularised Coulomb friction. `stiffness`/`damping` `None`: the defaults from
+    /// the model's weight, filled in when a scene is built.
     #[staticmethod]
     #[pyo3(signature = (points, normal, height, stiffness, exponent, damping, friction, v_eps, name=None))]
     #[allow(clippy::too_many_arguments)]
@@ -442,9 +443,9 @@ impl PyEffect {
         points: &Bound<'_, PyAny>,
         normal: &Bound<'_, PyAny>,
         height: &Bound<'_, PyAny>,
-        stiffness: &Bound<'_, PyAny>,
+        stiffness: Option<&Bound<'_, PyAny>>,
         exponent: &Bound<'_, PyAny>,
-        damping: &Bound<'_, PyAny>,
+        damping: Option<&Bound<'_, PyAny>>,
         friction: &Bound<'_, PyAny>,
         v_eps: &Bound<'_, PyAny>,
         name: Option<String>,
@@ -454,9 +455,9 @@ impl PyEffect {
             contact_points_arg(points)?,
             vec3(normal, "normal")?,
             real(height, "height")?,
-            real(stiffness, "stiffness")?,
+            opt_real(stiffness, "stiffness")?,
             real(exponent, "exponent")?,
-            real(damping, "damping")?,
+            opt_real(damping, "damping")?,
             real(friction, "friction")?,
             real(v_eps, "v_eps")?,
         )
@@ -624,6 +625,27 @@ impl PyEffect {
     ) -> PyResult<Self> {
         let (_, values) = super::convert::array(value, name)?;
         Ok(self.inner.with_parameter(name, &values).py(py)?.into())
+    }
+    /// A ground contact's law parameters: a dict of `height`, `stiffness`, `exponent`,
+    /// `damping`, `friction`, `v_eps` (`stiffness`/`damping` None until a scene fills in
+    /// their defaults: the scene's effects hold the values it runs with); `None` for other
+    /// effects.
+    #[getter]
+    fn contact_parameters<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
+        let Effect::GroundContact(c) = &self.inner else {
+            return Ok(None);
+        };
+        let d = pyo3::types::PyDict::new(py);
+        d.set_item("height", c.height)?;
+        d.set_item("stiffness", c.stiffness)?;
+        d.set_item("exponent", c.exponent)?;
+        d.set_item("damping", c.damping)?;
+        d.set_item("friction", c.friction)?;
+        d.set_item("v_eps", c.v_eps)?;
+        Ok(Some(d))
     }
     /// A gravity effect's acceleration `g` (3,); `None` for other effects.
     #[getter]

@@ -59,7 +59,7 @@ pub fn simulate_scene<'py>(
         controller,
         stiffness,
     )?;
-    let run = requested.resolve(&s.settings, base).py(py)?;
+    let run = requested.resolve_scene(s, base).py(py)?;
     let events = SceneEvents::parse(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
@@ -400,7 +400,7 @@ pub fn simulate_batch<'py>(
             "standard",
             "warn",
         )?;
-        resolved.push(requested.resolve(&s.settings, base).py(py)?);
+        resolved.push(requested.resolve_scene(s, base).py(py)?);
     }
     let runs = broadcast(&scenes, &resolved, q0s.as_ref(), v0s.as_ref()).py(py)?;
     let count = runs.len();

@@ -209,3 +209,18 @@ impl PyModel {
         Ok(())
     }
 }
+
+/// Where a mesh `uri` of a model file in `base_dir` is (`package://`, `file://`, absolute or
+/// relative), as `from_urdf` finds its meshes (`crate::visual::resolve_mesh`); `None` when no
+/// candidate is a file. `urdf_contact_points` reads collision meshes with it.
+#[pyfunction]
+#[pyo3(signature = (uri, base_dir=None, package_dirs=None))]
+pub fn resolve_mesh(
+    py: Python<'_>,
+    uri: &str,
+    base_dir: Option<PathBuf>,
+    package_dirs: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<PathBuf>> {
+    let dirs = self::package_dirs(py, package_dirs)?;
+    Ok(crate::visual::resolve_mesh(uri, base_dir.as_deref(), &dirs))
+}

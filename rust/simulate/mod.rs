@@ -1,6 +1,7 @@
 //! The simulate loop, entirely in Rust: state `y = [q; v]`, `q̇` from `v`, `v̇` from the
 //! recursive forward dynamics with the scene's declared effects, integrated by the method of
-//! the run's options (RK45 by default; see `integrator::Method`).
+//! the run's options (see `integrator::Method`; a run that names none: RK45, or `auto` for a
+//! scene with contact or joint limits, [`default_method`]).
 //!
 //! The right-hand side asks the effects for joint forces and link wrenches only when the
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
@@ -11,7 +12,7 @@ mod dynamics;
 mod settings;
 
 pub use dynamics::{Dynamics, Progress};
-pub use settings::{disabled, Requested, Resolved};
+pub use settings::{default_method, disabled, Requested, Resolved};
 
 use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};

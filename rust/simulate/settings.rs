@@ -1,9 +1,9 @@
 //! Which setting a run uses: the caller's argument beats the scene's setting, which beats
 //! the default. The one place that decides it; the bindings only parse the arguments.
-use crate::effects::Disabled;
+use crate::effects::{Disabled, Effect, Kind};
 use crate::error::{Error, Result};
-use crate::integrator::{SolverOptions, Tol};
-use crate::scene::Settings;
+use crate::integrator::{Method, SolverOptions, Tol};
+use crate::scene::{Scene, Settings};
 
 /// What the caller of a run asked for: `None` where they said nothing (an infinite
 /// `max_step` counts as nothing said).
@@ -33,7 +33,35 @@ pub fn disabled(caller: Option<Disabled>, scene: &Settings) -> Disabled {
     caller.or(scene.disable).unwrap_or_default()
 }
 
+/// The method of a run of `effects` that names none (neither the caller nor the scene):
+/// `auto` when an enabled effect is a ground contact or a joint limit — compliant
+/// constraints, stiff by design, where RK45 takes 10–100× the right-hand sides of Radau
+/// (docs/contact.md §5) — else RK45 (SciPy's, step for step). `auto` steps as RK45 until
+/// Hairer's stiffness test fires (DOP853 at rtol ≤ 1e-8), then Radau; the result says so.
+pub fn default_method(effects: &[Effect], disabled: Disabled) -> Method {
+    let stiff = effects
+        .iter()
+        .map(Effect::kind)
+        .any(|k| matches!(k, Kind::Contact | Kind::Limits) && !disabled.contains(k));
+    if stiff {
+        Method::Auto
+    } else {
+        Method::Rk45
+    }
+}
+
 impl Requested {
+    /// [`Requested::resolve`] against a scene, whose effects choose the method when neither
+    /// the caller nor the scene's settings name one ([`default_method`]).
+    pub fn resolve_scene(self, scene: &Scene, base: SolverOptions) -> Result<Resolved> {
+        let off = disabled(self.disable, &scene.settings);
+        let base = SolverOptions {
+            method: default_method(&scene.effects, off),
+            ..base
+        };
+        self.resolve(&scene.settings, base)
+    }
+
     /// The run's settings against a scene's: `base` carries the options a scene does not
     /// set (controller, `t_eval`, dense output, stiffness check) and the defaults of the rest.
     /// Without a `t_span` from either, an `InvalidArgument` naming `t_span`.
@@ -140,6 +168,45 @@ mod tests {
         };
         let r = caller.resolve(&Settings::default(), base.clone()).unwrap();
         assert_eq!((r.opts, r.disabled), (base, Disabled::none()));
+    }
+
+    #[test]
+    fn contact_and_joint_limits_default_to_auto_unless_disabled() {
+        use crate::effects::{ContactPoint, GroundContact, JointLimit, JointRef, PerJoint};
+        let contact = Effect::GroundContact(
+            GroundContact::new(
+                None,
+                vec![ContactPoint {
+                    body: JointRef::Index(0),
+                    point: crate::spatial::Vec3::zeros(),
+                    radius: 0.0,
+                }],
+                crate::spatial::Vec3::z(),
+                0.0,
+                None,
+                1.5,
+                None,
+                0.5,
+                1e-3,
+            )
+            .unwrap(),
+        );
+        let all = PerJoint::All(1.0);
+        let limit = JointLimit::new(None, None, None, None, all.clone(), all).unwrap();
+        let gravity = Effect::gravity(crate::spatial::Vec3::z()).unwrap();
+        let none = Disabled::none();
+        assert_eq!(default_method(&[], none), Method::Rk45);
+        assert_eq!(
+            default_method(std::slice::from_ref(&gravity), none),
+            Method::Rk45
+        );
+        let stiff = [gravity, contact, Effect::JointLimit(limit)];
+        assert_eq!(default_method(&stiff, none), Method::Auto);
+        assert_eq!(default_method(&stiff[..2], none), Method::Auto);
+        let off = none.with(Kind::Contact);
+        assert_eq!(default_method(&stiff[..2], off), Method::Rk45);
+        assert_eq!(default_method(&stiff, off), Method::Auto);
+        assert_eq!(default_method(&stiff, off.with(Kind::Limits)), Method::Rk45);
     }
 
     #[test]
