@@ -466,12 +466,17 @@ pub(crate) fn select_initial_step<S: OdeSystem>(
     for i in 0..n {
         y1[i] = y0[i] + hd * f0[i];
     }
-    call_rhs(sys, nfev, t0, t0 + h0 * dir, y1, f1)?;
+    // A non-finite `f1` is no failure (SciPy's neither): it makes `d2` inf (`h1 = 0`, the
+    // first step the minimum one) or NaN (ignored by Python's `max(d1, d2)`).
+    let at = t0 + h0 * dir;
+    *nfev += 1;
+    sys.rhs(at, y1, f1)
+        .map_err(|message| Status::RhsError { t: t0, at, message })?;
     let d2 = rms_norm((0..n).map(|i| (f1[i] - f0[i]) / scale[i]), n) / h0;
     let h1 = if d1 <= 1e-15 && d2 <= 1e-15 {
         (1e-6f64).max(h0 * 1e-3)
     } else {
-        (0.01 / if d1 >= d2 { d1 } else { d2 }).powf(1.0 / (order + 1) as f64)
+        (0.01 / if d2 > d1 { d2 } else { d1 }).powf(1.0 / (order + 1) as f64)
     };
     Ok((100.0 * h0).min(h1).min(interval_length).min(max_step))
 }

@@ -4,7 +4,10 @@
 //! step-size control (SciPy's, or the PI controller), FSAL, projection, Hairer's stiffness
 //! test and the dense output's extra stages. `Stepper` (RK45) and `Dop853` are this engine
 //! with their tableaux. Arithmetic is kept in NumPy's order so accept/reject decisions, and
-//! hence step counts, match SciPy's.
+//! hence step counts, match SciPy's. A trial with a non-finite stage is rejected as SciPy's
+//! NaN/inf error norm rejects it, without evaluating its remaining stages (so `nfev` is then
+//! lower than SciPy's); a non-finite value at an accepted state, or in a trial at the minimum
+//! step, ends the run ([`Status::NonFinite`]).
 
 use std::ops::{Deref, DerefMut};
 
@@ -495,14 +498,27 @@ impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {
         let (mut h_abs, min_step, _) = self.st.step_bounds()?;
         let t = self.st.t;
         let mut rejections = 0usize;
+        // The last attempt's non-finite stage: the failure if the step falls below `min_step`.
+        let mut non_finite = None;
         let t_new = loop {
             if h_abs < min_step {
-                return Err(Status::StepTooSmall { t, min_step });
+                return Err(non_finite.unwrap_or(Status::StepTooSmall { t, min_step }));
             }
             let (t_new, h) = self.st.attempt(h_abs);
             h_abs = h.abs();
-            self.rk_stages(t, h)?;
-            let error_norm = self.error_norm(h);
+            // A non-finite stage (state or derivative) rejects the attempt as SciPy's NaN/inf
+            // error norm does (shrunk by MIN_FACTOR); its remaining stages are not evaluated.
+            let error_norm = match self.rk_stages(t, h) {
+                Ok(()) => {
+                    non_finite = None;
+                    self.error_norm(h)
+                }
+                Err(s @ Status::NonFinite { .. }) => {
+                    non_finite = Some(s);
+                    f64::INFINITY
+                }
+                Err(e) => return Err(e),
+            };
             if error_norm < 1.0 {
                 let mut factor = self.accept_factor(error_norm);
                 if rejections > 0 {

@@ -313,7 +313,8 @@ pub struct SolverOptions {
     pub max_step: f64,
     /// Maximum number of accepted steps (default 1_000_000). Rejected attempts are not
     /// counted; they are bounded anyway because each one shrinks the step by >= 10 %
-    /// until it falls below the minimum step (status `StepTooSmall`).
+    /// until it falls below the minimum step (status `StepTooSmall`, or `NonFinite` when the
+    /// last attempt was not finite).
     pub max_steps: usize,
     pub controller: Controller,
     /// Keep the interpolant of every step in `Solution::dense` (SciPy's `dense_output`).
