@@ -108,8 +108,10 @@ impl Crossings {
 /// conditioned state of the run so far, is at a singular position within rounding: there
 /// the branch the motion continues on is decided by rounding (docs/mechanisms.md §5). The
 /// N-four-bar's passes that stay on the parallel motion come no closer than 1e-4 (N = 4,
-/// RK45 and DOP853 at rtol 1e-8 … 1e-12, Radau at 1e-6, 1e-7); Radau's crawl at 1e-8 that
-/// left it, 1e-10.
+/// RK45 and DOP853 at rtol 1e-8 … 1e-12, Radau at 1e-6, 1e-7; A02, DOP853 at 1e-6 … 1e-12:
+/// 6.5e-3); Radau's crawl at 1e-8 that left it, 1e-10. A parallelogram four-bar's runs that
+/// crawled off their branch (DOP853, RK45 at rtol 1e-11 … 1e-13) came within 0.95e-7 …
+/// 1.6e-7, those that stayed no closer than 1.5e-4 (issue 38; docs/mechanisms.md §5).
 pub const SINGULAR_PASSAGE: f64 = 1e-5;
 
 /// A one-degree-of-freedom motion whose tangent (the kernel of the loop rows) turns by more
