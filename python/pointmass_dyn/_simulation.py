@@ -216,9 +216,16 @@ class SimulationResult:
     constraint_drift: float | None = None
     #: Models with loops: ``(t, ratio)`` when an accepted step ended at a singular position
     #: within rounding (its loop rows' pivot ratio ``ratio`` times the run's best, below
-    #: 1e-7; the first such step): past it the motion may continue on another branch,
+    #: 1e-5), or a one-degree-of-freedom motion's tangent turned by more than 60 degrees in
+    #: one step (the first such step): past it the motion may continue on another branch,
     #: chosen by rounding. ``simulate`` then warns (:class:`SingularPassageWarning`).
     singular_passage: tuple | None = None
+    #: Models with loops and one degree of freedom: ``(count, t)``, how many singular
+    #: positions the motion passed between accepted states (the orientation of the kernel of
+    #: the loop rows reversed, however long the step) and the time just past the first
+    #: (``None`` if none). Passing one is how such motions go; past one the accuracy is
+    #: limited (docs/mechanisms.md section 5).
+    singular_crossings: tuple | None = None
     #: The integration method that ran ("RK45", "DOP853", "Radau", "RK4", "Euler" or "auto";
     #: the one ``simulate`` chose when none was named). ``"auto"``: see ``switched_to``.
     method: str = "RK45"

@@ -243,6 +243,30 @@ impl EnvelopeQr {
     }
 }
 
+impl EnvelopeQr {
+    /// `x ← Q x` for a full-length `x` (all `rows` entries, not only the first `rank`).
+    pub fn apply_q_full(&self, x: &mut [f64]) {
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
+        for k in (0..self.rank).rev() {
+            let c = self.perm[k] * rows;
+            let end = self.end[k];
+            let u = &data[c + k + 1..c + end];
+            let dot: f64 = u.iter().zip(&x[k + 1..end]).map(|(a, b)| a * b).sum();
+            let s = self.tau[k] * (x[k] + dot);
+            x[k] -= s;
+            for (xi, ui) in x[k + 1..end].iter_mut().zip(u) {
+                *xi -= s * ui;
+            }
+        }
+    }
+
+    /// `R`'s diagonal entry `k` (`k < rank`).
+    pub fn diagonal(&self, k: usize) -> f64 {
+        self.a[(k, self.perm[k])]
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::super::pivoted_qr::PivotedQr;

@@ -161,6 +161,28 @@ impl PivotedQr {
     }
 }
 
+impl PivotedQr {
+    /// `x ← Q x` for a full-length `x` (all `rows` entries, not only the first `rank`).
+    pub fn apply_q_full(&self, x: &mut [f64]) {
+        let rows = self.a.nrows();
+        let data = self.a.as_slice();
+        for k in (0..self.rank).rev() {
+            let u = &data[k * rows + k + 1..(k + 1) * rows];
+            let dot: f64 = u.iter().zip(&x[k + 1..]).map(|(a, b)| a * b).sum();
+            let s = self.tau[k] * (x[k] + dot);
+            x[k] -= s;
+            for (xi, ui) in x[k + 1..].iter_mut().zip(u) {
+                *xi -= s * ui;
+            }
+        }
+    }
+
+    /// `R`'s diagonal entry `k` (`k < rank`).
+    pub fn diagonal(&self, k: usize) -> f64 {
+        self.a[(k, k)]
+    }
+}
+
 /// Turns `col` (of 2-norm `norm > 0`) into its Householder reflector in place: `β` in
 /// `col[0]`, the vector `v` (with `v₀ = 1` implied) below it; returns `τ` (`H = I − τ v vᵀ`).
 /// Shared by the dense pivoted and the banded QR.

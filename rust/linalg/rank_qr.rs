@@ -73,6 +73,35 @@ impl RankQr {
         }
     }
 
+    /// With `rank = rows − 1` (one direction left): `x ← Q e_rank`, the unit vector
+    /// orthogonal to the kept columns; returns `det[A_kept, x] = (−1)^rank Π R_kk`'s sign
+    /// (each kept column has a true reflector, `det H = −1`), which orients `x` against the
+    /// kept columns in their factored order. 0 (and `x` untouched) otherwise.
+    pub fn kernel_sign(&self, x: &mut [f64]) -> f64 {
+        let rank = self.rank();
+        if rank + 1 != x.len() {
+            return 0.0;
+        }
+        x.fill(0.0);
+        x[rank] = 1.0;
+        let mut sign = if rank % 2 == 0 { 1.0 } else { -1.0 };
+        match self {
+            RankQr::Dense(q) => {
+                q.apply_q_full(x);
+                for k in 0..rank {
+                    sign *= q.diagonal(k).signum();
+                }
+            }
+            RankQr::Envelope(q) => {
+                q.apply_q_full(x);
+                for k in 0..rank {
+                    sign *= q.diagonal(k).signum();
+                }
+            }
+        }
+        sign
+    }
+
     /// `R₁₁ᵀ w = b` in place.
     pub fn solve_rt(&self, w: &mut [f64]) {
         match self {

@@ -183,6 +183,54 @@ impl LoopSolver {
         self.qr_j.pivot_ratio()
     }
 
+    /// With one degree of freedom left at the last factorisation of `Jᵀ` (after
+    /// [`project_state`]: at the projected state): the unit vector spanning the kernel of the
+    /// kept rows, oriented as their generalized cross product in increasing row order
+    /// (`det[J_B; tᵀ] > 0`), into `kernel` (length nv); the kept rows, sorted, into `rows`;
+    /// `order` is scratch. That orientation is a polynomial in `J`'s entries: it turns
+    /// continuously along a motion and reverses where the kept rows pass through a
+    /// dependence (a singular position of the mechanism), not where one coordinate partition
+    /// is singular (a dead point of a crank). False with more (or no) freedom of motion.
+    pub fn oriented_kernel(
+        &self,
+        kernel: &mut [f64],
+        rows: &mut Vec<usize>,
+        order: &mut Vec<usize>,
+    ) -> bool {
+        let mut sign = self.qr_j.kernel_sign(kernel);
+        if sign == 0.0 {
+            return false;
+        }
+        let rank = self.qr_j.rank();
+        rows.clear();
+        rows.extend((0..rank).map(|k| self.active[self.qr_j.perm()[k]]));
+        // The parity of the permutation that sorts the kept rows: rank minus its cycles.
+        order.clear();
+        order.extend(0..rank);
+        order.sort_unstable_by_key(|&k| rows[k]);
+        let mut cycles = 0;
+        for start in 0..rank {
+            if order[start] == usize::MAX {
+                continue;
+            }
+            cycles += 1;
+            let mut k = start;
+            while order[k] != usize::MAX {
+                let next = order[k];
+                order[k] = usize::MAX;
+                k = next;
+            }
+        }
+        if (rank - cycles) % 2 == 1 {
+            sign = -sign;
+        }
+        rows.sort_unstable();
+        for x in kernel.iter_mut() {
+            *x *= sign;
+        }
+        true
+    }
+
     /// The rank the last factorisation found.
     pub fn rank(&self) -> usize {
         self.qr_j.rank()

@@ -296,3 +296,56 @@ fn banded_projection_closes_the_loops_as_the_dense_one() {
     super::residual(&m, &kin, &mut r);
     assert!(r.iter().all(|x| x.abs() < 1e-13), "{r:?}");
 }
+
+#[test]
+fn oriented_kernel_is_the_rows_cross_product_and_reverses_at_the_change_point() {
+    // N-four-bars on the parallel motion (one degree of freedom; the change point at φ = 0):
+    // the kernel is the motion's tangent (1, −1, 1, …), oriented so that det[J_B; kᵀ] > 0
+    // with the kept rows in increasing order (an LU determinant, independent of the QR),
+    // for the dense (pivoted) and the banded QRs alike; that orientation keeps its sign on
+    // either side of φ = 0 and across it takes the sign of the N rows that pass through zero
+    // there (each loop's row along the bars): it reverses for odd N only.
+    for (n, envelope) in [
+        (1, false),
+        (2, false),
+        (3, true),
+        (12, true),
+        (12, false),
+        (13, true),
+    ] {
+        let m = n_fourbar(n);
+        let nv = m.nv;
+        let mut solver = super::LoopSolver::with_envelope(&m, envelope);
+        let (mut rows, mut order) = (Vec::new(), Vec::new());
+        let mut kernel_at = |phi: f64| {
+            let (q, v) = parallel_state(n, phi, 0.3);
+            let mut y: Vec<f64> = q.iter().chain(&v).copied().collect();
+            super::project_state(&m, &mut solver, &mut y).unwrap();
+            let mut k = vec![0.0; nv];
+            assert!(solver.oriented_kernel(&mut k, &mut rows, &mut order));
+            assert_eq!(rows.len(), nv - 1);
+            let mut a = DMatrix::zeros(nv, nv);
+            for (i, &r) in rows.iter().enumerate() {
+                for c in 0..nv {
+                    a[(i, c)] = solver.cons.jacobian[(r, c)];
+                }
+            }
+            for c in 0..nv {
+                a[(nv - 1, c)] = k[c];
+            }
+            assert!(a.determinant() > 0.0, "n = {n}, φ = {phi}");
+            let tangent = 1.0 / (nv as f64).sqrt();
+            for (c, x) in k.iter().enumerate() {
+                let want = if c % 2 == 0 { tangent } else { -tangent };
+                assert!((x.abs() - tangent).abs() < 1e-9 && x * want * k[0].signum() > 0.0);
+            }
+            k
+        };
+        let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+        let (far, near) = (kernel_at(0.4), kernel_at(1e-3));
+        let (below, far_below) = (kernel_at(-1e-3), kernel_at(-0.4));
+        assert!(dot(&far, &near) > 0.99 && dot(&below, &far_below) > 0.99);
+        let across = if n % 2 == 1 { -1.0 } else { 1.0 };
+        assert!(dot(&near, &below) * across > 0.99, "n = {n}: across φ = 0");
+    }
+}

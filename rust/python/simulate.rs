@@ -180,6 +180,7 @@ fn trajectory_dict<'py>(
     )?;
     d.set_item("constraint_drift", traj.constraint_drift)?;
     d.set_item("singular_passage", traj.singular_passage)?;
+    d.set_item("singular_crossings", traj.singular_crossings)?;
     match &traj.power {
         Some(p) => d.set_item("power", power_dict(py, p, n, &traj.effect_labels)?)?,
         None => d.set_item("power", py.None())?,
