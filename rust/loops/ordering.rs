@@ -244,24 +244,36 @@ pub fn profile(model: &Model, position: &[usize]) -> usize {
     total
 }
 
-/// The order for the banded solver: `None` when the model's own is at least as good.
-pub fn choose(model: &Model) -> Option<CoordinateOrder> {
-    let adj = link_graph(model);
-    let links = preorder(model, &cuthill_mckee(&adj))?;
+/// The coordinates of the links in preorder by `rank` (`None` if the tree's links are not
+/// numbered parents first).
+fn laid_out(model: &Model, rank: &[usize]) -> Option<Vec<usize>> {
     let mut order = Vec::with_capacity(model.nv);
-    for &l in &links {
+    for l in preorder(model, rank)? {
         let link = &model.links[l];
         order.extend(link.v_index..link.v_index + link.joint.nv());
     }
-    if order.len() != model.nv {
-        return None;
-    }
-    let position = positions(&order);
+    (order.len() == model.nv).then_some(order)
+}
+
+/// The order for the banded solver: `None` when the model's own is at least as good.
+pub fn choose(model: &Model) -> Option<CoordinateOrder> {
+    let cm = cuthill_mckee(&link_graph(model));
+    // Parents come first in the layout, so the sweep's direction matters (a chain swept
+    // from its far end would put each v_k before the h_k that leads to it): both are tried.
+    let reversed: Vec<usize> = cm.iter().map(|&r| cm.len() - 1 - r).collect();
     let identity: Vec<usize> = (0..model.nv).collect();
-    if profile(model, &position) >= profile(model, &identity) {
-        return None;
+    let mut best = (profile(model, &identity), None);
+    for rank in [cm, reversed] {
+        let Some(order) = laid_out(model, &rank) else {
+            continue;
+        };
+        let p = profile(model, &positions(&order));
+        if p < best.0 {
+            best = (p, Some(order));
+        }
     }
-    let tree_end = tree_ends(model, &position);
+    let order = best.1?;
+    let tree_end = tree_ends(model, &positions(&order));
     Some(CoordinateOrder { order, tree_end })
 }
 

@@ -382,7 +382,7 @@ fn any_numbering_of_a_loop_chain_gets_the_interleaved_band() {
     assert!(super::ordering::profile(&m1, &identity) > 3 * best);
     assert_eq!(band(&m1), best);
     for seed in 1..6 {
-        let (bodies, loops) = shuffled(n, seed * 0x9e37_79b9_7f4a_7c15);
+        let (bodies, loops) = shuffled(n, 0x9e37_79b9_7f4a_7c15_u64.wrapping_mul(seed));
         let (m, _) = n_fourbar_numbered(n, &bodies, &loops);
         assert_eq!(band(&m), best, "{bodies:?}");
     }
@@ -399,7 +399,7 @@ fn reordered_banded_solver_agrees_with_the_dense_one_and_the_interleaved_numberi
     super::project_velocity_like(&m0, &q0, None, &mut v0, &vec![false; m0.nv]).unwrap();
     let (a0, _) = accelerations(&m0, &q0, &v0, true);
     for seed in 1..4 {
-        let (bodies, loops) = shuffled(n, seed * 0x2545_f491_4f6c_dd1d);
+        let (bodies, loops) = shuffled(n, 0x2545_f491_4f6c_dd1d_u64.wrapping_mul(seed));
         let (m, index) = n_fourbar_numbered(n, &bodies, &loops);
         assert!(super::LoopSolver::new(&m).order() != (0..m.nv).collect::<Vec<_>>());
         let (mut q, mut v) = (vec![0.0; m.nv], vec![0.0; m.nv]);
