@@ -7,6 +7,7 @@ error column measures convergence only.
 
     python benches/iftomm.py [--quick] [--only A02,A04]
     python benches/iftomm.py --opensim    # the settings OpenSim's pages report times for
+    python benches/iftomm.py --shuffled   # A02 with other numberings of its bodies
 
 A02 (N = 40) runs DOP853 only, over a range of tolerances (the error must fall as the
 tolerance tightens); RK45 and Radau take minutes there.
@@ -185,9 +186,56 @@ def opensim_table():
                   f"{min(cpu) * 1e3:.1f} ms | {theirs} |", flush=True)
 
 
+def shuffled_table(seeds=3, repeats=2):
+    """A02 (N = 40) with its bodies numbered otherwise than the bundled scene's interleaved
+    v0, h0, v1, ...: every vertical bar first, and random orders (each h_k after its v_k, the
+    loops shuffled too). The banded solver orders the coordinates itself (docs/loops.md §3):
+    CPU time (best of `repeats`) and its ratio to the bundled scene's, DOP853 rtol 1e-10, the
+    benchmark's error (against the exact reduction) and the largest difference of v0's angle
+    from the bundled run's."""
+    from test_loops_ordering import n_fourbar, rods_first, shuffled
+
+    n, rtol = 40, 1e-10
+    _, t, out, ref = a02()
+    cases = [("bundled (interleaved)", None), ("rods first", (rods_first(n), list(range(n))))]
+    cases += [(f"shuffled (seed {s})", shuffled(n, s)) for s in range(seeds)]
+    print("| numbering | profile (model's own) | nfev | CPU | per evaluation | ratio | "
+          "error (spec measure) | max abs diff of v0's angle |")
+    print("|---|---|---|---|---|---|---|---|")
+    base_cpu = base_q = None
+    for label, numbering in cases:
+        if numbering is None:
+            scene, v0_index = pmd.load_scene("iftomm_a02_nfourbar"), 0
+            m = scene.model
+        else:
+            bodies, loops = numbering
+            m = n_fourbar(n, bodies, loops)
+            q0 = [np.pi / 2 if b[0] == "v" else -np.pi / 2 for b in bodies]
+            v0 = [-1.0 if b[0] == "v" else 1.0 for b in bodies]
+            scene = pmd.Scene(m, q0, v0, effects=[pmd.Effect.gravity([0, -G, 0])])
+            v0_index = bodies.index("v0")
+        cpu = []
+        for _ in range(repeats):
+            c0 = time.process_time()
+            res = pmd.simulate(scene, (0, 20), t_eval=t, method="DOP853", rtol=rtol,
+                               atol=rtol * 1e-2, max_steps=2_000_000)
+            cpu.append(time.process_time() - c0)
+        q = np.asarray(res.q)[:, v0_index]
+        best = min(cpu)
+        if base_cpu is None:
+            base_cpu, base_q = best, q
+        info = m.loop_solver_info()
+        print(f"| {label} | {info['profile']} ({info['model_profile']}) | {res.nfev} | "
+              f"{best:.2f} s | {best / res.nfev * 1e6:.0f} µs | {best / base_cpu:.2f} | "
+              f"{measure(out(q[:, None]), ref):.1e} | {np.abs(q - base_q).max():.1e} |",
+              flush=True)
+
+
 def main():
     if "--opensim" in sys.argv:
         return opensim_table()
+    if "--shuffled" in sys.argv:
+        return shuffled_table()
     quick = "--quick" in sys.argv
     only = None
     if "--only" in sys.argv:

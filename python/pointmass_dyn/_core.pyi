@@ -272,6 +272,12 @@ class Model:
         """Velocity-level constraint Jacobian ``J``, shape (nconstraints, nv): ``J v = 0``
         keeps the loops closed. Rows of redundant constraints (a planar loop closed by a
         spatial joint) are zero or dependent."""
+    def loop_solver_info(self) -> dict[str, Any]:
+        """How the loop solver factors this model (docs/loops.md §3): ``banded`` (the banded
+        QRs of long mechanisms, or the dense ones), ``order`` (the v indices in the order the
+        factorisations take them: the model's own unless the banded solver reorders),
+        ``profile`` (the structural work of that order: per cut-joint row, the spans of its
+        ``Jᵀ`` and ``L⁻¹Jᵀ`` columns) and ``model_profile`` (the same for the model's order)."""
     def assemble(
         self,
         q_guess: ArrayLike,

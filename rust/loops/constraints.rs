@@ -409,19 +409,20 @@ pub fn jacobian(model: &Model, kin: &LoopKinematics, jac: &mut DMatrix<f64>) {
     add_jacobian(model, kin, jac);
 }
 
-/// [`jacobian`] into a `jac` that is zero outside each row's coordinates `lo[r]..hi[r]`
-/// (those it can touch: the loop solver's long mechanisms): only those are cleared.
+/// [`jacobian`] into a `jac` that is zero outside each row's coordinates `order[lo[r]..hi[r]]`
+/// (those it can touch, in the loop solver's order): only those are cleared.
 pub(super) fn jacobian_within(
     model: &Model,
     kin: &LoopKinematics,
     jac: &mut DMatrix<f64>,
     lo: &[usize],
     hi: &[usize],
+    order: &[usize],
 ) {
     let m = jac.nrows();
     let data = jac.as_mut_slice();
     for r in 0..m {
-        for c in lo[r]..hi[r] {
+        for &c in &order[lo[r]..hi[r]] {
             data[c * m + r] = 0.0;
         }
     }

@@ -14,6 +14,7 @@ mod constraints;
 pub mod coupling;
 mod derivatives;
 mod factor;
+mod ordering;
 mod solve;
 #[cfg(test)]
 mod tests;
@@ -25,6 +26,8 @@ pub use solve::{
     assemble, check_mobility, constrained_forward_dynamics, constraint_forces, driving_forces,
     project_state, project_velocity_like, LoopSolver,
 };
+
+pub use ordering::Layout;
 
 use crate::error::{Error, Result};
 use crate::joint::Joint;
@@ -211,4 +214,11 @@ impl Model {
         }
         Ok(())
     }
+}
+
+/// The loop solver's layout for `model` (docs/loops.md §3): the banded or dense QRs, and the
+/// order of the coordinates the banded ones take.
+pub fn solver_layout(model: &Model) -> Layout {
+    let solver = LoopSolver::new(model);
+    ordering::layout(model, solver.envelope, solver.order())
 }

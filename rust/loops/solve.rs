@@ -12,6 +12,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::constraints::{self, Constraints, LoopKinematics};
 use super::factor::{self, back_substitute, forward_substitute};
+use super::ordering;
 use crate::error::{Error, Result};
 use crate::linalg::rank_qr::RankQr;
 use crate::model::Model;
@@ -21,8 +22,16 @@ use crate::recursive::{self, Data};
 pub struct LoopSolver {
     pub kin: LoopKinematics,
     pub cons: Constraints,
-    /// The mass matrix, then its Cholesky factor (lower triangle).
+    /// The mass matrix, then its Cholesky factor (lower triangle), in the solver's order.
     mass: DMatrix<f64>,
+    /// The solver's order of the coordinates (banded QRs: `ordering`): `order[i]` is the
+    /// model's v index at position `i`; `J`'s columns, `M`, `L` and `Y` are taken in it.
+    order: Vec<usize>,
+    /// Whether `order` is not the identity: then `M` is formed in `mass_model` and copied
+    /// within each position's tree, `..tree_end[i]`, and the results mapped back.
+    permuted: bool,
+    tree_end: Vec<usize>,
+    mass_model: DMatrix<f64>,
     /// One past the last nonzero row of each column of the Cholesky factor.
     mass_ends: Vec<usize>,
     /// `Jᵀ` of the active rows, factored rank-revealing: the rank and the independent rows,
@@ -32,11 +41,11 @@ pub struct LoopSolver {
     qr_y: RankQr,
     /// Whether the QRs are the banded ones (a long mechanism with a sparse Jacobian).
     pub envelope: bool,
-    /// Each constraint row's nonzero coordinates at the last factorisation: `lo..hi`.
+    /// Each constraint row's nonzero positions at the last factorisation: `lo..hi`.
     row_lo: Vec<usize>,
     row_hi: Vec<usize>,
-    /// The coordinates each row can touch (its cut joint's two paths to the root; all for
-    /// a coupling): `struct_lo..struct_hi`.
+    /// The positions each row can touch (its cut joint's two paths to the root; all for a
+    /// coupling): `struct_lo..struct_hi`.
     struct_lo: Vec<usize>,
     struct_hi: Vec<usize>,
     pub lambda: DVector<f64>,
@@ -45,8 +54,10 @@ pub struct LoopSolver {
     active: Vec<usize>,
     /// m-long scratch (right-hand sides in pivoted order).
     work: Vec<f64>,
-    /// nv-long scratch (a step in v, a column).
+    /// nv-long scratch (a step in v, a column), in the model's order.
     step: Vec<f64>,
+    /// nv-long scratch in the solver's order.
+    pstep: Vec<f64>,
     /// nq-long scratch (q̇ of a step).
     qdot: Vec<f64>,
     /// Rank of the constraint Jacobian at the last solve.
@@ -104,29 +115,6 @@ fn envelope_pays(model: &Model) -> bool {
     4 * touched <= m * n
 }
 
-/// The coordinates each constraint row can touch, `lo[r]..hi[r]`: a cut joint's rows
-/// those of the joints on its two bodies' paths to the root (as `constraints::jacobian`
-/// fills them); a coupling's rows keep the caller's full range.
-fn structural_rows(model: &Model, lo: &mut [usize], hi: &mut [usize]) {
-    let mut r = 0;
-    for lp in &model.loops {
-        let (mut a, mut b) = (model.nv, 0);
-        for body in [lp.body_a, lp.body_b].into_iter().flatten() {
-            let mut next = model.bodies.get(body).and_then(|x| x.link);
-            while let Some(l) = next {
-                let link = &model.links[l];
-                a = a.min(link.v_index);
-                b = b.max(link.v_index + link.joint.nv());
-                next = link.parent;
-            }
-        }
-        for _ in 0..lp.kind().rows() {
-            (lo[r], hi[r]) = (a, b.max(a));
-            r += 1;
-        }
-    }
-}
-
 impl LoopSolver {
     pub fn new(model: &Model) -> Self {
         Self::with_envelope(model, envelope_pays(model))
@@ -135,12 +123,33 @@ impl LoopSolver {
     /// The solver with the banded (`envelope`) or the dense QRs; [`LoopSolver::new`] picks.
     pub fn with_envelope(model: &Model, envelope: bool) -> Self {
         let (m, n) = (model.nconstraints(), model.nv);
+        // The dense QRs' cost does not depend on the order: the model's is kept.
+        let chosen = if envelope {
+            ordering::choose(model)
+        } else {
+            None
+        };
+        let permuted = chosen.is_some();
+        let (order, tree_end) = match chosen {
+            Some(c) => (c.order, c.tree_end),
+            None => ((0..n).collect(), vec![n; n]),
+        };
         let (mut struct_lo, mut struct_hi) = (vec![0; m], vec![n; m]);
-        structural_rows(model, &mut struct_lo, &mut struct_hi);
+        ordering::structural_rows(
+            model,
+            &ordering::inverse(&order),
+            &mut struct_lo,
+            &mut struct_hi,
+        );
+        let side = if permuted { n } else { 0 };
         LoopSolver {
             kin: LoopKinematics::new(model),
             cons: Constraints::new(model),
             mass: DMatrix::zeros(n, n),
+            order,
+            permuted,
+            tree_end,
+            mass_model: DMatrix::zeros(side, side),
             mass_ends: vec![0; n],
             qr_j: RankQr::new(n, m, envelope),
             qr_y: RankQr::new(n, m.min(n), envelope),
@@ -154,6 +163,7 @@ impl LoopSolver {
             active: Vec::with_capacity(m),
             work: vec![0.0; m.max(n)],
             step: vec![0.0; n],
+            pstep: vec![0.0; n],
             qdot: vec![0.0; model.nq],
             rank: 0,
             max_drift: 0.0,
@@ -253,6 +263,7 @@ impl LoopSolver {
             &mut self.cons.jacobian,
             &self.struct_lo,
             &self.struct_hi,
+            &self.order,
         );
     }
 
@@ -261,6 +272,43 @@ impl LoopSolver {
         self.kin.positions(model, q);
         constraints::residual(model, &self.kin, self.cons.residual.as_mut_slice());
         self.cons.residual.amax()
+    }
+
+    /// The solver's order of the coordinates: `order()[i]` is the model's v index at
+    /// position `i` of the factorisations (the identity unless the banded QRs reorder).
+    pub fn order(&self) -> &[usize] {
+        &self.order
+    }
+
+    /// `M` in the solver's order, factored (`Err(k)`: pivot `k` not positive).
+    fn factor_mass(
+        &mut self,
+        model: &Model,
+        data: &mut Data,
+        q: &[f64],
+    ) -> std::result::Result<(), usize> {
+        if !self.permuted {
+            recursive::mass_matrix(model, data, q, &mut self.mass);
+            return factor::cholesky(&mut self.mass, &mut self.mass_ends);
+        }
+        recursive::mass_matrix(model, data, q, &mut self.mass_model);
+        let n = model.nv;
+        let (src, dst) = (self.mass_model.as_slice(), self.mass.as_mut_slice());
+        // The lower triangle within each tree's block: outside, `M` is zero and, the
+        // positions of a tree being contiguous, so is its factor (never written there).
+        for j in 0..n {
+            let pj = self.order[j] * n;
+            for i in j..self.tree_end[j] {
+                dst[j * n + i] = src[pj + self.order[i]];
+            }
+        }
+        let out = factor::cholesky(&mut self.mass, &mut self.mass_ends);
+        // A non-finite entry can spread past a block: cleared for the next call.
+        let spilled = (0..n).find(|&j| self.mass_ends[j] > self.tree_end[j]);
+        if out.is_err() || spilled.is_some() {
+            self.mass.as_mut_slice().fill(0.0);
+        }
+        out.and_then(|()| spilled.map_or(Ok(()), Err))
     }
 
     /// The rows of `J` (as held in `cons.jacobian`) that are not identically zero, then the
@@ -277,12 +325,13 @@ impl LoopSolver {
             row_hi,
             struct_lo,
             struct_hi,
+            order,
             ..
         } = self;
-        // Each row's nonzero coordinates, within those it can touch.
+        // Each row's nonzero positions, within those it can touch.
         let j = cons.jacobian.as_slice();
         for r in 0..m {
-            let nonzero = |&c: &usize| j[c * m + r] != 0.0;
+            let nonzero = |&c: &usize| j[order[c] * m + r] != 0.0;
             let mut range = struct_lo[r]..struct_hi[r];
             row_lo[r] = range.clone().find(nonzero).unwrap_or(n);
             row_hi[r] = range.rfind(nonzero).map_or(0, |c| c + 1);
@@ -290,7 +339,7 @@ impl LoopSolver {
         active.clear();
         active.extend((0..m).filter(|&r| row_hi[r] > 0));
         if self.envelope {
-            // By the last coordinate touched: a chain of loops gives a banded Jᵀ.
+            // By the last position touched: with the solver's order, a banded Jᵀ.
             active.sort_unstable_by_key(|&r| (row_hi[r], row_lo[r], r));
         }
         let mut largest: f64 = 0.0;
@@ -300,7 +349,7 @@ impl LoopSolver {
             col.fill(0.0);
             let mut s = 0.0;
             for c in row_lo[r]..row_hi[r] {
-                let x = j[c * m + r];
+                let x = j[order[c] * m + r];
                 col[c] = x;
                 s += x * x;
             }
@@ -344,8 +393,7 @@ pub fn constrained_forward_dynamics(
     } else {
         solver.constraints_at(model, q, Some(v))
     };
-    recursive::mass_matrix(model, data, q, &mut solver.mass);
-    if let Err(k) = factor::cholesky(&mut solver.mass, &mut solver.mass_ends) {
+    if let Err(k) = solver.factor_mass(model, data, q) {
         return Err(Error::Singular(format!(
             "the mass matrix is not positive definite (pivot {k}): a massless chain, or a body too slender"
         )));
@@ -370,7 +418,8 @@ pub fn constrained_forward_dynamics(
         active,
         row_lo,
         row_hi,
-        step,
+        pstep,
+        order,
         ..
     } = solver;
     let m = cons.jacobian.nrows();
@@ -381,8 +430,8 @@ pub fn constrained_forward_dynamics(
         col.fill(0.0);
         let mut ja = 0.0;
         for c in row_lo[r]..row_hi[r] {
-            col[c] = j[c * m + r];
-            ja += col[c] * a[c];
+            col[c] = j[order[c] * m + r];
+            ja += col[c] * a[order[c]];
         }
         work[k] = -cons.gamma[r] - ja;
         let end = forward_substitute(mass, mass_ends, col, row_lo[r], row_hi[r]);
@@ -399,15 +448,15 @@ pub fn constrained_forward_dynamics(
     }
     // Y_Bᵀ z = b for z in range(Y_B): z = Q R⁻ᵀ b; λ_B = R⁻¹ R⁻ᵀ b (Y_B λ_B = z).
     qr_y.solve_rt(work);
-    qr_y.apply_q(work, step);
+    qr_y.apply_q(work, pstep);
     qr_y.solve_r(work);
     lambda.fill(0.0);
     for k in 0..rank {
         lambda[active[qr_j.perm()[k]]] = work[k];
     }
-    back_substitute(mass, mass_ends, step);
-    for (ai, si) in a.iter_mut().zip(step.iter()) {
-        *ai += si;
+    back_substitute(mass, mass_ends, pstep);
+    for (&c, si) in order.iter().zip(pstep.iter()) {
+        a[c] += si;
     }
     Ok(())
 }
@@ -426,7 +475,8 @@ pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: 
         qr_j,
         qr_y,
         work,
-        step,
+        pstep,
+        order,
         active,
         rank,
         ..
@@ -437,17 +487,30 @@ pub(super) fn constrained_correction(solver: &mut LoopSolver, x: &mut [f64], b: 
         work[k] = b[r] - jx;
     }
     qr_y.solve_rt(work);
-    qr_y.apply_q(work, step);
-    back_substitute(mass, mass_ends, step);
-    for (xi, si) in x.iter_mut().zip(step.iter()) {
-        *xi += si;
+    qr_y.apply_q(work, pstep);
+    back_substitute(mass, mass_ends, pstep);
+    for (&c, si) in order.iter().zip(pstep.iter()) {
+        x[c] += si;
     }
 }
 
 /// `x = M⁻¹ x` with the Cholesky factor of the last [`constrained_forward_dynamics`].
-pub(super) fn mass_solve(solver: &LoopSolver, x: &mut [f64]) {
-    forward_substitute(&solver.mass, &solver.mass_ends, x, 0, x.len());
-    back_substitute(&solver.mass, &solver.mass_ends, x);
+pub(super) fn mass_solve(solver: &mut LoopSolver, x: &mut [f64]) {
+    let LoopSolver {
+        mass,
+        mass_ends,
+        pstep,
+        order,
+        ..
+    } = solver;
+    for (p, &c) in pstep.iter_mut().zip(order.iter()) {
+        *p = x[c];
+    }
+    forward_substitute(mass, mass_ends, pstep, 0, x.len());
+    back_substitute(mass, mass_ends, pstep);
+    for (p, &c) in pstep.iter().zip(order.iter()) {
+        x[c] = *p;
+    }
 }
 
 fn locked(model: &Model, rank: usize) -> Error {
@@ -501,13 +564,18 @@ pub fn constraint_forces(
             jt[(c, k)] = cons.jacobian[(r, c)];
         }
     }
-    // M Δa = L (Lᵀ Δa).
-    let mut b: Vec<f64> = (0..n).map(|c| a[c] - a_tree[c]).collect();
+    // M Δa = L (Lᵀ Δa), in the solver's order.
+    let order = &solver.order;
+    let mut p: Vec<f64> = order.iter().map(|&c| a[c] - a_tree[c]).collect();
     for i in 0..n {
-        b[i] = (i..n).map(|k| mass[(k, i)] * b[k]).sum();
+        p[i] = (i..n).map(|k| mass[(k, i)] * p[k]).sum();
     }
     for i in (0..n).rev() {
-        b[i] = (0..=i).map(|k| mass[(i, k)] * b[k]).sum();
+        p[i] = (0..=i).map(|k| mass[(i, k)] * p[k]).sum();
+    }
+    let mut b = vec![0.0; n];
+    for (&c, x) in order.iter().zip(&p) {
+        b[c] = *x;
     }
     let mut x = vec![0.0; na];
     let (mut pivots, mut work) = (vec![0; na], vec![0.0; na.max(n)]);
@@ -620,6 +688,8 @@ fn min_norm_step(solver: &mut LoopSolver, residual: f64) -> usize {
         rhs,
         work,
         step,
+        pstep,
+        order,
         active,
         ..
     } = solver;
@@ -627,7 +697,10 @@ fn min_norm_step(solver: &mut LoopSolver, residual: f64) -> usize {
         work[k] = -rhs[active[qr_j.perm()[k]]];
     }
     qr_j.solve_rt(work);
-    qr_j.apply_q(work, step);
+    qr_j.apply_q(work, pstep);
+    for (&c, p) in order.iter().zip(pstep.iter()) {
+        step[c] = *p;
+    }
     rank
 }
 
@@ -815,8 +888,9 @@ pub fn project_state(
     let m = solver.rhs.len();
     let j = solver.cons.jacobian.as_slice();
     for r in 0..m {
-        solver.rhs[r] = (solver.struct_lo[r]..solver.struct_hi[r])
-            .map(|c| j[c * m + r] * v[c])
+        solver.rhs[r] = solver.order[solver.struct_lo[r]..solver.struct_hi[r]]
+            .iter()
+            .map(|&c| j[c * m + r] * v[c])
             .sum();
     }
     min_norm_step(solver, norm);

@@ -349,3 +349,132 @@ fn oriented_kernel_is_the_rows_cross_product_and_reverses_at_the_change_point() 
         assert!(dot(&near, &below) * across > 0.99, "n = {n}: across φ = 0");
     }
 }
+
+/// The N-four-bar with its bodies added in `bodies`' order (logical body `2k` is v_k,
+/// `2k + 1` is h_k; each after its parent) and its loops in `loops`' order. Returns the
+/// model and each logical body's index (= its coordinate).
+fn n_fourbar_numbered(n: usize, bodies: &[usize], loops: &[usize]) -> (Model, Vec<usize>) {
+    let i = 1.0 / 12.0;
+    let rod = || {
+        RigidBody::new(
+            1.0,
+            Vec3::new(0.5, 0.0, 0.0),
+            Mat3::from_diagonal(&Vec3::new(1e-8, i, i)),
+        )
+        .unwrap()
+    };
+    let mut index = vec![usize::MAX; 2 * n + 1];
+    let mut m = Model::new();
+    let at = |x: f64| Placement::new(Mat3::identity(), Vec3::new(x, 0.0, 0.0));
+    let z = Joint::Revolute { axis: Vec3::z() };
+    for (k, &b) in bodies.iter().enumerate() {
+        let (parent, x) = if b % 2 == 0 {
+            (None, (b / 2) as f64)
+        } else {
+            (Some(index[b - 1]), 1.0)
+        };
+        m.add_body(rod(), z, parent, at(x), None, None).unwrap();
+        index[b] = k;
+    }
+    for &k in loops {
+        let (a, b) = (index[2 * k + 1], index[2 * k + 2]);
+        m.add_loop(Some(a), Some(b), z, at(1.0), at(1.0), None)
+            .unwrap();
+    }
+    (m, index)
+}
+
+/// A pseudo-random order of the N-four-bar's bodies with each h_k after its v_k, and of its
+/// loops.
+fn shuffled(n: usize, seed: u64) -> (Vec<usize>, Vec<usize>) {
+    let mut state = seed | 1;
+    let mut next = |below: usize| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state % below as u64) as usize
+    };
+    let mut ready: Vec<usize> = (0..=n).map(|k| 2 * k).collect();
+    let mut bodies = Vec::new();
+    while !ready.is_empty() {
+        let b = ready.swap_remove(next(ready.len()));
+        bodies.push(b);
+        if b % 2 == 0 && b < 2 * n {
+            ready.push(b + 1);
+        }
+    }
+    let mut loops: Vec<usize> = (0..n).collect();
+    for i in (1..n).rev() {
+        loops.swap(i, next(i + 1));
+    }
+    (bodies, loops)
+}
+
+#[test]
+fn any_numbering_of_a_loop_chain_gets_the_interleaved_band() {
+    let n = 12;
+    let interleaved: Vec<usize> = (0..=2 * n).collect();
+    let in_order: Vec<usize> = (0..n).collect();
+    let rods_first: Vec<usize> = (0..=n)
+        .map(|k| 2 * k)
+        .chain((0..n).map(|k| 2 * k + 1))
+        .collect();
+    let band = |m: &Model| {
+        let solver = super::LoopSolver::new(m);
+        assert!(solver.envelope);
+        super::ordering::profile(m, &super::ordering::inverse(solver.order()))
+    };
+    let (m0, _) = n_fourbar_numbered(n, &interleaved, &in_order);
+    let best = band(&m0);
+    // Each loop's rows touch three joints, adjacent at best (5 rows, J's span 3), and Y's
+    // reach the end of v_(k+1)'s tree (span 4; 3 for the last loop: v_n has no h_n).
+    assert_eq!(best, 5 * (n * (3 + 4) - 1));
+    let identity: Vec<usize> = (0..m0.nv).collect();
+    let (m1, _) = n_fourbar_numbered(n, &rods_first, &in_order);
+    // The model's own order would be a band of width ~n.
+    assert!(super::ordering::profile(&m1, &identity) > 3 * best);
+    assert_eq!(band(&m1), best);
+    for seed in 1..6 {
+        let (bodies, loops) = shuffled(n, 0x9e37_79b9_7f4a_7c15_u64.wrapping_mul(seed));
+        let (m, _) = n_fourbar_numbered(n, &bodies, &loops);
+        assert_eq!(band(&m), best, "{bodies:?}");
+    }
+}
+
+#[test]
+fn reordered_banded_solver_agrees_with_the_dense_one_and_the_interleaved_numbering() {
+    let n = 12;
+    let interleaved: Vec<usize> = (0..=2 * n).collect();
+    let in_order: Vec<usize> = (0..n).collect();
+    let (q0, _) = parallel_state(n, 0.4, 0.0);
+    let (m0, _) = n_fourbar_numbered(n, &interleaved, &in_order);
+    let mut v0: Vec<f64> = (0..m0.nv).map(|k| (k as f64 * 1.7).sin()).collect();
+    super::project_velocity_like(&m0, &q0, None, &mut v0, &vec![false; m0.nv]).unwrap();
+    let (a0, _) = accelerations(&m0, &q0, &v0, true);
+    for seed in 1..4 {
+        let (bodies, loops) = shuffled(n, 0x2545_f491_4f6c_dd1d_u64.wrapping_mul(seed));
+        let (m, index) = n_fourbar_numbered(n, &bodies, &loops);
+        assert!(super::LoopSolver::new(&m).order() != (0..m.nv).collect::<Vec<_>>());
+        let (mut q, mut v) = (vec![0.0; m.nv], vec![0.0; m.nv]);
+        for (b, &i) in index.iter().enumerate() {
+            (q[i], v[i]) = (q0[b], v0[b]);
+        }
+        let (banded, rank_b) = accelerations(&m, &q, &v, true);
+        let (dense, rank_d) = accelerations(&m, &q, &v, false);
+        assert_eq!((rank_b, rank_d), (2 * n, 2 * n));
+        for (b, &i) in index.iter().enumerate() {
+            let scale = 1.0 + a0[b].abs();
+            assert!((banded[i] - dense[i]).abs() < 1e-9 * scale, "{seed} {b}");
+            assert!((banded[i] - a0[b]).abs() < 1e-9 * scale, "{seed} {b}");
+        }
+        // The projection maps its steps back to the model's coordinates.
+        let mut y: Vec<f64> = q.iter().chain(&v).map(|x| x + 1e-7).collect();
+        let mut solver = super::LoopSolver::new(&m);
+        super::project_state(&m, &mut solver, &mut y).unwrap();
+        let mut kin = super::LoopKinematics::new(&m);
+        kin.positions(&m, &y[..m.nq]);
+        let mut r = vec![0.0; m.nconstraints()];
+        super::residual(&m, &kin, &mut r);
+        assert!(r.iter().all(|x| x.abs() < 1e-13), "{r:?}");
+    }
+}

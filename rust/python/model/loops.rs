@@ -1,6 +1,7 @@
 //! `Model`'s closed loops: cut joints, their residuals and Jacobian, assembly, and the cut
 //! joints' forces.
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use super::{external_wrenches, gravity_arg, load_state, load_x, rename, PyModel};
 use crate::loops;
@@ -99,6 +100,18 @@ impl PyModel {
         loops::jacobian(&model, &kin, &mut j);
         check_result(py, "constraint_jacobian", j.as_slice())?;
         dmatrix_to_array(py, &j)
+    }
+
+    /// How the loop solver factors this model: banded or dense QRs, its order of the
+    /// coordinates and that order's structural profile (docs/loops.md §3).
+    fn loop_solver_info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let layout = loops::solver_layout(&self.model());
+        let out = PyDict::new(py);
+        out.set_item("banded", layout.banded)?;
+        out.set_item("order", layout.order)?;
+        out.set_item("profile", layout.profile)?;
+        out.set_item("model_profile", layout.model_profile)?;
+        Ok(out)
     }
 
     /// The closed configuration nearest `q_guess`, the coordinates in `fixed` held.
