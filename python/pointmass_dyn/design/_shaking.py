@@ -23,6 +23,7 @@ import numpy as np
 from .. import _core
 from .._helpers import attach_partial, peak, rms, sample_count, scene_gravity, stop_reason
 from ..errors import InvalidInputError
+from ..plotting import coordinate_units
 
 
 @dataclass(frozen=True)
@@ -150,8 +151,6 @@ class MotionAnalysis:
     def units(self) -> dict[str, str]:
         """The unit of each :meth:`summary` entry: N for forces, N·m for the shaking moment
         and for the driving torque of an angular speed."""
-        from ..plotting import coordinate_units  # plotting imports matplotlib only when drawing
-
         speed = coordinate_units(self.model)[1]
         cols = self.actuated if self.actuated is not None else range(self.tau.shape[1])
         out = {"shaking force": "N", "shaking moment": "N·m"}
