@@ -300,3 +300,34 @@ pub fn layout(model: &Model, banded: bool, order: &[usize]) -> Layout {
         model_profile: profile(model, &identity),
     }
 }
+
+/// Fewest speeds for the banded QRs: below, the dense ones cost microseconds anyway, and
+/// their column pivoting picks the best-conditioned independent rows.
+pub const ENVELOPE_MIN_NV: usize = 24;
+
+/// Whether the banded QRs pay: a long mechanism whose constraint rows touch at most a
+/// quarter of the coordinates on average (structurally: a cut joint's rows touch the joints
+/// on its two bodies' paths to the root, a coupling's two).
+pub(super) fn envelope_pays(model: &Model) -> bool {
+    let (m, n) = (model.nconstraints(), model.nv);
+    if n < ENVELOPE_MIN_NV || m == 0 {
+        return false;
+    }
+    let mut seen = vec![usize::MAX; model.links.len()];
+    let mut touched = 2 * model.couplings.len();
+    for (k, lp) in model.loops.iter().enumerate() {
+        let mut cols = 0;
+        for body in [lp.body_a, lp.body_b].into_iter().flatten() {
+            let mut next = model.bodies.get(body).and_then(|b| b.link);
+            while let Some(l) = next {
+                if seen[l] != k {
+                    seen[l] = k;
+                    cols += model.links[l].joint.nv();
+                }
+                next = model.links[l].parent;
+            }
+        }
+        touched += cols * lp.kind().rows();
+    }
+    4 * touched <= m * n
+}
