@@ -29,7 +29,7 @@ import numpy as np
 
 from . import _core
 from ._core import Scene
-from ._helpers import interrupt_reason, interrupted_message
+from ._helpers import float_array, interrupt_reason, interrupted_message
 from ._simulation import SimulationResult
 from .errors import (
     InvalidInputError,
@@ -66,19 +66,9 @@ class BatchResult:
         return len(self.results)
 
 
-def _floats(name: str, value: Any) -> np.ndarray:
-    """``params[name]`` as a float array, or an error naming it (not NumPy's ValueError)."""
-    try:
-        return np.asarray(value, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(
-            f"params['{name}']: expected numbers, one value per run, got {value!r:.80}"
-        ) from exc
-
-
 def _rows(name: str, value: Any, count: int | None, shape: tuple[int, ...]) -> np.ndarray:
     """``value`` as B rows of ``shape`` (B from the first such argument)."""
-    arr = _floats(name, value)
+    arr = float_array(f"params['{name}']", value, "numbers, one value per run")
     if arr.ndim == len(shape):
         arr = arr[None]
     if arr.shape[1:] != shape or (count is not None and arr.shape[0] != count):
@@ -171,7 +161,7 @@ def scenes_from_params(scene: Scene, params: dict[str, Any]) -> list[Scene]:
     count = None
     per = {}
     for key, value in params.items():
-        arr = _floats(key, value)
+        arr = float_array(f"params['{key}']", value, "numbers, one value per run")
         if arr.ndim == 0:
             raise InvalidInputError(f"params['{key}']: expected one value per run, got a scalar")
         if count is None:

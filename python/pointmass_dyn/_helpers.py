@@ -77,6 +77,17 @@ def quaternion_slices(model) -> list[slice]:
     return out
 
 
+def float_array(arg: str, x, expected: str = "an array of real numbers") -> np.ndarray:
+    """``x`` as a float array, or an :class:`InvalidInputError` naming ``arg`` (not NumPy's
+    ValueError for a string or TypeError for an object it cannot read)."""
+    try:
+        return np.asarray(x, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidInputError(
+            f"{arg}: expected {expected}, got {type(x).__name__} {x!r:.60}"
+        ) from exc
+
+
 def sample_count(name: str, value, lowest: int = 1, largest: int = 10_000_000) -> int:
     """``value`` as a whole number of samples in [lowest, largest], or our error naming ``name``.
 

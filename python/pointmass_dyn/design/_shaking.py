@@ -21,7 +21,15 @@ from typing import Any, Callable
 import numpy as np
 
 from .. import _core
-from .._helpers import attach_partial, peak, rms, sample_count, scene_gravity, stop_reason
+from .._helpers import (
+    attach_partial,
+    float_array,
+    peak,
+    rms,
+    sample_count,
+    scene_gravity,
+    stop_reason,
+)
 from ..errors import InvalidInputError
 from ..plotting import coordinate_units
 
@@ -259,24 +267,13 @@ def _reporter(progress, total: int, scale: int = 1):
     return report
 
 
-def _reals(name: str, x) -> np.ndarray:
-    """``x`` as a float array, or an :class:`InvalidInputError` naming ``name`` (NumPy's
-    ValueError for a string, TypeError for an object it cannot read)."""
-    try:
-        return np.asarray(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InvalidInputError(
-            f"{name}: expected an array of real numbers, got {type(x).__name__} {x!r:.60}"
-        ) from exc
-
-
 def _state_rows(model, t, q, v, a):
     """``t`` (N,) finite, and ``q``, ``v``, ``a`` as (N, nq), (N, nv), (N, nv): one state per
     time; anything else is an :class:`InvalidInputError` naming the array and both shapes."""
     for name, x in (("t", t), ("q", q), ("v", v), ("a", a)):
         if np.iscomplexobj(x):  # NumPy would drop the imaginary part with only a warning
             raise InvalidInputError(f"{name}: expected real numbers, got complex values")
-    t = _reals("t", t)
+    t = float_array("t", t)
     if t.ndim != 1 or len(t) == 0 or not np.all(np.isfinite(t)):
         raise InvalidInputError(
             f"t: expected a non-empty 1-D array of finite times, got shape {t.shape}"
@@ -285,7 +282,7 @@ def _state_rows(model, t, q, v, a):
     n = len(t)
     out = [t]
     for name, x, width in (("q", q, model.nq), ("v", v, model.nv), ("a", a, model.nv)):
-        x = _reals(name, x)
+        x = float_array(name, x)
         if x.ndim == 1 and n == 1:
             x = x.reshape(1, -1)
         if x.shape != (n, width):
