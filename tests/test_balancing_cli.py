@@ -132,7 +132,7 @@ def test_pareto_front(tmp_path, capsys):
             "--plot", str(png), "--out", str(out)]
     assert cli.main(args) == 0
     text = capsys.readouterr().out
-    assert "Pareto front, 3 balances" in text
+    assert "Pareto front, 3 balances of 3" in text
     header, rows = read_rows(out)
     assert header == ["weight_force", "weight_moment", "rms_force", "rms_moment", "mass_added"]
     data = np.array(rows, dtype=float)
