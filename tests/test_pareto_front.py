@@ -2,9 +2,8 @@
 §5, each point's figures recomputed here from its design's analysis along the motion."""
 
 import numpy as np
-import pytest
-
 import pointmass_dyn as pmd
+import pytest
 
 REL = 1e-6  # of each objective's unbalanced value: far above solver and re-analysis error
 

@@ -9,7 +9,7 @@ driving torque, bearing forces and mass — a convex program (QP or SOCP) solved
 """
 
 from ._balance import Balance, Counterweight
-from ._front import ParetoFront, analysed_value, pareto_front
+from ._front import TIE_WEIGHT, ParetoFront, analysed_value, pareto_front
 from ._problem import OBJECTIVES, balance, objective_value
 from ._shaking import MotionAnalysis, Shaking, analyze_motion, prescribed_motion, shaking
 from ._shapes import LinkShape, Shape, read_stl
@@ -17,6 +17,7 @@ from ._write import write_scene, write_urdf
 
 __all__ = [
     "OBJECTIVES",
+    "TIE_WEIGHT",
     "Balance",
     "Counterweight",
     "LinkShape",

@@ -18,10 +18,12 @@ from ._balance import Balance
 from ._problem import MAX_PARETO_POINTS, balance, objective_value
 from ._shaking import MotionAnalysis
 
-#: Weight of the other objective (relative to its value before the design) that makes an
-#: end or an ε-constrained point properly Pareto-optimal instead of only weakly: small enough
-#: to move the first objective by at most this fraction of the second's unbalanced value.
-TIE_WEIGHT = 1e-4
+#: Weight of the other objective (both relative to their values before the design) that
+#: makes an end or an ε-constrained point properly Pareto-optimal instead of only weakly. It
+#: can raise the first objective (relative) by at most this times the second's (relative)
+#: value there, their squares in an RMS program (which weights mean squares): 6e-5 of the
+#: unbalanced RMS force at the four-bar's force-balanced end (tests/test_balancing.py).
+TIE_WEIGHT = 1e-5
 #: Two figures closer than this fraction of the objective's scale (its value before the
 #: design, or the largest on the front) count as equal: the solver's and the re-analysis'
 #: accuracy is far finer (gap 1e-10, round-off), a real trade-off far coarser.
