@@ -386,6 +386,11 @@ def balance(
             "status": sol["status"],
             "gap_abs": float(sol["gap_abs"]),
             "gap_rel": float(sol["gap_rel"]),
+            # Every stage's certificate: the optimum, then (least_mass) the least mass.
+            "stages": [
+                {"stage": stage, "status": st, "gap_abs": float(ga), "gap_rel": float(gr)}
+                for stage, (st, ga, gr) in zip(("optimum", "least mass"), sol["stages"])
+            ],
             "iterations": int(sol["iterations"]),
             "rounds": int(sol["rounds"]),
             "solve_time": float(sol["solve_time"]),
