@@ -132,12 +132,13 @@ def test_pareto_front(tmp_path, capsys):
             "--plot", str(png), "--out", str(out)]
     assert cli.main(args) == 0
     text = capsys.readouterr().out
-    assert "Pareto front, 3 balances" in text
+    assert "Pareto front, 3 balances of 3" in text
     header, rows = read_rows(out)
     assert header == ["weight_force", "weight_moment", "rms_force", "rms_moment", "mass_added"]
     data = np.array(rows, dtype=float)
     assert data.shape == (3, 5)
-    np.testing.assert_allclose(data[:, 1], [0.0, 0.5, 1.0], rtol=1e-5, atol=1e-9)
+    # The ends weight the other objective 1e-5 (pmd.design.TIE_WEIGHT): ties broken by it.
+    np.testing.assert_allclose(data[:, 1], [0.0, 0.5, 1.0], rtol=0, atol=2e-5)
     # Along the front the force rises and the moment falls.
     assert np.all(np.diff(data[:, 2]) > 0) and np.all(np.diff(data[:, 3]) < 0)
     assert is_png(png)

@@ -922,5 +922,6 @@ def design_pins(model: Model, body: int | str) -> list[tuple[_Array, _Array]]:
 
 def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
     """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
-    ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel``,
-    ``iterations``, ``solve_time``."""
+    ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel`` (the last
+    stage's), ``stages`` (each stage's ``(status, gap_abs, gap_rel)``: the optimum, then the
+    least mass), ``iterations``, ``rounds``, ``solve_time``."""

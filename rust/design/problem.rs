@@ -78,6 +78,9 @@ pub struct Solution {
     pub solve_time: f64,
     /// Programs solved: one per stage for RMS, one per cutting-plane round for peak.
     pub rounds: u32,
+    /// Each stage's certificate (the optimum, then the least mass): status, absolute and
+    /// relative duality gap of its last program. `status`/`gap_*` above are the last stage's.
+    pub stages: Vec<(String, f64, f64)>,
 }
 
 /// Each quantity's value at `δ` in `norm` (absolute units).
@@ -263,6 +266,7 @@ pub fn solve_outcome(problem: &Problem) -> Result<Outcome> {
             second.iterations += first.iterations;
             second.solve_time += first.solve_time;
             second.rounds += first.rounds;
+            second.stages = [first.stages, second.stages].concat();
             Ok(Outcome::Solved(second))
         }
         // The second solve only refines; its failure leaves the optimum found.
@@ -274,11 +278,13 @@ pub fn solve_outcome(problem: &Problem) -> Result<Outcome> {
 fn solution(problem: &Problem, raw: Raw, rounds: u32) -> Solution {
     let (nx, nd) = (problem.lower.len(), problem.ndelta);
     let delta = raw.z[nx..nx + nd].to_vec();
+    let status = format!("{:?}", raw.status);
     Solution {
         values: values(problem, &delta),
         x: raw.z[..nx].to_vec(),
         delta,
-        status: format!("{:?}", raw.status),
+        stages: vec![(status.clone(), raw.gap_abs, raw.gap_rel)],
+        status,
         objective: raw.objective,
         gap_abs: raw.gap_abs,
         gap_rel: raw.gap_rel,

@@ -292,6 +292,7 @@ pub fn design_solve<'py>(
     d.set_item("objective", sol.objective)?;
     d.set_item("gap_abs", sol.gap_abs)?;
     d.set_item("gap_rel", sol.gap_rel)?;
+    d.set_item("stages", sol.stages)?;
     d.set_item("iterations", sol.iterations)?;
     d.set_item("rounds", sol.rounds)?;
     d.set_item("solve_time", sol.solve_time)?;

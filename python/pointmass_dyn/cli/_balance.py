@@ -364,7 +364,7 @@ def cmd_balance(args) -> int:
         # The driving force is a torque (N·m) for a revolute driver, a force (N) for a slider.
         u = {"force": "N", "moment": "N·m", "torque": "N·m" if revolute else "N",
              "bearing": "N", "mass": "kg"}
-        print(f"Pareto front, {count} balances (RMS over the cycle; unbalanced: {first} "
+        print(f"Pareto front, {len(front)} balances of {count} (RMS over the cycle; unbalanced: {first} "
               f"{objective_rms(motion, first):.5g} {u[first]}, {second} "
               f"{objective_rms(motion, second):.5g} {u[second]})")
         print(f"{'w ' + first:>10}{'w ' + second:>10}{f'RMS {first} ({u[first]})':>20}"

@@ -18,7 +18,6 @@ from ..design import (
     Counterweight,
     LinkShape,
     balance,
-    objective_value,
     pareto_front,
     prescribed_motion,
 )
@@ -245,11 +244,11 @@ def _front(motion, spec, kwargs, out: Path) -> None:
     count = _spec_number(pareto, "count", 11, int, "[pareto]")
     method = pareto.get("method", "weighted")
     front = pareto_front(motion, names, count, method=method, **kwargs)
-    rows = [[objective_value(b, names[0]), objective_value(b, names[1]), float(np.sum(b.masses))]
-            for b in front]
+    # The figures re-analysed along the motion (repeated and dominated points dropped).
+    rows = [[float(v[0]), float(v[1]), float(np.sum(b.masses))] for b, v in zip(front, front.values)]
     units = [_objective_unit(motion, n) for n in names]
     print(f"Pareto front ({method}, {kwargs['norm']}): {names[0]} ({units[0]}) / "
-          f"{names[1]} ({units[1]})")
+          f"{names[1]} ({units[1]}); {len(front.dropped)} of {count} dropped (repeated or dominated)")
     for r in rows:
         print(f"  {r[0]:>13.6g} {units[0]:<6}{r[1]:>13.6g} {units[1]:<6}  "
               f"design mass {r[2]:.6g} kg")

@@ -9,20 +9,24 @@ driving torque, bearing forces and mass — a convex program (QP or SOCP) solved
 """
 
 from ._balance import Balance, Counterweight
-from ._problem import OBJECTIVES, balance, objective_value, pareto_front
+from ._front import TIE_WEIGHT, ParetoFront, analysed_value, pareto_front
+from ._problem import OBJECTIVES, balance, objective_value
 from ._shaking import MotionAnalysis, Shaking, analyze_motion, prescribed_motion, shaking
 from ._shapes import LinkShape, Shape, read_stl
 from ._write import write_scene, write_urdf
 
 __all__ = [
     "OBJECTIVES",
+    "TIE_WEIGHT",
     "Balance",
     "Counterweight",
     "LinkShape",
     "MotionAnalysis",
+    "ParetoFront",
     "Shape",
     "Shaking",
     "analyze_motion",
+    "analysed_value",
     "balance",
     "objective_value",
     "pareto_front",

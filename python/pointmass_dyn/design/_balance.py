@@ -112,7 +112,8 @@ class Balance:
     #: Designed link shapes by body name (:class:`~pointmass_dyn.Shape`).
     shapes: dict = field(default_factory=dict)
     #: The conic solver's report: status, duality gaps, iterations, times, the values it
-    #: predicts in the problem's norm and those before.
+    #: predicts in the problem's norm and those before; ``stages``: each stage's status and
+    #: gaps (the optimum, then the least mass among the optima).
     solver: dict = field(default_factory=dict)
 
     def write_scene(self, source: Any, path: Any) -> Any:

@@ -386,6 +386,11 @@ def balance(
             "status": sol["status"],
             "gap_abs": float(sol["gap_abs"]),
             "gap_rel": float(sol["gap_rel"]),
+            # Every stage's certificate: the optimum, then (least_mass) the least mass.
+            "stages": [
+                {"stage": stage, "status": st, "gap_abs": float(ga), "gap_rel": float(gr)}
+                for stage, (st, ga, gr) in zip(("optimum", "least mass"), sol["stages"])
+            ],
             "iterations": int(sol["iterations"]),
             "rounds": int(sol["rounds"]),
             "solve_time": float(sol["solve_time"]),
@@ -472,60 +477,6 @@ def _build(motion, var: _Variables, x, phi, designed) -> Balance:
     )
 
 
-def pareto_front(
-    motion: MotionAnalysis,
-    objectives: tuple[str, str] = ("force", "moment"),
-    count: int = 11,
-    progress: Callable[[str], Any] | None = None,
-    method: str = "weighted",
-    **kwargs,
-) -> list[Balance]:
-    """Designs trading two objectives, each Pareto-optimal.
-
-    ``method="weighted"``: weights ``(1 − s, s)`` for ``s`` from 0 to 1 in ``count`` steps
-    (each a :func:`balance` with those weights). ``method="epsilon"``: the ε-constraint
-    method — the two objectives' own optima as the ends, and ``count − 2`` levels ε of the
-    second evenly between its values there, each design minimising the first objective
-    with the second limited to ε (``limits``, in the chosen ``norm``; for
-    ``"mass"``, kg of design material); it also reaches the non-convex-looking parts of a
-    front that weights skip, and spaces the points along the second objective. Other
-    arguments are passed on to :func:`balance`. Interrupted (Ctrl-C) or failing at a point,
-    the exception carries the points already solved as ``.result`` (a list, in order)."""
-    if "objective" in kwargs:
-        raise InvalidInputError(
-            "objective: pareto_front sets the weights itself; give the two objectives as "
-            "`objectives` (and equalities as `zero`)"
-        )
-    if (isinstance(count, bool) or not isinstance(count, (int, np.integer))
-            or not 2 <= count <= MAX_PARETO_POINTS):
-        raise InvalidInputError(
-            f"count: expected an integer in [2, {MAX_PARETO_POINTS}] (one program each), got {count!r}"
-        )
-    if (
-        not isinstance(objectives, (tuple, list))
-        or len(objectives) != 2
-        or objectives[0] == objectives[1]
-    ):
-        raise InvalidInputError(f"objectives: expected two different objectives, got {objectives!r}")
-    if method not in ("weighted", "epsilon"):
-        raise InvalidInputError(f"method: expected 'weighted' or 'epsilon', got {method!r}")
-    first, second = objectives
-    _check_progress(progress)
-    say = progress or (lambda _s: None)
-    if method == "epsilon":
-        return _epsilon_front(motion, first, second, int(count), say, kwargs)
-    out: list[Balance] = []
-    try:
-        for k, s in enumerate(np.linspace(0.0, 1.0, int(count))):
-            say(f"Pareto point {k + 1}/{count}")
-            out.append(balance(motion, objective={first: 1.0 - s, second: s}, **kwargs))
-    except BaseException as exc:
-        # An interrupt or a failing point keeps the points already solved (in order).
-        exc.result = out
-        raise
-    return out
-
-
 def objective_value(b: Balance, name: str) -> float:
     """A design's value of objective ``name`` in its problem's norm (absolute units; kg of
     design material for ``"mass"``)."""
@@ -546,30 +497,3 @@ def objective_value(b: Balance, name: str) -> float:
         raise InvalidInputError(f"name: expected one of {OBJECTIVES} or 'bearing:<joint>', got {name!r}")
     size = y.shape[-1] if name != "torque" else b.predicted["torque"].shape[1]
     return _norm_value(np.asarray(y).reshape(-1), size, len(b.predicted["force"]), b.solver["norm"])
-
-
-def _epsilon_front(motion, first, second, count, say, kwargs) -> list[Balance]:
-    limits = dict(kwargs.pop("limits", None) or {})
-    if second in limits:
-        raise InvalidInputError(f"limits: the ε-constraint front sets the limit of '{second}' itself")
-    # The ends: each objective's own optimum (the payoff table); the levels ε of the second
-    # lie evenly between its values there. (Holding the first at its optimum to refine the
-    # first end is a thin, ill-conditioned cone when that optimum is zero, as in force
-    # balance: Clarabel stops for lack of progress.)
-    out: list[Balance] = []
-    try:
-        say(f"Pareto point 1/{count}")
-        out.append(balance(motion, objective={first: 1.0}, limits=limits or None, **kwargs))
-        say(f"Pareto point {count}/{count}")
-        end = balance(motion, objective={second: 1.0}, limits=limits or None, **kwargs)
-        hi, lo = objective_value(out[0], second), objective_value(end, second)
-        for k, eps in enumerate(np.linspace(hi, lo, count)[1:-1]):
-            say(f"Pareto point {k + 2}/{count}")
-            out.append(balance(motion, objective={first: 1.0}, limits={**limits, second: float(eps)}, **kwargs))
-    except BaseException as exc:
-        # The points already solved, in order along the front (the far end, if solved, is
-        # left out: it is not adjacent to them).
-        exc.result = out
-        raise
-    out.append(end)
-    return out
