@@ -144,20 +144,9 @@ impl PivotedQr {
 
     /// `x = Q [w; 0]` (x of length rows; w the first `rank` entries).
     pub fn apply_q(&self, w: &[f64], x: &mut [f64]) {
-        let rows = self.a.nrows();
-        let data = self.a.as_slice();
         x.fill(0.0);
         x[..self.rank].copy_from_slice(&w[..self.rank]);
-        // Q = H₀ H₁ ⋯ H_{r−1}: the last reflector first.
-        for k in (0..self.rank).rev() {
-            let u = &data[k * rows + k + 1..(k + 1) * rows];
-            let dot: f64 = u.iter().zip(&x[k + 1..]).map(|(a, b)| a * b).sum();
-            let s = self.tau[k] * (x[k] + dot);
-            x[k] -= s;
-            for (xi, ui) in x[k + 1..].iter_mut().zip(u) {
-                *xi -= s * ui;
-            }
-        }
+        self.apply_q_full(x);
     }
 }
 
@@ -166,6 +155,7 @@ impl PivotedQr {
     pub fn apply_q_full(&self, x: &mut [f64]) {
         let rows = self.a.nrows();
         let data = self.a.as_slice();
+        // Q = H₀ H₁ ⋯ H_{r−1}: the last reflector first.
         for k in (0..self.rank).rev() {
             let u = &data[k * rows + k + 1..(k + 1) * rows];
             let dot: f64 = u.iter().zip(&x[k + 1..]).map(|(a, b)| a * b).sum();
