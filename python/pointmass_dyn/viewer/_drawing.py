@@ -237,6 +237,50 @@ def _visuals(model, rot, origins, triangles) -> dict | None:
             "corners": corners.reshape(nf, -1, 3), "model": model}
 
 
+def _links(model, origins, jo, rot, info, floating) -> np.ndarray:
+    """The links as segments (F, L, 2, 3)."""
+    nf, nb = origins.shape[0], len(info)
+    children = {b: [c for c in range(nb) if info[c][2] == b] for b in range(nb)}
+    # Links: parent origin → joint origin → body origin; a body without children extends
+    # to twice its centre of mass (a uniform rod's far end), so a leaf is not invisible. A
+    # floating base is joined to nothing.
+    segs = []
+    for b in range(nb):
+        parent = info[b][2]
+        if b not in floating:
+            start = origins[:, parent] if parent >= 0 else np.zeros((nf, 3))
+            segs.append((start, jo[:, b]))
+            segs.append((jo[:, b], origins[:, b]))
+        if not children[b]:
+            com = np.asarray(model.body(b).com, dtype=float)
+            segs.append((origins[:, b], origins[:, b] + 2 * rot[:, b] @ com))
+    segs = segs or [(origins[:, 0], origins[:, 0])]
+    links = np.stack([np.stack(s, axis=1) for s in segs], axis=1)
+    # Degenerate segments (length 0 in every frame) are dropped.
+    keep = np.linalg.norm(links[:, :, 1] - links[:, :, 0], axis=-1).max(axis=0) > 1e-12
+    return links[:, keep]
+
+
+def _axes(poses, axis_len: float) -> tuple[np.ndarray, np.ndarray]:
+    """The joint and cut-joint axes as segments (F, A, 2, 3) and the cut joints' two
+    points (F, C, 2, 3)."""
+    jo, ja = poses["joint_origins"], poses["joint_axes"]
+    nf, nb = ja.shape[0], ja.shape[1]
+    axes = []
+    for b in range(nb):
+        if np.any(ja[0, b] != 0):
+            axes.append(np.stack([jo[:, b] - axis_len * ja[:, b],
+                                  jo[:, b] + axis_len * ja[:, b]], axis=1))
+    la, lb, lax = poses["loop_a"], poses["loop_b"], poses["loop_axes"]
+    cuts = np.stack([la, lb], axis=2) if la.shape[1] else np.zeros((nf, 0, 2, 3))
+    for c in range(la.shape[1]):
+        if np.any(lax[0, c] != 0):
+            axes.append(np.stack([la[:, c] - axis_len * lax[:, c],
+                                  la[:, c] + axis_len * lax[:, c]], axis=1))
+    axes = np.stack(axes, axis=1) if axes else np.zeros((nf, 0, 2, 3))
+    return axes, cuts
+
+
 def build_drawing(
     model,
     times: np.ndarray,
@@ -267,27 +311,9 @@ def build_drawing(
     origins, jo = poses["origins"], poses["joint_origins"]
     rot = poses["rotations"]
     info = [model.body_info(b) for b in range(nb)]
-    children = {b: [c for c in range(nb) if info[c][2] == b] for b in range(nb)}
     floating = [b for b in range(nb) if info[b][2] < 0 and info[b][1] == "FreeFlyer"]
 
-    # Links: parent origin → joint origin → body origin; a body without children extends
-    # to twice its centre of mass (a uniform rod's far end), so a leaf is not invisible. A
-    # floating base is joined to nothing.
-    segs = []
-    for b in range(nb):
-        parent = info[b][2]
-        if b not in floating:
-            start = origins[:, parent] if parent >= 0 else np.zeros((nf, 3))
-            segs.append((start, jo[:, b]))
-            segs.append((jo[:, b], origins[:, b]))
-        if not children[b]:
-            com = np.asarray(model.body(b).com, dtype=float)
-            segs.append((origins[:, b], origins[:, b] + 2 * rot[:, b] @ com))
-    segs = segs or [(origins[:, 0], origins[:, 0])]
-    links = np.stack([np.stack(s, axis=1) for s in segs], axis=1)
-    # Degenerate segments (length 0 in every frame) are dropped.
-    keep = np.linalg.norm(links[:, :, 1] - links[:, :, 0], axis=-1).max(axis=0) > 1e-12
-    links = links[:, keep]
+    links = _links(model, origins, jo, rot, info, floating)
 
     masses, _ = model.point_masses(q[0])
     pts = poses["points"].reshape(nf, -1, 3)
@@ -326,20 +352,7 @@ def build_drawing(
         for x in m
     ]).reshape(-1, 3)
 
-    axis_len = 0.06 * size
-    axes = []
-    ja = poses["joint_axes"]
-    for b in range(nb):
-        if np.any(ja[0, b] != 0):
-            axes.append(np.stack([jo[:, b] - axis_len * ja[:, b],
-                                  jo[:, b] + axis_len * ja[:, b]], axis=1))
-    la, lb, lax = poses["loop_a"], poses["loop_b"], poses["loop_axes"]
-    cuts = np.stack([la, lb], axis=2) if la.shape[1] else np.zeros((nf, 0, 2, 3))
-    for c in range(la.shape[1]):
-        if np.any(lax[0, c] != 0):
-            axes.append(np.stack([la[:, c] - axis_len * lax[:, c],
-                                  la[:, c] + axis_len * lax[:, c]], axis=1))
-    axes = np.stack(axes, axis=1) if axes else np.zeros((nf, 0, 2, 3))
+    axes, cuts = _axes(poses, 0.06 * size)
 
     arrow = None
     if shaking is not None:

@@ -70,16 +70,9 @@ def _robot(ax, d: Drawing, up: np.ndarray):
     return update
 
 
-def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
-    """The figure of ``d`` at frame 0: ``(fig, ax, update)``, ``update(k)`` moves every
-    artist to frame ``k``. The axes' limits never change, so one projection serves all
-    frames."""
-    plt = _pyplot()
-    width, height = size
-    fig = plt.figure(figsize=(width / dpi, height / dpi), dpi=dpi)
-    ax = fig.add_axes((0, 0, 1, 1), projection="3d")
-    ax.computed_zorder = False
-    ax.set_axis_off()
+def _point_camera(ax, d: Drawing):
+    """Point the axes' camera as ``d.camera`` says: ``(centre, up)``; ``centre(k)``
+    re-centres the axes' cube on frame ``k`` (a following camera moves with its subject)."""
     cam = d.camera
     target = np.asarray(cam["target"], dtype=float)
     # A cube around the motion (equal scales), a little larger than its largest extent (a
@@ -99,7 +92,10 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     if abs(up[int(np.argmax(np.abs(up)))]) < 0.999 or up.max() < 0.999:
         vertical = "z"  # mplot3d's vertical axis is a positive world axis
     ax.view_init(elev=cam["elevation"], azim=cam["azimuth"], vertical_axis=vertical)
+    return centre, up
 
+
+def _planes(ax, d: Drawing) -> None:
     # Every contact plane's grid where the plane is (else the ground grid), all as one
     # NaN-separated line (one artist: drawing cost is per artist).
     seg = []
@@ -111,6 +107,38 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     xyz = np.concatenate([np.array(seg), np.full((len(seg), 1, 3), np.nan)],
                          axis=1).reshape(-1, 3)
     ax.plot(xyz[:, 0], xyz[:, 1], xyz[:, 2], color=COLOURS["grid"], lw=0.5, zorder=0.5)
+
+
+def _legend(ax, d: Drawing, on: dict, contact: bool) -> None:
+    """The legend of the layers shown, bottom right."""
+    legend = [("● m > 0", COLOURS["positive"])] if on["masses"] else []
+    if on["masses"] and np.any(d.sphere_mass < 0):
+        legend.append(("● m < 0", COLOURS["negative"]))
+    if on["masses"] and np.any(d.sphere_mass == 0):
+        legend.append(("● m = 0", COLOURS["zero"]))
+    if on["masses"]:
+        legend.append(("disc ∝ |m|^(1/3)", (0.35, 0.35, 0.35)))
+    if contact:
+        legend.append((f"→ contact forces ({1e3 * d.contact_scale:.3g} mm/N)",
+                       COLOURS["contact"]))
+    for k, (text, colour) in enumerate(reversed(legend)):
+        ax.text2D(0.98, 0.03 + 0.05 * k, text, transform=ax.transAxes, color=colour,
+                  fontsize=8, ha="right")
+
+
+def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
+    """The figure of ``d`` at frame 0: ``(fig, ax, update)``, ``update(k)`` moves every
+    artist to frame ``k``. The axes' limits never change, so one projection serves all
+    frames."""
+    plt = _pyplot()
+    width, height = size
+    fig = plt.figure(figsize=(width / dpi, height / dpi), dpi=dpi)
+    ax = fig.add_axes((0, 0, 1, 1), projection="3d")
+    ax.computed_zorder = False
+    ax.set_axis_off()
+    cam = d.camera
+    centre, up = _point_camera(ax, d)
+    _planes(ax, d)
     robot = _robot(ax, d, up)
     w = 0.15 * d.size
     for axis, c in zip(np.eye(3), [(0.85, 0.1, 0.1), (0.1, 0.6, 0.1), (0.1, 0.2, 0.85)]):
@@ -154,19 +182,7 @@ def figure(d: Drawing, size: tuple[int, int], dpi: int = 100):
     clock = ax.text2D(0.02, 0.96, "", transform=ax.transAxes, family="monospace", fontsize=11)
     if d.title:
         ax.text2D(0.02, 0.91, d.title, transform=ax.transAxes, color="0.35", fontsize=9)
-    legend = [("● m > 0", COLOURS["positive"])] if on["masses"] else []
-    if on["masses"] and np.any(d.sphere_mass < 0):
-        legend.append(("● m < 0", COLOURS["negative"]))
-    if on["masses"] and np.any(d.sphere_mass == 0):
-        legend.append(("● m = 0", COLOURS["zero"]))
-    if on["masses"]:
-        legend.append(("disc ∝ |m|^(1/3)", (0.35, 0.35, 0.35)))
-    if contact is not None:
-        legend.append((f"→ contact forces ({1e3 * d.contact_scale:.3g} mm/N)",
-                       COLOURS["contact"]))
-    for k, (text, colour) in enumerate(reversed(legend)):
-        ax.text2D(0.98, 0.03 + 0.05 * k, text, transform=ax.transAxes, color=colour,
-                  fontsize=8, ha="right")
+    _legend(ax, d, on, contact is not None)
 
     def update(k: int):
         for i, line in enumerate(boxes):
