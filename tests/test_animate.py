@@ -15,7 +15,7 @@ import chromium_driver
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
-from pointmass_dyn import animation
+from pointmass_dyn import viewer as animation
 from pointmass_dyn.errors import AnimationWriterError, InvalidInputError
 from viewer_page import f32, page_data
 
@@ -295,7 +295,7 @@ def test_every_bundled_scene_loads_without_error(tmp_path):
 def test_gif_frames_size_and_point_masses(pendulum, tmp_path):
     from mpl_toolkits.mplot3d import proj3d
     from PIL import Image
-    from pointmass_dyn import viewer_video
+    from pointmass_dyn import viewer as viewer_video
 
     scene, result = pendulum
     size = (360, 280)

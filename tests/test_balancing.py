@@ -1,4 +1,4 @@
-"""Prescribed-motion analysis and balancing with point masses (pointmass_dyn.balancing)
+"""Prescribed-motion analysis and balancing with point masses (pointmass_dyn.design)
 against the Berkof–Lowen conditions for the complete force balance of a four-bar, against
 re-analysis and simulation of the balanced mechanism, and against the invariants of a
 weighted-sum Pareto front."""

@@ -15,7 +15,7 @@ import pointmass_dyn as pmd
 import pytest
 from conftest import record, rel_err, robots_dir
 from pointmass_dyn._helpers import rotation_of_wxyz
-from pointmass_dyn.importers import mujoco_state, pinocchio_q
+from pointmass_dyn.io import mujoco_state, pinocchio_q
 
 TOL = 1e-9
 mujoco = pytest.importorskip("mujoco")

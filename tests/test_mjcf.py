@@ -1,4 +1,4 @@
-"""`pmd.to_mjcf` and the state conversions of `pointmass_dyn.mjcf`, checked against MuJoCo
+"""`pmd.to_mjcf` and the state conversions of `pointmass_dyn.io`, checked against MuJoCo
 itself: MuJoCo's `mj_forward` acceleration of the exported model equals our forward dynamics
 (with the scene's effects) on every bundled tree scene and on random trees of every joint
 type, and MuJoCo's own kinematics (body poses, velocities) agree with ours through the state
@@ -10,9 +10,9 @@ import numpy as np
 import pointmass_dyn as pmd
 import pytest
 from conftest import build_model, random_state, random_tree, record
-from pointmass_dyn import mjcf
+from pointmass_dyn import io as mjcf
+from pointmass_dyn.benchmarking import scene_rhs
 from pointmass_dyn.errors import InvalidInputError, ModelStructureError
-from pointmass_dyn.work_precision import scene_rhs
 
 mujoco = pytest.importorskip("mujoco")
 

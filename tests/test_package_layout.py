@@ -1,12 +1,13 @@
 """The Python package's structure (docs/architecture.md, "The Python package"): no import
 cycles, no private names imported across modules, a private module used only inside its own
 package, our own modules imported at module level (a cycle cannot hide in a function), no
-module over 600 lines; every module imports first in a fresh interpreter; the names users
-imported before the subpackages still import."""
+module over 600 lines; every module imports first in a fresh interpreter; the benchmarking
+tools load on first use."""
 
 from __future__ import annotations
 
 import ast
+import importlib.util
 import subprocess
 import sys
 from pathlib import Path
@@ -188,41 +189,39 @@ def test_parts_depend_downwards():
     assert wrong == set()
 
 
-#: The flat layout's module paths that docs, tests and scripts name (``FORMER_MODULES``).
+#: Module paths of the flat layout before the subpackages: never shipped, so not kept.
 FORMER = ("animation", "balancing", "importers", "mjcf", "viewer_video", "work_precision",
           "work_precision_methods")
 
 
-@pytest.mark.parametrize("name", sorted(n for n in MODULES if not n.endswith(".__main__"))
-                         + [f"{ROOT}.{m}" for m in FORMER])
+@pytest.mark.parametrize("name", sorted(n for n in MODULES if not n.endswith(".__main__")))
 def test_every_module_imports_first_in_a_fresh_interpreter(name):
     """Dynamic: whichever module a program imports first, the import succeeds (a cycle that
-    only bites in one order would fail here); so does a former module path."""
+    only bites in one order would fail here)."""
     run = subprocess.run([sys.executable, "-c", f"import {name}"], capture_output=True,
                          text=True, timeout=120)
     assert run.returncode == 0, run.stderr[-2000:]
 
 
-def test_former_module_paths_still_import():
-    """The flat layout's module paths that docs, tests and scripts name: the same objects as
-    their new homes; ``pmd.work_precision`` stays the function whatever is imported after."""
-    from pointmass_dyn import animation, importers, mjcf, viewer_video, work_precision_methods
-    from pointmass_dyn.work_precision import rk4_fixed, scene_rhs
+def test_importing_the_package_does_not_load_the_benchmarking_tools():
+    """``import pointmass_dyn`` loads what simulating needs; ``pmd.work_precision`` and
+    ``pmd.benchmarking`` load the benchmarking subpackage on first use."""
+    code = ("import sys, pointmass_dyn as pmd\n"
+            "assert 'pointmass_dyn.benchmarking' not in sys.modules\n"
+            "assert pmd.work_precision is pmd.benchmarking.work_precision\n"
+            "assert pmd.WorkPrecision is pmd.benchmarking.WorkPrecision\n"
+            "assert 'pointmass_dyn.benchmarking' in sys.modules\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
 
-    assert animation.animate is pmd.animate is pmd.viewer.animate
-    assert animation.sample is pmd.viewer.sample and viewer_video.figure is pmd.viewer.figure
-    assert importers.from_mujoco is pmd.from_mujoco is pmd.io.from_mujoco
-    assert mjcf.to_mujoco_state is pmd.io.to_mujoco_state and mjcf.to_mjcf is pmd.to_mjcf
-    assert work_precision_methods.cheapest is pmd.benchmarking.cheapest
-    assert scene_rhs is pmd.benchmarking.scene_rhs and rk4_fixed is pmd.benchmarking.rk4_fixed
-    assert callable(pmd.work_precision) and pmd.work_precision is pmd.benchmarking.work_precision
-    assert pmd.importers is importers and pmd.mjcf is mjcf
-    assert set(pmd.FORMER_MODULES) == set(FORMER)
-    from pointmass_dyn.balancing import Counterweight, balance
 
-    assert balance is pmd.balance and Counterweight is pmd.design.Counterweight
+@pytest.mark.parametrize("name", FORMER)
+def test_the_flat_layouts_module_paths_are_gone(name):
+    """No aliases for module paths that never shipped."""
+    assert importlib.util.find_spec(f"{ROOT}.{name}") is None
     with pytest.raises(AttributeError):
-        pmd.no_such_module  # noqa: B018
+        getattr(pmd, name if name != "work_precision" else "no_such_module")
 
 
 def test_every_public_name_of_the_package_resolves():

@@ -189,7 +189,7 @@ REPAIRED = [
 
 
 def pin_check(name, model, pm, seeds=(0, 1)):
-    from pointmass_dyn.importers import pinocchio_q
+    from pointmass_dyn.io import pinocchio_q
 
     pm.gravity.linear = G
     for seed in seeds:

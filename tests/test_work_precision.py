@@ -13,8 +13,8 @@ import numpy as np
 import pointmass_dyn as pmd
 import pytest
 from conftest import PAPER_A, PAPER_D, PAPER_M, record
+from pointmass_dyn.benchmarking import rk4_fixed, scene_rhs
 from pointmass_dyn.cli import main
-from pointmass_dyn.work_precision import rk4_fixed, scene_rhs
 from scipy.integrate import solve_ivp
 from scipy.special import ellipj, ellipk
 
@@ -171,7 +171,7 @@ def test_cli_unknown_scene_is_a_clean_error(capsys):
 # --------------------------------------------------------------------------------------------
 # Across methods (issue 15): ours, SciPy's and MuJoCo's on one scene, one reference
 # --------------------------------------------------------------------------------------------
-from pointmass_dyn import work_precision_methods as wpm  # noqa: E402
+from pointmass_dyn import benchmarking as wpm  # noqa: E402
 
 PLANAR_METHODS = ["RK45", "DOP853", "Radau", "RK4", "scipy:RK45", "scipy:DOP853",
                   "scipy:Radau", "mujoco:RK4", "mujoco:implicitfast", "numpy:RK4"]

@@ -7,9 +7,7 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-import sys
-
-from . import _pickle, benchmarking, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._contact import (
     ContactForces,
@@ -41,7 +39,6 @@ from ._simulation import (
     solve_ivp,
 )
 from ._sweep import sweep
-from .benchmarking import WorkPrecision, work_precision
 from .design import (
     Balance,
     Counterweight,
@@ -72,27 +69,18 @@ from .scenes import builtin_scenes, load_scene
 from .viewer import AnimationInfo, animate
 from .viewer import show as show_meshcat
 
-#: Module paths of the flat layout before the subpackages, still importable (``import
-#: pointmass_dyn.mjcf``, ``from pointmass_dyn.work_precision import scene_rhs``): each is the
-#: subpackage that now holds its public names. Registered in ``sys.modules`` rather than kept
-#: as alias files, so that importing ``pointmass_dyn.work_precision`` never rebinds
-#: ``pmd.work_precision`` (the function) to a module.
-FORMER_MODULES = {
-    "animation": viewer,
-    "balancing": design,
-    "importers": io,
-    "mjcf": io,
-    "viewer_video": viewer,
-    "work_precision": benchmarking,
-    "work_precision_methods": benchmarking,
-}
-for _name, _module in FORMER_MODULES.items():
-    sys.modules.setdefault(f"{__name__}.{_name}", _module)
+#: Names served by a subpackage imported on first use: the benchmarking tools (work-precision
+#: runs against SciPy and MuJoCo) are not needed to simulate, so ``import pointmass_dyn``
+#: does not load them.
+LAZY = {"benchmarking": None, "WorkPrecision": "WorkPrecision", "work_precision": "work_precision"}
 
 
 def __getattr__(name: str):
-    if name in FORMER_MODULES:
-        return FORMER_MODULES[name]
+    if name in LAZY:
+        import importlib
+
+        module = importlib.import_module(f"{__name__}.benchmarking")
+        return module if LAZY[name] is None else getattr(module, LAZY[name])
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
