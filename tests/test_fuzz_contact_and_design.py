@@ -1,4 +1,4 @@
-"""Random calls (issue 29, round 3) to the entry points newer than ``test_fuzz_api.py``'s:
+"""Random calls to the entry points newer than ``test_fuzz_api.py``'s:
 ground contact, joint limits, torque limits, couplings, armature, URDF contact points and
 the design API (link shapes, counterweights, ``balance``, ``pareto_front``). The contract is
 ``test_fuzz_api``'s: whatever the input, a finite result or a ``pmd.errors`` exception
@@ -274,7 +274,7 @@ def test_random_calls_to_contact_limits_couplings_and_design(data):
         design_calls(data)
 
 
-def test_the_wave_module_is_bounded():
+def test_these_random_calls_run_under_the_address_space_bound():
     # The limit of test_fuzz_api applies here too (the fixture is imported, autouse).
     assert bounded_address_space is not None and ALLOWED
     with pytest.raises(pmd.errors.InvalidInputError):
