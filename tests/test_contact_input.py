@@ -19,16 +19,6 @@ def _contact_ball():
     return pmd.Scene(m, q0=[0.1], v0=[0.0], effects=[contact, pmd.Gravity([0, 0, -9.81])])
 
 
-
-
-
-
-
-
-
-
-
-
 def test_torque_limit_message_says_inf_is_allowed():
     pmd.JointTorque(None, 1.0, limit=np.inf)  # accepted: no limit
     for bad in (np.nan, -1.0, [1.0, np.nan]):

@@ -28,25 +28,7 @@ def fourbar_motion():
     return scene, motion
 
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 G_PLANE = np.array([0.0, -9.81, 0.0])
-
-
 
 
 @pytest.fixture(scope="module")
@@ -60,22 +42,12 @@ def motion(fourbar):
                                  q_guess=fourbar.q0, gravity=G_PLANE)
 
 
-
-
-
-
-
-
-
-
 BOX = ([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004])
 
 
 @pytest.fixture(scope="module")
 def fourbar_model():
     return pmd.load_scene("fourbar").model
-
-
 
 
 @pytest.fixture(scope="module")

@@ -24,20 +24,6 @@ def _free_box():
     return m
 
 
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 LONG_NUMBER = re.compile(r"\d{25,}")
 
 
@@ -46,19 +32,7 @@ def fourbar():
     return pmd.load_scene("fourbar")
 
 
-
-
-
-
-
-
-
-
 Z = [0.0, 0.0, 1.0]
-
-
-
-
 
 
 def _arm() -> pmd.Model:
@@ -67,8 +41,6 @@ def _arm() -> pmd.Model:
     arm.add_body(pmd.RigidBody(0.8, [0.15, 0, 0], np.diag([1e-3, 0.01, 0.01])), pmd.Revolute(Z),
                  parent="upper", translation=[0.4, 0, 0], name="fore")
     return arm
-
-
 
 
 @pytest.mark.parametrize("scale", [1e155, 1e300, 3.0, 1e-7])

@@ -23,10 +23,6 @@ class _Boom(Exception):
     pass
 
 
-
-
-
-
 @pytest.fixture(scope="module")
 def fourbar_motion():
     scene = pmd.load_scene("fourbar")
@@ -34,16 +30,6 @@ def fourbar_motion():
         scene.model, "crank", speed=2 * np.pi, samples=36, q_guess=scene.q0, gravity=G
     )
     return scene, motion
-
-
-
-
-
-
-
-
-
-
 
 
 def _stoppable_batch_args():
@@ -70,11 +56,7 @@ def _check_partial_batch(scene, q0, kw, batch):
             assert r.t[-1] == pytest.approx(r.t_reached) and r.t_reached < 50
 
 
-
-
 G_PLANE = np.array([0.0, -9.81, 0.0])
-
-
 
 
 @pytest.fixture(scope="module")
@@ -122,16 +104,6 @@ def _contact_ball():
     contact = pmd.GroundContact([("ball", [0, 0, 0], 0.05)], stiffness=2e5, damping=5e5,
                                 friction=0.0)
     return pmd.Scene(m, q0=[0.1], v0=[0.0], effects=[contact, pmd.Gravity([0, 0, -9.81])])
-
-
-
-
-
-
-
-
-
-
 
 
 def test_torque_function_exception_carries_the_partial_result():

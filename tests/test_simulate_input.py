@@ -43,15 +43,7 @@ def _rod_pair(q0, v0):
             pmd.Scene(ball, quat, r.T @ lmat @ np.asarray(v0), effects=[pmd.Gravity(G)]))
 
 
-
-
-
-
-
-
 G_PLANE = np.array([0.0, -9.81, 0.0])
-
-
 
 
 @pytest.fixture(scope="module")
@@ -63,12 +55,6 @@ def fourbar():
 def motion(fourbar):
     return pmd.prescribed_motion(fourbar.model, "crank", speed=30.0, samples=24,
                                  q_guess=fourbar.q0, gravity=G_PLANE)
-
-
-
-
-
-
 
 
 def test_scene_derivatives_at_the_zyz_singularity_are_singularity_errors():

@@ -29,8 +29,6 @@ def chain_scene(n: int, effects=None) -> pmd.Scene:
     return pmd.Scene(m, q0, np.zeros(n), effects=[pmd.Gravity(G)] + list(effects or []))
 
 
-
-
 def _run_limited(code: str, limit_bytes: int) -> subprocess.CompletedProcess:
     """Runs `code` in a fresh interpreter whose address space is capped after the imports."""
     prog = textwrap.dedent(
@@ -75,20 +73,6 @@ def _run_capped(code: str, limit_bytes: int) -> subprocess.CompletedProcess:
         text=True,
         timeout=300,
     )
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 def test_one_model_many_threads_same_numbers():
