@@ -699,5 +699,5 @@ impl ForceLaw for GroundContactLaw {
 }
 
 #[cfg(test)]
-#[path = "ground_contact_tests.rs"]
+#[path = "tests/ground_contact.rs"]
 mod tests;

@@ -412,5 +412,5 @@ pub fn fill_model_limits(
 }
 
 #[cfg(test)]
-#[path = "joint_limit_tests.rs"]
+#[path = "tests/joint_limit.rs"]
 mod tests;

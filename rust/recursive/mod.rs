@@ -23,6 +23,7 @@ pub mod armature;
 pub mod compiled;
 pub mod crba;
 #[cfg(test)]
+#[path = "tests/derivatives.rs"]
 mod derivative_tests;
 mod outward;
 pub mod reference;

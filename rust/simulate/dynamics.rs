@@ -506,5 +506,5 @@ impl OdeSystem for Dynamics<'_> {
 }
 
 #[cfg(test)]
-#[path = "dynamics_tests.rs"]
+#[path = "tests/dynamics.rs"]
 mod tests;

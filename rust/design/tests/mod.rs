@@ -12,7 +12,7 @@ use crate::spatial::{linear, Vec3, Vec6};
 
 fn fourbar() -> (Model, Vec<f64>) {
     let scene = crate::scene::Scene::from_toml(
-        include_str!("../../python/pointmass_dyn/scenes/fourbar.toml"),
+        include_str!("../../../python/pointmass_dyn/scenes/fourbar.toml"),
         "fourbar.toml",
     )
     .unwrap();
