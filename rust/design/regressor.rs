@@ -186,19 +186,16 @@ impl LoopShare {
     }
 }
 
-/// The regressor along `samples` states (`q` samples × nq, `v`, `a` samples × nv, row after
-/// row), with gravity `g`, moments about `about`, and the driving forces of `actuated` (v
-/// indices; required for a model with loops, the tree's joint forces themselves otherwise).
-pub fn regressor(
+/// The number of states in `q`, `v`, `a` (N × nq, N × nv, N × nv), with `actuated` checked
+/// against the model.
+fn checked_samples(
     model: &Model,
     q: &[f64],
     v: &[f64],
     a: &[f64],
-    g: &Vec3,
-    about: &Vec3,
     actuated: &[usize],
-) -> Result<Regressor> {
-    let (nq, nv, nl) = (model.nq, model.nv, model.links.len());
+) -> Result<usize> {
+    let (nq, nv) = (model.nq, model.nv);
     let samples = q.len().checked_div(nq).unwrap_or(0);
     if q.len() != samples * nq || v.len() != samples * nv || a.len() != samples * nv {
         return Err(Error::arg(
@@ -221,6 +218,23 @@ pub fn regressor(
             "none",
         ));
     }
+    Ok(samples)
+}
+
+/// The regressor along `samples` states (`q` samples × nq, `v`, `a` samples × nv, row after
+/// row), with gravity `g`, moments about `about`, and the driving forces of `actuated` (v
+/// indices; required for a model with loops, the tree's joint forces themselves otherwise).
+pub fn regressor(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    about: &Vec3,
+    actuated: &[usize],
+) -> Result<Regressor> {
+    let (nq, nv, nl) = (model.nq, model.nv, model.links.len());
+    let samples = checked_samples(model, q, v, a, actuated)?;
     // Loops, or couplings with some joints not driven (those follow through their
     // couplings): the driving forces share δτ with the constraints. Couplings with every
     // joint driven: each joint's own (tree) force, as `inverse_dynamics` without `actuated`.
