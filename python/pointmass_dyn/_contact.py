@@ -231,12 +231,7 @@ def torque_saturation(scene: Scene, result: Any, disable: Any = None) -> dict | 
     }
     if not limits:
         return None
-    q, v = np.asarray(result.q), np.asarray(result.v)
-    out: dict[str, np.ndarray] = {}
-    for k, t in enumerate(np.asarray(result.t)):
-        forces = _core.effect_forces(scene, float(t), q[k], v[k], disable)
-        for name, lim in limits.items():
-            if name in forces:
-                row = out.setdefault(name, np.zeros(v.shape, dtype=bool))
-                row[k] = np.abs(forces[name]) >= lim * (1 - 1e-12)
+    _, forces = _core.scene_along(scene, result.t, result.q, result.v, disable, forces=True)
+    out = {name: np.abs(forces[name]) >= lim * (1 - 1e-12)
+           for name, lim in limits.items() if name in forces}
     return out or None

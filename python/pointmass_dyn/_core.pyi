@@ -835,6 +835,18 @@ def effect_forces(
 ) -> dict[str, _Array]:
     """Generalized force (nv,) of each enabled effect at ``(t, q, v)``, by effect name."""
 
+def scene_along(
+    scene: Scene,
+    t: ArrayLike,
+    q: ArrayLike,
+    v: ArrayLike,
+    disable: _Family | Sequence[_Family] | None = None,
+    forces: bool = False,
+) -> tuple[_Array, dict[str, _Array]]:
+    """``(a, forces)`` at the N states ``(t[k], q[k], v[k])``: the accelerations (N, nv) the
+    scene's effects give, and with ``forces`` each enabled effect's generalized force (N, nv)
+    by name (else an empty dict). In one call, the interpreter released."""
+
 def energies(
     scene: Scene,
     q: ArrayLike,

@@ -6,11 +6,13 @@
 //! The right-hand side asks the effects for joint forces and link wrenches only when the
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
 //! effects runs the bare forward dynamics.
+mod along;
 pub mod batch;
 pub mod derivatives;
 mod dynamics;
 mod settings;
 
+pub use along::Along;
 pub use dynamics::{Dynamics, Progress};
 pub use settings::{default_method, disabled, Requested, Resolved};
 

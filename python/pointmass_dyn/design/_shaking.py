@@ -83,12 +83,7 @@ def shaking(
         scene = model_or_scene
         model = scene.model
         q, v = np.asarray(result.q, dtype=float), np.asarray(result.v, dtype=float)
-        a = np.array(
-            [
-                model.forward_dynamics(qk, vk, sum(_core.effect_forces(scene, t, qk, vk).values()))
-                for t, qk, vk in zip(result.t, q, v)
-            ]
-        ).reshape(len(result.t), model.nv)
+        a, _ = _core.scene_along(scene, result.t, q, v)
         if gravity is None:
             gravity = scene_gravity(scene)
     else:

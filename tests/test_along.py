@@ -1,0 +1,74 @@
+"""Analyses along a result in one call (``_core.scene_along``): the accelerations and effect
+forces at every output state, checked sample by sample against the per-state calls
+(``Model.forward_dynamics`` of the summed ``effect_forces``), on a mechanism with a loop, a
+robot with a PD torque and limits, and a body on ground contact."""
+
+from __future__ import annotations
+
+import numpy as np
+import pointmass_dyn as pmd
+import pytest
+from pointmass_dyn import _core
+from pointmass_dyn.errors import InvalidInputError
+
+
+def per_sample(scene, result):
+    """The reference: one ``effect_forces`` and one ``forward_dynamics`` per state."""
+    m = scene.model
+    forces = [_core.effect_forces(scene, float(t), q, v) for t, q, v in
+              zip(result.t, result.q, result.v)]
+    a = np.array([m.forward_dynamics(q, v, sum(f.values())) for q, v, f in
+                  zip(result.q, result.v, forces)])
+    return a, {k: np.array([f[k] for f in forces]) for k in forces[0]}
+
+
+@pytest.mark.parametrize("name", ["fourbar", "chain7", "box_incline", "slider_crank"])
+def test_accelerations_and_forces_along_a_result_are_the_per_state_ones(name):
+    scene = pmd.load_scene(name)
+    res = pmd.simulate(scene, (0.0, 0.2), t_eval=np.linspace(0.0, 0.2, 41))
+    assert res.success, res.message
+    a, forces = _core.scene_along(scene, res.t, res.q, res.v, forces=True)
+    a_ref, f_ref = per_sample(scene, res)
+    scale = max(np.abs(a_ref).max(), 1.0)
+    np.testing.assert_allclose(a, a_ref, rtol=0, atol=1e-9 * scale)
+    assert forces.keys() == f_ref.keys()
+    for k in forces:
+        np.testing.assert_allclose(forces[k], f_ref[k], rtol=0,
+                                   atol=1e-12 * max(np.abs(f_ref[k]).max(), 1.0), err_msg=k)
+
+
+def test_shaking_along_a_result_matches_the_states_accelerations():
+    """``shaking(scene, result)`` is ``shaking(model, q, v, a)`` with the per-state a."""
+    scene = pmd.load_scene("fourbar")
+    res = pmd.simulate(scene, (0.0, 0.3), t_eval=np.linspace(0.0, 0.3, 31))
+    a_ref, _ = per_sample(scene, res)
+    along = pmd.shaking(scene, res)
+    ref = pmd.shaking(scene.model, res.q, res.v, a_ref)
+    np.testing.assert_allclose(along.force, ref.force, rtol=0,
+                               atol=1e-9 * np.abs(ref.force).max())
+
+
+def test_torque_saturation_is_where_the_limited_torque_reaches_its_limit():
+    model = pmd.load_scene("chain7").model
+    pd = pmd.PDTorque(model.joint_names[0], kp=400.0, kd=5.0, time=[0.0, 1.0], reference=[1.0, 1.0],
+                      limit=3.0)
+    scene = pmd.Scene(model, np.zeros(model.nq), np.zeros(model.nv),
+                      effects=[pmd.Gravity([0, 0, -9.81]), pd])
+    res = pmd.simulate(scene, (0.0, 0.5), t_eval=np.linspace(0.0, 0.5, 51))
+    sat = pmd.torque_saturation(scene, res)
+    _, f_ref = per_sample(scene, res)
+    (name,) = sat.keys()
+    expected = np.abs(f_ref[name]) >= 3.0 * (1 - 1e-12)
+    assert sat[name].shape == (51, model.nv) and np.array_equal(sat[name], expected)
+    assert 0 < sat[name][:, 0].sum() < 51  # saturated at first, free later
+
+
+def test_bad_states_are_named():
+    scene = pmd.load_scene("chain7")
+    n = 4
+    t, q, v = np.zeros(n), np.zeros((n, scene.model.nq)), np.zeros((n, scene.model.nv))
+    with pytest.raises(InvalidInputError, match=r"t, q, v: expected shapes \(N,\)"):
+        _core.scene_along(scene, t, q[:, :3], v)
+    q[2, 1] = np.nan
+    with pytest.raises(InvalidInputError, match="sample 2"):
+        _core.scene_along(scene, t, q, v)
