@@ -231,7 +231,8 @@ def torque_saturation(scene: Scene, result: Any, disable: Any = None) -> dict | 
     }
     if not limits:
         return None
-    _, forces = _core.scene_along(scene, result.t, result.q, result.v, disable, forces=True)
+    _, forces = _core.scene_along(scene, result.t, result.q, result.v, disable,
+                                   accelerations=False, forces=True)
     out = {name: np.abs(forces[name]) >= lim * (1 - 1e-12)
            for name, lim in limits.items() if name in forces}
     return out or None

@@ -841,11 +841,13 @@ def scene_along(
     q: ArrayLike,
     v: ArrayLike,
     disable: _Family | Sequence[_Family] | None = None,
+    accelerations: bool = True,
     forces: bool = False,
-) -> tuple[_Array, dict[str, _Array]]:
-    """``(a, forces)`` at the N states ``(t[k], q[k], v[k])``: the accelerations (N, nv) the
-    scene's effects give, and with ``forces`` each enabled effect's generalized force (N, nv)
-    by name (else an empty dict). In one call, the interpreter released."""
+) -> tuple[_Array | None, dict[str, _Array]]:
+    """``(a, forces)`` at the N states ``(t[k], q[k], v[k])``: with ``accelerations`` the
+    accelerations (N, nv) the scene's effects give (else None), and with ``forces`` each
+    enabled effect's generalized force (N, nv) by name (else an empty dict). In one call, the
+    interpreter released."""
 
 def energies(
     scene: Scene,

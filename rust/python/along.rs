@@ -10,10 +10,12 @@ use super::scene::PyScene;
 use super::signals::detach_interruptible;
 use super::simulate::scene_system;
 
-/// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv); `forces` a dict from each
-/// enabled effect's name to its generalized force (N, nv) (empty unless `forces`).
+/// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
+/// `accelerations`); `forces` a dict from each enabled effect's name to its generalized force
+/// (N, nv) (empty unless `forces`).
 #[pyfunction]
-#[pyo3(signature = (scene, t, q, v, disable=None, forces=false))]
+#[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false))]
+#[allow(clippy::too_many_arguments)] // the arguments of the Python function
 pub fn scene_along<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,
@@ -21,8 +23,9 @@ pub fn scene_along<'py>(
     q: &Bound<'_, PyAny>,
     v: &Bound<'_, PyAny>,
     disable: Option<&Bound<'_, PyAny>>,
+    accelerations: bool,
     forces: bool,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyDict>)> {
+) -> PyResult<(Option<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
     let s = &scene.inner;
     let (nq, nv) = (s.model.nq, s.model.nv);
     let (ts, t) = array(t, "t")?;
@@ -53,7 +56,7 @@ pub fn scene_along<'py>(
     }
     let mut sys = scene_system(py, s, disable)?;
     take_callback_error();
-    let out = detach_interruptible(py, || sys.along(&t, &q, &v, forces));
+    let out = detach_interruptible(py, || sys.along(&t, &q, &v, accelerations, forces));
     if let Some(e) = take_callback_error() {
         return Err(e);
     }
@@ -62,5 +65,9 @@ pub fn scene_along<'py>(
     for (label, f) in out.labels.into_iter().zip(out.forces) {
         d.set_item(label, to_array(py, f, &[n, nv])?)?;
     }
-    Ok((to_array(py, out.accelerations, &[n, nv])?, d))
+    let a = match accelerations {
+        true => Some(to_array(py, out.accelerations, &[n, nv])?),
+        false => None,
+    };
+    Ok((a, d))
 }

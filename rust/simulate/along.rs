@@ -4,8 +4,9 @@
 use super::Dynamics;
 use crate::error::{Error, Result};
 
-/// The scene at N states: `accelerations` (N × nv, row after row) and, when asked for, each
-/// enabled effect's generalized force (`forces[k]`: N × nv for effect `labels[k]`).
+/// The scene at N states, what was asked for: `accelerations` (N × nv, row after row; empty
+/// when not asked for) and each enabled effect's generalized force (`forces[k]`: N × nv for
+/// effect `labels[k]`; none when not asked for).
 #[derive(Debug, Clone, Default)]
 pub struct Along {
     pub samples: usize,
@@ -15,10 +16,18 @@ pub struct Along {
 }
 
 impl Dynamics<'_> {
-    /// The accelerations (and with `forces`, every enabled effect's force) at the states
-    /// `(t[k], q[k], v[k])`; `q` is N × nq and `v` N × nv, row after row. Ctrl-C is heard
-    /// between samples. A sample whose effects or dynamics fail is an error naming it.
-    pub fn along(&mut self, t: &[f64], q: &[f64], v: &[f64], forces: bool) -> Result<Along> {
+    /// With `accelerations`, the accelerations, and with `forces`, every enabled effect's
+    /// force, at the states `(t[k], q[k], v[k])`; `q` is N × nq and `v` N × nv, row after
+    /// row. Ctrl-C is heard between samples. A sample whose effects or dynamics fail is an
+    /// error naming it.
+    pub fn along(
+        &mut self,
+        t: &[f64],
+        q: &[f64],
+        v: &[f64],
+        accelerations: bool,
+        forces: bool,
+    ) -> Result<Along> {
         let (nq, nv, n) = (self.model.nq, self.model.nv, t.len());
         if q.len() != n * nq || v.len() != n * nv {
             return Err(Error::arg(
@@ -49,8 +58,10 @@ impl Dynamics<'_> {
             crate::interrupt::check("the scene along a trajectory")?;
             let (qk, vk) = (&q[k * nq..(k + 1) * nq], &v[k * nv..(k + 1) * nv]);
             let at = |e: String| Error::Numerical(format!("sample {k} (t = {}): {e}", t[k]));
-            self.accelerations(t[k], qk, vk, &mut out.accelerations[k * nv..(k + 1) * nv])
-                .map_err(at)?;
+            if accelerations {
+                self.accelerations(t[k], qk, vk, &mut out.accelerations[k * nv..(k + 1) * nv])
+                    .map_err(at)?;
+            }
             if ne > 0 {
                 self.effect_forces(t[k], qk, vk, &mut row).map_err(at)?;
                 for (e, f) in out.forces.iter_mut().enumerate() {
