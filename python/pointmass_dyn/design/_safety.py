@@ -102,9 +102,9 @@ def raise_infeasible(message: str, relaxation: dict, binding: tuple, alone: dict
             reach = c.material.allowable_stress / needed if needed > 0 else np.inf
             relaxation[key] = (safety, reach)
             lines.append(
-                f"link '{c.body}': safety factor {safety:g} asked, at most {reach:.3g} reachable "
-                f"here (its webs' stress must fall {needed / asked:.3g}x: widen web= or thicken "
-                "the plate)"
+                f"link '{c.body}': safety factor {safety:g} asked, {reach:.3g} in the nearest "
+                f"design that exists (the least relaxation; its web's stress is "
+                f"{needed / asked:.3g}x the allowed: widen web= or thicken the plate)"
             )
     if lines:
         message = "; ".join(lines) + f" [{message}]"
