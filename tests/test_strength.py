@@ -245,3 +245,40 @@ def test_report_is_one_html_page_with_embedded_figures(tmp_path):
         assert base64.b64decode(data)[:8] == b"\x89PNG\r\n\x1a\n"
     assert "Solved" in text and "aluminium" in text
     assert "http" not in text.replace("http://www.w3.org", "")  # self-contained
+
+
+CLI_SPEC = """
+speed = 300.0
+samples = 24
+objective = { force = 1.0 }
+limits = { safety = 3.0 }
+
+[[link]]
+body = "rocker"
+box = [[-0.05, -0.02, -0.004], [0.08, 0.02, 0.004]]
+cell = 0.004
+material = "steel"
+
+[[link]]
+body = "crank"
+box = [[-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]]
+cell = 0.004
+material = { density = 2700.0, allowable_stress = 2.4e8, name = "alu" }
+"""
+
+
+def test_design_command_writes_dxf_and_report(tmp_path, capsys):
+    pytest.importorskip("matplotlib")
+    from pointmass_dyn.cli import main
+
+    spec = tmp_path / "spec.toml"
+    spec.write_text(CLI_SPEC)
+    out, report = tmp_path / "out", tmp_path / "report.html"
+    assert main(["design", "fourbar", str(spec), "--out", str(out), "--report", str(report)]) == 0
+    text = capsys.readouterr().out
+    factors = [float(v) for v in re.findall(r"least safety factor ([0-9.]+)", text)]
+    assert len(factors) == 2 and min(factors) >= 3.0 * (1 - 1e-6)
+    for name in ("crank", "rocker"):
+        polys, circles = parse_dxf((out / f"{name}.dxf").read_text())
+        assert polys and len(circles) == 2
+    assert "alu" in report.read_text()

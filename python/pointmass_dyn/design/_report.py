@@ -82,11 +82,12 @@ def _polar_figure(plt, b) -> str:
     ax1 = fig.add_subplot(1, 2, 1, projection="polar")
     ax2 = fig.add_subplot(1, 2, 2, projection="polar")
     for a, label, style in ((b.before, "before", "--"), (b.after, "after", "-")):
-        f = np.asarray(a.shaking.force)
+        # The cycle closed: its last sample joined to its first.
+        f = np.vstack([a.shaking.force, a.shaking.force[:1]])
         ax1.plot(np.arctan2(f[:, 1], f[:, 0]), np.hypot(f[:, 0], f[:, 1]), style, label=label)
         ang, _ = _angle(a)
         m = np.asarray(a.shaking.moment)
-        ax2.plot(ang, np.abs(m[:, 2]), style, label=label)
+        ax2.plot(np.append(ang, ang[0]), np.abs(np.append(m[:, 2], m[0, 2])), style, label=label)
     ax1.set_title("shaking force (N): tip of (Fx, Fy)")
     ax2.set_title("|shaking moment Mz| (N·m) over the input angle")
     ax1.legend(loc="lower left", fontsize=8)
