@@ -12,6 +12,7 @@ import numpy as np
 from .. import _core
 from ..errors import InvalidInputError
 from ._dxf import outline, plate_holes, write_dxf
+from ._report import write_report
 from ._shaking import MotionAnalysis
 from ._write import write_scene, write_urdf
 
@@ -137,9 +138,7 @@ class Balance:
         """Writes one self-contained HTML page on this design (figures embedded): each link's
         outline and density map, shaking before/after, bearing forces, the mass and
         safety-factor table, the solver's status and time (docs/design.md §4c)."""
-        from ._report import write_report  # matplotlib only when a report is asked for
-
-        return write_report(self, path)
+        return write_report(self, path)  # (matplotlib imported only here)
 
     def write_dxf(self, body: str, path: Any, threshold: float = 0.5, hole: float | None = None) -> Any:
         """A plate link's outline for cutting (R12 DXF, mm): the cells at least ``threshold``
