@@ -119,6 +119,7 @@ def test_safety_limit_is_honoured_on_a_reanalysis():
     for name, s in b.strength.items():
         assert s.safety >= target * (1 - 1e-7), (name, s.safety, target)
         assert 0 <= s.sample < len(motion.t) and s.t == motion.t[s.sample]
+        assert s.input == motion.input[s.sample]  # the crank angle there
     # The crank's worst stress by the beam formula from the re-analysed bearing forces.
     crank = plates(soft)[0]
     sigma = hand_stress(b, crank)

@@ -386,7 +386,7 @@ def balance(
     for (link, mom), (_, _, _, sl) in zip(var.columns, var.parts):
         phi[NPARAM * link : NPARAM * (link + 1)] += mom.T @ x[sl]
     result = _build(motion, var, x, phi, designed)
-    result.strength = _safety.analysed(checked, result.after)
+    result.strength = _safety.analysed(checked, result.after, motion.input)
     result.solver.update(
         {
             "status": sol["status"],

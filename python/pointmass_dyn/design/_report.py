@@ -8,6 +8,7 @@ from __future__ import annotations
 import base64
 import html
 import io
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -50,6 +51,13 @@ def _angle(a) -> tuple[np.ndarray, str]:
     return 2 * np.pi * (t - t[0]) / span, "phase of the cycle (rad)"
 
 
+def _with_input(a, before):
+    """``a`` with the motion's input (a re-analysis along the same motion has none)."""
+    if a.input is None and before.input is not None:
+        return replace(a, input=before.input, input_name=before.input_name)
+    return a
+
+
 def _shape_figure(plt, name: str, shape, strength) -> str:
     idx = np.round((shape.centers[:, :2] - shape.centers[:, :2].min(axis=0)) / shape.cell).astype(int)
     grid = np.zeros(idx.max(axis=0) + 1)
@@ -82,6 +90,7 @@ def _polar_figure(plt, b) -> str:
     ax1 = fig.add_subplot(1, 2, 1, projection="polar")
     ax2 = fig.add_subplot(1, 2, 2, projection="polar")
     for a, label, style in ((b.before, "before", "--"), (b.after, "after", "-")):
+        a = _with_input(a, b.before)
         # The cycle closed: its last sample joined to its first.
         f = np.vstack([a.shaking.force, a.shaking.force[:1]])
         ax1.plot(np.arctan2(f[:, 1], f[:, 0]), np.hypot(f[:, 0], f[:, 1]), style, label=label)
@@ -101,7 +110,7 @@ def _bearing_figure(plt, b) -> str:
     names = list(model.link_names) + list(model.loop_names)
     fig, ax = plt.subplots(figsize=(10, 3.8))
     for a, style in ((b.before, "--"), (b.after, "-")):
-        ang, xlabel = _angle(a)
+        ang, xlabel = _angle(_with_input(a, b.before))
         f = np.concatenate([a.bearing[:, :, :3], a.cut[:, :, :3]], axis=1)
         for k, name in enumerate(names):
             ax.plot(ang, np.linalg.norm(f[:, k], axis=1), style, color=f"C{k % 10}",
@@ -132,8 +141,8 @@ def _mass_rows(b) -> list[list[Any]]:
         safety = "-"
         if s is not None and np.isfinite(s.safety):
             safety = f"{s.safety:.3g} ({s.material.name})"
-            ang, _ = _angle(b.after)
-            where = (f"t = {s.t:.4g} s, input {ang[s.sample]:.3f} rad, member {s.member}, "
+            ang = "" if s.input is None else f", input {s.input:.3f} rad"
+            where = (f"t = {s.t:.4g} s{ang}, member {s.member}, "
                      f"{s.section * 1e3:.1f} mm from its first pin")
         rows.append([name, f"{before.mass:.4g}", f"{body.mass:.4g}",
                      np.array2string(np.asarray(body.com), precision=4), safety, where])

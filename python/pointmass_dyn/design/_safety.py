@@ -111,6 +111,7 @@ def raise_infeasible(message: str, relaxation: dict, binding: tuple, alone: dict
     raise InfeasibleDesignError(message, relaxation, binding, alone)
 
 
-def analysed(checked: list[Checked], after) -> dict[str, LinkStrength]:
-    """Each checked link's stresses re-analysed from the design's bearing forces."""
-    return {c.body: analyse(after, c.body, c.material, c.members, c.pins) for c in checked}
+def analysed(checked: list[Checked], after, inputs=None) -> dict[str, LinkStrength]:
+    """Each checked link's stresses re-analysed from the design's bearing forces
+    (``inputs``: the driver's position per sample, to say where)."""
+    return {c.body: analyse(after, c.body, c.material, c.members, c.pins, inputs) for c in checked}

@@ -227,8 +227,9 @@ def pin_forces_analysed(analysis, body: str, pins: list[dict]) -> np.ndarray:
 class LinkStrength:
     """A link's strength along the motion: ``material``, its ``members`` and ``pins``,
     ``stress`` (N, members, sections, 2, 4) in Pa, the ``safety`` factor (the allowable
-    stress over the largest |σ|), where it occurs (``sample``, ``t``, ``member``,
-    ``section`` (m from the member's first pin))."""
+    stress over the largest |σ|), where it occurs (``sample``, ``t``, ``input``: the
+    driver's position then (the crank angle; None without one), ``member``, ``section`` (m
+    from the member's first pin))."""
 
     body: str
     material: object
@@ -240,9 +241,11 @@ class LinkStrength:
     t: float
     member: int
     section: float
+    input: float | None = None
 
 
-def analyse(analysis, body: str, material, member_list: list[Member], pins: list[dict]) -> LinkStrength:
+def analyse(analysis, body: str, material, member_list: list[Member], pins: list[dict],
+            inputs=None) -> LinkStrength:
     """The stresses in a link's members from the pin forces of ``analysis`` (an independent
     re-analysis of a design: its bearing and cut joint forces)."""
     forces = pin_forces_analysed(analysis, body, pins)
@@ -258,8 +261,10 @@ def analyse(analysis, body: str, material, member_list: list[Member], pins: list
     t, i, k, _, _ = np.unravel_index(int(np.argmax(peak)), peak.shape)
     top = float(peak.max(initial=0.0))
     safety = material.allowable_stress / top if top > 0 else np.inf
+    inputs = analysis.input if inputs is None else inputs  # the driver's, per sample
+    angle = None if inputs is None else float(np.asarray(inputs)[t])
     return LinkStrength(body, material, pins, member_list, stress, float(safety), int(t),
-                        float(analysis.t[t]), int(i), float(member_list[i].sections[k].s))
+                        float(analysis.t[t]), int(i), float(member_list[i].sections[k].s), angle)
 
 
 def stress_rows(model, body: str, member_list: list[Member], pins: list[dict], q, data,
