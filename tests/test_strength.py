@@ -283,3 +283,19 @@ def test_design_command_writes_dxf_and_report(tmp_path, capsys):
         polys, circles = parse_dxf((out / f"{name}.dxf").read_text())
         assert polys and len(circles) == 2
     assert "alu" in report.read_text()
+
+
+def test_safety_arguments_are_checked():
+    _scene, motion = crank_rocker(24)
+    plain = [pmd.LinkShape("crank", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004)]
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"limits\['safety'\].*material"):
+        pmd.balance(motion, links=plain, limits={"safety": 2.0})
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"limits\['safety'\].*>= 1"):
+        pmd.balance(motion, links=plates(pmd.Material.steel()), limits={"safety": 0.5})
+    with pytest.raises(pmd.errors.InvalidInputError, match="web"):
+        plates(pmd.Material.steel(), web=-1.0)[0].cells(motion.model)
+    # A web off the pins' centre line leaves a member without a section: named.
+    off = pmd.LinkShape("crank", box=([-0.05, 0.004, -0.004], [0.045, 0.02, 0.004]), cell=0.004,
+                        material=pmd.Material.steel(), boss=0.0)
+    with pytest.raises(pmd.errors.InvalidInputError, match="'crank'.*no(ne| material)"):
+        pmd.balance(motion, links=[off], objective={"force": 1.0})
