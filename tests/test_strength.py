@@ -72,13 +72,13 @@ def plates(material, web=None):
     ]
 
 
-def hand_stress(b, shape):
-    """The largest |σ| in the crank's web (its pins on the x axis), from the designed
+def hand_stress(b, shape, name="crank"):
+    """The largest |σ| in a two-pin link's web (its pins on the x axis), from the designed
     mechanism's bearing forces along the motion, by the beam formula on a rectangle: loads
     from the far pin (N = F_B,x, M = F_B,y (L - s)) and from the near one (N = F_A,x,
     M = τ - F_A,y s with τ the driving torque)."""
     model = b.after.model
-    (pa, _), (pb, _) = pmd._core.design_pins(model, "crank")[:2]
+    (pa, _), (pb, _) = pmd._core.design_pins(model, name)[:2]
     assert np.allclose(pa, 0) and abs(pb[1]) < 1e-12 and pb[0] > 0  # along x
     length = pb[0]
     centers, lower, cap = shape.cells(model)
@@ -87,16 +87,19 @@ def hand_stress(b, shape):
     thick = np.ptp(web[:, 2]) + shape.cell
     area, inertia = width * thick, thick * width**3 / 12
     names = model.body_names
-    i_crank, i_coupler = names.index("crank"), names.index("coupler")
-    l_crank, l_coupler = model.link_names.index("crank"), model.link_names.index("coupler")
+    i_link, i_coupler = names.index(name), names.index("coupler")
+    l_link, l_coupler = model.link_names.index(name), model.link_names.index("coupler")
     r = shape.boss_radius()
     stations = np.arange(r + shape.cell / 2, length - r - shape.cell / 2 + 1e-12, shape.cell)
     worst = 0.0
     for t in range(len(b.after.t)):
         rot, _ = model.placements(b.after.q[t])
-        f_b = -(rot[i_crank].T @ rot[i_coupler] @ b.after.bearing[t, l_coupler, :3])
-        f_a = b.after.bearing[t, l_crank, :3]
-        torque = b.after.bearing[t, l_crank, 5]  # the driving torque about the crank's pin (z)
+        if name == "crank":  # its far pin: the coupler's joint (the reaction to its bearing)
+            f_b = -(rot[i_link].T @ rot[i_coupler] @ b.after.bearing[t, l_coupler, :3])
+        else:  # the rocker's: the cut joint, on its body b, in the coupler's (frame a's) axes
+            f_b = rot[i_link].T @ rot[i_coupler] @ b.after.cut[t, 0, :3]
+        f_a = b.after.bearing[t, l_link, :3]
+        torque = b.after.bearing[t, l_link, 5]  # the driving torque about its pin (z)
         for s in stations:
             for n, m in ((f_b[0], f_b[1] * (length - s)), (f_a[0], torque - f_a[1] * s)):
                 worst = max(worst, abs(n) / area + abs(m) * (width / 2) / inertia)
@@ -120,11 +123,12 @@ def test_safety_limit_is_honoured_on_a_reanalysis():
         assert s.safety >= target * (1 - 1e-7), (name, s.safety, target)
         assert 0 <= s.sample < len(motion.t) and s.t == motion.t[s.sample]
         assert s.input == motion.input[s.sample]  # the crank angle there
-    # The crank's worst stress by the beam formula from the re-analysed bearing forces.
-    crank = plates(soft)[0]
-    sigma = hand_stress(b, crank)
-    assert sigma <= soft.allowable_stress / target * (1 + 1e-7)
-    np.testing.assert_allclose(soft.allowable_stress / sigma, b.strength["crank"].safety, rtol=1e-9)
+    # Each link's worst stress by the beam formula from the re-analysed bearing forces.
+    for shape in plates(soft):
+        sigma = hand_stress(b, shape, shape.body)
+        assert sigma <= soft.allowable_stress / target * (1 + 1e-7)
+        np.testing.assert_allclose(soft.allowable_stress / sigma, b.strength[shape.body].safety,
+                                   rtol=1e-9)
     # It costs shaking force (the limit binds): no better than without it.
     assert b.solver["values"]["force"] > 1.01 * free.solver["values"]["force"]
 
