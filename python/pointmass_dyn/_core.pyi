@@ -934,6 +934,14 @@ def design_regressor(
 def design_pins(model: Model, body: int | str) -> list[tuple[_Array, _Array]]:
     """``(point, axis)`` of each revolute or ball joint on ``body``, in its frame."""
 
+def design_pin_loads(model: Model, body: int | str) -> list[dict[str, Any]]:
+    """The pins of :func:`design_pins` (same order) with the source of each one's force:
+    ``point``, ``axis`` (body frame), ``kind`` (``"joint"``: a tree joint's bearing rows, world
+    axes; ``"cut"``: a cut joint's, frame a's axes), ``index`` (link or cut joint), ``sign``
+    (+1 the force on this body, -1 its reaction), ``frame_body`` (the body whose rotation
+    times ``frame_rotation`` turns the rows to world axes; -1: none) and ``frame_rotation``
+    (3, 3)."""
+
 def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
     """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
     ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel`` (the last

@@ -29,7 +29,7 @@ pub(crate) fn initial(problem: &Problem) -> Active {
         .iter()
         .map(|q| {
             let (per, n) = blocks(q);
-            let stride = match problem.norm {
+            let stride = match q.norm(problem.norm) {
                 Norm::Peak => (n / per / FIRST_SAMPLES).max(1),
                 Norm::Rms => 1,
             };
@@ -53,7 +53,8 @@ pub(crate) fn solve_cut(
         };
         iterations += raw.iterations;
         time += raw.solve_time;
-        if problem.norm == Norm::Rms || add_violated(problem, &lay, stage, &raw, active) == 0 {
+        let any_peak = problem.norm == Norm::Peak || problem.quantities.iter().any(|q| q.peak);
+        if !any_peak || add_violated(problem, &lay, stage, &raw, active) == 0 {
             raw.iterations = iterations;
             raw.solve_time = time;
             return Ok(Some((raw, round)));
@@ -88,6 +89,9 @@ fn add_violated(
         let Some(b) = bound(problem, lay, stage, k) else {
             continue;
         };
+        if q.norm(problem.norm) == Norm::Rms {
+            continue; // one cone for the whole motion: always in the program
+        }
         // Quantities are relative to their value before: 1e-9 of it, or of the bound.
         let limit = b.value(&raw.z);
         let limit = limit + 1e-9 * (1.0 + limit.abs());

@@ -12,6 +12,7 @@ pub mod pins;
 pub mod problem;
 mod program;
 pub mod regressor;
+pub mod strength;
 
 pub use cells::{cube_moments, fill, point_moments, Envelope};
 pub use pins::pins;

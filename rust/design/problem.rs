@@ -36,6 +36,20 @@ pub struct Quantity {
     pub limit: Option<f64>,
     /// Must vanish at every sample (linear equalities).
     pub zero: bool,
+    /// Its limit holds at every block whatever the problem's norm (a member's stress,
+    /// `design/strength`): one cone per block, weight zero.
+    pub peak: bool,
+}
+
+impl Quantity {
+    /// The norm this quantity is measured in: its own peak, or the problem's.
+    pub fn norm(&self, problem_norm: Norm) -> Norm {
+        if self.peak {
+            Norm::Peak
+        } else {
+            problem_norm
+        }
+    }
 }
 
 /// A design problem: bounds and maps of the design masses, and the quantities.
@@ -93,7 +107,7 @@ pub fn values(problem: &Problem, delta: &[f64]) -> Vec<f64> {
             let y = &q.rows * &d + &q.constant;
             let blocks = y.len() / q.dim.max(1);
             let norms = (0..blocks).map(|b| y.rows(b * q.dim, q.dim).norm_squared());
-            match problem.norm {
+            match q.norm(problem.norm) {
                 Norm::Rms => (norms.sum::<f64>() / q.samples.max(1) as f64).sqrt(),
                 Norm::Peak => norms.fold(0.0_f64, f64::max).sqrt(),
             }

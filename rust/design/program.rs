@@ -231,7 +231,7 @@ fn rms_factors(problem: &Problem) -> Vec<DMatrix<f64>> {
     problem
         .quantities
         .iter()
-        .filter(|q| q.weight > 0.0 && !q.zero)
+        .filter(|q| q.weight > 0.0 && !q.zero && !q.peak)
         .map(|q| {
             let s = scale(q) / (q.samples.max(1) as f64).sqrt();
             compress(&q.rows, &q.constant, s * q.weight.sqrt())
@@ -363,7 +363,7 @@ fn cones(bld: &mut Builder, problem: &Problem, lay: &Layout, stage: Stage, activ
             }
         };
         let s = scale(q);
-        match problem.norm {
+        match q.norm(problem.norm) {
             Norm::Peak => {
                 for &b in &active[k] {
                     head(bld);

@@ -4,12 +4,12 @@ use nalgebra::{DMatrix, DVector};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use super::convert::{array, to_array, to_array1};
+use super::convert::{array, mat3_to_array, to_array, to_array1};
 use super::errors::{check_result, invalid};
 use super::model::{gravity_arg, PyModel};
 use super::signals::detach_interruptible;
 use crate::design::{self, Envelope, Norm, Problem, Quantity};
-use crate::spatial::Vec3;
+use crate::spatial::{Mat3, Vec3};
 
 fn points3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec<Vec3>> {
     let (shape, data) = array(obj, arg)?;
@@ -170,6 +170,50 @@ pub fn design_pins<'py>(
     Ok(out)
 }
 
+/// The pins of `design_pins` with where each one's force comes from (design/_strength.py):
+/// dicts with `point`, `axis`, `kind` ("joint" or "cut"), `index` (link or cut joint),
+/// `sign`, `frame_body` (the body whose axes the rows are in after `frame_rotation`; -1:
+/// the world) and `frame_rotation` (3, 3).
+#[pyfunction]
+pub fn design_pin_loads<'py>(
+    py: Python<'py>,
+    model: PyRef<'_, PyModel>,
+    body: &Bound<'_, PyAny>,
+) -> PyResult<Bound<'py, PyList>> {
+    use crate::design::strength::{pin_loads, PinSource};
+    let model = model.model();
+    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
+        invalid(
+            py,
+            "body",
+            "a body of the model (not the world)",
+            "the world",
+        )
+    })?;
+    let out = PyList::empty(py);
+    for pin in pin_loads(&model, b) {
+        let d = PyDict::new(py);
+        d.set_item("point", to_array1(py, pin.point.as_slice()))?;
+        d.set_item("axis", to_array1(py, pin.axis.as_slice()))?;
+        let (kind, index, sign, frame_body, rot) = match pin.source {
+            PinSource::Tree { link, sign } => ("joint", link, sign, -1, Mat3::identity()),
+            PinSource::Cut {
+                k,
+                sign,
+                body_a,
+                frame_a,
+            } => ("cut", k, sign, body_a.map_or(-1, |a| a as i64), frame_a),
+        };
+        d.set_item("kind", kind)?;
+        d.set_item("index", index)?;
+        d.set_item("sign", sign)?;
+        d.set_item("frame_body", frame_body)?;
+        d.set_item("frame_rotation", mat3_to_array(py, &rot)?)?;
+        out.append(d)?;
+    }
+    Ok(out)
+}
+
 fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
     let py = obj.py();
     let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
@@ -196,6 +240,11 @@ fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
         reference: get("reference")?.extract()?,
         limit: get("limit")?.extract()?,
         zero: get("zero")?.extract()?,
+        // Optional: a member's stress (its limit at every sample whatever the norm).
+        peak: match obj.get_item("peak") {
+            Ok(v) => v.extract()?,
+            Err(_) => false,
+        },
         name,
     })
 }

@@ -56,6 +56,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::design_cells, m)?)?;
     m.add_function(wrap_pyfunction!(design::design_regressor, m)?)?;
     m.add_function(wrap_pyfunction!(design::design_pins, m)?)?;
+    m.add_function(wrap_pyfunction!(design::design_pin_loads, m)?)?;
     m.add_function(wrap_pyfunction!(design::design_solve, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;

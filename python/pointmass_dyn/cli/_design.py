@@ -17,6 +17,7 @@ from .._helpers import scene_gravity
 from ..design import (
     Counterweight,
     LinkShape,
+    Material,
     balance,
     pareto_front,
     prescribed_motion,
@@ -33,7 +34,8 @@ The spec is a TOML file:
   samples = 360               # instants over the revolution
   norm = "peak"               # or "rms"
   objective = { bearing = 1.0 }          # force, moment, torque, bearing, bearing:<joint>, mass
-  limits = { force = 0.39 }              # same norm, absolute units (mass: kg)
+  limits = { force = 0.39 }              # same norm, absolute units (mass: kg);
+                                         # safety = 2.0: links with a material
   zero = []                              # quantities that must vanish at every instant
 
   [[link]]                    # a link's material as cells (pmd.LinkShape's arguments)
@@ -41,6 +43,8 @@ The spec is a TOML file:
   box = [[-0.05, -0.02, -0.006], [0.045, 0.02, 0.006]]   # or polygon + z, or stl = "file"
   cell = 0.005
   density = 7850.0            # optional: mass = [low, high], keep, keep_out, symmetric
+  material = "steel"          # optional, strength-checked: "steel", "aluminium" or
+                              # { density = 2700.0, allowable_stress = 1.2e8 }; web = 0.008
 
   [[counterweight]]           # candidate point masses (pmd.Counterweight)
   body = "rocker"
@@ -57,7 +61,9 @@ position, mass, bound), bodies.csv (each designed body's ten inertial parameters
 first moments m·c, inertia about the body origin in Pinocchio's order), summary.csv (RMS
 and peak of each quantity before and after), <body>.stl (cells filled to half or more),
 density_<body>.png (matplotlib), and designed.toml: the scene with the designed bodies
-(and designed.urdf where they came from a URDF). With [pareto]: pareto.csv, pareto.png.
+(and designed.urdf where they came from a URDF), <body>.dxf (plate links: the outline and
+pin holes for cutting). With [pareto]: pareto.csv, pareto.png. --report PATH: one HTML page
+on the design (figures embedded; matplotlib).
 Exit status 2 with the reason when no design meets the spec (which limit, by how much).
 
 example:
@@ -67,7 +73,7 @@ example:
 _SPEC_KEYS = {"driver", "speed", "samples", "norm", "objective", "limits", "zero", "least_mass",
               "link", "counterweight", "pareto"}
 _LINK_KEYS = {"body", "box", "polygon", "z", "stl", "density", "cell", "mass", "keep", "keep_out",
-              "boss", "symmetric"}
+              "boss", "symmetric", "material", "web"}
 
 
 def add_parser(sub):
@@ -85,6 +91,8 @@ def add_parser(sub):
     p.add_argument("spec", help="the design spec, a TOML file (see below)")
     p.add_argument("--out", default=None, metavar="DIR",
                    help="directory for the results (default: <scene>_design)")
+    p.add_argument("--report", default=None, metavar="PATH",
+                   help="also write one self-contained HTML report of the design there")
     p.set_defaults(func=cmd_design, driver=None)
     return p
 
@@ -125,8 +133,26 @@ def _links(spec: dict, base: Path) -> list[LinkShape]:
         for key in ("mass", "z"):
             if key in args:
                 args[key] = tuple(args[key])
+        if "material" in args:
+            args["material"] = _material(args["material"], k)
         out.append(LinkShape(**args))
     return out
+
+
+def _material(value, k: int) -> Material:
+    """A [[link]]'s material: a preset's name or a table of Material's arguments."""
+    presets = {"steel": Material.steel, "aluminium": Material.aluminium}
+    if isinstance(value, str) and value in presets:
+        return presets[value]()
+    if isinstance(value, dict) and set(value) <= {"density", "allowable_stress", "name"}:
+        try:
+            return Material(**value)
+        except TypeError:
+            pass
+    raise InvalidInputError(
+        f"spec: [[link]] {k + 1} material: expected \"steel\", \"aluminium\" or a table with "
+        f"density and allowable_stress, got {value!r}"
+    )
 
 
 def _spec_number(table: dict, key: str, default, cast, where: str):
@@ -325,6 +351,16 @@ def cmd_design(args) -> int:
     for name, shape in b.shapes.items():
         shape.write_stl(out / f"{name}.stl", threshold=0.5)
     _density_maps(b, out)
+    for name, st in b.strength.items():
+        print(f"{name}: least safety factor {st.safety:.3g} at t = {st.t:.4g} s")
+    for name in b.shapes:
+        try:
+            b.write_dxf(name, out / f"{name}.dxf")
+        except InvalidInputError as exc:  # not a plate: no outline to cut
+            print(f"{name}.dxf skipped: {exc}")
     b.write_scene(resolve_scene_path(args.scene), out / "designed.toml")
-    print(f"written to {out}/: design.csv, bodies.csv, summary.csv, STL, density maps, designed.toml")
+    print(f"written to {out}/: design.csv, bodies.csv, summary.csv, STL, DXF, density maps, "
+          "designed.toml")
+    if args.report:
+        print(f"report: {b.report(args.report)}")
     return 0

@@ -10,9 +10,11 @@ driving torque, bearing forces and mass — a convex program (QP or SOCP) solved
 
 from ._balance import Balance, Counterweight
 from ._front import TIE_WEIGHT, ParetoFront, analysed_value, pareto_front
+from ._material import Material
 from ._problem import OBJECTIVES, balance, objective_value
 from ._shaking import MotionAnalysis, Shaking, analyze_motion, prescribed_motion, shaking
 from ._shapes import LinkShape, Shape, read_stl
+from ._strength import LinkStrength
 from ._write import write_scene, write_urdf
 
 __all__ = [
@@ -21,6 +23,8 @@ __all__ = [
     "Balance",
     "Counterweight",
     "LinkShape",
+    "LinkStrength",
+    "Material",
     "MotionAnalysis",
     "ParetoFront",
     "Shape",

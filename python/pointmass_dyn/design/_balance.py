@@ -9,7 +9,10 @@ from typing import Any
 
 import numpy as np
 
+from .. import _core
 from ..errors import InvalidInputError
+from ._dxf import outline, plate_holes, write_dxf
+from ._report import write_report
 from ._shaking import MotionAnalysis
 from ._write import write_scene, write_urdf
 
@@ -115,6 +118,10 @@ class Balance:
     #: predicts in the problem's norm and those before; ``stages``: each stage's status and
     #: gaps (the optimum, then the least mass among the optima).
     solver: dict = field(default_factory=dict)
+    #: Strength-checked links (``LinkShape(material=…)``) by body name: a
+    #: :class:`~pointmass_dyn.design.LinkStrength` each — stresses along the motion, the
+    #: smallest safety factor and where it occurs (re-analysed from ``after``).
+    strength: dict = field(default_factory=dict)
 
     def write_scene(self, source: Any, path: Any) -> Any:
         """The designed model as a scene file: a copy of ``source`` (the scene the motion's
@@ -126,6 +133,27 @@ class Balance:
     def write_urdf(self, source: Any, path: Any) -> Any:
         """A copy of the URDF ``source`` with the designed bodies' ``<inertial>`` elements."""
         return write_urdf(self.bodies, source, path)
+
+    def report(self, path: Any) -> Any:
+        """Writes one self-contained HTML page on this design (figures embedded): each link's
+        outline and density map, shaking before/after, bearing forces, the mass and
+        safety-factor table, the solver's status and time (docs/design.md §4c)."""
+        return write_report(self, path)  # (matplotlib imported only here)
+
+    def write_dxf(self, body: str, path: Any, threshold: float = 0.5, hole: float | None = None) -> Any:
+        """A plate link's outline for cutting (R12 DXF, mm): the cells at least ``threshold``
+        full seen along z, and a hole of radius ``hole`` (default half a cell) at each pin."""
+        if body not in self.shapes:
+            raise InvalidInputError(f"body: expected a designed link shape {sorted(self.shapes)}, got {body!r}")
+        shape = self.shapes[body]
+        if not 0.0 <= threshold <= 1.0:
+            raise InvalidInputError(f"threshold: expected a fraction in [0, 1], got {threshold}")
+        r = 0.5 * shape.cell if hole is None else float(hole)
+        if not (np.isfinite(r) and r > 0):
+            raise InvalidInputError(f"hole: expected a radius > 0 (m), got {hole!r}")
+        loops = outline(shape.centers, shape.fill >= threshold, shape.cell)
+        holes = plate_holes(_core.design_pins(self.before.model, body), r)
+        return write_dxf(path, loops, holes)
 
     def table(self) -> str:
         """Before/after RMS and peaks, as text, each quantity with its unit."""

@@ -18,7 +18,8 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from ..errors import InfeasibleDesignError, InvalidInputError
+from ..errors import InvalidInputError
+from . import _safety
 from ._balance import Balance, Counterweight
 from ._shaking import MotionAnalysis, analyze_motion
 from ._shapes import LinkShape, Shape
@@ -282,6 +283,7 @@ def balance(
         _number(w, f"objective['{k}']")
     for k, v in limits.items():
         _number(v, f"limits['{k}']")
+    safety = _safety.safety_limit(limits)  # bounds the members' stress (design/_safety.py)
     if not any(float(w) > 0 for w in objective.values()) and not limits and not zero:
         raise InvalidInputError(
             f"objective: expected some weight > 0 (or limits= / zero=), got {objective}"
@@ -347,6 +349,9 @@ def balance(
                 "zero": what in zero,
             }
         )
+    checked = _safety.checked_links(model, var.parts, safety)
+    quantities += _safety.quantities(checked, motion, data, actuated, cols, phi_base,
+                                     phi_now, safety)
     lower = np.concatenate(var.lower)
     upper = np.concatenate(var.upper)
     spec = {
@@ -372,7 +377,7 @@ def balance(
         relaxation = {name: (asked, needed) for name, _z, asked, needed, *_ in items}
         binding = tuple(name for name, _z, _a, _n, _b, on, _alone in items if on)
         alone = {name: value for name, *_, value in items}
-        raise InfeasibleDesignError(sol["message"], relaxation, binding, alone)
+        _safety.raise_infeasible(sol["message"], relaxation, binding, alone, checked, safety)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
     # The parameters of the masses found (the solver's δ = M x holds to its tolerance only):
@@ -381,6 +386,7 @@ def balance(
     for (link, mom), (_, _, _, sl) in zip(var.columns, var.parts):
         phi[NPARAM * link : NPARAM * (link + 1)] += mom.T @ x[sl]
     result = _build(motion, var, x, phi, designed)
+    result.strength = _safety.analysed(checked, result.after, motion.input)
     result.solver.update(
         {
             "status": sol["status"],

@@ -18,6 +18,8 @@ import numpy as np
 
 from .. import _core
 from ..errors import InvalidInputError
+from ._material import Material
+from ._strength import link_pins, members, web_mask
 
 
 def _numbers(value: Any, arg: str, expected: str) -> np.ndarray:
@@ -85,6 +87,24 @@ class LinkShape:
     keep_out: Any = ()
     boss: float | None = None
     symmetric: bool = False
+    #: A :class:`~pointmass_dyn.Material` (density and allowable stress): the link's members
+    #: are strength-checked (docs/design.md §4a); its density replaces ``density``.
+    material: Any = None
+    #: With a material: the width (m) of the web kept full along each member (default: two
+    #: bosses' radius).
+    web: float | None = None
+
+    @property
+    def rho(self) -> float:
+        """The density the cells are made of: the material's, else ``density``."""
+        return float(self.material.density if self.material is not None else self.density)
+
+    def web_width(self) -> float:
+        """The web's width (m): ``web``, else the bosses' diameter."""
+        return float(self.web) if self.web is not None else 2.0 * self.boss_radius()
+
+    def boss_radius(self) -> float:
+        return self.cell if self.boss is None else float(self.boss)
 
     def _envelope(self) -> dict:
         given = [k for k in ("box", "polygon", "stl") if getattr(self, k) is not None]
@@ -118,6 +138,7 @@ class LinkShape:
             isinstance(b, bool) or not (isinstance(b, (int, float)) and np.isfinite(b) and b >= 0)
         ):
             raise InvalidInputError(f"boss: expected None or a finite radius >= 0 (m), got {b!r}")
+        _check_material(self)
         env = self._envelope()
         centers = np.asarray(_core.design_cells(float(self.cell), **env), dtype=float).reshape(-1, 3)
         for b in _boxes(self.keep_out, "keep_out"):
@@ -126,7 +147,7 @@ class LinkShape:
             raise InvalidInputError(
                 f"LinkShape '{self.body}': no cell of side {self.cell} fits in the envelope (less keep_out)"
             )
-        cap = np.full(len(centers), self.density * self.cell**3)
+        cap = np.full(len(centers), self.rho * self.cell**3)
         full = np.zeros(len(centers), dtype=bool)
         for b in _boxes(self.keep, "keep"):
             full |= _inside(centers, b)
@@ -137,6 +158,8 @@ class LinkShape:
             if n > 0:
                 d = d - np.outer(d @ (axis / n), axis / n)
             full |= np.linalg.norm(d, axis=1) <= radius * (1 + 1e-9)
+        if self.material is not None:  # the members' webs stay full: they carry the loads
+            full |= web_mask(members(link_pins(model, self.body), radius), centers, self.web_width())
         return centers, np.where(full, cap, 0.0), cap
 
     def mirror_pairs(self, centers: np.ndarray) -> list[tuple[int, int]]:
@@ -159,6 +182,23 @@ class LinkShape:
             if i < j:
                 pairs.append((i, j))
         return pairs
+
+
+def _check_material(shape: LinkShape) -> None:
+    if shape.material is not None and not isinstance(shape.material, Material):
+        raise InvalidInputError(
+            f"material: expected a pmd.Material (e.g. pmd.Material.steel()), got {shape.material!r}"
+        )
+    if shape.material is not None and shape.density != LinkShape.density \
+            and shape.density != shape.material.density:
+        raise InvalidInputError(
+            f"density: expected the material's ({shape.material.density} kg/m³) or none with "
+            f"material=, got {shape.density!r}"
+        )
+    w = shape.web
+    if w is not None and (isinstance(w, bool) or not isinstance(w, (int, float, np.integer, np.floating))
+                          or not (np.isfinite(w) and w > 0)):
+        raise InvalidInputError(f"web: expected None or a width > 0 (m), got {w!r}")
 
 
 def _boxes(value: Any, arg: str) -> list[np.ndarray]:

@@ -146,6 +146,7 @@ fn toy(norm: Norm, limit: Option<f64>, upper: f64) -> Problem {
         groups: vec![],
         equal: vec![],
         quantities: vec![Quantity {
+            peak: false,
             name: "y".into(),
             rows,
             constant: DVector::from_vec(vec![-1.0, -2.0]),
