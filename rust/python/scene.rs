@@ -190,6 +190,18 @@ impl PyScene {
             .py(py)
     }
 
+    /// The scene as scene-file text that `Scene.from_toml` reads back as an equal scene
+    /// (docs/scenes.md, "Saving a scene"). Raises `InvalidInputError` naming an effect no
+    /// file can state (a torque function).
+    fn to_toml(&self, py: Python<'_>) -> PyResult<String> {
+        self.inner.to_toml().py(py)
+    }
+
+    /// Writes `to_toml()` to `path` (`load_scene(path)` reads it back).
+    fn write(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        self.inner.write(&path).py(py)
+    }
+
     /// The scene's model (shared, not copied: adding a body to it copies it first, so the
     /// scene never changes).
     #[getter]
