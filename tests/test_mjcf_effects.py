@@ -138,3 +138,5 @@ def test_what_mujoco_cannot_take_is_refused_naming_the_effect(effect):
     sc = pmd.Scene(chain(2), effects=[pmd.Gravity(), effect])
     with pytest.raises(pmd.errors.InvalidInputError, match=repr(effect.name)):
         pmd.to_mjcf(sc)
+    with pytest.raises(pmd.errors.InvalidInputError, match="scene: expected a pointmass_dyn"):
+        pmd.io.mujoco_controls(sc.model, 0.0)

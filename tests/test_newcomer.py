@@ -130,3 +130,14 @@ def test_the_package_under_test_is_the_one_asked_for():
     assert pmd._core.cpu_dispatch in ("avx2", "baseline")
     if expected:
         assert pmd._core.cpu_dispatch == expected
+
+
+def test_a_lone_effect_is_refused_as_effects_naming_the_argument():
+    # Issue 38's walk: Scene(model, effects=pmd.Gravity()) said "'Effect' object is not
+    # iterable" (a TypeError naming nothing).
+    m = pmd.Model()
+    m.add_body(pmd.RigidBody(1.0, [0.2, 0, 0], np.diag([1e-3, 1e-2, 1e-2])),
+               pmd.Revolute([0, 1, 0]), name="arm")
+    with pytest.raises(pmd.errors.InvalidInputError,
+                       match=r"effects: expected a list of effects.*got Gravity\("):
+        pmd.Scene(m, effects=pmd.Gravity())

@@ -319,7 +319,7 @@ impl Declaration for Torque {
             ),
             TorqueLaw::Function(_) => {
                 return Err(Error::arg(
-                    "effects",
+                    "effect",
                     "effects a scene file can state (a torque function is Python code: give a table or a PD torque, or save the scene with pickle)",
                     format!("the torque function '{}'", self.label().unwrap_or("torques")),
                 ))

@@ -64,7 +64,16 @@ impl PyScene {
         let mut list = Vec::new();
         if let Some(effs) = effects {
             if !effs.is_none() {
-                for (k, e) in effs.try_iter()?.enumerate() {
+                // A lone effect is a common slip: say what a list is, not "not iterable".
+                let items = effs.try_iter().map_err(|_| {
+                    invalid(
+                        py,
+                        "effects",
+                        "a list of effects such as [pmd.Gravity()]",
+                        repr_of(effs),
+                    )
+                })?;
+                for (k, e) in items.enumerate() {
                     let e = e?;
                     let eff = e.cast::<PyEffect>().map_err(|_| {
                         invalid(

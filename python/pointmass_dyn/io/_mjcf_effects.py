@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from .._core import Scene
 from ..errors import InvalidInputError
 
 #: MuJoCo's impedance for our soft limits and contacts: nearly hard (see the module docs).
@@ -153,6 +154,9 @@ def _actuated(scene) -> list[tuple[Any, dict, list[int]]]:
 def mujoco_controls(scene, t: float = 0.0) -> np.ndarray:
     """``d.ctrl`` of :func:`to_mjcf`'s model at time ``t``: the actuators' controls, in the
     order the MJCF lists them (see the module docs)."""
+    if not isinstance(scene, Scene):
+        raise InvalidInputError(f"scene: expected a pointmass_dyn Scene, got "
+                                f"{type(scene).__name__}")
     parts = [_torque_controls(d, len(links), float(t)) for _, d, links in _actuated(scene)]
     return np.concatenate(parts) if parts else np.zeros(0)
 
