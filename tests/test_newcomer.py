@@ -141,3 +141,12 @@ def test_a_lone_effect_is_refused_as_effects_naming_the_argument():
     with pytest.raises(pmd.errors.InvalidInputError,
                        match=r"effects: expected a list of effects.*got Gravity\("):
         pmd.Scene(m, effects=pmd.Gravity())
+
+
+def test_animate_with_the_scene_first_says_the_order(tmp_path):
+    # Issue 38's walk: animate(scene, result, path), in simulate's order, said only
+    # "expected a Model or a Scene, got SimulationResult".
+    sc = pmd.load_scene("pendulum_planar")
+    res = pmd.simulate(sc, (0, 0.1))
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"the result first"):
+        pmd.animate(sc, res, tmp_path / "x.html")
