@@ -173,3 +173,27 @@ inertia = [[0, 0, 0], [0, 0, 0], [0, 0, 0]]
         pmd.Scene.from_toml(text)
     with pytest.raises(pmd.errors.SceneError, match=r"body\[0\] \('ghost'\)\.inertia"):
         pmd.Scene.from_toml(text.replace("[0, 0, 0]]", "[0, 0, 1]]"))
+
+
+def test_a_design_is_written_from_a_python_built_scene(tmp_path):
+    # write_scene needed a scene file as its source; a Scene built in Python is one now.
+    sc = pmd.load_scene("fourbar")
+    built = pmd.Scene(sc.model, sc.q0, sc.v0, sc.effects, name="built in Python")
+    mo = pmd.prescribed_motion(sc.model, "crank", speed=30.0, q_guess=sc.q0,
+                               gravity=[0, -9.81, 0])
+    rings = [pmd.Counterweight.ring("crank", [0, 0, 0], 0.02),
+             pmd.Counterweight.ring("rocker", [0, 0, 0], 0.02)]
+    b = pmd.balance(mo, counterweights=rings, zero=("force",))
+    path = b.write_scene(built, tmp_path / "balanced.toml")
+    again = pmd.load_scene(path)
+    for name, body in b.bodies.items():
+        got = again.model.body(name)
+        assert got.mass == body.mass
+        np.testing.assert_array_equal(got.com, body.com)
+        np.testing.assert_array_equal(got.inertia, body.inertia)
+    # The balanced model's shaking force along the same motion: what the balance promised.
+    after = pmd.prescribed_motion(again.model, "crank", speed=30.0, q_guess=sc.q0,
+                                  gravity=[0, -9.81, 0])
+    assert after.summary()["shaking force"]["rms"] < 1e-6 * mo.summary()["shaking force"]["rms"]
+    with pytest.raises(pmd.errors.InvalidInputError, match="bodies"):
+        pmd.design.write_scene({"nobody": b.bodies["crank"]}, built, tmp_path / "x.toml")
