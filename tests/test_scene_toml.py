@@ -35,6 +35,9 @@ def assert_same_model(a: pmd.Model, b: pmd.Model):
     for _ in range(3):
         q, v = random_state(a)
         q = a.neutral() if a.nloops else q  # loop models: a state on the constraint manifold
+        # The seven point masses (where point_mass_center puts them), not only their sums.
+        for xa, xb in zip(a.point_masses(q), b.point_masses(q)):
+            np.testing.assert_allclose(xb, xa, rtol=0, atol=1e-14 * max(np.abs(xa).max(), 1))
         ma, mb = a.mass_matrix(q), b.mass_matrix(q)
         np.testing.assert_allclose(mb, ma, rtol=0, atol=1e-14 * np.abs(ma).max())
         ba, bb = a.bias_forces(q, v, g), b.bias_forces(q, v, g)
