@@ -200,3 +200,19 @@ def test_a_design_is_written_from_a_python_built_scene(tmp_path):
     assert after.summary()["shaking force"]["rms"] < 1e-6 * mo.summary()["shaking force"]["rms"]
     with pytest.raises(pmd.errors.InvalidInputError, match="bodies"):
         pmd.design.write_scene({"nobody": b.bodies["crank"]}, built, tmp_path / "x.toml")
+
+
+def test_a_mujoco_import_with_a_massless_intermediate_body_reads_back():
+    mujoco = pytest.importorskip("mujoco")
+    xml = """<mujoco><worldbody><body name="a" pos="0 0 1">
+      <joint name="j1" type="hinge" axis="1 0 0"/><joint name="j2" type="hinge" axis="0 1 0"/>
+      <inertial mass="1" pos="0.1 0 0" diaginertia="0.01 0.02 0.03"/>
+      <body name="b" pos="0.3 0 0"><joint name="j3" type="slide" axis="1 0 0"/>
+        <inertial mass="0.5" pos="0 0 0" diaginertia="0.001 0.001 0.001"/></body>
+    </body></worldbody></mujoco>"""
+    m = pmd.from_mujoco(mujoco.MjModel.from_xml_string(xml))
+    assert m.body(0).mass == 0.0  # the body of joint j1, between the world and j2's
+    sc = pmd.Scene(m, effects=[pmd.Gravity()])
+    text = sc.to_toml()
+    assert "mass = 0.0" in text
+    assert_same_scene(sc, pmd.Scene.from_toml(text))
