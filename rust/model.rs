@@ -264,7 +264,7 @@ impl Model {
 
     /// Checks that the joint records point at bodies and coordinates of this model (a
     /// deserialised model's may not).
-    fn check_records(&self) -> Result<()> {
+    pub(crate) fn check_records(&self) -> Result<()> {
         let bad = self.records.joints.iter().find(|j| {
             j.body >= self.bodies.len()
                 || j.link.is_some_and(|l| l >= self.links.len())

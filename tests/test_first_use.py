@@ -130,3 +130,23 @@ def test_the_package_under_test_is_the_one_asked_for():
     assert pmd._core.cpu_dispatch in ("avx2", "baseline")
     if expected:
         assert pmd._core.cpu_dispatch == expected
+
+
+def test_a_lone_effect_is_refused_as_effects_naming_the_argument():
+    # Issue 38's walk: Scene(model, effects=pmd.Gravity()) said "'Effect' object is not
+    # iterable" (a TypeError naming nothing).
+    m = pmd.Model()
+    m.add_body(pmd.RigidBody(1.0, [0.2, 0, 0], np.diag([1e-3, 1e-2, 1e-2])),
+               pmd.Revolute([0, 1, 0]), name="arm")
+    with pytest.raises(pmd.errors.InvalidInputError,
+                       match=r"effects: expected a list of effects.*got Gravity\("):
+        pmd.Scene(m, effects=pmd.Gravity())
+
+
+def test_animate_with_the_scene_first_says_the_order(tmp_path):
+    # Issue 38's walk: animate(scene, result, path), in simulate's order, said only
+    # "expected a Model or a Scene, got SimulationResult".
+    sc = pmd.load_scene("pendulum_planar")
+    res = pmd.simulate(sc, (0, 0.1))
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"the result first"):
+        pmd.animate(sc, res, tmp_path / "x.html")

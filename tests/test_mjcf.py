@@ -191,7 +191,7 @@ def test_refusals_name_the_problem():
     chain = pmd.load_scene("chain7")
     for eff, words in [
         (pmd.JointFriction("link0", friction=0.2, v_eps=1e-3), "JointFriction"),
-        (pmd.JointTorque("link0", tau=1.0), "JointTorque"),
+        (pmd.ExternalForce("link0", [0, 0, 1.0]), "External"),  # a JointTorque is a motor now
     ]:
         with pytest.raises(InvalidInputError, match=words):
             pmd.to_mjcf(chain.replace(effects=[*chain.effects, eff]))

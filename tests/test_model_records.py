@@ -1,6 +1,6 @@
 """A model's joint names, limits, repairs, couplings, armature and visuals survive every way
 a model travels: into a Scene and out of it, `Scene.replace`, `with_body`, pickling and deep
-copies, a scene file written and loaded, and `to_mjcf`. The reference names come from
+copies, a scene file written and loaded (`write_scene`, `Scene.to_toml`), and `to_mjcf`. The reference names come from
 Pinocchio's URDF parser and the limits from the URDF text itself."""
 
 from __future__ import annotations
@@ -46,6 +46,7 @@ def copies(model: pmd.Model):
     yield "Scene.replace(q0=…).model", scene.replace(q0=q, rtol=1e-5).model
     yield "pickle(model)", pickle.loads(pickle.dumps(model))
     yield "pickle(scene).model", pickle.loads(pickle.dumps(scene)).model
+    yield "Scene.from_toml(scene.to_toml()).model", pmd.Scene.from_toml(scene.to_toml()).model
     yield "deepcopy(model)", copy.deepcopy(model)
     yield "with_body", model.with_body(model.nbodies - 1, model.body(model.nbodies - 1))
     grown = scene.model

@@ -405,6 +405,12 @@ def test_cli_errors(tmp_path, capsys):
     assert "body[0] ('rod').mass" in capsys.readouterr().err
     assert cli.main(["simulate", "pendulum_planar", "--t-end", "0.1", "--out", str(tmp_path / "x.txt")]) == 2
     assert "--out" in capsys.readouterr().err
+    # animate refuses a file name it cannot write before the run, not after it (issue 38's
+    # walk: `animate fourbar --out x.xyz` ran the whole simulation first).
+    assert cli.main(["animate", "pendulum_planar", "--out", str(tmp_path / "x.xyz")]) == 2
+    captured = capsys.readouterr()
+    assert "--out" in captured.err and ".html, .gif or .mp4" in captured.err
+    assert "reached the end" not in captured.out
     # A run that cannot finish exits 1.
     failing = write(tmp_path, ROD + "\n[simulate]\nt_end = 1\nmax_steps = 3\n", "failing.toml")
     assert cli.main(["simulate", str(failing)]) == 1

@@ -136,10 +136,11 @@ def check(res, said, angle_error, rtol):
     if res.singular_passage is not None:
         assert len(said) == 1 and "singular position" in str(said[0].message)
         return
-    # No warning: on its branch, and within 100 rtol unless the message says why not.
+    # No warning: on its branch (a run that leaves it is off by ~1 rad), and within 100 rtol
+    # unless the message says why not.
     assert not said
     assert res.success, res.message
-    assert angle_error < 1e-4, (angle_error, res.singular_crossings)
+    assert angle_error < 1e-3, (angle_error, res.singular_crossings)
     if angle_error > 100 * rtol:
         assert res.singular_crossings[0] > 0, (angle_error, res.message)
         assert "singular position" in res.message
@@ -173,19 +174,14 @@ def test_planar_runs_are_accurate_or_say_why_not(case, method, rtol):
     check(res, said, err, rtol)
 
 
-# Known gaps, measured: at 1e-6 one long step over the top that DOP853's estimate under-rates
-# (1.4 x 100 rtol; docs/mechanisms.md section 5, "A02 at rtol 1e-8"); at 1e-12 and 1e-13 the
-# crossing's cost (3.6 and 55 x 100 rtol), which no report covers: A02's rows lose N = 40
-# dimensions there at once, an even number, so the kernel's orientation does not reverse.
-A02_GAPS = {1e-6: "the long step over the top", 1e-12: "an even rank drop",
-            1e-13: "an even rank drop"}
-
-
-@pytest.mark.parametrize("rtol", [
-    pytest.param(r, marks=pytest.mark.xfail(reason=A02_GAPS[r], strict=False))
-    if r in A02_GAPS else r for r in RTOLS])
+@pytest.mark.parametrize("rtol", RTOLS)
 def test_n_fourbar_a02_through_its_first_crossing_is_accurate_or_says_why_not(rtol):
-    # The benchmark scene (N = 40) through its first crossing (t = 3.21 s).
+    # The benchmark scene (N = 40) through its crossings (theta = 0, -pi at t = 0.72, 1.24,
+    # 2.69, 3.21 s). A02's rows lose N = 40 dimensions there at once, an even number, so the
+    # kernel's orientation does not reverse: the rows' volume dipping over a step reports
+    # them (rust/simulate/dynamics.rs, Crossings). Measured: 1.4, 0.27, 3.1 and 50 x 100 rtol
+    # at 1e-6, 1e-9, 1e-12, 1e-13 (the crossing's cost at tight rtol, a long step over the
+    # top at 1e-6), every run reporting the 4 crossings.
     sc = pmd.load_scene("iftomm_a02_nfourbar")
     res, said = run(sc, 3.5, "DOP853", rtol)
     t = np.asarray(res.t)
@@ -196,6 +192,7 @@ def test_n_fourbar_a02_through_its_first_crossing_is_accurate_or_says_why_not(rt
     print("A02", rtol, res.success, f"{err:.1e}", res.singular_passage, res.singular_crossings,
           res.n_accepted)
     check(res, said, err, rtol)
+    assert res.singular_crossings[0] == int(np.sum(np.diff(np.floor(ref.y[0] / np.pi)) != 0))
 
 
 @pytest.mark.parametrize("rtol", [1e-6, 1e-9])

@@ -610,6 +610,9 @@ class Effect:
     @property
     def kind(self) -> _Family:
         """The effect's family (what ``disable`` switches off)."""
+    def to_dict(self) -> dict[str, Any]:
+        """The effect's scene-file ``[[effect]]`` table (``type``, ``name`` and its keys, SI
+        units, radians). A torque function raises ``InvalidInputError``."""
     def __eq__(self, other: object, /) -> bool: ...
 
 @final
@@ -716,6 +719,14 @@ class Scene:
         same sizes), the effects (checked against it), the start state (``q0`` normalised),
         name, description and any run setting. Raises ``InvalidInputError`` naming the
         argument."""
+    def to_toml(self) -> str:
+        """The scene as scene-file text that ``Scene.from_toml`` reads back as an equal scene:
+        the model inline (bodies, joints, placements, point-mass centres, loops, couplings,
+        armature; joint names, limits, repairs and visuals under ``[records]``), every effect,
+        the start state and every run setting. A torque function raises
+        ``InvalidInputError`` naming the effect."""
+    def write(self, path: str | os.PathLike[str]) -> None:
+        """Writes :meth:`to_toml` to ``path`` (``load_scene(path)`` reads it back)."""
     @staticmethod
     def from_toml(text: str, file: str = "<string>") -> Scene:
         """Parses a scene from TOML text; raises :class:`pointmass_dyn.errors.SceneError`

@@ -1,5 +1,6 @@
 //! Viscous joint dampers: `τ = −c v` on every speed of each selected joint (isotropic on the
 //! 3 speeds of a spherical joint). Power `−c |v|²`.
+use super::scene_writer as w;
 use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
@@ -41,6 +42,12 @@ impl Damper {
 }
 
 impl Declaration for Damper {
+    fn to_toml(&self) -> Result<toml::Table> {
+        Ok(w::EffectTable::new("damper", self.label())
+            .joints(&self.joints)
+            .set("damping", w::per_joint(&self.damping))
+            .done())
+    }
     fn parameters(&self) -> &'static [&'static str] {
         &["damping"]
     }

@@ -7,6 +7,7 @@
 //! Evaluation needs only the link's orientation `R` (the wrench is taken about the link
 //! origin): `[R p × f + m; f]`, with `R` composed along the link's ancestors, so a force on
 //! link `i` costs O(depth of i) and nothing when undeclared.
+use super::scene_writer as w;
 use super::table::Table;
 use super::{
     check_values, resolve_body, Context, Declaration, Fields, ForceLaw, JointRef, Kind, Matrix,
@@ -196,6 +197,29 @@ impl External {
 }
 
 impl Declaration for External {
+    fn to_toml(&self) -> Result<toml::Table> {
+        let t = w::EffectTable::new("external", self.label())
+            .set("body", w::joint_ref(&self.body))
+            .set("point", w::vec3(&self.point))
+            .set("frame", toml::Value::String(self.frame.name().into()));
+        Ok(match &self.load {
+            ExternalLoad::Constant { force, moment } => t
+                .set("force", w::vec3(force))
+                .set("moment", w::vec3(moment)),
+            ExternalLoad::Tabulated(table) => {
+                // Six columns: the force's three, then the moment's.
+                let (mut force, mut moment) = (Vec::new(), Vec::new());
+                for row in table.values().chunks(6) {
+                    force.extend_from_slice(&row[..3]);
+                    moment.extend_from_slice(&row[3..]);
+                }
+                t.set("time", w::numbers(table.time()))
+                    .set("force", w::rows(&force, 3, false))
+                    .set("moment", w::rows(&moment, 3, false))
+            }
+        }
+        .done())
+    }
     fn parameters(&self) -> &'static [&'static str] {
         &[]
     }

@@ -3,6 +3,7 @@
 //! a quaternion spherical joint's angular velocity `ω`. `F` is the friction torque (N·m) or
 //! force (N) reached when sliding well above `v_eps`; below it the law is viscous with slope
 //! `F / v_eps`, which keeps the equations smooth (no stick-slip switching). Power ≤ 0.
+use super::scene_writer as w;
 use super::{joints_repr, label_repr, one_number, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
@@ -62,6 +63,13 @@ impl Friction {
 }
 
 impl Declaration for Friction {
+    fn to_toml(&self) -> Result<toml::Table> {
+        Ok(w::EffectTable::new("friction", self.label())
+            .joints(&self.joints)
+            .set("friction", w::per_joint(&self.friction))
+            .set("v_eps", w::number(self.v_eps))
+            .done())
+    }
     fn parameters(&self) -> &'static [&'static str] {
         &["friction", "v_eps"]
     }

@@ -1,6 +1,7 @@
 //! Uniform gravity: `f_ij = m_ij g` on every point mass. It rides on the base twist rate
 //! `[0; −g]`, so the forward dynamics pays nothing for it; its potential energy is
 //! `−Σ m_ij g·x_ij` (zero at the world origin).
+use super::scene_writer as w;
 use super::{required, Context, Declaration, Effect, Fields, ForceLaw, Kind, TomlType};
 use crate::error::{check_finite, Error, Result};
 use crate::kinematics::LinkState;
@@ -42,6 +43,11 @@ impl From<Gravity> for Effect {
 }
 
 impl Declaration for Gravity {
+    fn to_toml(&self) -> Result<toml::Table> {
+        Ok(w::EffectTable::new("gravity", None)
+            .set("g", w::vec3(&self.g))
+            .done())
+    }
     fn kind(&self) -> Kind {
         Kind::Gravity
     }

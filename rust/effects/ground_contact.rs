@@ -17,6 +17,7 @@
 //! adds energy. The derivatives are analytic (`add_derivatives`), which Radau needs: a
 //! stiff contact makes a scene stiff.
 use super::body_point::{add_force, velocity, PointSet};
+use super::scene_writer as w;
 use super::{label_repr, one_number, Effect, TomlType};
 use super::{required, Context, Declaration, Fields, ForceLaw, JointRef, Kind};
 use crate::error::{check_finite, Error, Result};
@@ -287,6 +288,29 @@ fn points_from_toml(v: &toml::Value) -> Result<Vec<ContactPoint>> {
 }
 
 impl Declaration for GroundContact {
+    fn to_toml(&self) -> Result<toml::Table> {
+        let points = self
+            .points
+            .iter()
+            .map(|p| {
+                toml::Value::Array(vec![
+                    w::joint_ref(&p.body),
+                    w::vec3(&p.point),
+                    w::number(p.radius),
+                ])
+            })
+            .collect();
+        Ok(w::EffectTable::new("ground_contact", self.label())
+            .set("points", toml::Value::Array(points))
+            .set("normal", w::vec3(&self.normal))
+            .set("height", w::number(self.height))
+            .maybe("stiffness", self.stiffness.map(w::number))
+            .set("exponent", w::number(self.exponent))
+            .maybe("damping", self.damping.map(w::number))
+            .set("friction", w::number(self.friction))
+            .set("v_eps", w::number(self.v_eps))
+            .done())
+    }
     fn kind(&self) -> Kind {
         Kind::Contact
     }

@@ -9,6 +9,7 @@
 //! (or 0 ≤ −dV/dt where the `max` is active): a limit never adds energy. Infinite bounds are
 //! allowed (a one-sided range, or none). Without `lower`/`upper` the model's own limits are
 //! used ([`JointLimit::with_model_limits`]: URDF `<limit>`, MJCF `range`).
+use super::scene_writer as w;
 use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, JointSlot, Kind,
@@ -202,6 +203,15 @@ fn check_order(lower: &[f64], upper: &[f64], at: impl Fn(usize) -> String) -> Re
 }
 
 impl Declaration for JointLimit {
+    fn to_toml(&self) -> Result<toml::Table> {
+        Ok(w::EffectTable::new("joint_limit", self.label())
+            .joints(&self.joints)
+            .maybe("lower", self.lower.as_ref().map(w::per_joint))
+            .maybe("upper", self.upper.as_ref().map(w::per_joint))
+            .set("stiffness", w::per_joint(&self.stiffness))
+            .set("damping", w::per_joint(&self.damping))
+            .done())
+    }
     fn kind(&self) -> Kind {
         Kind::Limits
     }

@@ -69,6 +69,7 @@ pub mod joint_limit;
 mod law;
 pub mod point_spring;
 mod scene_file;
+pub mod scene_writer;
 mod select;
 pub mod spring;
 pub mod table;
@@ -136,6 +137,10 @@ pub trait Declaration {
     fn with_parameter(&self, key: &str, values: &[f64]) -> Result<Effect>;
     /// How Python shows the declaration (`Spring(joints=all)`), the factory's name first.
     fn repr(&self) -> String;
+    /// The `[[effect]]` table that the scene file reads back as an equal declaration
+    /// (`scene_writer.rs`); an effect no file can state (a Python-function torque) is an
+    /// error naming it.
+    fn to_toml(&self) -> Result<toml::Table>;
     /// The scene-file `type`s this declaration reads, with their keys and parsers.
     fn toml_types() -> &'static [TomlType]
     where
@@ -230,6 +235,11 @@ impl Effect {
     /// name the field at fault (`joints`, `stiffness`, `values`, ...).
     pub fn build(&self, model: &Model) -> Result<Box<dyn ForceLaw>> {
         self.declaration().build(model)
+    }
+
+    /// The `[[effect]]` table of this effect (`Declaration::to_toml`).
+    pub fn to_toml(&self) -> Result<toml::Table> {
+        self.declaration().to_toml()
     }
 
     /// Parses one `[[effect]]` table of a scene file. Errors name the key (without the

@@ -13,6 +13,7 @@
 //! The direction `u` is undefined where the points coincide (`l = 0`): the run stops there
 //! with an error, unless `l₀ = 0` and `c = 0`, where the force is `−k d` (smooth through 0).
 use super::body_point::End;
+use super::scene_writer as w;
 use super::{label_repr, one_number, Effect, TomlType};
 use super::{Context, Declaration, Fields, ForceLaw, JointRef, Kind};
 use crate::error::{check_finite, Error, Result};
@@ -136,6 +137,21 @@ fn body_or_world(f: &mut Fields<'_>, key: &'static str) -> Result<Option<Option<
 }
 
 impl Declaration for PointSpring {
+    fn to_toml(&self) -> Result<toml::Table> {
+        let body = |b: &Option<JointRef>| match b {
+            Some(r) => w::joint_ref(r),
+            None => toml::Value::String("world".into()),
+        };
+        Ok(w::EffectTable::new("point_spring", self.label())
+            .set("body_a", body(&self.body_a))
+            .set("point_a", w::vec3(&self.point_a))
+            .set("body_b", body(&self.body_b))
+            .set("point_b", w::vec3(&self.point_b))
+            .set("stiffness", w::number(self.stiffness))
+            .set("rest_length", w::number(self.rest_length))
+            .set("damping", w::number(self.damping))
+            .done())
+    }
     fn parameters(&self) -> &'static [&'static str] {
         &["stiffness", "rest_length", "damping"]
     }

@@ -4,6 +4,7 @@
 //! rest orientation: `τ = −k θ` (body-frame speeds, which is exactly `−∂V/∂` of the potential
 //! `½ k |θ|²` since `θ` is an eigenvector of the SO(3) Jacobians). Euler-angle
 //! (`SphericalZYZ`) joints are refused: use the quaternion joint.
+use super::scene_writer as w;
 use super::{joints_repr, label_repr, Effect, TomlType};
 use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
@@ -56,6 +57,13 @@ impl Spring {
 }
 
 impl Declaration for Spring {
+    fn to_toml(&self) -> Result<toml::Table> {
+        Ok(w::EffectTable::new("spring", self.label())
+            .joints(&self.joints)
+            .set("stiffness", w::per_joint(&self.stiffness))
+            .set("rest", w::per_joint(&self.rest))
+            .done())
+    }
     fn parameters(&self) -> &'static [&'static str] {
         &["stiffness", "rest"]
     }

@@ -113,6 +113,10 @@ impl Table {
     pub fn time(&self) -> &[f64] {
         &self.time
     }
+    /// Whether the values were given as one flat list (shape `(len,)`).
+    pub fn one_d(&self) -> bool {
+        self.one_d
+    }
     pub fn values(&self) -> &[f64] {
         &self.values
     }

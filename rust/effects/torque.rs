@@ -5,6 +5,7 @@
 //!   `τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)`, with `q̇_ref` the slope of the table's
 //!   segment (right-continuous at breakpoints, zero outside the table);
 //! * a function `f(t, q, v) → τ` (length nv), e.g. a Python callable.
+use super::scene_writer as w;
 use std::any::Any;
 use std::sync::Arc;
 
@@ -297,6 +298,40 @@ impl Torque {
 }
 
 impl Declaration for Torque {
+    fn to_toml(&self) -> Result<toml::Table> {
+        let name = self.label();
+        let t = match &self.law {
+            TorqueLaw::Constant(tau) => w::EffectTable::new("torque", name)
+                .joints(&self.joints)
+                .set("tau", w::per_joint(tau)),
+            TorqueLaw::Tabulated(table) => w::table(
+                w::EffectTable::new("tabulated_torque", name).joints(&self.joints),
+                table,
+                "values",
+            ),
+            TorqueLaw::Pd { kp, kd, reference } => w::table(
+                w::EffectTable::new("pd_torque", name)
+                    .joints(&self.joints)
+                    .set("kp", w::per_joint(kp))
+                    .set("kd", w::per_joint(kd)),
+                reference,
+                "reference",
+            ),
+            TorqueLaw::Function(_) => {
+                return Err(Error::arg(
+                    "effect",
+                    "effects a scene file can state (a torque function is Python code: give a table or a PD torque, or save the scene with pickle)",
+                    format!("the torque function '{}'", self.label().unwrap_or("torques")),
+                ))
+            }
+        };
+        let limit = match &self.limit {
+            None => None,
+            Some(TorqueLimit::Given(l)) => Some(w::per_joint(l)),
+            Some(TorqueLimit::Effort) => Some(toml::Value::String("effort".into())),
+        };
+        Ok(t.maybe("limit", limit).done())
+    }
     fn parameters(&self) -> &'static [&'static str] {
         match self.law {
             TorqueLaw::Constant(_) => &["tau"],

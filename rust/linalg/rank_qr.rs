@@ -73,6 +73,17 @@ impl RankQr {
         }
     }
 
+    /// `Σ ln |R_kk|` over the kept columns: the log of their volume (the product of their
+    /// singular values), which falls like `|t − t*|^k` as a motion nears a position where
+    /// `k` of them become dependent at once (−inf with a zero pivot).
+    pub fn log_volume(&self) -> f64 {
+        let rank = self.rank();
+        match self {
+            RankQr::Dense(q) => (0..rank).map(|k| q.diagonal(k).abs().ln()).sum(),
+            RankQr::Envelope(q) => (0..rank).map(|k| q.diagonal(k).abs().ln()).sum(),
+        }
+    }
+
     /// With `rank = rows − 1` (one direction left): `x ← Q e_rank`, the unit vector
     /// orthogonal to the kept columns; returns `det[A_kept, x] = (−1)^rank Π R_kk`'s sign
     /// (each kept column has a true reflector, `det H = −1`), which orients `x` against the

@@ -162,6 +162,12 @@ impl LoopSolver {
         self.qr_j.pivot_ratio()
     }
 
+    /// The log-volume of the rows kept at the last factorisation
+    /// ([`crate::linalg::rank_qr::RankQr::log_volume`]).
+    pub fn log_volume(&self) -> f64 {
+        self.qr_j.log_volume()
+    }
+
     /// With one degree of freedom left at the last factorisation of `Jᵀ` (after
     /// [`project_state`]: at the projected state): the unit vector spanning the kernel of the
     /// kept rows, oriented as their generalized cross product in increasing row order

@@ -667,10 +667,43 @@ impl PyEffect {
             _ => None,
         }
     }
+    /// The effect's scene-file `[[effect]]` table as a dict (`type`, `name`, its keys;
+    /// docs/scenes.md): every parameter it holds, SI units and radians. Raises
+    /// `InvalidInputError` for a torque function (Python code no file can state).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let table = self.inner.to_toml().py(py)?;
+        toml_to_py(py, &toml::Value::Table(table))
+    }
     fn __repr__(&self) -> String {
         self.inner.repr()
     }
     fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {
         self.inner == other.inner
     }
+}
+
+/// A TOML value as Python data (dicts, lists, str, int, float, bool).
+fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    use pyo3::IntoPyObjectExt;
+    Ok(match v {
+        toml::Value::String(s) => s.into_bound_py_any(py)?,
+        toml::Value::Integer(i) => i.into_bound_py_any(py)?,
+        toml::Value::Float(x) => x.into_bound_py_any(py)?,
+        toml::Value::Boolean(b) => b.into_bound_py_any(py)?,
+        toml::Value::Datetime(d) => d.to_string().into_bound_py_any(py)?,
+        toml::Value::Array(a) => {
+            let items = a
+                .iter()
+                .map(|x| toml_to_py(py, x))
+                .collect::<PyResult<Vec<_>>>()?;
+            pyo3::types::PyList::new(py, items)?.into_any()
+        }
+        toml::Value::Table(t) => {
+            let d = pyo3::types::PyDict::new(py);
+            for (k, x) in t {
+                d.set_item(k, toml_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
 }

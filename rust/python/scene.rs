@@ -64,7 +64,16 @@ impl PyScene {
         let mut list = Vec::new();
         if let Some(effs) = effects {
             if !effs.is_none() {
-                for (k, e) in effs.try_iter()?.enumerate() {
+                // A lone effect is a common slip: say what a list is, not "not iterable".
+                let items = effs.try_iter().map_err(|_| {
+                    invalid(
+                        py,
+                        "effects",
+                        "a list of effects such as [pmd.Gravity()]",
+                        repr_of(effs),
+                    )
+                })?;
+                for (k, e) in items.enumerate() {
                     let e = e?;
                     let eff = e.cast::<PyEffect>().map_err(|_| {
                         invalid(
@@ -188,6 +197,18 @@ impl PyScene {
         Scene::from_file(&path)
             .map(|inner| PyScene { inner })
             .py(py)
+    }
+
+    /// The scene as scene-file text that `Scene.from_toml` reads back as an equal scene
+    /// (docs/scenes.md, "Saving a scene"). Raises `InvalidInputError` naming an effect no
+    /// file can state (a torque function).
+    fn to_toml(&self, py: Python<'_>) -> PyResult<String> {
+        self.inner.to_toml().py(py)
+    }
+
+    /// Writes `to_toml()` to `path` (`load_scene(path)` reads it back).
+    fn write(&self, py: Python<'_>, path: std::path::PathBuf) -> PyResult<()> {
+        self.inner.write(&path).py(py)
     }
 
     /// The scene's model (shared, not copied: adding a body to it copies it first, so the

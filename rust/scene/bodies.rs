@@ -16,16 +16,63 @@ pub(super) fn add_bodies(
     q0: &mut Vec<f64>,
     v0: &mut Vec<f64>,
 ) -> Result<()> {
+    let mut massless = Vec::new();
     for (k, b) in bodies.iter().enumerate() {
         let at = At {
             ctx,
             k,
             name: &b.name,
         };
-        let joint = add_body(&at, model, b, units)?;
+        let (joint, without_mass) = add_body(&at, model, b, units)?;
+        if without_mass {
+            massless.push(k);
+        }
         let (q, v) = initial_coordinates(&at, b, &joint, units)?;
         q0.extend(q);
         v0.extend(v);
+    }
+    sum_massless_links(ctx, model, bodies, &massless)
+}
+
+/// The links holding a body of mass 0 (added with a placeholder, as the URDF loader does)
+/// take the sum of their bodies' own inertials; a link left without mass needs links with
+/// mass below it, or its joint's acceleration is undetermined.
+fn sum_massless_links(
+    ctx: &Ctx,
+    model: &mut Model,
+    bodies: &[BodyFile],
+    massless: &[usize],
+) -> Result<()> {
+    if massless.is_empty() {
+        return Ok(());
+    }
+    let merged = model.link_bodies();
+    let mut below = vec![0.0; merged.len()];
+    for l in (0..merged.len()).rev() {
+        if let Some(p) = model.links[l].parent {
+            below[p] += below[l] + merged[l].mass;
+        }
+    }
+    let mut done = vec![false; merged.len()];
+    for &k in massless {
+        let Some(l) = model.bodies[k].link.filter(|&l| !done[l]) else {
+            continue;
+        };
+        done[l] = true;
+        let at = At {
+            ctx,
+            k,
+            name: &bodies[k].name,
+        };
+        if merged[l].mass <= 0.0 && below[l] <= 0.0 {
+            return Err(at.err(
+                "mass",
+                "mass 0 on a moving body with no body with mass below it: its joint moves nothing (give it a mass > 0)",
+            ));
+        }
+        model
+            .set_link_body(l, merged[l])
+            .map_err(|e| at.core("inertia", e))?;
     }
     Ok(())
 }
@@ -60,8 +107,8 @@ fn field_of(e: &Error, inertia: bool, default: &str) -> String {
     }
 }
 
-/// Adds body `b`; returns its joint.
-fn add_body(at: &At, model: &mut Model, b: &BodyFile, units: Units) -> Result<Joint> {
+/// Adds body `b`; returns its joint and whether it has mass 0.
+fn add_body(at: &At, model: &mut Model, b: &BodyFile, units: Units) -> Result<(Joint, bool)> {
     let parent = match b.parent.as_deref() {
         None | Some("world") => None,
         Some(p) => Some(model.body_index(p).ok_or_else(|| {
@@ -88,17 +135,36 @@ fn add_body(at: &At, model: &mut Model, b: &BodyFile, units: Units) -> Result<Jo
         (None, Some(rpy)) => crate::urdf::rpy_matrix(&(Vec3::from(rpy) * units.angle)),
         (None, None) => Mat3::identity(),
     };
-    let body = rigid_body(at, b)?;
+    let (body, massless) = rigid_body(at, b)?;
     let placement = Placement::new(rotation, Vec3::from(b.translation.unwrap_or([0.0; 3])));
     let center = b.point_mass_center.map(Vec3::from);
-    model
-        .add_body(body, joint, parent, placement, Some(b.name.clone()), center)
+    // `add_body` merges welded bodies with mass > 0: a massless one gets a placeholder and
+    // its own inertial after (`sum_massless_links`).
+    let placeholder = RigidBody {
+        mass: 1.0,
+        com: Vec3::zeros(),
+        inertia: Mat3::identity(),
+    };
+    let added = if massless { placeholder } else { body };
+    let index = model
+        .add_body(
+            added,
+            joint,
+            parent,
+            placement,
+            Some(b.name.clone()),
+            center,
+        )
         .map_err(|e| at.core(&field_of(&e, false, ""), e))?;
-    Ok(joint)
+    if massless {
+        model.set_body_inertial(index, body);
+    }
+    Ok((joint, massless))
 }
 
-/// `mass`, `com` and `inertia` (3x3 about the COM) or `inertia_diag`.
-fn rigid_body(at: &At, b: &BodyFile) -> Result<RigidBody> {
+/// `mass`, `com` and `inertia` (3x3 about the COM) or `inertia_diag`, and whether the mass
+/// is 0 (a massless intermediate body, as a URDF's: then without rotational inertia).
+fn rigid_body(at: &At, b: &BodyFile) -> Result<(RigidBody, bool)> {
     let inertia = match (b.inertia, b.inertia_diag) {
         (Some(_), Some(_)) => {
             return Err(at.err("inertia", "give either inertia or inertia_diag, not both"))
@@ -113,7 +179,26 @@ fn rigid_body(at: &At, b: &BodyFile) -> Result<RigidBody> {
         }
     };
     let com = Vec3::from(b.com.unwrap_or([0.0; 3]));
-    RigidBody::new(b.mass, com, inertia).map_err(|e| at.core(&field_of(&e, true, "inertia"), e))
+    if b.mass == 0.0 {
+        crate::error::check_finite("com", com.as_slice()).map_err(|e| at.core("com", e))?;
+        if inertia.abs().max() > 0.0 {
+            return Err(at.err(
+                "inertia",
+                "a body of mass 0 needs a zero inertia (seven point masses cannot carry one)",
+            ));
+        }
+        return Ok((
+            RigidBody {
+                mass: 0.0,
+                com,
+                inertia,
+            },
+            true,
+        ));
+    }
+    RigidBody::new(b.mass, com, inertia)
+        .map(|r| (r, false))
+        .map_err(|e| at.core(&field_of(&e, true, "inertia"), e))
 }
 
 /// The joint's initial q and v: the body's `q0`/`v0` (angles and angular rates in the file's

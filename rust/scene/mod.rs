@@ -14,6 +14,7 @@ use crate::model::Model;
 mod bodies;
 mod couplings;
 mod loops;
+mod write;
 
 /// Integrator settings a scene may carry; the caller's arguments override them.
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -111,6 +112,9 @@ struct SceneFile {
     /// Rotor inertia by joint or body name (`couplings.rs`).
     armature: Option<toml::Table>,
     simulate: Option<SimulateFile>,
+    /// What the model keeps beside its dynamics (`write.rs` writes it): the source file's
+    /// joints (names, limits), repairs, visuals and the model's name.
+    records: Option<write::RecordsFile>,
 }
 
 #[derive(Deserialize)]
@@ -209,6 +213,9 @@ impl Scene {
         let mut q0 = model.neutral();
         let mut v0 = vec![0.0; model.nv];
         bodies::add_bodies(&ctx, &mut model, &sf.body, units, &mut q0, &mut v0)?;
+        if let Some(r) = sf.records {
+            set_records(&ctx, &mut model, r, sf.urdf.is_some())?;
+        }
         loops::add_loops(&ctx, &mut model, &sf.loops, units)?;
         couplings::add_couplings(&ctx, &mut model, urdf_joints, &sf.coupling, units)?;
         for (k, b) in sf.body.iter().enumerate() {
@@ -245,6 +252,24 @@ impl Scene {
             settings,
         })
     }
+}
+
+/// `[records]` (a written scene's, for a model without a `urdf` key): the joints' names and
+/// limits, repairs, visuals and name, checked against the model's bodies and coordinates.
+fn set_records(ctx: &Ctx, model: &mut Model, r: write::RecordsFile, urdf: bool) -> Result<()> {
+    if urdf {
+        return Err(ctx.err(
+            "records",
+            "only for a scene without a urdf key (a written scene)",
+        ));
+    }
+    model.name = r.model;
+    model.records = crate::joint_records::JointRecords::new(r.joints, r.repairs);
+    model.visuals = r.visuals;
+    model
+        .check_structure()
+        .and_then(|_| model.check_records())
+        .map_err(|e| ctx.core("records", e))
 }
 
 /// Error builder bound to one scene file.

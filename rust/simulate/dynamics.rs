@@ -55,6 +55,12 @@ pub struct Dynamics<'a> {
 /// says the motion went through (or jumped over) a singular position between the two
 /// states, however long the step; a dead point of one coordinate partition does not
 /// reverse it. Compared only while the kept rows are the same.
+///
+/// Where an even number of rows become dependent at once (the N-four-bar's 40 bars all flat
+/// together) the orientation keeps its sign; the rows' volume (`Π |R_kk|`, a product of
+/// their singular values) still falls like `|t − t*|^k` towards the position and rises past
+/// it. A local minimum of the volume over accepted states below [`VOLUME_DIP`] of the run's
+/// largest, with the same rows and no reversal there, counts as a passage too.
 pub struct Crossings {
     kernel: Vec<f64>,
     prev: Vec<f64>,
@@ -62,6 +68,12 @@ pub struct Crossings {
     prev_rows: Vec<usize>,
     order: Vec<usize>,
     have_prev: bool,
+    /// Log-volume of the previous state's rows, the run's largest, and whether it fell into
+    /// the previous state; `reversed`: a reversal was counted at the previous state.
+    volume: f64,
+    volume_max: f64,
+    falling: bool,
+    reversed: bool,
     /// How many, and the time of the accepted state just past the first.
     pub count: usize,
     pub first: Option<f64>,
@@ -76,6 +88,10 @@ impl Crossings {
             prev_rows: Vec::with_capacity(m),
             order: Vec::with_capacity(m),
             have_prev: false,
+            volume: f64::NEG_INFINITY,
+            volume_max: f64::NEG_INFINITY,
+            falling: false,
+            reversed: false,
             count: 0,
             first: None,
         }
@@ -89,14 +105,28 @@ impl Crossings {
             return false;
         }
         let mut turned = false;
+        let volume = solver.log_volume();
+        let mut reversed = false;
         if self.have_prev {
             let dot: f64 = self.kernel.iter().zip(&self.prev).map(|(a, b)| a * b).sum();
             turned = dot.abs() < TANGENT_TURN.cos();
-            if dot < 0.0 && self.rows == self.prev_rows {
+            reversed = dot < 0.0 && self.rows == self.prev_rows;
+        }
+        if self.have_prev && self.rows == self.prev_rows {
+            let dipped = self.falling
+                && volume > self.volume
+                && self.volume - self.volume_max < VOLUME_DIP.ln();
+            if reversed || (dipped && !self.reversed) {
                 self.count += 1;
                 self.first.get_or_insert(t);
             }
+            self.falling = volume < self.volume;
+        } else {
+            self.falling = false;
         }
+        self.reversed = reversed;
+        self.volume = volume;
+        self.volume_max = self.volume_max.max(volume);
         std::mem::swap(&mut self.kernel, &mut self.prev);
         std::mem::swap(&mut self.rows, &mut self.prev_rows);
         self.have_prev = true;
@@ -113,6 +143,10 @@ impl Crossings {
 /// crawled off their branch (DOP853, RK45 at rtol 1e-11 … 1e-13) came within 0.95e-7 …
 /// 1.6e-7, those that stayed no closer than 1.5e-4 (issue 38; docs/mechanisms.md §5).
 pub const SINGULAR_PASSAGE: f64 = 1e-5;
+
+/// A local minimum of the kept rows' volume this far below the run's largest is a passage
+/// by a singular position where several rows became dependent at once ([`Crossings`]).
+pub const VOLUME_DIP: f64 = 1e-6;
 
 /// A one-degree-of-freedom motion whose tangent (the kernel of the loop rows) turns by more
 /// than this between two accepted states has changed branch at a crossing in one step (the

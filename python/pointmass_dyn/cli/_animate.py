@@ -122,6 +122,10 @@ def write(args, result, scene, path: str) -> None:
 def cmd_animate(args) -> int:
     scene = load_scene(args.scene)
     check_outputs(scene.model, [("--out", args.out)], args.trail, args.size)
+    # Before the run, not after it: a file name animate cannot write.
+    if args.out and Path(args.out).suffix.lower() not in (".html", ".gif", ".mp4"):
+        raise InvalidInputError(
+            f"--out: expected a file name ending in .html, .gif or .mp4, got '{args.out}'")
     t_span = scene.t_span or (0.0, 10.0)
     if args.t_end is not None:
         t_span = (t_span[0], args.t_end)

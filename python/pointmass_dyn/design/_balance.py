@@ -125,8 +125,8 @@ class Balance:
 
     def write_scene(self, source: Any, path: Any) -> Any:
         """The designed model as a scene file: a copy of ``source`` (the scene the motion's
-        model came from: a path or a bundled name) with the designed bodies' mass, COM and
-        inertia; bodies from a URDF go into a copy of it beside ``path``
+        model came from: a path, a bundled name or a :class:`Scene`) with the designed
+        bodies' mass, COM and inertia; bodies from a URDF go into a copy of it beside ``path``
         (:func:`~pointmass_dyn.design.write_scene`)."""
         return write_scene(self.bodies, source, path)
 

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .._core import Scene
 from ..errors import InvalidInputError, SceneError
 from ..scenes import resolve_scene_path
 
@@ -136,7 +137,11 @@ def write_scene(bodies: dict[str, Any], source: str | os.PathLike, path: str | o
     """A copy of the scene file ``source`` with the designed ``bodies`` (name →
     :class:`RigidBody`): a body of a ``[[body]]`` table gets its ``mass``, ``com`` and full
     ``inertia`` replaced; a body from the scene's ``urdf`` is written into a copy of that URDF
-    beside ``path`` (``<stem>.urdf``), which the new scene then loads. Returns ``path``."""
+    beside ``path`` (``<stem>.urdf``), which the new scene then loads. ``source`` may also
+    be a :class:`Scene` (one built in Python, say): its model with the designed bodies is
+    written whole (:meth:`Scene.write`). Returns ``path``."""
+    if isinstance(source, Scene):
+        return _write_designed_scene(bodies, source, Path(path))
     source, path = resolve_scene_path(source), Path(path)
     try:
         text = source.read_text(encoding="utf-8")
@@ -166,6 +171,19 @@ def write_scene(bodies: dict[str, Any], source: str | os.PathLike, path: str | o
         pattern = re.compile(r"^\s*urdf\s*=")
         lines = [f"urdf = {json.dumps(rel)}" if pattern.match(ln) else ln for ln in lines]
     _write_text(path, "\n".join(lines) + "\n")
+    return path
+
+
+def _write_designed_scene(bodies: dict[str, Any], scene: Scene, path: Path) -> Path:
+    """``scene`` with the designed ``bodies`` (by name), written as a whole scene file."""
+    model = scene.model
+    unknown = sorted(n for n in bodies if n not in model.body_names)
+    if unknown:
+        raise InvalidInputError(f"bodies: {unknown} are not bodies of the scene's model "
+                                f"(bodies: {', '.join(model.body_names)})")
+    for name, body in bodies.items():
+        model = model.with_body(name, body)
+    _write_text(path, scene.replace(model=model).to_toml())
     return path
 
 

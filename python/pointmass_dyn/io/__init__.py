@@ -6,6 +6,7 @@ MuJoCo's coordinates and ours.
     q, v = pmd.io.mujoco_state(mj_model, data.qpos, data.qvel)
     xml = pmd.to_mjcf(scene)
     qpos, qvel = pmd.io.to_mujoco_state(scene.model, q, v)
+    d.ctrl[:] = pmd.io.mujoco_controls(scene, d.time)   # its actuators' controls at a time
 """
 
 from ._importers import InertiaRepair, from_mujoco, from_pinocchio, mujoco_state, pinocchio_q
@@ -19,6 +20,7 @@ from ._mjcf import (
     to_mujoco_acceleration,
     to_mujoco_state,
 )
+from ._mjcf_effects import mujoco_controls
 
 __all__ = [
     "MUJOCO_INTEGRATORS",
@@ -28,6 +30,7 @@ __all__ = [
     "from_mujoco_state",
     "from_pinocchio",
     "layout",
+    "mujoco_controls",
     "mujoco_state",
     "pinocchio_q",
     "probe_effects",

@@ -34,8 +34,12 @@ Scene effects: gravity (summed), joint springs on revolute/prismatic joints (``s
 ``springref``) and on quaternion joints resting at the identity (MuJoCo's ball spring), and
 dampers (``damping``) on every joint but ZYZ ones (ours damp Euler rates, MuJoCo the angular
 velocity), read back by probing :func:`pointmass_dyn.effect_forces`; rotor inertia as
-``armature``. Other effects, loops, couplings and FreeFlyer joints below a moving body are
-refused (``InvalidInputError``). Contact is disabled; friction loss, limits are not added.
+``armature``. PD, constant and tabulated torques as actuators (their limits as
+``forcerange``), joint limits as limited ranges and ground contact as a plane with spheres:
+``_mjcf_effects.py``, which says how the soft laws are matched. Other effects (friction,
+external forces, point springs, torque functions), loops, couplings and FreeFlyer joints
+below a moving body are refused (``InvalidInputError``). Without ground contact, contact is
+disabled.
 
 Accuracy: MuJoCo's ``mj_forward`` ``qacc`` equals our forward dynamics (with the scene's
 springs and dampers) to ~1e-14 relative on chain7, Panda and random trees of every joint
@@ -53,6 +57,7 @@ import numpy as np
 from .. import _core
 from .._helpers import rotation_of_wxyz, scene_gravity
 from ..errors import InvalidInputError, ModelStructureError
+from ._mjcf_effects import mjcf_effects
 from ._mjcf_rotations import (
     axis_of,
     qmul,
@@ -166,16 +171,17 @@ def probe_effects(scene, model, lay: MujocoLayout):
         if e.kind in disabled:
             continue
         r = repr(e)
-        if r.startswith("Gravity("):
-            continue
+        if r.startswith("Gravity(") or e.kind in ("torques", "contact", "limits"):
+            continue  # torques, contact and limits: _mjcf_effects.py
         elif r.startswith("Spring("):
             springs.append(e)
         elif r.startswith("Damper("):
             dampers.append(e)
         else:
             raise InvalidInputError(
-                f"scene: effect {r} has no MuJoCo counterpart in the MJCF export (supported: "
-                f"Gravity, Spring, Damper); leave it out or disable its family "
+                f"scene: effect {r} ({e.name!r}) has no MuJoCo counterpart in the MJCF export "
+                f"(supported: Gravity, Spring, Damper, PD/constant/tabulated torques, "
+                f"GroundContact, JointLimit); leave it out or disable its family "
                 f"({e.kind!r}) to convert the rest")
     nv = model.nv
     stiff, rest, damp = np.zeros(nv), np.zeros(nv), np.zeros(nv)
@@ -270,12 +276,14 @@ def to_mjcf(
             raise InvalidInputError("gravity: give it only with a Model; a Scene's gravity is "
                                     "its Gravity effect")
         g, stiff, rest, damp = probe_effects(scene, model, lay)
+        extra = mjcf_effects(scene)
         name = name or scene.name
     else:
         g = np.zeros(3) if gravity is None else np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise InvalidInputError(f"gravity: expected 3 finite numbers, got {gravity!r}")
         stiff, rest, damp = np.zeros(nv), np.zeros(nv), np.zeros(nv)
+        extra = mjcf_effects(None)
     by_body = {j.body: j for j in lay.joints}
     rots, origins = model.placements(model.neutral())
 
@@ -300,9 +308,10 @@ def to_mjcf(
            '  <compiler angle="radian" autolimits="true"/>',
            f'  <option gravity="{_fmt(g)}" integrator="{integrator}" '
            f'timestep="{float(timestep)!r}">',
-           '    <flag contact="disable"/>',
+           *([] if extra.contact else ['    <flag contact="disable"/>']),
            "  </option>",
-           "  <worldbody>"]
+           "  <worldbody>",
+           *(f"    {g}" for g in extra.world_geoms)]
 
     joint_names, limits = model.joint_names, model.joint_limits()
     def joint_xml(b: int, frame: int) -> str:
@@ -324,8 +333,11 @@ def to_mjcf(
             axis = rf.T @ rots[b] @ axis
             mj = "hinge" if kind == "Revolute" else "slide"
             attrs += f' type="{mj}" axis="{_fmt(axis)}"'
-            lo, up = limits[jname][:2]  # enforced by our JointLimit effect only: not limited
-            attrs += f' range="{lo!r} {up!r}" limited="false"' if abs(lo) + abs(up) < math.inf else ""
+            lo, up = limits[jname][:2]  # enforced only by a JointLimit effect (extra)
+            if link in extra.joint_attrs:
+                attrs += extra.joint_attrs[link]
+            elif abs(lo) + abs(up) < math.inf:
+                attrs += f' range="{lo!r} {up!r}" limited="false"'
             if stiff[j.v]:
                 attrs += f' stiffness="{float(stiff[j.v])!r}" springref="{float(rest[j.v])!r}"'
         elif kind in ("Spherical", "SphericalZYZ"):
@@ -383,6 +395,8 @@ def to_mjcf(
             raise ModelStructureError(
                 f"model: body {bname!r} moves but has no mass; MuJoCo refuses massless moving "
                 f"bodies (give it a mass, or fix it to a body that has one)")
+        for geom in extra.body_geoms.get(b, ()):
+            xml.append(f"{pad}  {geom}")
         for c in children[b]:
             write(c, depth + 1, [])
         xml.append(f"{pad}</body>")
@@ -390,7 +404,16 @@ def to_mjcf(
     for b in range(model.nbodies):
         if infos[b][2] < 0:
             write(b, 2, [])
-    xml += ["  </worldbody>", "</mujoco>"]
+    xml.append("  </worldbody>")
+    if extra.actuators:
+        xml += ["  <actuator>", *(f"    {a}" for a in extra.actuators), "  </actuator>"]
+    if scene is not None:  # the start state (and controls): mj_resetDataKeyframe(m, d, 0)
+        qpos, qvel = to_mujoco_state(model, scene.q0, scene.v0)
+        ctrl = f' ctrl="{_fmt(extra.ctrl0)}"' if extra.actuators else ""
+        xml += ["  <keyframe>",
+                f'    <key name="scene" qpos="{_fmt(qpos)}" qvel="{_fmt(qvel)}"{ctrl}/>',
+                "  </keyframe>"]
+    xml.append("</mujoco>")
     return "\n".join(xml) + "\n"
 
 

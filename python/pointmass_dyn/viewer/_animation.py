@@ -156,8 +156,13 @@ def prepare(
     scene = model_or_scene if isinstance(model_or_scene, _core.Scene) else None
     model = scene.model if scene is not None else model_or_scene
     if not isinstance(model, _core.Model):
+        # simulate takes the scene first, animate the result first: say so when swapped.
+        swapped = (" (the arguments are (result, model_or_scene, path): the result first, "
+                   "as it came from simulate)"
+                   if isinstance(result, (_core.Scene, _core.Model)) else "")
         raise InvalidInputError(
-            f"model_or_scene: expected a Model or a Scene, got {type(model_or_scene).__name__}"
+            f"model_or_scene: expected a Model or a Scene, got "
+            f"{type(model_or_scene).__name__}{swapped}"
         )
     for name, val in (("fps", fps), ("duration", duration)):
         if val is not None and not (isinstance(val, (int, float)) and math.isfinite(val)
