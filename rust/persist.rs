@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 8;
+pub const FORMAT_VERSION: u8 = 9;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
