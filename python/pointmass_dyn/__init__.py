@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from . import _pickle, benchmarking, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, benchmarking, design, errors, io, kinematics, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._contact import (
     ContactForces,
@@ -67,6 +67,7 @@ from .errors import (
     SingularityError,
 )
 from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
+from .kinematics import IKResult, inverse_kinematics
 from .robots import example_robot
 from .scenes import builtin_scenes, load_scene
 from .viewer import AnimationInfo, animate
@@ -132,6 +133,9 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "kinematics",
+    "IKResult",
+    "inverse_kinematics",
     "benchmarking",
     "robots",
     "design",
