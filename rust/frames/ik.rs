@@ -83,7 +83,8 @@ fn jr_inv(phi: &Vec3) -> Mat3 {
 }
 
 /// `log R` as a rotation vector, accurate at small angles (from the skew part and the
-/// trace by `atan2`, not `acos` of the trace) and near a half turn (the axis from `R + 1`).
+/// trace by `atan2`, not `acos` of the trace) and near a half turn (the axis from the
+/// symmetric part).
 pub fn log3(r: &Mat3) -> Vec3 {
     let w = Vec3::new(
         r[(2, 1)] - r[(1, 2)],
@@ -101,8 +102,9 @@ pub fn log3(r: &Mat3) -> Vec3 {
         };
         return w * f;
     }
-    // Near π: R + 1 ≈ 2 a aᵀ; its largest column gives the axis, w its sign.
-    let b = r + Mat3::identity();
+    // Near π: the symmetric part of R less c·1 is (1 − c) a aᵀ; its largest column gives
+    // the axis, w its sign.
+    let b = (r + r.transpose()) * 0.5 - Mat3::identity() * c;
     let k = (0..3)
         .max_by(|&i, &j| b[(i, i)].total_cmp(&b[(j, j)]))
         .unwrap_or(0);
