@@ -1,10 +1,11 @@
 //! `Model`'s frames, frame Jacobians, centre of mass and centroidal methods
 //! (`crate::frames`): arguments converted, the core called, results converted.
+use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
-use super::PyModel;
-use crate::frames::{evaluate, placement, FrameRef, ReferenceFrame};
+use super::{load_state, PyModel};
+use crate::frames::{evaluate, jacobian, placement, FrameRef, ReferenceFrame};
 use crate::model::Model;
 use crate::python::convert::{array, int_arg, mat3, shape_str, to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
@@ -195,20 +196,31 @@ impl PyModel {
         q: &Bound<'_, PyAny>,
         reference: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let rf = reference_arg(py, reference)?;
+        if let Ok(q1) = q.cast::<numpy::PyArray1<f64>>() {
+            // One configuration: the pooled workspace's buffers, no thread hand-off.
+            return self.with_workspace(|ws| {
+                load_state(ws, py, q1.as_any(), None)?;
+                let model = &ws.version.model;
+                let f = frame_arg(model, frame, "frame")?;
+                crate::kinematics::positions(model, &ws.q, &mut ws.data.links);
+                let nv = model.nv;
+                let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
+                // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
+                let out = unsafe { arr.as_slice_mut() }?;
+                jacobian::frame_jacobian_links(model, &ws.data.links, &f, rf, out);
+                check_result(py, "frame_jacobian", out)?;
+                Ok(arr.into_any())
+            });
+        }
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
-        let rf = reference_arg(py, reference)?;
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
         let nv = model.nv;
         let mut out = vec![0.0; rows * 6 * nv];
-        if rows == 1 {
-            // One configuration: no thread hand-off (it costs more than the work).
-            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, &mut out).py(py)?;
-        } else {
-            detach_interruptible(py, || {
-                evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, &mut out)
-            })?;
-        }
+        detach_interruptible(py, || {
+            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, &mut out)
+        })?;
         check_result(py, "frame_jacobian", &out)?;
         to_array(py, out, &lead(stacked, rows, &[6, nv]))
     }
