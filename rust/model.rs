@@ -78,6 +78,10 @@ pub struct Model {
     /// (`crate::joint_records`): no part of the dynamics, shared by every copy of the model.
     #[serde(default)]
     pub records: Arc<JointRecords>,
+    /// Frames added on bodies (`crate::frames`): tool points, sites; every body is a frame
+    /// too. No part of the dynamics.
+    #[serde(default)]
+    pub frames: Vec<crate::frames::Frame>,
     /// Body index by name, kept by `add_body` (the only place bodies are added or named), so
     /// name lookups and duplicate checks cost O(1) and building a model is linear. Derived
     /// from `bodies`: not serialised, rebuilt when deserialising.
@@ -108,6 +112,8 @@ struct ModelData {
     name: String,
     #[serde(default)]
     records: Arc<JointRecords>,
+    #[serde(default)]
+    frames: Vec<crate::frames::Frame>,
 }
 
 impl TryFrom<ModelData> for Model {
@@ -130,6 +136,7 @@ impl TryFrom<ModelData> for Model {
             visuals: d.visuals,
             name: d.name,
             records: d.records,
+            frames: d.frames,
             names,
             compiled: OnceLock::new(),
         };
@@ -138,6 +145,7 @@ impl TryFrom<ModelData> for Model {
         m.check_couplings()?;
         m.check_armature()?;
         m.check_records()?;
+        m.check_frames()?;
         Ok(m)
     }
 }
@@ -357,10 +365,10 @@ impl Model {
         }
         crate::error::check_name("body", name.as_deref())?;
         let name = name.unwrap_or_else(|| format!("body{index}"));
-        if self.body_index(&name).is_some() {
+        if self.body_index(&name).is_some() || self.frames.iter().any(|f| f.name == name) {
             return Err(Error::model(
                 "name",
-                format!("a body named '{name}' already exists"),
+                format!("a body or frame named '{name}' already exists"),
             ));
         }
         let (parent_link, parent_in_link) = match parent {

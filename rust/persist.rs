@@ -20,7 +20,7 @@ pub const MAGIC: &[u8; 3] = b"PMD";
 
 /// The layout written now. Bump it whenever a serialised type changes shape (a field, a
 /// variant, an order): older frames are then refused with a message naming both versions.
-pub const FORMAT_VERSION: u8 = 8;
+pub const FORMAT_VERSION: u8 = 9;
 
 const HEADER: usize = MAGIC.len() + 1;
 const CHECKSUM: usize = 8;
@@ -516,7 +516,7 @@ mod tests {
         let sum = fnv1a64(&bytes[HEADER..bytes.len() - CHECKSUM]);
         assert_eq!(
             (FORMAT_VERSION, bytes.len(), sum),
-            (8, 3001, 0x40b8_9e00_1b71_2872),
+            (9, 3002, 0xd1f5_6d0c_bf34_8c6e),
             "a serialised type changed shape: bump FORMAT_VERSION, then update this test"
         );
     }

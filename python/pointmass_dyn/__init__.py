@@ -7,7 +7,7 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-from . import _pickle, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, design, errors, io, kinematics, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._contact import (
     ContactForces,
@@ -65,6 +65,7 @@ from .errors import (
     SingularityError,
 )
 from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
+from .kinematics import IKResult, inverse_kinematics
 from .robots import example_robot
 from .scenes import builtin_scenes, load_scene
 from .viewer import AnimationInfo, animate
@@ -121,6 +122,9 @@ def FreeFlyer() -> Joint:
 
 
 __all__ = [
+    "kinematics",
+    "IKResult",
+    "inverse_kinematics",
     "benchmarking",
     "robots",
     "design",

@@ -177,6 +177,58 @@ class Model:
         revolute and prismatic joints, zero otherwise) (nbodies, 3), ``points`` (nlinks, 7, 3)
         and per cut joint ``loop_a``, ``loop_b`` (its two frames' origins), ``loop_axes``
         (nloops, 3)."""
+    # Frames, Jacobians, centre of mass (docs/kinematics.md); six-vectors angular first.
+    @property
+    def frame_names(self) -> list[str]:
+        """Every body's name (URDF links welded by fixed joints included), then the frames
+        added with ``add_frame``."""
+    def add_frame(
+        self, name: str, body: str | int, translation: ArrayLike | None = None,
+        rotation: ArrayLike | None = None,
+    ) -> int:
+        """Adds a frame fixed on ``body``; returns its index among the added frames."""
+    def frame_placement(self, frame: str | int, q: ArrayLike) -> tuple[_Array, _Array]:
+        """(rotation (3, 3), translation (3,)) of ``frame`` in the world, or (N, 3, 3), (N, 3)
+        for q (N, nq)."""
+    def point_path(
+        self, frame: str | int, point: ArrayLike, q: ArrayLike, v: ArrayLike | None = None
+    ) -> tuple[_Array, _Array | None]:
+        """World positions (N, 3) of ``point`` (in ``frame``) at q (N, nq); with v (N, nv),
+        its velocities (N, 3)."""
+    def frame_jacobian(
+        self, frame: str | int, q: ArrayLike, reference: str = "local"
+    ) -> _Array:
+        """(6, nv) Jacobian, or (N, 6, nv) for q (N, nq); ``reference``: "local",
+        "world" or "local_world_aligned" (Pinocchio's)."""
+    def frame_jacobian_dot(
+        self, frame: str | int, q: ArrayLike, v: ArrayLike, reference: str = "local"
+    ) -> _Array:
+        """(6, nv) time derivative of ``frame_jacobian`` in the same reference."""
+    def frame_motion(
+        self, frame: str | int, q: ArrayLike, v: ArrayLike, a: ArrayLike | None = None,
+        reference: str = "local",
+    ) -> tuple[_Array, _Array]:
+        """(J v, J a + J̇ v) of ``frame``, (6,) each."""
+    def center_of_mass(self, q: ArrayLike, jacobian: bool = False) -> Any:
+        """COM of the moving bodies (3,) or (N, 3); with ``jacobian=True`` also the COM
+        Jacobian (3, nv) or (N, 3, nv)."""
+    def center_of_mass_motion(
+        self, q: ArrayLike, v: ArrayLike, a: ArrayLike | None = None
+    ) -> tuple[_Array, _Array, _Array]:
+        """COM position, velocity and acceleration."""
+    def centroidal(
+        self, q: ArrayLike, v: ArrayLike | None = None, a: ArrayLike | None = None
+    ) -> dict[str, _Array]:
+        """``A`` (A_g, 6 × nv, [k_G; p]) and with ``v`` ``momentum`` and ``rate``
+        (A_g a + Ȧ_g v)."""
+    def independent_map(
+        self, q: ArrayLike, independent: Any = None
+    ) -> tuple[_Array, list[int]]:
+        """G (nv, k) with v = G v_I for the independent speeds, and their v indices."""
+    def _inverse_kinematics(
+        self, tasks: list, q0: ArrayLike, limits: bool, tol: float, max_iterations: int,
+        restarts: int, seed: int,
+    ) -> dict[str, Any]: ...
     def denoc(self, q: ArrayLike) -> dict[str, _Array]:
         """The DeNOC matrices at ``q``: keys ``D``, ``Nl``, ``Nd``, ``N``, ``masses`` (7n,)
         and ``points`` (7n, 3)."""

@@ -44,11 +44,11 @@ from typing import Any, Callable
 
 import numpy as np
 
-from . import _core
+from . import _core, kinematics
 from ._contact import contact_forces, torque_saturation
 from ._core import Effect, Scene, StateEvent
 from ._helpers import interrupted_message
-from .errors import SimulationError, SingularPassageWarning
+from .errors import InvalidInputError, SimulationError, SingularPassageWarning
 
 
 def Gravity(g: Sequence[float] = (0.0, 0.0, -9.81)) -> Effect:
@@ -241,6 +241,30 @@ class SimulationResult:
     #: Torques with a ``limit``: where each was at its limit, (N, nv) booleans at the output
     #: times by effect name (columns of the speeds it does not drive are False).
     saturated: dict | None = None
+    #: The scene's model (``simulate`` sets it): what ``frame_path`` and ``point_path`` use.
+    model: Any = field(default=None, repr=False, compare=False)
+
+    def frame_path(self, frame: Any, model: Any = None) -> tuple[np.ndarray, np.ndarray]:
+        """(rotations (N, 3, 3), positions (N, 3)) of ``frame`` at the output times."""
+        return kinematics.frame_path(self._model(model), self.q, frame)
+
+    def point_path(
+        self, body: Any, point: Any, model: Any = None, velocities: bool = False
+    ) -> Any:
+        """World positions (N, 3) of ``point`` (in the body or frame ``body``) at the output
+        times (a coupler curve); with ``velocities=True``, (positions, velocities (N, 3))."""
+        pos, vel = kinematics.point_path(
+            self._model(model), self.q, body, point, self.v if velocities else None
+        )
+        return (pos, vel) if velocities else pos
+
+    def _model(self, model: Any) -> Any:
+        model = self.model if model is None else model
+        if model is None:
+            raise InvalidInputError(
+                "model: this result holds no model (a batch result): pass model=scene.model"
+            )
+        return model
 
     @property
     def nsteps(self) -> int:
@@ -365,6 +389,7 @@ def simulate(
     error = out.pop("error")
     out["message"] = interrupted_message(out["message"], error)
     result = SimulationResult(scene=scene.name, **out)
+    result.model = scene.model
     result.saturated = torque_saturation(scene, result, disable)
     if result.singular_passage is not None:
         warnings.warn(singular_passage_warning(result), stacklevel=2)

@@ -76,7 +76,8 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
     the joint's limit (``Model.joint_limits()``, what ``pmd.JointLimit`` without bounds
     enforces).
 
-    The geoms of the bodies (groups 0-2) become ``model.visuals`` (mesh files looked for as
+    Each ``<site>`` becomes a frame of its name (``model.frame_names``). The geoms of the
+    bodies (groups 0-2) become ``model.visuals`` (mesh files looked for as
     MuJoCo recorded them and in ``mesh_dirs``), and the model is named after
     ``<mujoco model>``."""
     try:
@@ -163,6 +164,7 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
                        f"inertia boxes; pass mesh_dirs=[...]): " + ", ".join(missing[:8]))
     ignored += _mujoco_armature(m, model, part_of_joint)
     ignored += _mujoco_loops(m, model, parts, last_of_body, anchor_of_body, part_of_joint)
+    ignored += _mujoco_sites(m, model, last_of_body, anchor_of_body)
     if ignored:
         warnings.warn(
             "from_mujoco: not imported: " + "; ".join(ignored),
@@ -170,6 +172,27 @@ def from_mujoco(mj_model: Any, *, mesh_dirs=None) -> Model:
             stacklevel=2,
         )
     return model
+
+
+def _mujoco_sites(m, model, last_of_body, anchor_of_body) -> list[str]:
+    """Each ``<site>`` on a body as a frame (``Model.add_frame``, docs/kinematics.md) named
+    after it (unnamed: ``site<i>``): the body's last part's frame is the MuJoCo body frame
+    moved to that part's anchor. Returns what was not imported (sites on the world body, or
+    whose name a body already has)."""
+    import mujoco
+
+    skipped = []
+    taken = set(model.frame_names)
+    for s in range(m.nsite):
+        name = _name(m, mujoco.mjtObj.mjOBJ_SITE, s, f"site{s}")
+        b = int(m.site_bodyid[s])
+        if b == 0 or name in taken:
+            skipped.append(f"site '{name}' ({'on the world body' if b == 0 else 'name taken'})")
+            continue
+        pos = np.asarray(m.site_pos[s], float) - anchor_of_body[b]
+        model.add_frame(name, last_of_body[b], pos, rotation_of_wxyz(m.site_quat[s]))
+        taken.add(name)
+    return skipped
 
 
 def _mujoco_armature(m, model, part_of_joint) -> list[str]:

@@ -16,6 +16,8 @@ use crate::spatial::{Vec3, Vec6};
 
 mod couplings;
 mod dynamics;
+mod frames;
+mod ik;
 mod import;
 mod kinematics;
 mod loops;

@@ -1,0 +1,158 @@
+//! The frame algorithms assembled for one call (what the bindings call): a frame's
+//! Jacobian at many configurations, its velocity and acceleration, the centre of mass and the
+//! centroidal quantities. Each checks its inputs and allocates its own buffers once.
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::spatial::{Vec3, Vec6};
+
+use super::com::{self, Composite};
+use super::motion::FrameKinematics;
+use super::placement::check_rows;
+use super::{centroidal, jacobian, jacobian_dot, FrameRef, ReferenceFrame};
+
+/// `J` of `f` at `rows` configurations (row-major `rows × 6 × nv` into `out`).
+pub fn frame_jacobians(
+    model: &Model,
+    f: &FrameRef,
+    rf: ReferenceFrame,
+    qs: &[f64],
+    rows: usize,
+    stacked: bool,
+    out: &mut [f64],
+) -> Result<()> {
+    check_rows(model, qs, rows, stacked, "q")?;
+    let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
+    let (nq, nv) = (model.nq, model.nv);
+    for k in 0..rows {
+        if k % 256 == 255 {
+            crate::interrupt::check("frame_jacobian")?;
+        }
+        crate::kinematics::positions(model, &qs[k * nq..(k + 1) * nq], &mut links);
+        jacobian::frame_jacobian_links(
+            model,
+            &links,
+            f,
+            rf,
+            &mut out[k * 6 * nv..(k + 1) * 6 * nv],
+        );
+    }
+    Ok(())
+}
+
+/// `J̇` of `f` (row-major 6 × nv) at `(q, v)` (checked by the caller).
+pub fn frame_jacobian_dot(
+    model: &Model,
+    f: &FrameRef,
+    rf: ReferenceFrame,
+    q: &[f64],
+    v: &[f64],
+) -> Vec<f64> {
+    let mut kin = FrameKinematics::new(model);
+    kin.positions(model, q);
+    kin.velocities(model, q, v);
+    let mut out = vec![0.0; 6 * model.nv];
+    jacobian_dot::frame_jacobian_dot(model, &kin, f, rf, &mut out);
+    out
+}
+
+fn mat_vec(m: &[f64], x: &[f64], nv: usize) -> Vec6 {
+    Vec6::from_fn(|i, _| (0..nv).map(|c| m[i * nv + c] * x[c]).sum())
+}
+
+/// The frame's velocity `J v` and acceleration `J a + J̇ v` (a = None: zero) in `rf`
+/// (checked inputs). In LOCAL_WORLD_ALIGNED the linear parts are the velocity and the
+/// classical acceleration of the frame origin.
+pub fn frame_motion(
+    model: &Model,
+    f: &FrameRef,
+    rf: ReferenceFrame,
+    q: &[f64],
+    v: &[f64],
+    a: Option<&[f64]>,
+) -> (Vec6, Vec6) {
+    let nv = model.nv;
+    let mut kin = FrameKinematics::new(model);
+    kin.positions(model, q);
+    kin.velocities(model, q, v);
+    let mut j = vec![0.0; 6 * nv];
+    jacobian::frame_jacobian(model, &kin, f, rf, &mut j);
+    let mut jd = vec![0.0; 6 * nv];
+    jacobian_dot::frame_jacobian_dot(model, &kin, f, rf, &mut jd);
+    let vel = mat_vec(&j, v, nv);
+    let mut acc = mat_vec(&jd, v, nv);
+    if let Some(a) = a {
+        acc += mat_vec(&j, a, nv);
+    }
+    (vel, acc)
+}
+
+fn no_mass() -> Error {
+    Error::model(
+        "model",
+        "no moving body has mass: the centre of mass of the moving links is undefined",
+    )
+}
+
+/// Centre of mass and, when `jac` is given, the COM Jacobian (row-major `rows × 3 × nv`) at
+/// `rows` configurations; `com_out` gets `rows × 3`.
+pub fn com_batch(
+    model: &Model,
+    qs: &[f64],
+    rows: usize,
+    stacked: bool,
+    com_out: &mut [f64],
+    mut jac: Option<&mut [f64]>,
+) -> Result<()> {
+    check_rows(model, qs, rows, stacked, "q")?;
+    let mut kin = FrameKinematics::new(model);
+    let mut comp = vec![Composite::default(); model.links.len()];
+    let (nq, nv) = (model.nq, model.nv);
+    for k in 0..rows {
+        if k % 256 == 255 {
+            crate::interrupt::check("center_of_mass")?;
+        }
+        kin.positions(model, &qs[k * nq..(k + 1) * nq]);
+        let (m, c) = com::com(model, &kin).ok_or_else(no_mass)?;
+        com_out[3 * k..3 * k + 3].copy_from_slice(c.as_slice());
+        if let Some(j) = jac.as_deref_mut() {
+            com::composites(model, &kin, &mut comp);
+            com::com_jacobian(model, &kin, &comp, m, &mut j[k * 3 * nv..(k + 1) * 3 * nv]);
+        }
+    }
+    Ok(())
+}
+
+/// The COM's position, velocity and acceleration (a = None: zero) at a checked state.
+pub fn com_motion(model: &Model, q: &[f64], v: &[f64], a: Option<&[f64]>) -> Result<[Vec3; 3]> {
+    let mut kin = FrameKinematics::new(model);
+    kin.positions(model, q);
+    let (_, c) = com::com(model, &kin).ok_or_else(no_mass)?;
+    kin.velocities(model, q, v);
+    kin.accelerations(model, a);
+    let (vc, ac) = com::com_motion(model, &kin, true);
+    Ok([c, vc, ac])
+}
+
+/// Centroidal quantities at a checked `q` (and `v`, `a`): `A_g` (row-major 6 × nv), and with
+/// `v` the momentum `h_G = A_g v` and its rate `A_g a + Ȧ_g v` (a = None: the bias `Ȧ_g v`).
+pub fn centroidal(
+    model: &Model,
+    q: &[f64],
+    v: Option<&[f64]>,
+    a: Option<&[f64]>,
+) -> Result<(Vec<f64>, Option<(Vec6, Vec6)>)> {
+    let nv = model.nv;
+    let mut kin = FrameKinematics::new(model);
+    kin.positions(model, q);
+    let (_, g) = com::com(model, &kin).ok_or_else(no_mass)?;
+    let mut comp = vec![Composite::default(); model.links.len()];
+    com::composites(model, &kin, &mut comp);
+    let mut ag = vec![0.0; 6 * nv];
+    centroidal::centroidal_map(model, &kin, &comp, &g, &mut ag);
+    let Some(v) = v else { return Ok((ag, None)) };
+    kin.velocities(model, q, v);
+    kin.accelerations(model, a);
+    let h = mat_vec(&ag, v, nv);
+    let hdot = centroidal::momentum_rate(model, &kin, &g);
+    Ok((ag, Some((h, hdot))))
+}

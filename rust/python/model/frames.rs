@@ -1,0 +1,371 @@
+//! `Model`'s frames, frame Jacobians, centre of mass and centroidal methods
+//! (`crate::frames`): arguments converted, the core called, results converted.
+use numpy::PyArrayMethods;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+
+use super::{load_state, PyModel};
+use crate::frames::{evaluate, jacobian, placement, FrameRef, ReferenceFrame};
+use crate::model::Model;
+use crate::python::convert::{array, int_arg, mat3, shape_str, to_array, to_array1, vec3};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::signals::detach_interruptible;
+use crate::spatial::{Mat3, Placement, Vec3};
+
+/// A frame: its name (a body or an added frame) or a body index.
+pub fn frame_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<FrameRef> {
+    if obj.is_instance_of::<PyString>() {
+        let name: String = obj.extract()?;
+        return model.frame_named(arg, &name).py(obj.py());
+    }
+    let n = model.nbodies() as i64;
+    let k = int_arg(
+        obj,
+        arg,
+        0,
+        n - 1,
+        "a frame name (Model.frame_names) or a body index",
+    )?;
+    Ok(model.body_frame(k as usize, &Placement::identity()))
+}
+
+/// A body (name or index) as an index.
+fn body_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<usize> {
+    if obj.is_instance_of::<PyString>() {
+        let name: String = obj.extract()?;
+        return model.body_named(arg, &name).py(obj.py());
+    }
+    let n = model.nbodies() as i64;
+    Ok(int_arg(obj, arg, 0, n - 1, "a body name or index")? as usize)
+}
+
+fn reference_arg(py: Python<'_>, reference: &str) -> PyResult<ReferenceFrame> {
+    ReferenceFrame::parse("reference", reference).py(py)
+}
+
+/// `q` as (rows, data, stacked): shape (nq,) or (N, nq).
+pub fn configurations(
+    model: &Model,
+    q: &Bound<'_, PyAny>,
+    arg: &str,
+) -> PyResult<(usize, Vec<f64>, bool)> {
+    let (shape, data) = array(q, arg)?;
+    match shape.as_slice() {
+        [n] if *n == model.nq => Ok((1, data, false)),
+        [rows, n] if *n == model.nq => Ok((*rows, data, true)),
+        _ => Err(invalid(
+            q.py(),
+            arg,
+            format!("shape ({0},) or (N, {0})", model.nq),
+            shape_str(&shape),
+        )),
+    }
+}
+
+fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
+    let mut s = if stacked { vec![rows] } else { vec![] };
+    s.extend_from_slice(tail);
+    s
+}
+
+fn optional_vector(
+    model: &Model,
+    py: Python<'_>,
+    x: Option<&Bound<'_, PyAny>>,
+    arg: &str,
+) -> PyResult<Option<Vec<f64>>> {
+    match x {
+        Some(x) if !x.is_none() => {
+            let v = crate::python::convert::vector(x, arg, Some(model.nv))?;
+            model.check_vector(arg, &v).py(py)?;
+            Ok(Some(v))
+        }
+        _ => Ok(None),
+    }
+}
+
+#[pymethods]
+impl PyModel {
+    /// Every frame's name: each body's (URDF links welded by fixed joints included), then the
+    /// frames added with `add_frame`.
+    #[getter]
+    fn frame_names(&self) -> Vec<String> {
+        self.model().frame_names()
+    }
+
+    /// Adds a frame fixed on `body` (name or index) at `translation`, `rotation` (3 × 3, frame
+    /// axes in the body frame); returns its index among the added frames.
+    #[pyo3(signature = (name, body, translation=None, rotation=None))]
+    fn add_frame(
+        &self,
+        py: Python<'_>,
+        name: String,
+        body: &Bound<'_, PyAny>,
+        translation: Option<&Bound<'_, PyAny>>,
+        rotation: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<usize> {
+        let b = body_arg(&self.model(), body, "body")?;
+        let t = match translation {
+            Some(t) if !t.is_none() => vec3(t, "translation")?,
+            _ => Vec3::zeros(),
+        };
+        let r = match rotation {
+            Some(r) if !r.is_none() => mat3(r, "rotation")?,
+            _ => Mat3::identity(),
+        };
+        self.shared
+            .update(|m| m.add_frame(&name, b, Placement::new(r, t)))
+            .py(py)
+    }
+
+    /// World placement of `frame` at q (nq,) or (N, nq): (rotation (3, 3) or (N, 3, 3),
+    /// translation (3,) or (N, 3)).
+    fn frame_placement<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let model = self.model();
+        let f = frame_arg(&model, frame, "frame")?;
+        let (rows, qs, stacked) = configurations(&model, q, "q")?;
+        let (mut rot, mut org) = (vec![0.0; 9 * rows], vec![0.0; 3 * rows]);
+        detach_interruptible(py, || {
+            placement::check_rows(&model, &qs, rows, stacked, "q")?;
+            placement::frame_placements(&model, &[f], &qs, rows, &mut rot, &mut org)
+        })?;
+        check_result(py, "frame_placement", &org)?;
+        Ok((
+            to_array(py, rot, &lead(stacked, rows, &[3, 3]))?,
+            to_array(py, org, &lead(stacked, rows, &[3]))?,
+        ))
+    }
+
+    /// World positions (and with `v`, velocities) of `point` (in the frame or body `frame`)
+    /// at q (N, nq): (positions (N, 3), velocities (N, 3) or None).
+    #[pyo3(signature = (frame, point, q, v=None))]
+    fn point_path<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'_, PyAny>,
+        point: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+        v: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>)> {
+        let model = self.model();
+        let f = frame_arg(&model, frame, "frame")?;
+        let p = vec3(point, "point")?;
+        crate::error::check_finite("point", p.as_slice()).py(py)?;
+        let (rows, qs, _) = configurations(&model, q, "q")?;
+        let vs = match v {
+            Some(v) if !v.is_none() => {
+                let (shape, data) = array(v, "v")?;
+                if shape != [rows, model.nv] && !(rows == 1 && shape == [model.nv]) {
+                    return Err(invalid(
+                        py,
+                        "v",
+                        format!("shape ({rows}, {})", model.nv),
+                        shape_str(&shape),
+                    ));
+                }
+                crate::error::check_finite("v", &data).py(py)?;
+                Some(data)
+            }
+            _ => None,
+        };
+        let (mut pos, mut vel) = (vec![0.0; 3 * rows], vec![0.0; 3 * rows]);
+        detach_interruptible(py, || {
+            placement::check_rows(&model, &qs, rows, true, "q")?;
+            placement::point_path(&model, &f, &p, &qs, vs.as_deref(), rows, &mut pos, &mut vel)
+        })?;
+        check_result(py, "point_path", &pos)?;
+        let vel = match vs {
+            Some(_) => Some(to_array(py, vel, &[rows, 3])?),
+            None => None,
+        };
+        Ok((to_array(py, pos, &[rows, 3])?, vel))
+    }
+
+    /// The 6 × nv Jacobian of `frame` (angular rows first) in `reference` ('local',
+    /// 'world' or 'local_world_aligned', Pinocchio's conventions) at q (nq,) or (N, nq).
+    #[pyo3(signature = (frame, q, reference="local"))]
+    fn frame_jacobian<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+        reference: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let rf = reference_arg(py, reference)?;
+        if let Ok(q1) = q.cast::<numpy::PyArray1<f64>>() {
+            // One configuration: the pooled workspace's buffers, no thread hand-off.
+            return self.with_workspace(|ws| {
+                load_state(ws, py, q1.as_any(), None)?;
+                let model = &ws.version.model;
+                let f = frame_arg(model, frame, "frame")?;
+                crate::kinematics::positions(model, &ws.q, &mut ws.data.links);
+                let nv = model.nv;
+                let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
+                // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
+                let out = unsafe { arr.as_slice_mut() }?;
+                jacobian::frame_jacobian_links(model, &ws.data.links, &f, rf, out);
+                check_result(py, "frame_jacobian", out)?;
+                Ok(arr.into_any())
+            });
+        }
+        let model = self.model();
+        let f = frame_arg(&model, frame, "frame")?;
+        let (rows, qs, stacked) = configurations(&model, q, "q")?;
+        let nv = model.nv;
+        let mut out = vec![0.0; rows * 6 * nv];
+        detach_interruptible(py, || {
+            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, &mut out)
+        })?;
+        check_result(py, "frame_jacobian", &out)?;
+        to_array(py, out, &lead(stacked, rows, &[6, nv]))
+    }
+
+    /// `J̇` of `frame` in `reference` at (q, v): the time derivative of `frame_jacobian`.
+    #[pyo3(signature = (frame, q, v, reference="local"))]
+    fn frame_jacobian_dot<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        reference: &str,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q, v) = self.state(py, q, v)?;
+        let f = frame_arg(&model, frame, "frame")?;
+        let rf = reference_arg(py, reference)?;
+        let out = evaluate::frame_jacobian_dot(&model, &f, rf, &q, &v);
+        check_result(py, "frame_jacobian_dot", &out)?;
+        to_array(py, out, &[6, model.nv])
+    }
+
+    /// (velocity `J v`, acceleration `J a + J̇ v`) of `frame` in `reference`, six-vectors
+    /// angular first; `a=None` is zero (the acceleration is then `J̇ v`).
+    #[pyo3(signature = (frame, q, v, a=None, reference="local"))]
+    fn frame_motion<'py>(
+        &self,
+        py: Python<'py>,
+        frame: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: Option<&Bound<'_, PyAny>>,
+        reference: &str,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let (model, q, v) = self.state(py, q, v)?;
+        let a = optional_vector(&model, py, a, "a")?;
+        let f = frame_arg(&model, frame, "frame")?;
+        let rf = reference_arg(py, reference)?;
+        let (vel, acc) = evaluate::frame_motion(&model, &f, rf, &q, &v, a.as_deref());
+        check_result(py, "frame_motion", acc.as_slice())?;
+        Ok((
+            to_array1(py, vel.as_slice()).into_any(),
+            to_array1(py, acc.as_slice()).into_any(),
+        ))
+    }
+
+    /// Centre of mass of the moving links at q (nq,) or (N, nq); with `jacobian=True`,
+    /// (com, COM Jacobian (3, nv) or (N, 3, nv)).
+    #[pyo3(signature = (q, jacobian=false))]
+    fn center_of_mass<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        jacobian: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model();
+        let (rows, qs, stacked) = configurations(&model, q, "q")?;
+        let nv = model.nv;
+        let mut com = vec![0.0; 3 * rows];
+        let mut jac = vec![0.0; if jacobian { rows * 3 * nv } else { 0 }];
+        let j = jacobian.then_some(jac.as_mut_slice());
+        if rows == 1 {
+            evaluate::com_batch(&model, &qs, rows, stacked, &mut com, j).py(py)?;
+        } else {
+            detach_interruptible(py, || {
+                evaluate::com_batch(&model, &qs, rows, stacked, &mut com, j)
+            })?;
+        }
+        check_result(py, "center_of_mass", &com)?;
+        let c = to_array(py, com, &lead(stacked, rows, &[3]))?;
+        if !jacobian {
+            return Ok(c);
+        }
+        let j = to_array(py, jac, &lead(stacked, rows, &[3, nv]))?;
+        Ok((c, j).into_pyobject(py)?.into_any())
+    }
+
+    /// (position, velocity, acceleration) of the centre of mass at (q, v, a); `a=None` is zero.
+    #[pyo3(signature = (q, v, a=None))]
+    fn center_of_mass_motion<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+        a: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let (model, q, v) = self.state(py, q, v)?;
+        let a = optional_vector(&model, py, a, "a")?;
+        let [c, vc, ac] = evaluate::com_motion(&model, &q, &v, a.as_deref()).py(py)?;
+        check_result(py, "center_of_mass_motion", ac.as_slice())?;
+        let t = (
+            to_array1(py, c.as_slice()),
+            to_array1(py, vc.as_slice()),
+            to_array1(py, ac.as_slice()),
+        );
+        Ok(t.into_pyobject(py)?.into_any())
+    }
+
+    /// Centroidal momentum at q (and v, a): dict with `A` (A_g, 6 × nv, angular rows first,
+    /// about the centre of mass, world axes), `com`; with `v` also `momentum` (A_g v) and
+    /// `rate` (A_g a + Ȧ_g v; with a=None the bias Ȧ_g v).
+    #[pyo3(signature = (q, v=None, a=None))]
+    fn centroidal<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        v: Option<&Bound<'_, PyAny>>,
+        a: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let (model, q) = self.state_only(py, q)?;
+        let v = optional_vector(&model, py, v, "v")?;
+        let a = optional_vector(&model, py, a, "a")?;
+        if a.is_some() && v.is_none() {
+            return Err(invalid(py, "v", "the speeds (nv,) when a is given", "None"));
+        }
+        let (ag, rest) = evaluate::centroidal(&model, &q, v.as_deref(), a.as_deref()).py(py)?;
+        check_result(py, "centroidal", &ag)?;
+        let d = PyDict::new(py);
+        d.set_item("A", to_array(py, ag, &[6, model.nv])?)?;
+        if let Some((h, hdot)) = rest {
+            check_result(py, "centroidal", hdot.as_slice())?;
+            d.set_item("momentum", to_array1(py, h.as_slice()))?;
+            d.set_item("rate", to_array1(py, hdot.as_slice()))?;
+        }
+        Ok(d)
+    }
+
+    /// `G` (nv × k) with `v = G v_I` for the independent speeds `independent` (v indices or
+    /// body names; None: chosen from the constraint Jacobian), and those v indices.
+    #[pyo3(signature = (q, independent=None))]
+    fn independent_map<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'_, PyAny>,
+        independent: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Bound<'py, PyAny>, Vec<usize>)> {
+        let (model, q) = self.state_only(py, q)?;
+        let idx = match independent {
+            Some(x) if !x.is_none() => crate::python::loops::actuated_indices(&model, x)
+                .map_err(|e| super::rename(py, e, "actuated", "independent"))?,
+            _ => crate::frames::constrained::default_independent(
+                &crate::frames::constrained::constraint_jacobian(&model, &q),
+            ),
+        };
+        let g = crate::frames::constrained::independent_map(&model, &q, &idx).py(py)?;
+        Ok((crate::python::convert::dmatrix_to_array(py, &g)?, idx))
+    }
+}

@@ -1,0 +1,131 @@
+"""Frame Jacobians in Pinocchio's three reference frames and their time variation, against
+Pinocchio's `getFrameJacobian` and `getFrameJacobianTimeVariation` on example-robot-data
+URDFs (fixed and free base, three frames each: a welded link among them) to 1e-10 relative;
+`J̇ v` against central differences of `J(q(t)) v`; the loop-closing map of the four-bar."""
+
+from __future__ import annotations
+
+import numpy as np
+import pointmass_dyn as pmd
+import pytest
+from conftest import record, rel_err
+from test_frames import pin_q, random_q, robot  # noqa: F401  (robot: the fixture)
+
+pin = pytest.importorskip("pinocchio")
+
+TOL = 1e-10
+REFS = {
+    "world": pin.ReferenceFrame.WORLD,
+    "local": pin.ReferenceFrame.LOCAL,
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+}
+# Pinocchio's six-vectors are linear first, ours angular first.
+SWAP = [3, 4, 5, 0, 1, 2]
+
+
+def three_frames(pm) -> list[str]:
+    """The last link, one in the middle and a link welded by a fixed joint (if any)."""
+    bodies = [f for f in pm.frames if f.type == pin.FrameType.BODY]
+    names = [bodies[-1].name, bodies[len(bodies) // 2].name]
+    welded = [f.name for f in bodies if pm.frames[f.parentFrame].type == pin.FrameType.FIXED_JOINT]
+    names.append(welded[-1] if welded else bodies[1].name)
+    return names
+
+
+def test_frame_jacobians_match_pinocchio(robot):  # noqa: F811
+    name, model, pm = robot
+    data = pm.createData()
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        q = random_q(model, rng)
+        v = rng.normal(size=model.nv)
+        qp = pin_q(pm, model, q)
+        pin.computeJointJacobians(pm, data, qp)
+        pin.computeJointJacobiansTimeVariation(pm, data, qp, v)
+        pin.updateFramePlacements(pm, data)
+        for frame in three_frames(pm):
+            fid = pm.getFrameId(frame, pin.FrameType.BODY)
+            for ref, rf in REFS.items():
+                j = model.frame_jacobian(frame, q, reference=ref)
+                want = pin.getFrameJacobian(pm, data, fid, rf)[SWAP]
+                assert record(f"frame jacobian {name}", rel_err(j, want)) < TOL, (frame, ref)
+                jd = model.frame_jacobian_dot(frame, q, v, reference=ref)
+                want = pin.getFrameJacobianTimeVariation(pm, data, fid, rf)[SWAP]
+                # Relative to the size of its terms (|J| |v|): where J̇ is zero (a frame on a
+                # free-flying base, LOCAL), Pinocchio's is rounding noise.
+                scale = max(np.abs(want).max(), np.abs(j).max() * np.abs(v).max())
+                err = np.abs(jd - want).max() / scale if scale > 0 else np.abs(jd - want).max()
+                assert record(f"frame jacobian dot {name}", err) < TOL, (frame, ref)
+
+
+def test_frame_velocity_and_acceleration_match_pinocchio(robot):  # noqa: F811
+    name, model, pm = robot
+    data = pm.createData()
+    rng = np.random.default_rng(5)
+    q = random_q(model, rng)
+    v, a = rng.normal(size=model.nv), rng.normal(size=model.nv)
+    pin.forwardKinematics(pm, data, pin_q(pm, model, q), v, a)
+    frame = three_frames(pm)[0]
+    fid = pm.getFrameId(frame, pin.FrameType.BODY)
+    for ref in ("world", "local"):
+        vel, acc = model.frame_motion(frame, q, v, a, reference=ref)
+        want_v = pin.getFrameVelocity(pm, data, fid, REFS[ref]).vector[SWAP]
+        want_a = pin.getFrameAcceleration(pm, data, fid, REFS[ref]).vector[SWAP]
+        assert rel_err(vel, want_v) < TOL and rel_err(acc, want_a) < TOL, ref
+    # LOCAL_WORLD_ALIGNED: the linear part is the classical acceleration of the frame origin.
+    vel, acc = model.frame_motion(frame, q, v, a, reference="local_world_aligned")
+    want = pin.getFrameClassicalAcceleration(pm, data, fid, pin.ReferenceFrame.LOCAL_WORLD_ALIGNED)
+    assert rel_err(acc[3:], want.linear) < TOL
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5", "solo12-free"])
+def test_jdot_v_is_the_derivative_of_j_v(name, request):
+    from conftest import FLOATING, robots_dir
+    from test_frames import FIXED, load
+
+    root = robots_dir()
+    if root is None:
+        pytest.skip("example-robot-data not installed")
+    free = name.endswith("-free")
+    path = str(root / (FLOATING if free else FIXED)[name.removesuffix("-free")])
+    model, pm = load(path, free)
+    rng = np.random.default_rng(2)
+    q = random_q(model, rng)
+    v = rng.normal(size=model.nv)
+    frame = three_frames(pm)[0]
+    h = 1e-5
+    for ref in REFS:
+        jdv = model.frame_jacobian_dot(frame, q, v, reference=ref) @ v
+        jp = model.frame_jacobian(frame, pin.integrate(pm, q, v * h), reference=ref)
+        jm = model.frame_jacobian(frame, pin.integrate(pm, q, -v * h), reference=ref)
+        fd = (jp - jm) @ v / (2 * h)
+        assert rel_err(jdv, fd) < 1e-7, ref
+
+
+def fourbar():
+    return pmd.load_scene("fourbar")
+
+
+def test_jacobian_in_independent_coordinates_keeps_the_loop_closed():
+    scene = fourbar()
+    model, q = scene.model, scene.q0
+    g, idx = model.independent_map(q)
+    # The four-bar has one degree of freedom: one independent speed, and G's column a
+    # velocity the constraints allow (J_c G = 0), scaled so that the independent speed is 1.
+    assert len(idx) == 1 and g.shape == (model.nv, 1)
+    assert g[idx[0], 0] == 1.0
+    jc = model.constraint_jacobian(q)
+    assert np.abs(jc @ g).max() < 1e-12 * np.abs(jc).max()
+    g_crank, idx_crank = model.independent_map(q, independent=["crank"])
+    assert idx_crank == [0]
+    # With the crank independent, the frame Jacobian in the crank's speed moves the coupler
+    # as the closed mechanism does: compare with a step along the closed motion.
+    frame = "coupler"
+    jg = model.frame_jacobian(frame, q, reference="local_world_aligned") @ g_crank
+    h = 1e-6
+    qp = model.assemble(q + h * g_crank[:, 0], fixed=["crank"])
+    qm = model.assemble(q - h * g_crank[:, 0], fixed=["crank"])
+    fd = (model.frame_placement(frame, qp)[1] - model.frame_placement(frame, qm)[1]) / (2 * h)
+    np.testing.assert_allclose(fd, jg[3:, 0], rtol=1e-6, atol=1e-12)
+    with pytest.raises(pmd.errors.InvalidInputError, match="independent"):
+        model.independent_map(q, independent=["crank", "coupler", "rocker"])
