@@ -15,6 +15,7 @@ pub mod design;
 pub mod effects;
 pub mod error;
 pub mod files;
+pub mod identification;
 pub mod integrator;
 pub mod interrupt;
 pub mod joint;
