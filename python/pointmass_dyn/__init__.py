@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from . import _pickle, benchmarking, design, errors, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, benchmarking, design, errors, identification, io, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._contact import (
     ContactForces,
@@ -66,6 +66,7 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .identification import Identification, excitation_trajectory, identify
 from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
 from .robots import example_robot
 from .scenes import builtin_scenes, load_scene
@@ -135,6 +136,10 @@ __all__ = [
     "benchmarking",
     "robots",
     "design",
+    "identification",
+    "Identification",
+    "excitation_trajectory",
+    "identify",
     "io",
     "viewer",
     "AnimationInfo",
