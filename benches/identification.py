@@ -29,7 +29,7 @@ def panda_arm(folder: Path):
     path.write_text(text)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
-        return pmd.Model.from_urdf(str(path), package_dirs=[str(pmd.robots.directory())])
+        return pmd.Model.from_urdf(str(path), package_dirs=[str(pmd.robots.directory().parent.parent)])
 
 
 def main() -> int:

@@ -197,7 +197,7 @@ def panda_arm(tmp_path):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", pmd.errors.UrdfWarning)
-        return pmd.Model.from_urdf(str(path), package_dirs=[str(pmd.robots.directory())])
+        return pmd.Model.from_urdf(str(path), package_dirs=[str(pmd.robots.directory().parent.parent)])
 
 
 def noisy(model, traj, rng, sigma=None):

@@ -133,10 +133,13 @@ pub fn fit_cells(
         }
         b[g.nrows() + c] = pw[c] * prior[c];
     }
-    let mut x = solve_qp(&a, &b, &vars.nonneg)?;
+    let mut fit = ols(red, base, Some(prior))?;
+    // The objective's unit: least squares' own residual (the noise), so that the optimum's
+    // value is O(1) whatever the data's size; a fraction of the data's norm for exact data.
+    let sigma = fit.rss.sqrt().max(1e-9 * b.norm()).max(1e-300);
+    let mut x = solve_qp(&a, &b, &vars.nonneg, sigma)?;
     polish(&a, &b, &vars.nonneg, &vars.ranges, &mut x);
     let pi_free = &vars.t * &x;
-    let mut fit = ols(red, base, Some(prior))?;
     fit.pi = pi_free.iter().copied().collect();
     fit.beta = base.of(&fit.pi);
     let masses = vars
@@ -151,7 +154,12 @@ pub fn fit_cells(
 /// columns, the residual `e = A x − b` as variables of a diagonal objective (so the
 /// matrices stay sparse however many cells), and a tiny `‖x‖²` that makes the
 /// solution unique (the polish removes its bias).
-fn solve_qp(a: &DMatrix<f64>, b: &DVector<f64>, nonneg: &[bool]) -> Result<DVector<f64>> {
+fn solve_qp(
+    a: &DMatrix<f64>,
+    b: &DVector<f64>,
+    nonneg: &[bool],
+    sigma: f64,
+) -> Result<DVector<f64>> {
     let (m, n) = a.shape();
     let scale: Vec<f64> = (0..n)
         .map(|v| {
@@ -163,10 +171,9 @@ fn solve_qp(a: &DMatrix<f64>, b: &DVector<f64>, nonneg: &[bool]) -> Result<DVect
             }
         })
         .collect();
-    let sigma = b.norm().max(1e-300);
     let nz = n + m;
     // Objective ½ zᵀ P z: ‖e‖² + ε ‖u‖².
-    let eps = 1e-9;
+    let eps = 1e-10;
     let (mut pr, mut pc, mut pv) = (Vec::new(), Vec::new(), Vec::new());
     for k in 0..nz {
         pr.push(k);
@@ -228,10 +235,12 @@ fn solve_qp(a: &DMatrix<f64>, b: &DVector<f64>, nonneg: &[bool]) -> Result<DVect
         SolverStatus::CallbackTerminated => {
             return Err(Error::Interrupted("identification".into()))
         }
-        other => return Err(Error::Singular(format!(
+        other => {
+            return Err(Error::Singular(format!(
             "identification: the cells' program stopped with status {other:?} after {} iterations",
             sol.iterations
-        ))),
+        )))
+        }
     }
     Ok(DVector::from_fn(n, |v, _| {
         let x = sol.x[v] * scale[v];
@@ -244,8 +253,8 @@ fn solve_qp(a: &DMatrix<f64>, b: &DVector<f64>, nonneg: &[bool]) -> Result<DVect
 }
 
 /// Least-squares steps on the variables in use (cells above a relative threshold of their
-/// link's largest, and every joint-space variable), each as long as keeps them
-/// non-negative, while the residual falls.
+/// link's largest, and every joint-space variable): Lawson–Hanson's inner loop, each step
+/// cut where a variable reaches zero, which then leaves the set, while the residual falls.
 fn polish(
     a: &DMatrix<f64>,
     b: &DVector<f64>,
@@ -255,16 +264,16 @@ fn polish(
 ) {
     let n = x.len();
     let mut cost = (a * &*x - b).norm_squared();
-    for _ in 0..4 {
-        let mut used = vec![true; n];
-        for r in ranges {
-            let top = x.as_slice()[r.clone()]
-                .iter()
-                .fold(0.0f64, |m, v| m.max(*v));
-            for v in r.clone() {
-                used[v] = x[v] > 1e-9 * top;
-            }
+    let mut used = vec![true; n];
+    for r in ranges {
+        let top = x.as_slice()[r.clone()]
+            .iter()
+            .fold(0.0f64, |m, v| m.max(*v));
+        for v in r.clone() {
+            used[v] = x[v] > 1e-9 * top;
         }
+    }
+    for _ in 0..30 {
         let cols: Vec<usize> = (0..n).filter(|&v| used[v]).collect();
         let sub = DMatrix::from_fn(a.nrows(), cols.len(), |i, j| a[(i, cols[j])]);
         let resid = b - a * &*x;
@@ -276,9 +285,11 @@ fn polish(
             return;
         };
         let mut alpha = 1.0f64;
+        let mut blocking = None;
         for (j, &v) in cols.iter().enumerate() {
-            if nonneg[v] && step[j] < 0.0 {
-                alpha = alpha.min(x[v] / -step[j]);
+            if nonneg[v] && step[j] < 0.0 && x[v] / -step[j] < alpha {
+                alpha = x[v] / -step[j];
+                blocking = Some(v);
             }
         }
         let mut trial = x.clone();
@@ -288,13 +299,17 @@ fn polish(
                 trial[v] = trial[v].max(0.0);
             }
         }
+        if let Some(v) = blocking {
+            trial[v] = 0.0;
+            used[v] = false;
+        }
         let c = (a * &trial - b).norm_squared();
-        if !(c < cost) {
+        if !(c <= cost) {
             return;
         }
         *x = trial;
         cost = c;
-        if alpha >= 1.0 {
+        if blocking.is_none() {
             return;
         }
     }
