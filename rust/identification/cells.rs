@@ -118,11 +118,16 @@ pub fn fit_cells(
 ) -> Result<(Fit, Vec<Vec<f64>>)> {
     let vars = variables(free, links, extras, model)?;
     let g = &red.r * &vars.t;
-    // The prior's rows: √w ‖R_c‖ (π_c − π̄_c) for each free column c.
+    // The prior's rows: √w n_c (π_c − π̄_c) for each free column c, n_c the column's norm, or
+    // the median norm of its kind (the same parameter of the other links, the same
+    // joint-space term of the other joints) where the data hardly reach it: those are
+    // exactly the directions the prior is for.
     let nprior = if prior_weight > 0.0 { free.len() } else { 0 };
-    let pw: Vec<f64> = (0..nprior)
-        .map(|c| prior_weight.sqrt() * red.r.column(c).norm())
-        .collect();
+    let pw = prior_scales(red, free, model)
+        .into_iter()
+        .map(|n| prior_weight.sqrt() * n)
+        .take(nprior)
+        .collect::<Vec<f64>>();
     let mut a = DMatrix::zeros(g.nrows() + nprior, g.ncols());
     a.view_mut((0, 0), g.shape()).copy_from(&g);
     let mut b = DVector::zeros(g.nrows() + nprior);
@@ -148,6 +153,40 @@ pub fn fit_cells(
         .map(|r| x.as_slice()[r.clone()].to_vec())
         .collect();
     Ok((fit, masses))
+}
+
+/// Column norms of the reduced regressor, those below `1e-3` of their kind's median replaced
+/// by the median (kinds: the ten link parameters by position, each joint-space term).
+fn prior_scales(red: &Reduced, free: &[usize], model: &Model) -> Vec<f64> {
+    let nlp = NPARAM * model.links.len();
+    let nj = super::regressor::extra_joints(model).len().max(1);
+    let kind = |c: usize| {
+        if c < nlp {
+            c % NPARAM
+        } else {
+            NPARAM + (c - nlp) / nj
+        }
+    };
+    let norms: Vec<f64> = (0..free.len()).map(|k| red.r.column(k).norm()).collect();
+    let mut out = norms.clone();
+    for (k, &c) in free.iter().enumerate() {
+        let mut same: Vec<f64> = free
+            .iter()
+            .enumerate()
+            .filter(|&(_, &d)| kind(d) == kind(c))
+            .map(|(j, _)| norms[j])
+            .filter(|n| *n > 0.0)
+            .collect();
+        if same.is_empty() {
+            continue;
+        }
+        same.sort_by(f64::total_cmp);
+        let median = same[same.len() / 2];
+        if norms[k] < 1e-3 * median {
+            out[k] = median;
+        }
+    }
+    out
 }
 
 /// `min ‖A x − b‖²` with `x_k ≥ 0` where `nonneg[k]`, on Clarabel: variables scaled to unit

@@ -4,12 +4,21 @@ visuals (URDF ``<visual>``: boxes, cylinders, spheres, meshes)."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 from .._collision import GeometryUnreadable, mesh_vertices
 from ..errors import InvalidInputError
 
 _UNIT_BOX = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
+
+
+@lru_cache(maxsize=128)
+def _hull_points(path: str) -> np.ndarray:
+    """A mesh file's vertices, read once per process (a robot's meshes are re-read for every
+    identification otherwise)."""
+    return mesh_vertices(path)
 
 
 def _shape_points(vis: dict) -> np.ndarray:
@@ -29,7 +38,7 @@ def _shape_points(vis: dict) -> np.ndarray:
         path = vis.get("path")
         if not path:
             raise GeometryUnreadable(f"mesh '{vis.get('uri')}': no file")
-        pts = mesh_vertices(str(path)) * np.asarray(vis.get("scale") or (1.0, 1.0, 1.0), float)
+        pts = _hull_points(str(path)) * np.asarray(vis.get("scale") or (1.0, 1.0, 1.0), float)
     else:
         raise GeometryUnreadable(f"a '{kind}' shape")
     return pts @ np.asarray(vis["rotation"], float).T + np.asarray(vis["translation"], float)

@@ -131,8 +131,10 @@ def excitation_trajectory(
             y = y[:, cols]
         norms = np.linalg.norm(y, axis=0)
         y = y[:, norms > 0] / norms[norms > 0]
-        sv = np.linalg.svd(y, compute_uv=False)
-        return sv[0] / sv[-1] if sv[-1] > 0 else np.inf
+        # The Gram matrix's eigenvalues (small and symmetric: much cheaper than an SVD of
+        # the tall regressor), squares of the singular values.
+        ev = np.linalg.eigvalsh(y.T @ y)
+        return float(np.sqrt(ev[-1] / ev[0])) if ev[0] > 0 else np.inf
 
     # The identifiable columns of a rich motion, once; the search then conditions those.
     cols = None
