@@ -261,3 +261,36 @@ def test_bad_data_is_refused_naming_the_argument():
         pmd.identify(model, (q, v, a, tau[:, :2]), method="ols")
     with pytest.raises(pmd.errors.InvalidInputError, match=r"t: expected uniformly spaced"):
         pmd.identify(model, (np.r_[0.0, np.cumsum(np.random.default_rng(0).uniform(0.1, 0.2, 19))], q, tau), method="ols")
+
+
+# ------------------------------------------------------------------------------ excitation, filter
+
+
+def test_excitation_stays_within_limits_and_writes_its_csv(tmp_path):
+    model = pmd.example_robot("panda")
+    exc = pmd.excitation_trajectory(model, 6.0, harmonics=3, rate=200, acceleration=4.0, iterations=5, seed=2, csv=tmp_path / "e.csv")
+    limits = np.array(list(model.joint_limits().values()))
+    lo, hi, vmax = limits[:, 0], limits[:, 1], limits[:, 3]
+    assert np.all(exc.q >= lo - 1e-12) and np.all(exc.q <= hi + 1e-12)
+    assert np.all(np.abs(exc.v) <= vmax) and np.all(np.abs(exc.a) <= 4.0)
+    # v and a are the derivatives of q (central differences of the sampled series).
+    dt = exc.t[1] - exc.t[0]
+    assert rel_err((exc.q[2:] - exc.q[:-2]) / (2 * dt), exc.v[1:-1]) <= 1e-3
+    assert rel_err((exc.v[2:] - exc.v[:-2]) / (2 * dt), exc.a[1:-1]) <= 1e-3
+    table = np.loadtxt(tmp_path / "e.csv", delimiter=",", skiprows=1)
+    assert table.shape == (len(exc.t), 1 + 3 * model.nv)
+    assert rel_err(table[:, 1 : 1 + model.nv], exc.q) <= 1e-9
+    # Periodic: the series is the same one period later.
+    q1, _, _ = ident.fourier(exc.coefficients, exc.offsets, exc.t + 6.0, 2 * np.pi / 6.0)
+    assert rel_err(q1, exc.q) <= 1e-12
+
+
+def test_savgol_differentiates_a_polynomial_exactly_and_a_sine_closely():
+    t = np.linspace(0.0, 2.0, 401)
+    x = np.column_stack([1 + 2 * t - 3 * t**2 + 0.5 * t**3, np.sin(3 * t)])
+    s, v, a = ident.savgol(t, x, window=21, order=3)
+    # A cubic is its own fit: exact to rounding everywhere, the ends included.
+    assert np.allclose(v[:, 0], 2 - 6 * t + 1.5 * t**2, atol=1e-9)
+    assert np.allclose(a[:, 0], -6 + 3 * t, atol=1e-7)
+    assert np.max(np.abs(v[:, 1] - 3 * np.cos(3 * t))) <= 1e-3
+    assert np.max(np.abs(a[:, 1] + 9 * np.sin(3 * t))) <= 5e-2
