@@ -16,6 +16,7 @@ pub mod effects;
 pub mod error;
 pub mod files;
 pub mod frames;
+pub mod identification;
 pub mod integrator;
 pub mod interrupt;
 pub mod joint;

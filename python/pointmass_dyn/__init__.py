@@ -7,7 +7,7 @@ matrices. The core is Rust; this package is its NumPy front.
 
 from __future__ import annotations
 
-from . import _pickle, design, errors, io, kinematics, robots, viewer  # noqa: F401  (_pickle: copyreg)
+from . import _pickle, design, errors, identification, io, kinematics, robots, viewer  # noqa: F401  (_pickle: copyreg)
 from ._batch import BatchResult, simulate_batch
 from ._contact import (
     ContactForces,
@@ -64,6 +64,7 @@ from .errors import (
     SimulationError,
     SingularityError,
 )
+from .identification import Identification, excitation_trajectory, identify
 from .io import InertiaRepair, from_mujoco, from_pinocchio, to_mjcf
 from .kinematics import IKResult, inverse_kinematics
 from .robots import example_robot
@@ -128,6 +129,10 @@ __all__ = [
     "benchmarking",
     "robots",
     "design",
+    "identification",
+    "Identification",
+    "excitation_trajectory",
+    "identify",
     "io",
     "viewer",
     "AnimationInfo",

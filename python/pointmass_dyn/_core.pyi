@@ -994,6 +994,59 @@ def design_regressor(
     moment, driving forces, bearing forces per link and cut joint, per unit inertial
     parameter), ``rows``, ``nactuated``, ``nlinks``, ``nloops``, ``parameters``."""
 
+def identification_regressor(
+    model: Model,
+    q: ArrayLike,
+    v: ArrayLike,
+    a: ArrayLike,
+    gravity: ArrayLike | None = None,
+    viscous: bool = False,
+    coulomb: bool = False,
+    armature: bool = False,
+    offset: bool = False,
+) -> _Array:
+    """The joint torque regressor along N states, (N · nv, p), sample-major rows: per link
+    Pinocchio's ten parameters, then per 1-dof joint the asked joint-space columns
+    (docs/identification.md)."""
+
+def identification_parameters(
+    model: Model, viscous: bool = False, coulomb: bool = False, armature: bool = False, offset: bool = False
+) -> tuple[list[str], _Array]:
+    """Column names and the model's values (friction and offsets 0, armature 0 here)."""
+
+def identification_base(y: ArrayLike, rank_tol: float = 1e-8) -> dict[str, Any]:
+    """Base parameters of a regressor: ``rank``, ``independent``, ``dependent``,
+    ``coefficients`` (rank, p − rank), ``pivots``."""
+
+def identification_fit(
+    model: Model,
+    q: ArrayLike,
+    v: ArrayLike,
+    a: ArrayLike,
+    tau: ArrayLike,
+    gravity: ArrayLike | None,
+    method: str,
+    free: list[bool],
+    prior: list[float],
+    prior_weight: float,
+    weights: list[float],
+    cells: list[tuple[int, ArrayLike, float]],
+    viscous: bool,
+    coulomb: bool,
+    armature: bool,
+    offset: bool,
+    rank_tol: float = 1e-8,
+) -> dict[str, Any]:
+    """The identification (pointmass_dyn.identification.identify builds the arguments):
+    ``names``, ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``,
+    ``condition``, ``structural_rank``, ``residuals``, ``masses``."""
+
+def identification_model(
+    model: Model, pi: list[float], links: list[int], armature: list[float] | None = None
+) -> Model:
+    """A copy of ``model`` with links ``links`` given the parameters ``pi`` (10 per link);
+    ``InertiaError`` naming the body when one is not a rigid body."""
+
 def design_pins(model: Model, body: int | str) -> list[tuple[_Array, _Array]]:
     """``(point, axis)`` of each revolute or ball joint on ``body``, in its frame."""
 

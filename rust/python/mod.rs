@@ -8,6 +8,7 @@ mod design;
 mod effects;
 mod errors;
 mod events;
+mod identification;
 mod jac;
 mod joint;
 mod loops;
@@ -58,6 +59,17 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(design::design_pins, m)?)?;
     m.add_function(wrap_pyfunction!(design::design_pin_loads, m)?)?;
     m.add_function(wrap_pyfunction!(design::design_solve, m)?)?;
+    m.add_function(wrap_pyfunction!(
+        identification::identification_regressor,
+        m
+    )?)?;
+    m.add_function(wrap_pyfunction!(
+        identification::identification_parameters,
+        m
+    )?)?;
+    m.add_function(wrap_pyfunction!(identification::identification_base, m)?)?;
+    m.add_function(wrap_pyfunction!(identification::identification_fit, m)?)?;
+    m.add_function(wrap_pyfunction!(identification::identification_model, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
     m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;
     Ok(())
