@@ -303,3 +303,72 @@ def test_safety_arguments_are_checked():
                         material=pmd.Material.steel(), boss=0.0)
     with pytest.raises(pmd.errors.InvalidInputError, match="'crank'.*no(ne| material)"):
         pmd.balance(motion, links=[off], objective={"force": 1.0})
+
+
+def watt_sixbar():
+    """The Watt II six-bar of docs/design.md §7b: a ternary rocker (pins at 0, +70, -50 mm)."""
+    def bar(length, mass):
+        i = mass * length**2 / 12
+        return pmd.RigidBody(mass, [length / 2, 0, 0], np.diag([1e-7, i, i]))
+
+    six = pmd.Model()
+    z = pmd.Revolute([0, 0, 1])
+    six.add_body(bar(0.035, 0.02), z, parent=-1, name="crank")
+    six.add_body(bar(0.09, 0.05), z, parent="crank", translation=[0.035, 0, 0], name="coupler")
+    six.add_body(bar(0.07, 0.06), z, parent=-1, translation=[0.1, 0, 0], name="rocker")
+    six.add_body(bar(0.07, 0.04), z, parent="rocker", translation=[-0.05, 0, 0], name="link5")
+    six.add_body(bar(0.05, 0.03), z, parent=-1, translation=[0.17, -0.05, 0], name="output")
+    six.add_loop("coupler", "rocker", z, translation_a=[0.09, 0, 0], translation_b=[0.07, 0, 0])
+    six.add_loop("link5", "output", z, translation_a=[0.07, 0, 0], translation_b=[0.05, 0, 0])
+    th = 1.683673226
+    pin5 = np.array([0.1, 0.0]) - 0.05 * np.array([np.cos(th), np.sin(th)])
+    o3 = np.array([0.17, -0.05])
+    d = np.linalg.norm(o3 - pin5)
+    a = (0.07**2 - 0.05**2 + d**2) / (2 * d)
+    u = (o3 - pin5) / d
+    joint = pin5 + a * u + np.sqrt(0.07**2 - a**2) * np.array([-u[1], u[0]])
+    q0 = [0.0, 0.8832855795, th, np.arctan2(*(joint - pin5)[::-1]) - th,
+          np.arctan2(*(joint - o3)[::-1])]
+    return six, q0
+
+
+def test_ternary_link_members_against_the_beam_formula():
+    six, q0 = watt_sixbar()
+    motion = pmd.prescribed_motion(six, "crank", speed=150.0, samples=24, q_guess=q0, gravity=G)
+    rocker = pmd.LinkShape("rocker", box=([-0.06, -0.016, -0.004], [0.08, 0.016, 0.004]), cell=0.004,
+                           material=pmd.Material.aluminium())
+    b = pmd.balance(motion, links=[rocker], objective={"force": 1.0}, limits={"safety": 1.0})
+    s = b.strength["rocker"]
+    assert len(s.members) == 2
+    # The program's stress rows (the design regressor's pin forces) predict the re-analysis.
+    np.testing.assert_allclose(b.solver["values"]["safety:rocker"], np.abs(s.stress).max(), rtol=1e-6)
+    model, a = b.after.model, b.after
+    names = model.body_names
+    i_r, i_c, i_5 = names.index("rocker"), names.index("coupler"), names.index("link5")
+    l_r, l_5 = model.link_names.index("rocker"), model.link_names.index("link5")
+    centers, lower, cap = rocker.cells(model)
+    web = centers[(lower >= cap) & (np.abs(centers[:, 1]) <= 0.5 * rocker.web_width() + 1e-12)]
+    width, thick = np.ptp(web[:, 1]) + rocker.cell, np.ptp(web[:, 2]) + rocker.cell
+    area, inertia = width * thick, thick * width**3 / 12
+    r = rocker.boss_radius()
+    # Members in the pins' order: own, then its child's (link5, -50 mm), then the cut joint's.
+    for member, (far, near) in enumerate(((-0.05, 0.07), (0.07, -0.05))):
+        length = abs(far)
+        worst = 0.0
+        for t in range(len(a.t)):
+            rot, _ = model.placements(a.q[t])
+            # Forces on the rocker (its axes): its own pin, the cut joint at +70 mm (body b),
+            # the joint of link5 at -50 mm (the reaction to link5's bearing).
+            own = a.bearing[t, l_r, :3]
+            at = {0.07: rot[i_r].T @ rot[i_c] @ a.cut[t, 0, :3],
+                  -0.05: -(rot[i_r].T @ rot[i_5] @ a.bearing[t, l_5, :3])}
+            torque = a.bearing[t, l_r, 5]
+            for x in np.arange(r + rocker.cell / 2, length - r - rocker.cell / 2 + 1e-12, rocker.cell):
+                c = np.sign(far) * x  # the section's centre on the body's x axis
+                # z-moment of a force f at (p, 0) about (c, 0): (p - c) f_y.
+                loads = [(at[far][0], (far - c) * at[far][1]),
+                         (own[0] + at[near][0], -c * own[1] + (near - c) * at[near][1] + torque)]
+                for n, m in loads:
+                    worst = max(worst, abs(n) / area + abs(m) * (width / 2) / inertia)
+        got = np.abs(s.stress[:, member]).max()
+        np.testing.assert_allclose(got, worst, rtol=1e-9)
