@@ -28,8 +28,8 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core
-from ._core import Scene
-from ._helpers import float_array, interrupt_reason, interrupted_message
+from ._core import RunConfig, Scene
+from ._helpers import changed_settings, float_array, interrupt_reason, interrupted_message
 from ._simulation import SimulationResult
 from .errors import (
     InvalidInputError,
@@ -205,6 +205,7 @@ def simulate_batch(
     progress: Callable[[int, int], Any] | None = None,
     method: str | None = None,
     dt: float | None = None,
+    config: RunConfig | None = None,
 ) -> BatchResult:
     """B simulations of one scene (or of a list of scenes), on ``threads`` threads (default:
     one per core), the GIL released once for the whole batch.
@@ -220,7 +221,8 @@ def simulate_batch(
     ``t_reached``), runs not started with ``status=-1`` and the reason. Each run gives
     exactly what the same
     :func:`simulate` call gives; one failing run (a NaN force, a singularity) is reported in
-    its own result while the others finish."""
+    its own result while the others finish. ``config``: a :class:`RunConfig`, as
+    :func:`simulate`'s."""
     scenes = [scene] if isinstance(scene, Scene) else list(scene)
     if not scenes or not all(isinstance(s, Scene) for s in scenes):
         raise InvalidInputError("scene: expected a Scene or a non-empty list of Scenes")
@@ -244,18 +246,23 @@ def simulate_batch(
         t_span,
         rtol,
         atol,
-        t_eval,
-        events,
-        first_step,
-        max_step,
-        max_steps,
-        energy,
-        disable,
-        threads,
-        progress,
-        method,
-        dt,
+        config=config,
+        events=events,
+        threads=threads,
+        progress=progress,
+        **changed_settings(
+            t_eval=t_eval,
+            first_step=first_step,
+            max_step=max_step,
+            max_steps=max_steps,
+            energy=energy,
+            disable=disable,
+            method=method,
+            dt=dt,
+        ),
     )
+    if t_eval is None and config is not None:
+        t_eval = config.t_eval
     batch = _batch_result(scenes, out, t_eval, stopped)
     if stopped is not None:
         raise _with_batch(stopped, batch)

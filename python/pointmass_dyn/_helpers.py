@@ -155,3 +155,18 @@ def interrupt_reason(error: BaseException) -> str:
         return "Ctrl-C (or a KeyboardInterrupt raised by progress)"
     text = str(error)
     return f"{type(error).__name__}{': ' + text if text else ''}, raised by progress"
+
+
+#: The run settings' defaults in the signatures of ``simulate`` and ``simulate_batch``: left
+#: at these, a keyword says nothing (a ``RunConfig``, the scene or the core's default decide).
+_SETTING_DEFAULTS = {"energy": False, "power": False, "controller": "standard", "stiffness": "warn"}
+
+
+def changed_settings(**settings) -> dict:
+    """The run settings a call states, as ``RunConfig``'s keywords: those not ``None`` and
+    not at their signature's default."""
+    return {
+        k: v
+        for k, v in settings.items()
+        if v is not None and not (k in _SETTING_DEFAULTS and v == _SETTING_DEFAULTS[k])
+    }

@@ -12,12 +12,13 @@ mod dynamics;
 mod settings;
 
 pub use dynamics::{Dynamics, Progress};
-pub use settings::{default_method, disabled, Requested, Resolved};
+pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};
 use crate::integrator::{self, Event, SolverOptions, Status};
 use crate::model::Model;
+use crate::scene::Scene;
 
 /// An event on the state: `q[index] − value` or `v[index] − value` crossing zero.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -80,6 +81,32 @@ pub struct Trajectory {
     pub message: String,
     pub t_reached: f64,
     pub success: bool,
+}
+
+/// Runs `scene` as `config` asks: the caller's settings over the scene's, over the
+/// defaults ([`RunConfig::resolve`]), then [`simulate`] from the scene's initial state.
+pub fn run_scene(
+    scene: &Scene,
+    config: RunConfig,
+    state_events: &[StateEvent],
+    extra_events: Vec<Event<'_>>,
+    progress: Option<Progress<'_>>,
+) -> Result<Trajectory> {
+    let dim = scene.model.nq + scene.model.nv;
+    let run = config.resolve(&scene.settings, &scene.effects, dim)?;
+    simulate(
+        &scene.model,
+        &scene.effects,
+        run.disabled,
+        &scene.q0,
+        &scene.v0,
+        run.t_span,
+        &run.opts,
+        state_events,
+        extra_events,
+        run.record,
+        progress,
+    )
 }
 
 /// Integrates `model` with `effects` (minus the `disabled` families) from `(q0, v0)` over
