@@ -29,7 +29,7 @@ import numpy as np
 
 from . import _core
 from ._core import RunConfig, Scene
-from ._helpers import changed_settings, float_array, interrupt_reason, interrupted_message
+from ._helpers import changed_settings, float_array
 from ._simulation import SimulationResult
 from .errors import (
     InvalidInputError,
@@ -263,30 +263,23 @@ def simulate_batch(
     )
     if t_eval is None and config is not None:
         t_eval = config.t_eval
-    batch = _batch_result(scenes, out, t_eval, stopped)
+    batch = _batch_result(scenes, out, t_eval)
     if stopped is not None:
         raise _with_batch(stopped, batch)
     return batch
 
 
-def _batch_result(
-    scenes: list[Scene], out: list[dict], t_eval: Any, stopped: BaseException | None = None
-) -> BatchResult:
-    """The core's per-run dicts as a :class:`BatchResult`; ``stopped``: what stopped the
-    batch (Ctrl-C, a raising ``progress``), which the runs it cut short name."""
+def _batch_result(scenes: list[Scene], out: list[dict], t_eval: Any) -> BatchResult:
+    """The core's per-run dicts as a :class:`BatchResult` (the runs a stopped batch cut
+    short name what stopped it in their messages: the bindings put it there)."""
     names = [s.name for s in scenes]
     results = []
     for k, d in enumerate(out):
         name = names[0] if len(names) == 1 else names[k]
         error = d.pop("error")
         if "t" not in d:
-            if stopped is not None and isinstance(error, KeyboardInterrupt):
-                why = f"the batch was stopped before this run started, by {interrupt_reason(stopped)}"
-                results.append(_failed(name, error, why))
-            else:
-                results.append(_failed(name, error))
+            results.append(_failed(name, error, d.get("message")))
         else:
-            d["message"] = interrupted_message(d["message"], stopped)
             results.append(SimulationResult(scene=name, **d))
     passed = [k for k, r in enumerate(results) if r.singular_passage is not None]
     if passed:

@@ -47,7 +47,7 @@ import numpy as np
 from . import _core
 from ._contact import contact_forces, torque_saturation
 from ._core import Effect, RunConfig, Scene, StateEvent
-from ._helpers import changed_settings, interrupted_message
+from ._helpers import changed_settings
 from .errors import SimulationError, SingularPassageWarning
 
 
@@ -371,7 +371,6 @@ def simulate(
         ),
     )
     error = out.pop("error")
-    out["message"] = interrupted_message(out["message"], error)
     result = SimulationResult(scene=scene.name, **out)
     result.saturated = torque_saturation(scene, result, disable)
     if result.singular_passage is not None:

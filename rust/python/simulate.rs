@@ -6,7 +6,7 @@ use pyo3::types::{PyDict, PyList};
 
 use super::convert::{real, to_array, to_array1, vector};
 use super::effects::take_callback_error;
-use super::errors::{check_result, invalid, py_error, IntoPyResult};
+use super::errors::{check_result, interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
 use super::options::{given, set_method, set_outcome};
 use super::run_config::{call_config, PyRunConfig};
@@ -63,7 +63,12 @@ pub fn simulate_scene<'py>(
         .or(failure.into_inner().ok().flatten())
         .or(watch.error.take());
     match (result, raised) {
-        (Ok(traj), raised) => trajectory_dict(py, traj, raised, &events),
+        (Ok(mut traj), raised) => {
+            if let Some(e) = &raised {
+                traj.name_interruption(&interrupt_reason(py, e));
+            }
+            trajectory_dict(py, traj, raised, &events)
+        }
         (Err(_), Some(raised)) => Err(raised),
         (Err(e), None) => Err(super::errors::to_py(py, e)),
     }
@@ -379,11 +384,21 @@ pub fn simulate_batch<'py>(
     let results = results
         .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
     let out = PyList::empty(py);
+    let reason = stopped.as_ref().map(|e| interrupt_reason(py, e));
     for result in results {
-        match result {
-            Ok(traj) => out.append(trajectory_dict(py, traj, None, &events)?)?,
-            Err(e) => {
+        match (result, &reason) {
+            (Ok(mut traj), reason) => {
+                if let Some(r) = reason {
+                    traj.name_interruption(r);
+                }
+                out.append(trajectory_dict(py, traj, None, &events)?)?
+            }
+            (Err(e), reason) => {
                 let d = PyDict::new(py);
+                if let (crate::error::Error::Interrupted(_), Some(r)) = (&e, reason) {
+                    let why = format!("the batch was stopped before this run started, by {r}");
+                    d.set_item("message", why)?;
+                }
                 d.set_item("error", super::errors::to_py(py, e).into_value(py))?;
                 out.append(d)?;
             }

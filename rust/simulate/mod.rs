@@ -83,6 +83,25 @@ pub struct Trajectory {
     pub success: bool,
 }
 
+impl Trajectory {
+    /// A run its caller interrupted ([`Status::Interrupted`]) says by what: `reason`, which
+    /// only the caller knows (the exception its progress callback raised, Ctrl-C).
+    pub fn name_interruption(&mut self, reason: &str) {
+        let Status::Interrupted { t, at, .. } = self.status else {
+            return;
+        };
+        let before = self.status.describe(self.t_reached);
+        let rest = self.message.strip_prefix(before.as_str()).unwrap_or("");
+        let rest = rest.to_string();
+        self.status = Status::Interrupted {
+            t,
+            at,
+            reason: Some(reason.to_string()),
+        };
+        self.message = self.status.describe(self.t_reached) + &rest;
+    }
+}
+
 /// Runs `scene` as `config` asks: the caller's settings over the scene's, over the
 /// defaults ([`RunConfig::resolve`]), then [`simulate`] from the scene's initial state.
 pub fn run_scene(
@@ -160,15 +179,13 @@ pub fn simulate(
              (DOP853 passes the IFToMM N-four-bar down to rtol 1e-12)",
         );
     }
-    if let Status::RhsError { t, at, message } = &sol.status {
-        if message == dynamics::INTERRUPTED {
-            sol.message = format!(
-                "interrupted at t = {} (Ctrl-C, or the progress callback raised or the batch \
-                 was stopped); integration reached t = {}",
-                integrator::fmt_time(*at),
-                integrator::fmt_time(*t)
-            );
-        }
+    if let (Status::RhsError { t, at, .. }, Some(_)) = (&sol.status, sys.interrupted_at) {
+        sol.status = Status::Interrupted {
+            t: *t,
+            at: *at,
+            reason: None,
+        };
+        sol.message = sol.status.describe(sol.t_reached);
     }
     sol.t_events.truncate(n_user);
     sol.y_events.truncate(n_user);
