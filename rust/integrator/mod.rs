@@ -44,7 +44,7 @@ pub use dense::{eval_segment, DenseOutput, Interpolant};
 pub use dop853::{Dop853, Dop853Tableau};
 #[cfg(test)]
 pub(crate) use driver::auto as driver_auto;
-pub use driver::{rk45, solve, AUTO_DOP853_RTOL};
+pub use driver::{rk45, solve, solve_with_jacobian, AUTO_DOP853_RTOL};
 pub use events::{Event, EventDirection, EventFn};
 pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};

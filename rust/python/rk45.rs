@@ -11,10 +11,10 @@ use super::effects::repr_of;
 use super::errors::IntoPyResult;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
-use super::jac::{jac_arg, JacArg, Source, WithJacobian};
+use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::options::{set_method, set_outcome, t_span_arg};
 use super::run_config::{call_config, PyRunConfig};
-use crate::integrator::{self, Event, FnSystem, JacobianSource, Method, OdeSystem};
+use crate::integrator::{self, Event, FnSystem, OdeSystem};
 use crate::scene::Settings;
 
 /// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
@@ -59,29 +59,20 @@ pub fn rk45<'py>(
         .collect();
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let sys = python_system(py, fun, dim, &rhs_failure);
-    let failure_slot = &rhs_failure;
-    let with = |inner, source| WithJacobian {
-        inner,
-        source,
-        failure: failure_slot,
-    };
+    // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
     let sol = match jac {
-        JacArg::None => integrator::solve(sys, t_span, &y0, &opts, &mut evs),
         JacArg::Callable(f) => {
-            integrator::solve(with(sys, Source::Callable(f)), t_span, &y0, &opts, &mut evs)
+            let with = WithJacobian {
+                inner: sys,
+                jac: f,
+                failure: &rhs_failure,
+            };
+            integrator::solve(with, t_span, &y0, &opts, &mut evs)
         }
-        // SciPy's constant Jacobian: never re-evaluated.
-        JacArg::Constant(m) if opts.method == Method::Radau => integrator::radau_solve(
-            sys,
-            t_span,
-            &y0,
-            &opts,
-            &mut evs,
-            JacobianSource::Constant(m),
-        ),
         JacArg::Constant(m) => {
-            integrator::solve(with(sys, Source::Constant(m)), t_span, &y0, &opts, &mut evs)
+            integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, Some(m))
         }
+        JacArg::None => integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, None),
     }
     .map_err(|e| invalid_setting(py, e))?;
     drop(evs);
