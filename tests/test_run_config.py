@@ -4,9 +4,8 @@ the scene's ``[simulate]`` table over the defaults (docs/architecture.md)."""
 import pickle
 
 import numpy as np
-import pytest
-
 import pointmass_dyn as pmd
+import pytest
 
 
 def pendulum(**settings):
