@@ -484,7 +484,10 @@ def test_stub_declares_every_export():
 
 def _params(fn: ast.FunctionDef) -> list[str]:
     args = fn.args
-    return [a.arg for a in args.posonlyargs + args.args + args.kwonlyargs if a.arg not in ("self", "cls")]
+    named = [a.arg for a in args.posonlyargs + args.args + args.kwonlyargs]
+    return [a for a in named if a not in ("self", "cls")] + (
+        ["**" + args.kwarg.arg] if args.kwarg else []
+    )
 
 
 def test_stub_signatures_match_the_runtime():

@@ -17,7 +17,17 @@ from ._contact import (
     torque_saturation,
     urdf_contact_points,
 )
-from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
+from ._core import (
+    Effect,
+    Joint,
+    Model,
+    PointMasses,
+    RigidBody,
+    RunConfig,
+    Scene,
+    StateEvent,
+    __version__,
+)
 from ._simulation import (
     Damper,
     ExternalForce,
@@ -172,6 +182,7 @@ __all__ = [
     "Prismatic",
     "Revolute",
     "RigidBody",
+    "RunConfig",
     "Scene",
     "SceneError",
     "Shaking",

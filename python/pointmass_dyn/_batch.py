@@ -28,8 +28,8 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core
-from ._core import Scene
-from ._helpers import float_array, interrupt_reason, interrupted_message
+from ._core import RunConfig, Scene
+from ._helpers import changed_settings, float_array
 from ._simulation import SimulationResult
 from .errors import (
     InvalidInputError,
@@ -205,6 +205,7 @@ def simulate_batch(
     progress: Callable[[int, int], Any] | None = None,
     method: str | None = None,
     dt: float | None = None,
+    config: RunConfig | None = None,
 ) -> BatchResult:
     """B simulations of one scene (or of a list of scenes), on ``threads`` threads (default:
     one per core), the GIL released once for the whole batch.
@@ -220,7 +221,8 @@ def simulate_batch(
     ``t_reached``), runs not started with ``status=-1`` and the reason. Each run gives
     exactly what the same
     :func:`simulate` call gives; one failing run (a NaN force, a singularity) is reported in
-    its own result while the others finish."""
+    its own result while the others finish. ``config``: a :class:`RunConfig`, as
+    :func:`simulate`'s."""
     scenes = [scene] if isinstance(scene, Scene) else list(scene)
     if not scenes or not all(isinstance(s, Scene) for s in scenes):
         raise InvalidInputError("scene: expected a Scene or a non-empty list of Scenes")
@@ -244,42 +246,40 @@ def simulate_batch(
         t_span,
         rtol,
         atol,
-        t_eval,
-        events,
-        first_step,
-        max_step,
-        max_steps,
-        energy,
-        disable,
-        threads,
-        progress,
-        method,
-        dt,
+        config=config,
+        events=events,
+        threads=threads,
+        progress=progress,
+        **changed_settings(
+            t_eval=t_eval,
+            first_step=first_step,
+            max_step=max_step,
+            max_steps=max_steps,
+            energy=energy,
+            disable=disable,
+            method=method,
+            dt=dt,
+        ),
     )
-    batch = _batch_result(scenes, out, t_eval, stopped)
+    if t_eval is None and config is not None:
+        t_eval = config.t_eval
+    batch = _batch_result(scenes, out, t_eval)
     if stopped is not None:
         raise _with_batch(stopped, batch)
     return batch
 
 
-def _batch_result(
-    scenes: list[Scene], out: list[dict], t_eval: Any, stopped: BaseException | None = None
-) -> BatchResult:
-    """The core's per-run dicts as a :class:`BatchResult`; ``stopped``: what stopped the
-    batch (Ctrl-C, a raising ``progress``), which the runs it cut short name."""
+def _batch_result(scenes: list[Scene], out: list[dict], t_eval: Any) -> BatchResult:
+    """The core's per-run dicts as a :class:`BatchResult` (the runs a stopped batch cut
+    short name what stopped it in their messages: the bindings put it there)."""
     names = [s.name for s in scenes]
     results = []
     for k, d in enumerate(out):
         name = names[0] if len(names) == 1 else names[k]
         error = d.pop("error")
         if "t" not in d:
-            if stopped is not None and isinstance(error, KeyboardInterrupt):
-                why = f"the batch was stopped before this run started, by {interrupt_reason(stopped)}"
-                results.append(_failed(name, error, why))
-            else:
-                results.append(_failed(name, error))
+            results.append(_failed(name, error, d.get("message")))
         else:
-            d["message"] = interrupted_message(d["message"], stopped)
             results.append(SimulationResult(scene=name, **d))
     passed = [k for k, r in enumerate(results) if r.singular_passage is not None]
     if passed:

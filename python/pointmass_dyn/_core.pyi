@@ -689,6 +689,70 @@ class StateEvent:
         """-1, 0 or +1."""
 
 @final
+class RunConfig:
+    """One run's settings (``simulate``, ``simulate_batch``, ``solve_ivp``), ``None`` where
+    nothing is said: a run takes the keywords of its call, else this, else the scene's
+    ``[simulate]`` table, else the default (docs/architecture.md). Frozen: vary it with
+    :meth:`replace`; equal when every setting is."""
+
+    def __new__(
+        cls,
+        t_span: ArrayLike | None = None,
+        *,
+        rtol: ArrayLike | None = None,
+        atol: ArrayLike | None = None,
+        t_eval: ArrayLike | None = None,
+        first_step: float | None = None,
+        max_step: float | None = None,
+        max_steps: int | None = None,
+        method: _Integrator | None = None,
+        dt: float | None = None,
+        controller: _Controller | None = None,
+        stiffness: Literal["warn", "stop", "off"] | None = None,
+        disable: _Family | Sequence[_Family] | None = None,
+        energy: bool | None = None,
+        power: bool | None = None,
+        dense_output: bool | None = None,
+    ) -> RunConfig: ...
+    @property
+    def t_span(self) -> tuple[float, float] | None: ...
+    @property
+    def rtol(self) -> float | _Array | None:
+        """A number, or one per state component."""
+    @property
+    def atol(self) -> float | _Array | None: ...
+    @property
+    def t_eval(self) -> _Array | None: ...
+    @property
+    def first_step(self) -> float | None: ...
+    @property
+    def max_step(self) -> float | None: ...
+    @property
+    def max_steps(self) -> int | None: ...
+    @property
+    def method(self) -> str | None:
+        """SciPy's spelling: ``"RK45"``, ``"DOP853"``, ``"Radau"``, ``"RK4"``, ``"Euler"``, ``"auto"``."""
+    @property
+    def dt(self) -> float | None: ...
+    @property
+    def controller(self) -> Literal["standard", "pi"] | None: ...
+    @property
+    def stiffness(self) -> Literal["warn", "stop", "off"] | None: ...
+    @property
+    def disable(self) -> tuple[str, ...] | None:
+        """The effect families switched off (``()``: none)."""
+    @property
+    def energy(self) -> bool | None: ...
+    @property
+    def power(self) -> bool | None: ...
+    @property
+    def dense_output(self) -> bool | None: ...
+    def as_dict(self) -> dict[str, Any]:
+        """The settings given, by keyword (``RunConfig(**d)`` rebuilds it)."""
+    def replace(self, **changes: Any) -> RunConfig:
+        """A copy with the given settings replaced (``None`` unsets one)."""
+
+@final
 class Scene:
     """A model, the effects it declares, its initial state and integrator settings."""
 
@@ -842,27 +906,20 @@ def simulate_scene(
     t_span: ArrayLike | None = None,
     rtol: ArrayLike | None = None,
     atol: ArrayLike | None = None,
-    t_eval: ArrayLike | None = None,
+    *,
+    config: RunConfig | None = None,
     events: Sequence[StateEvent | _EventFunc] | None = None,
-    first_step: float | None = None,
-    max_step: float | None = None,
-    max_steps: int | None = None,
-    energy: bool = False,
-    controller: _Controller = "standard",
     progress: Callable[[float], Any] | None = None,
-    disable: _Family | Sequence[_Family] | None = None,
-    power: bool = False,
-    stiffness: Literal["warn", "stop", "off"] = "warn",
     progress_interval: float | None = None,
-    method: _Integrator | None = None,
-    dt: float | None = None,
+    **settings: Any,
 ) -> dict[str, Any]:
     """Integrates a scene in Rust (GIL released); returns the fields of
     ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``power``,
     ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
     ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``method``,
     ``switched_to``, ``t_switch``) and ``error``: ``None``, or the
-    exception a Python callback raised (Ctrl-C included), for the caller to re-raise."""
+    exception a Python callback raised (Ctrl-C included), for the caller to re-raise.
+    ``settings``: :class:`RunConfig`'s keywords, which beat ``config``'s."""
 
 def simulate_batch(
     scenes: Sequence[Scene],
@@ -871,17 +928,12 @@ def simulate_batch(
     t_span: ArrayLike | None = None,
     rtol: ArrayLike | None = None,
     atol: ArrayLike | None = None,
-    t_eval: ArrayLike | None = None,
+    *,
+    config: RunConfig | None = None,
     events: Sequence[StateEvent] | None = None,
-    first_step: float | None = None,
-    max_step: float | None = None,
-    max_steps: int | None = None,
-    energy: bool = False,
-    disable: _Family | Sequence[_Family] | None = None,
     threads: int | None = None,
     progress: Callable[[int, int], Any] | None = None,
-    method: _Integrator | None = None,
-    dt: float | None = None,
+    **settings: Any,
 ) -> tuple[list[dict[str, Any]], BaseException | None]:
     """Runs B scenes (or one scene from B initial states ``q0`` (B, nq), ``v0`` (B, nv)) on
     ``threads`` threads, the GIL released once; one dict per run as ``simulate_scene``
@@ -934,17 +986,11 @@ def rk45(
     y0: ArrayLike,
     rtol: ArrayLike | None = None,
     atol: ArrayLike | None = None,
-    t_eval: ArrayLike | None = None,
+    *,
+    config: RunConfig | None = None,
     events: _EventFunc | Sequence[_EventFunc] | None = None,
-    first_step: float | None = None,
-    max_step: float | None = None,
-    max_steps: int | None = None,
-    dense_output: bool = False,
-    controller: _Controller = "standard",
-    stiffness: Literal["warn", "stop", "off"] = "warn",
-    method: _Integrator | None = None,
-    dt: float | None = None,
     jac: Callable[[float, _Array], Any] | ArrayLike | None = None,
+    **settings: Any,
 ) -> dict[str, Any]:
     """Our integrators on ``fun(t, y)`` (``method``: RK45 by default; RK45 and DOP853 step for
     step SciPy's ``solve_ivp``, RK4/Euler at the fixed step ``dt``);

@@ -5,7 +5,6 @@ scene feels, where a model's quaternions sit in q, and sample counts checked bef
 from __future__ import annotations
 
 import operator
-import re
 
 import numpy as np
 
@@ -136,22 +135,16 @@ def stop_reason(error: BaseException) -> str:
     return f"{type(error).__name__}: {text}" if text else type(error).__name__
 
 
-_INTERRUPTED = re.compile(r"^interrupted at t = (\S+) \(.*?\); integration reached t = (\S+)$")
+#: The run settings' defaults in the signatures of ``simulate`` and ``simulate_batch``: left
+#: at these, a keyword says nothing (a ``RunConfig``, the scene or the core's default decide).
+_SETTING_DEFAULTS = {"energy": False, "power": False, "controller": "standard", "stiffness": "warn"}
 
 
-def interrupted_message(message: str, error: BaseException | None) -> str:
-    """A run's message ``interrupted at t = … (…)`` (the core's, which cannot tell Ctrl-C
-    from a raising ``progress``) with the real reason, ``error``, put in."""
-    m = _INTERRUPTED.match(message)
-    if m is None or error is None:
-        return message
-    return f"interrupted at t = {m[1]} by {interrupt_reason(error)}; integration reached t = {m[2]}"
-
-
-def interrupt_reason(error: BaseException) -> str:
-    """What stopped a run from its progress hook: Ctrl-C, or the exception ``progress``
-    raised."""
-    if isinstance(error, KeyboardInterrupt):
-        return "Ctrl-C (or a KeyboardInterrupt raised by progress)"
-    text = str(error)
-    return f"{type(error).__name__}{': ' + text if text else ''}, raised by progress"
+def changed_settings(**settings) -> dict:
+    """The run settings a call states, as ``RunConfig``'s keywords: those not ``None`` and
+    not at their signature's default."""
+    return {
+        k: v
+        for k, v in settings.items()
+        if v is not None and not (k in _SETTING_DEFAULTS and v == _SETTING_DEFAULTS[k])
+    }

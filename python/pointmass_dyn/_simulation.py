@@ -46,8 +46,8 @@ import numpy as np
 
 from . import _core, kinematics
 from ._contact import contact_forces, torque_saturation
-from ._core import Effect, Scene, StateEvent
-from ._helpers import interrupted_message
+from ._core import Effect, RunConfig, Scene, StateEvent
+from ._helpers import changed_settings
 from .errors import InvalidInputError, SimulationError, SingularPassageWarning
 
 
@@ -318,6 +318,7 @@ def simulate(
     method: str | None = None,
     dt: float | None = None,
     contact: bool = False,
+    config: RunConfig | None = None,
 ) -> SimulationResult:
     """Integrates a scene, entirely in Rust with the GIL released.
 
@@ -365,29 +366,35 @@ def simulate(
     Ctrl-C (``KeyboardInterrupt``) stop the run and propagate as themselves, with the
     trajectory computed so far attached as ``.result`` (a ``SimulationResult`` with
     ``success=False`` and ``t_reached``). Invalid arguments raise :class:`InvalidInputError`.
+
+    ``config``: a :class:`RunConfig` holding these settings once for many calls; the
+    keywords given here beat it (those left at their defaults do not), and it beats the
+    scene's ``[simulate]`` table.
     """
     out = _core.simulate_scene(
         scene,
         t_span,
         rtol,
         atol,
-        t_eval,
-        events,
-        first_step,
-        max_step,
-        max_steps,
-        energy,
-        controller,
-        progress,
-        disable,
-        power,
-        stiffness,
-        progress_interval,
-        method,
-        dt,
+        config=config,
+        events=events,
+        progress=progress,
+        progress_interval=progress_interval,
+        **changed_settings(
+            t_eval=t_eval,
+            first_step=first_step,
+            max_step=max_step,
+            max_steps=max_steps,
+            method=method,
+            dt=dt,
+            disable=disable,
+            energy=energy,
+            power=power,
+            controller=controller,
+            stiffness=stiffness,
+        ),
     )
     error = out.pop("error")
-    out["message"] = interrupted_message(out["message"], error)
     result = SimulationResult(scene=scene.name, **out)
     result.model = scene.model
     result.saturated = torque_saturation(scene, result, disable)
@@ -509,17 +516,17 @@ def solve_ivp(
         y0,
         rtol,
         atol,
-        t_eval,
-        events,
-        first_step,
-        max_step,  # inf: no limit (checked in Rust: a real number)
-        max_steps,
-        dense_output,
-        controller,
-        stiffness,
-        method,
-        dt,
-        jac,
+        events=events,
+        jac=jac,
+        t_eval=t_eval,
+        first_step=first_step,
+        max_step=max_step,  # inf: no limit (checked in Rust: a real number)
+        max_steps=max_steps,
+        dense_output=dense_output,
+        controller=controller,
+        stiffness=stiffness,
+        method=method,
+        dt=dt,
     )
     error = out.pop("error")
     result = OdeResult(out)

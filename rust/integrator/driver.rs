@@ -8,7 +8,7 @@ use super::events::{self, Event};
 use super::explicit_rk::{ExplicitRk, Tableau};
 use super::fixed_step::{Euler, FixedStep, Rk4};
 use super::method::{Counts, Integrator, Method};
-use super::radau::Radau;
+use super::radau::{JacobianSource, Radau};
 use super::stepper::{Rk45, Stepper};
 use super::StepOutcome;
 use super::{fmt_time, InputError, OdeSystem, Solution, SolverOptions, Status, StiffnessCheck};
@@ -74,6 +74,48 @@ pub fn solve<S: OdeSystem>(
             Method::Radau,
         ),
         Method::Auto => auto(sys, t_span, y0, opts, events, stiff_target::<S>),
+    }
+}
+
+/// [`solve`] with a Jacobian of the caller's (SciPy's `jac`): `None` takes the system's own
+/// (or finite differences); a constant row-major `dim × dim` matrix is never re-evaluated
+/// (Radau keeps it as [`JacobianSource::Constant`]; `auto` hands it to Radau at its switch).
+pub fn solve_with_jacobian<S: OdeSystem>(
+    sys: S,
+    t_span: (f64, f64),
+    y0: &[f64],
+    opts: &SolverOptions,
+    events: &mut [Event<'_>],
+    constant: Option<Vec<f64>>,
+) -> Result<Solution, InputError> {
+    match constant {
+        None => solve(sys, t_span, y0, opts, events),
+        Some(m) if opts.method == Method::Radau => {
+            super::radau_solve(sys, t_span, y0, opts, events, JacobianSource::Constant(m))
+        }
+        Some(m) => solve(ConstantJacobian { sys, m }, t_span, y0, opts, events),
+    }
+}
+
+/// A system whose Jacobian is the constant `m`.
+struct ConstantJacobian<S> {
+    sys: S,
+    m: Vec<f64>,
+}
+
+impl<S: OdeSystem> OdeSystem for ConstantJacobian<S> {
+    fn dim(&self) -> usize {
+        self.sys.dim()
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+        self.sys.rhs(t, y, dydt)
+    }
+    fn project(&mut self, y: &mut [f64]) -> Result<bool, String> {
+        self.sys.project(y)
+    }
+    fn jacobian(&mut self, _t: f64, _y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        jac.copy_from_slice(&self.m);
+        Ok(true)
     }
 }
 

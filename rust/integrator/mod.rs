@@ -44,7 +44,7 @@ pub use dense::{eval_segment, DenseOutput, Interpolant};
 pub use dop853::{Dop853, Dop853Tableau};
 #[cfg(test)]
 pub(crate) use driver::auto as driver_auto;
-pub use driver::{rk45, solve, AUTO_DOP853_RTOL};
+pub use driver::{rk45, solve, solve_with_jacobian, AUTO_DOP853_RTOL};
 pub use events::{Event, EventDirection, EventFn};
 pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
@@ -499,6 +499,13 @@ pub enum Status {
     EventNaN { t: f64, at: f64, event: usize },
     /// Stiffness was detected and [`StiffnessCheck::Stop`] asked to stop (see [`Stiffness`]).
     Stiff { t: f64, h_lambda: f64, h: f64 },
+    /// The caller stopped the run from the evaluation at `at` (Ctrl-C, its progress callback,
+    /// a stopped batch); `reason` says which when the caller has named it.
+    Interrupted {
+        t: f64,
+        at: f64,
+        reason: Option<String>,
+    },
 }
 
 impl Status {
@@ -580,6 +587,16 @@ impl Status {
             Status::EventNaN { t, at, event } => format!(
                 "event {event} returned NaN (not a number) at t = {}; integration reached t = {}",
                 f(*at),
+                f(*t)
+            ),
+            Status::Interrupted { t, at, reason } => format!(
+                "interrupted at t = {} {}; integration reached t = {}",
+                f(*at),
+                match reason {
+                    Some(r) => format!("by {r}"),
+                    None => "(Ctrl-C, or the progress callback raised or the batch was stopped)"
+                        .to_string(),
+                },
                 f(*t)
             ),
             Status::Stiff { t, h_lambda, h } => format!(

@@ -74,3 +74,17 @@ pub fn invalid(
 ) -> PyErr {
     to_py(py, Error::arg(arg, expected.to_string(), got.to_string()))
 }
+
+/// What stopped a run from its progress hook, for the run's message
+/// (`Status::Interrupted`'s reason): Ctrl-C, or the exception the progress callback raised.
+pub fn interrupt_reason(py: Python<'_>, e: &PyErr) -> String {
+    if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
+        return "Ctrl-C (or a KeyboardInterrupt raised by progress)".into();
+    }
+    let name = e.get_type(py).name().map(|n| n.to_string());
+    let name = name.unwrap_or_else(|_| "an exception".into());
+    match e.value(py).str().map(|s| s.to_string()) {
+        Ok(text) if !text.is_empty() => format!("{name}: {text}, raised by progress"),
+        _ => format!("{name}, raised by progress"),
+    }
+}

@@ -93,17 +93,11 @@ pub(super) fn jac_arg<'a>(
     Ok(JacArg::Constant(m))
 }
 
-/// Where [`WithJacobian`] gets the Jacobian.
-pub(super) enum Source<'a> {
-    Callable(&'a Bound<'a, PyAny>),
-    Constant(Vec<f64>),
-}
-
-/// A system with the Jacobian from Python; an exception from `jac` is kept in `failure`
+/// A system with the Jacobian from a Python callable `jac(t, y)`; an exception from `jac` is kept in `failure`
 /// (the run stops with its message, and the caller re-raises it).
 pub(super) struct WithJacobian<'a, S> {
     pub inner: S,
-    pub source: Source<'a>,
+    pub jac: &'a Bound<'a, PyAny>,
     pub failure: &'a Mutex<Option<PyErr>>,
 }
 
@@ -118,13 +112,7 @@ impl<S: OdeSystem> OdeSystem for WithJacobian<'_, S> {
         self.inner.project(y)
     }
     fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
-        let f = match &self.source {
-            Source::Constant(m) => {
-                jac.copy_from_slice(m);
-                return Ok(true);
-            }
-            Source::Callable(f) => *f,
-        };
+        let f = self.jac;
         let dim = y.len();
         let py = f.py();
         let out = f

@@ -17,6 +17,7 @@ mod options;
 mod pickle;
 mod reactions;
 mod rk45;
+mod run_config;
 mod scene;
 mod signals;
 mod simulate;
@@ -47,6 +48,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<events::PyStateEvent>()?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<dense::PyDenseSolution>()?;
+    m.add_class::<run_config::PyRunConfig>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_batch, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;

@@ -1,11 +1,11 @@
-//! The integration arguments and result entries common to `rk45` and `simulate_scene`.
+//! The integration arguments and result entries common to `rk45` and `simulate_scene`
+//! (`run_config.rs` gathers the arguments into a `RunConfig`).
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::{array, opt_count, opt_real, shape_str, vector};
+use super::convert::vector;
 use super::errors::invalid;
-use crate::integrator::{self, Controller, SolverOptions, Status, Tol};
-use crate::simulate::Requested;
+use crate::integrator::{self, Controller, Status};
 
 pub(super) fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
     let v = vector(obj, "t_span", Some(2))?;
@@ -18,22 +18,6 @@ pub(super) fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f6
         ));
     }
     Ok((v[0], v[1]))
-}
-
-pub(super) fn tol_arg(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Tol> {
-    let (shape, values) = array(obj, arg)?;
-    if shape.is_empty() {
-        return Ok(Tol::Scalar(values[0]));
-    }
-    if shape != [dim] {
-        return Err(invalid(
-            obj.py(),
-            arg,
-            format!("a number or shape ({dim},)"),
-            shape_str(&shape),
-        ));
-    }
-    Ok(Tol::PerComponent(values))
 }
 
 pub(super) fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller> {
@@ -54,43 +38,6 @@ pub(super) fn given<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a B
     obj.filter(|o| !o.is_none())
 }
 
-/// `first_step`, `max_step` (inf: no limit, as if not given) and `max_steps` as numbers
-/// and a count: a request with only these.
-pub(super) fn step_args(
-    first_step: Option<&Bound<'_, PyAny>>,
-    max_step: Option<&Bound<'_, PyAny>>,
-    max_steps: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Requested> {
-    Ok(Requested {
-        first_step: opt_real(first_step, "first_step")?,
-        max_step: opt_real(max_step, "max_step")?.filter(|x| *x != f64::INFINITY),
-        max_steps: opt_count(max_steps, "max_steps", "a step count >= 0 (or None)")?,
-        ..Requested::default()
-    })
-}
-
-/// `method` (a name, case-insensitive; `None`: not given) and the fixed step `dt` into
-/// `requested`.
-pub(super) fn method_args(
-    py: Python<'_>,
-    requested: &mut Requested,
-    method: Option<&str>,
-    dt: Option<&Bound<'_, PyAny>>,
-) -> PyResult<()> {
-    if let Some(name) = method {
-        requested.method = Some(integrator::Method::parse(name).ok_or_else(|| {
-            invalid(
-                py,
-                "method",
-                format!("one of {}", integrator::Method::NAMES),
-                format!("'{name}'"),
-            )
-        })?);
-    }
-    requested.dt = opt_real(dt, "dt")?;
-    Ok(())
-}
-
 /// The run's method, evaluation counts and switch (`auto`) as result entries.
 pub(super) fn set_method(
     d: &Bound<'_, PyDict>,
@@ -106,38 +53,8 @@ pub(super) fn set_method(
     d.set_item("t_switch", t_switch)
 }
 
-/// The caller's other integration arguments (common to `rk45` and `simulate`): the
-/// tolerances into `requested` (a scene's may stand in for them), the rest into the options
-/// no scene sets. The step limits come from `step_args`; `Requested` resolves them all.
-#[allow(clippy::too_many_arguments)]
-pub(super) fn options(
-    py: Python<'_>,
-    dim: usize,
-    requested: &mut Requested,
-    rtol: Option<&Bound<'_, PyAny>>,
-    atol: Option<&Bound<'_, PyAny>>,
-    t_eval: Option<&Bound<'_, PyAny>>,
-    dense: bool,
-    controller: &str,
-    stiffness: &str,
-) -> PyResult<SolverOptions> {
-    let controller = controller_arg(py, controller)?;
-    requested.rtol = given(rtol).map(|r| tol_arg(r, "rtol", dim)).transpose()?;
-    requested.atol = given(atol).map(|a| tol_arg(a, "atol", dim)).transpose()?;
-    let t_eval = given(t_eval)
-        .map(|t| vector(t, "t_eval", None))
-        .transpose()?;
-    Ok(SolverOptions {
-        dense,
-        controller,
-        t_eval,
-        stiffness: stiffness_arg(py, stiffness)?,
-        ..Default::default()
-    })
-}
-
 /// `"warn"` (default: detect, report, steps unchanged), `"stop"` or `"off"`.
-fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::StiffnessCheck> {
+pub(super) fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::StiffnessCheck> {
     match name {
         "warn" => Ok(integrator::StiffnessCheck::Warn),
         "stop" => Ok(integrator::StiffnessCheck::Stop),

@@ -8,17 +8,19 @@ use pyo3::types::{PyDict, PyList};
 use super::convert::{to_array, to_array1, vector};
 use super::dense::PyDenseSolution;
 use super::effects::repr_of;
+use super::errors::IntoPyResult;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
-use super::jac::{jac_arg, JacArg, Source, WithJacobian};
-use super::options::{method_args, options, set_method, set_outcome, step_args, t_span_arg};
-use crate::integrator::{self, Event, FnSystem, JacobianSource, Method, OdeSystem};
+use super::jac::{jac_arg, JacArg, WithJacobian};
+use super::options::{set_method, set_outcome, t_span_arg};
+use super::run_config::{call_config, PyRunConfig};
+use crate::integrator::{self, Event, FnSystem, OdeSystem};
 use crate::scene::Settings;
 
 /// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
 /// (default) and "DOP853" step for step SciPy's `solve_ivp`, "RK4"/"Euler" at the fixed `dt`.
 #[pyfunction]
-#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, dense_output=false, controller="standard", stiffness="warn", method=None, dt=None, jac=None))]
+#[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, *, config=None, events=None, jac=None, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn rk45<'py>(
     py: Python<'py>,
@@ -27,17 +29,10 @@ pub fn rk45<'py>(
     y0: &Bound<'_, PyAny>,
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
-    t_eval: Option<&Bound<'_, PyAny>>,
+    config: Option<PyRef<'_, PyRunConfig>>,
     events: Option<&Bound<'_, PyAny>>,
-    first_step: Option<&Bound<'_, PyAny>>,
-    max_step: Option<&Bound<'_, PyAny>>,
-    max_steps: Option<&Bound<'_, PyAny>>,
-    dense_output: bool,
-    controller: &str,
-    stiffness: &str,
-    method: Option<&str>,
-    dt: Option<&Bound<'_, PyAny>>,
     jac: Option<&Bound<'_, PyAny>>,
+    settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     if !fun.is_callable() {
         return Err(invalid(
@@ -47,24 +42,14 @@ pub fn rk45<'py>(
             repr_of(fun),
         ));
     }
-    let t_span = t_span_arg(py, t_span)?;
+    let t_span_given = t_span_arg(py, t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
-    let mut requested = step_args(first_step, max_step, max_steps)?;
-    method_args(py, &mut requested, method, dt)?;
-    let base = options(
-        py,
-        dim,
-        &mut requested,
-        rtol,
-        atol,
-        t_eval,
-        dense_output,
-        controller,
-        stiffness,
-    )?;
     // No scene: the caller's settings, else the defaults.
-    let opts = requested.options(&Settings::default(), base);
+    let run = call_config(py, config, Some(t_span), rtol, atol, settings)?
+        .resolve(&Settings::default(), &[], dim)
+        .py(py)?;
+    let (t_span, opts) = (t_span_given, run.opts);
     let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
     let specs = event_specs(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
@@ -74,29 +59,20 @@ pub fn rk45<'py>(
         .collect();
     let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let sys = python_system(py, fun, dim, &rhs_failure);
-    let failure_slot = &rhs_failure;
-    let with = |inner, source| WithJacobian {
-        inner,
-        source,
-        failure: failure_slot,
-    };
+    // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
     let sol = match jac {
-        JacArg::None => integrator::solve(sys, t_span, &y0, &opts, &mut evs),
         JacArg::Callable(f) => {
-            integrator::solve(with(sys, Source::Callable(f)), t_span, &y0, &opts, &mut evs)
+            let with = WithJacobian {
+                inner: sys,
+                jac: f,
+                failure: &rhs_failure,
+            };
+            integrator::solve(with, t_span, &y0, &opts, &mut evs)
         }
-        // SciPy's constant Jacobian: never re-evaluated.
-        JacArg::Constant(m) if opts.method == Method::Radau => integrator::radau_solve(
-            sys,
-            t_span,
-            &y0,
-            &opts,
-            &mut evs,
-            JacobianSource::Constant(m),
-        ),
         JacArg::Constant(m) => {
-            integrator::solve(with(sys, Source::Constant(m)), t_span, &y0, &opts, &mut evs)
+            integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, Some(m))
         }
+        JacArg::None => integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, None),
     }
     .map_err(|e| invalid_setting(py, e))?;
     drop(evs);

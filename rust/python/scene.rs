@@ -1,11 +1,12 @@
 //! `Scene`: a model, its initial state, effects and the settings of its runs.
 use pyo3::prelude::*;
 
-use super::convert::{opt_real, to_array1, vector};
+use super::convert::{opt_count, opt_real, to_array1, vector};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use super::options::{given, method_args, step_args, t_span_arg};
+use super::options::{given, t_span_arg};
+use super::run_config::method_arg;
 use crate::effects::{Disabled, Effects};
 use crate::scene::{Scene, Settings};
 
@@ -356,9 +357,8 @@ struct SettingsArgs<'a, 'py> {
 impl SettingsArgs<'_, '_> {
     /// `base` with the given settings replaced, checked (`Settings::check`).
     fn over(&self, py: Python<'_>, base: Settings) -> PyResult<Settings> {
-        let steps = step_args(self.first_step, self.max_step, self.max_steps)?;
-        let mut requested = steps.clone();
-        method_args(py, &mut requested, self.method, given(self.dt))?;
+        let max_step = opt_real(self.max_step, "max_step")?.filter(|x| *x != f64::INFINITY);
+        let max_steps = opt_count(self.max_steps, "max_steps", "a step count >= 0 (or None)")?;
         let settings = Settings {
             t_span: match given(self.t_span) {
                 Some(t) => Some(t_span_arg(py, t)?),
@@ -366,12 +366,16 @@ impl SettingsArgs<'_, '_> {
             },
             rtol: opt_real(self.rtol, "rtol")?.or(base.rtol),
             atol: opt_real(self.atol, "atol")?.or(base.atol),
-            max_step: steps.max_step.or(base.max_step),
-            max_steps: steps.max_steps.or(base.max_steps),
-            first_step: steps.first_step.or(base.first_step),
+            max_step: max_step.or(base.max_step),
+            max_steps: max_steps.or(base.max_steps),
+            first_step: opt_real(self.first_step, "first_step")?.or(base.first_step),
             disable: disable_arg(py, self.disable)?.or(base.disable),
-            method: requested.method.or(base.method),
-            dt: requested.dt.or(base.dt),
+            method: self
+                .method
+                .map(|m| method_arg(py, m))
+                .transpose()?
+                .or(base.method),
+            dt: opt_real(given(self.dt), "dt")?.or(base.dt),
         };
         settings.check().py(py)?;
         Ok(settings)

@@ -6,19 +6,21 @@ use pyo3::types::{PyDict, PyList};
 
 use super::convert::{real, to_array, to_array1, vector};
 use super::effects::take_callback_error;
-use super::errors::{check_result, invalid, py_error, IntoPyResult};
+use super::errors::{check_result, interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
-use super::options::{given, method_args, options, set_method, set_outcome, step_args, t_span_arg};
+use super::options::{given, set_method, set_outcome};
+use super::run_config::{call_config, PyRunConfig};
 use super::scene::{disable_arg, PyScene};
 use super::signals::{Watch, INTERVAL};
 use crate::integrator::Event;
 use crate::scene::Scene;
 use crate::simulate::batch::StateRows;
-use crate::simulate::{simulate, Dynamics, Progress, Record, StateEvent, Trajectory};
+use crate::simulate::{run_scene, Dynamics, Progress, StateEvent, Trajectory};
 
-/// Runs a scene: returns a dict that `pointmass_dyn.simulate` wraps.
+/// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
+/// it: returns a dict that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
-#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, controller="standard", progress=None, disable=None, power=false, stiffness="warn", progress_interval=None, method=None, dt=None))]
+#[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, *, config=None, events=None, progress=None, progress_interval=None, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_scene<'py>(
     py: Python<'py>,
@@ -26,40 +28,16 @@ pub fn simulate_scene<'py>(
     t_span: Option<&Bound<'_, PyAny>>,
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
-    t_eval: Option<&Bound<'_, PyAny>>,
+    config: Option<PyRef<'_, PyRunConfig>>,
     events: Option<&Bound<'_, PyAny>>,
-    first_step: Option<&Bound<'_, PyAny>>,
-    max_step: Option<&Bound<'_, PyAny>>,
-    max_steps: Option<&Bound<'_, PyAny>>,
-    energy: bool,
-    controller: &str,
     progress: Option<Py<PyAny>>,
-    disable: Option<&Bound<'_, PyAny>>,
-    power: bool,
-    stiffness: &str,
     progress_interval: Option<f64>,
-    method: Option<&str>,
-    dt: Option<&Bound<'_, PyAny>>,
+    settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
-    let (nq, nv) = (s.model.nq, s.model.nv);
-    let mut requested = step_args(first_step, max_step, max_steps)?;
-    method_args(py, &mut requested, method, dt)?;
+    let nq = s.model.nq;
+    let config = call_config(py, config, t_span, rtol, atol, settings)?;
     let mut watch = watch_arg(py, progress_interval)?;
-    requested.disable = disable_arg(py, disable)?;
-    requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
-    let base = options(
-        py,
-        nq + nv,
-        &mut requested,
-        rtol,
-        atol,
-        t_eval,
-        false,
-        controller,
-        stiffness,
-    )?;
-    let run = requested.resolve_scene(s, base).py(py)?;
     let events = SceneEvents::parse(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
@@ -77,19 +55,7 @@ pub fn simulate_scene<'py>(
                 None => Ok(()),
             })
         });
-        simulate(
-            &s.model,
-            &s.effects,
-            run.disabled,
-            &s.q0,
-            &s.v0,
-            run.t_span,
-            &run.opts,
-            &events.state,
-            extra,
-            Record { energy, power },
-            Some(hook),
-        )
+        run_scene(s, config, &events.state, extra, Some(hook))
     });
     // A Python callback that raised (or Ctrl-C) ends the run; its exception is re-raised by
     // `pointmass_dyn.simulate` with the trajectory computed so far attached.
@@ -97,7 +63,12 @@ pub fn simulate_scene<'py>(
         .or(failure.into_inner().ok().flatten())
         .or(watch.error.take());
     match (result, raised) {
-        (Ok(traj), raised) => trajectory_dict(py, traj, raised, &events),
+        (Ok(mut traj), raised) => {
+            if let Some(e) = &raised {
+                traj.name_interruption(&interrupt_reason(py, e));
+            }
+            trajectory_dict(py, traj, raised, &events)
+        }
         (Err(_), Some(raised)) => Err(raised),
         (Err(e), None) => Err(super::errors::to_py(py, e)),
     }
@@ -338,7 +309,7 @@ pub fn energies<'py>(
 /// run that could not start (bad input) has its exception in `"error"`. Every run is
 /// exactly the `simulate` call it stands for.
 #[pyfunction]
-#[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, t_eval=None, events=None, first_step=None, max_step=None, max_steps=None, energy=false, disable=None, threads=None, progress=None, method=None, dt=None))]
+#[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, *, config=None, events=None, threads=None, progress=None, **settings))]
 #[allow(clippy::too_many_arguments)]
 pub fn simulate_batch<'py>(
     py: Python<'py>,
@@ -348,23 +319,18 @@ pub fn simulate_batch<'py>(
     t_span: Option<&Bound<'_, PyAny>>,
     rtol: Option<&Bound<'_, PyAny>>,
     atol: Option<&Bound<'_, PyAny>>,
-    t_eval: Option<&Bound<'_, PyAny>>,
+    config: Option<PyRef<'_, PyRunConfig>>,
     events: Option<&Bound<'_, PyAny>>,
-    first_step: Option<&Bound<'_, PyAny>>,
-    max_step: Option<&Bound<'_, PyAny>>,
-    max_steps: Option<&Bound<'_, PyAny>>,
-    energy: bool,
-    disable: Option<&Bound<'_, PyAny>>,
     threads: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
-    method: Option<&str>,
-    dt: Option<&Bound<'_, PyAny>>,
+    settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Bound<'py, PyList>, Option<Py<PyAny>>)> {
     use crate::simulate::batch::{broadcast, run_batch_polled};
     if scenes.is_empty() {
         return Err(invalid(py, "scenes", "at least one Scene", "none"));
     }
     let scenes: Vec<Scene> = scenes.iter().map(|s| s.inner.clone()).collect();
+    let config = call_config(py, config, t_span, rtol, atol, settings)?;
     let q0s = batch_states("q0", q0, scenes[0].model.nq)?;
     let v0s = batch_states("v0", v0, scenes[0].model.nv)?;
     let events = SceneEvents::parse(py, events)?;
@@ -382,33 +348,19 @@ pub fn simulate_batch<'py>(
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),
     };
-    // Settings per scene (each resolves the caller's arguments against its own file's).
-    let mut resolved = Vec::with_capacity(scenes.len());
-    for s in &scenes {
-        let mut requested = step_args(first_step, max_step, max_steps)?;
-        method_args(py, &mut requested, method, dt)?;
-        requested.disable = disable_arg(py, disable)?;
-        requested.t_span = given(t_span).map(|t| t_span_arg(py, t)).transpose()?;
-        let dim = s.model.nq + s.model.nv;
-        let base = options(
-            py,
-            dim,
-            &mut requested,
-            rtol,
-            atol,
-            t_eval,
-            false,
-            "standard",
-            "warn",
-        )?;
-        resolved.push(requested.resolve_scene(s, base).py(py)?);
-    }
+    // Settings per scene (each resolves the caller's against its own file's).
+    let resolved = scenes
+        .iter()
+        .map(|s| {
+            let dim = s.model.nq + s.model.nv;
+            config.clone().resolve(&s.settings, &s.effects, dim)
+        })
+        .collect::<crate::error::Result<Vec<_>>>()
+        .py(py)?;
     let runs = broadcast(&scenes, &resolved, q0s.as_ref(), v0s.as_ref()).py(py)?;
     let count = runs.len();
-    let record = Record {
-        energy,
-        power: false,
-    };
+    // The record is the caller's alone (no scene file sets one).
+    let record = resolved[0].record;
     // Ctrl-C and the caller's progress from this thread, by elapsed time (signals::Watch).
     let mut watch = Watch::default();
     take_callback_error();
@@ -432,11 +384,21 @@ pub fn simulate_batch<'py>(
     let results = results
         .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
     let out = PyList::empty(py);
+    let reason = stopped.as_ref().map(|e| interrupt_reason(py, e));
     for result in results {
-        match result {
-            Ok(traj) => out.append(trajectory_dict(py, traj, None, &events)?)?,
-            Err(e) => {
+        match (result, &reason) {
+            (Ok(mut traj), reason) => {
+                if let Some(r) = reason {
+                    traj.name_interruption(r);
+                }
+                out.append(trajectory_dict(py, traj, None, &events)?)?
+            }
+            (Err(e), reason) => {
                 let d = PyDict::new(py);
+                if let (crate::error::Error::Interrupted(_), Some(r)) = (&e, reason) {
+                    let why = format!("the batch was stopped before this run started, by {r}");
+                    d.set_item("message", why)?;
+                }
                 d.set_item("error", super::errors::to_py(py, e).into_value(py))?;
                 out.append(d)?;
             }

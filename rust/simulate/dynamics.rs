@@ -21,6 +21,8 @@ pub struct Dynamics<'a> {
     /// elapsed time whether to do anything (the Python one re-attaches every 50 ms).
     pub(super) progress: Option<Progress<'a>>,
     calls: usize,
+    /// The time of the evaluation at which the progress hook asked to stop.
+    pub(super) interrupted_at: Option<f64>,
     probe: Option<Probe>,
     /// The closed-loop solver (models with loops only).
     pub loops: Option<Box<LoopSolver>>,
@@ -186,6 +188,7 @@ impl<'a> Dynamics<'a> {
             wrenches: vec![Vec6::zeros(); model.links.len()],
             progress: None,
             calls: 0,
+            interrupted_at: None,
             probe: None,
             loops: model
                 .has_constraints()
@@ -376,9 +379,10 @@ fn project_aside(model: &Model, solver: &mut LoopSolver, x: &mut [f64]) -> bool 
     ok
 }
 
-/// The right-hand side's "error" when the progress hook asks to stop (Ctrl-C, a raising
-/// `progress`, a stopped batch); `simulate` words the run's message from it.
-pub const INTERRUPTED: &str = "interrupted";
+/// The right-hand side's error when the progress hook asks to stop (Ctrl-C, a raising
+/// `progress`, a stopped batch); `simulate` reads `interrupted_at`, not this text, and
+/// reports `Status::Interrupted`.
+const INTERRUPTED: &str = "interrupted";
 
 impl OdeSystem for Dynamics<'_> {
     fn dim(&self) -> usize {
@@ -391,6 +395,7 @@ impl OdeSystem for Dynamics<'_> {
         if let Some(hook) = self.progress.as_mut() {
             self.calls += 1;
             if self.calls % PROGRESS_EVERY == 0 && !hook(t) {
+                self.interrupted_at = Some(t);
                 return Err(INTERRUPTED.into());
             }
         }

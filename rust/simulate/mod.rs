@@ -14,12 +14,13 @@ mod settings;
 
 pub use along::Along;
 pub use dynamics::{Dynamics, Progress};
-pub use settings::{default_method, disabled, Requested, Resolved};
+pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};
 use crate::integrator::{self, Event, SolverOptions, Status};
 use crate::model::Model;
+use crate::scene::Scene;
 
 /// An event on the state: `q[index] − value` or `v[index] − value` crossing zero.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -84,6 +85,51 @@ pub struct Trajectory {
     pub success: bool,
 }
 
+impl Trajectory {
+    /// A run its caller interrupted ([`Status::Interrupted`]) says by what: `reason`, which
+    /// only the caller knows (the exception its progress callback raised, Ctrl-C).
+    pub fn name_interruption(&mut self, reason: &str) {
+        let Status::Interrupted { t, at, .. } = self.status else {
+            return;
+        };
+        let before = self.status.describe(self.t_reached);
+        let rest = self.message.strip_prefix(before.as_str()).unwrap_or("");
+        let rest = rest.to_string();
+        self.status = Status::Interrupted {
+            t,
+            at,
+            reason: Some(reason.to_string()),
+        };
+        self.message = self.status.describe(self.t_reached) + &rest;
+    }
+}
+
+/// Runs `scene` as `config` asks: the caller's settings over the scene's, over the
+/// defaults ([`RunConfig::resolve`]), then [`simulate`] from the scene's initial state.
+pub fn run_scene(
+    scene: &Scene,
+    config: RunConfig,
+    state_events: &[StateEvent],
+    extra_events: Vec<Event<'_>>,
+    progress: Option<Progress<'_>>,
+) -> Result<Trajectory> {
+    let dim = scene.model.nq + scene.model.nv;
+    let run = config.resolve(&scene.settings, &scene.effects, dim)?;
+    simulate(
+        &scene.model,
+        &scene.effects,
+        run.disabled,
+        &scene.q0,
+        &scene.v0,
+        run.t_span,
+        &run.opts,
+        state_events,
+        extra_events,
+        run.record,
+        progress,
+    )
+}
+
 /// Integrates `model` with `effects` (minus the `disabled` families) from `(q0, v0)` over
 /// `t_span`. `extra_events` are caller-built events on `y = [q; v]` (e.g. Python callables),
 /// evaluated after the state events. Invalid input is an `Err`; a run that fails midway
@@ -135,15 +181,13 @@ pub fn simulate(
              (DOP853 passes the IFToMM N-four-bar down to rtol 1e-12)",
         );
     }
-    if let Status::RhsError { t, at, message } = &sol.status {
-        if message == dynamics::INTERRUPTED {
-            sol.message = format!(
-                "interrupted at t = {} (Ctrl-C, or the progress callback raised or the batch \
-                 was stopped); integration reached t = {}",
-                integrator::fmt_time(*at),
-                integrator::fmt_time(*t)
-            );
-        }
+    if let (Status::RhsError { t, at, .. }, Some(_)) = (&sol.status, sys.interrupted_at) {
+        sol.status = Status::Interrupted {
+            t: *t,
+            at: *at,
+            reason: None,
+        };
+        sol.message = sol.status.describe(sol.t_reached);
     }
     sol.t_events.truncate(n_user);
     sol.y_events.truncate(n_user);

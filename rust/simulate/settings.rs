@@ -1,23 +1,40 @@
-//! Which setting a run uses: the caller's argument beats the scene's setting, which beats
-//! the default. The one place that decides it; the bindings only parse the arguments.
+//! A run's configuration and which of its settings a run uses: the caller's [`RunConfig`]
+//! beats the scene's (`[simulate]`, [`Settings`]), which beats the default. The one place
+//! that decides it ([`RunConfig::resolve`]); the bindings only parse the arguments.
 use crate::effects::{Disabled, Effect, Kind};
 use crate::error::{Error, Result};
-use crate::integrator::{Method, SolverOptions, Tol};
-use crate::scene::{Scene, Settings};
+use crate::integrator::{Controller, Method, SolverOptions, StiffnessCheck, Tol};
+use crate::scene::Settings;
 
-/// What the caller of a run asked for: `None` where they said nothing (an infinite
-/// `max_step` counts as nothing said).
+use super::Record;
+
+/// One run's configuration, as a caller (or a scene file) states it: `None` where it says
+/// nothing (an infinite `max_step` counts as nothing said). The scene file's `[simulate]`
+/// table is the subset [`Settings`] (`RunConfig::from(&settings)`); what the integrator
+/// gets is the resolved [`SolverOptions`].
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Requested {
+pub struct RunConfig {
     pub t_span: Option<(f64, f64)>,
     pub rtol: Option<Tol>,
     pub atol: Option<Tol>,
     pub first_step: Option<f64>,
     pub max_step: Option<f64>,
     pub max_steps: Option<usize>,
-    pub disable: Option<Disabled>,
-    pub method: Option<crate::integrator::Method>,
+    pub method: Option<Method>,
+    /// Fixed step of RK4 and Euler.
     pub dt: Option<f64>,
+    /// Effect families left out.
+    pub disable: Option<Disabled>,
+    /// Output only at these times.
+    pub t_eval: Option<Vec<f64>>,
+    pub controller: Option<Controller>,
+    pub stiffness: Option<StiffnessCheck>,
+    /// Keep every step's interpolant (`solve_ivp`'s `dense_output`).
+    pub dense: Option<bool>,
+    /// Record the energy at the output times.
+    pub energy: Option<bool>,
+    /// Record each effect's power at the output times.
+    pub power: Option<bool>,
 }
 
 /// The settings a run uses.
@@ -26,6 +43,24 @@ pub struct Resolved {
     pub t_span: (f64, f64),
     pub disabled: Disabled,
     pub opts: SolverOptions,
+    pub record: Record,
+}
+
+impl From<&Settings> for RunConfig {
+    fn from(s: &Settings) -> Self {
+        RunConfig {
+            t_span: s.t_span,
+            rtol: s.rtol.map(Tol::Scalar),
+            atol: s.atol.map(Tol::Scalar),
+            first_step: s.first_step,
+            max_step: s.max_step,
+            max_steps: s.max_steps,
+            method: s.method,
+            dt: s.dt,
+            disable: s.disable,
+            ..RunConfig::default()
+        }
+    }
 }
 
 /// The effect families to leave out: the caller's, else the scene's, else none.
@@ -50,57 +85,83 @@ pub fn default_method(effects: &[Effect], disabled: Disabled) -> Method {
     }
 }
 
-impl Requested {
-    /// [`Requested::resolve`] against a scene, whose effects choose the method when neither
-    /// the caller nor the scene's settings name one ([`default_method`]).
-    pub fn resolve_scene(self, scene: &Scene, base: SolverOptions) -> Result<Resolved> {
-        let off = disabled(self.disable, &scene.settings);
-        let base = SolverOptions {
-            method: default_method(&scene.effects, off),
-            ..base
-        };
-        self.resolve(&scene.settings, base)
+impl RunConfig {
+    /// `self` where it says something, else `below` (`dt` too: see [`RunConfig::resolve`]).
+    pub fn over(self, below: RunConfig) -> RunConfig {
+        RunConfig {
+            t_span: self.t_span.or(below.t_span),
+            rtol: self.rtol.or(below.rtol),
+            atol: self.atol.or(below.atol),
+            first_step: self.first_step.or(below.first_step),
+            max_step: self.max_step.or(below.max_step),
+            max_steps: self.max_steps.or(below.max_steps),
+            method: self.method.or(below.method),
+            dt: self.dt.or(below.dt),
+            disable: self.disable.or(below.disable),
+            t_eval: self.t_eval.or(below.t_eval),
+            controller: self.controller.or(below.controller),
+            stiffness: self.stiffness.or(below.stiffness),
+            dense: self.dense.or(below.dense),
+            energy: self.energy.or(below.energy),
+            power: self.power.or(below.power),
+        }
     }
 
-    /// The run's settings against a scene's: `base` carries the options a scene does not
-    /// set (controller, `t_eval`, dense output, stiffness check) and the defaults of the rest.
+    /// The run's settings: the caller's (`self`), else the scene's, else the defaults
+    /// ([`SolverOptions::default`]; the method: [`default_method`] of the scene's
+    /// `effects`). `dim` is the state's length (per-component tolerances must match it).
     /// Without a `t_span` from either, an `InvalidArgument` naming `t_span`.
-    pub fn resolve(self, scene: &Settings, base: SolverOptions) -> Result<Resolved> {
-        let t_span = self
+    pub fn resolve(self, scene: &Settings, effects: &[Effect], dim: usize) -> Result<Resolved> {
+        let disabled = disabled(self.disable, scene);
+        // The scene's dt belongs to its fixed-step method: a caller who picks an adaptive
+        // one leaves it out (a dt of the caller's own is checked by the driver).
+        let caller_dt = self.dt;
+        let c = self.over(RunConfig::from(scene));
+        let d = SolverOptions::default();
+        let method = c
+            .method
+            .unwrap_or_else(|| default_method(effects, disabled));
+        let dt = caller_dt.or(c.dt.filter(|_| method.is_fixed_step()));
+        let (rtol, atol) = (
+            check_tol(c.rtol, "rtol", dim)?,
+            check_tol(c.atol, "atol", dim)?,
+        );
+        let t_span = c
             .t_span
-            .or(scene.t_span)
             .ok_or_else(|| Error::arg("t_span", "(t0, t_end): the scene sets none", "None"))?;
         Ok(Resolved {
             t_span,
-            disabled: disabled(self.disable, scene),
-            opts: self.options(scene, base),
+            disabled,
+            record: Record {
+                energy: c.energy.unwrap_or(false),
+                power: c.power.unwrap_or(false),
+            },
+            opts: SolverOptions {
+                method,
+                dt,
+                rtol: rtol.unwrap_or(d.rtol),
+                atol: atol.unwrap_or(d.atol),
+                first_step: c.first_step,
+                max_step: c.max_step.unwrap_or(d.max_step),
+                max_steps: c.max_steps.unwrap_or(d.max_steps),
+                controller: c.controller.unwrap_or(d.controller),
+                dense: c.dense.unwrap_or(d.dense),
+                t_eval: c.t_eval,
+                stiffness: c.stiffness.unwrap_or(d.stiffness),
+            },
         })
     }
+}
 
-    /// `base` with the tolerances and step limits resolved (all but `t_span` and `disable`).
-    pub fn options(self, scene: &Settings, base: SolverOptions) -> SolverOptions {
-        let method = self.method.or(scene.method).unwrap_or(base.method);
-        SolverOptions {
-            rtol: self
-                .rtol
-                .or(scene.rtol.map(Tol::Scalar))
-                .unwrap_or(base.rtol),
-            atol: self
-                .atol
-                .or(scene.atol.map(Tol::Scalar))
-                .unwrap_or(base.atol),
-            first_step: self.first_step.or(scene.first_step).or(base.first_step),
-            max_step: self.max_step.or(scene.max_step).unwrap_or(base.max_step),
-            max_steps: self.max_steps.or(scene.max_steps).unwrap_or(base.max_steps),
-            method,
-            // The scene's dt belongs to its fixed-step method: a caller who picks an
-            // adaptive one leaves it out (a dt of the caller's own is checked by the driver).
-            dt: self
-                .dt
-                .or(base.dt)
-                .or(scene.dt.filter(|_| method.is_fixed_step())),
-            ..base
-        }
+/// A per-component tolerance has one value per state component.
+fn check_tol(tol: Option<Tol>, arg: &str, dim: usize) -> Result<Option<Tol>> {
+    match &tol {
+        Some(Tol::PerComponent(v)) if v.len() != dim => Err(Error::arg(
+            arg,
+            format!("a number or shape ({dim},)"),
+            format!("shape ({},)", v.len()),
+        )),
+        _ => Ok(tol),
     }
 }
 
@@ -124,7 +185,7 @@ mod tests {
 
     #[test]
     fn the_caller_beats_the_scene_which_beats_the_default() {
-        let caller = Requested {
+        let caller = RunConfig {
             t_span: Some((1.0, 0.0)),
             rtol: Some(Tol::PerComponent(vec![1e-4, 1e-4])),
             atol: Some(Tol::Scalar(1e-9)),
@@ -132,9 +193,10 @@ mod tests {
             max_step: Some(0.2),
             max_steps: Some(7),
             disable: Some(Disabled::none()),
+            energy: Some(true),
             ..Default::default()
         };
-        let r = caller.resolve(&scene(), SolverOptions::default()).unwrap();
+        let r = caller.resolve(&scene(), &[], 2).unwrap();
         assert_eq!(r.t_span, (1.0, 0.0));
         assert_eq!(r.disabled, Disabled::none());
         assert_eq!(r.opts.rtol, Tol::PerComponent(vec![1e-4, 1e-4]));
@@ -143,10 +205,9 @@ mod tests {
             (r.opts.first_step, r.opts.max_step, r.opts.max_steps),
             (Some(0.5), 0.2, 7)
         );
+        assert!(r.record.energy && !r.record.power);
 
-        let r = Requested::default()
-            .resolve(&scene(), SolverOptions::default())
-            .unwrap();
+        let r = RunConfig::default().resolve(&scene(), &[], 2).unwrap();
         assert_eq!(r.t_span, (0.0, 2.0));
         assert_eq!(r.disabled, Disabled::none().with(Kind::Gravity));
         assert_eq!(
@@ -158,16 +219,49 @@ mod tests {
             (Some(1e-3), 0.1, 50)
         );
 
-        let caller = Requested {
+        let caller = RunConfig {
             t_span: Some((0.0, 1.0)),
+            dense: Some(true),
             ..Default::default()
         };
+        let r = caller.resolve(&Settings::default(), &[], 2).unwrap();
         let base = SolverOptions {
             dense: true,
             ..Default::default()
         };
-        let r = caller.resolve(&Settings::default(), base.clone()).unwrap();
         assert_eq!((r.opts, r.disabled), (base, Disabled::none()));
+    }
+
+    #[test]
+    fn the_scenes_dt_goes_with_its_fixed_step_method_only() {
+        let rk4 = Settings {
+            t_span: Some((0.0, 1.0)),
+            method: Some(Method::Rk4),
+            dt: Some(1e-2),
+            ..Default::default()
+        };
+        let r = RunConfig::default().resolve(&rk4, &[], 2).unwrap();
+        assert_eq!((r.opts.method, r.opts.dt), (Method::Rk4, Some(1e-2)));
+        let adaptive = RunConfig {
+            method: Some(Method::Dop853),
+            ..Default::default()
+        };
+        let r = adaptive.resolve(&rk4, &[], 2).unwrap();
+        assert_eq!((r.opts.method, r.opts.dt), (Method::Dop853, None));
+    }
+
+    #[test]
+    fn a_per_component_tolerance_of_the_wrong_length_names_its_argument() {
+        let caller = RunConfig {
+            t_span: Some((0.0, 1.0)),
+            atol: Some(Tol::PerComponent(vec![1e-6; 3])),
+            ..Default::default()
+        };
+        let e = caller.resolve(&Settings::default(), &[], 4).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "atol: expected a number or shape (4,), got shape (3,)"
+        );
     }
 
     #[test]
@@ -211,8 +305,8 @@ mod tests {
 
     #[test]
     fn a_run_without_t_span_names_it() {
-        let e = Requested::default()
-            .resolve(&Settings::default(), SolverOptions::default())
+        let e = RunConfig::default()
+            .resolve(&Settings::default(), &[], 2)
             .unwrap_err();
         assert_eq!(
             e.to_string(),
