@@ -2,7 +2,7 @@
 computeRNEADerivatives and computeABADerivatives on identical models (checked to agree first),
 in one process.
 
-    python benches/derivatives.py            # chain7, Panda, chain100
+    python benches/derivatives.py            # chain7, Panda, chain100, chain300
     python benches/derivatives.py --quick    # fewer repeats
 
 chainN as in compare_pinocchio.py (docs/benchmarks.md); Panda from example-robot-data
@@ -41,7 +41,8 @@ def rel(a, b):
 def rows(repeat):
     rng = np.random.default_rng(0)
     models = [("chain7", chain_ours(7), chain_pin(7)), ("panda", *panda()),
-              ("chain100", chain_ours(100), chain_pin(100))]
+              ("chain100", chain_ours(100), chain_pin(100)),
+              ("chain300", chain_ours(300), chain_pin(300))]
     for name, ours, pm in models:
         data = pm.createData()
         n = pm.nv

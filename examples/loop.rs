@@ -7,7 +7,7 @@
 //! target/release/examples/loop scene python/pointmass_dyn/scenes/panda.toml 1000000
 //! ```
 //!
-//! `fd`, `id`, `gim` N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
+//! `fd`, `id`, `gim`, `idd`, `fdd` (inverse and forward dynamics derivatives) N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
 //! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
 //! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state;
 //! `sim` N ITERS: ITERS runs of `simulate` (RK45, rtol 1e-6, t in (0, 1)) of the chain, gravity
@@ -28,7 +28,7 @@ use pointmass_dyn::spatial::Vec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: loop (fd|id|gim|sim) N ITERS | loop (scene|loops) PATH ITERS";
+    let usage = "usage: loop (fd|id|gim|idd|fdd|sim) N ITERS | loop (scene|loops) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
@@ -59,6 +59,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut data = Data::new(&model);
     let mut out = vec![0.0; nv];
     let mut gim = DMatrix::zeros(nv, nv);
+    let mut dd = recursive::DerivativeData::new(&model);
     let start = std::time::Instant::now();
     let mut nfev = 0;
     for _ in 0..iters {
@@ -72,6 +73,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 recursive::inverse_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)
             }
             "gim" => recursive::mass_matrix(&model, &mut data, black_box(&q), &mut gim),
+            "idd" => {
+                let q = black_box(&q);
+                recursive::inverse_dynamics_derivatives(&model, &mut data, &mut dd, q, &v, &tau, &g)
+            }
+            "fdd" => {
+                let q = black_box(&q);
+                recursive::forward_dynamics_derivatives(
+                    &model, &mut data, &mut dd, q, &v, &tau, &g,
+                )?
+            }
             "sim" => {
                 let opts = pointmass_dyn::integrator::SolverOptions {
                     rtol: 1e-6.into(),
@@ -118,7 +129,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("{nfev} right-hand sides: {:.2} µs each", per_rhs * 1e6);
         println!("last state's q[0] = {:.17e}", out[0]);
     }
-    black_box((&out, &gim));
+    black_box((&out, &gim, &dd.dtau_dq));
     Ok(())
 }
 

@@ -20,6 +20,8 @@ pub enum Interpolant {
     /// `y_old + (q0 x + q1 x² + q2 x³)` with `q0 = h f_old`, `q1 = 3Δ − 2h f_old − h f`,
     /// `q2 = h f_old + h f − 2Δ`, `Δ = y − y_old`.
     Hermite,
+    /// Verner 9(8)'s interpolant: `y_old + (q0 x + q1 x² + … + q8 x⁹)` (the factor h is in `q`).
+    Vern9,
 }
 
 impl Interpolant {
@@ -29,6 +31,7 @@ impl Interpolant {
             Interpolant::Rk45 => 4,
             Interpolant::Dop853 => 7,
             Interpolant::Radau | Interpolant::Hermite => 3,
+            Interpolant::Vern9 => 9,
         }
     }
 
@@ -48,6 +51,17 @@ impl Interpolant {
                         y *= if k % 2 == 0 { x } else { xm };
                     }
                     *o = y + y_old[i];
+                }
+            }
+            Interpolant::Vern9 => {
+                let x = (t - t_old) / h;
+                for (i, o) in out.iter_mut().enumerate() {
+                    let qi = &q[9 * i..9 * i + 9];
+                    let mut y = qi[8];
+                    for c in qi[..8].iter().rev() {
+                        y = y * x + c;
+                    }
+                    *o = y * x + y_old[i];
                 }
             }
             Interpolant::Radau | Interpolant::Hermite => {

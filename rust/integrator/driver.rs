@@ -10,6 +10,7 @@ use super::fixed_step::{Euler, FixedStep, Rk4};
 use super::method::{Counts, Integrator, Method};
 use super::radau::{JacobianSource, Radau};
 use super::stepper::{Rk45, Stepper};
+use super::vern9::Vern9;
 use super::StepOutcome;
 use super::{fmt_time, InputError, OdeSystem, Solution, SolverOptions, Status, StiffnessCheck};
 
@@ -54,6 +55,12 @@ pub fn solve<S: OdeSystem>(
             opts,
             events,
             Method::Dop853,
+        ),
+        Method::Vern9 => drive(
+            Vern9::new(sys, t0, y0, t_end, opts)?,
+            opts,
+            events,
+            Method::Vern9,
         ),
         Method::Rk4 => drive(
             FixedStep::<_, Rk4>::new(sys, t0, y0, t_end, opts)?,
@@ -253,7 +260,7 @@ fn validate_t_eval(t_eval: &[f64], t0: f64, t_end: f64) -> Result<(), InputError
 }
 
 /// The most coefficients any interpolant has per component.
-const MAX_COEF: usize = 7;
+const MAX_COEF: usize = 9;
 
 /// The step loop: steps until the end, a terminal event or a failure, which it returns.
 /// The interpolant of a step is computed only when needed (dense output, an event's sign

@@ -87,6 +87,8 @@ pub enum Method {
     Rk45,
     /// Dormand–Prince 8(5,3), SciPy's `DOP853` step for step.
     Dop853,
+    /// Verner's 9(8) pair (not SciPy's), for tight tolerances on smooth non-stiff problems.
+    Vern9,
     /// Radau IIA order 5 (implicit), SciPy's `Radau`.
     Radau,
     /// Classical Runge–Kutta 4 at a fixed step `dt`.
@@ -101,13 +103,14 @@ pub enum Method {
 
 impl Method {
     /// Every accepted name (case-insensitive), for messages.
-    pub const NAMES: &'static str = "'RK45', 'DOP853', 'Radau', 'RK4', 'Euler' or 'auto'";
+    pub const NAMES: &'static str = "'RK45', 'DOP853', 'Vern9', 'Radau', 'RK4', 'Euler' or 'auto'";
 
     /// SciPy's spelling.
     pub fn name(self) -> &'static str {
         match self {
             Method::Rk45 => "RK45",
             Method::Dop853 => "DOP853",
+            Method::Vern9 => "Vern9",
             Method::Radau => "Radau",
             Method::Rk4 => "RK4",
             Method::Euler => "Euler",
@@ -120,6 +123,7 @@ impl Method {
         [
             Method::Rk45,
             Method::Dop853,
+            Method::Vern9,
             Method::Radau,
             Method::Rk4,
             Method::Euler,

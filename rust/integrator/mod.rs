@@ -38,6 +38,8 @@ mod num_jac;
 mod radau;
 mod radau_tableau;
 mod stepper;
+mod vern9;
+mod vern9_tableau;
 
 pub use common::{StepOutcome, StepState};
 pub use dense::{eval_segment, DenseOutput, Interpolant};
@@ -51,6 +53,7 @@ pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
 pub use method::{Counts, Integrator, Method};
 pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
 pub use stepper::{Rk45, Stepper};
+pub use vern9::{Vern9, Vern9Tableau};
 
 use thiserror::Error;
 

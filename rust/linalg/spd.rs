@@ -3,12 +3,23 @@
 //! the inverse on every call; the derivatives reuse their workspace and allocate nothing.
 use nalgebra::DMatrix;
 
-/// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`, then
-/// `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`, `out`:
-/// scratch matrices of the same size; `inv_diag`: scratch of length n (the reciprocal
-/// pivots, so the substitution multiplies instead of dividing). `Err(k)` at a non-positive
-/// pivot `k`.
-pub fn spd_inverse(
+crate::cpu::multiversion! {
+    /// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`,
+    /// then `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`,
+    /// `out`: scratch matrices of the same size; `inv_diag`: scratch of length n (the
+    /// reciprocal pivots, so the substitution multiplies instead of dividing). `Err(k)` at a
+    /// non-positive pivot `k`. Runs its AVX2 copy where the CPU has it (`crate::cpu`: the same
+    /// IEEE operations in wider lanes, so the same bits).
+    pub fn spd_inverse / spd_inverse_avx2 / spd_inverse_baseline [] (
+        m: &mut DMatrix<f64>,
+        t: &mut DMatrix<f64>,
+        out: &mut DMatrix<f64>,
+        inv_diag: &mut [f64],
+    ) -> std::result::Result<(), usize> => spd_inverse_body
+}
+
+#[inline(always)]
+fn spd_inverse_body(
     m: &mut DMatrix<f64>,
     t: &mut DMatrix<f64>,
     out: &mut DMatrix<f64>,
@@ -65,17 +76,21 @@ pub fn spd_inverse(
             a[j * n + i] = 0.0;
         }
     }
-    for j in 0..n {
-        for i in 0..n {
-            t[(i, j)] = m[(j, i)];
+    {
+        let (src, dst) = (m.as_slice(), t.as_mut_slice());
+        for j in 0..n {
+            for i in 0..n {
+                dst[j * n + i] = src[i * n + j];
+            }
         }
     }
     out.gemm(1.0, t, m, 0.0);
     std::mem::swap(m, out);
     // Exactly symmetric (the product rounds (i, j) and (j, i) alike, but say so).
+    let a = m.as_mut_slice();
     for j in 0..n {
         for i in j + 1..n {
-            m[(j, i)] = m[(i, j)];
+            a[i * n + j] = a[j * n + i];
         }
     }
     Ok(())

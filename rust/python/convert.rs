@@ -301,25 +301,42 @@ pub fn vector(obj: &Bound<'_, PyAny>, arg: &str, len: Option<usize>) -> PyResult
     Ok(data)
 }
 
+/// A 1-D, C-contiguous, aligned, native-order float64 `numpy.ndarray` (exactly that type) as a
+/// slice, read from the array's own fields: rust-numpy's checked cast (dtype objects compared
+/// through NumPy's API) costs more than copying a short vector. `None` for anything else.
+fn plain_f64<'a>(obj: &'a Bound<'_, PyAny>) -> Option<&'a [f64]> {
+    use numpy::npyffi::{self, NPY_TYPES};
+    if !is_exact_ndarray(obj) {
+        return None;
+    }
+    const FLAGS: std::os::raw::c_int = npyffi::NPY_ARRAY_C_CONTIGUOUS | npyffi::NPY_ARRAY_ALIGNED;
+    // SAFETY: `obj` is exactly a NumPy array (checked above), so it has the array object's
+    // layout; its descriptor and, for nd = 1, its one dimension are valid while `obj` lives.
+    // The data is read at once by the caller, attached to the interpreter (no Python code
+    // runs meanwhile), as the checked path does.
+    unsafe {
+        let arr = &(*(obj.as_ptr() as *const npyffi::PyArrayObject)).fields;
+        if arr.nd != 1 || arr.flags & FLAGS != FLAGS {
+            return None;
+        }
+        let d = &(*arr.descr).fields;
+        if d.type_num != NPY_TYPES::NPY_DOUBLE as std::os::raw::c_int
+            || d.byteorder == b'>' as std::os::raw::c_char
+        {
+            return None;
+        }
+        let len = usize::try_from(*arr.dimensions).ok()?;
+        Some(std::slice::from_raw_parts(arr.data as *const f64, len))
+    }
+}
+
 /// Fast path for the per-call dynamics functions: a contiguous float64 1-D array is copied
 /// straight into `out`; anything else goes through `vector`.
 pub fn vector_into(obj: &Bound<'_, PyAny>, arg: &str, out: &mut [f64]) -> PyResult<()> {
-    // Exactly an ndarray (a subclass such as a masked array takes the checked path).
-    if let (Ok(a), true) = (obj.cast::<PyArray1<f64>>(), is_exact_ndarray(obj)) {
-        // SAFETY: the data is copied at once while attached to the interpreter, so no Python
-        // code can write to the array meanwhile; this skips rust-numpy's borrow tracking,
-        // which costs more than the copy for small arrays.
-        if let Ok(s) = unsafe { a.as_slice() }.map_err(|_| ()).and_then(|s| {
-            if a.is_c_contiguous() {
-                Ok(s)
-            } else {
-                Err(())
-            }
-        }) {
-            if s.len() == out.len() {
-                out.copy_from_slice(s);
-                return Ok(());
-            }
+    if let Some(s) = plain_f64(obj) {
+        if s.len() == out.len() {
+            out.copy_from_slice(s);
+            return Ok(());
         }
     }
     let v = vector(obj, arg, Some(out.len()))?;

@@ -162,6 +162,14 @@ pub struct DerivativeData {
     /// above it: the tree's shape, refilled by each call.
     pub dof_parent: Vec<usize>,
     pub last_dof: Vec<usize>,
+    /// Per link: the dofs above it (how many), and its subtree's dofs (how many, and one past
+    /// the highest index), refilled by each call: where they are index ranges, the matrices'
+    /// columns are filled by contiguous, vectorised loops.
+    pub above_count: Vec<usize>,
+    pub subtree_count: Vec<usize>,
+    pub subtree_end: Vec<usize>,
+    /// Per dof, structure of arrays: `S` (6 rows of nv), `Y S` (6), `Bᵀ S` (3).
+    pub columns: Vec<f64>,
     /// Scratch: the reciprocal pivots of the mass matrix's Cholesky factor.
     pub inv_diag: Vec<f64>,
 }
@@ -184,6 +192,10 @@ impl DerivativeData {
             inv_diag: vec![0.0; nv],
             dof_parent: vec![0; nv],
             last_dof: vec![0; n],
+            above_count: vec![0; n],
+            subtree_count: vec![0; n],
+            subtree_end: vec![0; n],
+            columns: vec![0.0; 15 * nv],
         }
     }
 

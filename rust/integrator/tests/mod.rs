@@ -5,3 +5,4 @@ pub(super) mod fixtures;
 mod methods;
 mod rk45;
 mod stiffness;
+mod vern9;
