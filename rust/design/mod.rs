@@ -8,12 +8,14 @@
 //! solves it with Clarabel (in place of a hand-written interior point).
 mod active;
 pub mod cells;
+pub mod connectivity;
 pub mod pins;
 pub mod problem;
 mod program;
 pub mod regressor;
 
 pub use cells::{cube_moments, fill, point_moments, Envelope};
+pub use connectivity::Flow;
 pub use pins::pins;
 pub use problem::{
     solve, solve_outcome, Norm, Outcome, Problem, Quantity, Relaxation, Relaxed, Solution,
