@@ -322,8 +322,8 @@ def cmd_design(args) -> int:
     before, after = b.before.summary(), b.after.summary()
     _write_csv(out / "summary.csv", ["quantity", "rms_before", "rms_after", "peak_before", "peak_after"],
                [[k, before[k]["rms"], after[k]["rms"], before[k]["peak"], after[k]["peak"]] for k in before])
-    for name, shape in b.shapes.items():
-        shape.write_stl(out / f"{name}.stl", threshold=0.5)
+    for name in b.shapes:  # the written (realised) parts, whose mass properties b.realised gives
+        b.realised[name].write_stl(out / f"{name}.stl")
     _density_maps(b, out)
     b.write_scene(resolve_scene_path(args.scene), out / "designed.toml")
     print(f"written to {out}/: design.csv, bodies.csv, summary.csv, STL, density maps, designed.toml")

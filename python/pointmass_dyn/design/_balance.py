@@ -115,6 +115,10 @@ class Balance:
     #: predicts in the problem's norm and those before; ``stages``: each stage's status and
     #: gaps (the optimum, then the least mass among the optima).
     solver: dict = field(default_factory=dict)
+    #: The written parts (:class:`~pointmass_dyn.design.Realisation`, docs/design.md §4):
+    #: each link's solid boxes and their exact mass properties, the realised model analysed
+    #: along the motion and its deviation from ``predicted``; None without link shapes.
+    realised: Any = None
 
     def write_scene(self, source: Any, path: Any) -> Any:
         """The designed model as a scene file: a copy of ``source`` (the scene the motion's
