@@ -200,12 +200,33 @@ def _decide(spec: Any, model: Any, masses: np.ndarray) -> dict:
     fill = masses / cap
     idx = _connect.grid(centers, spec.cell)
     adj = _connect.neighbours(len(centers), _connect.faces(idx))
-    solid = (fill >= 0.5) | (lower > 0)
+    # Decided by column along z (a plate's through-thickness stack, when its cells are
+    # contiguous): the mean fill, so that columns are whole and the polish can thin them.
+    level = _threshold(fill, cap, masses)
+    solid = fill >= level
+    stacks: dict = {}
+    for j, (i0, i1, _) in enumerate(idx):
+        stacks.setdefault((int(i0), int(i1)), []).append(j)
+    for cells in stacks.values():
+        ks = np.sort(idx[cells, 2])
+        if np.all(np.diff(ks) == 1):
+            solid[cells] = fill[cells].mean() >= level or bool(np.any(lower[cells] > 0))
+    solid |= lower > 0
     if spec.connected:
         solid = _connect.join(solid, fill, adj, _connect.bosses(spec, model, centers))
     base = centers.min(axis=0)
     return {"centers": centers, "cap": cap, "idx": idx, "adj": adj, "solid": solid, "kept": lower > 0,
             "cell": float(spec.cell), "density": float(spec.density), "base": base, "fill": fill}
+
+
+def _threshold(fill: np.ndarray, cap: np.ndarray, masses: np.ndarray) -> float:
+    """The fill above which cells are solid: the fullest cells until they hold the design's
+    mass, between 0.25 and 0.5 (a design of mostly full and empty cells rounds at a half;
+    one that spreads material thinly keeps its fullest cells rather than losing them all)."""
+    order = np.argsort(-fill)
+    reached = np.searchsorted(np.cumsum(cap[order]), masses.sum())
+    level = fill[order[min(reached, len(order) - 1)]]
+    return float(np.clip(level, 0.25, 0.5))
 
 
 def _columns(d: dict, depth: int) -> list[tuple[np.ndarray, str]]:
@@ -239,6 +260,8 @@ def _columns(d: dict, depth: int) -> list[tuple[np.ndarray, str]]:
             and any(n is None or n[2] != "S" for n in around(k))]
     frontier = set(edge)
     free.update({k: "S" for k in edge})
+    if depth == 0:  # every column
+        free.update({k: "S" for k, (_, _, st, held) in info.items() if st == "S" and not held and even(k)})
     for _ in range(depth - 1):
         frontier = {(k[0] + a, k[1] + b) for k in frontier for a, b in near} - set(free)
         frontier = {k for k in frontier if k in info and info[k][2] == "S" and not info[k][3] and even(k)}
@@ -358,8 +381,8 @@ def realise(motion: Any, shapes: list, phi: np.ndarray, data: np.ndarray, predic
     before = world_quantities(motion)
     scale = _row_scale(data.shape[1], predicted, before)
     best = None
-    for depth in (1, 2, 3):
-        say(f"polishing the written parts (boundary layer {depth} column(s) deep)")
+    for depth in (1, 2, 0):
+        say(f"polishing the written parts (boundary layer {depth or 'all'} column(s) deep)")
         columns, t, report = _polish(links, data, phi, scale, depth)
         out = _written(motion, shapes, decided, columns, t, phi, designed, bodies, body_from)
         out.polish = report
