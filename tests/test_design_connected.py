@@ -187,3 +187,26 @@ def test_realised_parts_from_the_stl_reproduce_the_design(designs, label, tmp_pa
         assert dev <= 0.01 * max(peak, floor), (label, what, dev, peak)
     # Rounding alone (without the polish) is what the issue reports: several per cent.
     assert b.realised.polish["status"] in ("Solved", "AlmostSolved")
+
+
+@pytest.mark.parametrize("kw, message", [
+    ({"web": "a"}, r"web: expected a finite number >= 0"),
+    ({"web": -1.0}, r"web: expected a finite number >= 0"),
+    ({"hang": 0.0}, r"hang: expected a finite number > 0 or None"),
+    ({"connected": "yes"}, r"connected: expected True or False"),
+])
+def test_bad_connectivity_arguments_are_refused(kw, message):
+    scene = pmd.load_scene("fourbar")
+    motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=12, q_guess=scene.q0, gravity=G)
+    shape = pmd.LinkShape("crank", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004, **kw)
+    with pytest.raises(pmd.errors.InvalidInputError, match=message):
+        pmd.balance(motion, links=[shape], zero=("force",))
+
+
+def test_a_connected_link_must_reach_its_joints():
+    """The coupler in the crank's envelope misses its far joint: an error naming the link."""
+    scene = pmd.load_scene("fourbar")
+    motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=12, q_guess=scene.q0, gravity=G)
+    shape = pmd.LinkShape("coupler", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004)
+    with pytest.raises(pmd.errors.InvalidInputError, match="LinkShape 'coupler': joint 1"):
+        pmd.balance(motion, links=[shape], zero=("force",))

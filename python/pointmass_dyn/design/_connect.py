@@ -91,9 +91,27 @@ def bosses(shape: Any, model: Any, centers: np.ndarray) -> list[np.ndarray]:
     return [np.array(sorted(m), np.int64) for m in merged]
 
 
+def connected(shape: Any) -> bool:
+    """``LinkShape.connected``, checked to be a bool."""
+    if not isinstance(shape.connected, (bool, np.bool_)):
+        raise InvalidInputError(
+            f"connected: expected True or False for LinkShape '{shape.body}', got {shape.connected!r}"
+        )
+    return bool(shape.connected)
+
+
 def flow(shape: Any, model: Any, centers: np.ndarray, start: int) -> dict:
     """The flows a connected link's cells hold in the program (design variables from
     ``start``), after checking that its envelope joins its bosses at all."""
+    for arg, v, low in (("web", shape.web, 0.0), ("hang", shape.hang, None)):
+        if arg == "hang" and v is None:
+            continue
+        if isinstance(v, bool) or not isinstance(v, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(v) or not (v >= 0 if low == 0.0 else v > 0):
+            raise InvalidInputError(
+                f"{arg}: expected a finite number {'>= 0 (cell faces)' if low == 0.0 else '> 0 or None'} "
+                f"for LinkShape '{shape.body}', got {v!r}"
+            )
     idx = grid(centers, shape.cell)
     edges = faces(idx)
     groups = bosses(shape, model, centers)

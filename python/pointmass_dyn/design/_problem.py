@@ -368,7 +368,7 @@ def balance(
         "least_mass": bool(least_mass),
         # Connected links: flows through their cells' faces (docs/design.md §3).
         "flows": [_connect.flow(sp, model, sp.cells(model)[0], sl.start)
-                  for kind, _, sp, sl in var.parts if kind == "shape" and sp.connected],
+                  for kind, _, sp, sl in var.parts if kind == "shape" and _connect.connected(sp)],
     }
     say(f"conic program: {var.count} design masses, {len(quantities)} quantities ({norm})")
     sol = _core.design_solve(spec)
