@@ -10,13 +10,16 @@ REL = 1e-6  # of each objective's unbalanced value: far above solver and re-anal
 
 @pytest.fixture(scope="module")
 def doc_problem():
-    # docs/design.md §5: the four-bar's crank and rocker as steel plates.
+    # docs/design.md §5: the four-bar's crank and rocker as steel plates (its fronts are traced
+    # on unconnected plates).
     scene = pmd.load_scene("fourbar")
     motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=120,
                                    q_guess=scene.q0, gravity=np.array([0.0, -9.81, 0.0]))
     plates = [
-        pmd.LinkShape("crank", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004),
-        pmd.LinkShape("rocker", box=([-0.05, -0.02, -0.004], [0.08, 0.02, 0.004]), cell=0.004),
+        pmd.LinkShape("crank", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004,
+                      connected=False),
+        pmd.LinkShape("rocker", box=([-0.05, -0.02, -0.004], [0.08, 0.02, 0.004]), cell=0.004,
+                      connected=False),
     ]
     return motion, plates
 

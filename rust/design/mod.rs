@@ -8,6 +8,7 @@
 //! solves it with Clarabel (in place of a hand-written interior point).
 mod active;
 pub mod cells;
+pub mod connectivity;
 pub mod pins;
 pub mod problem;
 mod program;
@@ -15,6 +16,7 @@ pub mod regressor;
 pub mod strength;
 
 pub use cells::{cube_moments, fill, point_moments, Envelope};
+pub use connectivity::Flow;
 pub use pins::pins;
 pub use problem::{
     solve, solve_outcome, Norm, Outcome, Problem, Quantity, Relaxation, Relaxed, Solution,

@@ -73,6 +73,8 @@ pub struct Problem {
     pub mass_limit: Option<f64>,
     /// After the optimum, take the least total mass among the optima (a second solve).
     pub least_mass: bool,
+    /// Connected links: each link's cells joined to its bosses by flows (empty: none).
+    pub flows: Vec<super::connectivity::Flow>,
 }
 
 /// What the solver found.
@@ -152,6 +154,9 @@ fn check(problem: &Problem) -> Result<()> {
         }
         crate::error::check_finite(&q.name, q.rows.as_slice())?;
         crate::error::check_finite(&q.name, q.constant.as_slice())?;
+    }
+    for f in &problem.flows {
+        f.check(nx, &problem.upper)?;
     }
     Ok(())
 }
@@ -315,7 +320,8 @@ fn relax(problem: &Problem, active: Vec<Vec<usize>>) -> Result<Relaxation> {
     let Some((raw, _)) = solve_cut(problem, Stage::Relax(None), &mut active.clone())? else {
         return Err(Error::arg(
             "links, counterweights",
-            "bounds, link mass ranges and symmetry some design masses meet together",
+            "bounds, link mass ranges, symmetry and connected links some design masses meet \
+             together",
             "ones that conflict (Clarabel's certificate, with every limit and zero relaxed)",
         ));
     };

@@ -40,6 +40,8 @@ pub(crate) struct Layout {
     peaks: Vec<(usize, usize)>,
     /// (quantity, or None for the mass limit; its slack variable) in phase 1.
     pub slacks: Vec<(Option<usize>, usize)>,
+    /// The first of the connected links' flow variables (super::connectivity).
+    flows: usize,
     nz: usize,
 }
 
@@ -64,11 +66,14 @@ impl Layout {
             slacks.push((None, next));
             next += 1;
         }
+        let flows = next;
+        next += problem.flows.iter().map(|f| f.count()).sum::<usize>();
         Layout {
             nx,
             nd,
             peaks,
             slacks,
+            flows,
             nz: next,
         }
     }
@@ -442,6 +447,15 @@ pub(crate) fn solve_program(
     equalities(&mut bld, problem, lay, stage)?;
     inequalities(&mut bld, problem, lay, stage);
     cones(&mut bld, problem, lay, stage, active);
+    // Connected links: flows through the cells' faces (linear rows; docs/design.md §3).
+    let mut rows = super::connectivity::Rows {
+        rows: &mut bld.rows,
+        cols: &mut bld.cols,
+        vals: &mut bld.vals,
+        b: &mut bld.b,
+        cones: &mut bld.cones,
+    };
+    super::connectivity::append(&mut rows, &problem.flows, &problem.upper, lay.flows);
     let (p, q, constant) = objective(problem, lay, stage);
     let a = CscMatrix::new_from_triplets(bld.m(), lay.nz, bld.rows, bld.cols, bld.vals);
     let mut settings = DefaultSettings::<f64> {

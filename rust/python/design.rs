@@ -249,6 +249,23 @@ fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
     })
 }
 
+/// A connected link's flows: a dict with `nodes`, `edges` ((E, 2) local indices), `bosses`
+/// (lists of local indices), `web` and `hang` (crate::design::connectivity).
+fn flow(obj: &Bound<'_, PyAny>) -> PyResult<design::Flow> {
+    let py = obj.py();
+    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        obj.get_item(k)
+            .map_err(|_| invalid(py, "flows", format!("a dict with '{k}'"), "none"))
+    };
+    Ok(design::Flow {
+        nodes: get("nodes")?.extract()?,
+        edges: get("edges")?.extract()?,
+        bosses: get("bosses")?.extract()?,
+        web: get("web")?.extract()?,
+        hang: get("hang")?.extract()?,
+    })
+}
+
 /// Solves the design program given as a dict (see `pointmass_dyn`'s design module).
 #[pyfunction]
 pub fn design_solve<'py>(
@@ -307,6 +324,10 @@ pub fn design_solve<'py>(
         mass_reference: get("mass_reference")?.extract()?,
         mass_limit: get("mass_limit")?.extract()?,
         least_mass: get("least_mass")?.extract()?,
+        flows: match spec.get_item("flows")? {
+            Some(f) => f.try_iter()?.map(|f| flow(&f?)).collect::<PyResult<_>>()?,
+            None => vec![],
+        },
     };
     let outcome = detach_interruptible(py, || design::solve_outcome(&problem))?;
     let d = PyDict::new(py);

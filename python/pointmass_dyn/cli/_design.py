@@ -348,8 +348,8 @@ def cmd_design(args) -> int:
     before, after = b.before.summary(), b.after.summary()
     _write_csv(out / "summary.csv", ["quantity", "rms_before", "rms_after", "peak_before", "peak_after"],
                [[k, before[k]["rms"], after[k]["rms"], before[k]["peak"], after[k]["peak"]] for k in before])
-    for name, shape in b.shapes.items():
-        shape.write_stl(out / f"{name}.stl", threshold=0.5)
+    for name in b.shapes:  # the written (realised) parts, whose mass properties b.realised gives
+        b.realised[name].write_stl(out / f"{name}.stl")
     _density_maps(b, out)
     for name, st in b.strength.items():
         print(f"{name}: least safety factor {st.safety:.3g} at t = {st.t:.4g} s")

@@ -9,17 +9,23 @@ driving torque, bearing forces and mass — a convex program (QP or SOCP) solved
 """
 
 from ._balance import Balance, Counterweight
+from ._connect import HANG
 from ._front import TIE_WEIGHT, ParetoFront, analysed_value, pareto_front
 from ._material import Material
 from ._problem import OBJECTIVES, balance, objective_value
+from ._realise import FLOOR, T_MIN, TOLERANCE, Realisation, RealisedPart
 from ._shaking import MotionAnalysis, Shaking, analyze_motion, prescribed_motion, shaking
 from ._shapes import LinkShape, Shape, read_stl
 from ._strength import LinkStrength
 from ._write import write_scene, write_urdf
 
 __all__ = [
+    "FLOOR",
+    "HANG",
     "OBJECTIVES",
     "TIE_WEIGHT",
+    "TOLERANCE",
+    "T_MIN",
     "Balance",
     "Counterweight",
     "LinkShape",
@@ -27,6 +33,8 @@ __all__ = [
     "Material",
     "MotionAnalysis",
     "ParetoFront",
+    "Realisation",
+    "RealisedPart",
     "Shape",
     "Shaking",
     "analyze_motion",

@@ -122,6 +122,10 @@ class Balance:
     #: :class:`~pointmass_dyn.design.LinkStrength` each — stresses along the motion, the
     #: smallest safety factor and where it occurs (re-analysed from ``after``).
     strength: dict = field(default_factory=dict)
+    #: The written parts (:class:`~pointmass_dyn.design.Realisation`, docs/design.md §4):
+    #: each link's solid boxes and their exact mass properties, the realised model analysed
+    #: along the motion and its deviation from ``predicted``; None without link shapes.
+    realised: Any = None
 
     def write_scene(self, source: Any, path: Any) -> Any:
         """The designed model as a scene file: a copy of ``source`` (the scene the motion's

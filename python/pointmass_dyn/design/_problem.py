@@ -18,9 +18,10 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from ..errors import InvalidInputError
-from . import _safety
+from ..errors import InfeasibleDesignError, InvalidInputError
+from . import _connect, _safety
 from ._balance import Balance, Counterweight
+from ._realise import realise
 from ._shaking import MotionAnalysis, analyze_motion
 from ._shapes import LinkShape, Shape
 
@@ -369,6 +370,9 @@ def balance(
         "mass_reference": float(model.total_mass),
         "mass_limit": limits.get("mass"),
         "least_mass": bool(least_mass),
+        # Connected links: flows through their cells' faces (docs/design.md §3).
+        "flows": [_connect.flow(sp, model, sp.cells(model)[0], sl.start)
+                  for kind, _, sp, sl in var.parts if kind == "shape" and _connect.connected(sp)],
     }
     say(f"conic program: {var.count} design masses, {len(quantities)} quantities ({norm})")
     sol = _core.design_solve(spec)
@@ -418,6 +422,12 @@ def balance(
     )
     result.objective.update(objective)
     result.zero = zero
+    # What is written: cells decided, joined, polished; the written parts analysed again.
+    shapes = [(name, link, sp, x[sl]) for (kind, name, sp, sl), (link, _) in zip(var.parts, var.columns)
+              if kind == "shape"]
+    result.realised = realise(motion, shapes, phi, data, result.predicted, result.bodies,
+                              _body_from_parameters, say)
+    result.solver["time"] = time.perf_counter() - t0
     return result
 
 

@@ -73,7 +73,13 @@ class LinkShape:
     joint on the link (its own, its children's, the cut joints') stay full, so the link
     still carries its pins; ``keep`` (boxes) adds cells that must stay full, ``keep_out``
     (boxes) removes cells. ``symmetric=True`` keeps the link symmetric about the mid-plane
-    of its envelope's z range (a planar link stays in its plane)."""
+    of its envelope's z range (a planar link stays in its plane).
+
+    ``connected=True`` (default): the link is one face-connected part holding its bosses
+    (docs/design.md §3): every cross-section between two joints holds at least ``section``
+    cell faces of material, and material hangs from the bosses through faces at least ``1/hang``
+    as full as what they carry (``hang`` None: ``pmd.design.HANG``); the written part is
+    checked by a flood fill and joined where thresholding separated it."""
 
     body: Any
     box: Any = None
@@ -105,6 +111,14 @@ class LinkShape:
 
     def boss_radius(self) -> float:
         return self.cell if self.boss is None else float(self.boss)
+    #: One connected solid holding its pins (docs/design.md §3); ``False``: the unconnected
+    #: optimum.
+    connected: bool = True
+    #: Connected: the least cross-section, in cell faces, between two of its joints.
+    section: float = 1.0
+    #: Connected: how full (``1/hang``) the faces a region of cells hangs from must be, for
+    #: what it carries (``None``: :data:`~pointmass_dyn.design.HANG`).
+    hang: float | None = None
 
     def _envelope(self) -> dict:
         given = [k for k in ("box", "polygon", "stl") if getattr(self, k) is not None]
@@ -149,18 +163,28 @@ class LinkShape:
             )
         cap = np.full(len(centers), self.rho * self.cell**3)
         full = np.zeros(len(centers), dtype=bool)
-        for b in _boxes(self.keep, "keep"):
-            full |= _inside(centers, b)
-        radius = self.cell if self.boss is None else float(self.boss)
+        for g in self.keep_cells(centers) + self.pin_cells(model, centers):
+            full[g] = True
+        if self.material is not None:  # the members' webs stay full: they carry the loads
+            full |= web_mask(members(link_pins(model, self.body), self.boss_radius()), centers,
+                             self.web_width())
+        return centers, np.where(full, cap, 0.0), cap
+
+    def pin_cells(self, model: Any, centers: np.ndarray) -> list[np.ndarray]:
+        """Indices of the cells within ``boss`` of each joint on the link (its boss)."""
+        radius = self.boss_radius()
+        out = []
         for point, axis in _core.design_pins(model, self.body):
             d = centers - point
             n = np.linalg.norm(axis)
             if n > 0:
                 d = d - np.outer(d @ (axis / n), axis / n)
-            full |= np.linalg.norm(d, axis=1) <= radius * (1 + 1e-9)
-        if self.material is not None:  # the members' webs stay full: they carry the loads
-            full |= web_mask(members(link_pins(model, self.body), radius), centers, self.web_width())
-        return centers, np.where(full, cap, 0.0), cap
+            out.append(np.nonzero(np.linalg.norm(d, axis=1) <= radius * (1 + 1e-9))[0])
+        return out
+
+    def keep_cells(self, centers: np.ndarray) -> list[np.ndarray]:
+        """Indices of the cells inside each ``keep`` box."""
+        return [np.nonzero(_inside(centers, b))[0] for b in _boxes(self.keep, "keep")]
 
     def mirror_pairs(self, centers: np.ndarray) -> list[tuple[int, int]]:
         """Index pairs of cells mirrored about the envelope's z mid-plane."""

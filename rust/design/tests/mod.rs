@@ -162,6 +162,7 @@ fn toy(norm: Norm, limit: Option<f64>, upper: f64) -> Problem {
         mass_reference: 1.0,
         mass_limit: None,
         least_mass: false,
+        flows: vec![],
     }
 }
 
