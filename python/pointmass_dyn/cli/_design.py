@@ -73,7 +73,7 @@ example:
 _SPEC_KEYS = {"driver", "speed", "samples", "norm", "objective", "limits", "zero", "least_mass",
               "link", "counterweight", "pareto"}
 _LINK_KEYS = {"body", "box", "polygon", "z", "stl", "density", "cell", "mass", "keep", "keep_out",
-              "boss", "symmetric", "material", "web"}
+              "boss", "symmetric", "material", "web", "connected", "section", "hang"}
 
 
 def add_parser(sub):
