@@ -19,6 +19,7 @@ from ._contact import (
     torque_saturation,
     urdf_contact_points,
 )
+from ._control import IMU, Simulator, simulate
 from ._core import Effect, Joint, Model, PointMasses, RigidBody, Scene, StateEvent, __version__
 from ._simulation import (
     Damper,
@@ -37,7 +38,6 @@ from ._simulation import (
     effect_power,
     energies,
     rk45,
-    simulate,
     solve_ivp,
 )
 from ._sweep import sweep
@@ -148,6 +148,8 @@ __all__ = [
     "Shape",
     "Damper",
     "Effect",
+    "IMU",
+    "Simulator",
     "ExternalForce",
     "Fixed",
     "FreeFlyer",

@@ -37,6 +37,7 @@ mod method;
 mod num_jac;
 mod radau;
 mod radau_tableau;
+mod resume;
 mod stepper;
 
 pub use common::{StepOutcome, StepState};
@@ -50,6 +51,7 @@ pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
 pub use method::{Counts, Integrator, Method};
 pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
+pub use resume::Resume;
 pub use stepper::{Rk45, Stepper};
 
 use thiserror::Error;

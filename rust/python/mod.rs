@@ -1,5 +1,6 @@
 //! The Python bindings: one thin layer that converts arrays and errors and calls the core.
 mod body;
+mod control;
 mod convert;
 mod dense;
 mod derivatives;
@@ -45,6 +46,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<events::PyStateEvent>()?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<dense::PyDenseSolution>()?;
+    m.add_class::<control::PySimulator>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_batch, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
