@@ -250,15 +250,15 @@ def test_go2_stands_under_a_python_pd_controller_on_ground_contact():
         u[6:] = 100.0 * (pose - q[7:]) - 5.0 * v[6:]
         return u
 
-    # 1 s (the issue asks 5 s; 1 s keeps the test short): dropped, it settles and stays.
-    res = pmd.simulate(scene, (0, 1.0), controller=stand, control_period=1e-3, method="Radau",
+    # 5 s (about 6 s of test): dropped from 5 mm, it settles and stays.
+    res = pmd.simulate(scene, (0, 5.0), controller=stand, control_period=1e-3, method="Radau",
                        rtol=1e-5, atol=1e-8, contact=True)
     res.raise_for_status()
     last = pmd.Simulator(scene, contact=True)
     last.state = (res.q[-1], res.v[-1])
     forces = last.sensors()["contact.contact"]
     mass = go2.total_mass
-    record("go2 standing: base height, |v| at 1 s", (res.q[-1, 2], np.abs(res.v[-1]).max()))
+    record("go2 standing under Python PD: max |v| at 5 s", float(np.abs(res.v[-1]).max()))
     assert np.abs(res.v[-1]).max() < 0.05
     assert forces[:, 2].sum() == pytest.approx(mass * 9.81, rel=0.05)  # its weight on its feet
     assert res.q[:, 2].min() > q0[2] - 0.05  # did not collapse
