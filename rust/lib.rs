@@ -9,6 +9,7 @@
 pub mod alloc;
 pub mod benchmark_models;
 pub mod body;
+pub mod control;
 pub mod cpu;
 pub mod denoc;
 pub mod design;

@@ -17,6 +17,7 @@ from ._contact import (
     torque_saturation,
     urdf_contact_points,
 )
+from ._control import IMU, Simulator, simulate
 from ._core import (
     Effect,
     Joint,
@@ -45,7 +46,6 @@ from ._simulation import (
     effect_power,
     energies,
     rk45,
-    simulate,
     solve_ivp,
 )
 from ._sweep import sweep
@@ -157,6 +157,8 @@ __all__ = [
     "Shape",
     "Damper",
     "Effect",
+    "IMU",
+    "Simulator",
     "ExternalForce",
     "Fixed",
     "FreeFlyer",

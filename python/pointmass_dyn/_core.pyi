@@ -901,6 +901,43 @@ class DenseSolution:
     def ts(self) -> _Array:
         """Step boundaries."""
 
+@final
+class _Simulator:
+    """The stepping simulator (``pointmass_dyn.Simulator`` wraps it; docs/control.md)."""
+
+    def __init__(
+        self,
+        scene: Scene,
+        method: str | None = None,
+        rtol: ArrayLike | None = None,
+        atol: ArrayLike | None = None,
+        dt: float | None = None,
+        control_period: float = 0.001,
+        control: Literal["torque", "pd"] = "torque",
+        record: bool = True,
+        disable: _Family | Sequence[_Family] | None = None,
+        first_step: float | None = None,
+        max_step: float | None = None,
+        t0: float = 0.0,
+    ) -> None: ...
+    t: float
+    nq: int
+    nv: int
+    control_period: float
+    method: str
+    control_kind: str
+    control_len: int
+    steps: int
+    y: _Array
+    control: _Array | None
+    def set_control(self, u: ArrayLike) -> None: ...
+    def set_state(self, q: ArrayLike, v: ArrayLike) -> None: ...
+    def advance(self, target: float) -> str | None:
+        """Advances to ``target``; None, or the message of the failure that ended the run."""
+    def trajectory(self) -> dict[str, Any]: ...
+    def joint_torques(self) -> _Array: ...
+    def imu(self, imus: Sequence[tuple[int, ArrayLike, ArrayLike]]) -> _Array: ...
+
 def simulate_scene(
     scene: Scene,
     t_span: ArrayLike | None = None,

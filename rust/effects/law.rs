@@ -55,6 +55,14 @@ pub trait ForceLaw: Send {
     fn potential_energy(&self, _cx: &Context<'_>, _links: &[LinkState]) -> Option<f64> {
         None
     }
+    /// The joints a PD law drives (0 for any other law): the length of its held reference.
+    fn reference_joints(&self) -> usize {
+        0
+    }
+    /// A PD law's reference held at `target` ([`ForceLaw::reference_joints`] values, zero
+    /// reference rate) instead of its table; `None`: the table again. Must not allocate
+    /// once a target was held.
+    fn hold_reference(&mut self, _target: Option<&[f64]>) {}
 }
 
 pub(super) struct Item {
@@ -199,6 +207,31 @@ impl Effects {
             wrote |= item.law.apply(cx, tau, wrenches)?;
         }
         Ok(wrote)
+    }
+
+    /// Whether [`Effects::apply`] writes joint forces (some enabled effect besides gravity).
+    pub fn applies_in_rhs(&self) -> bool {
+        self.rhs_items > 0
+    }
+
+    /// The joints the enabled PD laws drive, in effect order (each law's own joints in its
+    /// order): the length of a PD target ([`Effects::hold_pd_targets`]).
+    pub fn pd_joints(&self) -> usize {
+        self.items.iter().map(|i| i.law.reference_joints()).sum()
+    }
+
+    /// Holds the enabled PD laws' references at `targets` (their joints in
+    /// [`Effects::pd_joints`] order), or, `None`, gives them their tables back. The caller
+    /// checks the length.
+    pub fn hold_pd_targets(&mut self, targets: Option<&[f64]>) {
+        let mut at = 0;
+        for item in self.items.iter_mut() {
+            let n = item.law.reference_joints();
+            if n > 0 {
+                item.law.hold_reference(targets.map(|t| &t[at..at + n]));
+                at += n;
+            }
+        }
     }
 
     /// Sum of the potential energies (gravity, springs); `links` holds positions at `cx.q`.

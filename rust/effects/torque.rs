@@ -496,6 +496,7 @@ impl Torque {
                     hint: 0,
                     r: vec![0.0; n],
                     rd: vec![0.0; n],
+                    held: false,
                 }))
             }
             TorqueLaw::Function(_) => unreachable!("handled above"),
@@ -597,6 +598,8 @@ struct PdLaw {
     hint: usize,
     r: Vec<f64>,
     rd: Vec<f64>,
+    /// A stepping simulator's target, held instead of the table (`ForceLaw::hold_reference`).
+    held: bool,
 }
 
 impl ForceLaw for PdLaw {
@@ -607,12 +610,27 @@ impl ForceLaw for PdLaw {
         tau: &mut [f64],
         _w: &mut [Vec6],
     ) -> std::result::Result<bool, String> {
-        self.table
-            .eval_with_slope(cx.t, &mut self.hint, &mut self.r, &mut self.rd);
+        if !self.held {
+            self.table
+                .eval_with_slope(cx.t, &mut self.hint, &mut self.r, &mut self.rd);
+        }
         for (k, &(iq, iv, kp, kd)) in self.joints.iter().enumerate() {
             tau[iv] += kp * (self.r[k] - cx.q[iq]) + kd * (self.rd[k] - cx.v[iv]);
         }
         Ok(false)
+    }
+
+    fn reference_joints(&self) -> usize {
+        self.joints.len()
+    }
+
+    /// The target into `r` (the table is not read while held), a zero rate into `rd`.
+    fn hold_reference(&mut self, target: Option<&[f64]>) {
+        self.held = target.is_some();
+        if let Some(t) = target.filter(|t| t.len() == self.r.len()) {
+            self.r.copy_from_slice(t);
+            self.rd.fill(0.0);
+        }
     }
 
     /// `−kp` and `−kd` on each joint's diagonal (one-speed joints: the tangent is the

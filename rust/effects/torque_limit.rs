@@ -83,6 +83,13 @@ impl ForceLaw for Saturated {
         Ok(wrote)
     }
 
+    fn reference_joints(&self) -> usize {
+        self.inner.reference_joints()
+    }
+    fn hold_reference(&mut self, target: Option<&[f64]>) {
+        self.inner.hold_reference(target)
+    }
+
     fn add_derivatives(
         &mut self,
         cx: &Context<'_>,

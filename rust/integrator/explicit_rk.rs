@@ -469,6 +469,11 @@ impl<S: OdeSystem, T: Tableau> ExplicitRk<S, T> {
     pub fn into_system(self) -> S {
         self.sys
     }
+    /// The step state and the system together, for a run continued across calls
+    /// (`integrator::resume`).
+    pub(crate) fn parts(&mut self) -> (&mut StepState, &mut S) {
+        (&mut self.st, &mut self.sys)
+    }
 }
 
 impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {

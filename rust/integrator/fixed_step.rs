@@ -251,6 +251,17 @@ impl<S: OdeSystem, M: Scheme> FixedStep<S, M> {
     pub fn nfev(&self) -> usize {
         self.w.nfev
     }
+
+    /// The interval continued to `t_bound` (`integrator::resume`): the grid goes on from
+    /// `t0`, and the next step evaluates `f(t, y)` afresh (the right-hand side may have
+    /// changed at `t`).
+    pub(crate) fn extend(&mut self, t_bound: f64) {
+        self.t_bound = t_bound;
+        self.f_valid = false;
+        if self.lifecycle == Lifecycle::Finished {
+            self.lifecycle = Lifecycle::Running;
+        }
+    }
 }
 
 /// Nothing to evaluate before the first step (`f(t0, y0)` is the first step's own).

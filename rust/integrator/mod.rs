@@ -37,6 +37,7 @@ mod method;
 mod num_jac;
 mod radau;
 mod radau_tableau;
+mod resume;
 mod stepper;
 mod vern9;
 mod vern9_tableau;
@@ -52,6 +53,7 @@ pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
 pub use method::{Counts, Integrator, Method};
 pub use radau::{radau_solve, JacobianSource, Radau, NEWTON_MAXITER};
+pub use resume::Resume;
 pub use stepper::{Rk45, Stepper};
 pub use vern9::{Vern9, Vern9Tableau};
 

@@ -754,6 +754,11 @@ impl<S: OdeSystem> Radau<S> {
     pub fn into_system(self) -> S {
         self.sys
     }
+    /// The step state and the system together, for a run continued across calls
+    /// (`integrator::resume`).
+    pub(crate) fn parts(&mut self) -> (&mut StepState, &mut S) {
+        (&mut self.st, &mut self.sys)
+    }
 }
 
 /// `solve(..)` with `method = Radau` and the Jacobian from `jacobian` (e.g. a constant matrix,

@@ -1,6 +1,7 @@
 //! The Python bindings: one thin layer that converts arrays and errors and calls the core.
 mod along;
 mod body;
+mod control;
 mod convert;
 mod dense;
 mod derivatives;
@@ -49,6 +50,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scene::PyScene>()?;
     m.add_class::<dense::PyDenseSolution>()?;
     m.add_class::<run_config::PyRunConfig>()?;
+    m.add_class::<control::PySimulator>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_batch, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;

@@ -48,6 +48,9 @@ pub struct Dynamics<'a> {
     /// With loops and one degree of freedom: the kept rows' oriented kernel, to see the
     /// motion pass singular positions (built on the first projection).
     pub crossings: Option<Box<Crossings>>,
+    /// Joint torques held by a stepping simulator (`control::Simulator`), added after the
+    /// effects' (length nv; empty: none).
+    pub control: Vec<f64>,
 }
 
 /// The singular positions a one-degree-of-freedom mechanism passed: the orientation of the
@@ -211,6 +214,7 @@ impl<'a> Dynamics<'a> {
             rank_max: 0,
             singular_passage: None,
             crossings: None,
+            control: Vec::new(),
         }
     }
 
@@ -291,6 +295,16 @@ impl<'a> Dynamics<'a> {
         } else {
             None
         };
+        if !self.control.is_empty() {
+            // Without joint forces from the effects `tau` was not overwritten: clear it.
+            if !self.effects.applies_in_rhs() {
+                self.tau.fill(0.0);
+            }
+            self.tau
+                .iter_mut()
+                .zip(&self.control)
+                .for_each(|(t, u)| *t += u);
+        }
         recursive::forward_dynamics(
             self.model,
             &mut self.data,

@@ -256,7 +256,7 @@ fn check_state_events(model: &Model, state_events: &[StateEvent]) -> Result<()> 
 }
 
 /// `y0 = [q0; v0]` with unit quaternions.
-fn initial_state(model: &Model, q0: &[f64], v0: &[f64]) -> Vec<f64> {
+pub(crate) fn initial_state(model: &Model, q0: &[f64], v0: &[f64]) -> Vec<f64> {
     let mut y0 = Vec::with_capacity(model.nq + model.nv);
     y0.extend_from_slice(q0);
     y0.extend_from_slice(v0);
@@ -267,7 +267,7 @@ fn initial_state(model: &Model, q0: &[f64], v0: &[f64]) -> Vec<f64> {
 /// A model with loops starts on the constraint manifolds: `q0` must close every loop to
 /// 1e-8 and `v0` keep them closed (else an error pointing at `assemble`); what remains is
 /// projected away.
-fn close_initial_state(
+pub(crate) fn close_initial_state(
     model: &Model,
     solver: &mut crate::loops::LoopSolver,
     y0: &mut [f64],
@@ -430,7 +430,7 @@ fn report_euler_singularity(
     }
 }
 
-fn input_error(e: integrator::InputError) -> Error {
+pub(crate) fn input_error(e: integrator::InputError) -> Error {
     match e {
         integrator::InputError::OutputTooLarge { bytes, .. } => Error::OutOfMemory {
             what: "simulate".into(),

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from .. import _core
-from ..errors import InfeasibleDesignError, InvalidInputError
+from ..errors import InvalidInputError
 from . import _connect, _safety
 from ._balance import Balance, Counterweight
 from ._realise import realise

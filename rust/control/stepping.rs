@@ -1,0 +1,447 @@
+//! [`Simulator`]: a scene advanced period by period with a held control.
+//!
+//! At a control boundary the method is not restarted: the step that would pass the boundary
+//! is clipped to end on it, the next step starts from the proposal the controller made
+//! before that clipping (not from a smaller clipped one), and when the control changed, the
+//! derivative at the boundary is evaluated again with the new control (one right-hand side
+//! evaluation per change for RK45, DOP853 and Radau: their first stage; nothing for RK4 and
+//! Euler). Radau keeps its Jacobian and LU (a held torque or target does not change
+//! `∂f/∂y`). A restart would instead cost SciPy's initial-step selection (one more
+//! evaluation) and a first step ~100 times shorter, every period.
+use super::sensors::{self, Imu, SensorWork};
+use crate::effects::{Disabled, Effect};
+use crate::error::{Error, Result};
+use crate::integrator::{
+    Counts, Dop853, Euler, FixedStep, Integrator, Method, Radau, Resume, Rk4, SolverOptions,
+    Status, StepOutcome, Stepper,
+};
+use crate::model::Model;
+use crate::simulate::{self, Dynamics, Trajectory};
+
+/// What a control holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ControlKind {
+    /// Joint torques, one per speed (`nv`), added to the effects' forces.
+    Torque,
+    /// The references of the scene's PD torques, one per joint they drive, held at zero
+    /// reference rate (their tables are not read while a target is held).
+    PdTarget,
+}
+
+enum Engine<'a> {
+    Rk45(Stepper<Dynamics<'a>>),
+    Dop853(Dop853<Dynamics<'a>>),
+    Radau(Radau<Dynamics<'a>>),
+    Rk4(FixedStep<Dynamics<'a>, Rk4>),
+    Euler(FixedStep<Dynamics<'a>, Euler>),
+}
+
+/// `$body` with `$x` bound to the engine's integrator, whatever the method.
+macro_rules! each {
+    ($e:expr, $x:ident => $body:expr) => {
+        match $e {
+            Engine::Rk45($x) => $body,
+            Engine::Dop853($x) => $body,
+            Engine::Radau($x) => $body,
+            Engine::Rk4($x) => $body,
+            Engine::Euler($x) => $body,
+        }
+    };
+}
+
+impl<'a> Engine<'a> {
+    fn new(
+        sys: Dynamics<'a>,
+        t: f64,
+        y: &[f64],
+        t_bound: f64,
+        opts: &SolverOptions,
+    ) -> Result<Self> {
+        let e = simulate::input_error;
+        Ok(match opts.method {
+            Method::Rk45 => Engine::Rk45(Stepper::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Dop853 => Engine::Dop853(Dop853::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Radau => Engine::Radau(Radau::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Rk4 => Engine::Rk4(FixedStep::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Euler => Engine::Euler(FixedStep::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Auto => {
+                return Err(Error::arg(
+                    "method",
+                    "'RK45', 'DOP853', 'Radau', 'RK4' or 'Euler' for a Simulator (it does not \
+                     switch methods)",
+                    "'auto'",
+                ))
+            }
+        })
+    }
+    fn t(&self) -> f64 {
+        each!(self, x => Integrator::t(x))
+    }
+    fn y(&self) -> &[f64] {
+        each!(self, x => Integrator::y(x))
+    }
+    fn counts(&self) -> Counts {
+        each!(self, x => Integrator::counts(x))
+    }
+    fn h_next(&self) -> f64 {
+        each!(self, x => Integrator::h_next(x))
+    }
+    fn step(&mut self) -> std::result::Result<StepOutcome, Status> {
+        each!(self, x => Integrator::step(x))
+    }
+    fn extend(&mut self, t_bound: f64) {
+        each!(self, x => x.extend(t_bound))
+    }
+    fn discontinuity(&mut self) -> std::result::Result<(), Status> {
+        each!(self, x => x.discontinuity())
+    }
+    fn set_h_next(&mut self, h: f64) {
+        each!(self, x => x.set_h_next(h))
+    }
+    fn sys(&mut self) -> &mut Dynamics<'a> {
+        each!(self, x => Integrator::system_mut(x))
+    }
+    fn into_sys(self) -> Dynamics<'a> {
+        each!(self, x => Integrator::into_system(x))
+    }
+}
+
+/// A scene stepped one control period at a time (docs/control.md).
+pub struct Simulator<'a> {
+    model: &'a Model,
+    engine: Option<Engine<'a>>,
+    opts: SolverOptions,
+    period: f64,
+    kind: ControlKind,
+    /// Joints the enabled PD torques drive.
+    pd_joints: usize,
+    /// The control held (None: none set yet; with PD targets, the tables then).
+    control: Option<Vec<f64>>,
+    /// The control changed since the last step (a discontinuity at the next one's start).
+    changed: bool,
+    /// `advance` calls so far (messages name the step).
+    steps: usize,
+    record: bool,
+    t_out: Vec<f64>,
+    y_out: Vec<f64>,
+    /// Counts of the engines a state change replaced.
+    counts: Counts,
+    /// The failure that ended the run, if any.
+    failure: Option<Status>,
+    sensors: SensorWork,
+}
+
+impl<'a> Simulator<'a> {
+    /// A simulator of `model` with `effects` (minus `disabled`) from `(q0, v0)` at `t0`,
+    /// advancing `period` by default with `opts.method` (not `auto`). `record`: keep every
+    /// accepted step for [`Simulator::trajectory`].
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        model: &'a Model,
+        effects: &[Effect],
+        disabled: Disabled,
+        (q0, v0): (&[f64], &[f64]),
+        t0: f64,
+        opts: SolverOptions,
+        period: f64,
+        kind: ControlKind,
+        record: bool,
+    ) -> Result<Self> {
+        if !(period > 0.0 && period.is_finite()) {
+            return Err(Error::arg(
+                "control_period",
+                "a positive, finite number of seconds",
+                format!("{period}"),
+            ));
+        }
+        if !t0.is_finite() {
+            return Err(Error::arg("t0", "a finite time", format!("{t0}")));
+        }
+        model.check_state(q0, Some(v0))?;
+        let mut sys = Dynamics::try_new(model, effects, disabled)?;
+        let pd_joints = sys.effects.pd_joints();
+        if kind == ControlKind::PdTarget && pd_joints == 0 {
+            return Err(Error::arg(
+                "control",
+                "'torque', or 'pd' for a scene with enabled PD torques (PDTorque)",
+                "'pd' for a scene without one",
+            ));
+        }
+        if kind == ControlKind::Torque {
+            sys.control = vec![0.0; model.nv];
+        }
+        let mut y0 = simulate::initial_state(model, q0, v0);
+        if let Some(solver) = sys.loops.as_mut() {
+            simulate::close_initial_state(model, solver, &mut y0)?;
+        }
+        let engine = Engine::new(sys, t0, &y0, t0 + period, &opts)?;
+        let mut s = Simulator {
+            model,
+            engine: Some(engine),
+            opts,
+            period,
+            kind,
+            pd_joints,
+            control: None,
+            changed: false,
+            steps: 0,
+            record,
+            t_out: Vec::new(),
+            y_out: Vec::new(),
+            counts: Counts::default(),
+            failure: None,
+            sensors: SensorWork::new(model),
+        };
+        s.push_row();
+        Ok(s)
+    }
+
+    fn engine(&self) -> &Engine<'a> {
+        self.engine
+            .as_ref()
+            .expect("the engine is only taken inside set_state")
+    }
+    fn engine_mut(&mut self) -> &mut Engine<'a> {
+        self.engine
+            .as_mut()
+            .expect("the engine is only taken inside set_state")
+    }
+
+    fn push_row(&mut self) {
+        if self.record {
+            let (t, y) = (self.engine().t(), self.engine().y().to_vec());
+            self.t_out.push(t);
+            self.y_out.extend_from_slice(&y);
+        }
+    }
+
+    pub fn t(&self) -> f64 {
+        self.engine().t()
+    }
+    /// The state `[q; v]`.
+    pub fn y(&self) -> &[f64] {
+        self.engine().y()
+    }
+    pub fn nq(&self) -> usize {
+        self.model.nq
+    }
+    pub fn nv(&self) -> usize {
+        self.model.nv
+    }
+    pub fn period(&self) -> f64 {
+        self.period
+    }
+    pub fn method(&self) -> Method {
+        self.opts.method
+    }
+    pub fn kind(&self) -> ControlKind {
+        self.kind
+    }
+    /// The control held (None before the first).
+    pub fn control(&self) -> Option<&[f64]> {
+        self.control.as_deref()
+    }
+    /// The length a control has: `nv` torques, or one target per PD-driven joint.
+    pub fn control_len(&self) -> usize {
+        match self.kind {
+            ControlKind::Torque => self.model.nv,
+            ControlKind::PdTarget => self.pd_joints,
+        }
+    }
+    /// `advance` calls so far.
+    pub fn steps(&self) -> usize {
+        self.steps
+    }
+    pub fn failure(&self) -> Option<&Status> {
+        self.failure.as_ref()
+    }
+
+    /// Holds `u` from now on (checked: its length, finite values; errors name the step).
+    pub fn set_control(&mut self, u: &[f64]) -> Result<()> {
+        let (n, k, t) = (self.control_len(), self.steps, self.t());
+        let what = match self.kind {
+            ControlKind::Torque => "joint torques, one per speed",
+            ControlKind::PdTarget => "PD targets, one per joint the PD torques drive",
+        };
+        if u.len() != n {
+            return Err(Error::arg(
+                "control",
+                format!("{n} {what} (step {k}, t = {t})"),
+                format!("{} values", u.len()),
+            ));
+        }
+        if let Some((i, x)) = u.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(Error::arg(
+                "control",
+                format!("finite {what} (step {k}, t = {t})"),
+                format!("{x} at index {i}"),
+            ));
+        }
+        if self.control.as_deref() == Some(u) {
+            return Ok(());
+        }
+        let kind = self.kind;
+        let sys = self.engine_mut().sys();
+        match kind {
+            ControlKind::Torque => sys.control.copy_from_slice(u),
+            ControlKind::PdTarget => sys.effects.hold_pd_targets(Some(u)),
+        }
+        self.control = Some(u.to_vec());
+        self.changed = true;
+        Ok(())
+    }
+
+    /// Advances to `target` (after `t`) with the control held. A failure of the run (a
+    /// non-finite state, a step too small, a failing callback) is returned as its status and
+    /// kept: every later call returns it again.
+    pub fn advance(&mut self, target: f64) -> Result<std::result::Result<(), Status>> {
+        let t = self.t();
+        if !(target > t && target.is_finite()) {
+            return Err(Error::arg(
+                "duration",
+                format!("a positive, finite time to advance (step {})", self.steps),
+                format!("{} (to t = {target} from t = {t})", target - t),
+            ));
+        }
+        if let Some(s) = &self.failure {
+            return Ok(Err(s.clone()));
+        }
+        self.steps += 1;
+        let r = self.advance_to(target);
+        if let Err(s) = &r {
+            self.failure = Some(s.clone());
+        }
+        Ok(r)
+    }
+
+    fn advance_to(&mut self, target: f64) -> std::result::Result<(), Status> {
+        let changed = std::mem::take(&mut self.changed);
+        let e = self.engine_mut();
+        e.extend(target);
+        if changed {
+            e.discontinuity()?;
+        }
+        loop {
+            let e = self.engine_mut();
+            let (h_before, t_before, rejected) = (e.h_next(), e.t(), e.counts().n_rejected);
+            let outcome = e.step()?;
+            let clipped = (e.t() - t_before).abs() < h_before;
+            if outcome == StepOutcome::Finished
+                && clipped
+                && e.counts().n_rejected == rejected
+                && e.h_next() < h_before
+            {
+                e.set_h_next(h_before);
+            }
+            self.push_row();
+            if outcome == StepOutcome::Finished {
+                return Ok(());
+            }
+        }
+    }
+
+    /// Replaces the state (a reset or a perturbation) at the current time: unit quaternions;
+    /// with loops, `q` must close them to 1e-8 and `v` keep them closed, what remains is
+    /// projected away (else an error, the state unchanged). The method starts afresh from
+    /// it (its first step chosen again); the trajectory gets a second row at this time.
+    pub fn set_state(&mut self, q: &[f64], v: &[f64]) -> Result<()> {
+        self.model.check_state(q, Some(v))?;
+        let mut y = simulate::initial_state(self.model, q, v);
+        let t = self.t();
+        let engine = self.engine.take().expect("engine present");
+        self.counts = self.counts + engine.counts();
+        let mut sys = engine.into_sys();
+        let closed = match sys.loops.as_mut() {
+            Some(solver) => simulate::close_initial_state(self.model, solver, &mut y),
+            None => Ok(()),
+        };
+        let y = match closed {
+            Ok(()) => y,
+            Err(e) => {
+                // Refused: the run goes on from the state it had.
+                let y_old = self.y_out_last_or(&y);
+                self.engine = Some(Engine::new(sys, t, &y_old, t + self.period, &self.opts)?);
+                return Err(e);
+            }
+        };
+        self.engine = Some(Engine::new(sys, t, &y, t + self.period, &self.opts)?);
+        self.failure = None;
+        self.changed = false;
+        self.push_row();
+        Ok(())
+    }
+
+    fn y_out_last_or(&self, fallback: &[f64]) -> Vec<f64> {
+        let n = fallback.len();
+        if self.y_out.len() >= n {
+            self.y_out[self.y_out.len() - n..].to_vec()
+        } else {
+            fallback.to_vec()
+        }
+    }
+
+    /// Counts of the whole run (engines replaced by state changes included).
+    pub fn counts(&self) -> Counts {
+        self.counts + self.engine().counts()
+    }
+
+    /// Every accepted step so far (with `record`), as `simulate` returns it.
+    pub fn trajectory(&self) -> Trajectory {
+        let (nq, nv) = (self.model.nq, self.model.nv);
+        let n = self.t_out.len();
+        let (mut q, mut v) = (Vec::with_capacity(n * nq), Vec::with_capacity(n * nv));
+        for row in self.y_out.chunks_exact(nq + nv) {
+            q.extend_from_slice(&row[..nq]);
+            v.extend_from_slice(&row[nq..]);
+        }
+        let c = self.counts();
+        let t_reached = self.t();
+        let status = self.failure.clone().unwrap_or(Status::Success);
+        Trajectory {
+            nq,
+            nv,
+            t: self.t_out.clone(),
+            q,
+            v,
+            energy: None,
+            constraint_residual: None,
+            constraint_drift: None,
+            singular_passage: None,
+            singular_crossings: None,
+            effect_labels: Vec::new(),
+            power: None,
+            t_events: Vec::new(),
+            y_events: Vec::new(),
+            nfev: c.nfev,
+            njev: c.njev,
+            nlu: c.nlu,
+            n_accepted: c.n_accepted,
+            n_rejected: c.n_rejected,
+            method: self.opts.method,
+            switched_to: None,
+            t_switch: None,
+            message: status.describe(t_reached),
+            success: status.is_success(),
+            status,
+            t_reached,
+        }
+    }
+
+    /// Joint torques the actuators apply now: the held torque control plus the scene's
+    /// torques-family effects (PD torques included), `nv` values into `out`.
+    pub fn joint_torques(&mut self, out: &mut [f64]) -> Result<()> {
+        let t = self.t();
+        let y = self.y().to_vec();
+        let e = self.engine.as_mut().expect("engine present");
+        sensors::joint_torques(self.model, e.sys(), &mut self.sensors, t, &y, out)
+    }
+
+    /// IMU readings now: per sensor the specific force (accelerometer, gravity included) and
+    /// the angular velocity, both in the sensor's axes, 6 values each into `out`.
+    pub fn imu(&mut self, imus: &[Imu], out: &mut [f64]) -> Result<()> {
+        let t = self.t();
+        let y = self.y().to_vec();
+        let e = self.engine.as_mut().expect("engine present");
+        sensors::imu(self.model, e.sys(), &mut self.sensors, imus, t, &y, out)
+    }
+}

@@ -1,0 +1,230 @@
+//! `_Simulator`: the stepping simulator (`crate::control`), converted; `pointmass_dyn.Simulator`
+//! wraps it.
+use std::sync::{Mutex, MutexGuard};
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use super::convert::{to_array, to_array1, vector};
+use super::effects::take_callback_error;
+use super::errors::{invalid, IntoPyResult};
+use super::options::{method_args, options, set_method, set_outcome, step_args};
+use super::scene::{disable_arg, PyScene};
+use crate::control::{ControlKind, Imu, OwnedSimulator, Simulator};
+use crate::integrator::Method;
+use crate::simulate::disabled;
+use crate::spatial::{Mat3, Vec3};
+
+#[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
+pub struct PySimulator {
+    // A class must be `Sync`; the effects' laws are `Send` only. Uncontended: one call at a time.
+    inner: Mutex<OwnedSimulator>,
+}
+
+impl PySimulator {
+    fn lock(&self) -> MutexGuard<'_, OwnedSimulator> {
+        // A panic cannot leave it poisoned mid-update in a way we could repair: take it as is.
+        self.inner.lock().unwrap_or_else(|e| e.into_inner())
+    }
+}
+
+fn kind_arg(py: Python<'_>, control: &str) -> PyResult<ControlKind> {
+    match control {
+        "torque" => Ok(ControlKind::Torque),
+        "pd" => Ok(ControlKind::PdTarget),
+        other => Err(invalid(
+            py,
+            "control",
+            "'torque' (joint torques) or 'pd' (targets of the scene's PD torques)",
+            format!("'{other}'"),
+        )),
+    }
+}
+
+#[pymethods]
+impl PySimulator {
+    #[new]
+    #[pyo3(signature = (scene, method=None, rtol=None, atol=None, dt=None, control_period=0.001, control="torque", record=true, disable=None, first_step=None, max_step=None, t0=0.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        scene: PyRef<'_, PyScene>,
+        method: Option<&str>,
+        rtol: Option<&Bound<'_, PyAny>>,
+        atol: Option<&Bound<'_, PyAny>>,
+        dt: Option<&Bound<'_, PyAny>>,
+        control_period: f64,
+        control: &str,
+        record: bool,
+        disable: Option<&Bound<'_, PyAny>>,
+        first_step: Option<&Bound<'_, PyAny>>,
+        max_step: Option<&Bound<'_, PyAny>>,
+        t0: f64,
+    ) -> PyResult<Self> {
+        let s = &scene.inner;
+        let kind = kind_arg(py, control)?;
+        let period = control_period;
+        let mut requested = step_args(first_step, max_step, None)?;
+        method_args(py, &mut requested, method, dt)?;
+        let dim = s.model.nq + s.model.nv;
+        let base = options(
+            py,
+            dim,
+            &mut requested,
+            rtol,
+            atol,
+            None,
+            false,
+            "standard",
+            "off",
+        )?;
+        let off = disabled(disable_arg(py, disable)?, &s.settings);
+        let named = requested.method.is_some() || s.settings.method.is_some();
+        let mut opts = requested.options(&s.settings, base);
+        // A long run of short calls: no cap on the steps of the whole run.
+        opts.max_steps = usize::MAX;
+        if opts.method == Method::Auto && !named {
+            // What `simulate` would start stiff scenes with; the Simulator does not switch.
+            opts.method = Method::Radau;
+        }
+        let model = s.model.clone();
+        let (q0, v0) = (s.q0.clone(), s.v0.clone());
+        let effects = s.effects.clone();
+        let inner = OwnedSimulator::new(model, |m| {
+            Simulator::new(m, &effects, off, (&q0, &v0), t0, opts, period, kind, record)
+        })
+        .py(py)?;
+        Ok(PySimulator {
+            inner: Mutex::new(inner),
+        })
+    }
+
+    #[getter]
+    fn t(&self) -> f64 {
+        self.lock().get().t()
+    }
+    #[getter]
+    fn nq(&self) -> usize {
+        self.lock().get().nq()
+    }
+    #[getter]
+    fn nv(&self) -> usize {
+        self.lock().get().nv()
+    }
+    #[getter]
+    fn control_period(&self) -> f64 {
+        self.lock().get().period()
+    }
+    #[getter]
+    fn method(&self) -> &'static str {
+        self.lock().get().method().name()
+    }
+    #[getter]
+    fn control_kind(&self) -> &'static str {
+        match self.lock().get().kind() {
+            ControlKind::Torque => "torque",
+            ControlKind::PdTarget => "pd",
+        }
+    }
+    #[getter]
+    fn control_len(&self) -> usize {
+        self.lock().get().control_len()
+    }
+    #[getter]
+    fn steps(&self) -> usize {
+        self.lock().get().steps()
+    }
+    /// The state `[q; v]` (a copy).
+    #[getter]
+    fn y<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+        to_array1(py, self.lock().get().y()).into_any()
+    }
+    #[getter]
+    fn control<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+        self.lock()
+            .get()
+            .control()
+            .map(|u| to_array1(py, u).into_any())
+    }
+
+    fn set_control(&self, py: Python<'_>, u: &Bound<'_, PyAny>) -> PyResult<()> {
+        let u = vector(u, "control", None)?;
+        self.lock().sim().set_control(&u).py(py)
+    }
+
+    fn set_state(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        v: &Bound<'_, PyAny>,
+    ) -> PyResult<()> {
+        let q = vector(q, "q", None)?;
+        let v = vector(v, "v", None)?;
+        self.lock().sim().set_state(&q, &v).py(py)
+    }
+
+    /// Advances to `target` with the interpreter released; returns None, or the failure's
+    /// message (the run then stays where it failed). A Python callback that raised is
+    /// re-raised.
+    fn advance(&self, py: Python<'_>, target: f64) -> PyResult<Option<String>> {
+        take_callback_error();
+        let mut guard = self.lock();
+        let sim = guard.sim();
+        let r = py.detach(|| sim.advance(target)).py(py)?;
+        if let Some(e) = take_callback_error() {
+            return Err(e);
+        }
+        Ok(r.err().map(|s| s.describe(sim.t())))
+    }
+
+    /// Everything so far, as the dict `simulate` returns.
+    fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let traj = self.lock().get().trajectory();
+        let (n, nq, nv) = (traj.t.len(), traj.nq, traj.nv);
+        let d = PyDict::new(py);
+        d.set_item("t", to_array1(py, &traj.t))?;
+        d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
+        d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
+        d.set_item("energy", py.None())?;
+        for key in ["t_events", "q_events", "v_events"] {
+            d.set_item(key, PyList::empty(py))?;
+        }
+        d.set_item("nfev", traj.nfev)?;
+        set_method(&d, traj.method, (traj.njev, traj.nlu), None, None)?;
+        set_outcome(
+            &d,
+            &traj.status,
+            traj.n_accepted,
+            traj.n_rejected,
+            &traj.message,
+            traj.t_reached,
+        )?;
+        Ok(d)
+    }
+
+    /// The actuators' joint torques now (nv): the torque control plus the scene's torques.
+    fn joint_torques<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let mut out = vec![0.0; self.lock().get().nv()];
+        self.lock().sim().joint_torques(&mut out).py(py)?;
+        Ok(to_array1(py, &out).into_any())
+    }
+
+    /// IMU readings now, (n, 6): specific force then angular velocity, sensor axes; each IMU
+    /// `(body index, position (3,), rotation (3, 3))` in the body's frame.
+    fn imu<'py>(&self, py: Python<'py>, imus: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let mut list = Vec::new();
+        for (k, item) in imus.try_iter()?.enumerate() {
+            let (body, p, r): (usize, Bound<'_, PyAny>, Bound<'_, PyAny>) = item?.extract()?;
+            let p = vector(&p, &format!("imu[{k}].position"), Some(3))?;
+            let r = super::convert::mat3(&r, &format!("imu[{k}].rotation"))?;
+            list.push(Imu {
+                body,
+                position: Vec3::from_column_slice(&p),
+                rotation: Mat3::from(r),
+            });
+        }
+        let mut out = vec![0.0; 6 * list.len()];
+        self.lock().sim().imu(&list, &mut out).py(py)?;
+        to_array(py, out, &[list.len(), 6])
+    }
+}
