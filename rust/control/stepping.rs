@@ -13,7 +13,7 @@ use crate::effects::{Disabled, Effect};
 use crate::error::{Error, Result};
 use crate::integrator::{
     Counts, Dop853, Euler, FixedStep, Integrator, Method, Radau, Resume, Rk4, SolverOptions,
-    Status, StepOutcome, Stepper,
+    Status, StepOutcome, Stepper, Vern9,
 };
 use crate::model::Model;
 use crate::simulate::{self, Dynamics, Trajectory};
@@ -31,6 +31,7 @@ pub enum ControlKind {
 enum Engine<'a> {
     Rk45(Stepper<Dynamics<'a>>),
     Dop853(Dop853<Dynamics<'a>>),
+    Vern9(Vern9<Dynamics<'a>>),
     Radau(Radau<Dynamics<'a>>),
     Rk4(FixedStep<Dynamics<'a>, Rk4>),
     Euler(FixedStep<Dynamics<'a>, Euler>),
@@ -42,6 +43,7 @@ macro_rules! each {
         match $e {
             Engine::Rk45($x) => $body,
             Engine::Dop853($x) => $body,
+            Engine::Vern9($x) => $body,
             Engine::Radau($x) => $body,
             Engine::Rk4($x) => $body,
             Engine::Euler($x) => $body,
@@ -61,14 +63,15 @@ impl<'a> Engine<'a> {
         Ok(match opts.method {
             Method::Rk45 => Engine::Rk45(Stepper::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Dop853 => Engine::Dop853(Dop853::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Vern9 => Engine::Vern9(Vern9::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Radau => Engine::Radau(Radau::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Rk4 => Engine::Rk4(FixedStep::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Euler => Engine::Euler(FixedStep::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Auto => {
                 return Err(Error::arg(
                     "method",
-                    "'RK45', 'DOP853', 'Radau', 'RK4' or 'Euler' for a Simulator (it does not \
-                     switch methods)",
+                    "'RK45', 'DOP853', 'Vern9', 'Radau', 'RK4' or 'Euler' for a Simulator (it \
+                     does not switch methods)",
                     "'auto'",
                 ))
             }

@@ -8,11 +8,12 @@ use pyo3::types::{PyDict, PyList};
 use super::convert::{to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{invalid, IntoPyResult};
-use super::options::{method_args, options, set_method, set_outcome, step_args};
-use super::scene::{disable_arg, PyScene};
+use super::options::{set_method, set_outcome};
+use super::run_config::call_config;
+use super::scene::PyScene;
 use crate::control::{ControlKind, Imu, OwnedSimulator, Simulator};
 use crate::integrator::Method;
-use crate::simulate::disabled;
+use crate::simulate::RunConfig;
 use crate::spatial::{Mat3, Vec3};
 
 #[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
@@ -64,23 +65,35 @@ impl PySimulator {
         let s = &scene.inner;
         let kind = kind_arg(py, control)?;
         let period = control_period;
-        let mut requested = step_args(first_step, max_step, None)?;
-        method_args(py, &mut requested, method, dt)?;
+        // The run configuration `simulate` reads (the same checks, the same precedence over
+        // the scene's settings); the Simulator steps on from `t0` without an end.
+        let given = PyDict::new(py);
+        for (key, value) in [
+            (
+                "method",
+                method
+                    .map(|m| m.into_pyobject(py).map(|o| o.into_any()))
+                    .transpose()?,
+            ),
+            ("dt", dt.cloned()),
+            ("disable", disable.cloned()),
+            ("first_step", first_step.cloned()),
+            ("max_step", max_step.cloned()),
+        ] {
+            if let Some(v) = value.filter(|v| !v.is_none()) {
+                given.set_item(key, v)?;
+            }
+        }
         let dim = s.model.nq + s.model.nv;
-        let base = options(
-            py,
-            dim,
-            &mut requested,
-            rtol,
-            atol,
-            None,
-            false,
-            "standard",
-            "off",
-        )?;
-        let off = disabled(disable_arg(py, disable)?, &s.settings);
-        let named = requested.method.is_some() || s.settings.method.is_some();
-        let mut opts = requested.options(&s.settings, base);
+        let call = call_config(py, None, None, rtol, atol, Some(&given))?;
+        let named = call.method.is_some() || s.settings.method.is_some();
+        let run = RunConfig {
+            t_span: Some((t0, t0)),
+            ..call
+        }
+        .resolve(&s.settings, &s.effects, dim)
+        .py(py)?;
+        let (off, mut opts) = (run.disabled, run.opts);
         // A long run of short calls: no cap on the steps of the whole run.
         opts.max_steps = usize::MAX;
         if opts.method == Method::Auto && !named {
