@@ -196,7 +196,7 @@ def test_sensor_noise_is_seeded():
 
 def test_python_pd_holding_panda_matches_mujoco_running_the_same_controller():
     mujoco = pytest.importorskip("mujoco")
-    from pointmass_dyn import mjcf
+    from pointmass_dyn import io as mjcf
 
     scene = pmd.load_scene("panda")
     model = scene.model

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from .errors import InvalidInputError
+from .errors import InvalidInputError, NumericalError
 
 
 @dataclass
@@ -36,8 +36,6 @@ class IKResult:
         """Raises :class:`pointmass_dyn.errors.NumericalError` (with the message) if the
         targets were not reached; returns self."""
         if not self.converged:
-            from .errors import NumericalError
-
             raise NumericalError(self.message)
         return self
 

@@ -244,6 +244,107 @@ def _number(value: Any, arg: str, positive: bool = False) -> float:
     return v
 
 
+def _design_arguments(objective, limits, zero, norm, least_mass, link_mass):
+    """``balance``'s settings checked: ``(objective, limits, zero, names, safety,
+    link_mass)``, ``names`` every quantity they mention, ``safety`` the members' limit."""
+    for arg, value in (("objective", objective), ("limits", limits)):
+        if value is not None and not isinstance(value, dict):  # dict("0.3") is a ValueError
+            raise InvalidInputError(f"{arg}: expected None or a dict by quantity, got {value!r}")
+    objective = {"force": 1.0} if objective is None else dict(objective)
+    limits = dict(limits or {})
+    for k, w in objective.items():
+        _number(w, f"objective['{k}']")
+    for k, v in limits.items():
+        _number(v, f"limits['{k}']")
+    safety = _safety.safety_limit(limits)  # bounds the members' stress (design/_safety.py)
+    if not any(float(w) > 0 for w in objective.values()) and not limits and not zero:
+        raise InvalidInputError(
+            f"objective: expected some weight > 0 (or limits= / zero=), got {objective}"
+        )
+    if norm not in ("rms", "peak"):
+        raise InvalidInputError(f"norm: expected 'rms' or 'peak', got {norm!r}")
+    zero = tuple([zero] if isinstance(zero, str) else zero)
+    names = set(objective) | set(limits) | set(zero)
+    if zero and "mass" in zero:
+        raise InvalidInputError("zero: the design mass cannot be zero; give a limit instead")
+    if not isinstance(least_mass, (bool, np.bool_)):
+        raise InvalidInputError(f"least_mass: expected True or False, got {least_mass!r}")
+    link_mass = _link_mass_arg(link_mass)
+    return objective, limits, zero, names, safety, link_mass
+
+
+def _design_map(var: _Variables, designed: list[int]) -> dict:
+    """``δ = M x``: the designed links' parameters from the design masses, as the sparse
+    ``map_rows``, ``map_cols``, ``map_vals`` of the program."""
+    pos = {link: k for k, link in enumerate(designed)}
+    mr, mc, mv = [], [], []
+    for (link, mom), (_, _, _, sl) in zip(var.columns, var.parts):
+        j = np.arange(sl.start, sl.stop)
+        for c in range(NPARAM):
+            mr.append(np.full(len(j), NPARAM * pos[link] + c))
+            mc.append(j)
+            mv.append(mom[:, c])
+    return {"map_rows": [int(v) for v in np.concatenate(mr)],
+            "map_cols": [int(v) for v in np.concatenate(mc)],
+            "map_vals": np.concatenate(mv)}
+
+
+def _quantities(model, reg, data, names, objective, limits, zero, norm, phi_now, phi_base,
+                cols) -> tuple[list[dict], dict]:
+    """The program's quantities (their rows on the design, the rest constant) and each one's
+    value before, in ``norm``."""
+    n = data.shape[0]
+    quantities, before = [], {}
+    for what in sorted(names - {"mass"}):
+        idx, dim = _quantity_rows(reg, what, model)
+        block = data[:, idx, :].reshape(n * len(idx), -1)
+        y_now = block @ phi_now
+        ref = _norm_value(y_now, dim, n, norm)
+        w = float(objective.get(what, 0.0))
+        if (w > 0 or what in zero) and ref == 0.0:
+            raise InvalidInputError(
+                f"objective: the {what} is zero along this motion before any design; nothing to "
+                f"reduce (check the motion's speed and the model's masses)"
+            )
+        before[what] = ref
+        quantities.append(
+            {
+                "name": what,
+                "rows": np.ascontiguousarray(block[:, cols]),
+                "constant": block @ phi_base,
+                "dim": dim,
+                "samples": n,
+                "weight": w,
+                "reference": ref if ref > 0 else 1.0,
+                "limit": limits.get(what),
+                "zero": what in zero,
+            }
+        )
+    return quantities, before
+
+
+def _solver_report(sol: dict, quantities: list[dict], before: dict, norm: str, t0: float) -> dict:
+    """``Balance.solver``: the certificate of every stage, the counts and times, the values
+    the program predicts and those before."""
+    return {
+        "status": sol["status"],
+        "gap_abs": float(sol["gap_abs"]),
+        "gap_rel": float(sol["gap_rel"]),
+        # Every stage's certificate: the optimum, then (least_mass) the least mass.
+        "stages": [
+            {"stage": stage, "status": st, "gap_abs": float(ga), "gap_rel": float(gr)}
+            for stage, (st, ga, gr) in zip(("optimum", "least mass"), sol["stages"])
+        ],
+        "iterations": int(sol["iterations"]),
+        "rounds": int(sol["rounds"]),
+        "solve_time": float(sol["solve_time"]),
+        "values": dict(zip([q["name"] for q in quantities], sol["values"].tolist())),
+        "before": before,
+        "norm": norm,
+        "time": time.perf_counter() - t0,
+    }
+
+
 def balance(
     motion: MotionAnalysis,
     *,
@@ -275,29 +376,8 @@ def balance(
     _check_progress(progress)
     say = progress or (lambda _s: None)
     model = motion.model
-    for arg, value in (("objective", objective), ("limits", limits)):
-        if value is not None and not isinstance(value, dict):  # dict("0.3") is a ValueError
-            raise InvalidInputError(f"{arg}: expected None or a dict by quantity, got {value!r}")
-    objective = {"force": 1.0} if objective is None else dict(objective)
-    limits = dict(limits or {})
-    for k, w in objective.items():
-        _number(w, f"objective['{k}']")
-    for k, v in limits.items():
-        _number(v, f"limits['{k}']")
-    safety = _safety.safety_limit(limits)  # bounds the members' stress (design/_safety.py)
-    if not any(float(w) > 0 for w in objective.values()) and not limits and not zero:
-        raise InvalidInputError(
-            f"objective: expected some weight > 0 (or limits= / zero=), got {objective}"
-        )
-    if norm not in ("rms", "peak"):
-        raise InvalidInputError(f"norm: expected 'rms' or 'peak', got {norm!r}")
-    zero = tuple([zero] if isinstance(zero, str) else zero)
-    names = set(objective) | set(limits) | set(zero)
-    if zero and "mass" in zero:
-        raise InvalidInputError("zero: the design mass cannot be zero; give a limit instead")
-    if not isinstance(least_mass, (bool, np.bool_)):
-        raise InvalidInputError(f"least_mass: expected True or False, got {least_mass!r}")
-    link_mass = _link_mass_arg(link_mass)
+    objective, limits, zero, names, safety, link_mass = _design_arguments(
+        objective, limits, zero, norm, least_mass, link_mass)
     var = _collect(model, list(links), list(counterweights), link_mass)
     actuated = motion.actuated if motion.actuated is not None else list(range(model.nv))
     say("maps along the motion")
@@ -313,43 +393,8 @@ def balance(
     phi_base = phi_now.copy()
     for link in var.replaced:
         phi_base[NPARAM * link : NPARAM * (link + 1)] = 0.0
-    # δ = M x on the designed links' parameters.
-    pos = {link: k for k, link in enumerate(designed)}
-    mr, mc, mv = [], [], []
-    for (link, mom), (_, _, _, sl) in zip(var.columns, var.parts):
-        j = np.arange(sl.start, sl.stop)
-        for c in range(NPARAM):
-            mr.append(np.full(len(j), NPARAM * pos[link] + c))
-            mc.append(j)
-            mv.append(mom[:, c])
-    quantities, layout = [], {}
-    before = {}
-    for what in sorted(names - {"mass"}):
-        idx, dim = _quantity_rows(reg, what, model)
-        block = data[:, idx, :].reshape(n * len(idx), -1)
-        y_now = block @ phi_now
-        ref = _norm_value(y_now, dim, n, norm)
-        w = float(objective.get(what, 0.0))
-        if (w > 0 or what in zero) and ref == 0.0:
-            raise InvalidInputError(
-                f"objective: the {what} is zero along this motion before any design; nothing to "
-                f"reduce (check the motion's speed and the model's masses)"
-            )
-        layout[what] = (idx, dim)
-        before[what] = ref
-        quantities.append(
-            {
-                "name": what,
-                "rows": np.ascontiguousarray(block[:, cols]),
-                "constant": block @ phi_base,
-                "dim": dim,
-                "samples": n,
-                "weight": w,
-                "reference": ref if ref > 0 else 1.0,
-                "limit": limits.get(what),
-                "zero": what in zero,
-            }
-        )
+    quantities, before = _quantities(model, reg, data, names, objective, limits, zero, norm,
+                                     phi_now, phi_base, cols)
     checked = _safety.checked_links(model, var.parts, safety)
     quantities += _safety.quantities(checked, motion, data, actuated, cols, phi_base,
                                      phi_now, safety)
@@ -359,9 +404,7 @@ def balance(
         "ndelta": len(cols),
         "lower": lower,
         "upper": upper,
-        "map_rows": [int(v) for v in np.concatenate(mr)],
-        "map_cols": [int(v) for v in np.concatenate(mc)],
-        "map_vals": np.concatenate(mv),
+        **_design_map(var, designed),
         "groups": var.groups,
         "equal": var.equal,
         "quantities": quantities,
@@ -391,25 +434,7 @@ def balance(
         phi[NPARAM * link : NPARAM * (link + 1)] += mom.T @ x[sl]
     result = _build(motion, var, x, phi, designed)
     result.strength = _safety.analysed(checked, result.after, motion.input)
-    result.solver.update(
-        {
-            "status": sol["status"],
-            "gap_abs": float(sol["gap_abs"]),
-            "gap_rel": float(sol["gap_rel"]),
-            # Every stage's certificate: the optimum, then (least_mass) the least mass.
-            "stages": [
-                {"stage": stage, "status": st, "gap_abs": float(ga), "gap_rel": float(gr)}
-                for stage, (st, ga, gr) in zip(("optimum", "least mass"), sol["stages"])
-            ],
-            "iterations": int(sol["iterations"]),
-            "rounds": int(sol["rounds"]),
-            "solve_time": float(sol["solve_time"]),
-            "values": dict(zip([q["name"] for q in quantities], sol["values"].tolist())),
-            "before": before,
-            "norm": norm,
-            "time": time.perf_counter() - t0,
-        }
-    )
+    result.solver.update(_solver_report(sol, quantities, before, norm, t0))
     # Predicted quantities along the motion (what the re-analysis must reproduce).
     full = data @ phi
     result.predicted.update(
