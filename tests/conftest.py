@@ -40,6 +40,18 @@ def record(name: str, value: float) -> float:
     return value
 
 
+def pytest_sessionfinish(session):
+    # Under pytest-xdist each worker sends its worst errors to the controller.
+    if hasattr(session.config, "workeroutput"):
+        session.config.workeroutput["worst_relative_errors"] = dict(WORST)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_testnodedown(node, error):
+    for name, value in getattr(node, "workeroutput", {}).get("worst_relative_errors", {}).items():
+        record(name, value)
+
+
 def pytest_terminal_summary(terminalreporter):
     if WORST:
         terminalreporter.section("worst relative errors seen")
