@@ -199,3 +199,43 @@ fn vern9_agrees_with_dop853_on_the_scenes() {
         }
     }
 }
+
+/// `cargo test --lib vern9_stiffness_detection -- --ignored --nocapture` (figures for
+/// `auto`'s choice, docs/integrators.md): evaluations until the stiffness test stops DOP853
+/// and Vern9 on `y' = −1e4 (y − cos t)` over 0–2, and to the end on Krogh (non-stiff).
+#[test]
+#[ignore]
+fn vern9_stiffness_detection() {
+    use crate::integrator::{Status, StiffnessCheck};
+    let stiff = || {
+        FnSystem::new(1, |t, y: &[f64], dy: &mut [f64]| {
+            dy[0] = -1e4 * (y[0] - t.cos());
+            Ok(())
+        })
+    };
+    for tl in [1e-6, 1e-8, 1e-9, 1e-10, 1e-11, 1e-12] {
+        let mut row = format!("{tl:e}");
+        for method in [Method::Dop853, Method::Vern9] {
+            let opts = SolverOptions {
+                method,
+                stiffness: StiffnessCheck::Stop,
+                ..super::fixtures::tol(tl)
+            };
+            let s = solve(stiff(), (0.0, 2.0), &[0.0], &opts, &mut []).unwrap();
+            let k = solve(
+                super::fixtures::krogh(),
+                (0.0, 12.0),
+                &[0.0, 1.0, 1.0],
+                &opts,
+                &mut [],
+            )
+            .unwrap();
+            let at = match s.status {
+                Status::Stiff { t, .. } => format!("stops at t={t:.4} after {}", s.nfev),
+                _ => format!("never ({})", s.nfev),
+            };
+            row += &format!(" | {method:?}: stiff {at}; krogh {}", k.nfev);
+        }
+        println!("{row}");
+    }
+}
