@@ -141,7 +141,7 @@ pub fn fit_cells(
     let mut fit = ols(red, base, Some(prior))?;
     // The objective's unit: least squares' own residual (the noise), so that the optimum's
     // value is O(1) whatever the data's size; a fraction of the data's norm for exact data.
-    let sigma = fit.rss.sqrt().max(1e-9 * b.norm()).max(1e-300);
+    let sigma = fit.rss.sqrt().max(1e-6 * b.norm()).max(1e-300);
     let mut x = solve_qp(&a, &b, &vars.nonneg, sigma)?;
     polish(&a, &b, &vars.nonneg, &vars.ranges, &mut x);
     let pi_free = &vars.t * &x;
