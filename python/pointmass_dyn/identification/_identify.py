@@ -13,7 +13,13 @@ from .. import _core
 from ..errors import InertiaError, InvalidInputError
 from ._envelope import box_cells, envelope_boxes
 from ._filter import savgol
-from ._regressor import BaseParameters, actuated_indices, base_parameters_from, friction_flags, one_dof_joints
+from ._regressor import (
+    BaseParameters,
+    actuated_indices,
+    base_parameters_from,
+    friction_flags,
+    one_dof_joints,
+)
 
 METHODS = ("cells", "ols")
 
