@@ -65,7 +65,9 @@ def body_of(name: str, parameters, box=None) -> IdentifiedBody:
     io = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
     ic = io - m * (com @ com * np.eye(3) - np.outer(com, com))
     inside = None
-    if box is not None:
+    if hasattr(box, "contains"):  # a prism or a mesh (identification._shapes)
+        inside = bool(box.contains(com[None])[0])
+    elif box is not None:
         slack = 1e-9 * float(np.ptp(box, axis=0).max())
         inside = bool(np.all(com >= box[0] - slack) and np.all(com <= box[1] + slack))
     return IdentifiedBody(name, float(m), com, ic, p, float(np.linalg.eigvalsh(pseudo_inertia(p)).min()), inside)
@@ -221,7 +223,8 @@ def identify(
     if method == "cells":
         boxes = envelope_boxes(model, chosen, envelopes)
         for name in chosen:
-            centres, side = box_cells(boxes[name], int(cells))
+            env = boxes[name]
+            centres, side = env.cells(int(cells)) if hasattr(env, "cells") else box_cells(env, int(cells))
             cell_grids[name] = (centres, side)
             cell_args.append((links.index(name), centres, side))
     elif envelopes is not None:
