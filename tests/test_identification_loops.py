@@ -164,3 +164,26 @@ def test_replay_puts_the_identified_models_motion_beside_the_measurement(fourbar
     assert wrong.rms.max() > 10 * rep.rms.max()
     rep.plot(tmp_path / "replay.png", labels=list(m.link_names))
     assert (tmp_path / "replay.png").stat().st_size > 0
+
+
+def test_coupled_arm_actuated_regressor_is_the_virtual_work_sum():
+    """A coupling q_fore = r q_upper + c driven at the upper joint: by virtual work the
+    driving force is τ_upper + r τ_fore of the tree, so Y_a = Y_upper + r Y_fore row by row
+    (and the fit recovers the base parameters from it)."""
+    z, r = [0.0, 0.0, 1.0], 0.5
+    arm = pmd.Model()
+    arm.add_body(pmd.RigidBody(1.2, [0.2, 0, 0], np.diag([1e-3, 0.02, 0.02])), pmd.Revolute(z), name="upper")
+    arm.add_body(pmd.RigidBody(0.8, [0.15, 0.02, 0], np.diag([1e-3, 0.01, 0.01])), pmd.Revolute(z),
+                 parent="upper", translation=[0.4, 0, 0], name="fore")
+    arm.add_coupling("fore", "upper", ratio=r, offset=0.2)
+    rng = np.random.default_rng(4)
+    th, om, al = rng.uniform(-2, 2, (3, 40))
+    qs = np.c_[th, r * th + 0.2]
+    vs, acs = np.c_[om, r * om], np.c_[al, r * al]
+    tree = ident.torque_regressor(arm, qs, vs, acs, G).data.reshape(40, 2, -1)
+    act = ident.torque_regressor(arm, qs, vs, acs, G, actuated=["upper"])
+    assert record("identification: coupled arm Y_a vs virtual work", rel_err(act.data, tree[:, 0] + r * tree[:, 1])) < 1e-13
+    tau = np.array([arm.inverse_dynamics(*s, gravity=G, actuated=["upper"])[:1] for s in zip(qs, vs, acs)])
+    assert rel_err(act.torques(), tau) < 1e-13
+    res = pmd.identify(arm, (qs, vs, acs, tau), method="ols", actuated=["upper"], gravity=G)
+    assert res.structural_rank == res.base.rank and rel_err(res.base_values, res.base.of(act.values)) < 1e-9
