@@ -136,6 +136,9 @@ def test_actuated_bad_input(fourbar):
         ident.torque_regressor(m, qs, vs, acs, G, actuated=["elbow"])
     with pytest.raises(pmd.errors.InvalidInputError, match="actuated"):
         ident.torque_regressor(m, qs, vs, acs, G, actuated=[0, 0])
+    tree = pmd.load_scene("chain7").model
+    with pytest.raises(pmd.errors.InvalidInputError, match="actuated: expected None for a model without loops"):
+        ident.torque_regressor(tree, np.zeros((2, 7)), np.zeros((2, 7)), np.zeros((2, 7)), actuated=[0])
     with pytest.raises(pmd.errors.InvalidInputError, match=r"tau: expected an \(N, 1\) array"):
         pmd.identify(m, (qs, vs, acs, np.c_[tau, tau, tau]), method="ols", actuated=["crank"], gravity=G)
     with pytest.raises(pmd.errors.InvalidInputError, match="actuated"):

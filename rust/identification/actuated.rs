@@ -18,9 +18,18 @@ use crate::spatial::Vec3;
 /// rounding; a mechanism's real stiffness is far above this).
 const RANK_TOL: f64 = 1e-10;
 
-/// Checks `actuated` (v indices, distinct, at least one) against `model`.
+/// Checks `actuated` (v indices, distinct, at least one) against `model`, which must have
+/// loops or couplings (a tree's joints are each driven: `inverse_dynamics` refuses
+/// `actuated` there too).
 pub fn check_actuated(model: &Model, actuated: &[usize]) -> Result<()> {
     let nv = model.nv;
+    if !model.has_constraints() {
+        return Err(Error::arg(
+            "actuated",
+            "None for a model without loops or couplings (every joint is actuated)",
+            format!("{actuated:?}"),
+        ));
+    }
     if actuated.is_empty() {
         return Err(Error::arg(
             "actuated",
