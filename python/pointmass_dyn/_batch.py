@@ -28,6 +28,7 @@ from typing import Any, Callable
 import numpy as np
 
 from . import _core
+from ._control import controlled_runs
 from ._core import RunConfig, Scene
 from ._helpers import changed_settings, float_array
 from ._simulation import SimulationResult
@@ -206,6 +207,14 @@ def simulate_batch(
     method: str | None = None,
     dt: float | None = None,
     config: RunConfig | None = None,
+    controller: Any = None,
+    control_period: float = 0.001,
+    control: str = "torque",
+    imu: Any = None,
+    contact: bool = False,
+    noise: Any = None,
+    bias: Any = None,
+    seed: Any = None,
 ) -> BatchResult:
     """B simulations of one scene (or of a list of scenes), on ``threads`` threads (default:
     one per core), the GIL released once for the whole batch.
@@ -222,7 +231,27 @@ def simulate_batch(
     exactly what the same
     :func:`simulate` call gives; one failing run (a NaN force, a singularity) is reported in
     its own result while the others finish. ``config``: a :class:`RunConfig`, as
-    :func:`simulate`'s."""
+    :func:`simulate`'s.
+
+    ``controller``: a callable ``f(t, q, v, sensors)`` for every run, or a list of one per
+    run, sampled every ``control_period`` as in ``simulate(controller=...)`` (``control``,
+    ``imu``, ``contact``, ``noise``, ``bias``, ``seed`` as there; ``seed`` may be a list of
+    one per run). Each run is then exactly its ``simulate(..., controller=f_b)`` call, bit
+    for bit; the runs go one after another in the calling thread (a Python controller holds
+    the GIL). An exception raised by one run's controller ends that run with its trajectory
+    so far (``success`` False, the exception in its message) and the others go on."""
+    if controller is not None:
+        scenes = [scene] if isinstance(scene, Scene) else list(scene)
+        if params:
+            if len(scenes) != 1:
+                raise InvalidInputError("params: give one scene with params, or a list of scenes")
+            scenes = scenes_from_params(scenes[0], dict(params))
+        options = dict(method=method, rtol=rtol, atol=atol, dt=dt, first_step=first_step, max_step=max_step,
+                       disable=disable, t_eval=t_eval, events=events or None, max_steps=max_steps,
+                       energy=energy or None, config=config, progress=progress)  # fmt: skip
+        sensing = dict(control=control, imu=imu, contact=contact, noise=noise, bias=bias, seed=seed)
+        results = controlled_runs(scenes, t_span, controller, control_period, sensing, options, q0, v0)
+        return _batch_of(results)
     scenes = [scene] if isinstance(scene, Scene) else list(scene)
     if not scenes or not all(isinstance(s, Scene) for s in scenes):
         raise InvalidInputError("scene: expected a Scene or a non-empty list of Scenes")
@@ -307,6 +336,21 @@ def _batch_result(scenes: list[Scene], out: list[dict], t_eval: Any) -> BatchRes
         q=q,
         v=v,
         success=success,
+        status=np.array([r.status for r in results]),
+        message=[r.message for r in results],
+        t_reached=np.array([r.t_reached for r in results], dtype=float),
+        nfev=np.array([r.nfev for r in results], dtype=int),
+    )
+
+
+def _batch_of(results: list[SimulationResult]) -> BatchResult:
+    """A :class:`BatchResult` of runs made one by one (no common output times)."""
+    return BatchResult(
+        results=results,
+        t=None,
+        q=None,
+        v=None,
+        success=np.array([r.success for r in results], dtype=bool),
         status=np.array([r.status for r in results]),
         message=[r.message for r in results],
         t_reached=np.array([r.t_reached for r in results], dtype=float),

@@ -308,3 +308,68 @@ def _attach(error: BaseException, result: SimulationResult) -> None:
                        "what was computed is in this exception's .result")  # fmt: skip
     except (AttributeError, TypeError):
         pass
+
+
+def controlled_runs(
+    scenes: Sequence[Any],
+    t_span: Any,
+    controllers: Any,
+    period: float,
+    sensing: dict,
+    options: dict,
+    q0: Any = None,
+    v0: Any = None,
+) -> list[SimulationResult]:
+    """:func:`simulate_batch`'s runs with a controller: run ``b`` is exactly
+    ``simulate(scene_b, t_span, controller=f_b, ...)`` (the same loop, so bit for bit), one
+    after the other (a Python controller holds the GIL, so threads would only interleave).
+    ``controllers``: one callable for every run or a sequence of one per run; ``q0``/``v0``
+    rows and a sequence of ``seed`` values are per run too. An exception raised by run b's
+    controller (or a refused control) ends run b with its trajectory so far (``success``
+    False, the exception in ``message``) and the batch goes on; Ctrl-C stops the batch."""
+    count = len(scenes)
+    for x in (q0, v0):
+        if x is not None and np.ndim(x) == 2:
+            count = max(count, int(np.shape(x)[0]))
+    if callable(controllers):
+        controllers = [controllers] * count
+    else:
+        controllers = list(controllers)
+        if not controllers or not all(callable(f) for f in controllers):
+            raise InvalidInputError(
+                "controller: expected a callable f(t, q, v, sensors) or a list of them (one per run)"
+            )
+        count = max(count, len(controllers))
+        if len(controllers) == 1:
+            controllers = controllers * count
+    seeds = sensing.get("seed")
+    per_seed = isinstance(seeds, (list, tuple))
+    sizes = {"controller": len(controllers), "scene": len(scenes) if len(scenes) > 1 else count,
+             "seed": len(seeds) if per_seed else count}  # fmt: skip
+    for x, name in ((q0, "q0"), (v0, "v0")):
+        if x is not None and np.ndim(x) == 2:
+            sizes[name] = int(np.shape(x)[0])
+    wrong = {k: n for k, n in sizes.items() if n != count}
+    if wrong:
+        raise InvalidInputError(f"controller: expected {count} runs from every per-run argument, got {wrong}")
+    out = []
+    for b in range(count):
+        scene = scenes[b] if len(scenes) > 1 else scenes[0]
+        changes = {}
+        for x, name in ((q0, "q0"), (v0, "v0")):
+            if x is not None:
+                changes[name] = np.asarray(x, float)[b] if np.ndim(x) == 2 else x
+        if changes:
+            scene = scene.replace(**changes)
+        run_sensing = dict(sensing, seed=seeds[b] if per_seed else seeds)
+        try:
+            out.append(_controlled(scene, t_span, controllers[b], period, run_sensing, options))
+        except Exception as error:  # any controller error ends its own run only
+            res = getattr(error, "result", None)
+            if res is None:  # refused before the first step: nothing computed
+                raise
+            res.success = False
+            res.status = -1
+            res.message = f"the controller raised {type(error).__name__}: {error} (at t = {res.t_reached})"
+            out.append(res)
+    return out

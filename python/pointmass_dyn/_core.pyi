@@ -1087,10 +1087,12 @@ def identification_regressor(
     coulomb: bool = False,
     armature: bool = False,
     offset: bool = False,
+    actuated: list[int] = ...,
 ) -> _Array:
     """The joint torque regressor along N states, (N · nv, p), sample-major rows: per link
     Pinocchio's ten parameters, then per 1-dof joint the asked joint-space columns
-    (docs/identification.md)."""
+    (docs/identification.md); with ``actuated`` (v indices; required with loops) the driven
+    joints' forces, (N · na, p)."""
 
 def identification_parameters(
     model: Model, viscous: bool = False, coulomb: bool = False, armature: bool = False, offset: bool = False
@@ -1119,6 +1121,7 @@ def identification_fit(
     armature: bool,
     offset: bool,
     rank_tol: float = 1e-8,
+    actuated: list[int] = ...,
 ) -> dict[str, Any]:
     """The identification (pointmass_dyn.identification.identify builds the arguments):
     ``names``, ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``,

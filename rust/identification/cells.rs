@@ -141,8 +141,18 @@ pub fn fit_cells(
     let mut fit = ols(red, base, Some(prior))?;
     // The objective's unit: least squares' own residual (the noise), so that the optimum's
     // value is O(1) whatever the data's size; a fraction of the data's norm for exact data.
-    let sigma = fit.rss.sqrt().max(1e-9 * b.norm()).max(1e-300);
-    let mut x = solve_qp(&a, &b, &vars.nonneg, sigma)?;
+    let sigma = fit.rss.sqrt().max(1e-6 * b.norm()).max(1e-300);
+    // Clarabel can stall (InsufficientProgress) on a badly scaled objective; the same program
+    // with a coarser unit is solved, and the polish takes it to the optimum's precision.
+    let mut x = solve_qp(&a, &b, &vars.nonneg, sigma)
+        .or_else(|e| match e {
+            Error::Singular(_) => solve_qp(&a, &b, &vars.nonneg, 100.0 * sigma),
+            other => Err(other),
+        })
+        .or_else(|e| match e {
+            Error::Singular(_) => solve_qp(&a, &b, &vars.nonneg, 1e4 * sigma),
+            other => Err(other),
+        })?;
     polish(&a, &b, &vars.nonneg, &vars.ranges, &mut x);
     let pi_free = &vars.t * &x;
     fit.pi = pi_free.iter().copied().collect();

@@ -3,9 +3,10 @@
 //! structural ones), then least squares or the cells' program.
 use nalgebra::DMatrix;
 
+use super::actuated::{closed_state, joint_force_regressor};
 use super::base_parameters::{base_parameters, reduce, Base, Reduced};
 use super::cells::{fit_cells, LinkCells};
-use super::regressor::{ncolumns, parameter_names, torque_regressor, Extras};
+use super::regressor::{ncolumns, parameter_names, Extras};
 use super::solve::{ols, residual, Fit};
 use crate::error::{Error, Result};
 use crate::model::Model;
@@ -34,6 +35,9 @@ pub struct Options {
     /// Rank tolerance of the unit-norm-column QR.
     pub rank_tol: f64,
     pub method: Method,
+    /// The driven joints (v indices): `tau` holds their forces alone
+    /// ([`super::actuated::actuated_regressor`]); empty: every joint's (tree) force.
+    pub actuated: Vec<usize>,
 }
 
 #[derive(Debug, Clone)]
@@ -52,7 +56,8 @@ pub struct Identified {
     pub structural_rank: usize,
 }
 
-/// Identifies the free parameters from stacked states and joint forces `tau` (N × nv).
+/// Identifies the free parameters from stacked states and joint forces `tau` (N × nv, or
+/// N × na for the `actuated` joints).
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     model: &Model,
@@ -73,11 +78,16 @@ pub fn identify(
     }
     crate::error::check_finite("prior", &opt.prior)?;
     crate::error::check_finite("tau", tau)?;
-    let y = torque_regressor(model, q, v, a, g, &opt.extras)?;
+    let y = joint_force_regressor(model, q, v, a, g, &opt.extras, &opt.actuated)?;
     if tau.len() != y.nrows() {
+        let width = if opt.actuated.is_empty() {
+            "nv"
+        } else {
+            "na (the actuated joints)"
+        };
         return Err(Error::arg(
             "tau",
-            format!("{} values (N × nv for the N states)", y.nrows()),
+            format!("{} values (N × {width} for the N states)", y.nrows()),
             format!("{}", tau.len()),
         ));
     }
@@ -96,7 +106,7 @@ pub fn identify(
     let base = base_parameters(&red.r, opt.rank_tol);
     let names = parameter_names(model, &opt.extras);
     let free_names: Vec<String> = free.iter().map(|&c| names[c].clone()).collect();
-    let structural = structural_base(model, g, &opt.extras, &free, opt.rank_tol)?;
+    let structural = structural_base(model, g, opt, &free, q)?;
     if base.rank < structural.rank {
         return Err(unidentifiable(&base, &structural, &free_names, y.nrows()));
     }
@@ -138,16 +148,23 @@ pub fn identify(
 }
 
 /// The base parameters for a rich motion: random states (a fixed seed), enough rows for
-/// every column three times over.
+/// every column three times over. With loops or couplings, each random state is closed
+/// onto the constraints from a guess near one of the measured positions `q_data` (which are
+/// closed: the random offsets move it along the mechanism's freedom).
 fn structural_base(
     model: &Model,
     g: &Vec3,
-    extras: &Extras,
+    opt: &Options,
     free: &[usize],
-    tol: f64,
+    q_data: &[f64],
 ) -> Result<Base> {
     let (nq, nv) = (model.nq, model.nv);
-    let samples = (3 * free.len()).div_ceil(nv.max(1)) + 8;
+    let rows = if opt.actuated.is_empty() {
+        nv
+    } else {
+        opt.actuated.len()
+    };
+    let samples = (3 * free.len()).div_ceil(rows.max(1)) + 8;
     let mut seed = 0x9E37_79B9_7F4A_7C15u64;
     let mut rand = move || {
         // xorshift64*: a deterministic spread in (−1, 1).
@@ -158,18 +175,38 @@ fn structural_base(
         (x >> 11) as f64 / (1u64 << 52) as f64 - 1.0
     };
     let neutral = model.neutral();
+    // Couplings without `actuated`: the tree's forces, sampled as before (unconstrained).
+    let constrained = model.has_constraints() && !opt.actuated.is_empty();
+    let measured = q_data.len() / nq.max(1);
     let mut q = Vec::with_capacity(samples * nq);
     let (mut v, mut a) = (Vec::new(), Vec::new());
-    for _ in 0..samples {
-        let mut qk: Vec<f64> = neutral.iter().map(|x| x + 0.8 * rand()).collect();
+    for k in 0..samples {
+        let centre = if constrained && measured > 0 {
+            let s = k * measured / samples;
+            &q_data[s * nq..(s + 1) * nq]
+        } else {
+            &neutral[..]
+        };
+        let mut qk: Vec<f64> = centre.iter().map(|x| x + 0.8 * rand()).collect();
         model.normalize(&mut qk);
+        let mut vk: Vec<f64> = (0..nv).map(|_| 2.0 * rand()).collect();
+        let mut ak: Vec<f64> = (0..nv).map(|_| 5.0 * rand()).collect();
+        if constrained {
+            // Not closable from there: the measured position itself (closed already).
+            let closed = closed_state(model, &qk, &mut vk, &mut ak)
+                .or_else(|| closed_state(model, centre, &mut vk, &mut ak));
+            match closed {
+                Some(c) => qk = c,
+                None => continue,
+            }
+        }
         q.extend(qk);
-        v.extend((0..nv).map(|_| 2.0 * rand()));
-        a.extend((0..nv).map(|_| 5.0 * rand()));
+        v.extend(vk);
+        a.extend(ak);
     }
-    let y = torque_regressor(model, &q, &v, &a, g, extras)?;
+    let y = joint_force_regressor(model, &q, &v, &a, g, &opt.extras, &opt.actuated)?;
     let red: Reduced = reduce(&y, free, None, &[]);
-    Ok(base_parameters(&red.r, tol))
+    Ok(base_parameters(&red.r, opt.rank_tol))
 }
 
 /// The error for a motion that identifies fewer base parameters than the model has.

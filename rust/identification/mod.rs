@@ -3,6 +3,7 @@
 //! ([`regressor`]), the base parameters ([`base_parameters`]), least squares ([`solve`]) and
 //! the physically consistent estimate as non-negative masses on cells inside each link's
 //! envelope ([`cells`]).
+pub mod actuated;
 pub mod base_parameters;
 pub mod cells;
 pub mod identify;
@@ -10,6 +11,7 @@ pub mod model;
 pub mod regressor;
 pub mod solve;
 
+pub use actuated::{actuated_regressor, joint_force_regressor};
 pub use base_parameters::{base_parameters, reduce, Base, Reduced};
 pub use cells::{cell_parameters, LinkCells};
 pub use identify::{identify, Identified, Method, Options};

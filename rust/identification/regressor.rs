@@ -167,7 +167,8 @@ pub fn check_states(model: &Model, q: &[f64], v: &[f64], a: &[f64]) -> Result<us
 /// gravity `g`: (N · nv) × [`ncolumns`], sample-major rows (sample k's joint forces in rows
 /// `k nv .. (k+1) nv`). The joint forces of the tree: for a model with couplings, each
 /// joint's own force, as `inverse_dynamics` without `actuated`. A model with loops is
-/// refused: the regressor of its actuated forces is not built yet.
+/// refused: its joint forces depend on which joints drive it
+/// ([`super::actuated::actuated_regressor`]).
 pub fn torque_regressor(
     model: &Model,
     q: &[f64],
@@ -178,11 +179,23 @@ pub fn torque_regressor(
 ) -> Result<DMatrix<f64>> {
     if !model.loops.is_empty() {
         return Err(Error::arg(
-            "model",
-            "a tree (the regressor of a mechanism with loops is not available yet)",
-            format!("a model with {} loop(s)", model.loops.len()),
+            "actuated",
+            "the driven joints of a mechanism with loops (its joint forces depend on which joints drive it)",
+            format!("none, for a model with {} loop(s)", model.loops.len()),
         ));
     }
+    tree_regressor(model, q, v, a, g, extras)
+}
+
+/// [`torque_regressor`] of the spanning tree, loops or not (the cut joints' forces left out).
+pub(super) fn tree_regressor(
+    model: &Model,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    extras: &Extras,
+) -> Result<DMatrix<f64>> {
     let samples = check_states(model, q, v, a)?;
     let (nq, nv) = (model.nq, model.nv);
     let cols = ncolumns(model, extras);

@@ -18,9 +18,10 @@ fn extras(viscous: bool, coulomb: bool, armature: bool, offset: bool) -> Extras 
     }
 }
 
-/// The joint torque regressor along N states: (N · nv, p), sample-major rows.
+/// The joint torque regressor along N states: (N · nv, p), sample-major rows; with
+/// `actuated` (v indices) the driven joints' forces, (N · na, p).
 #[pyfunction]
-#[pyo3(signature = (model, q, v, a, gravity=None, viscous=false, coulomb=false, armature=false, offset=false))]
+#[pyo3(signature = (model, q, v, a, gravity=None, viscous=false, coulomb=false, armature=false, offset=false, actuated=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 pub fn identification_regressor<'py>(
     py: Python<'py>,
@@ -33,13 +34,14 @@ pub fn identification_regressor<'py>(
     coulomb: bool,
     armature: bool,
     offset: bool,
+    actuated: Vec<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let model = model.model();
     let g = gravity_arg(py, gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
     let ex = extras(viscous, coulomb, armature, offset);
     let y = detach_interruptible(py, || {
-        ident::torque_regressor(&model, &qs, &vs, &accs, &g, &ex)
+        ident::joint_force_regressor(&model, &qs, &vs, &accs, &g, &ex, &actuated)
     })?;
     check_result(py, "torque regressor", y.as_slice())?;
     dmatrix_to_array(py, &y)
@@ -106,7 +108,7 @@ fn base_dict<'py>(py: Python<'py>, base: &ident::Base) -> PyResult<Bound<'py, Py
 /// The identification (crate::identification::identify); `cells`: a list of
 /// `(link index, centres (K, 3), side)` for method "cells".
 #[pyfunction]
-#[pyo3(signature = (model, q, v, a, tau, gravity, method, free, prior, prior_weight, weights, cells, viscous, coulomb, armature, offset, rank_tol=1e-8))]
+#[pyo3(signature = (model, q, v, a, tau, gravity, method, free, prior, prior_weight, weights, cells, viscous, coulomb, armature, offset, rank_tol=1e-8, actuated=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
 pub fn identification_fit<'py>(
     py: Python<'py>,
@@ -127,6 +129,7 @@ pub fn identification_fit<'py>(
     armature: bool,
     offset: bool,
     rank_tol: f64,
+    actuated: Vec<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = model.model();
     let g = gravity_arg(py, gravity)?;
@@ -162,6 +165,7 @@ pub fn identification_fit<'py>(
         weights,
         rank_tol,
         method,
+        actuated,
     };
     let out = detach_interruptible(py, || {
         ident::identify(&model, &qs, &vs, &accs, &taus, &g, &opt)

@@ -13,6 +13,7 @@ from ._identify import (
     pseudo_inertia,
 )
 from ._regressor import BaseParameters, Regressor, base_parameters, one_dof_joints, torque_regressor
+from ._replay import Replay, plot_replay, replay
 from ._validate import Validation, predict_torques, validate
 
 __all__ = [
@@ -21,6 +22,7 @@ __all__ = [
     "Identification",
     "IdentifiedBody",
     "Regressor",
+    "Replay",
     "Validation",
     "base_parameters",
     "body_of",
@@ -29,8 +31,10 @@ __all__ = [
     "identify",
     "measured_states",
     "one_dof_joints",
+    "plot_replay",
     "predict_torques",
     "pseudo_inertia",
+    "replay",
     "savgol",
     "torque_regressor",
     "validate",

@@ -10,6 +10,7 @@ import numpy as np
 
 from .._collision import GeometryUnreadable, mesh_vertices
 from ..errors import InvalidInputError
+from ._shapes import envelope_of
 
 _UNIT_BOX = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], float)
 
@@ -71,10 +72,11 @@ def visual_boxes(model) -> dict[str, np.ndarray]:
     return {k: np.array([np.min(np.vstack(v), 0), np.max(np.vstack(v), 0)]) for k, v in pts.items()}
 
 
-def envelope_boxes(model, links: list[str], envelopes) -> dict[str, np.ndarray]:
-    """The box of every link in ``links``: ``envelopes[link]`` ((2, 3) lower and upper
-    corners) where given, else the bounds of its visuals; an error naming the link when it
-    has neither."""
+def envelope_boxes(model, links: list[str], envelopes) -> dict:
+    """The envelope of every link in ``links``: ``envelopes[link]`` where given ((2, 3) lower
+    and upper corners; a prism ``{"polygon": (P, 2), "z": (low, high)}`` or a mesh
+    ``{"stl": path or (T, 3, 3)}`` / an STL path, as ``_shapes`` objects), else the bounds of
+    its visuals; an error naming the link when it has neither."""
     given = dict(envelopes or {})
     unknown = [k for k in given if k not in model.link_names]
     if unknown:
@@ -83,6 +85,10 @@ def envelope_boxes(model, links: list[str], envelopes) -> dict[str, np.ndarray]:
     out = {}
     for k in links:
         box = given.get(k, auto.get(k))
+        shape = envelope_of(k, box) if k in given else None
+        if shape is not None:
+            out[k] = shape
+            continue
         if box is None:
             raise InvalidInputError(
                 f"envelopes: expected a box for link '{k}' (it has no visual geometry to bound), got none"

@@ -13,7 +13,13 @@ from .. import _core
 from ..errors import InertiaError, InvalidInputError
 from ._envelope import box_cells, envelope_boxes
 from ._filter import savgol
-from ._regressor import BaseParameters, base_parameters_from, friction_flags, one_dof_joints
+from ._regressor import (
+    BaseParameters,
+    actuated_indices,
+    base_parameters_from,
+    friction_flags,
+    one_dof_joints,
+)
 
 METHODS = ("cells", "ols")
 
@@ -59,7 +65,9 @@ def body_of(name: str, parameters, box=None) -> IdentifiedBody:
     io = np.array([[p[4], p[5], p[7]], [p[5], p[6], p[8]], [p[7], p[8], p[9]]])
     ic = io - m * (com @ com * np.eye(3) - np.outer(com, com))
     inside = None
-    if box is not None:
+    if hasattr(box, "contains"):  # a prism or a mesh (identification._shapes)
+        inside = bool(box.contains(com[None])[0])
+    elif box is not None:
         slack = 1e-9 * float(np.ptp(box, axis=0).max())
         inside = bool(np.all(com >= box[0] - slack) and np.all(com <= box[1] + slack))
     return IdentifiedBody(name, float(m), com, ic, p, float(np.linalg.eigvalsh(pseudo_inertia(p)).min()), inside)
@@ -93,6 +101,7 @@ class Identification:
     model_error: str | None = None
     cells: dict[str, tuple[np.ndarray, np.ndarray, float]] = field(default_factory=dict)
     structural_rank: int = 0
+    actuated: tuple[int, ...] = ()
 
     @property
     def physical(self) -> bool:
@@ -116,10 +125,12 @@ def _array(value, arg: str, width: int | None) -> np.ndarray:
     return x
 
 
-def measured_states(model, data, window: int | None = None, order: int = 3):
+def measured_states(model, data, window: int | None = None, order: int = 3, width: int | None = None):
     """``(q, v, a, tau)`` from ``data``: ``(q, v, a, tau)`` as given, or ``(t, q, tau)`` with
     ``v`` and ``a`` from a Savitzky–Golay fit (see ``_filter``) and ``tau`` smoothed by the
-    same zero-phase filter. A dict with keys ``t, q, tau`` or ``q, v, a, tau`` works too."""
+    same zero-phase filter. A dict with keys ``t, q, tau`` or ``q, v, a, tau`` works too.
+    ``tau`` is (N, ``width``): nv by default, the number of actuated joints with them."""
+    tw = model.nv if width is None else width
     if isinstance(data, dict):
         keys = ("q", "v", "a", "tau") if "v" in data else ("t", "q", "tau")
         missing = [k for k in keys if k not in data]
@@ -130,11 +141,12 @@ def measured_states(model, data, window: int | None = None, order: int = 3):
         raise InvalidInputError("data: expected (t, q, tau) or (q, v, a, tau), got " + type(data).__name__)
     if len(data) == 4:
         q = _array(data[0], "q", model.nq)
-        v, a, tau = (_array(x, k, model.nv) for x, k in zip(data[1:], ("v", "a", "tau")))
+        v, a = (_array(x, k, model.nv) for x, k in zip(data[1:3], ("v", "a")))
+        tau = _array(data[3], "tau", tw)
     else:
         t = _array(data[0], "t", None)
         q = _array(data[1], "q", model.nq)
-        tau = _array(data[2], "tau", model.nv)
+        tau = _array(data[2], "tau", tw)
         if model.nq != model.nv:
             raise InvalidInputError("data: (t, q, tau) needs nq == nv (no quaternion joints); give (q, v, a, tau)")
         if not (len(t) == len(q) == len(tau)):
@@ -184,6 +196,7 @@ def identify(
     gravity=None,
     window: int | None = None,
     rank_tol: float = 1e-8,
+    actuated=None,
 ) -> Identification:
     """Identifies the inertial parameters of ``bodies`` (link names; all by default) and,
     when asked, ``friction`` (True, "viscous", "coulomb") per 1-dof joint, ``armature`` and
@@ -193,32 +206,37 @@ def identify(
     parameter vector (default: ``model``'s own values) for the links not identified and, with
     ``prior_weight`` > 0, as a pull (cells). ``noise``: each joint's torque noise σ (one
     number or nv), weighting the rows by 1/σ. A motion that cannot identify all the model's
-    base parameters raises, naming the ones it misses."""
+    base parameters raises, naming the ones it misses. ``actuated`` (v indices or link names;
+    required with loops): ``tau`` holds those joints' driving forces alone, (N, na), and
+    ``noise`` is one σ per actuated joint."""
     if method not in METHODS:
         raise InvalidInputError(f"method: expected one of {METHODS}, got {method!r}")
-    q, v, a, tau = measured_states(model, data, window)
+    act = actuated_indices(model, actuated)
+    rows = len(act) if act else model.nv
+    q, v, a, tau = measured_states(model, data, window, width=rows)
     flags, names, values, free, chosen = _columns(model, bodies, friction, armature, offset)
     if prior is not None:
         values = _prior(prior, names, flags, armature, offset)
-    weights = _weights(noise, model.nv)
+    weights = _weights(noise, rows)
     links = list(model.link_names)
     boxes, cell_args, cell_grids = {}, [], {}
     if method == "cells":
         boxes = envelope_boxes(model, chosen, envelopes)
         for name in chosen:
-            centres, side = box_cells(boxes[name], int(cells))
+            env = boxes[name]
+            centres, side = env.cells(int(cells)) if hasattr(env, "cells") else box_cells(env, int(cells))
             cell_grids[name] = (centres, side)
             cell_args.append((links.index(name), centres, side))
     elif envelopes is not None:
         boxes = envelope_boxes(model, chosen, envelopes)
     out = _core.identification_fit(
         model, q, v, a, tau.reshape(-1), gravity, method, list(map(bool, free)), list(map(float, values)),
-        float(prior_weight), list(weights), cell_args, flags[0], flags[1], armature, offset, rank_tol,
+        float(prior_weight), list(weights), cell_args, flags[0], flags[1], armature, offset, rank_tol, act,
     )
     free_names = [names[i] for i in out["free"]]
     base = base_parameters_from(out["base"], free_names, len(free_names))
     pi = np.asarray(out["pi"])
-    residuals = np.asarray(out["residuals"]).reshape(-1, model.nv)
+    residuals = np.asarray(out["residuals"]).reshape(-1, rows)
     bodies_out = {n: body_of(n, pi[10 * links.index(n) : 10 * links.index(n) + 10], boxes.get(n)) for n in chosen}
     joints = [links[_link_of(model, j)] for j in one_dof_joints(model)]
     extra = {k: {} for k in ("fv", "fc", "armature", "offset")}
@@ -232,7 +250,7 @@ def identify(
     return Identification(
         method, names, pi, base, np.asarray(out["beta"]), np.asarray(out["std"]), float(out["condition"]),
         residuals, np.sqrt(np.mean(residuals**2, axis=0)), bodies_out, friction_out, extra["armature"],
-        extra["offset"], ident_model, err, masses, int(out["structural_rank"]),
+        extra["offset"], ident_model, err, masses, int(out["structural_rank"]), tuple(act),
     )
 
 

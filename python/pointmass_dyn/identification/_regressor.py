@@ -39,12 +39,14 @@ def friction_flags(friction) -> tuple[bool, bool]:
 class Regressor:
     """``data`` (N · nv, p), sample-major (sample k's joint forces in rows ``k nv … (k+1)
     nv − 1``); ``names`` of the p columns; ``values`` the model's own value of each column
-    (friction and offsets zero)."""
+    (friction and offsets zero). With ``actuated`` (v indices) the rows are those joints'
+    driving forces and ``nv`` is their number."""
 
     data: np.ndarray
     names: list[str]
     values: np.ndarray
     nv: int
+    actuated: tuple[int, ...] = ()
 
     def torques(self, parameters=None) -> np.ndarray:
         """``Y π`` as (N, nv) (the model's own parameters by default)."""
@@ -52,23 +54,57 @@ class Regressor:
         return (self.data @ pi).reshape(-1, self.nv)
 
 
+def actuated_indices(model, actuated) -> list[int]:
+    """v indices of ``actuated`` (v indices or link names of 1-dof joints); [] for None."""
+    if actuated is None:
+        return []
+    items = [actuated] if isinstance(actuated, (str, int, np.integer)) else list(actuated)
+    links = list(model.link_names)
+    slices = model.joint_slices()
+    out = []
+    for x in items:
+        if isinstance(x, str):
+            if x not in links or slices[links.index(x)][3] != 1:
+                raise InvalidInputError(
+                    f"actuated: expected v indices or names of links with a 1-dof joint {links}, got {x!r}"
+                )
+            out.append(int(slices[links.index(x)][1]))
+        elif isinstance(x, (int, np.integer)) and not isinstance(x, bool) and 0 <= x < model.nv:
+            out.append(int(x))
+        else:
+            raise InvalidInputError(f"actuated: expected v indices below {model.nv} or link names, got {x!r}")
+    return out
+
+
 def torque_regressor(
-    model, q, v, a, gravity=None, friction=None, armature: bool = False, offset: bool = False
+    model,
+    q,
+    v,
+    a,
+    gravity=None,
+    friction=None,
+    armature: bool = False,
+    offset: bool = False,
+    actuated=None,
 ) -> Regressor:
     """The joint torque regressor along N states (``q`` (N, nq), ``v``, ``a`` (N, nv)), one
     call for all of them. ``Y π`` is :meth:`Model.inverse_dynamics` (plus the friction,
-    armature and offset columns' terms)."""
+    armature and offset columns' terms). ``actuated`` (v indices or link names; required with
+    loops): the regressor of those joints' driving forces, ``Y_a = P(q) Y`` with ``P`` the
+    actuated rows of ``[S_a | Jᵀ]⁺``, so ``Y_a π`` is ``inverse_dynamics(..., actuated)`` at
+    those joints (docs/identification.md §7)."""
     viscous, coulomb = friction_flags(friction)
     q = np.atleast_2d(np.asarray(q, float))
     v = np.atleast_2d(np.asarray(v, float))
     a = np.atleast_2d(np.asarray(a, float))
-    y = _core.identification_regressor(model, q, v, a, gravity, viscous, coulomb, armature, offset)
+    act = actuated_indices(model, actuated)
+    y = _core.identification_regressor(model, q, v, a, gravity, viscous, coulomb, armature, offset, act)
     names, values = _core.identification_parameters(model, viscous, coulomb, armature, offset)
     if armature:
         arm = np.asarray(model.armature, float)
         one = [i for i, n in enumerate(names) if n.endswith(".armature")]
         values[one] = arm[one_dof_joints(model)]
-    return Regressor(y, names, values, model.nv)
+    return Regressor(y, names, values, len(act) if act else model.nv, tuple(act))
 
 
 def one_dof_joints(model) -> np.ndarray:
