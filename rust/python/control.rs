@@ -3,12 +3,11 @@
 use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use super::convert::{to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{invalid, IntoPyResult};
-use super::run_config::call_config;
+use super::run_config::config_of;
 use super::scene::PyScene;
 use super::trajectory::PyRunResult;
 use crate::control::{ControlKind, Imu, OwnedSimulator, Simulator};
@@ -67,25 +66,20 @@ impl PySimulator {
         let period = control_period;
         // The run configuration `simulate` reads (the same checks, the same precedence over
         // the scene's settings); the Simulator steps on from `t0` without an end.
-        let given = PyDict::new(py);
-        for (key, value) in [
-            (
-                "method",
-                method
-                    .map(|m| m.into_pyobject(py).map(|o| o.into_any()))
-                    .transpose()?,
-            ),
-            ("dt", dt.cloned()),
-            ("disable", disable.cloned()),
-            ("first_step", first_step.cloned()),
-            ("max_step", max_step.cloned()),
-        ] {
-            if let Some(v) = value.filter(|v| !v.is_none()) {
-                given.set_item(key, v)?;
-            }
-        }
+        let method = method.map(|m| pyo3::types::PyString::new(py, m).into_any());
+        let call = config_of(
+            py,
+            &[
+                ("method", method.as_ref()),
+                ("rtol", rtol),
+                ("atol", atol),
+                ("dt", dt),
+                ("disable", disable),
+                ("first_step", first_step),
+                ("max_step", max_step),
+            ],
+        )?;
         let dim = s.model.nq + s.model.nv;
-        let call = call_config(py, None, None, rtol, atol, Some(&given))?;
         let named = call.method.is_some() || s.settings.method.is_some();
         let run = RunConfig {
             t_span: Some((t0, t0)),

@@ -63,6 +63,37 @@ impl From<&Settings> for RunConfig {
     }
 }
 
+impl RunConfig {
+    /// A scene's settings (`base`) with the ones this config states replaced, checked
+    /// (`Settings::check`): the scene's constructor and `replace` parse their keywords as
+    /// `RunConfig`'s. A scene holds the settings a file can state: one tolerance for every
+    /// component, no output times or recording.
+    pub fn onto_scene(self, base: Settings) -> Result<Settings> {
+        let scalar = |tol: Option<Tol>, arg: &str| match tol {
+            None => Ok(None),
+            Some(Tol::Scalar(x)) => Ok(Some(x)),
+            Some(Tol::PerComponent(v)) => Err(Error::arg(
+                arg,
+                "a number (a scene's tolerance holds for every component)",
+                format!("{} values", v.len()),
+            )),
+        };
+        let settings = Settings {
+            t_span: self.t_span.or(base.t_span),
+            rtol: scalar(self.rtol, "rtol")?.or(base.rtol),
+            atol: scalar(self.atol, "atol")?.or(base.atol),
+            max_step: self.max_step.or(base.max_step),
+            max_steps: self.max_steps.or(base.max_steps),
+            first_step: self.first_step.or(base.first_step),
+            disable: self.disable.or(base.disable),
+            method: self.method.or(base.method),
+            dt: self.dt.or(base.dt),
+        };
+        settings.check()?;
+        Ok(settings)
+    }
+}
+
 /// The effect families to leave out: the caller's, else the scene's, else none.
 pub fn disabled(caller: Option<Disabled>, scene: &Settings) -> Disabled {
     caller.or(scene.disable).unwrap_or_default()
