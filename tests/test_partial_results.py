@@ -5,6 +5,8 @@ run uninterrupted or against what the stop must be."""
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
@@ -382,6 +384,12 @@ def test_a_contact_run_stopped_by_progress_says_interrupted_not_failed(method):
     assert status.t == r.t_reached == r.t[-1] and status.at >= status.t
     assert status.reason == "Ctrl-C (or a KeyboardInterrupt raised by progress)"
     assert f"{status.at:.6g}" in r.message or str(status.at) in r.message
+    # It travels with the result (pickle, copies): the same variant and fields.
+    back = pickle.loads(pickle.dumps(r))
+    assert type(back.outcome) is type(status) and repr(back.outcome) == repr(status)
+    assert (back.outcome.t, back.outcome.at, back.outcome.reason) == (
+        status.t, status.at, status.reason)
+    assert repr(status).startswith("RunStatus.Interrupted(t=")
 
 
 def test_a_nan_torque_is_a_typed_failure_at_its_time():

@@ -940,7 +940,10 @@ class _Simulator:
 
 class RunStatus:
     """How a run ended, one variant per cause (``isinstance(s, RunStatus.Interrupted)``):
-    ``t`` the time reached, ``at`` where the failure or interruption happened."""
+    ``t`` the time reached, ``at`` where the failure or interruption happened. Shown as
+    ``RunStatus.Interrupted(t=..., at=..., reason=...)``; pickles."""
+
+    __match_args__: ClassVar[tuple[str, ...]]
 
     class Success(RunStatus): ...
     class TerminalEvent(RunStatus):

@@ -65,6 +65,46 @@ pub enum PyRunStatus {
     },
 }
 
+#[pymethods]
+impl PyRunStatus {
+    /// `RunStatus.Interrupted(t=0.5, at=0.51, reason='...')`: the variant and its fields.
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let (name, args) = Self::variant(slf)?;
+        let fields: Vec<String> = Self::fields(slf)?
+            .into_iter()
+            .zip(args.iter())
+            .map(|(f, v)| Ok(format!("{f}={}", v.repr()?)))
+            .collect::<PyResult<_>>()?;
+        Ok(format!("RunStatus.{name}({})", fields.join(", ")))
+    }
+
+    /// Pickled as its variant called with its fields (a result's `outcome` travels with it).
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, pyo3::types::PyTuple>)> {
+        Ok((slf.as_any().get_type().into_any(), Self::variant(slf)?.1))
+    }
+}
+
+impl PyRunStatus {
+    /// The variant's field names, in its constructor's order.
+    fn fields(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
+        slf.as_any().get_type().getattr("__match_args__")?.extract()
+    }
+
+    /// The variant's name and its fields' values.
+    fn variant<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(String, Bound<'py, pyo3::types::PyTuple>)> {
+        let values = Self::fields(slf)?
+            .iter()
+            .map(|f| slf.as_any().getattr(f.as_str()))
+            .collect::<PyResult<Vec<_>>>()?;
+        let name = slf.as_any().get_type().name()?.to_string();
+        Ok((name, pyo3::types::PyTuple::new(slf.py(), values)?))
+    }
+}
+
 impl From<&Status> for PyRunStatus {
     fn from(s: &Status) -> Self {
         match s.clone() {
