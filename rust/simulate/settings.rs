@@ -215,6 +215,42 @@ mod tests {
     }
 
     #[test]
+    fn a_config_onto_a_scene_replaces_what_it_states_and_keeps_the_rest() {
+        let config = RunConfig {
+            rtol: Some(Tol::Scalar(1e-9)),
+            method: Some(Method::Dop853),
+            max_step: None,
+            energy: Some(true), // not a scene's: dropped
+            ..Default::default()
+        };
+        let s = config.onto_scene(scene()).unwrap();
+        assert_eq!(s.rtol, Some(1e-9));
+        assert_eq!(s.method, Some(Method::Dop853));
+        let kept = Settings {
+            rtol: Some(1e-9),
+            method: Some(Method::Dop853),
+            ..scene()
+        };
+        assert_eq!(s, kept);
+        // One tolerance per component is a run's, not a scene's; bad values are refused
+        // by the scene's own check, naming the setting.
+        let per = RunConfig {
+            atol: Some(Tol::PerComponent(vec![1e-6, 1e-7])),
+            ..Default::default()
+        };
+        let arg = |e: Error| match e {
+            Error::InvalidArgument { arg, .. } => arg,
+            other => panic!("{other}"),
+        };
+        assert_eq!(arg(per.onto_scene(scene()).unwrap_err()), "atol");
+        let negative = RunConfig {
+            rtol: Some(Tol::Scalar(-1.0)),
+            ..Default::default()
+        };
+        assert_eq!(arg(negative.onto_scene(scene()).unwrap_err()), "rtol");
+    }
+
+    #[test]
     fn the_caller_beats_the_scene_which_beats_the_default() {
         let caller = RunConfig {
             t_span: Some((1.0, 0.0)),
