@@ -592,11 +592,14 @@ def spring_scene(k, c):
 def test_stiff_joint_spring_scene_is_reported(k, c, lam):
     scene = spring_scene(k, c)
     stop = pmd._core.simulate_scene(scene, (0.0, 2.0), 1e-6, 1e-6, stiffness="stop")
-    assert stop["status"] == -1 and "the problem is stiff" in stop["message"]
-    est = float(re.search(r", \|λ\| ≈ ([0-9.e+-]+)\)", stop["message"]).group(1))
+    assert stop.status == -1 and "the problem is stiff" in stop.message
+    # The typed status carries the same estimate the message prints.
+    assert isinstance(stop.outcome, pmd.RunStatus.Stiff)
+    est = float(re.search(r", \|λ\| ≈ ([0-9.e+-]+)\)", stop.message).group(1))
+    assert est == pytest.approx(stop.outcome.h_lambda / stop.outcome.h, rel=1e-3)
     record(f"stiff spring k={k:g}: |λ| estimate / expected", est / lam)
     assert 0.5 < est / lam < 2.5
-    n = stop["n_accepted"]
+    n = stop.n_accepted
     assert n < 20000
     # Default (warn): the run goes on, and when it runs out of steps it says why.
     r = pmd.simulate(scene, (0.0, 2.0), rtol=1e-6, atol=1e-6, max_steps=n + 500)

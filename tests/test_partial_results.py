@@ -5,6 +5,8 @@ run uninterrupted or against what the stop must be."""
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
@@ -52,6 +54,12 @@ def _check_partial_batch(scene, q0, kw, batch):
         r = batch.results[k]
         assert batch.status[k] == -1
         assert "interrupted" in r.message or "stopped before this run started" in r.message
+        # The typed status says the same: stopped midway (time reached, where) or never run.
+        if isinstance(r.outcome, pmd.RunStatus.Interrupted):
+            assert r.outcome.t == r.t_reached and r.outcome.at >= r.outcome.t
+        else:
+            assert isinstance(r.outcome, pmd.RunStatus.NotStarted) and len(r.t) == 0
+            assert r.outcome.reason == r.message
         if len(r.t):
             assert r.t[-1] == pytest.approx(r.t_reached) and r.t_reached < 50
 
@@ -369,6 +377,34 @@ def test_a_contact_run_stopped_by_progress_says_interrupted_not_failed(method):
     assert r.message.startswith("interrupted at t = ") and "failed" not in r.message
     assert "Ctrl-C (or a KeyboardInterrupt raised by progress)" in r.message
     assert 0 < r.t_reached < 30
+    # Typed end to end: the variant, the time reached (the trajectory's last), the place the
+    # progress hook stopped the run (at or after it) and the reason, no message to parse.
+    status = r.outcome
+    assert isinstance(status, pmd.RunStatus.Interrupted) and r.status == -1
+    assert status.t == r.t_reached == r.t[-1] and status.at >= status.t
+    assert status.reason == "Ctrl-C (or a KeyboardInterrupt raised by progress)"
+    assert f"{status.at:.6g}" in r.message or str(status.at) in r.message
+    # It travels with the result (pickle, copies): the same variant and fields.
+    back = pickle.loads(pickle.dumps(r))
+    assert type(back.outcome) is type(status) and repr(back.outcome) == repr(status)
+    assert (back.outcome.t, back.outcome.at, back.outcome.reason) == (
+        status.t, status.at, status.reason)
+    assert repr(status).startswith("RunStatus.Interrupted(t=")
+
+
+def test_a_nan_torque_is_a_typed_failure_at_its_time():
+    # Finite up to t = 0.2, NaN past it: the run fails at the first evaluation past 0.2,
+    # reaching at most that time.
+    scene = chain_scene(3, [pmd.TorqueFunction(
+        lambda t, q, v: np.full(3, np.nan) if t > 0.2 else np.zeros(3))])
+    r = pmd.simulate(scene, (0.0, 1.0))
+    assert not r.success and r.status == -1
+    status = r.outcome
+    assert isinstance(status, (pmd.RunStatus.NonFinite, pmd.RunStatus.RhsError)), status
+    assert status.at > 0.2 and status.t == r.t_reached == r.t[-1] <= status.at
+    assert not isinstance(pmd.simulate(chain_scene(3), (0.0, 1.0)).outcome,
+                          (pmd.RunStatus.NonFinite, pmd.RunStatus.RhsError))
+    assert isinstance(pmd.simulate(chain_scene(3), (0.0, 1.0)).outcome, pmd.RunStatus.Success)
 
 
 def test_a_batch_stopped_by_progress_names_the_real_reason():

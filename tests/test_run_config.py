@@ -91,3 +91,28 @@ def test_bad_settings_name_their_argument():
         pmd.simulate(pendulum(), (0.0, 1.0), config=pmd.RunConfig(atol=[1e-6] * 3))
     with pytest.raises(pmd.InvalidInputError, match="t_span"):
         pmd.simulate(pendulum(), config=pmd.RunConfig(rtol=1e-6))
+
+
+@pytest.mark.parametrize("key, bad", [
+    ("rtol", "tight"), ("max_step", "big"), ("method", "RK99"), ("t_span", (1.0, 1.0)),
+    ("disable", ["gravity", "wind"]), ("dt", "small"),
+])
+def test_a_scene_and_a_config_read_a_setting_alike(key, bad):
+    # One parser for the run settings: a scene refuses what RunConfig refuses, in its words.
+    with pytest.raises(pmd.InvalidInputError) as config:
+        pmd.RunConfig(**{key: bad})
+    with pytest.raises(pmd.InvalidInputError) as scene:
+        pendulum(**{key: bad})
+    assert str(scene.value) == str(config.value) and str(config.value).startswith(key)
+    with pytest.raises(pmd.InvalidInputError) as replaced:
+        pendulum().replace(**{key: bad})
+    assert str(replaced.value) == str(config.value)
+
+
+def test_a_scene_holds_one_tolerance_for_every_component():
+    # A run config may hold one per state component; a scene (as its file) one number.
+    assert pmd.RunConfig(rtol=[1e-6, 1e-7]).rtol.shape == (2,)
+    with pytest.raises(pmd.InvalidInputError, match=r"^rtol: expected a number .*got 2 values"):
+        pendulum(rtol=[1e-6, 1e-7])
+    assert pendulum(rtol=1e-7, max_step=np.inf).rtol == 1e-7
+    assert pendulum(max_step=np.inf).max_step is None

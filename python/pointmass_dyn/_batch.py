@@ -31,7 +31,7 @@ from . import _core
 from ._control import controlled_runs
 from ._core import RunConfig, Scene
 from ._helpers import changed_settings, float_array
-from ._simulation import SimulationResult
+from ._simulation import SimulationResult, result_from_run
 from .errors import (
     InvalidInputError,
     OutOfMemoryError,
@@ -298,18 +298,13 @@ def simulate_batch(
     return batch
 
 
-def _batch_result(scenes: list[Scene], out: list[dict], t_eval: Any) -> BatchResult:
-    """The core's per-run dicts as a :class:`BatchResult` (the runs a stopped batch cut
-    short name what stopped it in their messages: the bindings put it there)."""
+def _batch_result(scenes: list[Scene], out: list, t_eval: Any) -> BatchResult:
+    """The core's per-run ``RunResult``s as a :class:`BatchResult` (the runs a stopped batch
+    cut short name what stopped it in their messages: the bindings put it there; a run that
+    could not start is ``RunStatus.NotStarted``)."""
     names = [s.name for s in scenes]
-    results = []
-    for k, d in enumerate(out):
-        name = names[0] if len(names) == 1 else names[k]
-        error = d.pop("error")
-        if "t" not in d:
-            results.append(_failed(name, error, d.get("message")))
-        else:
-            results.append(SimulationResult(scene=name, **d))
+    results = [result_from_run(run, names[0] if len(names) == 1 else names[k])
+               for k, run in enumerate(out)]
     passed = [k for k, r in enumerate(results) if r.singular_passage is not None]
     if passed:
         # One warning for the batch, naming the runs (simulate warns per run).
@@ -377,23 +372,3 @@ def _with_batch(error: BaseException, batch: BatchResult) -> BaseException:
         pass
     return error
 
-
-def _failed(name: str, error: BaseException, message: str | None = None) -> SimulationResult:
-    """The result of a run that could not start (its input was refused)."""
-    return SimulationResult(
-        t=np.zeros(0),
-        q=np.zeros((0, 0)),
-        v=np.zeros((0, 0)),
-        energy=None,
-        t_events=[],
-        q_events=[],
-        v_events=[],
-        nfev=0,
-        n_accepted=0,
-        n_rejected=0,
-        status=-1,
-        message=message or f"{type(error).__name__}: {error}",
-        success=False,
-        t_reached=float("nan"),
-        scene=name,
-    )

@@ -11,7 +11,7 @@ import numpy as np
 
 from . import _core
 from ._contact import contact_forces
-from ._simulation import SimulationResult
+from ._simulation import SimulationResult, result_from_run
 from ._simulation import simulate as _simulate
 from .errors import InvalidInputError, SimulationError
 
@@ -218,8 +218,7 @@ class Simulator:
     def result(self) -> SimulationResult:
         """Everything so far (every accepted step, with ``record=True``) as ``simulate``
         returns it."""
-        out = self._core.trajectory()
-        return SimulationResult(scene=self.scene.name, **out)
+        return result_from_run(self._core.trajectory(), self.scene.name)
 
 
 def simulate(

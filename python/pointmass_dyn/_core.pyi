@@ -934,9 +934,86 @@ class _Simulator:
     def set_state(self, q: ArrayLike, v: ArrayLike) -> None: ...
     def advance(self, target: float) -> str | None:
         """Advances to ``target``; None, or the message of the failure that ended the run."""
-    def trajectory(self) -> dict[str, Any]: ...
+    def trajectory(self) -> RunResult: ...
     def joint_torques(self) -> _Array: ...
     def imu(self, imus: Sequence[tuple[int, ArrayLike, ArrayLike]]) -> _Array: ...
+
+class RunStatus:
+    """How a run ended, one variant per cause (``isinstance(s, RunStatus.Interrupted)``):
+    ``t`` the time reached, ``at`` where the failure or interruption happened. Shown as
+    ``RunStatus.Interrupted(t=..., at=..., reason=...)``; pickles."""
+
+    __match_args__: ClassVar[tuple[str, ...]]
+
+    class Success(RunStatus): ...
+    class TerminalEvent(RunStatus):
+        event: int
+        t: float
+    class StepTooSmall(RunStatus):
+        t: float
+        min_step: float
+    class NewtonFailed(RunStatus):
+        t: float
+        min_step: float
+        singular: bool
+    class MaxSteps(RunStatus):
+        t: float
+        max_steps: int
+    class NonFinite(RunStatus):
+        t: float
+        at: float
+        what: Literal["derivative", "state", "jacobian"]
+    class RhsError(RunStatus):
+        t: float
+        at: float
+        message: str
+    class EventNaN(RunStatus):
+        t: float
+        at: float
+        event: int
+    class Stiff(RunStatus):
+        t: float
+        h_lambda: float
+        h: float
+    class Interrupted(RunStatus):
+        t: float
+        at: float
+        reason: str | None
+    class NotStarted(RunStatus):
+        reason: str
+
+@final
+class RunResult:
+    """One run's trajectory and outcome: the fields of ``pointmass_dyn.SimulationResult``
+    of the same names (``outcome`` the typed status, ``status`` its SciPy code), and
+    ``error``: the exception that stopped the run from Python, or None."""
+
+    t: _Array
+    q: _Array
+    v: _Array
+    energy: _Array | None
+    constraint_residual: _Array | None
+    constraint_drift: float | None
+    singular_passage: tuple[float, float] | None
+    singular_crossings: tuple[int, float | None] | None
+    power: dict[str, _Array] | None
+    t_events: list[_Array]
+    q_events: list[_Array]
+    v_events: list[_Array]
+    nfev: int
+    njev: int
+    nlu: int
+    n_accepted: int
+    n_rejected: int
+    method: str
+    switched_to: str | None
+    t_switch: float | None
+    status: int
+    outcome: RunStatus
+    message: str
+    success: bool
+    t_reached: float
+    error: BaseException | None
 
 def simulate_scene(
     scene: Scene,
@@ -949,14 +1026,10 @@ def simulate_scene(
     progress: Callable[[float], Any] | None = None,
     progress_interval: float | None = None,
     **settings: Any,
-) -> dict[str, Any]:
-    """Integrates a scene in Rust (GIL released); returns the fields of
-    ``pointmass_dyn.SimulationResult`` (``t``, ``q``, ``v``, ``energy``, ``power``,
-    ``t_events``, ``q_events``, ``v_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
-    ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``method``,
-    ``switched_to``, ``t_switch``) and ``error``: ``None``, or the
-    exception a Python callback raised (Ctrl-C included), for the caller to re-raise.
-    ``settings``: :class:`RunConfig`'s keywords, which beat ``config``'s."""
+) -> RunResult:
+    """Integrates a scene in Rust (GIL released); its :class:`RunResult`, whose ``error``
+    is ``None`` or the exception a Python callback raised (Ctrl-C included), for the caller
+    to re-raise. ``settings``: :class:`RunConfig`'s keywords, which beat ``config``'s."""
 
 def simulate_batch(
     scenes: Sequence[Scene],
@@ -971,12 +1044,12 @@ def simulate_batch(
     threads: int | None = None,
     progress: Callable[[int, int], Any] | None = None,
     **settings: Any,
-) -> tuple[list[dict[str, Any]], BaseException | None]:
+) -> tuple[list[RunResult], BaseException | None]:
     """Runs B scenes (or one scene from B initial states ``q0`` (B, nq), ``v0`` (B, nv)) on
-    ``threads`` threads, the GIL released once; one dict per run as ``simulate_scene``
-    returns, or ``{"error": exception}`` for a run whose input was refused or that did not
-    start; with the exception (Ctrl-C, or one ``progress`` raised) that stopped the batch,
-    else None."""
+    ``threads`` threads, the GIL released once; one :class:`RunResult` per run as
+    ``simulate_scene`` returns it (``RunStatus.NotStarted`` with the exception in ``error``
+    for a run whose input was refused or that did not start); with the exception (Ctrl-C,
+    or one ``progress`` raised) that stopped the batch, else None."""
 
 def effect_forces(
     scene: Scene,

@@ -39,14 +39,14 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from typing import Any, Callable
 
 import numpy as np
 
 from . import _core, kinematics
 from ._contact import contact_forces, torque_saturation
-from ._core import Effect, RunConfig, Scene, StateEvent
+from ._core import Effect, RunConfig, RunStatus, Scene, StateEvent
 from ._helpers import changed_settings
 from .errors import InvalidInputError, SimulationError, SingularPassageWarning
 
@@ -243,6 +243,10 @@ class SimulationResult:
     saturated: dict | None = None
     #: The scene's model (``simulate`` sets it): what ``frame_path`` and ``point_path`` use.
     model: Any = field(default=None, repr=False, compare=False)
+    #: How the run ended, typed (a :class:`RunStatus` variant: ``RunStatus.Interrupted``
+    #: with ``t`` reached, ``at`` where and ``reason``; ``RunStatus.NonFinite``, ...);
+    #: ``status`` is its SciPy code.
+    outcome: Any = field(default=None, compare=False)
 
     def frame_path(self, frame: Any, model: Any = None) -> tuple[np.ndarray, np.ndarray]:
         """(rotations (N, 3, 3), positions (N, 3)) of ``frame`` at the output times."""
@@ -371,7 +375,7 @@ def simulate(
     keywords given here beat it (those left at their defaults do not), and it beats the
     scene's ``[simulate]`` table.
     """
-    out = _core.simulate_scene(
+    run = _core.simulate_scene(
         scene,
         t_span,
         rtol,
@@ -394,17 +398,28 @@ def simulate(
             stiffness=stiffness,
         ),
     )
-    error = out.pop("error")
-    result = SimulationResult(scene=scene.name, **out)
-    result.model = scene.model
+    result = result_from_run(run, scene.name, scene.model)
     result.saturated = torque_saturation(scene, result, disable)
     if result.singular_passage is not None:
         warnings.warn(singular_passage_warning(result), stacklevel=2)
     if contact:
         result.contact = contact_forces(scene, result)
-    if error is not None:
-        raise _with_partial_result(error, result)
+    if run.error is not None:
+        raise _with_partial_result(run.error, result)
     return result
+
+
+#: The fields a :class:`SimulationResult` takes from the core's ``RunResult`` (the others,
+#: ``scene``, ``model``, ``contact``, ``saturated``, are the caller's).
+_RUN_FIELDS = tuple(f.name for f in fields(SimulationResult) if hasattr(_core.RunResult, f.name))
+
+
+def result_from_run(run: Any, scene: str = "", model: Any = None) -> SimulationResult:
+    """The :class:`SimulationResult` of a core ``RunResult`` (``simulate``, a batch's run,
+    a ``Simulator``'s trajectory)."""
+    return SimulationResult(
+        scene=scene, model=model, **{name: getattr(run, name) for name in _RUN_FIELDS}
+    )
 
 
 def singular_passage_warning(result: SimulationResult) -> SingularPassageWarning:
@@ -555,6 +570,7 @@ __all__ = [
     "OdeResult",
     "PDTorque",
     "PointSpring",
+    "RunStatus",
     "SimulationResult",
     "Spring",
     "StateEvent",

@@ -489,6 +489,19 @@ impl GroundContact {
                 format!("{} coordinates and {} speeds", q.len(), v.len()),
             ));
         }
+        for (arg, x, width) in [("q", q, nq), ("v", v, nv)] {
+            if let Some(i) = x.iter().position(|x| !x.is_finite()) {
+                let at = format!("{} in state {} (entry {})", x[i], i / width, i % width);
+                return Err(Error::arg(arg, "finite states", at));
+            }
+        }
+        // A finite state can still be none (a zero quaternion): as every model call checks it.
+        for k in 0..n {
+            let (qk, vk) = (&q[k * nq..(k + 1) * nq], &v[k * nv..(k + 1) * nv]);
+            model
+                .check_state(qk, Some(vk))
+                .map_err(|e| e.map_arg(|a| format!("{a} (state {k})")))?;
+        }
         let mut law = self.law(model)?;
         let np = law.npoints();
         let mut out = ContactStates {

@@ -3,14 +3,13 @@
 use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
 
 use super::convert::{to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{invalid, IntoPyResult};
-use super::options::{set_method, set_outcome};
-use super::run_config::call_config;
+use super::run_config::config_of;
 use super::scene::PyScene;
+use super::trajectory::PyRunResult;
 use crate::control::{ControlKind, Imu, OwnedSimulator, Simulator};
 use crate::integrator::Method;
 use crate::simulate::RunConfig;
@@ -67,25 +66,20 @@ impl PySimulator {
         let period = control_period;
         // The run configuration `simulate` reads (the same checks, the same precedence over
         // the scene's settings); the Simulator steps on from `t0` without an end.
-        let given = PyDict::new(py);
-        for (key, value) in [
-            (
-                "method",
-                method
-                    .map(|m| m.into_pyobject(py).map(|o| o.into_any()))
-                    .transpose()?,
-            ),
-            ("dt", dt.cloned()),
-            ("disable", disable.cloned()),
-            ("first_step", first_step.cloned()),
-            ("max_step", max_step.cloned()),
-        ] {
-            if let Some(v) = value.filter(|v| !v.is_none()) {
-                given.set_item(key, v)?;
-            }
-        }
+        let method = method.map(|m| pyo3::types::PyString::new(py, m).into_any());
+        let call = config_of(
+            py,
+            &[
+                ("method", method.as_ref()),
+                ("rtol", rtol),
+                ("atol", atol),
+                ("dt", dt),
+                ("disable", disable),
+                ("first_step", first_step),
+                ("max_step", max_step),
+            ],
+        )?;
         let dim = s.model.nq + s.model.nv;
-        let call = call_config(py, None, None, rtol, atol, Some(&given))?;
         let named = call.method.is_some() || s.settings.method.is_some();
         let run = RunConfig {
             t_span: Some((t0, t0)),
@@ -190,29 +184,11 @@ impl PySimulator {
         Ok(r.err().map(|s| s.describe(sim.t())))
     }
 
-    /// Everything so far, as the dict `simulate` returns.
-    fn trajectory<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    /// Everything so far, as `simulate_scene` returns it.
+    fn trajectory(&self, py: Python<'_>) -> PyResult<PyRunResult> {
         let traj = self.lock().get().trajectory();
-        let (n, nq, nv) = (traj.t.len(), traj.nq, traj.nv);
-        let d = PyDict::new(py);
-        d.set_item("t", to_array1(py, &traj.t))?;
-        d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
-        d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
-        d.set_item("energy", py.None())?;
-        for key in ["t_events", "q_events", "v_events"] {
-            d.set_item(key, PyList::empty(py))?;
-        }
-        d.set_item("nfev", traj.nfev)?;
-        set_method(&d, traj.method, (traj.njev, traj.nlu), None, None)?;
-        set_outcome(
-            &d,
-            &traj.status,
-            traj.n_accepted,
-            traj.n_rejected,
-            &traj.message,
-            traj.t_reached,
-        )?;
-        Ok(d)
+        let slots: Vec<usize> = (0..traj.t_events.len()).collect();
+        PyRunResult::new(py, traj, &slots, None)
     }
 
     /// The actuators' joint torques now (nv): the torque control plus the scene's torques.

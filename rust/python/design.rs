@@ -214,121 +214,152 @@ pub fn design_pin_loads<'py>(
     Ok(out)
 }
 
-fn quantity(obj: &Bound<'_, PyAny>, ndelta: usize) -> PyResult<Quantity> {
-    let py = obj.py();
-    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        obj.get_item(k)
-            .map_err(|_| invalid(py, "quantities", format!("a dict with '{k}'"), "none"))
-    };
-    let name: String = get("name")?.extract()?;
-    let (shape, rows) = array(&get("rows")?, &name)?;
-    if shape.len() != 2 || shape[1] != ndelta {
-        return Err(invalid(
-            py,
-            &name,
-            format!("rows of shape (R, {ndelta})"),
-            format!("{shape:?}"),
-        ));
-    }
-    let (_, constant) = array(&get("constant")?, &name)?;
-    Ok(Quantity {
-        rows: DMatrix::from_row_slice(shape[0], ndelta, &rows),
-        constant: DVector::from_vec(constant),
-        dim: get("dim")?.extract()?,
-        samples: get("samples")?.extract()?,
-        weight: get("weight")?.extract()?,
-        reference: get("reference")?.extract()?,
-        limit: get("limit")?.extract()?,
-        zero: get("zero")?.extract()?,
-        // Optional: a member's stress (its limit at every sample whatever the norm).
-        peak: match obj.get_item("peak") {
-            Ok(v) => v.extract()?,
-            Err(_) => false,
-        },
-        name,
-    })
+/// The design program as `pointmass_dyn.design` states it: a dict read key by key into
+/// typed fields (`design_solve`'s argument; built by our Python, not by users).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct ProblemSpec {
+    ndelta: usize,
+    #[pyo3(from_py_with = reals)]
+    lower: Vec<f64>,
+    #[pyo3(from_py_with = reals)]
+    upper: Vec<f64>,
+    map_rows: Vec<usize>,
+    map_cols: Vec<usize>,
+    #[pyo3(from_py_with = reals)]
+    map_vals: Vec<f64>,
+    groups: Vec<(Vec<usize>, f64, f64)>,
+    equal: Vec<(usize, usize)>,
+    quantities: Vec<QuantitySpec>,
+    norm: String,
+    mass_weight: f64,
+    mass_reference: f64,
+    mass_limit: Option<f64>,
+    least_mass: bool,
+    /// Connected links' flows (crate::design::connectivity).
+    #[pyo3(default)]
+    flows: Vec<FlowSpec>,
 }
 
-/// A connected link's flows: a dict with `nodes`, `edges` ((E, 2) local indices), `bosses`
-/// (lists of local indices), `web` and `hang` (crate::design::connectivity).
-fn flow(obj: &Bound<'_, PyAny>) -> PyResult<design::Flow> {
-    let py = obj.py();
-    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        obj.get_item(k)
-            .map_err(|_| invalid(py, "flows", format!("a dict with '{k}'"), "none"))
-    };
-    Ok(design::Flow {
-        nodes: get("nodes")?.extract()?,
-        edges: get("edges")?.extract()?,
-        bosses: get("bosses")?.extract()?,
-        web: get("web")?.extract()?,
-        hang: get("hang")?.extract()?,
-    })
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct QuantitySpec {
+    name: String,
+    #[pyo3(from_py_with = shaped)]
+    rows: (Vec<usize>, Vec<f64>),
+    #[pyo3(from_py_with = reals)]
+    constant: Vec<f64>,
+    dim: usize,
+    samples: usize,
+    weight: f64,
+    reference: f64,
+    limit: Option<f64>,
+    zero: bool,
+    /// A member's stress: its limit at every sample whatever the norm.
+    #[pyo3(default)]
+    peak: bool,
 }
 
-/// Solves the design program given as a dict (see `pointmass_dyn`'s design module).
-#[pyfunction]
-pub fn design_solve<'py>(
-    py: Python<'py>,
-    spec: &Bound<'_, PyDict>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        spec.get_item(k)?
-            .ok_or_else(|| invalid(py, "problem", format!("a dict with '{k}'"), "none"))
-    };
-    let ndelta: usize = get("ndelta")?.extract()?;
-    let (_, lower) = array(&get("lower")?, "lower")?;
-    let (_, upper) = array(&get("upper")?, "upper")?;
-    let map_rows: Vec<usize> = get("map_rows")?.extract()?;
-    let map_cols: Vec<usize> = get("map_cols")?.extract()?;
-    let (_, map_vals) = array(&get("map_vals")?, "map_vals")?;
-    if map_rows.len() != map_cols.len() || map_rows.len() != map_vals.len() {
-        return Err(invalid(
-            py,
-            "map",
-            "rows, columns and values of one length",
-            "different lengths",
-        ));
-    }
-    let quantities = get("quantities")?
-        .try_iter()?
-        .map(|q| quantity(&q?, ndelta))
-        .collect::<PyResult<Vec<_>>>()?;
-    let norm = match get("norm")?.extract::<String>()?.as_str() {
-        "rms" => Norm::Rms,
-        "peak" => Norm::Peak,
-        other => {
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct FlowSpec {
+    nodes: Vec<usize>,
+    edges: Vec<(usize, usize)>,
+    bosses: Vec<Vec<usize>>,
+    web: f64,
+    hang: f64,
+}
+
+fn reals(obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    Ok(array(obj, "problem")?.1)
+}
+
+fn shaped(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    array(obj, "quantities")
+}
+
+impl ProblemSpec {
+    /// The core's problem, the sizes checked against each other.
+    fn problem(self, py: Python<'_>) -> PyResult<Problem> {
+        let n = self.map_rows.len();
+        if self.map_cols.len() != n || self.map_vals.len() != n {
+            let got = "different lengths";
             return Err(invalid(
                 py,
-                "norm",
-                "\"rms\" or \"peak\"",
-                format!("'{other}'"),
-            ))
+                "map",
+                "rows, columns and values of one length",
+                got,
+            ));
         }
-    };
-    let problem = Problem {
-        lower,
-        upper,
-        map: map_rows
+        let norm = match self.norm.as_str() {
+            "rms" => Norm::Rms,
+            "peak" => Norm::Peak,
+            other => {
+                return Err(invalid(
+                    py,
+                    "norm",
+                    "\"rms\" or \"peak\"",
+                    format!("'{other}'"),
+                ))
+            }
+        };
+        let ndelta = self.ndelta;
+        let quantities = self.quantities.into_iter().map(|q| {
+            let (shape, rows) = q.rows;
+            if shape.len() != 2 || shape[1] != ndelta {
+                let want = format!("rows of shape (R, {ndelta})");
+                return Err(invalid(py, &q.name, want, format!("{shape:?}")));
+            }
+            Ok(Quantity {
+                rows: DMatrix::from_row_slice(shape[0], ndelta, &rows),
+                constant: DVector::from_vec(q.constant),
+                dim: q.dim,
+                samples: q.samples,
+                weight: q.weight,
+                reference: q.reference,
+                limit: q.limit,
+                zero: q.zero,
+                peak: q.peak,
+                name: q.name,
+            })
+        });
+        let map = self
+            .map_rows
             .into_iter()
-            .zip(map_cols)
-            .zip(map_vals)
-            .map(|((r, c), v)| (r, c, v))
-            .collect(),
-        ndelta,
-        groups: get("groups")?.extract()?,
-        equal: get("equal")?.extract()?,
-        quantities,
-        norm,
-        mass_weight: get("mass_weight")?.extract()?,
-        mass_reference: get("mass_reference")?.extract()?,
-        mass_limit: get("mass_limit")?.extract()?,
-        least_mass: get("least_mass")?.extract()?,
-        flows: match spec.get_item("flows")? {
-            Some(f) => f.try_iter()?.map(|f| flow(&f?)).collect::<PyResult<_>>()?,
-            None => vec![],
-        },
-    };
+            .zip(self.map_cols)
+            .zip(self.map_vals);
+        Ok(Problem {
+            lower: self.lower,
+            upper: self.upper,
+            map: map.map(|((r, c), v)| (r, c, v)).collect(),
+            ndelta,
+            groups: self.groups,
+            equal: self.equal,
+            quantities: quantities.collect::<PyResult<_>>()?,
+            norm,
+            mass_weight: self.mass_weight,
+            mass_reference: self.mass_reference,
+            mass_limit: self.mass_limit,
+            least_mass: self.least_mass,
+            flows: self
+                .flows
+                .into_iter()
+                .map(|f| design::Flow {
+                    nodes: f.nodes,
+                    edges: f.edges,
+                    bosses: f.bosses,
+                    web: f.web,
+                    hang: f.hang,
+                })
+                .collect(),
+        })
+    }
+}
+
+/// Solves the design program (see `pointmass_dyn`'s design module).
+#[pyfunction]
+pub fn design_solve<'py>(py: Python<'py>, spec: ProblemSpec) -> PyResult<Bound<'py, PyDict>> {
+    let problem = spec.problem(py)?;
     let outcome = detach_interruptible(py, || design::solve_outcome(&problem))?;
     let d = PyDict::new(py);
     let sol = match outcome {

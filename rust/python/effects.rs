@@ -518,23 +518,6 @@ impl PyEffect {
                 format!("{} and {}", shape_str(&qs), shape_str(&vs)),
             ));
         }
-        for (arg, x, width) in [("q", &qv, m.nq), ("v", &vv, m.nv)] {
-            if let Some(i) = x.iter().position(|x| !x.is_finite()) {
-                return Err(invalid(
-                    py,
-                    arg,
-                    "finite states",
-                    format!("{} in state {} (entry {})", x[i], i / width, i % width),
-                ));
-            }
-        }
-        // A finite state can still be none (a zero quaternion): as every model call checks it.
-        for k in 0..qs[0] {
-            let (q, v) = (&qv[k * m.nq..(k + 1) * m.nq], &vv[k * m.nv..(k + 1) * m.nv]);
-            m.check_state(q, Some(v))
-                .map_err(|e| e.map_arg(|a| format!("{a} (state {k})")))
-                .py(py)?;
-        }
         let s = c.states(&m, &qv, &vv).py(py)?;
         // Finite states, but a law whose numbers overflow there (a damping of 1e307).
         for (what, x) in [

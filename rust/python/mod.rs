@@ -22,6 +22,7 @@ mod run_config;
 mod scene;
 mod signals;
 mod simulate;
+mod trajectory;
 mod visuals;
 
 use pyo3::prelude::*;
@@ -51,6 +52,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<dense::PyDenseSolution>()?;
     m.add_class::<run_config::PyRunConfig>()?;
     m.add_class::<control::PySimulator>()?;
+    m.add_class::<trajectory::PyRunResult>()?;
+    m.add_class::<trajectory::PyRunStatus>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_batch, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;

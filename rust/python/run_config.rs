@@ -257,6 +257,21 @@ pub(super) fn call_config(
     Ok(call.cast::<PyRunConfig>()?.get().inner.clone().over(below))
 }
 
+/// The `RunConfig` of the keywords given (`None`: not given), parsed by its constructor.
+pub(super) fn config_of(
+    py: Python<'_>,
+    given: &[(&str, Option<&Bound<'_, PyAny>>)],
+) -> PyResult<RunConfig> {
+    let d = PyDict::new(py);
+    for (key, value) in given {
+        if let Some(v) = value {
+            d.set_item(key, v)?;
+        }
+    }
+    let config = PyRunConfig::type_object(py).call((), Some(&d))?;
+    Ok(config.cast::<PyRunConfig>()?.get().inner.clone())
+}
+
 pub(super) fn method_arg(py: Python<'_>, name: &str) -> PyResult<Method> {
     Method::parse(name).ok_or_else(|| {
         invalid(

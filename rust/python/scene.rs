@@ -1,12 +1,11 @@
 //! `Scene`: a model, its initial state, effects and the settings of its runs.
 use pyo3::prelude::*;
 
-use super::convert::{opt_count, opt_real, to_array1, vector};
+use super::convert::{to_array1, vector};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use super::options::{given, t_span_arg};
-use super::run_config::method_arg;
+use super::run_config::config_of;
 use crate::effects::{Disabled, Effects};
 use crate::scene::{Scene, Settings};
 
@@ -341,7 +340,8 @@ impl PyScene {
 }
 
 /// `None`, one family name, or a sequence of them.
-/// The run settings a `Scene` call was given (`None`: not given).
+/// The run settings a `Scene` call was given (`None`: not given), parsed as `RunConfig`'s
+/// keywords are and laid over a scene's by the core (`RunConfig::onto_scene`).
 struct SettingsArgs<'a, 'py> {
     t_span: Option<&'a Bound<'py, PyAny>>,
     rtol: Option<&'a Bound<'py, PyAny>>,
@@ -355,30 +355,23 @@ struct SettingsArgs<'a, 'py> {
 }
 
 impl SettingsArgs<'_, '_> {
-    /// `base` with the given settings replaced, checked (`Settings::check`).
+    /// `base` with the given settings replaced, checked.
     fn over(&self, py: Python<'_>, base: Settings) -> PyResult<Settings> {
-        let max_step = opt_real(self.max_step, "max_step")?.filter(|x| *x != f64::INFINITY);
-        let max_steps = opt_count(self.max_steps, "max_steps", "a step count >= 0 (or None)")?;
-        let settings = Settings {
-            t_span: match given(self.t_span) {
-                Some(t) => Some(t_span_arg(py, t)?),
-                None => base.t_span,
-            },
-            rtol: opt_real(self.rtol, "rtol")?.or(base.rtol),
-            atol: opt_real(self.atol, "atol")?.or(base.atol),
-            max_step: max_step.or(base.max_step),
-            max_steps: max_steps.or(base.max_steps),
-            first_step: opt_real(self.first_step, "first_step")?.or(base.first_step),
-            disable: disable_arg(py, self.disable)?.or(base.disable),
-            method: self
-                .method
-                .map(|m| method_arg(py, m))
-                .transpose()?
-                .or(base.method),
-            dt: opt_real(given(self.dt), "dt")?.or(base.dt),
-        };
-        settings.check().py(py)?;
-        Ok(settings)
+        let method = self
+            .method
+            .map(|m| pyo3::types::PyString::new(py, m).into_any());
+        let given = [
+            ("t_span", self.t_span),
+            ("rtol", self.rtol),
+            ("atol", self.atol),
+            ("disable", self.disable),
+            ("method", method.as_ref()),
+            ("dt", self.dt),
+            ("max_step", self.max_step),
+            ("max_steps", self.max_steps),
+            ("first_step", self.first_step),
+        ];
+        config_of(py, &given)?.onto_scene(base).py(py)
     }
 }
 

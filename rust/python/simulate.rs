@@ -2,28 +2,29 @@
 use std::sync::Mutex;
 
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::PyDict;
 
-use super::convert::{real, to_array, to_array1, vector};
+use super::convert::{real, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
-use super::options::{given, set_method, set_outcome};
+use super::options::given;
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::{disable_arg, PyScene};
 use super::signals::{Watch, INTERVAL};
+use super::trajectory::PyRunResult;
 use crate::integrator::Event;
 use crate::scene::Scene;
 use crate::simulate::batch::StateRows;
-use crate::simulate::{run_scene, Dynamics, Progress, StateEvent, Trajectory};
+use crate::simulate::{run_scene, Dynamics, Progress, StateEvent};
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
-/// it: returns a dict that `pointmass_dyn.simulate` wraps.
+/// it: the `RunResult` that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
 #[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, *, config=None, events=None, progress=None, progress_interval=None, **settings))]
 #[allow(clippy::too_many_arguments)]
-pub fn simulate_scene<'py>(
-    py: Python<'py>,
+pub fn simulate_scene(
+    py: Python<'_>,
     scene: PyRef<'_, PyScene>,
     t_span: Option<&Bound<'_, PyAny>>,
     rtol: Option<&Bound<'_, PyAny>>,
@@ -33,7 +34,7 @@ pub fn simulate_scene<'py>(
     progress: Option<Py<PyAny>>,
     progress_interval: Option<f64>,
     settings: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyRunResult> {
     let s = &scene.inner;
     let nq = s.model.nq;
     let config = call_config(py, config, t_span, rtol, atol, settings)?;
@@ -67,7 +68,7 @@ pub fn simulate_scene<'py>(
             if let Some(e) = &raised {
                 traj.name_interruption(&interrupt_reason(py, e));
             }
-            trajectory_dict(py, traj, raised, &events)
+            PyRunResult::new(py, traj, &events.slots(), raised)
         }
         (Err(_), Some(raised)) => Err(raised),
         (Err(e), None) => Err(super::errors::to_py(py, e)),
@@ -122,92 +123,13 @@ impl SceneEvents {
     }
 
     /// The trajectory's slot of each event, in the caller's order.
-    fn slots(&self) -> impl Iterator<Item = usize> + '_ {
+    fn slots(&self) -> Vec<usize> {
         let ns = self.state.len();
         self.order
             .iter()
-            .map(move |&(is_py, k)| if is_py { ns + k } else { k })
+            .map(|&(is_py, k)| if is_py { ns + k } else { k })
+            .collect()
     }
-}
-
-/// The dict `pointmass_dyn.simulate` wraps into a `SimulationResult`.
-fn trajectory_dict<'py>(
-    py: Python<'py>,
-    traj: Trajectory,
-    raised: Option<PyErr>,
-    events: &SceneEvents,
-) -> PyResult<Bound<'py, PyDict>> {
-    let (n, nq, nv) = (traj.t.len(), traj.nq, traj.nv);
-    let d = PyDict::new(py);
-    d.set_item("error", raised.map(|e| e.into_value(py)))?;
-    d.set_item("t", to_array1(py, &traj.t))?;
-    d.set_item("q", to_array(py, traj.q, &[n, nq])?)?;
-    d.set_item("v", to_array(py, traj.v, &[n, nv])?)?;
-    d.set_item("energy", traj.energy.map(|e| to_array1(py, &e).into_any()))?;
-    d.set_item(
-        "constraint_residual",
-        traj.constraint_residual
-            .map(|r| to_array1(py, &r).into_any()),
-    )?;
-    d.set_item("constraint_drift", traj.constraint_drift)?;
-    d.set_item("singular_passage", traj.singular_passage)?;
-    d.set_item("singular_crossings", traj.singular_crossings)?;
-    match &traj.power {
-        Some(p) => d.set_item("power", power_dict(py, p, n, &traj.effect_labels)?)?,
-        None => d.set_item("power", py.None())?,
-    }
-    let te = PyList::empty(py);
-    let qe = PyList::empty(py);
-    let ve = PyList::empty(py);
-    for slot in events.slots() {
-        let times = &traj.t_events[slot];
-        te.append(to_array1(py, times))?;
-        let m = times.len();
-        let mut qs = Vec::with_capacity(m * nq);
-        let mut vs = Vec::with_capacity(m * nv);
-        for row in traj.y_events[slot].chunks_exact(nq + nv) {
-            qs.extend_from_slice(&row[..nq]);
-            vs.extend_from_slice(&row[nq..]);
-        }
-        qe.append(to_array(py, qs, &[m, nq])?)?;
-        ve.append(to_array(py, vs, &[m, nv])?)?;
-    }
-    d.set_item("t_events", te)?;
-    d.set_item("q_events", qe)?;
-    d.set_item("v_events", ve)?;
-    d.set_item("nfev", traj.nfev)?;
-    set_method(
-        &d,
-        traj.method,
-        (traj.njev, traj.nlu),
-        traj.switched_to,
-        traj.t_switch,
-    )?;
-    set_outcome(
-        &d,
-        &traj.status,
-        traj.n_accepted,
-        traj.n_rejected,
-        &traj.message,
-        traj.t_reached,
-    )?;
-    Ok(d)
-}
-
-/// The power columns (row-major N × labels) as a dict from the effect's label to an array.
-fn power_dict<'py>(
-    py: Python<'py>,
-    p: &[f64],
-    n: usize,
-    labels: &[String],
-) -> PyResult<Bound<'py, PyDict>> {
-    let m = labels.len();
-    let pd = PyDict::new(py);
-    for (k, label) in labels.iter().enumerate() {
-        let col: Vec<f64> = (0..n).map(|i| p[i * m + k]).collect();
-        pd.set_item(label, to_array1(py, &col))?;
-    }
-    Ok(pd)
 }
 
 /// The scene's equations of motion with the `disable`d families (the caller's, else the
@@ -305,8 +227,8 @@ pub fn energies<'py>(
 }
 
 /// Runs many scenes (or one scene from many initial states) on a pool of threads, the GIL
-/// released once: a list of dicts as `simulate_scene` returns them, in the runs' order. A
-/// run that could not start (bad input) has its exception in `"error"`. Every run is
+/// released once: a `RunResult` per run as `simulate_scene` returns them, in the runs'
+/// order. A run that could not start (bad input) is `NotStarted`, its exception in `error`. Every run is
 /// exactly the `simulate` call it stands for.
 #[pyfunction]
 #[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, *, config=None, events=None, threads=None, progress=None, **settings))]
@@ -324,7 +246,7 @@ pub fn simulate_batch<'py>(
     threads: Option<&Bound<'_, PyAny>>,
     progress: Option<Py<PyAny>>,
     settings: Option<&Bound<'_, PyDict>>,
-) -> PyResult<(Bound<'py, PyList>, Option<Py<PyAny>>)> {
+) -> PyResult<(Vec<PyRunResult>, Option<Py<PyAny>>)> {
     use crate::simulate::batch::{broadcast, run_batch_polled};
     if scenes.is_empty() {
         return Err(invalid(py, "scenes", "at least one Scene", "none"));
@@ -383,26 +305,27 @@ pub fn simulate_batch<'py>(
     }
     let results = results
         .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
-    let out = PyList::empty(py);
     let reason = stopped.as_ref().map(|e| interrupt_reason(py, e));
+    let slots = events.slots();
+    let mut out = Vec::with_capacity(results.len());
     for result in results {
-        match (result, &reason) {
-            (Ok(mut traj), reason) => {
-                if let Some(r) = reason {
+        out.push(match result {
+            Ok(mut traj) => {
+                if let Some(r) = &reason {
                     traj.name_interruption(r);
                 }
-                out.append(trajectory_dict(py, traj, None, &events)?)?
+                PyRunResult::new(py, traj, &slots, None)?
             }
-            (Err(e), reason) => {
-                let d = PyDict::new(py);
-                if let (crate::error::Error::Interrupted(_), Some(r)) = (&e, reason) {
-                    let why = format!("the batch was stopped before this run started, by {r}");
-                    d.set_item("message", why)?;
-                }
-                d.set_item("error", super::errors::to_py(py, e).into_value(py))?;
-                out.append(d)?;
+            Err(e) => {
+                let why = match (&e, &reason) {
+                    (crate::error::Error::Interrupted(_), Some(r)) => Some(format!(
+                        "the batch was stopped before this run started, by {r}"
+                    )),
+                    _ => None,
+                };
+                PyRunResult::not_started(py, super::errors::to_py(py, e), why)?
             }
-        }
+        });
     }
     Ok((out, stopped.map(|e| e.into_value(py).into_any())))
 }

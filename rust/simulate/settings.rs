@@ -63,6 +63,37 @@ impl From<&Settings> for RunConfig {
     }
 }
 
+impl RunConfig {
+    /// A scene's settings (`base`) with the ones this config states replaced, checked
+    /// (`Settings::check`): the scene's constructor and `replace` parse their keywords as
+    /// `RunConfig`'s. A scene holds the settings a file can state: one tolerance for every
+    /// component, no output times or recording.
+    pub fn onto_scene(self, base: Settings) -> Result<Settings> {
+        let scalar = |tol: Option<Tol>, arg: &str| match tol {
+            None => Ok(None),
+            Some(Tol::Scalar(x)) => Ok(Some(x)),
+            Some(Tol::PerComponent(v)) => Err(Error::arg(
+                arg,
+                "a number (a scene's tolerance holds for every component)",
+                format!("{} values", v.len()),
+            )),
+        };
+        let settings = Settings {
+            t_span: self.t_span.or(base.t_span),
+            rtol: scalar(self.rtol, "rtol")?.or(base.rtol),
+            atol: scalar(self.atol, "atol")?.or(base.atol),
+            max_step: self.max_step.or(base.max_step),
+            max_steps: self.max_steps.or(base.max_steps),
+            first_step: self.first_step.or(base.first_step),
+            disable: self.disable.or(base.disable),
+            method: self.method.or(base.method),
+            dt: self.dt.or(base.dt),
+        };
+        settings.check()?;
+        Ok(settings)
+    }
+}
+
 /// The effect families to leave out: the caller's, else the scene's, else none.
 pub fn disabled(caller: Option<Disabled>, scene: &Settings) -> Disabled {
     caller.or(scene.disable).unwrap_or_default()
@@ -181,6 +212,42 @@ mod tests {
             disable: Some(Disabled::none().with(Kind::Gravity)),
             ..Default::default()
         }
+    }
+
+    #[test]
+    fn a_config_onto_a_scene_replaces_what_it_states_and_keeps_the_rest() {
+        let config = RunConfig {
+            rtol: Some(Tol::Scalar(1e-9)),
+            method: Some(Method::Dop853),
+            max_step: None,
+            energy: Some(true), // not a scene's: dropped
+            ..Default::default()
+        };
+        let s = config.onto_scene(scene()).unwrap();
+        assert_eq!(s.rtol, Some(1e-9));
+        assert_eq!(s.method, Some(Method::Dop853));
+        let kept = Settings {
+            rtol: Some(1e-9),
+            method: Some(Method::Dop853),
+            ..scene()
+        };
+        assert_eq!(s, kept);
+        // One tolerance per component is a run's, not a scene's; bad values are refused
+        // by the scene's own check, naming the setting.
+        let per = RunConfig {
+            atol: Some(Tol::PerComponent(vec![1e-6, 1e-7])),
+            ..Default::default()
+        };
+        let arg = |e: Error| match e {
+            Error::InvalidArgument { arg, .. } => arg,
+            other => panic!("{other}"),
+        };
+        assert_eq!(arg(per.onto_scene(scene()).unwrap_err()), "atol");
+        let negative = RunConfig {
+            rtol: Some(Tol::Scalar(-1.0)),
+            ..Default::default()
+        };
+        assert_eq!(arg(negative.onto_scene(scene()).unwrap_err()), "rtol");
     }
 
     #[test]

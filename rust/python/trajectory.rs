@@ -1,0 +1,300 @@
+//! A run's result as one typed object (`_core.RunResult`, its status a `_core.RunStatus`
+//! variant), not a dict: `pointmass_dyn.SimulationResult` is built from its getters.
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use super::convert::{to_array, to_array1};
+use crate::error::compact_numbers;
+use crate::integrator::{NonFiniteKind, Status};
+use crate::simulate::Trajectory;
+
+/// How a run ended, one variant per cause: `t` the time the run reached, `at` where the
+/// failure (or interruption) happened. A typed copy of the core's `Status`, plus
+/// `NotStarted` for a run of a batch whose input was refused.
+#[pyclass(name = "RunStatus", module = "pointmass_dyn._core", frozen)]
+#[derive(Clone, Debug)]
+pub enum PyRunStatus {
+    Success(),
+    TerminalEvent {
+        event: usize,
+        t: f64,
+    },
+    StepTooSmall {
+        t: f64,
+        min_step: f64,
+    },
+    NewtonFailed {
+        t: f64,
+        min_step: f64,
+        singular: bool,
+    },
+    MaxSteps {
+        t: f64,
+        max_steps: usize,
+    },
+    /// `what`: "derivative", "state" or "jacobian".
+    NonFinite {
+        t: f64,
+        at: f64,
+        what: String,
+    },
+    RhsError {
+        t: f64,
+        at: f64,
+        message: String,
+    },
+    EventNaN {
+        t: f64,
+        at: f64,
+        event: usize,
+    },
+    Stiff {
+        t: f64,
+        h_lambda: f64,
+        h: f64,
+    },
+    /// Ctrl-C, a raising progress callback or a stopped batch; `reason` names it.
+    Interrupted {
+        t: f64,
+        at: f64,
+        reason: Option<String>,
+    },
+    /// A run of a batch that never started: its input was refused, or the batch stopped.
+    NotStarted {
+        reason: String,
+    },
+}
+
+#[pymethods]
+impl PyRunStatus {
+    /// `RunStatus.Interrupted(t=0.5, at=0.51, reason='...')`: the variant and its fields.
+    fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
+        let (name, args) = Self::variant(slf)?;
+        let fields: Vec<String> = Self::fields(slf)?
+            .into_iter()
+            .zip(args.iter())
+            .map(|(f, v)| Ok(format!("{f}={}", v.repr()?)))
+            .collect::<PyResult<_>>()?;
+        Ok(format!("RunStatus.{name}({})", fields.join(", ")))
+    }
+
+    /// Pickled as its variant called with its fields (a result's `outcome` travels with it).
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, pyo3::types::PyTuple>)> {
+        Ok((slf.as_any().get_type().into_any(), Self::variant(slf)?.1))
+    }
+}
+
+impl PyRunStatus {
+    /// The variant's field names, in its constructor's order.
+    fn fields(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
+        slf.as_any().get_type().getattr("__match_args__")?.extract()
+    }
+
+    /// The variant's name and its fields' values.
+    fn variant<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(String, Bound<'py, pyo3::types::PyTuple>)> {
+        let values = Self::fields(slf)?
+            .iter()
+            .map(|f| slf.as_any().getattr(f.as_str()))
+            .collect::<PyResult<Vec<_>>>()?;
+        let name = slf.as_any().get_type().name()?.to_string();
+        Ok((name, pyo3::types::PyTuple::new(slf.py(), values)?))
+    }
+}
+
+impl From<&Status> for PyRunStatus {
+    fn from(s: &Status) -> Self {
+        match s.clone() {
+            Status::Success => Self::Success(),
+            Status::TerminalEvent { event, t } => Self::TerminalEvent { event, t },
+            Status::StepTooSmall { t, min_step } => Self::StepTooSmall { t, min_step },
+            Status::NewtonFailed {
+                t,
+                min_step,
+                singular,
+            } => Self::NewtonFailed {
+                t,
+                min_step,
+                singular,
+            },
+            Status::MaxSteps { t, max_steps } => Self::MaxSteps { t, max_steps },
+            Status::NonFinite { t, at, what } => Self::NonFinite {
+                t,
+                at,
+                what: match what {
+                    NonFiniteKind::Derivative => "derivative",
+                    NonFiniteKind::State => "state",
+                    NonFiniteKind::Jacobian => "jacobian",
+                }
+                .into(),
+            },
+            Status::RhsError { t, at, message } => Self::RhsError { t, at, message },
+            Status::EventNaN { t, at, event } => Self::EventNaN { t, at, event },
+            Status::Stiff { t, h_lambda, h } => Self::Stiff { t, h_lambda, h },
+            Status::Interrupted { t, at, reason } => Self::Interrupted { t, at, reason },
+        }
+    }
+}
+
+/// One run's trajectory and outcome, the fields `pointmass_dyn.SimulationResult` has of the
+/// same names; `error`: the exception a Python callback (or Ctrl-C) stopped the run with,
+/// or the one that refused a batch run's input.
+#[pyclass(name = "RunResult", module = "pointmass_dyn._core", frozen, get_all)]
+pub struct PyRunResult {
+    t: Py<PyAny>,
+    q: Py<PyAny>,
+    v: Py<PyAny>,
+    energy: Option<Py<PyAny>>,
+    constraint_residual: Option<Py<PyAny>>,
+    constraint_drift: Option<f64>,
+    singular_passage: Option<(f64, f64)>,
+    singular_crossings: Option<(usize, Option<f64>)>,
+    /// Power of each enabled effect by its label.
+    power: Option<Py<PyDict>>,
+    t_events: Py<PyList>,
+    q_events: Py<PyList>,
+    v_events: Py<PyList>,
+    nfev: usize,
+    njev: usize,
+    nlu: usize,
+    n_accepted: usize,
+    n_rejected: usize,
+    method: &'static str,
+    switched_to: Option<&'static str>,
+    t_switch: Option<f64>,
+    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure.
+    status: i32,
+    outcome: PyRunStatus,
+    message: String,
+    success: bool,
+    t_reached: f64,
+    error: Option<Py<PyAny>>,
+}
+
+impl PyRunResult {
+    /// `traj` with its events in the caller's order (`slots[k]`: the trajectory's slot of
+    /// the caller's event `k`).
+    pub(super) fn new(
+        py: Python<'_>,
+        traj: Trajectory,
+        slots: &[usize],
+        error: Option<PyErr>,
+    ) -> PyResult<Self> {
+        let (n, nq, nv) = (traj.t.len(), traj.nq, traj.nv);
+        let (te, qe, ve) = (PyList::empty(py), PyList::empty(py), PyList::empty(py));
+        for &slot in slots {
+            let times = &traj.t_events[slot];
+            te.append(to_array1(py, times))?;
+            let m = times.len();
+            let mut qs = Vec::with_capacity(m * nq);
+            let mut vs = Vec::with_capacity(m * nv);
+            for row in traj.y_events[slot].chunks_exact(nq + nv) {
+                qs.extend_from_slice(&row[..nq]);
+                vs.extend_from_slice(&row[nq..]);
+            }
+            qe.append(to_array(py, qs, &[m, nq])?)?;
+            ve.append(to_array(py, vs, &[m, nv])?)?;
+        }
+        let power = match &traj.power {
+            Some(p) => Some(power_dict(py, p, n, &traj.effect_labels)?.unbind()),
+            None => None,
+        };
+        let array1 =
+            |x: &Option<Vec<f64>>| x.as_ref().map(|e| to_array1(py, e).into_any().unbind());
+        Ok(PyRunResult {
+            t: to_array1(py, &traj.t).into_any().unbind(),
+            energy: array1(&traj.energy),
+            constraint_residual: array1(&traj.constraint_residual),
+            q: to_array(py, traj.q, &[n, nq])?.unbind(),
+            v: to_array(py, traj.v, &[n, nv])?.unbind(),
+            constraint_drift: traj.constraint_drift,
+            singular_passage: traj.singular_passage,
+            singular_crossings: traj.singular_crossings,
+            power,
+            t_events: te.unbind(),
+            q_events: qe.unbind(),
+            v_events: ve.unbind(),
+            nfev: traj.nfev,
+            njev: traj.njev,
+            nlu: traj.nlu,
+            n_accepted: traj.n_accepted,
+            n_rejected: traj.n_rejected,
+            method: traj.method.name(),
+            switched_to: traj.switched_to.map(|m| m.name()),
+            t_switch: traj.t_switch,
+            status: traj.status.code(),
+            outcome: PyRunStatus::from(&traj.status),
+            // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
+            message: compact_numbers(&traj.message),
+            success: traj.status.is_success(),
+            t_reached: traj.t_reached,
+            error: error.map(|e| e.into_value(py).into_any()),
+        })
+    }
+
+    /// A batch run that never started: `error` refused its input (or the batch stopped
+    /// before it, `message` then says by what).
+    pub(super) fn not_started(
+        py: Python<'_>,
+        error: PyErr,
+        message: Option<String>,
+    ) -> PyResult<Self> {
+        let message = match message {
+            Some(m) => m,
+            None => {
+                let name = error.get_type(py).name()?.to_string();
+                format!("{name}: {}", error.value(py).str()?)
+            }
+        };
+        let empty = |shape: &[usize]| to_array(py, Vec::new(), shape).map(Bound::unbind);
+        Ok(PyRunResult {
+            t: empty(&[0])?,
+            q: empty(&[0, 0])?,
+            v: empty(&[0, 0])?,
+            energy: None,
+            constraint_residual: None,
+            constraint_drift: None,
+            singular_passage: None,
+            singular_crossings: None,
+            power: None,
+            t_events: PyList::empty(py).unbind(),
+            q_events: PyList::empty(py).unbind(),
+            v_events: PyList::empty(py).unbind(),
+            nfev: 0,
+            njev: 0,
+            nlu: 0,
+            n_accepted: 0,
+            n_rejected: 0,
+            method: "RK45",
+            switched_to: None,
+            t_switch: None,
+            status: -1,
+            outcome: PyRunStatus::NotStarted {
+                reason: message.clone(),
+            },
+            message,
+            success: false,
+            t_reached: f64::NAN,
+            error: Some(error.into_value(py).into_any()),
+        })
+    }
+}
+
+/// The power columns (row-major N × labels) as a dict from the effect's label to an array.
+fn power_dict<'py>(
+    py: Python<'py>,
+    p: &[f64],
+    n: usize,
+    labels: &[String],
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = labels.len();
+    let pd = PyDict::new(py);
+    for (k, label) in labels.iter().enumerate() {
+        let col: Vec<f64> = (0..n).map(|i| p[i * m + k]).collect();
+        pd.set_item(label, to_array1(py, &col))?;
+    }
+    Ok(pd)
+}
