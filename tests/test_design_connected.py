@@ -189,6 +189,33 @@ def test_realised_parts_from_the_stl_reproduce_the_design(designs, label, tmp_pa
     assert b.realised.polish["status"] in ("Solved", "AlmostSolved")
 
 
+def test_shape_writes_its_realised_part_beside_the_design(designs, tmp_path):
+    """``Shape.write_stl`` writes the realised part (not thresholded cells): the STL's mass
+    properties by the divergence theorem are the written part's; ``mass_properties`` gives
+    them beside the design's, which are the designed body's (the Rust parameters)."""
+    motion, ds = designs
+    b = ds["peak bearing"]
+    for name, shape in b.shapes.items():
+        path = tmp_path / f"{name}.stl"
+        count = shape.write_stl(path)
+        tri = read_triangles(path)
+        assert len(tri) == count
+        assert triangle_components(tri)[0] == 1
+        mass, com, inertia = stl_mass_properties(tri, b.realised[name].density)
+        props = shape.mass_properties()
+        written, designed = props["written"], props["designed"]
+        assert mass == pytest.approx(written["mass"], rel=1e-9)
+        np.testing.assert_allclose(com, written["com"], rtol=0, atol=1e-9 * np.abs(com).max())
+        np.testing.assert_allclose(inertia, written["inertia"], rtol=0, atol=1e-9 * np.abs(inertia).max())
+        body = b.bodies[name]  # the plates are the whole link: its designed body
+        assert designed["mass"] == pytest.approx(body.mass, rel=1e-12)
+        np.testing.assert_allclose(designed["com"], body.com, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(designed["inertia"], body.inertia, rtol=0, atol=1e-12 * np.abs(body.inertia).max())
+        assert "designed" in shape.table() and "written" in shape.table()
+        with pytest.warns(RuntimeWarning, match="not the design"):
+            shape.write_stl(tmp_path / "cells.stl", threshold=0.5)
+
+
 @pytest.mark.parametrize("kw, message", [
     ({"section": "a"}, r"section: expected a finite number >= 0"),
     ({"section": -1.0}, r"section: expected a finite number >= 0"),
