@@ -4,22 +4,21 @@
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
+from test_design_connected import box_components
 
 REL = 1e-6  # of each objective's unbalanced value: far above solver and re-analysis error
 
 
 @pytest.fixture(scope="module")
 def doc_problem():
-    # docs/design.md §5: the four-bar's crank and rocker as steel plates (its fronts are traced
-    # on unconnected plates).
+    # docs/design.md §5: the four-bar's crank and rocker as steel plates, connected (the
+    # default), on the fronts' coarser grid of 8 mm cells.
     scene = pmd.load_scene("fourbar")
     motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=120,
                                    q_guess=scene.q0, gravity=np.array([0.0, -9.81, 0.0]))
     plates = [
-        pmd.LinkShape("crank", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004,
-                      connected=False),
-        pmd.LinkShape("rocker", box=([-0.05, -0.02, -0.004], [0.08, 0.02, 0.004]), cell=0.004,
-                      connected=False),
+        pmd.LinkShape("crank", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.008),
+        pmd.LinkShape("rocker", box=([-0.05, -0.02, -0.004], [0.08, 0.02, 0.004]), cell=0.008),
     ]
     return motion, plates
 
@@ -71,6 +70,12 @@ def test_doc_fronts_hold_no_dominated_point(doc_problem, method):
         for s in stages:
             assert s["status"] in ("Solved", "AlmostSolved"), s
             assert 0 <= s["gap_rel"] <= 1e-8, s
+    # Every point is a connected design: each written part one solid (a flood fill over its
+    # written boxes' faces, test_design_connected's), the links' connectivity asked.
+    assert all(p.connected for p in plates)
+    for b in front:
+        for name in ("crank", "rocker"):
+            assert box_components(b.realised[name].boxes) == 1, (method, name)
     # Along the front one objective falls as the other rises.
     order = np.argsort(v[:, 0])
     assert np.all(np.diff(v[order, 1]) < 0)

@@ -46,18 +46,32 @@ pub(crate) fn solve_cut(
     active: &mut Active,
 ) -> Result<Option<(Raw, u32)>> {
     let lay = Layout::new(problem, stage);
-    let (mut iterations, mut time) = (0, 0.0);
+    let (mut iterations, mut time, mut scouted) = (0, 0.0, 0);
+    let any_peak = problem.norm == Norm::Peak || problem.quantities.iter().any(|q| q.peak);
+    if any_peak && !problem.flows.is_empty() {
+        // Scout: the stage's program without the connectivity flows is a relaxation (its
+        // infeasibility is the full one's) a fraction of the size; its cutting planes find
+        // most of the full program's active samples, so the full program is solved about
+        // once per stage instead of once per round.
+        let lean = Problem {
+            flows: vec![],
+            ..problem.clone()
+        };
+        let Some((raw, rounds)) = solve_cut(&lean, stage, active)? else {
+            return Ok(None);
+        };
+        (iterations, time, scouted) = (raw.iterations, raw.solve_time, rounds);
+    }
     for round in 1..=MAX_ROUNDS as u32 {
         let Some(mut raw) = solve_program(problem, &lay, stage, active)? else {
             return Ok(None);
         };
         iterations += raw.iterations;
         time += raw.solve_time;
-        let any_peak = problem.norm == Norm::Peak || problem.quantities.iter().any(|q| q.peak);
         if !any_peak || add_violated(problem, &lay, stage, &raw, active) == 0 {
             raw.iterations = iterations;
             raw.solve_time = time;
-            return Ok(Some((raw, round)));
+            return Ok(Some((raw, round + scouted)));
         }
     }
     *active = problem
@@ -69,7 +83,7 @@ pub(crate) fn solve_cut(
     Ok(out.map(|mut raw| {
         raw.iterations += iterations;
         raw.solve_time += time;
-        (raw, MAX_ROUNDS as u32 + 1)
+        (raw, MAX_ROUNDS as u32 + 1 + scouted)
     }))
 }
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -452,6 +453,9 @@ def balance(
               if kind == "shape"]
     result.realised = realise(motion, shapes, phi, data, result.predicted, result.bodies,
                               _body_from_parameters, say)
+    if result.realised is not None:
+        # Each Shape writes its realised part (what was designed, not thresholded cells).
+        result.shapes = {n: replace(s, realised=result.realised.parts.get(n)) for n, s in result.shapes.items()}
     result.solver["time"] = time.perf_counter() - t0
     return result
 

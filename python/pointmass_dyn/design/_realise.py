@@ -12,7 +12,9 @@ neighbours). A column of thickness ``t`` has mass, first moments and in-plane se
 moments exactly linear in ``t``; the polish (Clarabel, through the same program as the
 design) minimises the RMS mismatch between the realised and the designed quantities along
 the whole motion (every regressor row: shaking force and moment, driving and bearing
-forces, each relative to its value before), then among the optima the least material
+forces; the shaking and bearing forces relative to their scale in the 1 % check, their
+predicted peaks floored at ``FLOOR`` of their values before, the others to their values
+before), then among the optima the least material
 changed. The written geometry is a set of boxes whose corners are rounded to float32 (the
 STL's numbers); the realised bodies are their exact mass properties, and the realised
 model is analysed again along the motion."""
@@ -407,9 +409,14 @@ def _worst(r: Realisation) -> float:
 
 
 def _row_scale(rows: int, predicted: dict, before: dict) -> np.ndarray:
-    """1 / each regressor row's quantity's peak before (so rows compare relative changes)."""
+    """1 / each regressor row's scale: for the quantities the 1 % check holds (shaking and
+    bearing forces) their scale there — the predicted peak, floored at ``FLOOR`` of the peak
+    before (a force the design cancels is matched to its floor, not to its value before) —
+    and for the others (moment, driving forces) their peak before."""
     na = np.asarray(predicted["torque"]).shape[1]
-    peak = {q: np.abs(np.asarray(before[q])).max() for q in ("force", "moment", "torque", "bearing")}
+    peak = {q: np.abs(np.asarray(before[q])).max() for q in ("moment", "torque")}
+    peak.update({q: max(np.abs(np.asarray(predicted[q])).max(), FLOOR * np.abs(np.asarray(before[q])).max())
+                 for q in ("force", "bearing")})
     s = np.empty(rows)
     s[0:3], s[3:6] = peak["force"], peak["moment"]
     s[6:6 + na], s[6 + na:] = peak["torque"], peak["bearing"]

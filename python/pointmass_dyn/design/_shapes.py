@@ -10,7 +10,8 @@ is a :class:`Shape` (cells, masses, bounds; ``write_stl`` for a CAD tool)."""
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
+import warnings
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -241,13 +242,16 @@ def _inside(centers: np.ndarray, box: np.ndarray) -> np.ndarray:
 @dataclass(frozen=True)
 class Shape:
     """A designed link's material: cell ``centers`` (K, 3) in the body frame, their
-    ``masses`` (K,) and ``capacity`` (K,) (density × cell³), the cell side ``cell``."""
+    ``masses`` (K,) and ``capacity`` (K,) (density × cell³), the cell side ``cell``;
+    ``realised``: the part as written (``Balance.realised[body]``, a ``RealisedPart``), set
+    by ``balance``."""
 
     body: str
     centers: np.ndarray
     masses: np.ndarray
     capacity: np.ndarray
     cell: float
+    realised: Any = field(default=None, repr=False, compare=False)
 
     @property
     def mass(self) -> float:
@@ -258,13 +262,48 @@ class Shape:
         """Each cell's mass as a fraction of its capacity."""
         return self.masses / self.capacity
 
-    def write_stl(self, path: str | Path, threshold: float = 0.5) -> int:
-        """Writes the cells filled to at least ``threshold`` of their capacity as one closed
-        surface (binary STL, metres, the body frame): the faces between a kept cell and an
-        empty neighbour. Returns the number of triangles."""
+    def mass_properties(self) -> dict:
+        """The material's mass (kg), COM (m, body frame) and inertia about the COM (kg m²),
+        ``"designed"`` (the cells' masses, each a cube) and ``"written"`` (the realised
+        part's boxes, exactly; None without one)."""
+        m, c = self.masses, self.centers
+        mass = float(m.sum())
+        com = (m @ c) / max(mass, 1e-300)
+        r = c - com
+        inertia = (np.eye(3) * (np.einsum("k,ki,ki->", m, r, r) + mass * self.cell**2 / 6.0)
+                   - np.einsum("k,ki,kj->ij", m, r, r))
+        out = {"designed": {"mass": mass, "com": com, "inertia": inertia}, "written": None}
+        if self.realised is not None:
+            b = self.realised.body
+            out["written"] = {"mass": float(b.mass), "com": np.asarray(b.com, float),
+                              "inertia": np.asarray(b.inertia, float)}
+        return out
+
+    def table(self) -> str:
+        """The material's mass, COM and Izz, designed and written, one line each."""
+        rows = [f"{self.body:<10}{'':>9}{'mass (kg)':>13}{'COM (mm)':>30}{'Izz (kg m²)':>14}"]
+        for label, p in self.mass_properties().items():
+            if p is not None:
+                c = p["com"] * 1e3
+                rows.append(f"{'':<10}{label:>9}{p['mass']:>13.6g}{c[0]:>10.4f}{c[1]:>10.4f}"
+                            f"{c[2]:>10.4f}{p['inertia'][2, 2]:>14.6g}")
+        return "\n".join(rows)
+
+    def write_stl(self, path: str | Path, threshold: float | None = None) -> int:
+        """Writes the part as realised (``self.realised``, what ``Balance.realised`` analyses:
+        decided, joined and polished; ``mass_properties()`` gives it beside the design) as a
+        closed binary STL (metres, body frame). With ``threshold`` (or for a shape without a
+        realised part: 0.5), the cells filled to at least that fraction of their capacity
+        instead, with a ``RuntimeWarning`` giving how far their mass and COM are from the
+        design's. Returns the number of triangles."""
+        if threshold is None and self.realised is not None:
+            return self.realised.write_stl(path)
+        threshold = 0.5 if threshold is None else threshold
         if not 0.0 <= threshold <= 1.0:
             raise InvalidInputError(f"threshold: expected a fraction in [0, 1], got {threshold}")
-        kept = self.centers[self.fill >= threshold]
+        mask = self.fill >= threshold
+        kept = self.centers[mask]
+        _warn_rounded(self, mask, threshold)
         base = self.centers.min(axis=0)
         idx = np.round((kept - base) / self.cell).astype(np.int64)
         occupied = {tuple(i) for i in idx}
@@ -296,3 +335,19 @@ class Shape:
                 n = n / (np.linalg.norm(n) or 1.0)
                 f.write(struct.pack("<12fH", *n, *a, *b, *c, 0))
         return len(tris)
+
+
+def _warn_rounded(shape: Shape, mask: np.ndarray, threshold: float) -> None:
+    """Thresholded cells are not the design: say by how much (mass, and the COM against the
+    envelope's size)."""
+    designed = shape.mass_properties()["designed"]
+    full = shape.capacity[mask]
+    mass = float(full.sum())
+    com = (full @ shape.centers[mask]) / max(mass, 1e-300)
+    size = float(np.ptp(shape.centers, axis=0).max() + shape.cell)
+    dm = abs(mass - designed["mass"]) / max(designed["mass"], 1e-300)
+    dc = float(np.linalg.norm(com - designed["com"])) / size
+    warnings.warn(
+        f"Shape.write_stl: the cells at least {threshold:g} full are not the design: mass "
+        f"{100 * dm:.2f} % off, COM {100 * dc:.2f} % of the part's size off (write the realised "
+        "part: threshold=None)", RuntimeWarning, stacklevel=3)
