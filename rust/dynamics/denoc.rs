@@ -9,12 +9,12 @@
 //! interruption (`interrupt::check`) between blocks of the products.
 use nalgebra::{DMatrix, DVector};
 
-use crate::alloc::{ensure_available, try_zeros, try_zeros_vector};
-use crate::error::{Error, Result};
-use crate::interrupt;
 use crate::kinematics::{self, LinkState};
 use crate::model::Model;
-use crate::spatial::{angular, linear, skew, Mat3, Vec3};
+use crate::support::alloc::{ensure_available, try_zeros, try_zeros_vector};
+use crate::support::error::{Error, Result};
+use crate::support::interrupt;
+use crate::support::spatial::{angular, linear, skew, Mat3, Vec3};
 
 #[derive(Debug, Clone)]
 pub struct Denoc {

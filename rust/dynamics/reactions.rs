@@ -8,14 +8,14 @@
 //! mechanism's linear and angular momenta exactly (docs/balancing.md). The quantities are
 //! linear in the point masses for a given motion, which is what makes balancing a least
 //! squares problem.
-use crate::alloc::try_zeros_vec;
-use crate::error::Result;
 use crate::kinematics::{self, body_placement};
 use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::reference::{inverse_dynamics_world, Workspace};
 use crate::recursive::{self, Data};
-use crate::spatial::{angular, linear, shift_twist, stack, Mat3, Placement, Vec3, Vec6};
+use crate::support::alloc::try_zeros_vec;
+use crate::support::error::Result;
+use crate::support::spatial::{angular, linear, shift_twist, stack, Mat3, Placement, Vec3, Vec6};
 
 /// World positions, velocities and accelerations of points carried by the links, with
 /// their masses; index `7 i + j` for point `j` of link `i` when filled by [`point_motion`].
@@ -225,7 +225,7 @@ impl<'a> States<'a> {
 pub struct Rows<T> {
     pub value: T,
     pub rows: usize,
-    pub stopped: Option<crate::error::Error>,
+    pub stopped: Option<crate::support::error::Error>,
 }
 
 /// Shaking force and moment about `about` at every state: `(forces, moments)`, 3 per row
@@ -240,7 +240,7 @@ pub fn shaking_of_states(
     let rows = states.rows;
     let (mut force, mut moment) = (Vec::with_capacity(3 * rows), Vec::with_capacity(3 * rows));
     for k in 0..rows {
-        if let Err(e) = crate::interrupt::check("shaking") {
+        if let Err(e) = crate::support::interrupt::check("shaking") {
             return Rows {
                 value: (force, moment),
                 rows: k,
@@ -296,7 +296,7 @@ pub fn point_regressor(
     };
     let mut ws = Workspace::new(model);
     for k in 0..rows {
-        if let Err(e) = crate::interrupt::check("point_regressor") {
+        if let Err(e) = crate::support::interrupt::check("point_regressor") {
             out.positions.truncate(k * np * 3);
             out.accelerations.truncate(k * np * 3);
             out.generalized.truncate(k * np * nv);

@@ -5,12 +5,12 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use crate::denoc;
-use crate::error::Result;
+use crate::dynamics::denoc;
 use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::{self, Data, DerivativeData};
-use crate::spatial::{Vec3, Vec6};
+use crate::support::error::Result;
+use crate::support::spatial::{Vec3, Vec6};
 
 /// Workspaces kept for reuse per model (more threads than this allocate their own).
 const POOL: usize = 4;

@@ -106,11 +106,11 @@ pub fn decode<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, PersistError> {
 mod tests {
     use super::*;
     use crate::benchmark_models;
-    use crate::body::RigidBody;
     use crate::effects::{Effect, PerJoint, Spring, Table, Torque, TorqueFunction};
     use crate::integrator::DenseOutput;
+    use crate::model::body::RigidBody;
     use crate::model::Model;
-    use crate::spatial::{Mat3, Vec3};
+    use crate::support::spatial::{Mat3, Vec3};
     use std::sync::Arc;
 
     fn bits(x: &[f64]) -> Vec<u64> {
@@ -168,8 +168,11 @@ mod tests {
             env!("CARGO_MANIFEST_DIR"),
             "/python/pointmass_dyn/scenes/panda.urdf"
         );
-        let u = crate::urdf::load_urdf(std::path::Path::new(panda), crate::urdf::RootJoint::Fixed)
-            .unwrap();
+        let u = crate::io::urdf::load_urdf(
+            std::path::Path::new(panda),
+            crate::io::urdf::RootJoint::Fixed,
+        )
+        .unwrap();
         let back: Model = decode(&encode(&u.model).unwrap()).unwrap();
         same_model(&u.model, &back);
         assert!(!back.records.joints.is_empty());
@@ -259,13 +262,13 @@ mod tests {
             ContactPoint, Damper, Disabled, External, Frame, Friction, GroundContact, JointLimit,
             JointRef, Kind, PerJoint, TorqueLimit,
         };
+        use crate::io::scene::{Scene, Settings};
+        use crate::io::urdf::{Limit, Mimic, UrdfJoint};
         use crate::joint::Joint;
+        use crate::model::point_masses::EquimomentalSet;
         use crate::model::{BodyRecord, Link};
-        use crate::point_masses::EquimomentalSet;
-        use crate::scene::{Scene, Settings};
         use crate::simulate::StateEvent;
-        use crate::spatial::{BodyInertia, Placement};
-        use crate::urdf::{Limit, Mimic, UrdfJoint};
+        use crate::support::spatial::{BodyInertia, Placement};
         let v = |x: f64| Vec3::new(x, -x, 0.5);
         let body = RigidBody {
             mass: 2.0,
@@ -319,14 +322,14 @@ mod tests {
         model.nv = 1;
         model.name = "m".into();
         model.armature = vec![0.25];
-        model.couplings = vec![crate::loops::Coupling {
+        model.couplings = vec![crate::model::constraints::Coupling {
             name: "c".into(),
             joint: 0,
             reference: 0,
             ratio: -0.5,
             offset: 0.125,
         }];
-        use crate::visual::{Shape, Visual};
+        use crate::model::visual::{Shape, Visual};
         let shapes = [
             Shape::Box {
                 size: Vec3::new(0.5, 0.25, 1.0),

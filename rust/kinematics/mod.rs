@@ -1,9 +1,11 @@
 //! Forward kinematics over links: orientations, origins, joint-motion columns `P_i`, twists
 //! `t_i = [ω_i; v_i]` (velocity of the origin `O_i`) and the velocity-dependent part of the
 //! twist rate, `ξ_i = Ȧ_{i,λ} t_λ + Ṗ_i q̇_i` — all in world coordinates as in the paper (docs/method.md §2).
+pub mod poses;
+
 use crate::joint::Subspace;
 use crate::model::Model;
-use crate::spatial::{
+use crate::support::spatial::{
     angular, linear, mat_mat, mat_vec, stack, BodyInertia, Mat3, Placement, Vec3, Vec6,
 };
 

@@ -2,11 +2,11 @@
 //! every joint's frame origin and axis, every link's seven point masses and both ends of
 //! every cut joint, for many configurations at once. One state fills one row of
 //! preallocated buffers: nothing is allocated per configuration.
-use crate::error::Result;
 use crate::joint::Joint;
 use crate::kinematics::{self, body_placement, LinkState};
 use crate::model::Model;
-use crate::spatial::{Placement, Vec3};
+use crate::support::error::Result;
+use crate::support::spatial::{Placement, Vec3};
 
 /// Poses of `rows` configurations, row-major, world axes.
 pub struct Poses {
@@ -34,7 +34,10 @@ impl Poses {
     pub fn new(model: &Model, rows: usize) -> Result<Poses> {
         let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
         let zeros = |per: usize, what: &str| {
-            crate::alloc::try_zeros_vec(rows.saturating_mul(per), &format!("body_poses {what}"))
+            crate::support::alloc::try_zeros_vec(
+                rows.saturating_mul(per),
+                &format!("body_poses {what}"),
+            )
         };
         Ok(Poses {
             rows,
@@ -64,7 +67,7 @@ impl Poses {
         }
         let mut poses = Poses::new(model, rows)?;
         for k in 0..rows {
-            crate::interrupt::check("body_poses")?;
+            crate::support::interrupt::check("body_poses")?;
             poses.fill(model, k, &qs[k * nq..(k + 1) * nq]);
         }
         Ok(poses)
@@ -125,8 +128,8 @@ impl Poses {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::body::RigidBody;
-    use crate::spatial::Mat3;
+    use crate::model::body::RigidBody;
+    use crate::support::spatial::Mat3;
 
     /// A double pendulum about z, second joint 1 m along the first body's x: the joint
     /// origins and point masses are where plane trigonometry puts them.

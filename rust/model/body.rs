@@ -3,9 +3,9 @@
 //! Convention: standard (URDF, Pinocchio, MuJoCo) — `I_xx = Σ m (y² + z²)`,
 //! `I_xy = −Σ m x y`. The paper writes products of inertia with the opposite sign; that is
 //! converted at the boundary, never here.
-use crate::error::{check_finite, Error, Result};
-use crate::point_masses::EquimomentalSet;
-use crate::spatial::{BodyInertia, Mat3, Vec3};
+use crate::model::point_masses::EquimomentalSet;
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{BodyInertia, Mat3, Vec3};
 
 /// Relative tolerance for symmetry, definiteness and the triangle inequality, scaled by the
 /// trace of the tensor: rounding in a user's numbers must not make a valid body invalid.

@@ -4,7 +4,7 @@
 //! with a body added) keeps its joints' names and limits; no computation reads them.
 use std::sync::Arc;
 
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
 /// The records of one model (empty for a model built body by body).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -2,16 +2,23 @@
 //! welded into their moving ancestor (a "link"), so dynamics runs over links only. Each link
 //! carries its merged rigid body, its seven point masses and the 6×6 mass matrix about its
 //! origin built once from those points, in the link frame.
+pub mod body;
+pub mod constraints;
+pub mod frame;
+pub mod joint_records;
+pub mod point_masses;
+pub mod visual;
+
 use std::collections::HashMap;
 use std::sync::{Arc, OnceLock};
 
-use crate::body::RigidBody;
-use crate::error::{check_finite, Error, Result};
 use crate::joint::Joint;
-use crate::joint_records::JointRecords;
-use crate::point_masses::EquimomentalSet;
+use crate::model::body::RigidBody;
+use crate::model::joint_records::JointRecords;
+use crate::model::point_masses::EquimomentalSet;
 use crate::recursive::Compiled;
-use crate::spatial::{BodyInertia, Mat3, Placement, Vec3};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{BodyInertia, Mat3, Placement, Vec3};
 
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct BodyRecord {
@@ -58,11 +65,11 @@ pub struct Model {
     pub nv: usize,
     /// Cut joints closing kinematic loops (`crate::loops`); empty for a tree.
     #[serde(default)]
-    pub loops: Vec<crate::loops::LoopJoint>,
+    pub loops: Vec<crate::model::constraints::LoopJoint>,
     /// Joint couplings `q_joint = ratio · q_reference + offset` (`crate::loops::coupling`),
     /// holonomic constraints solved with the loops; empty for most models.
     #[serde(default)]
-    pub couplings: Vec<crate::loops::Coupling>,
+    pub couplings: Vec<crate::model::constraints::Coupling>,
     /// Rotor inertia (armature) per speed, added to the mass matrix's diagonal in every
     /// algorithm (`crate::recursive::armature`); empty when no joint has any.
     #[serde(default)]
@@ -70,18 +77,18 @@ pub struct Model {
     /// What a viewer draws for each body (URDF `<visual>`, MJCF geoms); no part of the
     /// dynamics. Checked against `bodies` by `check_structure`.
     #[serde(default)]
-    pub visuals: Vec<crate::visual::Visual>,
+    pub visuals: Vec<crate::model::visual::Visual>,
     /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; empty if none): titles.
     #[serde(default)]
     pub name: String,
     /// The source file's joints (names, limits, damping, friction) and repairs
-    /// (`crate::joint_records`): no part of the dynamics, shared by every copy of the model.
+    /// (`crate::model::joint_records`): no part of the dynamics, shared by every copy of the model.
     #[serde(default)]
     pub records: Arc<JointRecords>,
     /// Frames added on bodies (`crate::frames`): tool points, sites; every body is a frame
     /// too. No part of the dynamics.
     #[serde(default)]
-    pub frames: Vec<crate::frames::Frame>,
+    pub frames: Vec<crate::model::frame::Frame>,
     /// Body index by name, kept by `add_body` (the only place bodies are added or named), so
     /// name lookups and duplicate checks cost O(1) and building a model is linear. Derived
     /// from `bodies`: not serialised, rebuilt when deserialising.
@@ -101,19 +108,19 @@ struct ModelData {
     nq: usize,
     nv: usize,
     #[serde(default)]
-    loops: Vec<crate::loops::LoopJoint>,
+    loops: Vec<crate::model::constraints::LoopJoint>,
     #[serde(default)]
-    couplings: Vec<crate::loops::Coupling>,
+    couplings: Vec<crate::model::constraints::Coupling>,
     #[serde(default)]
     armature: Vec<f64>,
     #[serde(default)]
-    visuals: Vec<crate::visual::Visual>,
+    visuals: Vec<crate::model::visual::Visual>,
     #[serde(default)]
     name: String,
     #[serde(default)]
     records: Arc<JointRecords>,
     #[serde(default)]
-    frames: Vec<crate::frames::Frame>,
+    frames: Vec<crate::model::frame::Frame>,
 }
 
 impl TryFrom<ModelData> for Model {
@@ -363,7 +370,7 @@ impl Model {
         if let Some(c) = &point_mass_center {
             check_finite("point_mass_center", c.as_slice())?;
         }
-        crate::error::check_name("body", name.as_deref())?;
+        crate::support::error::check_name("body", name.as_deref())?;
         let name = name.unwrap_or_else(|| format!("body{index}"));
         if self.body_index(&name).is_some() || self.frames.iter().any(|f| f.name == name) {
             return Err(Error::model(

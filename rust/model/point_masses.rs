@@ -7,8 +7,8 @@
 //! and the missing eighth equation is chosen so the unused vertex (−,−,−) gets zero mass — with
 //! entries 0 and ±1/4 and condition number 2.83, whatever the body's shape. The paper's
 //! h-scaled form has condition number ~(h_max/h_min)² and is never used.
-use crate::body::RigidBody;
-use crate::spatial::Vec3;
+use crate::model::body::RigidBody;
+use crate::support::spatial::Vec3;
 
 /// Vertex signs (paper Table I); the eighth vertex (−,−,−) is not used.
 pub const SIGNS: [[f64; 3]; 7] = [
@@ -132,7 +132,7 @@ impl EquimomentalSet {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::spatial::Mat3;
+    use crate::support::spatial::Mat3;
     use proptest::prelude::*;
 
     fn rod(a: f64, d: f64) -> RigidBody {

@@ -4,8 +4,8 @@
 //! simplifying them is the viewer's business (Python, an optional extra).
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
-use crate::spatial::{Placement, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Placement, Vec3};
 
 /// A shape in its own frame (the [`Visual::origin`] places that frame in the body frame).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -77,7 +77,7 @@ impl Visual {
             );
         }
         crate::model::checked_rotation(&self.origin.rotation, arg)?;
-        crate::error::check_finite(arg, self.origin.translation.as_slice())?;
+        crate::support::error::check_finite(arg, self.origin.translation.as_slice())?;
         let positive = |x: &[f64]| x.iter().all(|v| v.is_finite() && *v > 0.0);
         let ok = match &self.shape {
             Shape::Box { size } => positive(size.as_slice()),

@@ -8,7 +8,7 @@ use super::model::PyModel;
 use super::options::{given, t_span_arg};
 use super::run_config::method_arg;
 use crate::effects::{Disabled, Effects};
-use crate::scene::{Scene, Settings};
+use crate::io::scene::{Scene, Settings};
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
 pub struct PyScene {

@@ -13,7 +13,7 @@ use super::run_config::{call_config, PyRunConfig};
 use super::scene::{disable_arg, PyScene};
 use super::signals::{Watch, INTERVAL};
 use crate::integrator::Event;
-use crate::scene::Scene;
+use crate::io::scene::Scene;
 use crate::simulate::batch::StateRows;
 use crate::simulate::{run_scene, Dynamics, Progress, StateEvent, Trajectory};
 
@@ -355,7 +355,7 @@ pub fn simulate_batch<'py>(
             let dim = s.model.nq + s.model.nv;
             config.clone().resolve(&s.settings, &s.effects, dim)
         })
-        .collect::<crate::error::Result<Vec<_>>>()
+        .collect::<crate::support::error::Result<Vec<_>>>()
         .py(py)?;
     let runs = broadcast(&scenes, &resolved, q0s.as_ref(), v0s.as_ref()).py(py)?;
     let count = runs.len();
@@ -395,7 +395,7 @@ pub fn simulate_batch<'py>(
             }
             (Err(e), reason) => {
                 let d = PyDict::new(py);
-                if let (crate::error::Error::Interrupted(_), Some(r)) = (&e, reason) {
+                if let (crate::support::error::Error::Interrupted(_), Some(r)) = (&e, reason) {
                     let why = format!("the batch was stopped before this run started, by {r}");
                     d.set_item("message", why)?;
                 }

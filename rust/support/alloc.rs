@@ -3,7 +3,7 @@
 //! its size, never an abort of the whole process.
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 /// A `Vec<f64>` of `len` zeros, or an error naming `what`.
 pub fn try_zeros_vec(len: usize, what: &str) -> Result<Vec<f64>> {

@@ -41,7 +41,7 @@ macro_rules! multiversion {
         #[inline]
         $vis fn $name<$($gen)*>($($arg: $ty),*) $(-> $ret)? {
             #[cfg(target_arch = "x86_64")]
-            if $crate::cpu::has_avx2() {
+            if $crate::support::cpu::has_avx2() {
                 // SAFETY: the CPU supports AVX2, checked just above.
                 return unsafe { $avx2($($arg),*) };
             }

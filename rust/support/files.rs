@@ -6,7 +6,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use crate::error::{Error, FileKind, Location};
+use crate::support::error::{Error, FileKind, Location};
 
 /// Largest input file read: 128 MiB (a 150k-link URDF is about 50 MB).
 pub const MAX_FILE_BYTES: u64 = 128 * 1024 * 1024;

@@ -4,7 +4,7 @@
 //! thread-local read and never interrupts.
 use std::cell::RefCell;
 
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 /// "Keep going?": called often, so it should itself decide how often to do real work. It
 /// owns its state (share what the caller must read afterwards through an `Rc`).

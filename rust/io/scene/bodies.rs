@@ -1,11 +1,11 @@
 //! A scene's `[[body]]` entries: each added to the model below its parent, with its initial
 //! state in the file's units. Errors name the key `body[k] ('name').field`.
 use super::{BodyFile, Ctx, JointFile, Units};
-use crate::body::RigidBody;
-use crate::error::{Error, Result};
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 /// Adds every body to `model` and appends its joint's initial q and v to `q0`, `v0`.
 pub(super) fn add_bodies(
@@ -132,7 +132,7 @@ fn add_body(at: &At, model: &mut Model, b: &BodyFile, units: Units) -> Result<(J
             return Err(at.err("rotation", "give either rotation or rpy, not both"))
         }
         (Some(r), None) => Mat3::from_row_slice(&r.concat()),
-        (None, Some(rpy)) => crate::urdf::rpy_matrix(&(Vec3::from(rpy) * units.angle)),
+        (None, Some(rpy)) => crate::io::urdf::rpy_matrix(&(Vec3::from(rpy) * units.angle)),
         (None, None) => Mat3::identity(),
     };
     let (body, massless) = rigid_body(at, b)?;
@@ -180,7 +180,8 @@ fn rigid_body(at: &At, b: &BodyFile) -> Result<(RigidBody, bool)> {
     };
     let com = Vec3::from(b.com.unwrap_or([0.0; 3]));
     if b.mass == 0.0 {
-        crate::error::check_finite("com", com.as_slice()).map_err(|e| at.core("com", e))?;
+        crate::support::error::check_finite("com", com.as_slice())
+            .map_err(|e| at.core("com", e))?;
         if inertia.abs().max() > 0.0 {
             return Err(at.err(
                 "inertia",
@@ -231,7 +232,7 @@ fn initial_coordinates(
             joint.check_configuration(out, "q0")
         } else {
             super::to_radians(out, |k| joint.v_is_angular(k), units.rate);
-            crate::error::check_finite("v0", out)
+            crate::support::error::check_finite("v0", out)
         };
         checked.map_err(|e| at.core(field, e))?;
     }

@@ -4,9 +4,9 @@
 //! a URDF joint name or a body name. Errors name the key (`coupling[k].ratio`,
 //! `armature.elbow`, `body[k] ('name').armature`).
 use super::{Ctx, Units};
-use crate::error::Result;
+use crate::io::urdf::UrdfJoint;
 use crate::model::Model;
-use crate::urdf::UrdfJoint;
+use crate::support::error::Result;
 
 /// The keys of a `[[coupling]]` table.
 const COUPLING_KEYS: &str = "joint, reference, ratio, offset, name";
@@ -147,7 +147,7 @@ pub(super) fn set_armature(
     let values = armature_values(ctx, key, value)?;
     model.set_armature(b, &values).map_err(|e| match e {
         // The core names its arguments `joint` and `value`: here both are the key.
-        crate::error::Error::InvalidArgument { expected, got, .. } => {
+        crate::support::error::Error::InvalidArgument { expected, got, .. } => {
             ctx.err(key, format!("expected {expected}, got {got}"))
         }
         other => ctx.core(key, other),

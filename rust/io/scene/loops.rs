@@ -4,10 +4,11 @@
 use serde::Deserialize;
 
 use super::{Ctx, JointFile, Units};
-use crate::error::Result;
+use crate::io::urdf::rpy_matrix;
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::error::Result;
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -73,7 +74,7 @@ pub(super) fn add_loops(
                         ))
                     }
                     (Some(r), None) => Mat3::from_row_slice(&r.concat()),
-                    (None, Some(rpy)) => crate::urdf::rpy_matrix(&(Vec3::from(rpy) * units.angle)),
+                    (None, Some(rpy)) => rpy_matrix(&(Vec3::from(rpy) * units.angle)),
                     (None, None) => Mat3::identity(),
                 };
                 Ok(Placement::new(rotation, Vec3::from(t.unwrap_or([0.0; 3]))))

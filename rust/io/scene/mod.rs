@@ -8,8 +8,8 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::effects::{Disabled, Effect, Effects};
-use crate::error::{Error, FileKind, Location, Result};
 use crate::model::Model;
+use crate::support::error::{Error, FileKind, Location, Result};
 
 mod bodies;
 mod couplings;
@@ -183,12 +183,12 @@ struct SimulateFile {
 
 impl Scene {
     /// Reads and parses a scene file. Only a regular file of at most
-    /// [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a device is refused before it is
+    /// [`crate::support::files::MAX_FILE_BYTES`] is read (a FIFO or a device is refused before it is
     /// opened); errors name the path (shortened if too long to show).
     pub fn from_file(path: &Path) -> Result<Scene> {
-        let text = crate::files::read_text(path, FileKind::Scene)?;
+        let text = crate::support::files::read_text(path, FileKind::Scene)?;
         let dir = path.parent().unwrap_or(Path::new(""));
-        Self::parse(&text, &crate::files::display_path(path), dir)
+        Self::parse(&text, &crate::support::files::display_path(path), dir)
     }
 
     /// Parses a scene from TOML text; `file` names it in errors, and a `urdf` key is resolved
@@ -264,7 +264,7 @@ fn set_records(ctx: &Ctx, model: &mut Model, r: write::RecordsFile, urdf: bool) 
         ));
     }
     model.name = r.model;
-    model.records = crate::joint_records::JointRecords::new(r.joints, r.repairs);
+    model.records = crate::model::joint_records::JointRecords::new(r.joints, r.repairs);
     model.visuals = r.visuals;
     model
         .check_structure()
@@ -354,8 +354,8 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
         return Ok((Model::new(), Vec::new()));
     };
     let root = match sf.root_joint.as_deref() {
-        None | Some("fixed") => crate::urdf::RootJoint::Fixed,
-        Some("free") => crate::urdf::RootJoint::Free,
+        None | Some("fixed") => crate::io::urdf::RootJoint::Fixed,
+        Some("free") => crate::io::urdf::RootJoint::Free,
         Some(other) => {
             return Err(ctx.err(
                 "root_joint",
@@ -367,8 +367,8 @@ fn urdf_model(ctx: &Ctx, dir: &Path, sf: &SceneFile) -> Result<(Model, Vec<Effec
     let repair = sf
         .urdf_repair
         .unwrap_or(false)
-        .then(crate::urdf::Repair::default);
-    let urdf = crate::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref(), &[])
+        .then(crate::io::urdf::Repair::default);
+    let urdf = crate::io::urdf::load_urdf_with(&dir.join(rel), root, repair.as_ref(), &[])
         .map_err(|e| ctx.core("urdf", e))?;
     let effects = urdf_dynamics_effects(ctx, &urdf, sf.urdf_dynamics.as_deref())?;
     Ok((urdf.model, effects))
@@ -428,7 +428,7 @@ fn scene_effects(
     model: &Model,
     tables: &[EffectFile],
     mut effects: Vec<Effect>,
-    urdf_joints: &[crate::urdf::UrdfJoint],
+    urdf_joints: &[crate::io::urdf::UrdfJoint],
 ) -> Result<Vec<Effect>> {
     let from_urdf = effects.len();
     for (k, e) in tables.iter().enumerate() {
@@ -491,14 +491,14 @@ fn settings(ctx: &Ctx, s: SimulateFile) -> Result<Settings> {
 /// are at the key `urdf_dynamics`.
 fn urdf_dynamics_effects(
     ctx: &Ctx,
-    urdf: &crate::urdf::Urdf,
+    urdf: &crate::io::urdf::Urdf,
     asked: Option<&[String]>,
 ) -> Result<Vec<Effect>> {
     let core = |e: Error| ctx.core("urdf_dynamics", e);
     use crate::effects::{damper::Damper, friction::Friction, JointRef, PerJoint};
     let mut out = Vec::new();
     for what in asked.unwrap_or(&[]) {
-        let pick = |f: fn(&crate::urdf::UrdfJoint) -> f64| -> (Vec<JointRef>, Vec<f64>) {
+        let pick = |f: fn(&crate::io::urdf::UrdfJoint) -> f64| -> (Vec<JointRef>, Vec<f64>) {
             urdf.joints()
                 .iter()
                 .filter(|j| j.q_index.is_some() && f(j) != 0.0)

@@ -10,24 +10,24 @@
 //! shortest decimal that reads back to the same `f64`.
 use super::Scene;
 use crate::effects::scene_writer::{number, numbers, vec3};
-use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Mat3, Placement};
 use toml::Value;
 
-/// `[records]`: what the model keeps beside the dynamics (`crate::joint_records`).
+/// `[records]`: what the model keeps beside the dynamics (`crate::model::joint_records`).
 #[derive(Default, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RecordsFile {
     #[serde(default)]
     pub model: String,
     #[serde(default)]
-    pub joints: Vec<crate::joint_records::UrdfJoint>,
+    pub joints: Vec<crate::model::joint_records::UrdfJoint>,
     #[serde(default)]
-    pub repairs: Vec<crate::joint_records::RepairRecord>,
+    pub repairs: Vec<crate::model::joint_records::RepairRecord>,
     #[serde(default)]
-    pub visuals: Vec<crate::visual::Visual>,
+    pub visuals: Vec<crate::model::visual::Visual>,
 }
 
 fn rows(m: &Mat3) -> Value {
@@ -62,7 +62,7 @@ fn joint(j: &Joint) -> Value {
 /// Sets `translation`/`rotation` keys (with `suffix`) of a placement; identity parts are
 /// left out.
 fn placement(t: &mut toml::Table, p: &Placement, suffix: &str) {
-    if p.translation != crate::spatial::Vec3::zeros() {
+    if p.translation != crate::support::spatial::Vec3::zeros() {
         t.insert(format!("translation{suffix}"), vec3(&p.translation));
     }
     if p.rotation != Mat3::identity() {
@@ -219,9 +219,10 @@ impl Scene {
     pub fn write(&self, path: &std::path::Path) -> Result<()> {
         let text = self.to_toml()?;
         std::fs::write(path, text).map_err(|e| {
-            let at = crate::error::Location::new(crate::files::display_path(path), "");
+            let at =
+                crate::support::error::Location::new(crate::support::files::display_path(path), "");
             Error::file(
-                crate::error::FileKind::Scene,
+                crate::support::error::FileKind::Scene,
                 at,
                 format!("cannot write: {e}"),
             )

@@ -6,11 +6,11 @@ use std::collections::{BTreeMap, HashMap};
 use super::parse::{Ctx, Kind, LinkData, RobotData};
 use super::tree::Tree;
 use super::{RootJoint, UrdfJoint, ROOT_JOINT_NAME};
-use crate::body::RigidBody;
-use crate::error::{Error, FileKind, Location, Result};
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::error::{Error, FileKind, Location, Result};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 /// The model; for each link, its body's index; the warning about invalid inertials ignored
 /// (if any).

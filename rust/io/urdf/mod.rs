@@ -36,10 +36,10 @@
 //! builds the model through `Model`'s own methods ([`build`]).
 use std::path::{Path, PathBuf};
 
-use crate::error::{FileKind, Result};
 use crate::joint::{rot_x, rot_y, rot_z};
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3};
+use crate::support::error::{FileKind, Result};
+use crate::support::spatial::{Mat3, Vec3};
 
 mod build;
 mod parse;
@@ -49,7 +49,7 @@ mod srdf;
 mod tree;
 mod visuals;
 
-pub use crate::joint_records::{Limit, Mimic, RepairRecord, UrdfJoint};
+pub use crate::model::joint_records::{Limit, Mimic, RepairRecord, UrdfJoint};
 pub use parts::{model_from_parts, Part};
 pub use repair::Repair;
 pub use srdf::{load_reference_poses, reference_poses, ReferencePose};
@@ -123,7 +123,7 @@ impl Urdf {
 }
 
 /// Reads and loads a URDF file; errors name `path` as given.
-/// Only a regular file of at most [`crate::files::MAX_FILE_BYTES`] is read (a FIFO or a
+/// Only a regular file of at most [`crate::support::files::MAX_FILE_BYTES`] is read (a FIFO or a
 /// device is refused before it is opened); a path too long to show is shortened in messages.
 pub fn load_urdf(path: &Path, root: RootJoint) -> Result<Urdf> {
     load_urdf_with(path, root, None, &[])
@@ -137,10 +137,10 @@ pub fn load_urdf_with(
     repair: Option<&Repair>,
     package_dirs: &[PathBuf],
 ) -> Result<Urdf> {
-    let text = crate::files::read_text(path, FileKind::Urdf)?;
+    let text = crate::support::files::read_text(path, FileKind::Urdf)?;
     model_from_urdf_with(
         &text,
-        &crate::files::display_path(path),
+        &crate::support::files::display_path(path),
         path.parent(),
         root,
         repair,
@@ -155,7 +155,7 @@ pub fn rpy_matrix(rpy: &Vec3) -> Mat3 {
 
 /// Parses URDF text. `file` names it in errors and warnings; `base_dir` is the directory its
 /// relative resources would resolve against (kept in [`Urdf::base_dir`]). Errors are
-/// [`crate::error::Error::File`] of kind [`FileKind::Urdf`], naming the element and, where
+/// [`crate::support::error::Error::File`] of kind [`FileKind::Urdf`], naming the element and, where
 /// known, the line.
 pub fn model_from_urdf(
     text: &str,
@@ -193,7 +193,7 @@ pub fn model_from_urdf_with(
         .chain(build::joint_warnings(file, &joints, &robot.ignored))
         .chain(mimics)
         .collect();
-    built.model.records = crate::joint_records::JointRecords::new(joints, repairs);
+    built.model.records = crate::model::joint_records::JointRecords::new(joints, repairs);
     Ok(Urdf {
         name: robot.name,
         model: built.model,

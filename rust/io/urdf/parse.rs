@@ -7,9 +7,9 @@ use roxmltree::{Document, Node, ParsingOptions};
 use super::repair::{repair_inertial, Repair};
 use super::RepairRecord;
 use super::{rpy_matrix, Limit, Mimic};
-use crate::body::RigidBody;
-use crate::error::{Error, FileKind, Location, Result};
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::model::body::RigidBody;
+use crate::support::error::{Error, FileKind, Location, Result};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 mod visual;
 pub(super) use visual::VisualData;

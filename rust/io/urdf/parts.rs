@@ -4,11 +4,11 @@
 //! importers.py) hand over, so a MuJoCo body with several joints becomes a chain of massless
 //! bodies, and joint order and names are kept.
 use super::{Urdf, UrdfJoint};
-use crate::body::RigidBody;
-use crate::error::{Error, Result};
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 /// One body: its joint frame in the parent's body frame, its joint and its own inertial
 /// (mass may be 0: a massless intermediate body).
@@ -135,7 +135,7 @@ pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
             }
         })
         .collect();
-    model.records = crate::joint_records::JointRecords::new(joints, Vec::new());
+    model.records = crate::model::joint_records::JointRecords::new(joints, Vec::new());
     Ok(Urdf {
         name: String::new(),
         model,

@@ -5,7 +5,7 @@
 use super::parse::{Inertial, Kind, RobotData};
 use super::tree::Tree;
 use super::RepairRecord;
-use crate::spatial::{Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 /// Which repairs a load may make (`Model.from_urdf(..., repair=...)`).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -6,8 +6,8 @@
 //! listed; a value of the wrong length is an error naming the pose and the joint.
 use std::path::Path;
 
-use crate::error::{Error, FileKind, Location, Result};
 use crate::model::Model;
+use crate::support::error::{Error, FileKind, Location, Result};
 
 /// One reference pose: its name and configuration (q, normalised).
 #[derive(Debug, Clone, PartialEq)]
@@ -22,8 +22,8 @@ pub fn load_reference_poses(
     model: &Model,
     path: &Path,
 ) -> Result<(Vec<ReferencePose>, Vec<String>)> {
-    let text = crate::files::read_text_named(path, FileKind::Urdf, "SRDF")?;
-    reference_poses(model, &text, &crate::files::display_path(path))
+    let text = crate::support::files::read_text_named(path, FileKind::Urdf, "SRDF")?;
+    reference_poses(model, &text, &crate::support::files::display_path(path))
 }
 
 /// [`load_reference_poses`] of SRDF text; `file` names it in errors.

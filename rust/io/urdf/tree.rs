@@ -4,7 +4,7 @@
 use std::collections::HashMap;
 
 use super::parse::{Ctx, JointData, LinkData};
-use crate::error::Result;
+use crate::support::error::Result;
 
 pub(super) struct Tree {
     /// The link that is no joint's child.

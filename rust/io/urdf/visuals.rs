@@ -1,10 +1,10 @@
 //! The `<visual>`s of the links put on the model's bodies, their mesh files looked for as
-//! Pinocchio does ([`crate::visual::resolve_mesh`]): one warning names every mesh not found.
+//! Pinocchio does ([`crate::model::visual::resolve_mesh`]): one warning names every mesh not found.
 use std::path::{Path, PathBuf};
 
 use super::parse::RobotData;
+use crate::model::visual::{resolve_mesh, Shape, Visual};
 use crate::model::Model;
-use crate::visual::{resolve_mesh, Shape, Visual};
 
 /// Where meshes are looked for besides `package_dirs`: `ROS_PACKAGE_PATH` (as Pinocchio).
 fn ros_package_path() -> Vec<PathBuf> {

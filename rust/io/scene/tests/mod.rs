@@ -1,6 +1,6 @@
 //! The scene loader's tests.
 use super::*;
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
 const PENDULUM: &str = r#"
 name = "pendulum"
@@ -63,7 +63,7 @@ fn errors_name_file_and_key() {
 
 #[test]
 fn errors_carry_their_location() {
-    use crate::error::{Error, FileKind};
+    use crate::support::error::{Error, FileKind};
     let bad_parent = PENDULUM.replace("name = \"rod\"", "name = \"rod\"\nparent = \"nope\"");
     match Scene::from_toml(&bad_parent, "p.toml").unwrap_err() {
         Error::File { kind, at, .. } => {

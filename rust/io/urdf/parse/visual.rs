@@ -4,12 +4,12 @@
 use roxmltree::Node;
 
 use super::{child, Ctx};
-use crate::spatial::{Placement, Vec3};
-use crate::visual::Shape;
+use crate::model::visual::Shape;
+use crate::support::spatial::{Placement, Vec3};
 
 /// A `<visual>` as read: its mesh `path` is resolved once the tree is built.
 #[derive(Debug, Clone)]
-pub(in crate::urdf) struct VisualData {
+pub(in crate::io::urdf) struct VisualData {
     pub origin: Placement,
     pub shape: Shape,
     /// Its own `<material><color rgba>`, else the name of a robot-level `<material>`.
@@ -73,9 +73,9 @@ pub(super) fn visual(ctx: &Ctx, element: &str, node: Node) -> Result<VisualData,
     })
 }
 
-fn shape(ctx: &Ctx, element: &str, node: Node) -> crate::error::Result<Shape> {
+fn shape(ctx: &Ctx, element: &str, node: Node) -> crate::support::error::Result<Shape> {
     let tag = node.tag_name().name();
-    let positive = |attr: &str| -> crate::error::Result<f64> {
+    let positive = |attr: &str| -> crate::support::error::Result<f64> {
         let x = ctx.required(element, node, attr)?;
         if x > 0.0 {
             Ok(x)

@@ -1,7 +1,7 @@
 //! The URDF loader's tests: small robots written inline by the fixtures below.
 use super::*;
 use crate::joint::{rot_x, rot_y, rot_z, Joint};
-use crate::spatial::{Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 fn inertial(mass: f64, xyz: &str, rpy: &str, diag: [f64; 3]) -> String {
     format!(
@@ -456,7 +456,7 @@ fn errors_name_file_and_element() {
 
 #[test]
 fn errors_carry_their_location() {
-    use crate::error::{Error, FileKind, Location};
+    use crate::support::error::{Error, FileKind, Location};
     let located =
         |text: &str| match model_from_urdf(text, "t.urdf", None, RootJoint::Fixed).unwrap_err() {
             Error::File { kind, at, .. } => (kind, at),
@@ -563,7 +563,7 @@ fn parts_keep_order_and_allow_massless_intermediates() {
     let part = |name: &str, parent: Option<usize>, joint: Joint, mass: f64| Part {
         name: name.to_string(),
         parent,
-        placement: crate::spatial::Placement::identity(),
+        placement: crate::support::spatial::Placement::identity(),
         joint,
         joint_name: format!("{name}_j"),
         mass,
@@ -607,14 +607,14 @@ fn visuals_are_kept_on_the_links_bodies_with_their_materials() {
     assert_eq!(m.visuals[0].body, a);
     assert_eq!(
         m.visuals[0].shape,
-        crate::visual::Shape::Cylinder {
+        crate::model::visual::Shape::Cylinder {
             radius: 0.1,
             length: 1.0
         }
     );
     assert_eq!(m.visuals[0].rgba, Some([0.5, 0.5, 0.6, 1.0]));
     assert_eq!(m.visuals[0].origin.translation, Vec3::new(0.0, 0.0, 0.5));
-    let crate::visual::Shape::Mesh { uri, path, scale } = &m.visuals[1].shape else {
+    let crate::model::visual::Shape::Mesh { uri, path, scale } = &m.visuals[1].shape else {
         panic!("{:?}", m.visuals[1])
     };
     assert_eq!(uri, "package://nowhere/a.stl");
