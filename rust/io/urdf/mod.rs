@@ -176,9 +176,9 @@ pub fn model_from_urdf_with(
     package_dirs: &[PathBuf],
 ) -> Result<Urdf> {
     let ctx = Ctx::new(file, text);
-    let mut robot = parse::parse_robot(&ctx, text, repair)?;
+    let mut robot = parse::parse_robot(&ctx, text)?;
+    let mut repairs = repair::inertials(&mut robot, repair);
     let tree = Tree::new(&ctx, &robot.links, &robot.joints)?;
-    let mut repairs = std::mem::take(&mut robot.repairs);
     if repair.is_some_and(|r| r.weld_massless) {
         repairs.extend(repair::weld_massless(&mut robot, &tree));
     }

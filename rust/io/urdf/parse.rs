@@ -4,8 +4,6 @@ use std::collections::BTreeMap;
 
 use roxmltree::{Document, Node, ParsingOptions};
 
-use super::repair::{repair_inertial, Repair};
-use super::RepairRecord;
 use super::{rpy_matrix, Limit, Mimic};
 use crate::model::body::RigidBody;
 use crate::support::error::{Error, FileKind, Location, Result};
@@ -62,8 +60,12 @@ pub(super) struct LinkData {
     pub name: String,
     pub line: u32,
     pub inertial: Inertial,
+    /// The `<inertial>`'s line (the link's without one), and whether the link has one.
+    pub inertial_line: u32,
+    pub has_inertial: bool,
     /// Why the inertial is no rigid body's (its line, and the message, which says the line):
-    /// an error unless the link is welded to the world.
+    /// an error unless the link is welded to the world. Not the reader's: `repair::inertials`
+    /// sets it.
     pub invalid: Option<(u32, String)>,
     /// `<visual>` elements in file order (those that could be read).
     pub visuals: Vec<VisualData>,
@@ -92,8 +94,6 @@ pub(super) struct RobotData {
     pub links: Vec<LinkData>,
     pub joints: Vec<JointData>,
     pub ignored: BTreeMap<String, usize>,
-    /// The links whose inertials a `repair` changed, in file order.
-    pub repairs: Vec<RepairRecord>,
     /// Leniencies the reader allowed itself (undeclared namespace prefixes), visuals dropped.
     pub notes: Vec<String>,
     /// Robot-level `<material name><color rgba>`, by name.
@@ -221,7 +221,7 @@ impl<'a> Ctx<'a> {
 
 /// Parses the text's `<robot>`: every `<link>` and `<joint>` (each checked on its own; how
 /// they connect is [`super::tree`]'s business).
-pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Result<RobotData> {
+pub(super) fn parse_robot(ctx: &Ctx, text: &str) -> Result<RobotData> {
     // Real files use namespace prefixes they never declare (`drake:`, `gazebo:`), which
     // urdfdom (TinyXML) reads; declare each one on the root element (same line: the line
     // numbers stay) and say so.
@@ -272,7 +272,6 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Res
     let mut ignored: BTreeMap<String, usize> = BTreeMap::new();
     let mut links: Vec<LinkData> = Vec::new();
     let mut joints: Vec<JointData> = Vec::new();
-    let mut repairs = Vec::new();
     let mut materials = BTreeMap::new();
     for c in robot.children().filter(|c| c.is_element()) {
         if let Some(q) = foreign(c) {
@@ -280,7 +279,7 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Res
             continue;
         }
         match c.tag_name().name() {
-            "link" => links.push(parse_link(ctx, c, &mut ignored, repair, &mut repairs)?),
+            "link" => links.push(parse_link(ctx, c, &mut ignored)?),
             "joint" => joints.push(parse_joint(ctx, c, &mut ignored)?),
             "material" => match visual::material(ctx, "robot", c) {
                 Ok((Some(name), Some(rgba))) => {
@@ -303,7 +302,6 @@ pub(super) fn parse_robot(ctx: &Ctx, text: &str, repair: Option<&Repair>) -> Res
         links,
         joints,
         ignored,
-        repairs,
         notes,
         materials,
     })
@@ -394,13 +392,7 @@ fn named(ctx: &Ctx, node: Node, tag: &str) -> Result<(String, String)> {
     Ok((name.to_string(), format!("{tag} '{name}'")))
 }
 
-fn parse_link(
-    ctx: &Ctx,
-    node: Node,
-    ignored: &mut BTreeMap<String, usize>,
-    repair: Option<&Repair>,
-    repairs: &mut Vec<RepairRecord>,
-) -> Result<LinkData> {
+fn parse_link(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> Result<LinkData> {
     let (name, element) = named(ctx, node, "link")?;
     let mut inertial = Inertial::none();
     let mut line = ctx.line(node);
@@ -426,22 +418,13 @@ fn parse_link(
             other => count(ignored, format!("<link><{other}>")),
         }
     }
-    // MuJoCo bounds every body, those without <inertial> too.
-    if let Some((fixed, record)) = repair.and_then(|r| repair_inertial(&name, &inertial, r)) {
-        inertial = fixed;
-        repairs.push(record);
-    }
-    let (inertial, invalid) = if seen_inertial || inertial.mass > 0.0 {
-        let (i, m) = validated(inertial, line, repair.is_some());
-        (i, m.map(|message| (line, message)))
-    } else {
-        (inertial, None)
-    };
     Ok(LinkData {
         name,
         line: ctx.line(node),
         inertial,
-        invalid,
+        inertial_line: line,
+        has_inertial: seen_inertial,
+        invalid: None,
         visuals,
         visual_notes,
     })
@@ -476,66 +459,6 @@ fn parse_inertial(ctx: &Ctx, element: &str, node: Node) -> Result<Inertial> {
         com: origin.translation,
         inertia: (rotated + rotated.transpose()) * 0.5,
     })
-}
-
-/// What `repair` would do about an invalid inertia, for the error of a load without it.
-const REPAIR_HINT: &str = "Model.from_urdf(..., repair=True) loads it as MuJoCo's compiler options balanceinertia/boundinertia would (docs/robots.md)";
-
-/// Validates a link's own body with our RigidBody's rules and messages. Mass 0 is a massless
-/// link (checked later against the tree); its tensor must still be physical. Tolerances
-/// scale with the link's inertia about its origin, m (|c|² + (1 mm)²): files written from
-/// CAD carry rounding noise (iCub's head: a point mass with ixz = 2.4e-35) that is no error
-/// at the scale the link enters the dynamics. A tensor accepted only at that scale is
-/// replaced by the nearest physical one (a change of that rounding size), since the
-/// point-mass solver must not see a non-physical tensor.
-fn validated(inertial: Inertial, line: u32, repaired: bool) -> (Inertial, Option<String>) {
-    let hint = if repaired {
-        String::new()
-    } else {
-        format!("; {REPAIR_HINT}")
-    };
-    let Inertial { mass, com, inertia } = inertial;
-    let (check_mass, scale) = if mass == 0.0 {
-        (1.0, 0.0)
-    } else {
-        (mass, mass * (com.norm_squared() + 1e-6))
-    };
-    if RigidBody::new(check_mass, com, inertia).is_ok() {
-        return (inertial, None);
-    }
-    match RigidBody::new_with_scale(check_mass, com, inertia, scale) {
-        Ok(_) => (
-            Inertial {
-                inertia: nearest_physical(&inertia),
-                ..inertial
-            },
-            None,
-        ),
-        Err(Error::InvalidInertia { arg, reason }) if arg == "mass" => (
-            inertial,
-            Some(format!("<inertial><mass value>: {reason} (line {line})")),
-        ),
-        Err(e) => (
-            inertial,
-            Some(format!("<inertial>: {e} (line {line}){hint}")),
-        ),
-    }
-}
-
-/// The physical inertia nearest `i` in principal second moments: `σ_k = ½(λ_i + λ_j − λ_k)`
-/// clamped at 0, `λ'_k = σ_i + σ_j`, same principal axes.
-fn nearest_physical(i: &Mat3) -> Mat3 {
-    let eig = i.symmetric_eigen();
-    let l = eig.eigenvalues;
-    let s = Vec3::new(
-        (0.5 * (l[1] + l[2] - l[0])).max(0.0),
-        (0.5 * (l[0] + l[2] - l[1])).max(0.0),
-        (0.5 * (l[0] + l[1] - l[2])).max(0.0),
-    );
-    let d = Vec3::new(s.y + s.z, s.x + s.z, s.x + s.y);
-    let v = eig.eigenvectors;
-    let out = v * Mat3::from_diagonal(&d) * v.transpose();
-    (out + out.transpose()) * 0.5
 }
 
 fn parse_joint(ctx: &Ctx, node: Node, ignored: &mut BTreeMap<String, usize>) -> Result<JointData> {

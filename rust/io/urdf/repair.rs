@@ -2,9 +2,13 @@
 //! options `boundmass`, `boundinertia` and `balanceinertia`, applied as MuJoCo applies them
 //! (per link, to the link's own `<inertial>`, before the fixed joints merge links into
 //! bodies), and the welding of moving joints that move no mass. Every change is recorded.
+//! The reader (`parse`) only reads: each link's inertial is repaired, then checked, here
+//! ([`inertials`]), before the tree is built.
 use super::parse::{Inertial, Kind, RobotData};
 use super::tree::Tree;
 use super::RepairRecord;
+use crate::model::body::RigidBody;
+use crate::support::error::Error;
 use crate::support::spatial::{Mat3, Vec3};
 
 /// Which repairs a load may make (`Model.from_urdf(..., repair=...)`).
@@ -31,6 +35,92 @@ impl Default for Repair {
             weld_massless: true,
         }
     }
+}
+
+/// Every link's inertial after reading: the opt-in repairs (`repair`; MuJoCo bounds every
+/// body, those without `<inertial>` too), then the check of what remains ([`validated`]).
+/// Returns the repairs made, in file order.
+pub(super) fn inertials(robot: &mut RobotData, repair: Option<&Repair>) -> Vec<RepairRecord> {
+    let mut repairs = Vec::new();
+    for link in &mut robot.links {
+        let mut inertial = link.inertial;
+        let line = link.inertial_line;
+        if let Some((fixed, record)) =
+            repair.and_then(|r| repair_inertial(&link.name, &inertial, r))
+        {
+            inertial = fixed;
+            repairs.push(record);
+        }
+        let (inertial, invalid) = if link.has_inertial || inertial.mass > 0.0 {
+            let (i, m) = validated(inertial, line, repair.is_some());
+            (i, m.map(|message| (line, message)))
+        } else {
+            (inertial, None)
+        };
+        link.inertial = inertial;
+        link.invalid = invalid;
+    }
+    repairs
+}
+
+/// What `repair` would do about an invalid inertia, for the error of a load without it.
+const REPAIR_HINT: &str = "Model.from_urdf(..., repair=True) loads it as MuJoCo's compiler options balanceinertia/boundinertia would (docs/robots.md)";
+
+/// Validates a link's own body with our RigidBody's rules and messages. Mass 0 is a massless
+/// link (checked later against the tree); its tensor must still be physical. Tolerances
+/// scale with the link's inertia about its origin, m (|c|² + (1 mm)²): files written from
+/// CAD carry rounding noise (iCub's head: a point mass with ixz = 2.4e-35) that is no error
+/// at the scale the link enters the dynamics. A tensor accepted only at that scale is
+/// replaced by the nearest physical one (a change of that rounding size), since the
+/// point-mass solver must not see a non-physical tensor.
+fn validated(inertial: Inertial, line: u32, repaired: bool) -> (Inertial, Option<String>) {
+    let hint = if repaired {
+        String::new()
+    } else {
+        format!("; {REPAIR_HINT}")
+    };
+    let Inertial { mass, com, inertia } = inertial;
+    let (check_mass, scale) = if mass == 0.0 {
+        (1.0, 0.0)
+    } else {
+        (mass, mass * (com.norm_squared() + 1e-6))
+    };
+    if RigidBody::new(check_mass, com, inertia).is_ok() {
+        return (inertial, None);
+    }
+    match RigidBody::new_with_scale(check_mass, com, inertia, scale) {
+        Ok(_) => (
+            Inertial {
+                inertia: nearest_physical(&inertia),
+                ..inertial
+            },
+            None,
+        ),
+        Err(Error::InvalidInertia { arg, reason }) if arg == "mass" => (
+            inertial,
+            Some(format!("<inertial><mass value>: {reason} (line {line})")),
+        ),
+        Err(e) => (
+            inertial,
+            Some(format!("<inertial>: {e} (line {line}){hint}")),
+        ),
+    }
+}
+
+/// The physical inertia nearest `i` in principal second moments: `σ_k = ½(λ_i + λ_j − λ_k)`
+/// clamped at 0, `λ'_k = σ_i + σ_j`, same principal axes.
+fn nearest_physical(i: &Mat3) -> Mat3 {
+    let eig = i.symmetric_eigen();
+    let l = eig.eigenvalues;
+    let s = Vec3::new(
+        (0.5 * (l[1] + l[2] - l[0])).max(0.0),
+        (0.5 * (l[0] + l[2] - l[1])).max(0.0),
+        (0.5 * (l[0] + l[1] - l[2])).max(0.0),
+    );
+    let d = Vec3::new(s.y + s.z, s.x + s.z, s.x + s.y);
+    let v = eig.eigenvectors;
+    let out = v * Mat3::from_diagonal(&d) * v.transpose();
+    (out + out.transpose()) * 0.5
 }
 
 /// Ascending principal moments and their axes (columns).
