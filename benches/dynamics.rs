@@ -10,7 +10,7 @@ use pointmass_dyn::integrator::{SolverOptions, Stepper};
 use pointmass_dyn::model::Model;
 use pointmass_dyn::recursive::{self, Data};
 use pointmass_dyn::simulate::Dynamics;
-use pointmass_dyn::spatial::Vec3;
+use pointmass_dyn::support::spatial::Vec3;
 
 const G: Vec3 = Vec3::new(0.0, 0.0, -9.81);
 

@@ -15,7 +15,7 @@ use pointmass_dyn::integrator::OdeSystem;
 use pointmass_dyn::model::Model;
 use pointmass_dyn::recursive::{self, Data};
 use pointmass_dyn::simulate::Dynamics;
-use pointmass_dyn::spatial::Vec3;
+use pointmass_dyn::support::spatial::Vec3;
 
 fn table(cols: usize) -> Table {
     let time: Vec<f64> = (0..50).map(|k| 0.1 * k as f64).collect();

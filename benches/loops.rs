@@ -5,16 +5,16 @@
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use pointmass_dyn::body::RigidBody;
 use pointmass_dyn::effects::Disabled;
 use pointmass_dyn::integrator::SolverOptions;
+use pointmass_dyn::io::scene::Scene;
 use pointmass_dyn::joint::Joint;
 use pointmass_dyn::loops::{self, LoopSolver};
+use pointmass_dyn::model::body::RigidBody;
 use pointmass_dyn::model::Model;
 use pointmass_dyn::recursive::{self, Data};
-use pointmass_dyn::scene::Scene;
 use pointmass_dyn::simulate::{simulate, Record};
-use pointmass_dyn::spatial::{Mat3, Placement, Vec3};
+use pointmass_dyn::support::spatial::{Mat3, Placement, Vec3};
 
 const G: Vec3 = Vec3::new(0.0, -9.81, 0.0);
 

@@ -2,7 +2,7 @@
 //! shared machine than criterion's wall times:
 //!
 //! ```text
-//! cargo build --release --example loop
+//! cargo build --release --example loop --features benchmark-models
 //! valgrind --tool=callgrind target/release/examples/loop fd 7 100000   # ÷ 100000 per call
 //! target/release/examples/loop scene python/pointmass_dyn/scenes/panda.toml 1000000
 //! ```
@@ -16,15 +16,15 @@
 //! atol 1e-12, t in (0, 20): IFToMM A02's high-precision run), printing the time per
 //! right-hand side. Subtract a
 //! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
-//! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::cpu`).
+//! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::support::cpu`).
 use std::hint::black_box;
 
 use nalgebra::DMatrix;
 use pointmass_dyn::benchmark_models::chain;
+use pointmass_dyn::io::scene::Scene;
 use pointmass_dyn::model::Model;
 use pointmass_dyn::recursive::{self, Data};
-use pointmass_dyn::scene::Scene;
-use pointmass_dyn::spatial::Vec3;
+use pointmass_dyn::support::spatial::Vec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();

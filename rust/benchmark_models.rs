@@ -1,8 +1,8 @@
 //! The models every benchmark uses (docs/benchmarks.md), so figures are comparable across tools.
-use crate::body::RigidBody;
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 fn chain_link() -> RigidBody {
     RigidBody {

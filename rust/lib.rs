@@ -6,44 +6,48 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 // The recursions walk several per-link arrays in step; an index reads clearer than zips.
 #![allow(clippy::needless_range_loop)]
-pub mod alloc;
-pub mod benchmark_models;
-pub mod body;
-pub mod control;
-pub mod cpu;
-pub mod denoc;
-pub mod design;
-pub mod effects;
-pub mod error;
-pub mod files;
-pub mod frames;
-pub mod identification;
-pub mod integrator;
-pub mod interrupt;
-pub mod joint;
-pub mod joint_records;
-pub mod kinematics;
+// The layers, bottom up (docs/architecture.md): a group of modules uses only the groups
+// before it and its own. The exceptions are counted by tests/test_code_limits.py (at most
+// two cycles): the model keeps the recursions' constants (`recursive::Compiled`), which
+// read the model, and the recursions read the world kinematics, which read the model.
+
+// Infrastructure and the 3-/6-vector algebra everything speaks; the factorisations (a leaf).
 pub mod linalg;
-pub mod loops;
+pub mod support;
+
+// The model: joints, bodies and their point masses, the tree and what it carries.
+pub mod joint;
 pub mod model;
-pub mod persist;
-pub mod point_masses;
-pub mod poses;
-pub mod reactions;
+
+// The algorithms on a model.
+pub mod dynamics;
+pub mod frames;
+pub mod kinematics;
+pub mod loops;
 pub mod recursive;
-pub mod scene;
-pub mod shared;
+
+// Simulation: effects (forces), integrators, file formats (a scene file holds effects and
+// solver settings), runs, stepped control.
+pub mod control;
+pub mod effects;
+pub mod integrator;
+pub mod io;
 pub mod simulate;
-pub mod spatial;
-pub mod trig;
-pub mod urdf;
-pub mod visual;
+
+// Applications.
+pub mod design;
+pub mod identification;
+
+// The models every benchmark uses (docs/benchmarks.md), for benches, examples and tests:
+// no part of the shipped library (feature `benchmark-models`, which those targets require).
+#[cfg(any(test, feature = "benchmark-models"))]
+pub mod benchmark_models;
 
 #[cfg(feature = "python")]
 mod python;
 
-pub use body::RigidBody;
-pub use error::{Error, Result};
 pub use joint::Joint;
+pub use model::body::RigidBody;
+pub use model::point_masses::EquimomentalSet;
 pub use model::Model;
-pub use point_masses::EquimomentalSet;
+pub use support::error::{Error, Result};

@@ -109,3 +109,22 @@ def test_visualisation_runs_every_block_but_the_live_view():
             assert "show_meshcat" in code, f"visualisation.md:{line} is not run"
             assert used <= known | defined, (line, sorted(used - known - defined))
         known |= defined
+
+
+RUST_PATH = re.compile(r"\brust/[\w/]*\w(?:\.rs|/)")
+
+
+def test_rust_paths_in_the_pages_exist():
+    """Every `rust/...` file or folder a page names is in the tree (the guides' `foo.rs`, the
+    file a reader adds, excepted): docs/architecture.md describes the real tree."""
+    missing = {f"{page.relative_to(ROOT)}: {path}" for page in ALL_PAGES
+               for path in RUST_PATH.findall(page.read_text())
+               if not (ROOT / path).exists() and not path.endswith("/foo.rs")}
+    assert missing == set()
+
+
+def test_architecture_names_every_folder_of_the_core():
+    text = (ROOT / "docs" / "architecture.md").read_text()
+    folders = {p.name for p in (ROOT / "rust").iterdir() if p.is_dir()}
+    assert len(folders) > 10
+    assert {f for f in folders if f"{f}/" not in text} == set()

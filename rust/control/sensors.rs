@@ -3,11 +3,11 @@
 //! angular velocity, in the frame's axes). Contact forces per point are the ground contacts'
 //! own output (Python's `contact_forces`).
 use crate::effects::Kind;
-use crate::error::{Error, Result};
 use crate::kinematics::{self, LinkState};
 use crate::model::Model;
 use crate::simulate::Dynamics;
-use crate::spatial::{angular, linear, stack, Mat3, Vec3, Vec6};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{angular, linear, stack, Mat3, Vec3, Vec6};
 
 /// An IMU: a frame on body `body` at `position` with axes `rotation` (columns: the sensor's
 /// axes), both in the body's frame.

@@ -10,13 +10,13 @@
 //! evaluation) and a first step ~100 times shorter, every period.
 use super::sensors::{self, Imu, SensorWork};
 use crate::effects::{Disabled, Effect};
-use crate::error::{Error, Result};
 use crate::integrator::{
     Counts, Dop853, Euler, FixedStep, Integrator, Method, Radau, Resume, Rk4, SolverOptions,
     Status, StepOutcome, Stepper, Vern9,
 };
 use crate::model::Model;
 use crate::simulate::{self, Dynamics, Trajectory};
+use crate::support::error::{Error, Result};
 
 /// What a control holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

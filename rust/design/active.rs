@@ -8,7 +8,7 @@ use nalgebra::DVector;
 
 use super::problem::{Norm, Problem};
 use super::program::{bound, scale, solve_program, Active, Layout, Raw, Stage};
-use crate::error::Result;
+use crate::support::error::Result;
 
 /// Samples in the first program of each quantity (all their vectors).
 const FIRST_SAMPLES: usize = 24;

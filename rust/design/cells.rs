@@ -2,8 +2,8 @@
 //! extruded along z, or a closed triangle mesh. Each cell is a small solid cube whose mass
 //! the design chooses; its mass, first and second moments are linear in that mass
 //! ([`cube_moments`]), so a designed link's inertia is linear in the cell masses.
-use crate::error::{Error, Result};
-use crate::spatial::Vec3;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec3;
 
 /// The most cells one envelope may hold (a guard against a cell size in the wrong unit).
 pub const MAX_CELLS: usize = 2_000_000;
@@ -72,8 +72,8 @@ impl Envelope {
     /// at least three vertices, a mesh of at least four triangles.
     pub fn check(&self) -> Result<()> {
         let (lo, hi) = self.bounds();
-        crate::error::check_finite("envelope", lo.as_slice())?;
-        crate::error::check_finite("envelope", hi.as_slice())?;
+        crate::support::error::check_finite("envelope", lo.as_slice())?;
+        crate::support::error::check_finite("envelope", hi.as_slice())?;
         match self {
             Envelope::Prism { polygon, .. } if polygon.len() < 3 => {
                 return Err(Error::arg(

@@ -12,7 +12,7 @@
 //!
 //! The flows are variables of their own; the program stays convex and Clarabel's
 //! certificate covers them.
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 use clarabel::solver::SupportedConeT;
 

@@ -2,7 +2,7 @@
 //! must keep material around them, whatever the design.
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::{Placement, Vec3};
+use crate::support::spatial::{Placement, Vec3};
 
 /// `(point, axis)` in the body's frame per revolute or spherical joint on body `b` (axis
 /// zero for a ball joint); prismatic, fixed and free joints carry no pin.

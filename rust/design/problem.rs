@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::active::{initial, solve_cut};
 use super::program::{Layout, Raw, Stage};
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Norm {
@@ -152,8 +152,8 @@ fn check(problem: &Problem) -> Result<()> {
                 format!("{:?}, {} constants", q.rows.shape(), q.constant.len()),
             ));
         }
-        crate::error::check_finite(&q.name, q.rows.as_slice())?;
-        crate::error::check_finite(&q.name, q.constant.as_slice())?;
+        crate::support::error::check_finite(&q.name, q.rows.as_slice())?;
+        crate::support::error::check_finite(&q.name, q.constant.as_slice())?;
     }
     for f in &problem.flows {
         f.check(nx, &problem.upper)?;

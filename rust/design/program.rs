@@ -12,7 +12,7 @@ use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, S
 use nalgebra::{DMatrix, DVector};
 
 use super::problem::{Norm, Problem, Quantity, Solution};
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 /// What a stage of the design minimises.
 #[derive(Clone, Copy)]
@@ -472,7 +472,7 @@ pub(crate) fn solve_program(
             "design: the conic program could not be set up: {e}"
         ))
     })?;
-    solver.set_termination_callback(|_info| crate::interrupt::check("design").is_err());
+    solver.set_termination_callback(|_info| crate::support::interrupt::check("design").is_err());
     solver.solve();
     let sol = &solver.solution;
     match sol.status {

@@ -11,12 +11,14 @@
 use nalgebra::{DMatrix, SMatrix};
 
 use super::cells::point_moments;
-use crate::error::{Error, Result};
+use crate::dynamics::reactions::{
+    add_cut_wrenches, add_point_force, carried_points, link_accelerations,
+};
 use crate::loops::{self, LoopKinematics};
 use crate::model::Model;
-use crate::reactions::{add_cut_wrenches, add_point_force, carried_points, link_accelerations};
 use crate::recursive::reference::Workspace;
-use crate::spatial::{linear, Vec3, Vec6};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{linear, Vec3, Vec6};
 
 /// Parameters per link.
 pub const NPARAM: usize = 10;
@@ -246,7 +248,8 @@ pub fn regressor(
         nloops: model.loops.len(),
     };
     let rows = layout.rows();
-    let mut data = crate::alloc::try_zeros(samples * rows, NPARAM * nl, "design regressor")?;
+    let mut data =
+        crate::support::alloc::try_zeros(samples * rows, NPARAM * nl, "design regressor")?;
     let (pts, inv) = basis();
     let mut ws = Workspace::new(model);
     let mut share = LoopShare::new(model);
@@ -254,7 +257,7 @@ pub fn regressor(
     let mut tree = vec![0.0; nv];
     let mut block = DMatrix::<f64>::zeros(rows, NPARAM);
     for k in 0..samples {
-        crate::interrupt::check("design regressor")?;
+        crate::support::interrupt::check("design regressor")?;
         let (qk, vk, ak) = (
             &q[k * nq..(k + 1) * nq],
             &v[k * nv..(k + 1) * nv],

@@ -4,7 +4,7 @@
 //! the pin is a signed block of the design regressor's rows (`regressor::Layout`).
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 /// Which rows of the regressor give the force on the link at a pin.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -8,12 +8,12 @@
 //! many points' paths once per evaluation (a robot's feet share its base), and builds a
 //! point's columns only when asked (a foot in the air needs none).
 use super::{resolve_body, JointRef};
-use crate::error::{Error, Result};
 use crate::joint::{axis_angle, Joint, Subspace};
 use crate::kinematics::{body_placement, LinkState};
 use crate::model::Model;
 use crate::recursive::algebra::{mat_mul, mul};
-use crate::spatial::{angular, linear, stack, Mat3, Vec3, Vec6};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{angular, linear, stack, Mat3, Vec3, Vec6};
 
 /// One speed's column along an end's path: the joint-motion column `s = [ω; v_O]` (world
 /// axes, about the link origin `O`) and, once the point is known, the point's velocity per

@@ -6,9 +6,9 @@ use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
     Sign,
 };
-use crate::error::Result;
 use crate::model::Model;
-use crate::spatial::Vec6;
+use crate::support::error::Result;
+use crate::support::spatial::Vec6;
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Damper {

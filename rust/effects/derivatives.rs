@@ -8,7 +8,7 @@
 use super::{Context, Effects, Probe};
 use crate::model::Model;
 use crate::recursive::tangent::integrate;
-use crate::spatial::{Vec3, Vec6};
+use crate::support::spatial::{Vec3, Vec6};
 use nalgebra::DMatrix;
 
 /// Central-difference step relative to `1 + |x|`: `ε^(1/3)`, balancing the `h²` truncation
@@ -122,9 +122,9 @@ mod tests {
     //! series branches (a ball spring near its rest, ball friction near rest).
     use super::super::{Damper, Effect, Friction, JointRef, PerJoint, Spring};
     use super::*;
-    use crate::body::RigidBody;
     use crate::joint::Joint;
-    use crate::spatial::{Mat3, Placement};
+    use crate::model::body::RigidBody;
+    use crate::support::spatial::{Mat3, Placement};
 
     fn model() -> Model {
         let mut m = Model::new();

@@ -14,9 +14,9 @@ use super::{
     Sign,
 };
 use super::{label_repr, Effect, TomlType};
-use crate::error::{check_finite, Error, Result};
 use crate::model::Model;
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{stack, Mat3, Vec3, Vec6};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Frame {

@@ -1,6 +1,6 @@
 //! Effect families: what the global `disable` switch turns off (MuJoCo-style), and the set
 //! of disabled ones.
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 /// Effect families: what a global disable switch turns off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -9,10 +9,10 @@ use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
     Sign,
 };
-use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::Vec6;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec6;
 
 /// Default regularisation speed (rad/s or m/s).
 pub const DEFAULT_V_EPS: f64 = 1e-3;

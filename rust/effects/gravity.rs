@@ -3,10 +3,10 @@
 //! `−Σ m_ij g·x_ij` (zero at the world origin).
 use super::scene_writer as w;
 use super::{required, Context, Declaration, Effect, Fields, ForceLaw, Kind, TomlType};
-use crate::error::{check_finite, Error, Result};
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{Vec3, Vec6};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{Vec3, Vec6};
 
 /// Gravity's declaration. [`Effect::Gravity`] stores its field inline (`{ g }`, the
 /// serialised shape since the first format), so the registry reaches it through

@@ -20,10 +20,10 @@ use super::body_point::{add_force, velocity, PointSet};
 use super::scene_writer as w;
 use super::{label_repr, one_number, Effect, TomlType};
 use super::{required, Context, Declaration, Fields, ForceLaw, JointRef, Kind};
-use crate::error::{check_finite, Error, Result};
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{angular, Mat3, Vec3, Vec6};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{angular, Mat3, Vec3, Vec6};
 
 /// Keys of a `type = "ground_contact"` table.
 const KEYS: &[&str] = &[
@@ -84,7 +84,7 @@ pub struct GroundContact {
 }
 
 /// A parameter that may wait for its default, serialised as a plain number with NaN for
-/// `None` (no given value is NaN): the pickle format (`crate::persist`) keeps its layout.
+/// `None` (no given value is NaN): the pickle format (`crate::io::persist`) keeps its layout.
 mod nan_is_none {
     use serde::{Deserialize, Deserializer, Serializer};
 
@@ -128,14 +128,14 @@ impl GroundContact {
                 return Err(Error::arg(
                     format!("points[{k}]"),
                     format!("an offset within ±{MAX_LENGTH:e} m of its body's origin"),
-                    crate::error::num(*x),
+                    crate::support::error::num(*x),
                 ));
             }
             if !(p.radius.is_finite() && (0.0..=MAX_LENGTH).contains(&p.radius)) {
                 return Err(Error::arg(
                     format!("points[{k}]"),
                     format!("a radius that is a number in [0, {MAX_LENGTH:e}] m"),
-                    crate::error::num(p.radius),
+                    crate::support::error::num(p.radius),
                 ));
             }
         }
@@ -153,14 +153,18 @@ impl GroundContact {
             return Err(Error::arg(
                 "height",
                 format!("a plane within ±{MAX_LENGTH:e} m of the origin"),
-                crate::error::num(height),
+                crate::support::error::num(height),
             ));
         }
         let positive = |arg: &str, x: f64| {
             if x.is_finite() && x > 0.0 {
                 Ok(())
             } else {
-                Err(Error::arg(arg, "a finite number > 0", crate::error::num(x)))
+                Err(Error::arg(
+                    arg,
+                    "a finite number > 0",
+                    crate::support::error::num(x),
+                ))
             }
         };
         let non_negative = |arg: &str, x: f64| {
@@ -170,7 +174,7 @@ impl GroundContact {
                 Err(Error::arg(
                     arg,
                     "a finite number >= 0",
-                    crate::error::num(x),
+                    crate::support::error::num(x),
                 ))
             }
         };
@@ -406,7 +410,7 @@ impl GroundContact {
             return Err(Error::arg(
                 arg,
                 "a number: its default comes from the model's weight, and this model's total mass is not a positive number",
-                format!("None (total mass {})", crate::error::num(mass + 0.0)), // not "-0"
+                format!("None (total mass {})", crate::support::error::num(mass + 0.0)), // not "-0"
             ));
         }
         let e = self.exponent;
@@ -426,7 +430,7 @@ impl GroundContact {
                 return Err(Error::arg(
                     arg,
                     "a number: its default from the model's weight is not a finite number > 0",
-                    format!("None (default {})", crate::error::num(x)),
+                    format!("None (default {})", crate::support::error::num(x)),
                 ));
             }
         }

@@ -15,11 +15,11 @@ use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, JointSlot, Kind,
     PerJoint, Sign,
 };
-use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::Vec6;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec6;
 
 /// Keys of a `type = "joint_limit"` table.
 const KEYS: &[&str] = &["name", "joints", "lower", "upper", "stiffness", "damping"];
@@ -50,7 +50,7 @@ fn check_bound(arg: &str, b: &Option<PerJoint>) -> Result<()> {
         Error::arg(
             arg,
             format!("numbers within ±{MAX_BOUND:e} (rad or m), or ±inf for no bound"),
-            format!("{}{at}", crate::error::num(x)),
+            format!("{}{at}", crate::support::error::num(x)),
         )
     };
     match b {
@@ -194,8 +194,8 @@ fn check_order(lower: &[f64], upper: &[f64], at: impl Fn(usize) -> String) -> Re
             "bounds with lower <= upper",
             format!(
                 "lower {} > upper {} ({})",
-                crate::error::num(lower[k]),
-                crate::error::num(upper[k]),
+                crate::support::error::num(lower[k]),
+                crate::support::error::num(upper[k]),
                 at(k)
             ),
         )),
@@ -370,7 +370,10 @@ impl ForceLaw for JointLimitLaw {
 /// `(lower, upper, effort)` of each link's joint from a URDF's joints (±inf bounds where
 /// there is no `<limit>`, and always for continuous joints; inf effort where none): what
 /// [`JointLimit::with_model_limits`] and a torque's `"effort"` limit take.
-pub fn limits_by_link(model: &Model, joints: &[crate::urdf::UrdfJoint]) -> Vec<[f64; 3]> {
+pub fn limits_by_link(
+    model: &Model,
+    joints: &[crate::model::joint_records::UrdfJoint],
+) -> Vec<[f64; 3]> {
     let inf = f64::INFINITY;
     let mut out = vec![[-inf, inf, inf]; model.links.len()];
     for j in joints {
@@ -391,7 +394,7 @@ pub fn limits_by_link(model: &Model, joints: &[crate::urdf::UrdfJoint]) -> Vec<[
 /// Errors name `{list}[k].field`.
 pub fn fill_model_limits(
     model: &Model,
-    urdf_joints: &[crate::urdf::UrdfJoint],
+    urdf_joints: &[crate::model::joint_records::UrdfJoint],
     effects: &mut [Effect],
     list: &str,
 ) -> Result<()> {

@@ -1,11 +1,11 @@
 //! The engine's side of the effects: [`ForceLaw`], the one trait the engine calls, the resolved
 //! set [`Effects`] the right-hand side composes, and [`Probe`] for per-effect forces.
 use super::{Disabled, Effect, Kind};
-use crate::error::{Error, Result};
 use crate::kinematics::LinkState;
 use crate::model::Model;
 use crate::recursive::{self, Data};
-use crate::spatial::{Vec3, Vec6};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Vec3, Vec6};
 
 /// The state an effect is evaluated at.
 #[derive(Clone, Copy)]

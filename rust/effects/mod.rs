@@ -76,9 +76,9 @@ pub mod table;
 pub mod torque;
 pub mod torque_limit;
 
-use crate::error::{Error, Result};
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec3;
 
 pub use damper::Damper;
 pub use external::{External, ExternalLoad, Frame};

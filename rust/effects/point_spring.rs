@@ -16,10 +16,10 @@ use super::body_point::End;
 use super::scene_writer as w;
 use super::{label_repr, one_number, Effect, TomlType};
 use super::{Context, Declaration, Fields, ForceLaw, JointRef, Kind};
-use crate::error::{check_finite, Error, Result};
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{angular, Mat3, Vec3, Vec6};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{angular, Mat3, Vec3, Vec6};
 
 /// Keys of a `type = "point_spring"` table.
 const KEYS: &[&str] = &[

@@ -5,8 +5,8 @@
 //! one per joint. Each effect's file declares its types and keys ([`TomlType`]); this file
 //! holds the typed readers, whose errors name the key.
 use super::{Effect, JointRef, PerJoint};
-use crate::error::{check_finite, Error, Result};
-use crate::spatial::Vec3;
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::Vec3;
 
 /// One scene-file `type` of an effect: its name, its keys besides `type` (unknown keys are
 /// refused against them) and its parser (given the type's name, for types sharing one).

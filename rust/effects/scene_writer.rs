@@ -4,7 +4,7 @@
 //! what is written here). Numbers are written as floats: TOML keeps an `f64` exactly (the
 //! shortest decimal that rounds back to it; `inf` and `-inf` are TOML values too).
 use super::{JointRef, PerJoint, Table};
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 use toml::Value;
 
 /// An `[[effect]]` table under construction: `type` first, then `name` if given.

@@ -1,8 +1,8 @@
 //! Which joints or bodies an effect acts on, and its per-joint numbers: references by name or
 //! index, resolved against a model into coordinate slots.
-use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::model::Model;
+use crate::support::error::{Error, Result};
 
 /// A joint (or body) chosen by its body's name or its body index (as `add_body` returns).
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -10,11 +10,11 @@ use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, Kind, PerJoint,
     Sign,
 };
-use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::Vec6;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec6;
 
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Spring {
@@ -238,7 +238,8 @@ impl ForceLaw for SpringLaw {
         }
         for s in &self.ball {
             let th = relative_rotation_vector(&s.rest_conj, &cx.q[s.q..s.q + 4]);
-            let j = inverse_right_jacobian(&crate::spatial::Vec3::new(th[0], th[1], th[2]));
+            let j =
+                inverse_right_jacobian(&crate::support::spatial::Vec3::new(th[0], th[1], th[2]));
             for r in 0..3 {
                 for c in 0..3 {
                     dq[(s.v + r, s.v + c)] -= s.k * j[(r, c)];
@@ -264,13 +265,13 @@ impl ForceLaw for SpringLaw {
 
 /// `J_r⁻¹(θ) = 1 + ½ θ̃ + (1/|θ|² − (1 + cos|θ|)/(2|θ| sin|θ|)) θ̃²`: how `log(exp(θ̃) exp(δ̃))`
 /// moves with `δ` at 0 (series below |θ| = 1e-4, where the coefficient tends to 1/12).
-pub fn inverse_right_jacobian(th: &crate::spatial::Vec3) -> crate::spatial::Mat3 {
+pub fn inverse_right_jacobian(th: &crate::support::spatial::Vec3) -> crate::support::spatial::Mat3 {
     let t = th.norm();
     let c = if t < 1e-4 {
         1.0 / 12.0 + t * t / 720.0
     } else {
         1.0 / (t * t) - (1.0 + t.cos()) / (2.0 * t * t.sin())
     };
-    let s = crate::spatial::skew(th);
-    crate::spatial::Mat3::identity() + s * 0.5 + s * s * c
+    let s = crate::support::spatial::skew(th);
+    crate::support::spatial::Mat3::identity() + s * 0.5 + s * s * c
 }

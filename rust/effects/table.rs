@@ -1,7 +1,7 @@
 //! Tables in time: strictly increasing times, one row of values per time, linear
 //! interpolation between rows and the end rows held outside (clamped). Lookups keep a hint,
 //! so the integrator's nearly monotone sweep costs O(1) per evaluation.
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 use super::{check_values, Matrix, Sign};
 

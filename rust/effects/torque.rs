@@ -16,10 +16,10 @@ use super::{
     required, resolve_joints, Context, Declaration, Fields, ForceLaw, JointRef, JointSlot, Kind,
     Matrix, PerJoint, Sign,
 };
-use crate::error::{Error, Result};
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::Vec6;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec6;
 
 /// A torque callback: `f(t, q, v, out)` writes all `nv` generalized forces into `out`.
 pub type TorqueFn =

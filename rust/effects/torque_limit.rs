@@ -3,8 +3,8 @@
 //! law, so constant, tabulated, PD and callback torques saturate alike; the derivatives are the
 //! inner law's with the saturated rows zeroed (the clamp's slope there).
 use super::{Context, ForceLaw, PerJoint};
-use crate::error::{num, Error, Result};
-use crate::spatial::Vec6;
+use crate::support::error::{num, Error, Result};
+use crate::support::spatial::Vec6;
 
 /// How a torque effect is limited.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

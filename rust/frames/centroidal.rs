@@ -7,7 +7,7 @@
 //! momentum rate at zero acceleration, summed link by link about the world origin:
 //! `ṗ = Σ m a_c`, `k̇_O = Σ (I_c ω̇ + ω × I_c ω + m c × a_c)`, `k̇_G = k̇_O − G × ṗ`.
 use crate::model::Model;
-use crate::spatial::{angular, linear, Vec3, Vec6};
+use crate::support::spatial::{angular, linear, Vec3, Vec6};
 
 use super::com::{link_com, Composite};
 use super::motion::FrameKinematics;

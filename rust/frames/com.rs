@@ -4,7 +4,7 @@
 //! `[a; l]` of link `j`, with `M_j`, `h_j` the mass and first moment (world) of the subtree
 //! below it (inclusive).
 use crate::model::Model;
-use crate::spatial::{angular, linear, Mat3, Vec3};
+use crate::support::spatial::{angular, linear, Mat3, Vec3};
 
 use super::motion::FrameKinematics;
 

@@ -5,9 +5,9 @@
 //! becomes `J G`.
 use nalgebra::DMatrix;
 
-use crate::error::{Error, Result};
 use crate::loops::{self, LoopKinematics};
 use crate::model::Model;
+use crate::support::error::{Error, Result};
 
 /// Relative size below which a singular value counts as zero.
 const RANK_TOL: f64 = 1e-10;

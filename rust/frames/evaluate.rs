@@ -1,9 +1,9 @@
 //! The frame algorithms assembled for one call (what the bindings call): a frame's
 //! Jacobian at many configurations, its velocity and acceleration, the centre of mass and the
 //! centroidal quantities. Each checks its inputs and allocates its own buffers once.
-use crate::error::{Error, Result};
 use crate::model::Model;
-use crate::spatial::{Vec3, Vec6};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Vec3, Vec6};
 
 use super::com::{self, Composite};
 use super::motion::FrameKinematics;
@@ -25,7 +25,7 @@ pub fn frame_jacobians(
     let (nq, nv) = (model.nq, model.nv);
     for k in 0..rows {
         if k % 256 == 255 {
-            crate::interrupt::check("frame_jacobian")?;
+            crate::support::interrupt::check("frame_jacobian")?;
         }
         crate::kinematics::positions(model, &qs[k * nq..(k + 1) * nq], &mut links);
         jacobian::frame_jacobian_links(
@@ -109,7 +109,7 @@ pub fn com_batch(
     let (nq, nv) = (model.nq, model.nv);
     for k in 0..rows {
         if k % 256 == 255 {
-            crate::interrupt::check("center_of_mass")?;
+            crate::support::interrupt::check("center_of_mass")?;
         }
         kin.positions(model, &qs[k * nq..(k + 1) * nq]);
         let (m, c) = com::com(model, &kin).ok_or_else(no_mass)?;

@@ -10,9 +10,9 @@ use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{Error, Result};
 use crate::model::Model;
-use crate::spatial::{skew, Mat3, Placement, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{skew, Mat3, Placement, Vec3};
 
 use super::jacobian::point_jacobian_at;
 use super::motion::FrameKinematics;
@@ -363,7 +363,7 @@ fn run(
     let mut trial = q.clone();
     let (mut res, mut cost) = measure(model, tasks, q, wk);
     for it in 0..opts.max_iterations {
-        crate::interrupt::check("inverse_kinematics")?;
+        crate::support::interrupt::check("inverse_kinematics")?;
         if res <= opts.tol {
             return Ok(it);
         }

@@ -5,7 +5,7 @@
 //! origin `p`, LOCAL_WORLD_ALIGNED), then in the frame's axes for LOCAL.
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{angular, linear, Mat3, Vec3};
+use crate::support::spatial::{angular, linear, Mat3, Vec3};
 
 use super::motion::FrameKinematics;
 use super::{FrameRef, ReferenceFrame};

@@ -6,7 +6,7 @@
 //! the joint column's rate; LOCAL turns it into the frame's axes and subtracts the rotation of
 //! those axes, `Rᵀ (ẏ − ω × y)` for each half `y`.
 use crate::model::Model;
-use crate::spatial::{angular, linear, Vec3};
+use crate::support::spatial::{angular, linear, Vec3};
 
 use super::motion::FrameKinematics;
 use super::{FrameRef, ReferenceFrame};

@@ -7,9 +7,10 @@
 //!
 //! Six-vectors are angular first, as everywhere in the crate (`[ω; v]`); the three
 //! reference frames are Pinocchio's (`ReferenceFrame`).
-use crate::error::{check_finite, Error, Result};
+use crate::model::frame::Frame;
 use crate::model::{checked_rotation, Model};
-use crate::spatial::Placement;
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::Placement;
 
 pub mod centroidal;
 pub mod com;
@@ -24,14 +25,6 @@ pub mod placement;
 mod tests;
 
 pub use motion::FrameKinematics;
-
-/// A user frame: `placement` in body `body`'s frame.
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Frame {
-    pub name: String,
-    pub body: usize,
-    pub placement: Placement,
-}
 
 /// A frame resolved to the moving link that carries it: its placement in the link frame, or
 /// in the world when `link` is `None` (welded to the world).
@@ -83,7 +76,7 @@ impl Model {
     /// Adds a frame `placement` in body `body`'s frame; its name must be new among bodies
     /// and frames. Returns its index in [`Model::frames`].
     pub fn add_frame(&mut self, name: &str, body: usize, placement: Placement) -> Result<usize> {
-        crate::error::check_name("frame", Some(name))?;
+        crate::support::error::check_name("frame", Some(name))?;
         if body >= self.bodies.len() {
             return Err(Error::model(
                 "body",

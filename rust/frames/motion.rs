@@ -7,7 +7,7 @@
 use crate::joint::Subspace;
 use crate::kinematics::{self, LinkState};
 use crate::model::Model;
-use crate::spatial::{angular, linear, stack, Vec3, Vec6};
+use crate::support::spatial::{angular, linear, stack, Vec3, Vec6};
 
 use super::FrameRef;
 
@@ -83,7 +83,7 @@ impl FrameKinematics {
     }
 
     /// The world position of the frame origin and its rotation (frame axes to world).
-    pub fn frame_pose(&self, f: &FrameRef) -> crate::spatial::Placement {
+    pub fn frame_pose(&self, f: &FrameRef) -> crate::support::spatial::Placement {
         pose_on(&self.links, f)
     }
 
@@ -115,11 +115,11 @@ impl FrameKinematics {
 }
 
 /// The world placement of frame `f` from the links' poses.
-pub fn pose_on(links: &[LinkState], f: &FrameRef) -> crate::spatial::Placement {
+pub fn pose_on(links: &[LinkState], f: &FrameRef) -> crate::support::spatial::Placement {
     match f.link {
         Some(l) => {
             let s = &links[l];
-            crate::spatial::Placement::new(s.rotation, s.origin).compose(&f.placement)
+            crate::support::spatial::Placement::new(s.rotation, s.origin).compose(&f.placement)
         }
         None => f.placement,
     }

@@ -1,9 +1,9 @@
 //! Frame placements and body-point paths over many configurations at once (a coupler
 //! curve, a gripper's path along a trajectory): one pass of the poses per row, nothing
 //! allocated per row.
-use crate::error::Result;
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::error::Result;
+use crate::support::spatial::Vec3;
 
 use super::motion::FrameKinematics;
 use super::FrameRef;
@@ -42,7 +42,7 @@ pub fn frame_placements(
     let (nq, nf) = (model.nq, frames.len());
     for k in 0..rows {
         if k % 256 == 0 {
-            crate::interrupt::check("frame_placement")?;
+            crate::support::interrupt::check("frame_placement")?;
         }
         kin.positions(model, &qs[k * nq..(k + 1) * nq]);
         for (i, f) in frames.iter().enumerate() {
@@ -71,7 +71,7 @@ pub fn point_path(
     let (nq, nv) = (model.nq, model.nv);
     for k in 0..rows {
         if k % 256 == 0 {
-            crate::interrupt::check("point_path")?;
+            crate::support::interrupt::check("point_path")?;
         }
         let q = &qs[k * nq..(k + 1) * nq];
         kin.positions(model, q);
@@ -79,7 +79,7 @@ pub fn point_path(
         positions[k * 3..k * 3 + 3].copy_from_slice(x.as_slice());
         if let Some(vs) = vs {
             crate::kinematics::velocities(model, q, &vs[k * nv..(k + 1) * nv], &mut kin.links);
-            let v = crate::spatial::linear(&kin.point_velocity(f.link, &x));
+            let v = crate::support::spatial::linear(&kin.point_velocity(f.link, &x));
             velocities[k * 3..k * 3 + 3].copy_from_slice(v.as_slice());
         }
     }

@@ -1,8 +1,8 @@
 //! Frames against finite differences of the placements.
 use super::*;
-use crate::body::RigidBody;
 use crate::joint::Joint;
-use crate::spatial::{Mat3, Vec3};
+use crate::model::body::RigidBody;
+use crate::support::spatial::{Mat3, Vec3};
 
 fn chain() -> Model {
     let mut m = Model::new();

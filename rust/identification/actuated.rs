@@ -9,10 +9,10 @@
 use nalgebra::DMatrix;
 
 use super::regressor::{check_states, tree_regressor, Extras};
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 use crate::loops::{self, LoopKinematics};
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
 /// Relative singular-value threshold of `[S_a | Jᵀ]` (J's redundant rows are exact zeros or
 /// rounding; a mechanism's real stiffness is far above this).
@@ -68,13 +68,13 @@ pub fn actuated_regressor(
     let tree = tree_regressor(model, q, v, a, g, extras)?;
     let (nq, nv, na, m) = (model.nq, model.nv, actuated.len(), model.nconstraints());
     let cols = tree.ncols();
-    let mut out = crate::alloc::try_zeros(samples * na, cols, "actuated regressor")?;
+    let mut out = crate::support::alloc::try_zeros(samples * na, cols, "actuated regressor")?;
     let mut kin = LoopKinematics::new(model);
     let mut jac = DMatrix::zeros(m, nv);
     let mut sys = DMatrix::zeros(nv, na + m);
     for k in 0..samples {
         if k % 1024 == 0 {
-            crate::interrupt::check("actuated regressor")?;
+            crate::support::interrupt::check("actuated regressor")?;
         }
         kin.positions(model, &q[k * nq..(k + 1) * nq]);
         loops::jacobian(model, &kin, &mut jac);

@@ -13,9 +13,9 @@ use nalgebra::{DMatrix, DVector};
 use super::base_parameters::{Base, Reduced};
 use super::regressor::{body_parameters, Extras, NPARAM};
 use super::solve::{ols, Fit};
-use crate::error::{Error, Result};
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Mat3, Vec3};
 
 /// The cells of one link: centres (link frame) of cubes of side `side`.
 #[derive(Debug, Clone)]
@@ -276,7 +276,9 @@ fn solve_qp(
             "identification: the cells' program could not be set up: {e}"
         ))
     })?;
-    solver.set_termination_callback(|_info| crate::interrupt::check("identification").is_err());
+    solver.set_termination_callback(|_info| {
+        crate::support::interrupt::check("identification").is_err()
+    });
     solver.solve();
     let sol = &solver.solution;
     match sol.status {

@@ -8,9 +8,9 @@ use super::base_parameters::{base_parameters, reduce, Base, Reduced};
 use super::cells::{fit_cells, LinkCells};
 use super::regressor::{ncolumns, parameter_names, Extras};
 use super::solve::{ols, residual, Fit};
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
 /// How to estimate.
 #[derive(Debug, Clone)]
@@ -76,8 +76,8 @@ pub fn identify(
             format!("{} and {}", opt.free.len(), opt.prior.len()),
         ));
     }
-    crate::error::check_finite("prior", &opt.prior)?;
-    crate::error::check_finite("tau", tau)?;
+    crate::support::error::check_finite("prior", &opt.prior)?;
+    crate::support::error::check_finite("tau", tau)?;
     let y = joint_force_regressor(model, q, v, a, g, &opt.extras, &opt.actuated)?;
     if tau.len() != y.nrows() {
         let width = if opt.actuated.is_empty() {

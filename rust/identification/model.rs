@@ -2,10 +2,10 @@
 //! that defines the link; the bodies welded to it then carry nothing, their share being in
 //! the estimate), validated as any body.
 use super::regressor::NPARAM;
-use crate::body::RigidBody;
-use crate::error::{Error, Result};
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Mat3, Vec3};
 
 /// Mass, centre of mass and inertia about it from ten parameters (Pinocchio's order).
 pub fn body_from_parameters(p: &[f64]) -> (f64, Vec3, Mat3) {

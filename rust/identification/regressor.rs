@@ -10,12 +10,12 @@
 //! frame), and a joint carries the wrenches of the links after it.
 use nalgebra::DMatrix;
 
-use crate::error::{Error, Result};
+use crate::dynamics::reactions::link_accelerations;
 use crate::joint::MotionClass;
 use crate::model::Model;
-use crate::reactions::link_accelerations;
 use crate::recursive::reference::Workspace;
-use crate::spatial::{angular, linear, Mat3, Vec3};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{angular, linear, Mat3, Vec3};
 
 /// Parameters per link.
 pub const NPARAM: usize = 10;
@@ -157,9 +157,9 @@ pub fn check_states(model: &Model, q: &[f64], v: &[f64], a: &[f64]) -> Result<us
             format!("{}, {}, {} values", q.len(), v.len(), a.len()),
         ));
     }
-    crate::error::check_finite("q", q)?;
-    crate::error::check_finite("v", v)?;
-    crate::error::check_finite("a", a)?;
+    crate::support::error::check_finite("q", q)?;
+    crate::support::error::check_finite("v", v)?;
+    crate::support::error::check_finite("a", a)?;
     Ok(samples)
 }
 
@@ -199,12 +199,12 @@ pub(super) fn tree_regressor(
     let samples = check_states(model, q, v, a)?;
     let (nq, nv) = (model.nq, model.nv);
     let cols = ncolumns(model, extras);
-    let mut out = crate::alloc::try_zeros(samples * nv, cols, "torque regressor")?;
+    let mut out = crate::support::alloc::try_zeros(samples * nv, cols, "torque regressor")?;
     let mut ws = Workspace::new(model);
     let joints = extra_joints(model);
     for k in 0..samples {
         if k % 1024 == 0 {
-            crate::interrupt::check("torque regressor")?;
+            crate::support::interrupt::check("torque regressor")?;
         }
         let (qk, vk, ak) = (
             &q[k * nq..(k + 1) * nq],

@@ -3,7 +3,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::base_parameters::{Base, Reduced};
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 /// An estimate of the base parameters and the full parameter vector it implies.
 #[derive(Debug, Clone)]

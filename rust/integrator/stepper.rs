@@ -57,11 +57,11 @@ pub(crate) fn first<const S: usize>(row: &[f64; 5]) -> [f64; S] {
     std::array::from_fn(|j| row[j])
 }
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// `out[i] = y[i] + (k_0[i] c_0 + k_1[i] c_1 + …) h` with `k_j = k[j n..(j + 1) n]`: per
     /// entry, the products summed left to right with every coefficient (zeros too), which is
     /// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the
-    /// CPU has it (`crate::cpu`; same arithmetic, packed lanes).
+    /// CPU has it (`crate::support::cpu`; same arithmetic, packed lanes).
     pub(crate) fn combine / combine_avx2 / combine_baseline [const S: usize] (
         out: &mut [f64],
         y: &[f64],
@@ -85,7 +85,7 @@ fn combine_body<const S: usize>(out: &mut [f64], y: &[f64], k: &[f64], coef: &[f
     }
 }
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// `r[i] = (K[i]ᵀ E) h / (atol[i] + max(|y[i]|, |y_new[i]|) rtol[i])`, element-wise (its
     /// AVX2 copy where the CPU has it); the caller sums the squares in order.
     fn scaled_errors / scaled_errors_avx2 / scaled_errors_baseline [] (

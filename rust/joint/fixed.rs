@@ -1,7 +1,7 @@
 //! Fixed joint: no coordinates; the body is welded to its parent (the model merges it into
 //! the parent's link, so the recursions meet it only as a link's first joint).
 use super::{JointType, LocalMotion, MotionClass, Subspace};
-use crate::spatial::{Mat3, Vec3, Vec6};
+use crate::support::spatial::{Mat3, Vec3, Vec6};
 
 pub struct Fixed;
 

@@ -9,9 +9,9 @@
 //! ([`MotionClass::Free`]): with `S = 1` the joint block is the whole articulated inertia.
 use super::spherical::{check_quaternion, quaternion_rate};
 use super::{quaternion, JacobianRows, JointType, LocalMotion, MotionClass, Subspace};
-use crate::error::Result;
 use crate::joint::rotation::quat_to_matrix;
-use crate::spatial::{skew, stack, Mat3, Vec3, Vec6};
+use crate::support::error::Result;
+use crate::support::spatial::{skew, stack, Mat3, Vec3, Vec6};
 use nalgebra::DMatrixViewMut;
 
 pub struct FreeFlyer;

@@ -27,8 +27,8 @@ mod spherical;
 mod tests;
 mod zyz;
 
-use crate::error::{check_finite, Error, Result};
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{stack, Mat3, Vec3, Vec6};
 use nalgebra::DMatrixViewMut;
 
 pub use rotation::{axis_angle, quat_to_matrix, rot_x, rot_y, rot_z};

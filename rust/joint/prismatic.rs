@@ -1,7 +1,7 @@
 //! Prismatic joint: one displacement `q` along a fixed unit axis `a` of the joint frame; the
 //! body does not turn. `P = [0; a]` (docs/method.md §2).
 use super::{turn_columns, JointType, LocalMotion, MotionClass, Subspace};
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::support::spatial::{stack, Mat3, Vec3, Vec6};
 
 pub struct Prismatic {
     pub axis: Vec3,

@@ -3,7 +3,7 @@
 //! joint frame (docs/method.md §2).
 use super::{turn_columns, JointType, LocalMotion, MotionClass, Subspace};
 use crate::joint::rotation::axis_angle;
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::support::spatial::{stack, Mat3, Vec3, Vec6};
 
 pub struct Revolute {
     pub axis: Vec3,

@@ -1,7 +1,7 @@
 //! Rotation matrices the joints are made of: about coordinate axes, about any unit axis
 //! (Rodrigues), and of a unit quaternion.
-use crate::spatial::{Mat3, Vec3};
-use crate::trig::sin_cos;
+use crate::support::spatial::{Mat3, Vec3};
+use crate::support::trig::sin_cos;
 
 pub fn rot_x(a: f64) -> Mat3 {
     let (s, c) = sin_cos(a);

@@ -5,9 +5,9 @@
 use super::{
     quaternion, turn_columns, JacobianRows, JointType, LocalMotion, MotionClass, Subspace,
 };
-use crate::error::{check_finite, Error, Result};
 use crate::joint::rotation::{quat_norm, quat_to_matrix, MIN_QUATERNION_NORM};
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::support::error::{check_finite, Error, Result};
+use crate::support::spatial::{stack, Mat3, Vec3, Vec6};
 use nalgebra::DMatrixViewMut;
 
 pub struct Spherical;

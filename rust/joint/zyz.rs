@@ -3,8 +3,8 @@
 //! joint is refused there (use the quaternion `Spherical` joint through θ = 0 or π).
 use super::{turn_columns, JointType, LocalMotion, MotionClass, Subspace};
 use crate::joint::rotation::{rot_y, rot_z};
-use crate::spatial::{stack, Mat3, Vec3, Vec6};
-use crate::trig::sin_cos;
+use crate::support::spatial::{stack, Mat3, Vec3, Vec6};
+use crate::support::trig::sin_cos;
 
 /// `|sin θ|` below which a `SphericalZYZ` joint is refused as singular: the Euler rates for a
 /// finite angular velocity grow like 1/sin θ and the joint's columns of the GIM lose rank, so

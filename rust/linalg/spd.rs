@@ -3,12 +3,12 @@
 //! the inverse on every call; the derivatives reuse their workspace and allocate nothing.
 use nalgebra::DMatrix;
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// The inverse of a symmetric positive definite matrix, in place: `M = L Lᵀ`, `X = L⁻¹`,
     /// then `M⁻¹ = Xᵀ X`, the factorizations' inner loops along (contiguous) columns. `t`,
     /// `out`: scratch matrices of the same size; `inv_diag`: scratch of length n (the
     /// reciprocal pivots, so the substitution multiplies instead of dividing). `Err(k)` at a
-    /// non-positive pivot `k`. Runs its AVX2 copy where the CPU has it (`crate::cpu`: the same
+    /// non-positive pivot `k`. Runs its AVX2 copy where the CPU has it (`crate::support::cpu`: the same
     /// IEEE operations in wider lanes, so the same bits).
     pub fn spd_inverse / spd_inverse_avx2 / spd_inverse_baseline [] (
         m: &mut DMatrix<f64>,

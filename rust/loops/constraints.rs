@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DVector};
 use super::{CutKind, LoopJoint};
 use crate::kinematics::{self, body_placement, LinkState};
 use crate::model::Model;
-use crate::spatial::{angular, linear, mat_vec, Mat3, Placement, Vec3, Vec6};
+use crate::support::spatial::{angular, linear, mat_vec, Mat3, Placement, Vec3, Vec6};
 
 /// The tree's world-frame kinematics for the constraints, reused across calls.
 pub struct LoopKinematics {
@@ -43,7 +43,7 @@ struct LoopConsts {
 
 impl LoopConsts {
     fn new(model: &Model, lp: &LoopJoint) -> Self {
-        let turns = |body: Option<usize>, frame: &crate::spatial::Placement| {
+        let turns = |body: Option<usize>, frame: &crate::support::spatial::Placement| {
             let in_link = body
                 .and_then(|b| model.bodies.get(b))
                 .is_some_and(|b| b.in_link.rotation != Mat3::identity());
@@ -139,7 +139,7 @@ impl LoopKinematics {
                 Some(p) => {
                     let (b, r) = (self.bias[p], self.links[i].origin - self.links[p].origin);
                     let w = angular(&b);
-                    crate::spatial::stack(&w, &(linear(&b) + w.cross(&r)))
+                    crate::support::spatial::stack(&w, &(linear(&b) + w.cross(&r)))
                 }
                 None => Vec6::zeros(),
             };
@@ -161,7 +161,7 @@ impl LoopKinematics {
         &self,
         model: &Model,
         body: Option<usize>,
-        frame: &crate::spatial::Placement,
+        frame: &crate::support::spatial::Placement,
         turns: [bool; 2],
     ) -> End {
         match body {

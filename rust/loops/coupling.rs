@@ -10,21 +10,9 @@
 //! feels `−ratio` times it): `I q̈ + C q̇ = τ + Jᵀλ`.
 use nalgebra::DMatrix;
 
-use crate::error::{Error, Result};
+use crate::model::constraints::Coupling;
 use crate::model::Model;
-
-/// One coupling between the joints of two bodies (each body's own joint, revolute or
-/// prismatic).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Coupling {
-    pub name: String,
-    /// The driven joint's body.
-    pub joint: usize,
-    /// The driving joint's body.
-    pub reference: usize,
-    pub ratio: f64,
-    pub offset: f64,
-}
+use crate::support::error::{Error, Result};
 
 /// A body's joint slot if it is a moving 1-dof joint: `(q index, v index)`.
 fn slot(model: &Model, body: usize) -> Option<(usize, usize)> {
@@ -57,7 +45,7 @@ impl Model {
         offset: f64,
         name: Option<String>,
     ) -> Result<usize> {
-        crate::error::check_name("coupling", name.as_deref())?;
+        crate::support::error::check_name("coupling", name.as_deref())?;
         let n = self.bodies.len();
         for (arg, b) in [("joint", joint), ("reference", reference)] {
             if b >= n {

@@ -13,14 +13,12 @@
 mod constraints;
 pub mod coupling;
 mod derivatives;
-mod factor;
 mod ordering;
 mod solve;
 #[cfg(test)]
 mod tests;
 
 pub use constraints::{gamma, jacobian, residual, wrenches, Constraints, LoopKinematics};
-pub use coupling::Coupling;
 pub use derivatives::{constrained_derivatives, LoopDerivativeWork};
 pub use solve::{
     assemble, check_mobility, constrained_forward_dynamics, constraint_forces, driving_forces,
@@ -29,73 +27,11 @@ pub use solve::{
 
 pub use ordering::Layout;
 
-use crate::error::{Error, Result};
 use crate::joint::Joint;
+use crate::model::constraints::{CutKind, LoopJoint};
 use crate::model::Model;
-use crate::spatial::{Placement, Vec3};
-
-/// A cut joint closing one loop: `joint` between `frame_a` on body `body_a` and `frame_b` on
-/// body `body_b` (`None`: the world). The loop is closed when the two frames coincide up to
-/// the joint's motion (rotation about / sliding along `frame_a`'s axis; any rotation for a
-/// spherical joint; none for a fixed one).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct LoopJoint {
-    pub name: String,
-    pub body_a: Option<usize>,
-    pub body_b: Option<usize>,
-    pub joint: Joint,
-    /// Frame a in body a's frame (the world frame for `None`).
-    pub frame_a: Placement,
-    /// Frame b in body b's frame.
-    pub frame_b: Placement,
-}
-
-/// Which relative motions a cut joint removes: `linear` position rows (3, or the 2 normal to
-/// a prismatic axis) and orientation rows (3 for fixed and prismatic, the 2 that keep a
-/// revolute axis aligned, none for a spherical joint).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CutKind {
-    Spherical,
-    Revolute,
-    Prismatic,
-    Fixed,
-}
-
-impl CutKind {
-    pub fn of(joint: &Joint) -> Option<CutKind> {
-        match joint {
-            Joint::Spherical => Some(CutKind::Spherical),
-            Joint::Revolute { .. } => Some(CutKind::Revolute),
-            Joint::Prismatic { .. } => Some(CutKind::Prismatic),
-            Joint::Fixed => Some(CutKind::Fixed),
-            _ => None,
-        }
-    }
-
-    /// Number of scalar constraints.
-    pub const fn rows(self) -> usize {
-        match self {
-            CutKind::Spherical => 3,
-            CutKind::Revolute | CutKind::Prismatic => 5,
-            CutKind::Fixed => 6,
-        }
-    }
-}
-
-impl LoopJoint {
-    pub fn kind(&self) -> CutKind {
-        // `add_loop` and deserialisation admit only the four cut-joint types.
-        CutKind::of(&self.joint).unwrap_or(CutKind::Fixed)
-    }
-
-    /// The joint axis in frame a (zero for spherical and fixed cut joints).
-    pub fn axis(&self) -> Vec3 {
-        match self.joint {
-            Joint::Revolute { axis } | Joint::Prismatic { axis } => axis,
-            _ => Vec3::zeros(),
-        }
-    }
-}
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Placement;
 
 impl Model {
     /// Number of cut joints.
@@ -134,7 +70,7 @@ impl Model {
         frame_b: Placement,
         name: Option<String>,
     ) -> Result<usize> {
-        crate::error::check_name("loop", name.as_deref())?;
+        crate::support::error::check_name("loop", name.as_deref())?;
         let n = self.bodies.len();
         for (arg, b) in [("body_a", body_a), ("body_b", body_b)] {
             if let Some(k) = b {
@@ -178,7 +114,7 @@ impl Model {
             ("rotation_a", "translation_a"),
             ("rotation_b", "translation_b"),
         ]) {
-            crate::error::check_finite(trans, f.translation.as_slice())?;
+            crate::support::error::check_finite(trans, f.translation.as_slice())?;
             f.rotation = crate::model::checked_rotation(&f.rotation, rot)?;
         }
         let index = self.loops.len();

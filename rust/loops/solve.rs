@@ -11,12 +11,12 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::constraints::{self, Constraints, LoopKinematics};
-use super::factor::{self, back_substitute, forward_substitute};
 use super::ordering;
-use crate::error::{Error, Result};
+use crate::linalg::cholesky::{self as factor, back_substitute, forward_substitute};
 use crate::linalg::rank_qr::RankQr;
 use crate::model::Model;
 use crate::recursive::{self, Data};
+use crate::support::error::{Error, Result};
 
 /// Buffers of the constrained dynamics and projections, sized once per model.
 pub struct LoopSolver {

@@ -3,8 +3,8 @@ use pyo3::prelude::*;
 
 use super::convert::{mat3, mat3_to_array, points, real, to_array, to_array1, vec3, vector};
 use super::errors::{check_result, IntoPyResult};
-use crate::body::RigidBody;
-use crate::point_masses::EquimomentalSet;
+use crate::model::body::RigidBody;
+use crate::model::point_masses::EquimomentalSet;
 
 #[pyclass(
     name = "RigidBody",
@@ -66,7 +66,7 @@ impl PyRigidBody {
         point: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let p = vec3(point, "point")?;
-        crate::error::check_finite("point", p.as_slice()).py(py)?;
+        crate::support::error::check_finite("point", p.as_slice()).py(py)?;
         let i = self.inner.inertia_about(&p);
         check_result(py, "inertia_about", i.as_slice())?;
         mat3_to_array(py, &i)
@@ -82,7 +82,7 @@ impl PyRigidBody {
         let c = match center {
             Some(c) if !c.is_none() => {
                 let c = vec3(c, "center")?;
-                crate::error::check_finite("center", c.as_slice()).py(py)?;
+                crate::support::error::check_finite("center", c.as_slice()).py(py)?;
                 c
             }
             _ => self.inner.com,

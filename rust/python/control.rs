@@ -13,7 +13,7 @@ use super::trajectory::PyRunResult;
 use crate::control::{ControlKind, Imu, OwnedSimulator, Simulator};
 use crate::integrator::Method;
 use crate::simulate::RunConfig;
-use crate::spatial::{Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 #[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
 pub struct PySimulator {

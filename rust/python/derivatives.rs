@@ -7,7 +7,7 @@ use super::convert::{to_array, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, invalid, py_error, to_py, IntoPyResult};
 use super::simulate::{scene_state, scene_system};
-use crate::scene::Scene;
+use crate::io::scene::Scene;
 use crate::simulate::derivatives::DerivativeWork;
 use nalgebra::DMatrix;
 
@@ -47,7 +47,10 @@ fn run<'py>(
     disable: Option<&Bound<'_, PyAny>>,
     name: &str,
     keys: [&str; 3],
-    f: impl FnOnce(&mut crate::simulate::Dynamics<'_>, &mut DerivativeWork) -> crate::error::Result<()>,
+    f: impl FnOnce(
+        &mut crate::simulate::Dynamics<'_>,
+        &mut DerivativeWork,
+    ) -> crate::support::error::Result<()>,
     pick: impl Fn(&DerivativeWork) -> [&DMatrix<f64>; 3],
 ) -> PyResult<Bound<'py, PyDict>> {
     let mut sys = scene_system(py, s, disable)?;
@@ -91,7 +94,7 @@ pub(super) fn forward<'py>(
     let tau = match tau {
         Some(x) if !x.is_none() => {
             let x = vector(x, "tau", Some(s.model.nv))?;
-            crate::error::check_finite("tau", &x).py(py)?;
+            crate::support::error::check_finite("tau", &x).py(py)?;
             x
         }
         _ => vec![0.0; s.model.nv],
@@ -121,7 +124,7 @@ pub(super) fn inverse<'py>(
     // A mechanism's driving forces depend on which joints are actuated (driving_forces).
     refuse_loops(py, s, "inverse_dynamics_derivatives")?;
     let a = vector(a, "a", Some(s.model.nv))?;
-    crate::error::check_finite("a", &a).py(py)?;
+    crate::support::error::check_finite("a", &a).py(py)?;
     run(
         py,
         s,

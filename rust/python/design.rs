@@ -9,7 +9,7 @@ use super::errors::{check_result, invalid};
 use super::model::{gravity_arg, PyModel};
 use super::signals::detach_interruptible;
 use crate::design::{self, Envelope, Norm, Problem, Quantity};
-use crate::spatial::{Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 fn points3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec<Vec3>> {
     let (shape, data) = array(obj, arg)?;

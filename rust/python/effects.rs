@@ -220,7 +220,7 @@ pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
                 };
                 match call() {
                     Ok(x) => {
-                        crate::error::check_finite("torque function f(t, q, v)", &x)
+                        crate::support::error::check_finite("torque function f(t, q, v)", &x)
                             .map_err(|e| e.to_string())?;
                         out.copy_from_slice(&x);
                         Ok(())
@@ -247,7 +247,7 @@ impl PyEffect {
     fn gravity(py: Python<'_>, g: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
         let g = match g {
             Some(g) if !g.is_none() => vec3(g, "g")?,
-            _ => crate::spatial::Vec3::new(0.0, 0.0, -9.81),
+            _ => crate::support::spatial::Vec3::new(0.0, 0.0, -9.81),
         };
         Ok(Effect::gravity(g).py(py)?.into())
     }
@@ -378,7 +378,7 @@ impl PyEffect {
         let body = joint_ref(body, "body")?;
         let point = match given(point) {
             Some(p) => vec3(p, "point")?,
-            None => crate::spatial::Vec3::zeros(),
+            None => crate::support::spatial::Vec3::zeros(),
         };
         let frame = Frame::parse(frame, "frame").py(py)?;
         let (force, moment) = (given(force), given(moment));
@@ -393,7 +393,7 @@ impl PyEffect {
                 External::tabulated(name, body, point, t, f, m, frame).py(py)?
             }
             None => {
-                let zero = crate::spatial::Vec3::zeros();
+                let zero = crate::support::spatial::Vec3::zeros();
                 let f = force.map(|f| vec3(f, "force")).transpose()?.unwrap_or(zero);
                 let m = moment
                     .map(|m| vec3(m, "moment"))

@@ -3,7 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 
-use crate::error::{Error, FileKind};
+use crate::support::error::{Error, FileKind};
 
 /// Builds an instance of `pointmass_dyn.errors.<class_name>` with `message`.
 pub fn py_error(py: Python<'_>, class_name: &str, message: String) -> PyErr {
@@ -40,7 +40,11 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
             return pyo3::exceptions::PyKeyboardInterrupt::new_err(err.to_string());
         }
     };
-    py_error(py, class, crate::error::compact_numbers(&err.to_string()))
+    py_error(
+        py,
+        class,
+        crate::support::error::compact_numbers(&err.to_string()),
+    )
 }
 
 pub trait IntoPyResult<T> {

@@ -29,7 +29,7 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let missing = crate::cpu::missing_cpu_features();
+    let missing = crate::support::cpu::missing_cpu_features();
     if !missing.is_empty() {
         return Err(pyo3::exceptions::PyImportError::new_err(format!(
             "pointmass_dyn was compiled for CPU features this processor lacks: {} (built with \
@@ -39,9 +39,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         )));
     }
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    // Which copy of the multiversioned loops runs (rust/cpu.rs; POINTMASS_DYN_BASELINE=1
+    // Which copy of the multiversioned loops runs (rust/support/cpu.rs; POINTMASS_DYN_BASELINE=1
     // forces "baseline").
-    m.add("cpu_dispatch", crate::cpu::dispatch())?;
+    m.add("cpu_dispatch", crate::support::cpu::dispatch())?;
     m.add_class::<body::PyRigidBody>()?;
     m.add_class::<body::PyPointMasses>()?;
     m.add_class::<joint::PyJoint>()?;

@@ -81,7 +81,7 @@ pub(super) fn set_outcome(
     d.set_item("n_rejected", n_rejected)?;
     d.set_item("status", status.code())?;
     // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
-    d.set_item("message", crate::error::compact_numbers(message))?;
+    d.set_item("message", crate::support::error::compact_numbers(message))?;
     d.set_item("success", status.is_success())?;
     d.set_item("t_reached", t_reached)
 }

@@ -2,7 +2,7 @@
 //! which `pointmass_dyn/_pickle.py` registers with `copyreg` for every class below (so
 //! `pickle`, `copy.copy` and `copy.deepcopy` all go through them).
 //!
-//! `data` is a [`crate::persist`] frame (version byte, postcard, checksum) of one [`Payload`],
+//! `data` is a [`crate::io::persist`] frame (version byte, postcard, checksum) of one [`Payload`],
 //! whose variant says which class it holds. Every value is serialised as it is, derived data
 //! included (a model's links and point masses, a URDF model's joint metadata), so the copy is
 //! bit-identical. Python callables inside (`TorqueFunction(f)`) are not in the bytes: they
@@ -21,13 +21,13 @@ use super::events::PyStateEvent;
 use super::joint::PyJoint;
 use super::model::PyModel;
 use super::scene::PyScene;
-use crate::body::RigidBody;
 use crate::effects::{Disabled, Effect, Effects, TorqueFunction, TorqueLaw};
 use crate::integrator::DenseOutput;
+use crate::io::scene::Scene;
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
+use crate::model::point_masses::EquimomentalSet;
 use crate::model::Model;
-use crate::point_masses::EquimomentalSet;
-use crate::scene::Scene;
 use crate::simulate::StateEvent;
 
 /// One pickled object. Append new variants at the end (postcard numbers them in order); any
@@ -136,7 +136,7 @@ pub fn _dumps<'py>(
             obj.get_type().name()?
         )));
     };
-    let data = crate::persist::encode(&payload).map_err(|e| {
+    let data = crate::io::persist::encode(&payload).map_err(|e| {
         let pickle = py.import("pickle");
         match pickle.and_then(|m| m.getattr("PicklingError")) {
             Ok(cls) => PyErr::from_value(cls.call1((e.to_string(),)).unwrap_or(cls)),
@@ -156,7 +156,7 @@ pub fn _loads(
     callables: Option<&Bound<'_, PyTuple>>,
 ) -> PyResult<Py<PyAny>> {
     let payload: Payload =
-        crate::persist::decode(data.as_bytes()).map_err(|e| unpickling_error(py, e))?;
+        crate::io::persist::decode(data.as_bytes()).map_err(|e| unpickling_error(py, e))?;
     let empty = PyTuple::empty(py);
     let callables = callables.unwrap_or(&empty);
     let check = |r: crate::Result<()>| r.map_err(|e| unpickling_error(py, e));

@@ -1,4 +1,4 @@
-//! Arguments of the shaking-force and bearing-force methods of `Model` (crate::reactions).
+//! Arguments of the shaking-force and bearing-force methods of `Model` (crate::dynamics::reactions).
 use pyo3::prelude::*;
 
 use super::convert::{array, shape_str};
@@ -57,17 +57,18 @@ fn check_rows(
     q: &[f64],
     v: &[f64],
     a: &[f64],
-) -> crate::error::Result<()> {
+) -> crate::support::error::Result<()> {
     for k in 0..count.unwrap_or(1) {
-        crate::interrupt::check("checking the states")?;
+        crate::support::interrupt::check("checking the states")?;
         let qk = &q[k * model.nq..(k + 1) * model.nq];
         let vk = &v[k * model.nv..(k + 1) * model.nv];
-        let row = |e: crate::error::Error| match count {
+        let row = |e: crate::support::error::Error| match count {
             Some(_) => e.map_arg(|name| format!("{name}[{k}]")),
             None => e,
         };
         model.check_state(qk, Some(vk)).map_err(row)?;
-        crate::error::check_finite("a", &a[k * model.nv..(k + 1) * model.nv]).map_err(row)?;
+        crate::support::error::check_finite("a", &a[k * model.nv..(k + 1) * model.nv])
+            .map_err(row)?;
     }
     Ok(())
 }
@@ -91,7 +92,7 @@ pub fn world_frame(py: Python<'_>, frame: &str) -> PyResult<bool> {
 pub fn body_points(
     model: &Model,
     list: &Bound<'_, PyAny>,
-) -> PyResult<Vec<(usize, crate::spatial::Vec3)>> {
+) -> PyResult<Vec<(usize, crate::support::spatial::Vec3)>> {
     let py = list.py();
     let expected =
         "a list of (body, [x, y, z]) pairs: a body index or name and a point in its frame";
@@ -118,7 +119,7 @@ pub fn body_points(
             )
         })?;
         let p = super::convert::vec3(&xyz, &arg)?;
-        crate::error::check_finite(&arg, p.as_slice()).py(py)?;
+        crate::support::error::check_finite(&arg, p.as_slice()).py(py)?;
         out.push((link, model.bodies[b].in_link.act_point(&p)));
     }
     Ok(out)

@@ -15,7 +15,7 @@ use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::options::{set_method, set_outcome, t_span_arg};
 use super::run_config::{call_config, PyRunConfig};
 use crate::integrator::{self, Event, FnSystem, OdeSystem};
-use crate::scene::Settings;
+use crate::io::scene::Settings;
 
 /// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
 /// (default) and "DOP853" step for step SciPy's `solve_ivp`, "RK4"/"Euler" at the fixed `dt`.

@@ -7,7 +7,7 @@ use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
 use super::run_config::config_of;
 use crate::effects::{Disabled, Effects};
-use crate::scene::{Scene, Settings};
+use crate::io::scene::{Scene, Settings};
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
 pub struct PyScene {

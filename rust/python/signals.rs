@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use pyo3::prelude::*;
 
 use super::errors::IntoPyResult;
-use crate::interrupt;
+use crate::support::interrupt;
 
 /// How often a detached computation looks at the interpreter.
 pub const INTERVAL: Duration = Duration::from_millis(50);
@@ -89,7 +89,7 @@ impl Watch {
 /// (or whatever a signal handler raised) comes back as itself.
 pub fn detach_interruptible<T: Send>(
     py: Python<'_>,
-    f: impl FnOnce() -> crate::error::Result<T> + Send,
+    f: impl FnOnce() -> crate::support::error::Result<T> + Send,
 ) -> PyResult<T> {
     let (result, raised) = detach_watched(py, f);
     match raised {
@@ -117,7 +117,7 @@ pub fn detach_watched<T: Send>(py: Python<'_>, f: impl FnOnce() -> T + Send) -> 
 pub fn stopped_with_partial(
     py: Python<'_>,
     raised: Option<PyErr>,
-    stopped: crate::error::Error,
+    stopped: crate::support::error::Error,
     partial: &Bound<'_, PyAny>,
     note: &str,
 ) -> PyErr {

@@ -14,7 +14,7 @@ use super::scene::{disable_arg, PyScene};
 use super::signals::{Watch, INTERVAL};
 use super::trajectory::PyRunResult;
 use crate::integrator::Event;
-use crate::scene::Scene;
+use crate::io::scene::Scene;
 use crate::simulate::batch::StateRows;
 use crate::simulate::{run_scene, Dynamics, Progress, StateEvent};
 
@@ -277,7 +277,7 @@ pub fn simulate_batch<'py>(
             let dim = s.model.nq + s.model.nv;
             config.clone().resolve(&s.settings, &s.effects, dim)
         })
-        .collect::<crate::error::Result<Vec<_>>>()
+        .collect::<crate::support::error::Result<Vec<_>>>()
         .py(py)?;
     let runs = broadcast(&scenes, &resolved, q0s.as_ref(), v0s.as_ref()).py(py)?;
     let count = runs.len();
@@ -318,7 +318,7 @@ pub fn simulate_batch<'py>(
             }
             Err(e) => {
                 let why = match (&e, &reason) {
-                    (crate::error::Error::Interrupted(_), Some(r)) => Some(format!(
+                    (crate::support::error::Error::Interrupted(_), Some(r)) => Some(format!(
                         "the batch was stopped before this run started, by {r}"
                     )),
                     _ => None,

@@ -4,7 +4,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use super::convert::{to_array, to_array1};
-use crate::error::compact_numbers;
+use crate::support::error::compact_numbers;
 use crate::integrator::{NonFiniteKind, Status};
 use crate::simulate::Trajectory;
 

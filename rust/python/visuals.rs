@@ -1,5 +1,5 @@
 //! `Model.visuals`, `Model.name`, `Model.set_visuals` and the `package_dirs` argument of
-//! `from_urdf`: the visual geometry (crate::visual) as plain Python data, a list of dicts.
+//! `from_urdf`: the visual geometry (crate::model::visual) as plain Python data, a list of dicts.
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
@@ -8,8 +8,8 @@ use pyo3::types::{PyDict, PyList};
 use super::convert::{mat3, vec3};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use crate::spatial::{Placement, Vec3};
-use crate::visual::{Shape, Visual};
+use crate::model::visual::{Shape, Visual};
+use crate::support::spatial::{Placement, Vec3};
 
 fn repr(obj: &Bound<'_, PyAny>) -> String {
     obj.repr()
@@ -132,7 +132,7 @@ fn from_dict(py: Python<'_>, d: &Bound<'_, PyAny>, arg: &str) -> PyResult<Visual
     };
     let rotation = match d.get_item("rotation")? {
         Some(r) => mat3(&r, &format!("{arg}['rotation']"))?,
-        None => crate::spatial::Mat3::identity(),
+        None => crate::support::spatial::Mat3::identity(),
     };
     let translation = match d.get_item("translation")? {
         Some(t) => vec3(&t, &format!("{arg}['translation']"))?,
@@ -211,7 +211,7 @@ impl PyModel {
 }
 
 /// Where a mesh `uri` of a model file in `base_dir` is (`package://`, `file://`, absolute or
-/// relative), as `from_urdf` finds its meshes (`crate::visual::resolve_mesh`); `None` when no
+/// relative), as `from_urdf` finds its meshes (`crate::model::visual::resolve_mesh`); `None` when no
 /// candidate is a file. `urdf_contact_points` reads collision meshes with it.
 #[pyfunction]
 #[pyo3(signature = (uri, base_dir=None, package_dirs=None))]
@@ -222,5 +222,9 @@ pub fn resolve_mesh(
     package_dirs: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<PathBuf>> {
     let dirs = self::package_dirs(py, package_dirs)?;
-    Ok(crate::visual::resolve_mesh(uri, base_dir.as_deref(), &dirs))
+    Ok(crate::model::visual::resolve_mesh(
+        uri,
+        base_dir.as_deref(),
+        &dirs,
+    ))
 }

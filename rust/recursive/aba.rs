@@ -20,18 +20,18 @@ use super::outward::{carry, outward_pass};
 use super::shift::{shift_add, to_parent, OffsetForm};
 use super::singular_message;
 use super::workspace::{Data, LinkWork};
-use crate::error::{Error, Result};
 use crate::joint::MotionClass;
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3, Vec6};
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{Mat3, Vec3, Vec6};
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`, by the articulated-body
     /// recursion in body frames. Same contract as `reference::forward_dynamics_world`:
     /// `external` holds one wrench per link, `[moment about the link origin; force]` in world
     /// axes; errors at a ZYZ Euler singularity or a non-positive joint block.
     ///
-    /// On a CPU with AVX2 the same code runs compiled for it (see [`crate::cpu`]); the
+    /// On a CPU with AVX2 the same code runs compiled for it (see [`crate::support::cpu`]); the
     /// results are bit for bit those of the baseline build.
     pub fn forward_dynamics_local / forward_dynamics_avx2 / forward_dynamics_baseline [] (
         model: &Model,

@@ -6,10 +6,10 @@
 //! factor and two matrix products. docs/derivatives.md.
 use super::rnea_derivatives::inverse_dynamics_derivatives;
 use super::workspace::{Data, DerivativeData};
-use crate::error::{Error, Result};
 use crate::linalg::spd_inverse;
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec3;
 
 /// `∂q̈/∂q`, `∂q̈/∂v`, `M⁻¹` into `dd.ddq_dq`, `dd.ddq_dv`, `dd.minv` (and `q̈` into
 /// `dd.qdd`, `∂τ/∂q`, `∂τ/∂v`, `M` as [`inverse_dynamics_derivatives`] leaves them). `tau`

@@ -4,7 +4,7 @@
 //! (`Rot`): a general matrix, a plane rotation about a coordinate axis, the identity, and a
 //! rotation placed by a constant one. The types let each pass be compiled once per joint
 //! case with the known zeros left out.
-use crate::spatial::{Mat3, Vec3, Vec6};
+use crate::support::spatial::{Mat3, Vec3, Vec6};
 
 /// A symmetric 3×3 matrix by its upper triangle: `[xx, yy, zz, xy, xz, yz]`.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -72,8 +72,8 @@ pub struct LocalInertia {
 
 impl LocalInertia {
     /// The whole 6×6 matrix `[[P, Q], [Qᵀ, R]]`.
-    pub(super) fn to_mat6(self) -> crate::spatial::Mat6 {
-        let mut m = crate::spatial::Mat6::zeros();
+    pub(super) fn to_mat6(self) -> crate::support::spatial::Mat6 {
+        let mut m = crate::support::spatial::Mat6::zeros();
         m.fixed_view_mut::<3, 3>(0, 0).copy_from(&self.p.to_mat());
         m.fixed_view_mut::<3, 3>(0, 3).copy_from(&self.q);
         m.fixed_view_mut::<3, 3>(3, 0)

@@ -7,9 +7,9 @@
 //! energy `½ armature v²`. A model without armature (`Model::armature` empty) skips all of it.
 use nalgebra::DMatrix;
 
-use crate::error::{Error, Result};
 use crate::joint::MotionClass;
 use crate::model::Model;
+use crate::support::error::{Error, Result};
 
 impl Model {
     /// Sets the armature of body `body`'s joint: one value per speed of the joint (or one

@@ -15,7 +15,7 @@ use super::algebra::{General, LocalInertia, Rot, Sym3};
 use super::shift::OffsetForm;
 use crate::joint::MotionClass;
 use crate::model::{Link, Model};
-use crate::spatial::{Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 /// A link's case in the recursions, one jump per link and pass, each case compiled with its
 /// known zeros. `Revolute{K}{P}`: a revolute joint about coordinate axis `K` (after the frame

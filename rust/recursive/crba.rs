@@ -14,11 +14,11 @@ use super::shift::{shift_add, to_parent, OffsetForm};
 use super::workspace::{Data, LinkWork};
 use crate::joint::MotionClass;
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// Fills `gim` (nv × nv, symmetric) at `q`. Runs its AVX2 copy where the CPU has it
-    /// ([`crate::cpu`]; the same rounding).
+    /// ([`crate::support::cpu`]; the same rounding).
     pub fn mass_matrix_local / mass_matrix_avx2 / mass_matrix_baseline [] (
         model: &Model,
         data: &mut Data,

@@ -36,7 +36,7 @@ mod tests;
 pub mod workspace;
 
 use crate::model::Model;
-use crate::spatial::{Vec3, Vec6};
+use crate::support::spatial::{Vec3, Vec6};
 
 pub use aba::forward_dynamics_local;
 pub use aba_derivatives::forward_dynamics_derivatives;
@@ -61,7 +61,7 @@ pub fn forward_dynamics(
     g: &Vec3,
     external: Option<&[Vec6]>,
     a: &mut [f64],
-) -> crate::error::Result<()> {
+) -> crate::support::error::Result<()> {
     forward_dynamics_local(model, data, q, v, tau, g, external, a)
 }
 
@@ -115,13 +115,15 @@ pub fn potential_energy(data: &Data, g: &Vec3) -> f64 {
 
 /// Refuses a configuration at a joint's coordinate singularity (ZYZ at sin θ ≈ 0), for the
 /// recursive and the explicit paths alike.
-pub fn check_singularities(model: &Model, q: &[f64]) -> crate::error::Result<()> {
+pub fn check_singularities(model: &Model, q: &[f64]) -> crate::support::error::Result<()> {
     for (i, l) in model.links.iter().enumerate() {
         if l.joint
             .singularity(&q[l.q_index..l.q_index + l.joint.nq()])
             .is_some()
         {
-            return Err(crate::error::Error::Singular(singular_message(model, i, q)));
+            return Err(crate::support::error::Error::Singular(singular_message(
+                model, i, q,
+            )));
         }
     }
     Ok(())

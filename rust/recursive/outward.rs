@@ -9,8 +9,8 @@ use super::shift::{cross_offset, OffsetForm};
 use super::workspace::LinkWork;
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3, Vec6};
-use crate::trig::{sin_cos, sin_cos4};
+use crate::support::spatial::{Mat3, Vec3, Vec6};
+use crate::support::trig::{sin_cos, sin_cos4};
 
 /// The outward pass over all links; returns the first link whose joint is at a coordinate
 /// singularity (`check_singularities`), if any. `ABI`: also start each leaf's articulated

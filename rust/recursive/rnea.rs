@@ -14,15 +14,15 @@ use super::shift::{to_parent, OffsetForm};
 use super::workspace::Data;
 use crate::joint::MotionClass;
 use crate::model::Model;
-use crate::spatial::{Vec3, Vec6};
+use crate::support::spatial::{Vec3, Vec6};
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// `τ = I a + C v − τ_g − Nᵀ f_ext`, in body frames. Same contract as
     /// `reference::inverse_dynamics_world`: `external` holds one wrench per link, `[moment
     /// about the link origin; force]` in world axes, applied to the link; gravity enters as the
     /// base twist rate `[0; −g]`. Writes `tau` (length nv). No allocation: works in
     /// `data.local`. Compiled for AVX2 where the CPU has it, bit for bit the same results (see
-    /// [`crate::cpu`]).
+    /// [`crate::support::cpu`]).
     pub fn inverse_dynamics_local / inverse_dynamics_avx2 / inverse_dynamics_baseline [] (
         model: &Model,
         data: &mut Data,

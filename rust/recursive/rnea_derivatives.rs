@@ -28,7 +28,7 @@ use super::base_accel;
 use super::workspace::{Data, DerivativeData, DofWork};
 use crate::kinematics;
 use crate::model::Model;
-use crate::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
+use crate::support::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
 
 /// No dof (above the root).
 pub(crate) const NO_DOF: usize = usize::MAX;
@@ -54,11 +54,11 @@ fn b_mul(baa: &Mat3, bla: &Mat3, x: &Vec6) -> Vec6 {
     stack(&(baa * xa), &(bla * xa))
 }
 
-crate::cpu::multiversion! {
+crate::support::cpu::multiversion! {
     /// `∂τ/∂q`, `∂τ/∂v` and `M = ∂τ/∂a` of `τ = ID(q, v, a)` (gravity `g`, no external
     /// wrenches) into `dd.dtau_dq`, `dd.dtau_dv`, `dd.mass`; `τ` itself into `dd.tau`. Columns
     /// are tangent directions (nv of them). `data.links` is overwritten with the positions at
-    /// `q`. No allocation. Compiled for AVX2 where the CPU has it (see [`crate::cpu`]).
+    /// `q`. No allocation. Compiled for AVX2 where the CPU has it (see [`crate::support::cpu`]).
     pub fn inverse_dynamics_derivatives / derivatives_avx2 / derivatives_baseline [] (
         model: &Model,
         data: &mut Data,

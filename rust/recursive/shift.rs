@@ -3,7 +3,7 @@
 //! `[E n + r × E f; E f]`, and `w × r`. The offset's form ([`OffsetForm`], a model constant)
 //! picks the cheapest exact product.
 use super::algebra::{cross, sidx, six, LocalInertia, Rot, Sym3};
-use crate::spatial::{Mat3, Vec3, Vec6};
+use crate::support::spatial::{Mat3, Vec3, Vec6};
 
 /// How a link's origin lies from its parent's (in parent axes): picks the shift's form.
 /// Always `Anywhere` for a prismatic joint, whose offset moves.

@@ -5,7 +5,7 @@
 use super::algebra::LocalInertia;
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{Mat3, Vec3, Vec6};
+use crate::support::spatial::{Mat3, Vec3, Vec6};
 use nalgebra::DMatrix;
 
 /// One link's per-call values, in the link's (recursion) frame, about its origin.
@@ -101,7 +101,7 @@ pub struct DerivLinkWork {
     pub v: Vec6,
     pub a: Vec6,
     /// Inertia, then the composite inertia of the subtree.
-    pub y: crate::spatial::BodyInertia,
+    pub y: crate::support::spatial::BodyInertia,
     /// `B = [[B_aa, 0], [B_la, 0]]` (see the module), then its subtree sum.
     pub baa: Mat3,
     pub bla: Mat3,
@@ -114,7 +114,7 @@ impl Default for DerivLinkWork {
         DerivLinkWork {
             v: Vec6::zeros(),
             a: Vec6::zeros(),
-            y: crate::spatial::BodyInertia::zero(),
+            y: crate::support::spatial::BodyInertia::zero(),
             baa: Mat3::zeros(),
             bla: Mat3::zeros(),
             f: Vec6::zeros(),

@@ -2,7 +2,7 @@
 //! at N states in one call, so that analyses along a result (the shaking of a run, where its
 //! torques saturate) run here rather than in a per-sample loop from Python.
 use super::Dynamics;
-use crate::error::{Error, Result};
+use crate::support::error::{Error, Result};
 
 /// The scene at N states, what was asked for: `accelerations` (N × nv, row after row; empty
 /// when not asked for) and each enabled effect's generalized force (`forces[k]`: N × nv for
@@ -44,18 +44,23 @@ impl Dynamics<'_> {
         let ne = labels.len();
         let mut out = Along {
             samples: n,
-            accelerations: crate::alloc::try_zeros_vec(
+            accelerations: crate::support::alloc::try_zeros_vec(
                 n * nv,
                 "accelerations along the trajectory",
             )?,
             forces: (0..ne)
-                .map(|_| crate::alloc::try_zeros_vec(n * nv, "effect forces along the trajectory"))
+                .map(|_| {
+                    crate::support::alloc::try_zeros_vec(
+                        n * nv,
+                        "effect forces along the trajectory",
+                    )
+                })
                 .collect::<Result<_>>()?,
             labels,
         };
         let mut row = vec![0.0; ne * nv];
         for k in 0..n {
-            crate::interrupt::check("the scene along a trajectory")?;
+            crate::support::interrupt::check("the scene along a trajectory")?;
             let (qk, vk) = (&q[k * nq..(k + 1) * nq], &v[k * nv..(k + 1) * nv]);
             let at = |e: String| Error::Numerical(format!("sample {k} (t = {}): {e}", t[k]));
             if accelerations {

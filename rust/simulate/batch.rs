@@ -9,10 +9,10 @@ use std::time::Duration;
 use super::settings::Resolved;
 use super::{simulate, Record, StateEvent, Trajectory};
 use crate::effects::{Disabled, Effect};
-use crate::error::{Error, Result};
 use crate::integrator::SolverOptions;
+use crate::io::scene::Scene;
 use crate::model::Model;
-use crate::scene::Scene;
+use crate::support::error::{Error, Result};
 
 /// One run of a batch: its model and effects (a scene's, or a variant of it), its initial
 /// state, span and integrator options.

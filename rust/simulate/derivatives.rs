@@ -10,11 +10,11 @@
 use super::dynamics::Dynamics;
 use crate::effects::derivatives::EffectDerivatives;
 use crate::effects::Context;
-use crate::error::Error;
 use crate::linalg::spd_inverse;
 use crate::loops::{self, LoopDerivativeWork};
 use crate::recursive::{self, tangent, DerivativeData};
-use crate::spatial::Vec6;
+use crate::support::error::Error;
+use crate::support::spatial::Vec6;
 use nalgebra::DMatrix;
 
 /// Everything the derivatives of one scene's dynamics need, allocated once.
@@ -72,7 +72,7 @@ impl Dynamics<'_> {
         v: &[f64],
         tau: &[f64],
         w: &mut DerivativeWork,
-    ) -> crate::error::Result<()> {
+    ) -> crate::support::error::Result<()> {
         let model = self.model;
         let cx = Context { model, t, q, v };
         w.tau.fill(0.0);
@@ -152,7 +152,7 @@ impl Dynamics<'_> {
         v: &[f64],
         a: &[f64],
         w: &mut DerivativeWork,
-    ) -> crate::error::Result<()> {
+    ) -> crate::support::error::Result<()> {
         let model = self.model;
         if model.has_constraints() {
             return Err(Error::Numerical(format!(

@@ -1,13 +1,13 @@
 //! The equations of motion `y = [q; v]`, `ẏ = [q̇(v); v̇]` with `v̇` from the recursive
 //! forward dynamics and the scene's effects, as an [`OdeSystem`].
 use crate::effects::{Context, Disabled, Effect, Effects, Probe};
-use crate::error::Result;
 use crate::integrator::OdeSystem;
 use crate::kinematics;
 use crate::loops::{self, LoopSolver};
 use crate::model::Model;
 use crate::recursive::{self, Data};
-use crate::spatial::Vec6;
+use crate::support::error::Result;
+use crate::support::spatial::Vec6;
 
 /// The equations of motion as a first-order system.
 pub struct Dynamics<'a> {

@@ -17,10 +17,10 @@ pub use dynamics::{Dynamics, Progress};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};
-use crate::error::{Error, Result};
 use crate::integrator::{self, Event, SolverOptions, Status};
+use crate::io::scene::Scene;
 use crate::model::Model;
-use crate::scene::Scene;
+use crate::support::error::{Error, Result};
 
 /// An event on the state: `q[index] − value` or `v[index] − value` crossing zero.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]

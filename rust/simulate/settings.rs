@@ -2,9 +2,9 @@
 //! beats the scene's (`[simulate]`, [`Settings`]), which beats the default. The one place
 //! that decides it ([`RunConfig::resolve`]); the bindings only parse the arguments.
 use crate::effects::{Disabled, Effect, Kind};
-use crate::error::{Error, Result};
 use crate::integrator::{Controller, Method, SolverOptions, StiffnessCheck, Tol};
-use crate::scene::Settings;
+use crate::io::scene::Settings;
+use crate::support::error::{Error, Result};
 
 use super::Record;
 
@@ -339,10 +339,10 @@ mod tests {
                 None,
                 vec![ContactPoint {
                     body: JointRef::Index(0),
-                    point: crate::spatial::Vec3::zeros(),
+                    point: crate::support::spatial::Vec3::zeros(),
                     radius: 0.0,
                 }],
-                crate::spatial::Vec3::z(),
+                crate::support::spatial::Vec3::z(),
                 0.0,
                 None,
                 1.5,
@@ -354,7 +354,7 @@ mod tests {
         );
         let all = PerJoint::All(1.0);
         let limit = JointLimit::new(None, None, None, None, all.clone(), all).unwrap();
-        let gravity = Effect::gravity(crate::spatial::Vec3::z()).unwrap();
+        let gravity = Effect::gravity(crate::support::spatial::Vec3::z()).unwrap();
         let none = Disabled::none();
         assert_eq!(default_method(&[], none), Method::Rk45);
         assert_eq!(

@@ -4,14 +4,14 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::*;
+use crate::dynamics::reactions;
 use crate::loops::{self, LoopSolver};
 use crate::model::Model;
-use crate::reactions;
 use crate::recursive::reference::Workspace;
-use crate::spatial::{linear, Vec3, Vec6};
+use crate::support::spatial::{linear, Vec3, Vec6};
 
 fn fourbar() -> (Model, Vec<f64>) {
-    let scene = crate::scene::Scene::from_toml(
+    let scene = crate::io::scene::Scene::from_toml(
         include_str!("../../../python/pointmass_dyn/scenes/fourbar.toml"),
         "fourbar.toml",
     )

@@ -3,11 +3,11 @@
 //! rate (it never adds energy), and its refusals.
 #![allow(clippy::needless_range_loop)]
 use super::*;
-use crate::body::RigidBody;
 use crate::effects::Effect;
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
 use crate::recursive::tangent::integrate;
-use crate::spatial::Placement;
+use crate::support::spatial::Placement;
 use nalgebra::DMatrix;
 
 fn body(m: f64) -> RigidBody {

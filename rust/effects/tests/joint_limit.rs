@@ -1,8 +1,8 @@
 //! Joint limits against their closed form, their derivatives against central differences,
 //! the model's bounds as defaults, and their refusals.
 use super::*;
-use crate::body::RigidBody;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::model::body::RigidBody;
+use crate::support::spatial::{Mat3, Placement, Vec3};
 use nalgebra::DMatrix;
 
 /// arm (revolute z) → slider (prismatic x) → ball (quaternion).

@@ -3,13 +3,13 @@
 //! and the right-hand side's composition against the sum of per-effect forces.
 #![allow(clippy::needless_range_loop)]
 use super::*;
-use crate::body::RigidBody;
 use crate::joint::rot_z;
 use crate::joint::Joint;
 use crate::kinematics;
+use crate::model::body::RigidBody;
 use crate::recursive::{self, Data};
 use crate::simulate::Dynamics;
-use crate::spatial::{Mat3, Placement};
+use crate::support::spatial::{Mat3, Placement};
 
 fn body(m: f64, c: [f64; 3], d: [f64; 3]) -> RigidBody {
     RigidBody::new(m, Vec3::from(c), Mat3::from_diagonal(&Vec3::from(d))).unwrap()
@@ -147,7 +147,7 @@ fn potentials_are_the_forces_of_springs_and_gravity() {
         );
     }
     // The gravity row is Nᵀ f^G from the explicit DeNOC path.
-    let tg = crate::denoc::gravity_forces(&m, &q, &Vec3::new(0.3, -1.0, -9.81)).unwrap();
+    let tg = crate::dynamics::denoc::gravity_forces(&m, &q, &Vec3::new(0.3, -1.0, -9.81)).unwrap();
     for k in 0..m.nv {
         assert!((f[k] - tg[k]).abs() < 1e-12);
     }

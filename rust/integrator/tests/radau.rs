@@ -593,7 +593,7 @@ fn radau_refuses_a_pi_controller() {
 /// chain7's links with stiff, heavily damped joints 1-6 (joint 0 free): the bends creep back
 /// with time constant c/k = 0.5 s while the fast modes decay at ~1e4 /s, so an explicit
 /// method is held to steps of ~1e-4 s by stability.
-fn stiff_chain_scene() -> crate::scene::Scene {
+fn stiff_chain_scene() -> crate::io::scene::Scene {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/python/pointmass_dyn/scenes/chain7.toml"
@@ -615,7 +615,7 @@ joints = ["link1", "link2", "link3", "link4", "link5", "link6"]
 damping = 300.0
 "#,
     );
-    crate::scene::Scene::from_toml(&text, "stiff chain").unwrap()
+    crate::io::scene::Scene::from_toml(&text, "stiff chain").unwrap()
 }
 
 /// On the stiff chain Radau reaches RK45's error (against DOP853 at 1e-13) for ≥ 10× fewer

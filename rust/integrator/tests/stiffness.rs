@@ -204,7 +204,7 @@ stiffness = 1e4
 type = "damper"
 damping = 3e3
 "#;
-    let scene = crate::scene::Scene::from_toml(text, "stiff.toml").unwrap();
+    let scene = crate::io::scene::Scene::from_toml(text, "stiff.toml").unwrap();
     let run = |check, max_steps| {
         let opts = SolverOptions {
             stiffness: check,

@@ -157,7 +157,7 @@ fn scene_run_counted(path: &str, method: Method, tl: f64, t_end: f64) -> (Vec<f6
         env!("CARGO_MANIFEST_DIR")
     );
     let text = std::fs::read_to_string(&file).unwrap();
-    let scene = crate::scene::Scene::from_toml(&text, &file).unwrap();
+    let scene = crate::io::scene::Scene::from_toml(&text, &file).unwrap();
     let t_eval: Vec<f64> = (1..=5).map(|k| t_end * k as f64 / 5.0).collect();
     let opts = SolverOptions {
         method,

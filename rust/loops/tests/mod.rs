@@ -1,10 +1,10 @@
 use nalgebra::{DMatrix, DVector};
 
-use super::factor::{cholesky, min_norm_solve, RANK_TOL};
-use crate::body::RigidBody;
 use crate::joint::Joint;
+use crate::linalg::cholesky::{cholesky, min_norm_solve, RANK_TOL};
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 #[test]
 fn cholesky_reproduces_the_matrix_and_refuses_indefinite_ones() {

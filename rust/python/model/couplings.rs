@@ -5,10 +5,10 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyString};
 
 use super::{gravity_arg, load_state, load_x, PyModel};
+use crate::dynamics::shared::Version;
 use crate::loops;
 use crate::python::convert::{int_arg, real, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
-use crate::shared::Version;
 
 /// A joint given as a body index, a URDF joint name or a body name: its body's index
 /// (`crate::effects::resolve_joint_body`).

@@ -6,15 +6,15 @@ use super::{
     external_wrenches, gravity_arg, load_state, load_x, method_arg, square_to_array,
     symmetric_to_array, Method, PyModel, DETACH_LINKS,
 };
-use crate::alloc::try_zeros;
-use crate::denoc;
+use crate::dynamics::denoc;
+use crate::dynamics::shared::{Direction, Workspace};
 use crate::kinematics;
 use crate::model::Model;
 use crate::python::convert::{dmatrix_to_array, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
 use crate::recursive;
-use crate::shared::{Direction, Workspace};
+use crate::support::alloc::try_zeros;
 
 fn name(direction: Direction) -> &'static str {
     match direction {

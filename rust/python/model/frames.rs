@@ -10,7 +10,7 @@ use crate::model::Model;
 use crate::python::convert::{array, int_arg, mat3, shape_str, to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 /// A frame: its name (a body or an added frame) or a body index.
 pub fn frame_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<FrameRef> {
@@ -155,7 +155,7 @@ impl PyModel {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let p = vec3(point, "point")?;
-        crate::error::check_finite("point", p.as_slice()).py(py)?;
+        crate::support::error::check_finite("point", p.as_slice()).py(py)?;
         let (rows, qs, _) = configurations(&model, q, "q")?;
         let vs = match v {
             Some(v) if !v.is_none() => {
@@ -168,7 +168,7 @@ impl PyModel {
                         shape_str(&shape),
                     ));
                 }
-                crate::error::check_finite("v", &data).py(py)?;
+                crate::support::error::check_finite("v", &data).py(py)?;
                 Some(data)
             }
             _ => None,

@@ -9,7 +9,7 @@ use crate::frames::ik::{self, Options, Target, Task};
 use crate::python::convert::{mat3, to_array1, vec3};
 use crate::python::errors::{invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
-use crate::spatial::Placement;
+use crate::support::spatial::Placement;
 
 #[pymethods]
 impl PyModel {
@@ -40,7 +40,7 @@ impl PyModel {
         for (frame, rot, pos, weights) in &tasks {
             let f = frame_arg(&model, frame, "targets")?;
             let t = vec3(pos, "targets")?;
-            crate::error::check_finite("targets", t.as_slice()).py(py)?;
+            crate::support::error::check_finite("targets", t.as_slice()).py(py)?;
             let target = match rot {
                 Some(r) if !r.is_none() => {
                     let r =

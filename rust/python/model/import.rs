@@ -10,7 +10,7 @@ use super::PyModel;
 use crate::python::convert::{mat3, vec3};
 use crate::python::errors::{invalid, IntoPyResult};
 use crate::python::joint::PyJoint;
-use crate::spatial::Placement;
+use crate::support::spatial::Placement;
 
 #[pymethods]
 impl PyModel {
@@ -34,10 +34,10 @@ impl PyModel {
     ) -> PyResult<Self> {
         let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
         let root = match root_joint {
-            None => crate::urdf::RootJoint::Fixed,
+            None => crate::io::urdf::RootJoint::Fixed,
             Some(r) => match r.extract::<String>().ok().as_deref() {
-                Some("fixed") => crate::urdf::RootJoint::Fixed,
-                Some("free") => crate::urdf::RootJoint::Free,
+                Some("fixed") => crate::io::urdf::RootJoint::Fixed,
+                Some("free") => crate::io::urdf::RootJoint::Free,
                 _ => {
                     return Err(invalid(
                         py,
@@ -50,9 +50,9 @@ impl PyModel {
         };
         let repair = repair_options(py, repair)?;
         let mut urdf =
-            crate::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
+            crate::io::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
         if !mimic {
-            urdf.independent_mimics(&crate::files::display_path(&path));
+            urdf.independent_mimics(&crate::support::files::display_path(&path));
         }
         let warnings = py.import("warnings")?;
         if !urdf.warnings.is_empty() {
@@ -68,7 +68,7 @@ impl PyModel {
             let lines: Vec<String> = urdf.repairs().iter().map(|r| r.describe()).collect();
             let message = format!(
                 "{}: repaired {} link(s)/joint(s) (model.repairs lists them):\n  {}",
-                crate::files::display_path(&path),
+                crate::support::files::display_path(&path),
                 urdf.repairs().len(),
                 lines.join("\n  ")
             );
@@ -130,7 +130,7 @@ impl PyModel {
                     ))
                 }
             };
-            out.push(crate::urdf::Part {
+            out.push(crate::io::urdf::Part {
                 name,
                 parent,
                 placement: Placement::new(mat3(&r, "rotation")?, vec3(&t, "translation")?),
@@ -142,7 +142,7 @@ impl PyModel {
                 range: ranges[k],
             });
         }
-        let built = crate::urdf::model_from_parts(&out).py(py)?;
+        let built = crate::io::urdf::model_from_parts(&out).py(py)?;
         Ok(PyModel::from_model(built.model))
     }
 
@@ -157,12 +157,12 @@ impl PyModel {
         srdf: std::path::PathBuf,
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
-        let (poses, skipped) = crate::urdf::load_reference_poses(&model, &srdf).py(py)?;
+        let (poses, skipped) = crate::io::urdf::load_reference_poses(&model, &srdf).py(py)?;
         if !skipped.is_empty() {
             let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
             let message = format!(
                 "{}: joints the model does not move, skipped: {}",
-                crate::files::display_path(&srdf),
+                crate::support::files::display_path(&srdf),
                 skipped.join(", ")
             );
             py.import("warnings")?
@@ -215,7 +215,7 @@ impl PyModel {
 fn repair_options(
     py: Python<'_>,
     repair: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<crate::urdf::Repair>> {
+) -> PyResult<Option<crate::io::urdf::Repair>> {
     const FIELDS: [&str; 4] = [
         "balance_inertia",
         "bound_mass",
@@ -229,7 +229,7 @@ fn repair_options(
         return Ok(None);
     }
     if let Ok(b) = r.cast::<pyo3::types::PyBool>() {
-        return Ok(b.is_true().then(crate::urdf::Repair::default));
+        return Ok(b.is_true().then(crate::io::urdf::Repair::default));
     }
     let get = |name: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
         if let Ok(d) = r.cast::<PyDict>() {
@@ -253,7 +253,7 @@ fn repair_options(
             }
         }
     }
-    let mut out = crate::urdf::Repair::default();
+    let mut out = crate::io::urdf::Repair::default();
     for name in FIELDS {
         let Some(v) = get(name)? else { continue };
         let arg = format!("repair.{name}");

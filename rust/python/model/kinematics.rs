@@ -4,7 +4,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::{gravity_arg, load_state, PyModel};
-use crate::denoc;
+use crate::dynamics::denoc;
 use crate::kinematics;
 use crate::model::Model;
 use crate::python::convert::{dmatrix_to_array, points, to_array, to_array1};
@@ -57,7 +57,7 @@ impl PyModel {
         };
         let rows = count.unwrap_or(1);
         let poses = detach_interruptible(py, || {
-            crate::poses::Poses::at(&model, &qs, rows, count.is_some())
+            crate::kinematics::poses::Poses::at(&model, &qs, rows, count.is_some())
         })?;
         let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
         let shape = |tail: &[usize]| -> Vec<usize> {
@@ -180,7 +180,7 @@ impl PyModel {
         let (model, qv) = self.state_only(py, q)?;
         let f = points(forces, "forces")?;
         for p in &f {
-            crate::error::check_finite("forces", p.as_slice()).py(py)?;
+            crate::support::error::check_finite("forces", p.as_slice()).py(py)?;
         }
         let tau = detach_interruptible(py, || denoc::generalized_forces(&model, &qv, &f))?;
         check_result(py, "generalized_forces", tau.as_slice())?;

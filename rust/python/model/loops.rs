@@ -9,7 +9,7 @@ use crate::python::convert::{dmatrix_to_array, mat3, to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::joint::PyJoint;
 use crate::python::loops::body_ref;
-use crate::spatial::{Placement, Vec3};
+use crate::support::spatial::{Placement, Vec3};
 
 #[pymethods]
 impl PyModel {
@@ -39,7 +39,7 @@ impl PyModel {
             };
             let r = match r.filter(|x| !x.is_none()) {
                 Some(r) => mat3(r, ra)?,
-                None => crate::spatial::Mat3::identity(),
+                None => crate::support::spatial::Mat3::identity(),
             };
             Ok(Placement::new(r, t))
         };
@@ -177,7 +177,7 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyAny>> {
         let (model, q, v) = self.state(py, q, v)?;
         let mut a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
-        crate::error::check_finite("a_guess", &a).py(py)?;
+        crate::support::error::check_finite("a_guess", &a).py(py)?;
         let mask = crate::python::loops::fixed_mask(&model, fixed)?;
         loops::project_velocity_like(&model, &q, Some(&v), &mut a, &mask).py(py)?;
         check_result(py, "assemble_acceleration", &a)?;

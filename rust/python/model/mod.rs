@@ -2,17 +2,17 @@
 //! (pyo3's `multiple-pymethods`): the tree and its names ([`structure`]), importers
 //! ([`import`]), kinematics and DeNOC matrices ([`kinematics`]), dynamics and derivatives
 //! ([`dynamics`]), closed loops ([`loops`]), shaking and bearing forces ([`reactions`]). Each
-//! converts arguments, calls the core (`crate::shared` holds the versions and the workspace
+//! converts arguments, calls the core (`crate::dynamics::shared` holds the versions and the workspace
 //! pool) and converts the result.
 use std::sync::Arc;
 
 use pyo3::prelude::*;
 
+use crate::dynamics::shared::{SharedModel, Version, Workspace};
 use crate::model::Model;
 use crate::python::convert::{vec3, vector_into};
 use crate::python::errors::{invalid, IntoPyResult};
-use crate::shared::{SharedModel, Version, Workspace};
-use crate::spatial::{Vec3, Vec6};
+use crate::support::spatial::{Vec3, Vec6};
 
 mod couplings;
 mod dynamics;
@@ -38,7 +38,7 @@ pub fn gravity_arg(py: Python<'_>, gravity: Option<&Bound<'_, PyAny>>) -> PyResu
     match gravity {
         Some(g) if !g.is_none() => {
             let g = vec3(g, "gravity")?;
-            crate::error::check_finite("gravity", g.as_slice()).py(py)?;
+            crate::support::error::check_finite("gravity", g.as_slice()).py(py)?;
             Ok(g)
         }
         _ => Ok(Vec3::zeros()),
@@ -80,7 +80,7 @@ fn load_state(
 /// Reads the argument that is not a state (τ or a) into the workspace and validates it.
 fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -> PyResult<()> {
     vector_into(x, arg, &mut ws.x)?;
-    crate::error::check_finite(arg, &ws.x).py(py)
+    crate::support::error::check_finite(arg, &ws.x).py(py)
 }
 
 impl PyModel {
@@ -108,7 +108,7 @@ impl PyModel {
     }
 
     /// The source file's joints and repairs (empty for a model built body by body).
-    pub fn records(&self) -> Arc<crate::joint_records::JointRecords> {
+    pub fn records(&self) -> Arc<crate::model::joint_records::JointRecords> {
         self.model().records.clone()
     }
 
@@ -116,7 +116,7 @@ impl PyModel {
         self.shared.version()
     }
 
-    /// Runs `f` with a workspace of the current model (the pool's, `crate::shared`).
+    /// Runs `f` with a workspace of the current model (the pool's, `crate::dynamics::shared`).
     fn with_workspace<R>(&self, f: impl FnOnce(&mut Workspace) -> PyResult<R>) -> PyResult<R> {
         self.shared.with_workspace(f)
     }
@@ -215,7 +215,7 @@ fn external_wrenches(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<
             if shape != [n, 6] {
                 return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), crate::python::convert::shape_str(&shape)));
             }
-            crate::error::check_finite("external", &data).py(f.py())?;
+            crate::support::error::check_finite("external", &data).py(f.py())?;
             Ok(Some(
                 data.chunks_exact(6).map(Vec6::from_column_slice).collect(),
             ))

@@ -1,16 +1,16 @@
-//! `Model`'s reactions (`crate::reactions`): the point masses in motion, the balancing
+//! `Model`'s reactions (`crate::dynamics::reactions`): the point masses in motion, the balancing
 //! regressors, shaking forces and bearing forces.
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::{external_wrenches, gravity_arg, PyModel};
+use crate::dynamics::reactions;
 use crate::python::convert::{to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, to_py, IntoPyResult};
 use crate::python::loops::loop_actuation;
 use crate::python::signals::{detach_watched, stopped_with_partial};
-use crate::reactions;
 use crate::recursive;
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
@@ -145,7 +145,7 @@ impl PyModel {
         let about = match about.filter(|x| !x.is_none()) {
             Some(o) => {
                 let o = vec3(o, "about")?;
-                crate::error::check_finite("about", o.as_slice()).py(py)?;
+                crate::support::error::check_finite("about", o.as_slice()).py(py)?;
                 o
             }
             None => Vec3::zeros(),
@@ -240,7 +240,7 @@ fn partial_rows(
     reached: usize,
     total: usize,
     raised: Option<PyErr>,
-    why: crate::error::Error,
+    why: crate::support::error::Error,
 ) -> PyErr {
     let message = format!("{what} stopped after {reached} of {total} states: interrupted");
     let _ = partial.set_item("states", reached);

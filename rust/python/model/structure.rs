@@ -9,7 +9,7 @@ use crate::python::body::PyRigidBody;
 use crate::python::convert::{mat3, to_array1, vec3};
 use crate::python::errors::{invalid, IntoPyResult};
 use crate::python::joint::PyJoint;
-use crate::spatial::{Placement, Vec3};
+use crate::support::spatial::{Placement, Vec3};
 
 #[pymethods]
 impl PyModel {
@@ -44,7 +44,7 @@ impl PyModel {
         };
         let r = match rotation {
             Some(r) if !r.is_none() => mat3(r, "rotation")?,
-            _ => crate::spatial::Mat3::identity(),
+            _ => crate::support::spatial::Mat3::identity(),
         };
         let center = match point_mass_center {
             Some(c) if !c.is_none() => Some(vec3(c, "point_mass_center")?),
@@ -74,7 +74,7 @@ impl PyModel {
                     -1 => None,
                     p if p >= 0 => Some(p as usize),
                     p => {
-                        return Err(crate::error::Error::model(
+                        return Err(crate::support::error::Error::model(
                             "parent",
                             format!(
                                 "expected -1 (the world) or a body index 0..{}, got {p}",

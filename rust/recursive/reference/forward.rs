@@ -4,11 +4,11 @@
 //! or purely linear subspace (`P = [A; 0]` or `[0; A]`), so its products are 3×3 blocks; the
 //! free flyer's six columns are taken whole.
 use super::Workspace;
-use crate::error::{Error, Result};
 use crate::kinematics;
 use crate::model::Model;
 use crate::recursive::{base_accel, singular_message};
-use crate::spatial::{
+use crate::support::error::{Error, Result};
+use crate::support::spatial::{
     angular, linear, shift_twist, shift_wrench, stack, ArticulatedInertia, Mat3, Mat6, Vec3, Vec6,
 };
 

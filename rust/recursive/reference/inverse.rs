@@ -3,7 +3,7 @@ use super::Workspace;
 use crate::kinematics;
 use crate::model::Model;
 use crate::recursive::base_accel;
-use crate::spatial::{shift_twist, shift_wrench, Vec3, Vec6};
+use crate::support::spatial::{shift_twist, shift_wrench, Vec3, Vec6};
 
 /// `τ = I a + C v − τ_g − Nᵀ f_ext`. `external` holds one wrench per link about its origin
 /// (world axes), applied to the link. Writes `tau` (length nv). World-axes version, kept as
@@ -33,7 +33,7 @@ pub fn inverse_dynamics_world(
             acc += s.s[k] * a[l.v_index + k];
         }
         ws.accel[i] = acc;
-        let w = crate::spatial::angular(&s.twist);
+        let w = crate::support::spatial::angular(&s.twist);
         let mut wr = s.inertia.mul_twist(&acc) + s.inertia.bias(&w);
         if let Some(f) = external {
             wr -= f[i];

@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use super::Workspace;
 use crate::kinematics;
 use crate::model::Model;
-use crate::spatial::shift_wrench;
+use crate::support::spatial::shift_wrench;
 
 /// Fills `gim` (nv × nv, symmetric).
 pub fn mass_matrix_world(model: &Model, ws: &mut Workspace, q: &[f64], gim: &mut DMatrix<f64>) {

@@ -10,7 +10,7 @@ pub mod mass_matrix;
 
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::spatial::{ArticulatedInertia, BodyInertia, Mat6, Vec6};
+use crate::support::spatial::{ArticulatedInertia, BodyInertia, Mat6, Vec6};
 
 pub use forward::forward_dynamics_world;
 pub use inverse::inverse_dynamics_world;

@@ -10,7 +10,7 @@ use crate::effects::{Damper, Disabled, Effect, JointRef, PerJoint, Spring};
 use crate::integrator::OdeSystem;
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::spatial::Vec3;
+use crate::support::spatial::Vec3;
 
 const G: Vec3 = Vec3::new(0.0, 0.0, -9.81);
 
@@ -140,16 +140,18 @@ fn state_jacobian_matches_central_differences_of_the_rhs() {
 #[test]
 fn state_jacobian_is_not_declined_with_closed_loops() {
     let mut model = crate::benchmark_models::chain(3);
-    let end =
-        crate::spatial::Placement::new(crate::spatial::Mat3::identity(), Vec3::new(0.3, 0.0, 0.0));
+    let end = crate::support::spatial::Placement::new(
+        crate::support::spatial::Mat3::identity(),
+        Vec3::new(0.3, 0.0, 0.0),
+    );
     model
         .add_loop(
             Some(2),
             None,
             Joint::revolute(Vec3::y()).unwrap(),
             end,
-            crate::spatial::Placement::new(
-                crate::spatial::Mat3::identity(),
+            crate::support::spatial::Placement::new(
+                crate::support::spatial::Mat3::identity(),
                 Vec3::new(0.5, 0.0, 0.0),
             ),
             None,

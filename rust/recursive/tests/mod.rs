@@ -8,11 +8,11 @@ use super::reference::{
     forward_dynamics_world, inverse_dynamics_world, mass_matrix_world, Workspace,
 };
 use super::*;
-use crate::body::RigidBody;
-use crate::denoc;
+use crate::dynamics::denoc;
 use crate::joint::Joint;
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 /// A deterministic pseudo-random stream, so a failure is reproducible from its seed.
 struct Lcg(u64);
@@ -239,11 +239,11 @@ fn thousand_body_chain_inverse_of_forward() {
 // ---- The body-frame recursion (`aba`) against the world-frame one and the
 // ---- explicit DeNOC path.
 
-fn random_wrenches(model: &Model, seed: u64) -> Vec<crate::spatial::Vec6> {
+fn random_wrenches(model: &Model, seed: u64) -> Vec<crate::support::spatial::Vec6> {
     let mut rng = Lcg(seed ^ 0x5851f42d4c957f2d);
     (0..model.links.len())
         .map(|_| {
-            crate::spatial::Vec6::new(
+            crate::support::spatial::Vec6::new(
                 rng.range(-2.0, 2.0),
                 rng.range(-2.0, 2.0),
                 rng.range(-2.0, 2.0),
@@ -261,7 +261,7 @@ fn both_forward(
     q: &[f64],
     v: &[f64],
     tau: &[f64],
-    ext: Option<&[crate::spatial::Vec6]>,
+    ext: Option<&[crate::support::spatial::Vec6]>,
 ) -> (DVector<f64>, DVector<f64>) {
     let mut data = Data::new(model);
     let mut loc = vec![0.0; model.nv];
@@ -613,7 +613,7 @@ fn local_forward_refuses_zyz_singularity() {
         None,
         &mut acc,
     );
-    assert!(matches!(r, Err(crate::error::Error::Singular(_))));
+    assert!(matches!(r, Err(crate::support::error::Error::Singular(_))));
 }
 
 #[test]
@@ -663,7 +663,7 @@ fn both_inverse(
     v: &[f64],
     a: &[f64],
     g: &Vec3,
-    ext: Option<&[crate::spatial::Vec6]>,
+    ext: Option<&[crate::support::spatial::Vec6]>,
 ) -> (DVector<f64>, DVector<f64>) {
     let mut data = Data::new(model);
     let mut loc = vec![0.0; model.nv];
@@ -689,7 +689,7 @@ fn explicit_inverse(
     q: &[f64],
     v: &[f64],
     a: &[f64],
-    ext: Option<&[crate::spatial::Vec6]>,
+    ext: Option<&[crate::support::spatial::Vec6]>,
 ) -> DVector<f64> {
     let mut tau = denoc::inverse_dynamics(model, q, v, a, &G).unwrap();
     if let Some(f) = ext {
@@ -801,7 +801,7 @@ fn avx2_copy_is_bit_identical() {
     // The dispatching entry points run the AVX2 copy on CPUs that have it (as CI's do); it
     // must round exactly as the baseline build does (no FMA contraction in Rust).
     #[cfg(target_arch = "x86_64")]
-    if !crate::cpu::has_avx2() {
+    if !crate::support::cpu::has_avx2() {
         eprintln!("no AVX2 on this CPU: both sides run the baseline build");
     }
     let models: Vec<Model> = (0..12u64)

@@ -1,13 +1,13 @@
 //! The loop hooks Radau uses (`filter_error`, `chain_projection`) against finite differences
 //! of the right-hand side as integrated and the closure residual.
 use super::Dynamics;
-use crate::body::RigidBody;
 use crate::effects::{Disabled, Effect};
 use crate::integrator::OdeSystem;
 use crate::joint::Joint;
 use crate::loops::{self, LoopKinematics};
+use crate::model::body::RigidBody;
 use crate::model::Model;
-use crate::spatial::{Mat3, Placement, Vec3};
+use crate::support::spatial::{Mat3, Placement, Vec3};
 
 fn at(x: f64) -> Placement {
     Placement::new(Mat3::identity(), Vec3::new(x, 0.0, 0.0))

@@ -1,0 +1,6 @@
+//! What callers ask of a model's dynamics beyond one recursion: the explicit DeNOC matrices
+//! (`denoc`), what a moving mechanism does to its supports (`reactions`), and a model many
+//! threads call at once with its pool of per-call workspaces (`shared`).
+pub mod denoc;
+pub mod reactions;
+pub mod shared;
