@@ -36,7 +36,7 @@ impl Default for LinkState {
 
 /// Positions: orientation, origin, joint columns and world-axes inertia of every link.
 pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
-    poses::<true>(model, q, st);
+    poses::<true, false>(model, q, st);
 }
 
 /// [`positions`] without the world-axes inertias (`inertia` is left as it was): what the
@@ -44,11 +44,27 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
 /// columns `s[..nv]` are written: `st` must have the others zero (as
 /// `LinkState::default()` has, and every earlier `frames` of the same model leaves them).
 pub fn frames(model: &Model, q: &[f64], st: &mut [LinkState]) {
-    poses::<false>(model, q, st);
+    poses::<false, false>(model, q, st);
+}
+
+/// [`frames`] with a revolute joint about a coordinate axis turning two columns of its joint
+/// frame's orientation (12 products instead of Rodrigues' matrix and a 3 × 3 product): the
+/// frame Jacobians', centre of mass's and inverse kinematics' poses (equal to [`frames`]'
+/// to rounding, not bit for bit). The same precondition on `st` as [`frames`].
+pub fn frame_poses(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    poses::<false, true>(model, q, st);
+}
+
+/// `(k, ±1)` when `axis` is `±e_k` exactly.
+#[inline(always)]
+fn coordinate_axis(axis: &Vec3) -> Option<(usize, f64)> {
+    let k = (0..3).find(|&k| axis[k].abs() == 1.0)?;
+    let others_zero = (0..3).all(|j| j == k || axis[j] == 0.0);
+    others_zero.then_some((k, axis[k]))
 }
 
 #[inline(always)]
-fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
+fn poses<const INERTIA: bool, const TURN: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
     for (i, l) in model.links.iter().enumerate() {
         let (r_parent, o_parent) = match l.parent {
             Some(p) => (st[p].rotation, st[p].origin),
@@ -61,6 +77,22 @@ fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
         } else {
             r_parent
         };
+        if let (true, crate::joint::Joint::Revolute { axis }) = (TURN, &l.joint) {
+            if let Some((k, sign)) = coordinate_axis(axis) {
+                // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
+                let (sn, cs) = crate::trig::sin_cos(sign * qi[0]);
+                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+                let (ca, cb) = (r_joint.column(a), r_joint.column(b));
+                let s = &mut st[i];
+                s.joint_rotation = r_joint;
+                s.rotation = r_joint;
+                s.rotation.set_column(a, &(ca * cs + cb * sn));
+                s.rotation.set_column(b, &(cb * cs - ca * sn));
+                s.origin = o_parent + mat_vec(&r_parent, &l.placement.translation);
+                s.s[0] = stack(&(r_joint.column(k) * sign), &Vec3::zeros());
+                continue;
+            }
+        }
         let (r_q, t_q) = l.joint.transform(qi);
         let s = &mut st[i];
         s.joint_rotation = r_joint;
