@@ -11,6 +11,7 @@ use crate::error::{check_finite, Error, Result};
 use crate::model::{checked_rotation, Model};
 use crate::spatial::Placement;
 
+mod box_qp;
 pub mod centroidal;
 pub mod com;
 pub mod constrained;
