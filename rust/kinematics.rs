@@ -63,9 +63,38 @@ fn coordinate_axis(axis: &Vec3) -> Option<(usize, f64)> {
     others_zero.then_some((k, axis[k]))
 }
 
+/// Sines and cosines of the turns `±q` of links `first..first + 4` that [`frame_poses`] turns
+/// by columns (0 for the others).
+#[inline(always)]
+fn turn_sin_cos(model: &Model, q: &[f64], first: usize) -> ([f64; 4], [f64; 4]) {
+    let mut x = [0.0; 4];
+    let end = (first + 4).min(model.links.len());
+    for (k, l) in model.links[first..end].iter().enumerate() {
+        if let crate::joint::Joint::Revolute { axis } = &l.joint {
+            if let Some((_, sign)) = coordinate_axis(axis) {
+                x[k] = sign * q[l.q_index];
+            }
+        }
+    }
+    crate::trig::sin_cos4(x).unwrap_or_else(|| {
+        // An angle beyond the branch-free reduction: one at a time.
+        let (mut sn, mut cs) = ([0.0; 4], [0.0; 4]);
+        for k in 0..4 {
+            (sn[k], cs[k]) = crate::trig::sin_cos(x[k]);
+        }
+        (sn, cs)
+    })
+}
+
 #[inline(always)]
 fn poses<const INERTIA: bool, const TURN: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    // The turns' sines and cosines four links at a time: the polynomial chains of four
+    // angles overlap instead of each waiting for the last (bit for bit `sin_cos`).
+    let mut sc = ([0.0; 4], [1.0; 4]);
     for (i, l) in model.links.iter().enumerate() {
+        if TURN && i % 4 == 0 {
+            sc = turn_sin_cos(model, q, i);
+        }
         let (r_parent, o_parent) = match l.parent {
             Some(p) => (st[p].rotation, st[p].origin),
             None => (Mat3::identity(), Vec3::zeros()),
@@ -80,7 +109,7 @@ fn poses<const INERTIA: bool, const TURN: bool>(model: &Model, q: &[f64], st: &m
         if let (true, crate::joint::Joint::Revolute { axis }) = (TURN, &l.joint) {
             if let Some((k, sign)) = coordinate_axis(axis) {
                 // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
-                let (sn, cs) = crate::trig::sin_cos(sign * qi[0]);
+                let (sn, cs) = (sc.0[i % 4], sc.1[i % 4]);
                 let (a, b) = ((k + 1) % 3, (k + 2) % 3);
                 let (ca, cb) = (r_joint.column(a), r_joint.column(b));
                 let s = &mut st[i];
