@@ -164,7 +164,7 @@ mod tests {
     /// Random strictly convex programs: the result meets the KKT conditions of the box, which
     /// determine the unique optimum.
     #[test]
-    fn matches_enumerated_kkt_solution() {
+    fn meets_the_box_kkt_conditions() {
         let mut seed = 7u64;
         let mut rnd = || {
             seed = seed
