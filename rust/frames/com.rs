@@ -3,6 +3,7 @@
 //! COM Jacobian `J_c = Σ_j (M_j l_j + a_j × (h_j − M_j O_j)) / M` over each joint column
 //! `[a; l]` of link `j`, with `M_j`, `h_j` the mass and first moment (world) of the subtree
 //! below it (inclusive).
+use crate::kinematics::LinkState;
 use crate::model::Model;
 use crate::support::spatial::{angular, linear, Mat3, Vec3};
 
@@ -86,24 +87,55 @@ pub fn com_motion(model: &Model, kin: &FrameKinematics, with_acc: bool) -> (Vec3
     }
 }
 
-/// The 3 × nv COM Jacobian (row-major) into `out`, from the composites; `total` is the
-/// total moving mass (> 0).
+/// Every link's subtree (itself and every link below) mass and first moment `Σ m c` (world)
+/// into `out` (4 per link: the mass, then the moment), from the links' poses alone
+/// (`crate::kinematics::frames`): what the centre of mass and its Jacobian need, without
+/// the inertias [`composites`] rotates.
+pub fn subtree_moments(model: &Model, links: &[LinkState], out: &mut [f64]) {
+    for (l, link) in model.links.iter().enumerate() {
+        let (b, s) = (&link.rigid, &links[l]);
+        let h = (s.origin + s.rotation * b.com) * b.mass;
+        out[4 * l..4 * l + 4].copy_from_slice(&[b.mass, h.x, h.y, h.z]);
+    }
+    for l in (0..model.links.len()).rev() {
+        if let Some(p) = model.links[l].parent {
+            for i in 0..4 {
+                out[4 * p + i] += out[4 * l + i];
+            }
+        }
+    }
+}
+
+/// Total moving mass and the centre of mass from [`subtree_moments`] (None without mass).
+pub fn com_of_moments(model: &Model, moments: &[f64]) -> Option<(f64, Vec3)> {
+    let (mut m, mut h) = (0.0, Vec3::zeros());
+    for (l, link) in model.links.iter().enumerate() {
+        if link.parent.is_none() {
+            m += moments[4 * l];
+            h += Vec3::new(moments[4 * l + 1], moments[4 * l + 2], moments[4 * l + 3]);
+        }
+    }
+    (m > 0.0).then(|| (m, h / m))
+}
+
+/// The 3 × nv COM Jacobian (row-major) into `out`, from [`subtree_moments`]; `total` is
+/// the total moving mass (> 0).
 pub fn com_jacobian(
     model: &Model,
-    kin: &FrameKinematics,
-    comp: &[Composite],
+    links: &[LinkState],
+    moments: &[f64],
     total: f64,
     out: &mut [f64],
 ) {
     let nv = model.nv;
-    out[..3 * nv].fill(0.0);
     for (j, l) in model.links.iter().enumerate() {
-        let st = &kin.links[j];
-        let c = &comp[j];
-        let arm = c.moment - st.origin * c.mass;
+        let st = &links[j];
+        let mass = moments[4 * j];
+        let h = Vec3::new(moments[4 * j + 1], moments[4 * j + 2], moments[4 * j + 3]);
+        let arm = h - st.origin * mass;
         for k in 0..l.joint.nv() {
             let s = &st.s[k];
-            let col = (linear(s) * c.mass + angular(s).cross(&arm)) / total;
+            let col = (linear(s) * mass + angular(s).cross(&arm)) / total;
             for i in 0..3 {
                 out[i * nv + l.v_index + k] = col[i];
             }

@@ -6,6 +6,7 @@ use crate::support::error::{Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
 
 use super::com::{self, Composite};
+
 use super::motion::FrameKinematics;
 use super::placement::check_rows;
 use super::{centroidal, jacobian, jacobian_dot, FrameRef, ReferenceFrame};
@@ -27,7 +28,8 @@ pub fn frame_jacobians(
         if k % 256 == 255 {
             crate::support::interrupt::check("frame_jacobian")?;
         }
-        crate::kinematics::positions(model, &qs[k * nq..(k + 1) * nq], &mut links);
+        // Poses and joint columns only: a Jacobian needs no inertias.
+        crate::kinematics::frame_poses(model, &qs[k * nq..(k + 1) * nq], &mut links);
         jacobian::frame_jacobian_links(
             model,
             &links,
@@ -104,22 +106,63 @@ pub fn com_batch(
     mut jac: Option<&mut [f64]>,
 ) -> Result<()> {
     check_rows(model, qs, rows, stacked, "q")?;
-    let mut kin = FrameKinematics::new(model);
-    let mut comp = vec![Composite::default(); model.links.len()];
+    let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
+    let mut moments = vec![0.0; 4 * model.links.len()];
     let (nq, nv) = (model.nq, model.nv);
     for k in 0..rows {
         if k % 256 == 255 {
             crate::support::interrupt::check("center_of_mass")?;
         }
-        kin.positions(model, &qs[k * nq..(k + 1) * nq]);
-        let (m, c) = com::com(model, &kin).ok_or_else(no_mass)?;
+        let j = jac
+            .as_deref_mut()
+            .map(|j| &mut j[k * 3 * nv..(k + 1) * 3 * nv]);
+        let c = com_at(
+            model,
+            &qs[k * nq..(k + 1) * nq],
+            &mut links,
+            &mut moments,
+            j,
+        )?;
         com_out[3 * k..3 * k + 3].copy_from_slice(c.as_slice());
-        if let Some(j) = jac.as_deref_mut() {
-            com::composites(model, &kin, &mut comp);
-            com::com_jacobian(model, &kin, &comp, m, &mut j[k * 3 * nv..(k + 1) * 3 * nv]);
-        }
     }
     Ok(())
+}
+
+/// The centre of mass at one checked `q` and, with `jac`, its 3 × nv Jacobian (every entry
+/// written); `links` and `moments` (4 per link) are the caller's buffers.
+pub fn com_at(
+    model: &Model,
+    q: &[f64],
+    links: &mut [crate::kinematics::LinkState],
+    moments: &mut [f64],
+    jac: Option<&mut [f64]>,
+) -> Result<Vec3> {
+    // Poses and joint columns only: the COM needs no inertias.
+    crate::kinematics::frame_poses(model, q, links);
+    com::subtree_moments(model, links, moments);
+    let (m, c) = com::com_of_moments(model, moments).ok_or_else(no_mass)?;
+    if let Some(j) = jac {
+        j.fill(0.0);
+        com::com_jacobian(model, links, moments, m, j);
+    }
+    Ok(c)
+}
+
+/// [`com_at`] with its moments on the stack for models of up to 64 links (a Python call's
+/// pooled workspace has the links' buffers, not these).
+pub fn com_one(
+    model: &Model,
+    q: &[f64],
+    links: &mut [crate::kinematics::LinkState],
+    jac: Option<&mut [f64]>,
+) -> Result<Vec3> {
+    let n = 4 * model.links.len();
+    if n <= 256 {
+        let mut moments = [0.0; 256];
+        com_at(model, q, links, &mut moments[..n], jac)
+    } else {
+        com_at(model, q, links, &mut vec![0.0; n], jac)
+    }
 }
 
 /// The COM's position, velocity and acceleration (a = None: zero) at a checked state.

@@ -14,6 +14,7 @@ use crate::model::Model;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::{skew, Mat3, Placement, Vec3};
 
+use super::box_qp::BoxQp;
 use super::jacobian::point_jacobian_at;
 use super::motion::FrameKinematics;
 use super::FrameRef;
@@ -123,12 +124,14 @@ struct Work {
     e: DVector<f64>,
     ejac: DMatrix<f64>,
     w: DVector<f64>,
+    qp: BoxQp,
 }
 
 /// The stacked errors and `E` at `q`; returns the largest unweighted error.
 fn evaluate(model: &Model, tasks: &[Task], q: &[f64], wk: &mut Work) -> f64 {
     let nv = model.nv;
-    wk.kin.positions(model, q);
+    // Poses and joint columns only (no inertias), revolute turns by their columns.
+    crate::kinematics::frame_poses(model, q, &mut wk.kin.links);
     let mut row = 0;
     for t in tasks {
         let pose = wk.kin.frame_pose(&t.frame);
@@ -386,9 +389,17 @@ fn run(
                 step_bounds(model, q, limits, &mut lo, &mut hi);
                 let outside = (0..nv).any(|k| step[k] < lo[k] - 1e-15 || step[k] > hi[k] + 1e-15);
                 if outside {
-                    match bounded_step(&h, &g, &c, &jc, &lo, &hi) {
-                        Some(s) => step = s,
-                        None => break,
+                    // Without loop constraints, a box: the active-set solve (Clarabel
+                    // where it gives up).
+                    let boxed = jc.nrows() == 0
+                        && wk
+                            .qp
+                            .solve(h.as_slice(), g.as_slice(), &lo, &hi, step.as_mut_slice());
+                    if !boxed {
+                        match bounded_step(&h, &g, &c, &jc, &lo, &hi) {
+                            Some(s) => step = s,
+                            None => break,
+                        }
                     }
                     for k in 0..nv {
                         step[k] = step[k].clamp(lo[k].min(0.0), hi[k].max(0.0));
@@ -460,6 +471,7 @@ pub fn solve(model: &Model, tasks: &[Task], q0: &[f64], opts: &Options) -> Resul
         e: DVector::zeros(rows),
         ejac: DMatrix::zeros(rows, model.nv),
         w: DVector::zeros(rows),
+        qp: BoxQp::new(model.nv),
     };
     let mut state = opts.seed ^ 0x5EED;
     let mut best: Option<(f64, Vec<f64>)> = None;

@@ -38,7 +38,7 @@ impl Default for LinkState {
 
 /// Positions: orientation, origin, joint columns and world-axes inertia of every link.
 pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
-    poses::<true>(model, q, st);
+    poses::<true, false>(model, q, st);
 }
 
 /// [`positions`] without the world-axes inertias (`inertia` is left as it was): what the
@@ -46,12 +46,57 @@ pub fn positions(model: &Model, q: &[f64], st: &mut [LinkState]) {
 /// columns `s[..nv]` are written: `st` must have the others zero (as
 /// `LinkState::default()` has, and every earlier `frames` of the same model leaves them).
 pub fn frames(model: &Model, q: &[f64], st: &mut [LinkState]) {
-    poses::<false>(model, q, st);
+    poses::<false, false>(model, q, st);
+}
+
+/// [`frames`] with a revolute joint about a coordinate axis turning two columns of its joint
+/// frame's orientation (12 products instead of Rodrigues' matrix and a 3 × 3 product): the
+/// frame Jacobians', centre of mass's and inverse kinematics' poses (equal to [`frames`]'
+/// to rounding, not bit for bit). The same precondition on `st` as [`frames`].
+pub fn frame_poses(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    poses::<false, true>(model, q, st);
+}
+
+/// `(k, ±1)` when `axis` is `±e_k` exactly.
+#[inline(always)]
+fn coordinate_axis(axis: &Vec3) -> Option<(usize, f64)> {
+    let k = (0..3).find(|&k| axis[k].abs() == 1.0)?;
+    let others_zero = (0..3).all(|j| j == k || axis[j] == 0.0);
+    others_zero.then_some((k, axis[k]))
+}
+
+/// Sines and cosines of the turns `±q` of links `first..first + 4` that [`frame_poses`] turns
+/// by columns (0 for the others).
+#[inline(always)]
+fn turn_sin_cos(model: &Model, q: &[f64], first: usize) -> ([f64; 4], [f64; 4]) {
+    let mut x = [0.0; 4];
+    let end = (first + 4).min(model.links.len());
+    for (k, l) in model.links[first..end].iter().enumerate() {
+        if let crate::joint::Joint::Revolute { axis } = &l.joint {
+            if let Some((_, sign)) = coordinate_axis(axis) {
+                x[k] = sign * q[l.q_index];
+            }
+        }
+    }
+    crate::trig::sin_cos4(x).unwrap_or_else(|| {
+        // An angle beyond the branch-free reduction: one at a time.
+        let (mut sn, mut cs) = ([0.0; 4], [0.0; 4]);
+        for k in 0..4 {
+            (sn[k], cs[k]) = crate::trig::sin_cos(x[k]);
+        }
+        (sn, cs)
+    })
 }
 
 #[inline(always)]
-fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
+fn poses<const INERTIA: bool, const TURN: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
+    // The turns' sines and cosines four links at a time: the polynomial chains of four
+    // angles overlap instead of each waiting for the last (bit for bit `sin_cos`).
+    let mut sc = ([0.0; 4], [1.0; 4]);
     for (i, l) in model.links.iter().enumerate() {
+        if TURN && i % 4 == 0 {
+            sc = turn_sin_cos(model, q, i);
+        }
         let (r_parent, o_parent) = match l.parent {
             Some(p) => (st[p].rotation, st[p].origin),
             None => (Mat3::identity(), Vec3::zeros()),
@@ -63,6 +108,22 @@ fn poses<const INERTIA: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
         } else {
             r_parent
         };
+        if let (true, crate::joint::Joint::Revolute { axis }) = (TURN, &l.joint) {
+            if let Some((k, sign)) = coordinate_axis(axis) {
+                // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
+                let (sn, cs) = (sc.0[i % 4], sc.1[i % 4]);
+                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
+                let (ca, cb) = (r_joint.column(a), r_joint.column(b));
+                let s = &mut st[i];
+                s.joint_rotation = r_joint;
+                s.rotation = r_joint;
+                s.rotation.set_column(a, &(ca * cs + cb * sn));
+                s.rotation.set_column(b, &(cb * cs - ca * sn));
+                s.origin = o_parent + mat_vec(&r_parent, &l.placement.translation);
+                s.s[0] = stack(&(r_joint.column(k) * sign), &Vec3::zeros());
+                continue;
+            }
+        }
         let (r_q, t_q) = l.joint.transform(qi);
         let s = &mut st[i];
         s.joint_rotation = r_joint;

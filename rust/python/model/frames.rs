@@ -203,7 +203,8 @@ impl PyModel {
                 load_state(ws, py, q1.as_any(), None)?;
                 let model = &ws.version.model;
                 let f = frame_arg(model, frame, "frame")?;
-                crate::kinematics::positions(model, &ws.q, &mut ws.data.links);
+                // Poses and joint columns only: a Jacobian needs no inertias.
+                crate::kinematics::frame_poses(model, &ws.q, &mut ws.data.links);
                 let nv = model.nv;
                 let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
                 // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
@@ -276,6 +277,26 @@ impl PyModel {
         q: &Bound<'_, PyAny>,
         jacobian: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
+        if let Ok(q1) = q.cast::<numpy::PyArray1<f64>>() {
+            // One configuration: the pooled workspace's buffers, no thread hand-off.
+            return self.with_workspace(|ws| {
+                load_state(ws, py, q1.as_any(), None)?;
+                let model = &ws.version.model;
+                let arr = jacobian.then(|| numpy::PyArray2::<f64>::zeros(py, [3, model.nv], false));
+                let j = match &arr {
+                    // SAFETY: a new array no Python code has seen yet, C-contiguous, 3 × nv.
+                    Some(a) => Some(unsafe { a.as_slice_mut() }?),
+                    None => None,
+                };
+                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, j).py(py)?;
+                check_result(py, "center_of_mass", c.as_slice())?;
+                let c = to_array1(py, c.as_slice()).into_any();
+                match arr {
+                    Some(j) => Ok((c, j).into_pyobject(py)?.into_any()),
+                    None => Ok(c),
+                }
+            });
+        }
         let model = self.model();
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
         let nv = model.nv;
