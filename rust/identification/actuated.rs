@@ -9,9 +9,9 @@
 use nalgebra::DMatrix;
 
 use super::regressor::{check_states, tree_regressor, Extras};
-use crate::support::error::{Error, Result};
 use crate::loops::{self, LoopKinematics};
 use crate::model::Model;
+use crate::support::error::{Error, Result};
 use crate::support::spatial::Vec3;
 
 /// Relative singular-value threshold of `[S_a | Jᵀ]` (J's redundant rows are exact zeros or

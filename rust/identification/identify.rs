@@ -8,8 +8,8 @@ use super::base_parameters::{base_parameters, reduce, Base, Reduced};
 use super::cells::{fit_cells, LinkCells};
 use super::regressor::{ncolumns, parameter_names, Extras};
 use super::solve::{ols, residual, Fit};
-use crate::support::error::{Error, Result};
 use crate::model::Model;
+use crate::support::error::{Error, Result};
 use crate::support::spatial::Vec3;
 
 /// How to estimate.

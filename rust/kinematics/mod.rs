@@ -78,11 +78,11 @@ fn turn_sin_cos(model: &Model, q: &[f64], first: usize) -> ([f64; 4], [f64; 4]) 
             }
         }
     }
-    crate::trig::sin_cos4(x).unwrap_or_else(|| {
+    crate::support::trig::sin_cos4(x).unwrap_or_else(|| {
         // An angle beyond the branch-free reduction: one at a time.
         let (mut sn, mut cs) = ([0.0; 4], [0.0; 4]);
         for k in 0..4 {
-            (sn[k], cs[k]) = crate::trig::sin_cos(x[k]);
+            (sn[k], cs[k]) = crate::support::trig::sin_cos(x[k]);
         }
         (sn, cs)
     })

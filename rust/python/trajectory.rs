@@ -4,9 +4,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use super::convert::{to_array, to_array1};
-use crate::support::error::compact_numbers;
 use crate::integrator::{NonFiniteKind, Status};
 use crate::simulate::Trajectory;
+use crate::support::error::compact_numbers;
 
 /// How a run ended, one variant per cause: `t` the time the run reached, `at` where the
 /// failure (or interruption) happened. A typed copy of the core's `Status`, plus
