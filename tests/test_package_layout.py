@@ -162,11 +162,12 @@ TOP_IMPORTERS = {ROOT, f"{ROOT}.__main__"}
 
 
 def test_parts_depend_downwards():
-    """cli → benchmarking, design, viewer, io → the core: a part imports only the parts
+    """cli → benchmarking, identification, design, viewer, io → the core: a part imports only the parts
     below it, the core none (docs/architecture.md)."""
     below = {
-        "cli": {"benchmarking", "design", "viewer", "io"},
+        "cli": {"benchmarking", "design", "identification", "viewer", "io"},
         "benchmarking": {"io"},
+        "identification": {"design"},
         "viewer": {"design"},
         "design": set(),
         "io": set(),
