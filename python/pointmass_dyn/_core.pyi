@@ -8,12 +8,11 @@ returned are fresh float64 NumPy arrays.
 """
 
 import os
-from collections.abc import Sequence
-from typing import Any, Callable, ClassVar, Literal, final
+from collections.abc import Callable, Sequence
+from typing import Any, ClassVar, Literal, TypeAlias, final
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from typing_extensions import TypeAlias
 
 __version__: str
 #: Which copy of the multiversioned loops runs: "avx2" or "baseline" (POINTMASS_DYN_BASELINE=1).

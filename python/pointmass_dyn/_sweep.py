@@ -18,8 +18,8 @@ from __future__ import annotations
 import math
 import socket
 import uuid
-from collections.abc import Sequence
-from typing import Any, Callable
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -14,9 +14,10 @@ mass (gravity excluded: the weight is steady and reported apart).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
