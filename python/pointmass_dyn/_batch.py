@@ -237,9 +237,10 @@ def simulate_batch(
     run, sampled every ``control_period`` as in ``simulate(controller=...)`` (``control``,
     ``imu``, ``contact``, ``noise``, ``bias``, ``seed`` as there; ``seed`` may be a list of
     one per run). Each run is then exactly its ``simulate(..., controller=f_b)`` call, bit
-    for bit, whatever ``threads``: the runs go on ``threads`` threads, each integrating with
-    the GIL released while another's controller runs (a Python controller holds the GIL, so
-    controllers do not run at the same time; docs/control.md §6). ``t_eval`` gives the
+    for bit, whatever ``threads``: the runs go on ``threads`` threads (default one: a Python
+    controller holds the GIL, so controllers never run at the same time; a thread integrates
+    with the GIL released while another's controller runs, which gains only where the
+    integration dominates; docs/control.md §3). ``t_eval`` gives the
     batch's ``t``, ``q`` and ``v`` arrays as for other batches. An exception raised by one
     run's controller, or a control refused (wrong length, not finite), ends that run with
     its trajectory so far (``success`` False, the reason and ``t_reached``) and the others

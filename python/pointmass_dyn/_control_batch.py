@@ -1,14 +1,13 @@
 """:func:`simulate_batch`'s runs with a controller (docs/control.md §6).
 
 Each run is its own :class:`Simulator` loop. A Python controller holds the GIL while it
-runs, but ``Simulator.step`` integrates with the GIL released: on ``threads`` threads, one
-run integrates while another's controller runs, and runs integrate side by side on separate
-cores. Runs share nothing (each its own simulator, noise generator and controller call
+runs, but ``Simulator.step`` integrates with the GIL released: on ``threads`` threads (one
+unless asked), one run integrates while another's controller runs, and runs integrate side
+by side on separate cores. Runs share nothing (each its own simulator, noise generator and controller call
 sequence), so a run's result is the same bits whatever the thread count."""
 
 from __future__ import annotations
 
-import os
 import threading
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor, wait
@@ -103,7 +102,9 @@ def controlled_runs(
     not started stay empty, and the ``KeyboardInterrupt`` is returned beside the results."""
     runs = _per_run(scenes, controllers, sensing, q0, v0)
     check_options(runs[0][0], t_span, options)  # the batch's own arguments: refused at once
-    threads = max(1, min(threads or os.cpu_count() or 1, len(runs)))
+    # One thread unless asked: with a cheap integration the GIL's hand-offs cost more than
+    # the overlap gains (docs/control.md §3).
+    threads = max(1, min(threads or 1, len(runs)))
     stopped = threading.Event()
 
     def one(b: int) -> SimulationResult:
