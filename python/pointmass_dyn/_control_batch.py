@@ -1,10 +1,12 @@
-""":func:`simulate_batch`'s runs with a controller (docs/control.md §6).
+""":func:`simulate_batch`'s runs with a controller (docs/control.md §3).
 
 Each run is its own :class:`Simulator` loop. A Python controller holds the GIL while it
 runs, but ``Simulator.step`` integrates with the GIL released: on ``threads`` threads (one
 unless asked), one run integrates while another's controller runs, and runs integrate side
-by side on separate cores. Runs share nothing (each its own simulator, noise generator and controller call
-sequence), so a run's result is the same bits whatever the thread count."""
+by side on separate cores. Runs share no state of ours (each its own simulator and noise
+generator), so a run's result is the same bits whatever the thread count, as long as the
+controllers keep none across runs either (one callable for every run that counts its calls,
+say, sees the runs' calls interleaved on several threads)."""
 
 from __future__ import annotations
 
