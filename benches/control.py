@@ -7,7 +7,11 @@
    checked against MuJoCo's RK4 at 20 µs first);
 3. 1,000 steps of a vectorised environment of the Go2 quadruped on ground contact
    (`pmd.envs.VectorSceneEnv`, random torques) beside MuJoCo stepping Gymnasium's Ant model
-   (`gymnasium/envs/mujoco/assets/ant.xml`, its frame_skip 5) directly: env steps per second.
+   (`gymnasium/envs/mujoco/assets/ant.xml`, its frame_skip 5) directly: env steps per second;
+4. `simulate_batch(controller=f)` of 8 chain7 runs under a Python PD at 1 kHz (RK45 rtol
+   1e-8) on 1 and 2 threads: each run integrates with the GIL released while another's
+   controller runs (the same bits either way);
+5. `io.from_mujoco_state` per call on Panda.
 
 Run: python benches/control.py [--quick]"""
 
@@ -170,8 +174,41 @@ def quadruped_env(quick: bool) -> None:
           f"{steps * copies / ant:8.0f} env steps/s")
 
 
+def controller_batch(quick: bool) -> None:
+    scene = pmd.load_scene("chain7")
+    nq = scene.model.nq
+    q0 = np.asarray(scene.q0) + 0.1 * np.random.default_rng(0).normal(size=(8, nq))
+
+    def f(t, q, v, sensors):
+        return 30.0 * (0.0 - q) - 3.0 * v
+
+    span = (0.0, 0.1 if quick else 0.3)
+    times, last = {}, None
+    for threads in (1, 2, 1, 2):
+        t0 = time.perf_counter()
+        batch = pmd.simulate_batch(scene, span, q0=q0, controller=f, control_period=1e-3, method="RK45",
+                                   rtol=1e-8, atol=1e-10, threads=threads)
+        times[threads] = min(times.get(threads, np.inf), time.perf_counter() - t0)
+        q = np.array([r.q[-1] for r in batch.results])
+        assert last is None or np.array_equal(q, last)  # the same bits on any thread count
+        last = q
+    print(f"\nsimulate_batch(controller=f), 8 chain7 runs x {span[1] * 1e3:.0f} periods, RK45 rtol 1e-8: "
+          f"1 thread {times[1] * 1e3:.0f} ms, 2 threads {times[2] * 1e3:.0f} ms ({times[1] / times[2]:.2f}x)")
+
+
+def state_conversion(n: int = 2000) -> None:
+    from pointmass_dyn import io
+
+    model = pmd.load_scene("panda").model
+    qpos, qvel = io.to_mujoco_state(model, model.neutral(), np.zeros(model.nv))
+    t = per_call(lambda: io.from_mujoco_state(model, qpos, qvel), n)
+    print(f"\nio.from_mujoco_state on Panda: {t * 1e6:.1f} us a call")
+
+
 if __name__ == "__main__":
     quick = "--quick" in sys.argv
     main(2000 if quick else 20000)
     panda_pd_loop(quick)
     quadruped_env(quick)
+    controller_batch(quick)
+    state_conversion()

@@ -262,3 +262,39 @@ def test_go2_stands_under_a_python_pd_controller_on_ground_contact():
     assert np.abs(res.v[-1]).max() < 0.05
     assert forces[:, 2].sum() == pytest.approx(mass * 9.81, rel=0.05)  # its weight on its feet
     assert res.q[:, 2].min() > q0[2] - 0.05  # did not collapse
+
+
+@pytest.mark.parametrize("opts", METHODS, ids=lambda o: o["method"])
+def test_simulator_t_eval_samples_the_steps_interpolants(opts):
+    """``t_eval``: the same steps as without it; at a step's end its state exactly, between
+    steps within the tolerance of a tight run; times are checked."""
+    scene = chain3()
+    u = controls(scene.model.nv, 10)
+    t_eval = np.linspace(0.0, 10 * PERIOD, 41)  # period ends and quarter periods
+    sampled = loop(scene, u, t_eval=t_eval, **opts).result()
+    steps = loop(scene, u, **opts).result()
+    assert np.array_equal(sampled.t, t_eval) and sampled.nfev >= steps.nfev
+    at = np.isin(t_eval, steps.t)
+    assert at.sum() >= 11 and np.array_equal(sampled.q[at], steps.q[np.isin(steps.t, t_eval)])
+    tight = loop(scene, u, t_eval=t_eval, method="DOP853", rtol=1e-12, atol=1e-14).result()
+    np.testing.assert_allclose(sampled.q, tight.q, rtol=0, atol=1e-6)
+    for bad, match in (([0.0, 0.01, 0.005], "increasing"), ([-1.0, 0.0], "current time"),
+                       ([0.0, np.nan], "finite")):
+        with pytest.raises(InvalidInputError, match=f"t_eval.*{match}"):
+            pmd.Simulator(scene, control_period=PERIOD, t_eval=bad, **opts)
+
+
+def test_a_refused_state_keeps_the_state_without_recording():
+    """A state that breaks the four-bar's loop is refused and the run goes on from where it
+    was, whether or not it records its steps."""
+    scene = pmd.load_scene("fourbar")
+    for record_steps in (True, False):
+        sim = pmd.Simulator(scene, control_period=PERIOD, method="RK45", record=record_steps)
+        for _ in range(3):
+            sim.step()
+        q, v = sim.state
+        with pytest.raises(InvalidInputError):
+            sim.state = (q + 0.3, v)
+        assert np.array_equal(sim.q, q) and np.array_equal(sim.v, v)
+        sim.step()
+        assert sim.t == pytest.approx(4 * PERIOD)

@@ -91,4 +91,64 @@ def test_controller_batch_bad_input():
     with pytest.raises(InvalidInputError, match="controller: expected 3 runs"):
         pmd.simulate_batch(scene, T, q0=np.zeros((3, scene.model.nq)), controller=[f, f], control_period=PERIOD)
     with pytest.raises(InvalidInputError, match="t_eval"):
-        pmd.simulate_batch(scene, T, controller=f, t_eval=[0.0, 0.01])
+        pmd.simulate_batch(scene, T, controller=f, t_eval=[0.0, 1.0])
+    with pytest.raises(InvalidInputError, match="energy"):
+        pmd.simulate_batch(scene, T, controller=f, energy=True)
+
+
+def test_a_refused_control_ends_its_run_only_with_its_partial_result():
+    """A control of the wrong length (here from step 4 on): in ``simulate`` an
+    InvalidInputError naming the step with the trajectory so far; in a batch that run ends
+    there (the reason and t_reached in its result) and the others are their own runs."""
+    scene = chain()
+    nq = scene.model.nq
+    good = pd(20.0, np.zeros(nq))
+
+    def short(t, q, v, s):
+        return good(t, q, v, s)[: 3 if t > 3.5 * PERIOD else nq]
+
+    with pytest.raises(InvalidInputError, match=r"control.*step 4") as e:
+        pmd.simulate(scene, T, controller=short, control_period=PERIOD, method="RK4", dt=PERIOD)
+    assert e.value.result.t[-1] == pytest.approx(4 * PERIOD)
+    for threads in (1, 2):
+        batch = pmd.simulate_batch(scene, T, controller=[good, short, good], control_period=PERIOD,
+                                   method="RK4", dt=PERIOD, threads=threads)
+        assert list(batch.success) == [True, False, True]
+        assert "step 4" in batch.message[1] and batch.status[1] == -1
+        assert batch.t_reached[1] == pytest.approx(4 * PERIOD)
+        ref = pmd.simulate(scene, T, controller=good, control_period=PERIOD, method="RK4", dt=PERIOD)
+        n = len(batch.results[1].t)
+        assert n == 5 and np.array_equal(batch.results[1].q, ref.q[:n])
+        assert same(batch.results[0], ref) and same(batch.results[2], ref)
+
+
+@pytest.mark.parametrize("opts", [dict(method="RK45", rtol=1e-8, atol=1e-10), dict(method="RK4", dt=PERIOD / 2)],
+                         ids=lambda o: o["method"])
+def test_controller_batch_has_the_batch_arrays_and_the_same_bits_on_threads(opts):
+    """With ``t_eval`` a controller batch gives ``t``, ``q``, ``v`` (B, T, ·) as other batches:
+    row b is run b's ``simulate(controller=..., t_eval=...)``, whatever the thread count; at
+    the steps' own ends the samples are the every-step trajectory's states, between them the
+    interpolant agrees with a tight reference run."""
+    scene = chain()
+    nq = scene.model.nq
+    rng = np.random.default_rng(1)
+    q0 = np.asarray(scene.q0) + 0.1 * rng.normal(size=(4, nq))
+    f = pd(30.0, np.zeros(nq))
+    t_eval = np.linspace(T[0], T[1], 21)  # every period, and half-periods between
+    batches = [pmd.simulate_batch(scene, T, q0=q0, controller=f, control_period=PERIOD, t_eval=t_eval,
+                                  threads=n, **opts) for n in (1, 2, 4)]
+    for batch in batches:
+        assert batch.q.shape == (4, 21, nq) and batch.v.shape == (4, 21, scene.model.nv)
+        assert np.array_equal(batch.t, t_eval) and batch.success.all()
+        assert np.array_equal(batch.q, batches[0].q) and np.array_equal(batch.v, batches[0].v)
+    for b in range(4):
+        run = scene.replace(q0=q0[b])
+        ref = pmd.simulate(run, T, controller=f, control_period=PERIOD, t_eval=t_eval, **opts)
+        assert np.array_equal(batches[0].q[b], ref.q) and np.array_equal(batches[0].v[b], ref.v)
+        steps = pmd.simulate(run, T, controller=f, control_period=PERIOD, **opts)
+        at = np.isin(t_eval, steps.t)
+        assert at.sum() >= 11  # the period ends are steps' ends
+        assert np.array_equal(ref.q[at], steps.q[np.isin(steps.t, t_eval)])
+        tight = pmd.simulate(run, T, controller=f, control_period=PERIOD, t_eval=t_eval, method="DOP853",
+                             rtol=1e-12, atol=1e-14)
+        np.testing.assert_allclose(ref.q, tight.q, rtol=0, atol=1e-5 if opts["method"] == "RK4" else 1e-7)

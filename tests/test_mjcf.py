@@ -249,3 +249,28 @@ def test_round_trip_through_from_mujoco(name):
                                    rtol=1e-10, atol=1e-10 * np.max(np.abs(a)))
         np.testing.assert_allclose(back.mass_matrix(q), model.mass_matrix(q), rtol=1e-10,
                                    atol=1e-12)
+
+
+def test_cached_state_maps_follow_each_model_against_mujoco():
+    """The conversions keep per-model index maps: models called in turn (and a new model
+    built after one was dropped) each get their own, checked against MuJoCo's kinematics of
+    the exported model (body positions of ``mj_kinematics`` from qpos, and qpos back)."""
+    rng = np.random.default_rng(7)
+    for _ in range(2):
+        scenes = [random_scene(s, effects=False) for s in (3, 11)] + [pmd.load_scene("panda")]
+        for scene in scenes * 2:
+            model = scene.model
+            m, d = load(pmd.to_mjcf(scene))
+            q, v = random_state(model, rng)
+            d.qpos[:], d.qvel[:] = mjcf.to_mujoco_state(model, q, v)
+            mujoco.mj_kinematics(m, d)
+            q2, v2 = mjcf.from_mujoco_state(model, d.qpos, d.qvel, q_like=q)
+            _, org = model.placements(q2)
+            names = [model.body_info(i)[0] for i in range(model.nbodies)]
+            for i, name in enumerate(names):
+                bid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, name)
+                if bid >= 0:
+                    np.testing.assert_allclose(org[i], d.xpos[bid], rtol=0, atol=1e-12)
+            np.testing.assert_allclose(q2, q, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(v2, v, rtol=0, atol=1e-10)
+        del scenes

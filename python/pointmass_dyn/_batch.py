@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from . import _core
-from ._control import controlled_runs
+from ._control_batch import controlled_runs
 from ._core import RunConfig, Scene
 from ._helpers import changed_settings, float_array
 from ._simulation import SimulationResult, result_from_run
@@ -237,9 +237,14 @@ def simulate_batch(
     run, sampled every ``control_period`` as in ``simulate(controller=...)`` (``control``,
     ``imu``, ``contact``, ``noise``, ``bias``, ``seed`` as there; ``seed`` may be a list of
     one per run). Each run is then exactly its ``simulate(..., controller=f_b)`` call, bit
-    for bit; the runs go one after another in the calling thread (a Python controller holds
-    the GIL). An exception raised by one run's controller ends that run with its trajectory
-    so far (``success`` False, the exception in its message) and the others go on."""
+    for bit, whatever ``threads``: the runs go on ``threads`` threads (default one: a Python
+    controller holds the GIL, so controllers never run at the same time; a thread integrates
+    with the GIL released while another's controller runs, which gains only where the
+    integration dominates; docs/control.md §3). ``t_eval`` gives the
+    batch's ``t``, ``q`` and ``v`` arrays as for other batches. An exception raised by one
+    run's controller, or a control refused (wrong length, not finite), ends that run with
+    its trajectory so far (``success`` False, the reason and ``t_reached``) and the others
+    go on; Ctrl-C stops the batch and propagates with the :class:`BatchResult` so far."""
     if controller is not None:
         scenes = [scene] if isinstance(scene, Scene) else list(scene)
         if params:
@@ -250,8 +255,12 @@ def simulate_batch(
                        disable=disable, t_eval=t_eval, events=events or None, max_steps=max_steps,
                        energy=energy or None, config=config, progress=progress)  # fmt: skip
         sensing = dict(control=control, imu=imu, contact=contact, noise=noise, bias=bias, seed=seed)
-        results = controlled_runs(scenes, t_span, controller, control_period, sensing, options, q0, v0)
-        return _batch_of(results)
+        results, stopped = controlled_runs(scenes, t_span, controller, control_period, sensing, options,
+                                           q0, v0, threads)  # fmt: skip
+        batch = batch_of_results(results, t_eval)
+        if stopped is not None:
+            raise _with_batch(stopped, batch)
+        return batch
     scenes = [scene] if isinstance(scene, Scene) else list(scene)
     if not scenes or not all(isinstance(s, Scene) for s in scenes):
         raise InvalidInputError("scene: expected a Scene or a non-empty list of Scenes")
@@ -305,6 +314,11 @@ def _batch_result(scenes: list[Scene], out: list, t_eval: Any) -> BatchResult:
     names = [s.name for s in scenes]
     results = [result_from_run(run, names[0] if len(names) == 1 else names[k])
                for k, run in enumerate(out)]
+    return batch_of_results(results, t_eval, stacklevel=4)
+
+
+def batch_of_results(results: list[SimulationResult], t_eval: Any, stacklevel: int = 3) -> BatchResult:
+    """The runs as a :class:`BatchResult`; with ``t_eval``, their states at it stacked."""
     passed = [k for k, r in enumerate(results) if r.singular_passage is not None]
     if passed:
         # One warning for the batch, naming the runs (simulate warns per run).
@@ -312,13 +326,13 @@ def _batch_result(scenes: list[Scene], out: list, t_eval: Any) -> BatchResult:
             f"{len(passed)} of {len(results)} runs ended a step at a singular position of the "
             f"loops (runs {passed[:10]}{' ...' if len(passed) > 10 else ''}; their "
             "results' singular_passage holds the time): past it the motion may continue on "
-            "another branch, chosen by rounding (docs/mechanisms.md §5)"), stacklevel=3)
+            "another branch, chosen by rounding (docs/mechanisms.md §5)"), stacklevel=stacklevel)
     success = np.array([r.success for r in results], dtype=bool)
     t = q = v = None
     if t_eval is not None:
         t = np.asarray(t_eval, dtype=float).reshape(-1)
-        nq = max(s.model.nq for s in scenes)
-        nv = max(s.model.nv for s in scenes)
+        nq = max(r.q.shape[1] for r in results)
+        nv = max(r.v.shape[1] for r in results)
         q = np.full((len(results), len(t), nq), np.nan)
         v = np.full((len(results), len(t), nv), np.nan)
         for k, r in enumerate(results):
@@ -331,21 +345,6 @@ def _batch_result(scenes: list[Scene], out: list, t_eval: Any) -> BatchResult:
         q=q,
         v=v,
         success=success,
-        status=np.array([r.status for r in results]),
-        message=[r.message for r in results],
-        t_reached=np.array([r.t_reached for r in results], dtype=float),
-        nfev=np.array([r.nfev for r in results], dtype=int),
-    )
-
-
-def _batch_of(results: list[SimulationResult]) -> BatchResult:
-    """A :class:`BatchResult` of runs made one by one (no common output times)."""
-    return BatchResult(
-        results=results,
-        t=None,
-        q=None,
-        v=None,
-        success=np.array([r.success for r in results], dtype=bool),
         status=np.array([r.status for r in results]),
         message=[r.message for r in results],
         t_reached=np.array([r.t_reached for r in results], dtype=float),

@@ -88,6 +88,10 @@ class Simulator:
     ``"<name>.gyro"``, and with ``contact=True`` each ground contact's forces per point
     (``"contact.<effect>"``, (P, 3), world axes). ``noise`` (standard deviation by reading name)
     and ``bias`` (added by name) are drawn from ``numpy.random.default_rng(seed)``.
+
+    ``t_eval`` (increasing times from ``t0`` on): :meth:`result` holds the states at these
+    times only, each from the interpolant of the step that reaches it (as ``simulate``'s
+    ``t_eval``), instead of every accepted step; the stepping is the same either way.
     """
 
     def __init__(
@@ -110,11 +114,12 @@ class Simulator:
         first_step: float | None = None,
         max_step: float | None = None,
         t0: float = 0.0,
+        t_eval: Any = None,
     ):
         self.scene = scene
         self._core = _core._Simulator(
             scene, method, rtol, atol, dt, control_period, control, record, disable,
-            first_step, max_step, t0,
+            first_step, max_step, t0, t_eval,
         )  # fmt: skip
         model = scene.model
         self._imu_names = list((imu or {}).keys())
@@ -237,7 +242,7 @@ def simulate(
 ) -> SimulationResult:
     if not callable(controller):
         return _simulate(scene, t_span, controller=controller, contact=contact, **options)
-    return _controlled(
+    return controlled_run(
         scene, t_span, controller, control_period,
         dict(control=control, imu=imu, contact=contact, noise=noise, bias=bias, seed=seed),
         options,
@@ -252,14 +257,18 @@ simulate.__doc__ = (_simulate.__doc__ or "") + """
     the :class:`Simulator` loop ``sim.step(control=f(sim.t, sim.q, sim.v, sim.sensors()))``,
     bit for bit; the last period is shortened to end at ``t_end``. An exception raised by
     ``f`` stops the run and propagates with the trajectory so far as ``.result``.
-    ``method``, ``rtol``, ``atol``, ``dt``, ``first_step``, ``max_step``, ``disable`` apply;
-    events, ``t_eval``, ``energy``, ``power`` and ``progress`` are not taken with a controller.
+    A control the :class:`Simulator` refuses (wrong length, not finite) raises
+    :class:`InvalidInputError` naming the step, with the trajectory so far as ``.result``.
+    ``method``, ``rtol``, ``atol``, ``dt``, ``first_step``, ``max_step``, ``disable`` and
+    ``t_eval`` (the output times, up to ``t_end``) apply; events, ``energy``, ``power`` and
+    ``progress`` are not taken with a controller.
 """
 
-_LOOP_OPTIONS = {"method", "rtol", "atol", "dt", "first_step", "max_step", "disable"}
+_LOOP_OPTIONS = {"method", "rtol", "atol", "dt", "first_step", "max_step", "disable", "t_eval"}
 
 
-def _controlled(scene: Any, t_span: Any, f: Callable, period: float, sensing: dict, options: dict):
+def check_options(scene: Any, t_span: Any, options: dict) -> tuple[float, float]:
+    """``(t0, t_end)``, after refusing what a run with a controller does not take."""
     extra = sorted(k for k, v in options.items() if k not in _LOOP_OPTIONS and v is not None)
     if extra:
         raise InvalidInputError(
@@ -275,22 +284,47 @@ def _controlled(scene: Any, t_span: Any, f: Callable, period: float, sensing: di
         raise InvalidInputError(
             f"t_span: expected finite (t0, t_end) with t_end > t0 for a controller, got {t_span!r}"
         )
+    t_eval = options.get("t_eval")
+    if t_eval is not None and np.size(t_eval) and np.max(t_eval) > t_end:
+        raise InvalidInputError(
+            f"t_eval: expected times within t_span ({t0}, {t_end}), got {np.max(t_eval)!r}"
+        )
+    return t0, t_end
+
+
+def controlled_run(
+    scene: Any,
+    t_span: Any,
+    f: Callable,
+    period: float,
+    sensing: dict,
+    options: dict,
+    stop: Callable[[], bool] | None = None,
+) -> SimulationResult:
+    """``simulate(scene, t_span, controller=f, ...)``. ``stop()`` is asked before each
+    period (a batch being stopped): True ends the run there, its result so far with
+    ``success`` False and ``status`` -1."""
+    t0, t_end = check_options(scene, t_span, options)
     opts = {k: options.get(k) for k in _LOOP_OPTIONS}
     sim = Simulator(scene, control_period=period, t0=t0, **sensing, **opts)
     k = 0
     while sim.t < t_end:
-        try:
-            u = f(sim.t, sim.q, sim.v, sim.sensors())
-        except BaseException as error:
-            _attach(error, sim.result())
-            raise
+        if stop is not None and stop():
+            result = sim.result()
+            result.success, result.status = False, -1
+            result.message = f"the batch was stopped; this run reached t = {sim.t}"
+            return _with_contact(scene, result, sensing["contact"])
         k += 1
         # Periods end at t0 + k·period, as Simulator.step's; the last one at t_end.
         last = t0 + k * period >= t_end
         try:
+            u = f(sim.t, sim.q, sim.v, sim.sensors())
             sim.step(duration=t_end - sim.t if last else None, control=u)
         except SimulationError as error:
             return _with_contact(scene, error.result, sensing["contact"])
+        except BaseException as error:  # the controller's, a refused control, Ctrl-C
+            _attach(error, sim.result())
+            raise
     return _with_contact(scene, sim.result(), sensing["contact"])
 
 
@@ -303,72 +337,7 @@ def _with_contact(scene: Any, result: SimulationResult, contact: bool) -> Simula
 def _attach(error: BaseException, result: SimulationResult) -> None:
     try:
         error.result = result
-        error.add_note(f"pointmass_dyn: the controller raised at t = {result.t_reached}; "
+        error.add_note(f"pointmass_dyn: the run stopped at t = {result.t_reached}; "
                        "what was computed is in this exception's .result")  # fmt: skip
     except (AttributeError, TypeError):
         pass
-
-
-def controlled_runs(
-    scenes: Sequence[Any],
-    t_span: Any,
-    controllers: Any,
-    period: float,
-    sensing: dict,
-    options: dict,
-    q0: Any = None,
-    v0: Any = None,
-) -> list[SimulationResult]:
-    """:func:`simulate_batch`'s runs with a controller: run ``b`` is exactly
-    ``simulate(scene_b, t_span, controller=f_b, ...)`` (the same loop, so bit for bit), one
-    after the other (a Python controller holds the GIL, so threads would only interleave).
-    ``controllers``: one callable for every run or a sequence of one per run; ``q0``/``v0``
-    rows and a sequence of ``seed`` values are per run too. An exception raised by run b's
-    controller (or a refused control) ends run b with its trajectory so far (``success``
-    False, the exception in ``message``) and the batch goes on; Ctrl-C stops the batch."""
-    count = len(scenes)
-    for x in (q0, v0):
-        if x is not None and np.ndim(x) == 2:
-            count = max(count, int(np.shape(x)[0]))
-    if callable(controllers):
-        controllers = [controllers] * count
-    else:
-        controllers = list(controllers)
-        if not controllers or not all(callable(f) for f in controllers):
-            raise InvalidInputError(
-                "controller: expected a callable f(t, q, v, sensors) or a list of them (one per run)"
-            )
-        count = max(count, len(controllers))
-        if len(controllers) == 1:
-            controllers = controllers * count
-    seeds = sensing.get("seed")
-    per_seed = isinstance(seeds, (list, tuple))
-    sizes = {"controller": len(controllers), "scene": len(scenes) if len(scenes) > 1 else count,
-             "seed": len(seeds) if per_seed else count}  # fmt: skip
-    for x, name in ((q0, "q0"), (v0, "v0")):
-        if x is not None and np.ndim(x) == 2:
-            sizes[name] = int(np.shape(x)[0])
-    wrong = {k: n for k, n in sizes.items() if n != count}
-    if wrong:
-        raise InvalidInputError(f"controller: expected {count} runs from every per-run argument, got {wrong}")
-    out = []
-    for b in range(count):
-        scene = scenes[b] if len(scenes) > 1 else scenes[0]
-        changes = {}
-        for x, name in ((q0, "q0"), (v0, "v0")):
-            if x is not None:
-                changes[name] = np.asarray(x, float)[b] if np.ndim(x) == 2 else x
-        if changes:
-            scene = scene.replace(**changes)
-        run_sensing = dict(sensing, seed=seeds[b] if per_seed else seeds)
-        try:
-            out.append(_controlled(scene, t_span, controllers[b], period, run_sensing, options))
-        except Exception as error:  # any controller error ends its own run only
-            res = getattr(error, "result", None)
-            if res is None:  # refused before the first step: nothing computed
-                raise
-            res.success = False
-            res.status = -1
-            res.message = f"the controller raised {type(error).__name__}: {error} (at t = {res.t_reached})"
-            out.append(res)
-    return out

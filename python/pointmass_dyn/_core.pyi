@@ -918,6 +918,7 @@ class _Simulator:
         first_step: float | None = None,
         max_step: float | None = None,
         t0: float = 0.0,
+        t_eval: ArrayLike | None = None,
     ) -> None: ...
     t: float
     nq: int
@@ -1067,11 +1068,14 @@ def scene_along(
     disable: _Family | Sequence[_Family] | None = None,
     accelerations: bool = True,
     forces: bool = False,
+    threads: int | None = None,
 ) -> tuple[_Array | None, dict[str, _Array]]:
     """``(a, forces)`` at the N states ``(t[k], q[k], v[k])``: with ``accelerations`` the
     accelerations (N, nv) the scene's effects give (else None), and with ``forces`` each
     enabled effect's generalized force (N, nv) by name (else an empty dict). In one call, the
-    interpreter released."""
+    interpreter released, the samples in chunks on ``threads`` threads (None: one per core;
+    a scene with a Python torque function: one), the same bits whatever their number. A
+    sample that fails or gives a non-finite value is an error naming it."""
 
 def energies(
     scene: Scene,

@@ -1,4 +1,12 @@
 //! A [`Simulator`] that owns its model (for a binding's object, which cannot borrow).
+//!
+//! Why `unsafe` remains: a [`Simulator`] borrows its model (`&'a Model`, down through
+//! `Dynamics<'a>` and every integrator), and a Python object cannot hold a borrow, so this
+//! struct holds both the model and a simulator borrowing it (a self-reference). A safe
+//! design would make `Dynamics` generic over how it holds the model (`&Model` or
+//! `Arc<Model>`), a change through the integrators and the batch code that this one owner
+//! does not justify; a crate such as `ouroboros` or `self_cell` would wrap the same
+//! reasoning in a macro (and a dependency).
 use std::sync::Arc;
 
 use super::Simulator;
@@ -12,15 +20,25 @@ pub struct OwnedSimulator {
 }
 
 impl OwnedSimulator {
-    /// `build` makes the simulator from the model `model` holds.
+    /// `build` makes the simulator from the model `model` holds. `build` may be called with
+    /// any lifetime (`for<'m>`), so it cannot keep the reference beyond the simulator.
     pub fn new<E>(
         model: Arc<Model>,
-        build: impl FnOnce(&'static Model) -> Result<Simulator<'static>, E>,
+        build: impl for<'m> FnOnce(&'m Model) -> Result<Simulator<'m>, E>,
     ) -> Result<Self, E> {
-        // SAFETY: the model lives on the heap behind the `Arc` this struct keeps, unchanged
-        // (a `Model` is never mutated behind an `Arc`), for as long as `sim` exists; `sim` is
-        // dropped first (field order) and the reference is never handed out (`Simulator`
-        // gives no access to its model).
+        // SAFETY: the reference is valid for as long as `sim` can use it, because
+        // (1) the `Model` lives on the heap inside the `Arc`, so its address does not change
+        //     when an `OwnedSimulator` moves;
+        // (2) `self.model` keeps that allocation alive, and `sim` is dropped before it
+        //     (fields drop in declaration order), so no use outlives it;
+        // (3) nothing mutates the model while it is shared: the `Arc` is private and only
+        //     handed out as `&Model`, and `Model` has no interior mutability;
+        // (4) the `'static` lifetime never reaches a caller: `build` and the closures of
+        //     [`OwnedSimulator::with`] / [`OwnedSimulator::with_mut`] are generic over the
+        //     lifetime, so they cannot store the simulator or its reference anywhere that
+        //     outlives the call (not even by swapping the simulator out of the `&mut`: they
+        //     have no other `Simulator<'m>` of that lifetime to put in its place, since
+        //     `Simulator` never hands out its model).
         let m: &'static Model = unsafe { &*Arc::as_ptr(&model) };
         Ok(OwnedSimulator {
             sim: build(m)?,
@@ -28,12 +46,16 @@ impl OwnedSimulator {
         })
     }
 
-    pub fn sim(&mut self) -> &mut Simulator<'static> {
-        &mut self.sim
+    /// `f` applied to the simulator.
+    pub fn with<R>(&self, f: impl for<'m> FnOnce(&Simulator<'m>) -> R) -> R {
+        f(&self.sim)
     }
-    pub fn get(&self) -> &Simulator<'static> {
-        &self.sim
+
+    /// `f` applied to the simulator, mutably.
+    pub fn with_mut<R>(&mut self, f: impl for<'m> FnOnce(&mut Simulator<'m>) -> R) -> R {
+        f(&mut self.sim)
     }
+
     pub fn model(&self) -> &Model {
         &self.model
     }

@@ -11,8 +11,8 @@
 use super::sensors::{self, Imu, SensorWork};
 use crate::effects::{Disabled, Effect};
 use crate::integrator::{
-    Counts, Dop853, Euler, FixedStep, Integrator, Method, Radau, Resume, Rk4, SolverOptions,
-    Status, StepOutcome, Stepper, Vern9,
+    Counts, Dop853, Euler, FixedStep, Integrator, Interpolant, Method, Radau, Resume, Rk4,
+    SolverOptions, Status, StepOutcome, Stepper, Vern9,
 };
 use crate::model::Model;
 use crate::simulate::{self, Dynamics, Trajectory};
@@ -101,6 +101,18 @@ impl<'a> Engine<'a> {
     fn set_h_next(&mut self, h: f64) {
         each!(self, x => x.set_h_next(h))
     }
+    fn t_old(&self) -> f64 {
+        each!(self, x => Integrator::t_old(x))
+    }
+    fn y_old(&self) -> &[f64] {
+        each!(self, x => Integrator::y_old(x))
+    }
+    fn interpolant(&self) -> Interpolant {
+        each!(self, x => Integrator::interpolant(x))
+    }
+    fn dense_coefficients(&mut self, q: &mut [f64]) -> std::result::Result<(), Status> {
+        each!(self, x => Integrator::dense_coefficients(x, q))
+    }
     fn sys(&mut self) -> &mut Dynamics<'a> {
         each!(self, x => Integrator::system_mut(x))
     }
@@ -132,6 +144,18 @@ pub struct Simulator<'a> {
     /// The failure that ended the run, if any.
     failure: Option<Status>,
     sensors: SensorWork,
+    /// With output times (`set_t_eval`): the rows are the states there, from each step's
+    /// interpolant, instead of every accepted step's.
+    t_eval: Option<Box<Sampled>>,
+}
+
+/// Output times and the buffers that evaluate a step's interpolant at them.
+struct Sampled {
+    times: Vec<f64>,
+    /// The next time to output.
+    next: usize,
+    coef: Vec<f64>,
+    row: Vec<f64>,
 }
 
 impl<'a> Simulator<'a> {
@@ -194,6 +218,7 @@ impl<'a> Simulator<'a> {
             counts: Counts::default(),
             failure: None,
             sensors: SensorWork::new(model),
+            t_eval: None,
         };
         s.push_row();
         Ok(s)
@@ -211,7 +236,7 @@ impl<'a> Simulator<'a> {
     }
 
     fn push_row(&mut self) {
-        if self.record {
+        if self.record && self.t_eval.is_none() {
             let (t, y) = (self.engine().t(), self.engine().y().to_vec());
             self.t_out.push(t);
             self.y_out.extend_from_slice(&y);
@@ -337,10 +362,78 @@ impl<'a> Simulator<'a> {
                 e.set_h_next(h_before);
             }
             self.push_row();
+            self.sample()?;
             if outcome == StepOutcome::Finished {
                 return Ok(());
             }
         }
+    }
+
+    /// Records the state only at `times` (increasing, finite, from the current time on)
+    /// instead of at every accepted step, each from the interpolant of the step that reaches
+    /// it (as `simulate`'s `t_eval`); a time equal to the current one is recorded now.
+    /// Replaces the rows recorded so far.
+    pub fn set_t_eval(&mut self, times: &[f64]) -> Result<()> {
+        let t = self.t();
+        if let Some((i, x)) = times.iter().enumerate().find(|(_, x)| !x.is_finite()) {
+            return Err(Error::arg(
+                "t_eval",
+                "finite times",
+                format!("{x} at index {i}"),
+            ));
+        }
+        if let Some(i) = (1..times.len()).find(|&i| times[i] <= times[i - 1]) {
+            let what = format!("{} then {} at index {i}", times[i - 1], times[i]);
+            return Err(Error::arg("t_eval", "strictly increasing times", what));
+        }
+        if let Some(&first) = times.first().filter(|&&x| x < t) {
+            let got = format!("{first} before t = {t}");
+            return Err(Error::arg("t_eval", "times from the current time on", got));
+        }
+        let dim = self.model.nq + self.model.nv;
+        self.t_out.clear();
+        self.y_out.clear();
+        self.t_eval = Some(Box::new(Sampled {
+            times: times.to_vec(),
+            next: 0,
+            coef: Vec::new(),
+            row: vec![0.0; dim],
+        }));
+        // `times` from `t` on: only a first time equal to `t` is due now.
+        if times.first() == Some(&t) {
+            let y = self.y().to_vec();
+            let s = self.t_eval.as_mut().expect("set above");
+            s.next = 1;
+            self.t_out.push(t);
+            self.y_out.extend_from_slice(&y);
+        }
+        Ok(())
+    }
+
+    /// The output times the last step reached, from its interpolant (its end state exactly).
+    fn sample(&mut self) -> std::result::Result<(), Status> {
+        let (Some(s), Some(e)) = (self.t_eval.as_mut(), self.engine.as_mut()) else {
+            return Ok(());
+        };
+        let t = e.t();
+        if s.next >= s.times.len() || s.times[s.next] > t {
+            return Ok(());
+        }
+        let kind = e.interpolant();
+        s.coef.resize(kind.n_coef() * s.row.len(), 0.0);
+        e.dense_coefficients(&mut s.coef)?;
+        let (t_old, h) = (e.t_old(), t - e.t_old());
+        while s.next < s.times.len() && s.times[s.next] <= t {
+            let te = s.times[s.next];
+            match te == t {
+                true => s.row.copy_from_slice(e.y()),
+                false => kind.eval(t_old, h, e.y_old(), &s.coef, te, &mut s.row),
+            }
+            self.t_out.push(te);
+            self.y_out.extend_from_slice(&s.row);
+            s.next += 1;
+        }
+        Ok(())
     }
 
     /// Replaces the state (a reset or a perturbation) at the current time: unit quaternions;
@@ -350,7 +443,7 @@ impl<'a> Simulator<'a> {
     pub fn set_state(&mut self, q: &[f64], v: &[f64]) -> Result<()> {
         self.model.check_state(q, Some(v))?;
         let mut y = simulate::initial_state(self.model, q, v);
-        let t = self.t();
+        let (t, y_before) = (self.t(), self.y().to_vec());
         let engine = self.engine.take().expect("engine present");
         self.counts = self.counts + engine.counts();
         let mut sys = engine.into_sys();
@@ -362,8 +455,7 @@ impl<'a> Simulator<'a> {
             Ok(()) => y,
             Err(e) => {
                 // Refused: the run goes on from the state it had.
-                let y_old = self.y_out_last_or(&y);
-                self.engine = Some(Engine::new(sys, t, &y_old, t + self.period, &self.opts)?);
+                self.engine = Some(Engine::new(sys, t, &y_before, t + self.period, &self.opts)?);
                 return Err(e);
             }
         };
@@ -372,15 +464,6 @@ impl<'a> Simulator<'a> {
         self.changed = false;
         self.push_row();
         Ok(())
-    }
-
-    fn y_out_last_or(&self, fallback: &[f64]) -> Vec<f64> {
-        let n = fallback.len();
-        if self.y_out.len() >= n {
-            self.y_out[self.y_out.len() - n..].to_vec()
-        } else {
-            fallback.to_vec()
-        }
     }
 
     /// Counts of the whole run (engines replaced by state changes included).

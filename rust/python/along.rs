@@ -6,15 +6,15 @@ use pyo3::types::PyDict;
 use super::convert::{array, shape_str, to_array};
 use super::effects::take_callback_error;
 use super::errors::invalid;
-use super::scene::PyScene;
+use super::scene::{disable_arg, PyScene};
 use super::signals::detach_interruptible;
-use super::simulate::scene_system;
 
 /// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
 /// `accelerations`); `forces` a dict from each enabled effect's name to its generalized force
-/// (N, nv) (empty unless `forces`).
+/// (N, nv) (empty unless `forces`). On `threads` threads (None: one per core), the same
+/// bits whatever their number.
 #[pyfunction]
-#[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false))]
+#[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false, threads=None))]
 #[allow(clippy::too_many_arguments)] // the arguments of the Python function
 pub fn scene_along<'py>(
     py: Python<'py>,
@@ -25,6 +25,7 @@ pub fn scene_along<'py>(
     disable: Option<&Bound<'_, PyAny>>,
     accelerations: bool,
     forces: bool,
+    threads: Option<usize>,
 ) -> PyResult<(Option<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
     let s = &scene.inner;
     let (nq, nv) = (s.model.nq, s.model.nv);
@@ -54,9 +55,23 @@ pub fn scene_along<'py>(
             format!("a non-finite value at sample {k}"),
         ));
     }
-    let mut sys = scene_system(py, s, disable)?;
+    let disabled = crate::simulate::disabled(disable_arg(py, disable)?, &s.settings);
+    let threads =
+        threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let (model, effects) = (&*s.model, &s.effects[..]);
     take_callback_error();
-    let out = detach_interruptible(py, || sys.along(&t, &q, &v, accelerations, forces));
+    let out = detach_interruptible(py, || {
+        let states = (&t[..], &q[..], &v[..]);
+        crate::simulate::along(
+            model,
+            effects,
+            disabled,
+            states,
+            accelerations,
+            forces,
+            threads,
+        )
+    });
     if let Some(e) = take_callback_error() {
         return Err(e);
     }

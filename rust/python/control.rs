@@ -44,7 +44,7 @@ fn kind_arg(py: Python<'_>, control: &str) -> PyResult<ControlKind> {
 #[pymethods]
 impl PySimulator {
     #[new]
-    #[pyo3(signature = (scene, method=None, rtol=None, atol=None, dt=None, control_period=0.001, control="torque", record=true, disable=None, first_step=None, max_step=None, t0=0.0))]
+    #[pyo3(signature = (scene, method=None, rtol=None, atol=None, dt=None, control_period=0.001, control="torque", record=true, disable=None, first_step=None, max_step=None, t0=0.0, t_eval=None))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -60,6 +60,7 @@ impl PySimulator {
         first_step: Option<&Bound<'_, PyAny>>,
         max_step: Option<&Bound<'_, PyAny>>,
         t0: f64,
+        t_eval: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let s = &scene.inner;
         let kind = kind_arg(py, control)?;
@@ -97,10 +98,14 @@ impl PySimulator {
         let model = s.model.clone();
         let (q0, v0) = (s.q0.clone(), s.v0.clone());
         let effects = s.effects.clone();
-        let inner = OwnedSimulator::new(model, |m| {
+        let mut inner = OwnedSimulator::new(model, |m| {
             Simulator::new(m, &effects, off, (&q0, &v0), t0, opts, period, kind, record)
         })
         .py(py)?;
+        if let Some(te) = t_eval {
+            let te = vector(te, "t_eval", None)?;
+            inner.with_mut(|s| s.set_t_eval(&te)).py(py)?;
+        }
         Ok(PySimulator {
             inner: Mutex::new(inner),
         })
@@ -108,55 +113,53 @@ impl PySimulator {
 
     #[getter]
     fn t(&self) -> f64 {
-        self.lock().get().t()
+        self.lock().with(|s| s.t())
     }
     #[getter]
     fn nq(&self) -> usize {
-        self.lock().get().nq()
+        self.lock().with(|s| s.nq())
     }
     #[getter]
     fn nv(&self) -> usize {
-        self.lock().get().nv()
+        self.lock().with(|s| s.nv())
     }
     #[getter]
     fn control_period(&self) -> f64 {
-        self.lock().get().period()
+        self.lock().with(|s| s.period())
     }
     #[getter]
     fn method(&self) -> &'static str {
-        self.lock().get().method().name()
+        self.lock().with(|s| s.method().name())
     }
     #[getter]
     fn control_kind(&self) -> &'static str {
-        match self.lock().get().kind() {
+        match self.lock().with(|s| s.kind()) {
             ControlKind::Torque => "torque",
             ControlKind::PdTarget => "pd",
         }
     }
     #[getter]
     fn control_len(&self) -> usize {
-        self.lock().get().control_len()
+        self.lock().with(|s| s.control_len())
     }
     #[getter]
     fn steps(&self) -> usize {
-        self.lock().get().steps()
+        self.lock().with(|s| s.steps())
     }
     /// The state `[q; v]` (a copy).
     #[getter]
     fn y<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
-        to_array1(py, self.lock().get().y()).into_any()
+        self.lock().with(|s| to_array1(py, s.y()).into_any())
     }
     #[getter]
     fn control<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
         self.lock()
-            .get()
-            .control()
-            .map(|u| to_array1(py, u).into_any())
+            .with(|s| s.control().map(|u| to_array1(py, u).into_any()))
     }
 
     fn set_control(&self, py: Python<'_>, u: &Bound<'_, PyAny>) -> PyResult<()> {
         let u = vector(u, "control", None)?;
-        self.lock().sim().set_control(&u).py(py)
+        self.lock().with_mut(|s| s.set_control(&u)).py(py)
     }
 
     fn set_state(
@@ -167,7 +170,7 @@ impl PySimulator {
     ) -> PyResult<()> {
         let q = vector(q, "q", None)?;
         let v = vector(v, "v", None)?;
-        self.lock().sim().set_state(&q, &v).py(py)
+        self.lock().with_mut(|s| s.set_state(&q, &v)).py(py)
     }
 
     /// Advances to `target` with the interpreter released; returns None, or the failure's
@@ -175,26 +178,27 @@ impl PySimulator {
     /// re-raised.
     fn advance(&self, py: Python<'_>, target: f64) -> PyResult<Option<String>> {
         take_callback_error();
-        let mut guard = self.lock();
-        let sim = guard.sim();
-        let r = py.detach(|| sim.advance(target)).py(py)?;
+        let (r, t) = self
+            .lock()
+            .with_mut(|sim| (py.detach(|| sim.advance(target)), sim.t()));
+        let r = r.py(py)?;
         if let Some(e) = take_callback_error() {
             return Err(e);
         }
-        Ok(r.err().map(|s| s.describe(sim.t())))
+        Ok(r.err().map(|s| s.describe(t)))
     }
 
     /// Everything so far, as `simulate_scene` returns it.
     fn trajectory(&self, py: Python<'_>) -> PyResult<PyRunResult> {
-        let traj = self.lock().get().trajectory();
+        let traj = self.lock().with(|s| s.trajectory());
         let slots: Vec<usize> = (0..traj.t_events.len()).collect();
         PyRunResult::new(py, traj, &slots, None)
     }
 
     /// The actuators' joint torques now (nv): the torque control plus the scene's torques.
     fn joint_torques<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let mut out = vec![0.0; self.lock().get().nv()];
-        self.lock().sim().joint_torques(&mut out).py(py)?;
+        let mut out = vec![0.0; self.lock().with(|s| s.nv())];
+        self.lock().with_mut(|s| s.joint_torques(&mut out)).py(py)?;
         Ok(to_array1(py, &out).into_any())
     }
 
@@ -213,7 +217,7 @@ impl PySimulator {
             });
         }
         let mut out = vec![0.0; 6 * list.len()];
-        self.lock().sim().imu(&list, &mut out).py(py)?;
+        self.lock().with_mut(|s| s.imu(&list, &mut out)).py(py)?;
         to_array(py, out, &[list.len(), 6])
     }
 }

@@ -12,7 +12,7 @@ pub mod derivatives;
 mod dynamics;
 mod settings;
 
-pub use along::Along;
+pub use along::{along, Along};
 pub use dynamics::{Dynamics, Progress};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 

@@ -430,19 +430,40 @@ def _states(model, q, v, what=("q", "v")):
     return q, v
 
 
+#: Models (frozen, so a layout stays true) and their layouts and 1-dof index maps, most
+#: recent last: a state conversion per control step reads them instead of rebuilding them.
+_MAPS: dict[int, tuple[Any, MujocoLayout, tuple, list]] = {}
+
+
+def _state_map(model) -> tuple[MujocoLayout, tuple, list]:
+    """``model``'s layout, the index arrays ``(q, v, qpos, dof)`` of its revolute and
+    prismatic joints (one copy each way), and its other joints."""
+    hit = _MAPS.get(id(model))
+    if hit is not None and hit[0] is model:
+        return hit[1:]
+    lay = layout(model)
+    one = [j for j in lay.joints if j.kind in ("Revolute", "Prismatic")]
+    index = tuple(np.array([getattr(j, k) for j in one], dtype=np.intp)
+                  for k in ("q", "v", "qpos", "dof"))
+    others = [j for j in lay.joints if j.kind not in ("Revolute", "Prismatic")]
+    if len(_MAPS) >= 32:  # a few models at a time: drop the oldest
+        del _MAPS[next(iter(_MAPS))]
+    _MAPS[id(model)] = (model, lay, index, others)  # the model kept: its id stays its own
+    return lay, index, others
+
+
 def to_mujoco_state(model, q, v) -> tuple[np.ndarray, np.ndarray]:
     """(qpos, qvel) of :func:`to_mjcf`'s model for our (q, v); one state (nq,), (nv,) or many
     (N, nq), (N, nv)."""
     model, _ = _model_of(model)
-    lay = layout(model)
+    lay, (qi, vi, pi, di), others = _state_map(model)
     q, v = _states(model, q, v)
     lead = q.shape[:-1]
     qpos, qvel = np.empty(lead + (lay.nq,)), np.empty(lead + (lay.nv,))
-    for j in lay.joints:
+    qpos[..., pi], qvel[..., di] = q[..., qi], v[..., vi]
+    for j in others:
         a, b, p, d = j.q, j.v, j.qpos, j.dof
-        if j.kind in ("Revolute", "Prismatic"):
-            qpos[..., p], qvel[..., d] = q[..., a], v[..., b]
-        elif j.kind == "Spherical":
+        if j.kind == "Spherical":
             qpos[..., p:p + 4] = q[..., [a + 3, a, a + 1, a + 2]]
             qvel[..., d:d + 3] = v[..., b:b + 3]
         elif j.kind == "SphericalZYZ":
@@ -467,7 +488,7 @@ def from_mujoco_state(model, qpos, qvel, q_like=None) -> tuple[np.ndarray, np.nd
     (same shape as q, e.g. a reference trajectory) picks the nearest; by default quaternions
     keep MuJoCo's sign and Euler angles take θ ∈ [0, π], φ, ψ ∈ (−π, π]."""
     model, _ = _model_of(model)
-    lay = layout(model)
+    lay, (qi, vi, pi, di), others = _state_map(model)
     qpos = np.asarray(qpos, dtype=float)
     qvel = np.asarray(qvel, dtype=float)
     if (qpos.shape[-1:] != (lay.nq,) or qvel.shape[-1:] != (lay.nv,)
@@ -486,11 +507,10 @@ def from_mujoco_state(model, qpos, qvel, q_like=None) -> tuple[np.ndarray, np.nd
         flip = np.sum(quat_xyzw * like[..., a:a + 4], -1) < 0
         return np.where(flip[..., None], -quat_xyzw, quat_xyzw)
 
-    for j in lay.joints:
+    q[..., qi], v[..., vi] = qpos[..., pi], qvel[..., di]
+    for j in others:
         a, b, p, d = j.q, j.v, j.qpos, j.dof
-        if j.kind in ("Revolute", "Prismatic"):
-            q[..., a], v[..., b] = qpos[..., p], qvel[..., d]
-        elif j.kind == "Spherical":
+        if j.kind == "Spherical":
             q[..., a:a + 4] = near_sign(qpos[..., [p + 1, p + 2, p + 3, p]], a)
             v[..., b:b + 3] = qvel[..., d:d + 3]
         elif j.kind == "SphericalZYZ":
