@@ -1,4 +1,18 @@
 //! The Python bindings: one thin layer that converts arrays and errors and calls the core.
+
+/// `#[getter]`s that return a field as it is:
+/// `getters!(PyX { name: Type = inner.field, ... });`.
+macro_rules! getters {
+    ($ty:ident { $($name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
+        #[pyo3::pymethods]
+        #[allow(clippy::clone_on_copy)]
+        impl $ty {
+            $(#[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
+        }
+    };
+}
+pub(crate) use getters;
+
 mod along;
 mod body;
 mod control;
@@ -47,6 +61,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<joint::PyJoint>()?;
     m.add_class::<model::PyModel>()?;
     m.add_class::<effects::PyEffect>()?;
+    m.add_class::<effects::PyContactParameters>()?;
     m.add_class::<events::PyStateEvent>()?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<dense::PyDenseSolution>()?;

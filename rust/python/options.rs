@@ -3,35 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::vector;
-use super::errors::invalid;
-use crate::integrator::{self, Controller, Status};
-
-pub(super) fn t_span_arg(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
-    let v = vector(obj, "t_span", Some(2))?;
-    if !(v[0].is_finite() && v[1].is_finite()) || v[0] == v[1] {
-        return Err(invalid(
-            py,
-            "t_span",
-            "two different finite times (t0, t_end)",
-            format!("({}, {})", v[0], v[1]),
-        ));
-    }
-    Ok((v[0], v[1]))
-}
-
-pub(super) fn controller_arg(py: Python<'_>, name: &str) -> PyResult<Controller> {
-    match name {
-        "standard" | "scipy" => Ok(Controller::Standard),
-        "pi" => Ok(Controller::hairer_pi()),
-        other => Err(invalid(
-            py,
-            "controller",
-            "'standard' (SciPy's) or 'pi' (Hairer's PI)",
-            format!("'{other}'"),
-        )),
-    }
-}
+use crate::integrator::{self, Status};
 
 /// An optional argument that was given (`None` counts as not given).
 pub(super) fn given<'a, 'py>(obj: Option<&'a Bound<'py, PyAny>>) -> Option<&'a Bound<'py, PyAny>> {
@@ -51,21 +23,6 @@ pub(super) fn set_method(
     d.set_item("nlu", counts.1)?;
     d.set_item("switched_to", switched_to.map(|m| m.name()))?;
     d.set_item("t_switch", t_switch)
-}
-
-/// `"warn"` (default: detect, report, steps unchanged), `"stop"` or `"off"`.
-pub(super) fn stiffness_arg(py: Python<'_>, name: &str) -> PyResult<integrator::StiffnessCheck> {
-    match name {
-        "warn" => Ok(integrator::StiffnessCheck::Warn),
-        "stop" => Ok(integrator::StiffnessCheck::Stop),
-        "off" => Ok(integrator::StiffnessCheck::Off),
-        other => Err(invalid(
-            py,
-            "stiffness",
-            "'warn' (detect and report), 'stop' (stop at the detection) or 'off'",
-            format!("'{other}'"),
-        )),
-    }
 }
 
 /// How the run ended: the result entries after the evaluation counts.

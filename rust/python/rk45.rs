@@ -12,7 +12,7 @@ use super::errors::IntoPyResult;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
 use super::jac::{jac_arg, JacArg, WithJacobian};
-use super::options::{set_method, set_outcome, t_span_arg};
+use super::options::{set_method, set_outcome};
 use super::run_config::{call_config, PyRunConfig};
 use crate::integrator::{self, Event, FnSystem, OdeSystem};
 use crate::io::scene::Settings;
@@ -42,11 +42,11 @@ pub fn rk45<'py>(
             repr_of(fun),
         ));
     }
-    let t_span_given = t_span_arg(py, t_span)?;
+    let t_span_given = crate::simulate::config_args::t_span(t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
     // No scene: the caller's settings, else the defaults.
-    let run = call_config(py, config, Some(t_span), rtol, atol, settings)?
+    let run = call_config(config, Some(t_span), rtol, atol, settings)?
         .resolve(&Settings::default(), &[], dim)
         .py(py)?;
     let (t_span, opts) = (t_span_given, run.opts);

@@ -8,6 +8,7 @@
 //! effects runs the bare forward dynamics.
 mod along;
 pub mod batch;
+pub mod config_args;
 pub mod derivatives;
 mod dynamics;
 mod settings;
