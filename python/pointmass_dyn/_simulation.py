@@ -185,9 +185,12 @@ def PointSpring(
     )
 
 
-@dataclass(repr=False)
+@dataclass(repr=False, eq=False)
 class SimulationResult:
-    """Trajectory of a scene. ``q`` is (N, nq), ``v`` (N, nv); ``energy`` (N,) when asked."""
+    """Trajectory of a scene. ``q`` is (N, nq), ``v`` (N, nv); ``energy`` (N,) when asked.
+
+    Compared (and hashed) by identity: two runs' arrays are compared with NumPy, as
+    ``np.array_equal(a.q, b.q)``, not with ``==``."""
 
     t: np.ndarray
     q: np.ndarray
