@@ -546,10 +546,9 @@ def solve_ivp(
         method=method,
         dt=dt,
     )
-    error = out.pop("error")
-    result = OdeResult(out)
-    if error is not None:
-        raise _with_partial_result(error, result)
+    result = OdeResult({k: out[k] for k in out.keys() if k != "error"})
+    if out.error is not None:
+        raise _with_partial_result(out.error, result)
     return result
 
 

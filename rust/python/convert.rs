@@ -187,14 +187,6 @@ pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
     Ok(x.as_array().iter().next().copied().unwrap_or(f64::NAN))
 }
 
-/// An optional real number (`None` → `None`).
-pub fn opt_real(obj: Option<&Bound<'_, PyAny>>, arg: &str) -> PyResult<Option<f64>> {
-    match obj {
-        Some(o) if !o.is_none() => real(o, arg).map(Some),
-        _ => Ok(None),
-    }
-}
-
 /// An integer argument (index or count) in `lo..=hi` (`crate::support::args::int`).
 pub fn int_arg(
     obj: &Bound<'_, PyAny>,

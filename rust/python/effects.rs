@@ -48,26 +48,10 @@ pub struct PyContactParameters {
     v_eps: f64,
 }
 
-const CONTACT_KEYS: [&str; 6] = [
-    "height",
-    "stiffness",
-    "exponent",
-    "damping",
-    "friction",
-    "v_eps",
-];
+super::indexable!(PyContactParameters ["height", "stiffness", "exponent", "damping", "friction", "v_eps"]);
 
 #[pymethods]
 impl PyContactParameters {
-    fn __getitem__<'py>(slf: &Bound<'py, Self>, key: &str) -> PyResult<Bound<'py, PyAny>> {
-        match CONTACT_KEYS.contains(&key) {
-            true => slf.getattr(key),
-            false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
-        }
-    }
-    fn keys(&self) -> [&'static str; 6] {
-        CONTACT_KEYS
-    }
     fn __repr__(&self) -> String {
         let opt = |x: Option<f64>| x.map_or("None".into(), |x| format!("{x:?}"));
         format!(

@@ -13,6 +13,30 @@ macro_rules! getters {
 }
 pub(crate) use getters;
 
+/// `obj["key"]` and `obj.keys()` on a typed result whose attributes are the keys (the
+/// dicts it replaced were indexed so): `indexable!(PyX ["a", "b"]);`.
+macro_rules! indexable {
+    ($ty:ident [$($key:literal),* $(,)?]) => {
+        #[pyo3::pymethods]
+        impl $ty {
+            fn __getitem__<'py>(
+                slf: &pyo3::Bound<'py, Self>,
+                key: &str,
+            ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
+                use pyo3::types::PyAnyMethods;
+                match [$($key),*].contains(&key) {
+                    true => slf.getattr(key),
+                    false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
+                }
+            }
+            fn keys(&self) -> Vec<&'static str> {
+                vec![$($key),*]
+            }
+        }
+    };
+}
+pub(crate) use indexable;
+
 mod along;
 mod body;
 mod control;
@@ -28,7 +52,6 @@ mod jac;
 mod joint;
 mod loops;
 mod model;
-mod options;
 mod pickle;
 mod reactions;
 mod rk45;
@@ -62,6 +85,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::PyModel>()?;
     m.add_class::<effects::PyEffect>()?;
     m.add_class::<effects::PyContactParameters>()?;
+    m.add_class::<rk45::PyOdeSolution>()?;
     m.add_class::<events::PyStateEvent>()?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<dense::PyDenseSolution>()?;

@@ -8,7 +8,6 @@ use super::convert::{real, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
-use super::options::given;
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::PyScene;
 use super::signals::{Watch, INTERVAL};
@@ -17,6 +16,7 @@ use crate::integrator::Event;
 use crate::io::scene::Scene;
 use crate::simulate::batch::StateRows;
 use crate::simulate::{run_scene, Dynamics, Progress, StateEvent};
+use crate::support::args::given;
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
 /// it: the `RunResult` that `pointmass_dyn.simulate` wraps.

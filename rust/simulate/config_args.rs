@@ -4,7 +4,7 @@
 use super::RunConfig;
 use crate::effects::args::disable;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
-use crate::support::args::{choice, count, flag, shape_str, vector, Arg};
+use crate::support::args::{choice, count, flag, int, opt, shape_str, vector, Arg, Int};
 use crate::support::error::Error;
 
 /// The settings, in the constructor's order (`t_span` may also come first by position).
@@ -140,5 +140,47 @@ impl StiffnessCheck {
             StiffnessCheck::Stop => "stop",
             StiffnessCheck::Off => "off",
         }
+    }
+}
+
+impl super::StateEvent {
+    /// `variable` (`"q"` or `"v"`) `[index]` crossing `value` (default 0) in `direction`'s
+    /// sign (default either way), stopping the run at the `terminal`-th crossing (a bool
+    /// or a count; default never).
+    pub fn from_args<A: Arg>(
+        variable: &str,
+        index: &A,
+        value: Option<&A>,
+        direction: Option<&A>,
+        terminal: Option<&A>,
+    ) -> Result<Self, A::Err> {
+        let index = count(index, "index", "a coordinate index >= 0")?;
+        let value = opt(value, |x| x.real("value"))?.unwrap_or(0.0);
+        let direction = opt(direction, |d| {
+            int(d, "direction", i64::MIN, i64::MAX, "-1, 0 or 1")
+        })?;
+        let on_velocity = match variable {
+            "q" => false,
+            "v" => true,
+            other => return Err(Error::arg("variable", "'q' or 'v'", format!("'{other}'")).into()),
+        };
+        if !value.is_finite() {
+            return Err(Error::arg("value", "a finite number", value.to_string()).into());
+        }
+        Ok(super::StateEvent {
+            on_velocity,
+            index,
+            value,
+            direction: direction.unwrap_or(0).signum() as i32,
+            terminal: opt(terminal, terminal_count)?.unwrap_or(0),
+        })
+    }
+}
+
+/// An event's `terminal`: a bool, or the count of crossings that stops the run.
+pub fn terminal_count<A: Arg>(x: &A) -> Result<usize, A::Err> {
+    match x.int() {
+        Int::Value(n) if n >= 0 => Ok(n as usize),
+        _ => Err(Error::arg("terminal", "a bool or a count >= 0", x.shown()).into()),
     }
 }
