@@ -23,6 +23,9 @@ impl PyRunConfig {
     /// counts as not given. The keywords: `crate::simulate::config_args::KEYS`.
     #[new]
     #[pyo3(signature = (t_span=None, **settings))]
+    #[pyo3(
+        text_signature = "(t_span=None, *, rtol=None, atol=None, t_eval=None, first_step=None, max_step=None, max_steps=None, method=None, dt=None, controller=None, stiffness=None, disable=None, energy=None, power=None, dense_output=None)"
+    )]
     fn new(
         t_span: Option<Bound<'_, PyAny>>,
         settings: Option<&Bound<'_, PyDict>>,
