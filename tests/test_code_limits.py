@@ -22,12 +22,23 @@ RUST_FILE, RUST_FN, PY_MODULE, PY_FN, BINDINGS = 900, 120, 600, 120, 4000
 
 
 def library_lines(path: Path) -> list[str]:
-    """A Rust file's lines before its `#[cfg(test)]` block (its tests are not library)."""
-    out = []
-    for line in path.read_text().splitlines():
-        if line.strip().startswith("#[cfg(test)]"):
-            break
-        out.append(line)
+    """A Rust file's lines less its ``#[cfg(test)]`` items (a ``mod tests;`` declaration or a
+    ``mod tests { ... }`` block, wherever it stands): everything else is library."""
+    lines, out, i = path.read_text().splitlines(), [], 0
+    while i < len(lines):
+        if not lines[i].strip().startswith("#[cfg(test)]"):
+            out.append(lines[i])
+            i += 1
+            continue
+        i += 1  # the item after the attribute: to its `;`, or to its block's closing brace
+        depth, opened = 0, False
+        while i < len(lines):
+            code = NOT_CODE.sub("", lines[i])
+            depth += code.count("{") - code.count("}")
+            opened = opened or "{" in code
+            i += 1
+            if (opened and depth <= 0) or (not opened and code.rstrip().endswith(";")):
+                break
     return out
 
 
@@ -83,6 +94,13 @@ def test_the_size_checks_see_what_they_measure():
     assert list(rust_functions(lines)) == [("f", 0, 6)]
     code = 'def f():\n    """Doc."""\n    def g():\n        return 1\n    return g\n'
     assert own_lines(ast.parse(code).body[0]) == 2
+    # Only the `#[cfg(test)]` items leave the count: a `mod tests;` declared at the top does
+    # not hide the library below it, and a test block in the middle hides only itself.
+    rs = ROOT / "target" / "code_limits_probe.rs"
+    rs.parent.mkdir(exist_ok=True)
+    rs.write_text("#[cfg(test)]\nmod tests;\nfn a() {}\n#[cfg(test)]\nmod t {\n    fn b() {}\n}\nfn c() {}\n")
+    assert library_lines(rs) == ["fn a() {}", "fn c() {}"]
+    rs.unlink()
     assert len(library_files()) > 100 and len(list(PYTHON.rglob("*.py"))) > 40
 
 

@@ -160,6 +160,9 @@ def test_default_contact_sinks_1_mm_with_a_critically_damped_mode(n):
     used = scene.effects[0].contact_parameters
     k = mass * G0 / SINK**n
     assert used["stiffness"] == pytest.approx(k, rel=1e-12)
+    assert used.stiffness == used["stiffness"] and used.exponent == n  # typed, and indexable
+    with pytest.raises(KeyError):
+        used["__class__"]
     shown = re.search(r"stiffness=([^,]+),", repr(scene.effects[0])).group(1)
     assert float(shown) == used["stiffness"]
     omega = math.sqrt(n * G0 / SINK)

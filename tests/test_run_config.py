@@ -116,3 +116,21 @@ def test_a_scene_holds_one_tolerance_for_every_component():
         pendulum(rtol=[1e-6, 1e-7])
     assert pendulum(rtol=1e-7, max_step=np.inf).rtol == 1e-7
     assert pendulum(max_step=np.inf).max_step is None
+
+
+def test_a_value_of_the_wrong_type_is_our_error_and_a_type_error():
+    # A float step count, an int method name, a number for a flag: refused naming the
+    # argument, as ours (InvalidInputError) and as Python's TypeError alike.
+    for key, bad in [("max_steps", 2.5), ("method", 5), ("energy", 3), ("controller", 1.0)]:
+        with pytest.raises(pmd.errors.ArgumentTypeError, match=f"^{key}: expected") as e:
+            pmd.RunConfig(**{key: bad})
+        assert isinstance(e.value, pmd.InvalidInputError) and isinstance(e.value, TypeError)
+    with pytest.raises(pmd.InvalidInputError, match="rtl"):
+        pmd.RunConfig(rtl=1e-3)
+
+
+def test_simulation_results_compare_by_identity():
+    scene = pendulum()
+    a, b = pmd.simulate(scene, (0.0, 0.1)), pmd.simulate(scene, (0.0, 0.1))
+    assert a == a and a != b and len({a, a, b}) == 2  # no ValueError from the arrays
+    np.testing.assert_array_equal(a.q, b.q)

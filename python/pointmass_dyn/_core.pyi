@@ -646,10 +646,9 @@ class Effect:
     def torque_limit_per_speed(self, model: Model) -> NDArray[np.float64]:
         """The limit on each of ``model``'s speeds (inf where unlimited or not driven)."""
     @property
-    def contact_parameters(self) -> dict[str, float | None] | None:
-        """A ground contact's ``height``, ``stiffness``, ``exponent``, ``damping``,
-        ``friction``, ``v_eps`` (``stiffness``/``damping`` None until a scene fills in their
-        defaults); None for other effects."""
+    def contact_parameters(self) -> ContactParameters | None:
+        """A ground contact's law parameters (``stiffness``/``damping`` None until a scene
+        fills in their defaults); None for other effects."""
     def contact_state(
         self, model: Model, q: ArrayLike, v: ArrayLike
     ) -> dict[str, NDArray[np.float64]]:
@@ -983,6 +982,44 @@ class RunStatus:
         reason: str
 
 @final
+class ContactParameters:
+    """A ground contact's law parameters (SI); ``p["stiffness"]`` indexes them as well."""
+    height: float
+    stiffness: float | None
+    exponent: float
+    damping: float | None
+    friction: float
+    v_eps: float
+    def __getitem__(self, key: str) -> float | None: ...
+    def keys(self) -> list[str]: ...
+
+@final
+class OdeSolution:
+    """What :func:`rk45` returns (``pointmass_dyn.OdeResult`` is built from it); indexable
+    by its attribute names, as the dict it replaced."""
+    t: NDArray[np.float64]
+    y: NDArray[np.float64]
+    t_events: list[NDArray[np.float64]] | None
+    y_events: list[NDArray[np.float64]] | None
+    nfev: int
+    njev: int
+    nlu: int
+    method: str
+    switched_to: str | None
+    t_switch: float | None
+    n_accepted: int
+    n_rejected: int
+    status: int
+    message: str
+    success: bool
+    t_reached: float
+    stiff: dict[str, float] | None
+    sol: DenseSolution | None
+    error: BaseException | None
+    def __getitem__(self, key: str) -> Any: ...
+    def keys(self) -> list[str]: ...
+
+@final
 class RunResult:
     """One run's trajectory and outcome: the fields of ``pointmass_dyn.SimulationResult``
     of the same names (``outcome`` the typed status, ``status`` its SciPy code), and
@@ -1104,10 +1141,10 @@ def rk45(
     events: _EventFunc | Sequence[_EventFunc] | None = None,
     jac: Callable[[float, _Array], Any] | ArrayLike | None = None,
     **settings: Any,
-) -> dict[str, Any]:
+) -> OdeSolution:
     """Our integrators on ``fun(t, y)`` (``method``: RK45 by default; RK45 and DOP853 step for
     step SciPy's ``solve_ivp``, RK4/Euler at the fixed step ``dt``);
-    returns ``t``, ``y`` (n, N), ``sol`` (:class:`DenseSolution` or ``None``),
+    returns an :class:`OdeSolution`: ``t``, ``y`` (n, N), ``sol`` (:class:`DenseSolution` or ``None``),
     ``t_events``, ``y_events``, ``nfev``, ``njev``, ``nlu``, ``n_accepted``,
     ``n_rejected``, ``status``, ``message``, ``success``, ``t_reached``, ``method``,
     ``switched_to``, ``t_switch``, ``stiff``:

@@ -185,9 +185,12 @@ def PointSpring(
     )
 
 
-@dataclass(repr=False)
+@dataclass(repr=False, eq=False)
 class SimulationResult:
-    """Trajectory of a scene. ``q`` is (N, nq), ``v`` (N, nv); ``energy`` (N,) when asked."""
+    """Trajectory of a scene. ``q`` is (N, nq), ``v`` (N, nv); ``energy`` (N,) when asked.
+
+    Compared (and hashed) by identity: two runs' arrays are compared with NumPy, as
+    ``np.array_equal(a.q, b.q)``, not with ``==``."""
 
     t: np.ndarray
     q: np.ndarray
@@ -543,10 +546,9 @@ def solve_ivp(
         method=method,
         dt=dt,
     )
-    error = out.pop("error")
-    result = OdeResult(out)
-    if error is not None:
-        raise _with_partial_result(error, result)
+    result = OdeResult({k: out[k] for k in out.keys() if k != "error"})
+    if out.error is not None:
+        raise _with_partial_result(out.error, result)
     return result
 
 

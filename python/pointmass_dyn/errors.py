@@ -14,6 +14,11 @@ class InvalidInputError(PointMassDynError, ValueError):
     """An argument of the wrong shape, type or range, or a non-finite number."""
 
 
+class ArgumentTypeError(InvalidInputError, TypeError):
+    """An argument of the wrong Python type altogether (a float for a count, an int for a
+    method name): also a ``TypeError``."""
+
+
 class InertiaError(InvalidInputError):
     """A mass, centre of mass or inertia tensor no rigid body can have."""
 

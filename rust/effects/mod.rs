@@ -57,6 +57,7 @@
 //! scene is built ([`fill_model_limits`]).
 //!
 //! `[simulate] disable = ["gravity", "springs"]` switches families off.
+pub mod args;
 mod body_point;
 pub mod damper;
 pub mod derivatives;

@@ -10,27 +10,16 @@ use numpy::{
     AllowTypeChange, PyArray1, PyArrayDescrMethods, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray,
     PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyOverflowError, PyTypeError};
+use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString, PyType};
 
-use super::errors::invalid;
+use super::errors::{invalid, py_error};
+use crate::support::args::{self, Arg, Int};
 use crate::support::spatial::{Mat3, Vec3};
 
-pub fn shape_str(shape: &[usize]) -> String {
-    match shape.len() {
-        1 => format!("shape ({},)", shape[0]),
-        _ => format!(
-            "shape ({})",
-            shape
-                .iter()
-                .map(|s| s.to_string())
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    }
-}
+pub use crate::support::args::shape_str;
 
 fn type_name(obj: &Bound<'_, PyAny>) -> String {
     obj.get_type()
@@ -198,17 +187,7 @@ pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
     Ok(x.as_array().iter().next().copied().unwrap_or(f64::NAN))
 }
 
-/// An optional real number (`None` → `None`).
-pub fn opt_real(obj: Option<&Bound<'_, PyAny>>, arg: &str) -> PyResult<Option<f64>> {
-    match obj {
-        Some(o) if !o.is_none() => real(o, arg).map(Some),
-        _ => Ok(None),
-    }
-}
-
-/// An integer argument (index or count) in `lo..=hi`: a Python int or NumPy integer.
-/// `TypeError` for another type (a float, a str); `InvalidInputError` naming the argument,
-/// `expected` and the value for an int out of range (negative or huge: no `OverflowError`).
+/// An integer argument (index or count) in `lo..=hi` (`crate::support::args::int`).
 pub fn int_arg(
     obj: &Bound<'_, PyAny>,
     arg: &str,
@@ -216,33 +195,12 @@ pub fn int_arg(
     hi: i64,
     expected: &str,
 ) -> PyResult<i64> {
-    let py = obj.py();
-    if obj.is_instance_of::<PyBool>() {
-        return Err(invalid(
-            py,
-            arg,
-            expected,
-            format!("the bool {}", short_repr(obj)),
-        ));
-    }
-    match obj.extract::<i64>() {
-        Ok(n) if (lo..=hi).contains(&n) => Ok(n),
-        Ok(n) => Err(invalid(py, arg, expected, n)),
-        Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
-            Err(invalid(py, arg, expected, short_repr(obj)))
-        }
-        // A float, None, a list…: still a TypeError, but one naming the argument.
-        Err(e) if e.is_instance_of::<PyTypeError>(py) => Err(PyTypeError::new_err(format!(
-            "{arg}: expected {expected}, got {}",
-            short_repr(obj)
-        ))),
-        Err(e) => Err(e),
-    }
+    args::int(obj, arg, lo, hi, expected)
 }
 
 /// A count or index `>= 0` (at most `i64::MAX`).
 pub fn count_arg(obj: &Bound<'_, PyAny>, arg: &str, expected: &str) -> PyResult<usize> {
-    int_arg(obj, arg, 0, i64::MAX, expected).map(|n| n as usize)
+    args::count(obj, arg, expected)
 }
 
 /// An optional count (`None` → `None`).
@@ -251,9 +209,47 @@ pub fn opt_count(
     arg: &str,
     expected: &str,
 ) -> PyResult<Option<usize>> {
-    match obj {
-        Some(o) if !o.is_none() => count_arg(o, arg, expected).map(Some),
-        _ => Ok(None),
+    args::opt(obj, |o| args::count(o, arg, expected))
+}
+
+/// A Python object as the core's [`Arg`]: the core parses, this only converts.
+impl Arg for Bound<'_, PyAny> {
+    type Err = PyErr;
+    fn absent(&self) -> bool {
+        self.is_none()
+    }
+    fn is_bool(&self) -> bool {
+        self.is_instance_of::<PyBool>()
+    }
+    fn text(&self) -> Option<String> {
+        self.extract().ok()
+    }
+    fn int(&self) -> Int {
+        match self.extract::<i64>() {
+            Ok(n) => Int::Value(n),
+            Err(e) if e.is_instance_of::<PyOverflowError>(self.py()) => Int::TooBig,
+            Err(_) => Int::No,
+        }
+    }
+    fn shown(&self) -> String {
+        short_repr(self)
+    }
+    fn items(&self) -> Option<PyResult<Vec<Self>>> {
+        self.try_iter().ok().map(|it| it.collect())
+    }
+    fn real(&self, arg: &str) -> PyResult<f64> {
+        real(self, arg)
+    }
+    fn array(&self, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+        array(self, arg)
+    }
+    fn wrong_type(&self, arg: &str, expected: &str) -> PyErr {
+        let got = short_repr(self);
+        py_error(
+            self.py(),
+            "ArgumentTypeError",
+            format!("{arg}: expected {expected}, got {got}"),
+        )
     }
 }
 
@@ -290,15 +286,7 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
 
 /// A 1-D array of length `len` (`None`: any length).
 pub fn vector(obj: &Bound<'_, PyAny>, arg: &str, len: Option<usize>) -> PyResult<Vec<f64>> {
-    let (shape, data) = array(obj, arg)?;
-    if shape.len() != 1 || len.is_some_and(|n| n != shape[0]) {
-        let want = match len {
-            Some(n) => format!("shape ({n},)"),
-            None => "a 1-D array".into(),
-        };
-        return Err(invalid(obj.py(), arg, want, shape_str(&shape)));
-    }
-    Ok(data)
+    args::vector(obj, arg, len)
 }
 
 /// A 1-D, C-contiguous, aligned, native-order float64 `numpy.ndarray` (exactly that type) as a

@@ -6,13 +6,12 @@ use std::sync::Arc;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use super::convert::{array, int_arg, opt_real, real, shape_str, vec3, vector};
+use super::convert::{array, shape_str, vector};
 use super::errors::{invalid, IntoPyResult};
-use super::options::given;
-use crate::effects::{
-    ContactPoint, Damper, Effect, External, Frame, Friction, GroundContact, JointLimit, JointRef,
-    Matrix, PerJoint, PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLimit,
-};
+use crate::effects::{args, Effect, PerJoint, TorqueFunction, TorqueLimit};
+
+/// An argument the core parses (`crate::effects::args`).
+type A<'py> = Bound<'py, PyAny>;
 
 #[pyclass(
     name = "Effect",
@@ -31,6 +30,37 @@ impl From<Effect> for PyEffect {
     }
 }
 
+/// A ground contact's law parameters (SI): attributes, and `p["stiffness"]` as well.
+#[pyclass(
+    name = "ContactParameters",
+    module = "pointmass_dyn._core",
+    frozen,
+    get_all,
+    eq
+)]
+#[derive(Clone, PartialEq, Debug)]
+pub struct PyContactParameters {
+    height: f64,
+    stiffness: Option<f64>,
+    exponent: f64,
+    damping: Option<f64>,
+    friction: f64,
+    v_eps: f64,
+}
+
+super::indexable!(PyContactParameters ["height", "stiffness", "exponent", "damping", "friction", "v_eps"]);
+
+#[pymethods]
+impl PyContactParameters {
+    fn __repr__(&self) -> String {
+        let opt = |x: Option<f64>| x.map_or("None".into(), |x| format!("{x:?}"));
+        format!(
+            "ContactParameters(height={:?}, stiffness={}, exponent={:?}, damping={}, friction={:?}, v_eps={:?})",
+            self.height, opt(self.stiffness), self.exponent, opt(self.damping), self.friction, self.v_eps
+        )
+    }
+}
+
 thread_local! {
     /// The first exception a Python torque function raised during the current call (the
     /// integration runs on the calling thread, detached from the interpreter).
@@ -43,161 +73,6 @@ pub(super) fn take_callback_error() -> Option<PyErr> {
 
 pub(super) fn repr_of(obj: &Bound<'_, PyAny>) -> String {
     obj.repr().map(|r| r.to_string()).unwrap_or_default()
-}
-
-/// A body name or index.
-pub(super) fn joint_ref(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<JointRef> {
-    if let Ok(s) = obj.extract::<String>() {
-        return Ok(JointRef::Name(s));
-    }
-    if !obj.is_instance_of::<pyo3::types::PyBool>() {
-        if let Ok(i) = obj.extract::<i64>() {
-            if i >= 0 {
-                return Ok(JointRef::Index(i as usize));
-            }
-        }
-    }
-    Err(invalid(
-        obj.py(),
-        arg,
-        "a body name (str) or body index (int >= 0)",
-        repr_of(obj),
-    ))
-}
-
-/// Contact points: a sequence of `(body, [x, y, z])` or `(body, [x, y, z], radius)`.
-fn contact_points_arg(obj: &Bound<'_, PyAny>) -> PyResult<Vec<ContactPoint>> {
-    const EXPECTED: &str =
-        "a sequence of (body, [x, y, z]) or (body, [x, y, z], radius): a body name or index, a point in its frame";
-    let py = obj.py();
-    if obj.extract::<String>().is_ok() {
-        return Err(invalid(py, "points", EXPECTED, repr_of(obj)));
-    }
-    let items = obj
-        .try_iter()
-        .map_err(|_| invalid(py, "points", EXPECTED, repr_of(obj)))?;
-    let mut out = Vec::new();
-    for (k, item) in items.enumerate() {
-        let item = item?;
-        let arg = format!("points[{k}]");
-        let parts: Vec<Bound<'_, PyAny>> = match item.try_iter() {
-            Ok(it) if item.extract::<String>().is_err() => it.collect::<PyResult<_>>()?,
-            _ => return Err(invalid(py, &arg, EXPECTED, repr_of(&item))),
-        };
-        let (body, point, radius) = match parts.as_slice() {
-            [b, p] => (b, p, 0.0),
-            [b, p, r] => (b, p, real(r, &format!("{arg} radius"))?),
-            _ => return Err(invalid(py, &arg, EXPECTED, repr_of(&item))),
-        };
-        out.push(ContactPoint {
-            body: joint_ref(body, &arg)?,
-            point: vec3(point, &arg)?,
-            radius,
-        });
-    }
-    Ok(out)
-}
-
-/// A torque limit: None, `"effort"` or one number / one per speed.
-fn torque_limit_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<TorqueLimit>> {
-    Ok(match given(obj) {
-        None => None,
-        Some(x) if x.extract::<String>().is_ok_and(|s| s == "effort") => Some(TorqueLimit::Effort),
-        Some(x) => Some(TorqueLimit::given(per_joint_arg(x, "limit")?).py(x.py())?),
-    })
-}
-
-/// A body name or index, or the world (`"world"`, −1 or `None`): `None` for the world.
-fn body_or_world(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Option<JointRef>> {
-    const EXPECTED: &str =
-        "a body name (str) or index (int >= 0), or 'world' / -1 / None for the ground";
-    if obj.is_none() {
-        return Ok(None);
-    }
-    if let Ok(s) = obj.extract::<String>() {
-        return Ok((s != "world").then_some(JointRef::Name(s)));
-    }
-    if obj.is_instance_of::<pyo3::types::PyBool>() || obj.extract::<i64>().is_err() {
-        return Err(invalid(obj.py(), arg, EXPECTED, repr_of(obj)));
-    }
-    match int_arg(obj, arg, -1, i64::MAX, EXPECTED)? {
-        -1 => Ok(None),
-        i => Ok(Some(JointRef::Index(i as usize))),
-    }
-}
-
-/// `None` (every moving joint), one body name or index, or a sequence of them.
-pub(super) fn joints_arg(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<JointRef>>> {
-    let Some(obj) = obj.filter(|o| !o.is_none()) else {
-        return Ok(None);
-    };
-    if obj.extract::<String>().is_ok() || obj.extract::<i64>().is_ok() {
-        return Ok(Some(vec![joint_ref(obj, "joints")?]));
-    }
-    let mut out = Vec::new();
-    let items = obj.try_iter().map_err(|_| {
-        invalid(
-            obj.py(),
-            "joints",
-            "None, a body name or index, or a sequence of them",
-            repr_of(obj),
-        )
-    })?;
-    for (k, x) in items.enumerate() {
-        out.push(joint_ref(&x?, &format!("joints[{k}]"))?);
-    }
-    Ok(Some(out))
-}
-
-/// A number (all joints) or a 1-D array (one per joint).
-pub(super) fn per_joint_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<PerJoint> {
-    let (shape, values) = array(obj, arg)?;
-    match shape.len() {
-        0 => Ok(PerJoint::All(values[0])),
-        1 => Ok(PerJoint::Each(values)),
-        _ => Err(invalid(
-            obj.py(),
-            arg,
-            "a number or a 1-D array",
-            shape_str(&shape),
-        )),
-    }
-}
-
-/// A 1-D or 2-D array, one row per time.
-pub(super) fn matrix_arg(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Matrix> {
-    let (shape, values) = array(obj, arg)?;
-    match shape.as_slice() {
-        [n] => Ok(Matrix {
-            values,
-            rows: *n,
-            cols: 1,
-            one_d: true,
-        }),
-        [n, c] => Ok(Matrix {
-            values,
-            rows: *n,
-            cols: *c,
-            one_d: false,
-        }),
-        _ => Err(invalid(
-            obj.py(),
-            arg,
-            "a 1-D or 2-D array (one row per time)",
-            shape_str(&shape),
-        )),
-    }
-}
-
-pub(super) fn table_arg(
-    py: Python<'_>,
-    time: &Bound<'_, PyAny>,
-    values: &Bound<'_, PyAny>,
-    values_arg: &str,
-) -> PyResult<Table> {
-    let t = vector(time, "time", None)?;
-    let m = matrix_arg(values, values_arg)?;
-    Table::new(t, m, "time", values_arg).py(py)
 }
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
@@ -244,194 +119,114 @@ impl PyEffect {
     /// Uniform gravity `g` (m/s², world frame).
     #[staticmethod]
     #[pyo3(signature = (g=None))]
-    fn gravity(py: Python<'_>, g: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let g = match g {
-            Some(g) if !g.is_none() => vec3(g, "g")?,
-            _ => crate::support::spatial::Vec3::new(0.0, 0.0, -9.81),
-        };
-        Ok(Effect::gravity(g).py(py)?.into())
+    fn gravity(g: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
+        Ok(args::gravity(g.as_ref())?.into())
     }
-
     /// Joint springs `τ = −k (q − rest)` (rotation-vector spring on quaternion joints).
     #[staticmethod]
     #[pyo3(signature = (joints, stiffness, rest=None, name=None))]
     fn spring(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        stiffness: &Bound<'_, PyAny>,
-        rest: Option<&Bound<'_, PyAny>>,
+        joints: Option<A<'_>>,
+        stiffness: A<'_>,
+        rest: Option<A<'_>>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let joints = joints_arg(joints)?;
-        let k = per_joint_arg(stiffness, "stiffness")?;
-        let rest = given(rest).map(|r| per_joint_arg(r, "rest")).transpose()?;
-        Ok(Effect::Spring(Spring::new(name, joints, k, rest).py(py)?).into())
+        Ok(args::spring(joints.as_ref(), &stiffness, rest.as_ref(), name)?.into())
     }
-
     /// Viscous joint dampers `τ = −c v`.
     #[staticmethod]
     #[pyo3(signature = (joints, damping, name=None))]
-    fn damper(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        damping: &Bound<'_, PyAny>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        let joints = joints_arg(joints)?;
-        let c = per_joint_arg(damping, "damping")?;
-        Ok(Effect::Damper(Damper::new(name, joints, c).py(py)?).into())
+    fn damper(joints: Option<A<'_>>, damping: A<'_>, name: Option<String>) -> PyResult<Self> {
+        Ok(args::damper(joints.as_ref(), &damping, name)?.into())
     }
-
     /// Regularised Coulomb friction `τ = −F tanh(v / v_eps)`.
     #[staticmethod]
     #[pyo3(signature = (joints, friction, v_eps=None, name=None))]
     fn friction(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        friction: &Bound<'_, PyAny>,
-        v_eps: Option<&Bound<'_, PyAny>>,
+        joints: Option<A<'_>>,
+        friction: A<'_>,
+        v_eps: Option<A<'_>>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let v_eps = opt_real(v_eps, "v_eps")?;
-        let joints = joints_arg(joints)?;
-        let f = per_joint_arg(friction, "friction")?;
-        Ok(Effect::Friction(Friction::new(name, joints, f, v_eps).py(py)?).into())
+        Ok(args::friction(joints.as_ref(), &friction, v_eps.as_ref(), name)?.into())
     }
-
     /// Constant joint torques (forces on prismatic joints), one per speed or one for all.
     #[staticmethod]
     #[pyo3(signature = (joints, tau, name=None))]
-    fn joint_torque(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        tau: &Bound<'_, PyAny>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        let joints = joints_arg(joints)?;
-        let tau = per_joint_arg(tau, "tau")?;
-        Ok(Effect::Torque(Torque::constant(name, joints, tau).py(py)?).into())
+    fn joint_torque(joints: Option<A<'_>>, tau: A<'_>, name: Option<String>) -> PyResult<Self> {
+        Ok(args::joint_torque(joints.as_ref(), &tau, name)?.into())
     }
-
     /// Joint torques tabulated in time: linear between rows, clamped outside.
     #[staticmethod]
     #[pyo3(signature = (joints, time, values, name=None))]
     fn tabulated_torque(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        time: &Bound<'_, PyAny>,
-        values: &Bound<'_, PyAny>,
+        joints: Option<A<'_>>,
+        time: A<'_>,
+        values: A<'_>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let joints = joints_arg(joints)?;
-        let table = table_arg(py, time, values, "values")?;
-        Ok(Effect::Torque(Torque::tabulated(name, joints, table).py(py)?).into())
+        Ok(args::tabulated_torque(joints.as_ref(), &time, &values, name)?.into())
     }
-
     /// PD torques tracking a tabulated reference on 1-dof joints.
     #[staticmethod]
     #[pyo3(signature = (joints, kp, kd, time, reference, name=None))]
-    #[allow(clippy::too_many_arguments)]
     fn pd_torque(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        kp: &Bound<'_, PyAny>,
-        kd: &Bound<'_, PyAny>,
-        time: &Bound<'_, PyAny>,
-        reference: &Bound<'_, PyAny>,
+        joints: Option<A<'_>>,
+        kp: A<'_>,
+        kd: A<'_>,
+        time: A<'_>,
+        reference: A<'_>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let joints = joints_arg(joints)?;
-        let kp = per_joint_arg(kp, "kp")?;
-        let kd = per_joint_arg(kd, "kd")?;
-        let table = table_arg(py, time, reference, "reference")?;
-        Ok(Effect::Torque(Torque::pd(name, joints, kp, kd, table).py(py)?).into())
+        Ok(args::pd_torque(joints.as_ref(), (&kp, &kd), (&time, &reference), name)?.into())
     }
-
     /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
     #[staticmethod]
     #[pyo3(signature = (f, name=None))]
-    fn torque_function(
-        py: Python<'_>,
-        f: &Bound<'_, PyAny>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
+    fn torque_function(py: Python<'_>, f: A<'_>, name: Option<String>) -> PyResult<Self> {
         if !f.is_callable() {
-            return Err(invalid(py, "f", "a callable f(t, q, v) -> tau", repr_of(f)));
+            return Err(invalid(
+                py,
+                "f",
+                "a callable f(t, q, v) -> tau",
+                repr_of(&f),
+            ));
         }
-        Ok(Effect::Torque(Torque::function(name, torque_callback(f.clone().unbind()))).into())
+        Ok(args::torque_function(torque_callback(f.unbind()), name).into())
     }
-
     /// A force (and moment) on a body at a body-fixed point, constant or tabulated.
     #[staticmethod]
     #[pyo3(signature = (body, force=None, point=None, moment=None, time=None, frame="world", name=None))]
-    #[allow(clippy::too_many_arguments)]
     fn external_force(
-        py: Python<'_>,
-        body: &Bound<'_, PyAny>,
-        force: Option<&Bound<'_, PyAny>>,
-        point: Option<&Bound<'_, PyAny>>,
-        moment: Option<&Bound<'_, PyAny>>,
-        time: Option<&Bound<'_, PyAny>>,
+        body: A<'_>,
+        force: Option<A<'_>>,
+        point: Option<A<'_>>,
+        moment: Option<A<'_>>,
+        time: Option<A<'_>>,
         frame: &str,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let body = joint_ref(body, "body")?;
-        let point = match given(point) {
-            Some(p) => vec3(p, "point")?,
-            None => crate::support::spatial::Vec3::zeros(),
-        };
-        let frame = Frame::parse(frame, "frame").py(py)?;
-        let (force, moment) = (given(force), given(moment));
-        if force.is_none() && moment.is_none() {
-            return Err(invalid(py, "force", "a force (or a moment)", "None"));
-        }
-        let inner = match given(time) {
-            Some(t) => {
-                let t = vector(t, "time", None)?;
-                let f = force.map(|f| matrix_arg(f, "force")).transpose()?;
-                let m = moment.map(|m| matrix_arg(m, "moment")).transpose()?;
-                External::tabulated(name, body, point, t, f, m, frame).py(py)?
-            }
-            None => {
-                let zero = crate::support::spatial::Vec3::zeros();
-                let f = force.map(|f| vec3(f, "force")).transpose()?.unwrap_or(zero);
-                let m = moment
-                    .map(|m| vec3(m, "moment"))
-                    .transpose()?
-                    .unwrap_or(zero);
-                External::constant(name, body, point, f, m, frame).py(py)?
-            }
-        };
-        Ok(Effect::External(inner).into())
+        let load = (force.as_ref(), moment.as_ref());
+        Ok(args::external_force(&body, load, point.as_ref(), time.as_ref(), frame, name)?.into())
     }
-
     /// A linear spring–damper between a point of body a and a point of body b (each in its
     /// body's frame; the world: `"world"`, −1 or `None`).
     #[staticmethod]
     #[pyo3(signature = (body_a, point_a, body_b, point_b, stiffness, rest_length=None, damping=None, name=None))]
     #[allow(clippy::too_many_arguments)]
     fn point_spring(
-        py: Python<'_>,
-        body_a: &Bound<'_, PyAny>,
-        point_a: &Bound<'_, PyAny>,
-        body_b: &Bound<'_, PyAny>,
-        point_b: &Bound<'_, PyAny>,
-        stiffness: &Bound<'_, PyAny>,
-        rest_length: Option<&Bound<'_, PyAny>>,
-        damping: Option<&Bound<'_, PyAny>>,
+        body_a: A<'_>,
+        point_a: A<'_>,
+        body_b: A<'_>,
+        point_b: A<'_>,
+        stiffness: A<'_>,
+        rest_length: Option<A<'_>>,
+        damping: Option<A<'_>>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let body_a = body_or_world(body_a, "body_a")?;
-        let point_a = vec3(point_a, "point_a")?;
-        let body_b = body_or_world(body_b, "body_b")?;
-        let point_b = vec3(point_b, "point_b")?;
-        let k = real(stiffness, "stiffness")?;
-        let rest = opt_real(rest_length, "rest_length")?.unwrap_or(0.0);
-        let c = opt_real(damping, "damping")?.unwrap_or(0.0);
-        let inner = PointSpring::new(name, body_a, point_a, body_b, point_b, k, rest, c).py(py)?;
-        Ok(Effect::PointSpring(inner).into())
+        let law = (&stiffness, rest_length.as_ref(), damping.as_ref());
+        Ok(args::point_spring((&body_a, &point_a), (&body_b, &point_b), law, name)?.into())
     }
-
     /// Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
     /// force, regularised Coulomb friction. `stiffness`/`damping` `None`: the defaults from
     /// the model's weight, filled in when a scene is built.
@@ -439,55 +234,39 @@ impl PyEffect {
     #[pyo3(signature = (points, normal, height, stiffness, exponent, damping, friction, v_eps, name=None))]
     #[allow(clippy::too_many_arguments)]
     fn ground_contact(
-        py: Python<'_>,
-        points: &Bound<'_, PyAny>,
-        normal: &Bound<'_, PyAny>,
-        height: &Bound<'_, PyAny>,
-        stiffness: Option<&Bound<'_, PyAny>>,
-        exponent: &Bound<'_, PyAny>,
-        damping: Option<&Bound<'_, PyAny>>,
-        friction: &Bound<'_, PyAny>,
-        v_eps: &Bound<'_, PyAny>,
+        points: A<'_>,
+        normal: A<'_>,
+        height: A<'_>,
+        stiffness: Option<A<'_>>,
+        exponent: A<'_>,
+        damping: Option<A<'_>>,
+        friction: A<'_>,
+        v_eps: A<'_>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let inner = GroundContact::new(
-            name,
-            contact_points_arg(points)?,
-            vec3(normal, "normal")?,
-            real(height, "height")?,
-            opt_real(stiffness, "stiffness")?,
-            real(exponent, "exponent")?,
-            opt_real(damping, "damping")?,
-            real(friction, "friction")?,
-            real(v_eps, "v_eps")?,
-        )
-        .py(py)?;
-        Ok(Effect::GroundContact(inner).into())
+        let law = (
+            stiffness.as_ref(),
+            &exponent,
+            damping.as_ref(),
+            &friction,
+            &v_eps,
+        );
+        Ok(args::ground_contact(&points, (&normal, &height), law, name)?.into())
     }
-
     /// Compliant joint ranges (one-sided spring–dampers outside `[lower, upper]`); bounds
     /// `None`: the model's own, filled in when a scene is built.
     #[staticmethod]
     #[pyo3(signature = (joints, lower, upper, stiffness, damping, name=None))]
     fn joint_limit(
-        py: Python<'_>,
-        joints: Option<&Bound<'_, PyAny>>,
-        lower: Option<&Bound<'_, PyAny>>,
-        upper: Option<&Bound<'_, PyAny>>,
-        stiffness: &Bound<'_, PyAny>,
-        damping: &Bound<'_, PyAny>,
+        joints: Option<A<'_>>,
+        lower: Option<A<'_>>,
+        upper: Option<A<'_>>,
+        stiffness: A<'_>,
+        damping: A<'_>,
         name: Option<String>,
     ) -> PyResult<Self> {
-        let joints = joints_arg(joints)?;
-        let lower = given(lower)
-            .map(|x| per_joint_arg(x, "lower"))
-            .transpose()?;
-        let upper = given(upper)
-            .map(|x| per_joint_arg(x, "upper"))
-            .transpose()?;
-        let k = per_joint_arg(stiffness, "stiffness")?;
-        let c = per_joint_arg(damping, "damping")?;
-        Ok(Effect::JointLimit(JointLimit::new(name, joints, lower, upper, k, c).py(py)?).into())
+        let bounds = (lower.as_ref(), upper.as_ref());
+        Ok(args::joint_limit(joints.as_ref(), bounds, &stiffness, &damping, name)?.into())
     }
 
     /// A ground contact's points along states `q` (N, nq), `v` (N, nv): a dict of
@@ -554,7 +333,7 @@ impl PyEffect {
                 format!("a {} effect", self.inner.kind().name()),
             ));
         };
-        let limit = torque_limit_arg(limit)?;
+        let limit = args::torque_limit(limit)?;
         Ok(Effect::Torque(t.clone().with_limit(limit)).into())
     }
 
@@ -609,26 +388,24 @@ impl PyEffect {
         let (_, values) = super::convert::array(value, name)?;
         Ok(self.inner.with_parameter(name, &values).py(py)?.into())
     }
-    /// A ground contact's law parameters: a dict of `height`, `stiffness`, `exponent`,
-    /// `damping`, `friction`, `v_eps` (`stiffness`/`damping` None until a scene fills in
+    /// A ground contact's law parameters (`stiffness`/`damping` None until a scene fills in
     /// their defaults: the scene's effects hold the values it runs with); `None` for other
     /// effects.
     #[getter]
-    fn contact_parameters<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<Option<Bound<'py, pyo3::types::PyDict>>> {
+    fn contact_parameters(&self) -> Option<PyContactParameters> {
         let Effect::GroundContact(c) = &self.inner else {
-            return Ok(None);
+            return None;
         };
-        let d = pyo3::types::PyDict::new(py);
-        d.set_item("height", c.height)?;
-        d.set_item("stiffness", c.stiffness)?;
-        d.set_item("exponent", c.exponent)?;
-        d.set_item("damping", c.damping)?;
-        d.set_item("friction", c.friction)?;
-        d.set_item("v_eps", c.v_eps)?;
-        Ok(Some(d))
+        let (height, stiffness, exponent) = (c.height, c.stiffness, c.exponent);
+        let (damping, friction, v_eps) = (c.damping, c.friction, c.v_eps);
+        Some(PyContactParameters {
+            height,
+            stiffness,
+            exponent,
+            damping,
+            friction,
+            v_eps,
+        })
     }
     /// A gravity effect's acceleration `g` (3,); `None` for other effects.
     #[getter]

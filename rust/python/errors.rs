@@ -47,6 +47,13 @@ pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
     )
 }
 
+/// For `?` on the core's results where no `py` is at hand (the core's parsers, [`crate::support::args`]).
+impl From<Error> for PyErr {
+    fn from(e: Error) -> PyErr {
+        Python::attach(|py| to_py(py, e))
+    }
+}
+
 pub trait IntoPyResult<T> {
     fn py(self, py: Python<'_>) -> PyResult<T>;
 }

@@ -3,12 +3,12 @@ use std::sync::Mutex;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::PyTuple;
 
-use super::convert::{count_arg, int_arg, opt_real, real};
+use super::convert::real;
 use super::effects::repr_of;
 use super::errors::{invalid, py_error};
 use crate::integrator::{Event, EventDirection};
+use crate::simulate::config_args::terminal_count;
 use crate::simulate::StateEvent;
 
 /// `q[index]` (or `v[index]`) crossing `value`; evaluated in Rust, no GIL needed.
@@ -23,60 +23,20 @@ pub struct PyStateEvent {
     pub inner: StateEvent,
 }
 
-pub(super) fn terminal_count(py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<usize> {
-    if let Ok(b) = obj.cast::<pyo3::types::PyBool>() {
-        return Ok(b.is_true() as usize);
-    }
-    match obj.extract::<i64>() {
-        Ok(n) if n >= 0 => Ok(n as usize),
-        _ => Err(invalid(
-            py,
-            "terminal",
-            "a bool or a count >= 0",
-            repr_of(obj),
-        )),
-    }
-}
-
 #[pymethods]
 impl PyStateEvent {
     #[new]
     #[pyo3(signature = (variable, index, value=None, direction=None, terminal=None))]
     fn new(
-        py: Python<'_>,
         variable: &str,
-        index: &Bound<'_, PyAny>,
-        value: Option<&Bound<'_, PyAny>>,
-        direction: Option<&Bound<'_, PyAny>>,
-        terminal: Option<&Bound<'_, PyAny>>,
+        index: Bound<'_, PyAny>,
+        value: Option<Bound<'_, PyAny>>,
+        direction: Option<Bound<'_, PyAny>>,
+        terminal: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let index = count_arg(index, "index", "a coordinate index >= 0")?;
-        let value = opt_real(value, "value")?.unwrap_or(0.0);
-        let direction = match direction.filter(|d| !d.is_none()) {
-            None => 0,
-            Some(d) => int_arg(d, "direction", i64::MIN, i64::MAX, "-1, 0 or 1")?.signum() as i32,
-        };
-        let on_velocity = match variable {
-            "q" => false,
-            "v" => true,
-            other => return Err(invalid(py, "variable", "'q' or 'v'", format!("'{other}'"))),
-        };
-        if !value.is_finite() {
-            return Err(invalid(py, "value", "a finite number", value));
-        }
-        let terminal = match terminal {
-            Some(t) if !t.is_none() => terminal_count(py, t)?,
-            _ => 0,
-        };
-        Ok(PyStateEvent {
-            inner: StateEvent {
-                on_velocity,
-                index,
-                value,
-                direction: direction.signum(),
-                terminal,
-            },
-        })
+        let (value, direction, terminal) = (value.as_ref(), direction.as_ref(), terminal.as_ref());
+        let inner = StateEvent::from_args(variable, &index, value, direction, terminal)?;
+        Ok(PyStateEvent { inner })
     }
     #[getter]
     fn terminal(&self) -> usize {
@@ -119,7 +79,7 @@ pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Bound<'_, PyAny>) -> PyRe
         ));
     }
     let terminal = match e.getattr("terminal") {
-        Ok(t) if !t.is_none() => terminal_count(py, &t)?,
+        Ok(t) if !t.is_none() => terminal_count(&t)?,
         _ => 0,
     };
     let direction = match e.getattr("direction") {
@@ -141,30 +101,12 @@ pub(super) fn python_event<'a>(
     split: Option<usize>,
     failure: &'a Mutex<Option<PyErr>>,
 ) -> Event<'a> {
-    let f = move |t: f64, y: &[f64]| -> f64 {
+    let f = move |t: f64, y_all: &[f64]| -> f64 {
         Python::attach(|py| {
+            let y = |y: &[f64]| PyArray1::from_slice(py, y).into_any();
             let args = match split {
-                Some(nq) => PyTuple::new(
-                    py,
-                    [
-                        t.into_pyobject(py).map(|x| x.into_any()),
-                        Ok(PyArray1::from_slice(py, &y[..nq]).into_any()),
-                        Ok(PyArray1::from_slice(py, &y[nq..]).into_any()),
-                    ]
-                    .into_iter()
-                    .collect::<Result<Vec<_>, _>>()
-                    .unwrap_or_default(),
-                ),
-                None => PyTuple::new(
-                    py,
-                    [
-                        t.into_pyobject(py).map(|x| x.into_any()),
-                        Ok(PyArray1::from_slice(py, y).into_any()),
-                    ]
-                    .into_iter()
-                    .collect::<Result<Vec<_>, _>>()
-                    .unwrap_or_default(),
-                ),
+                Some(nq) => (t, y(&y_all[..nq]), y(&y_all[nq..])).into_pyobject(py),
+                None => (t, y(y_all)).into_pyobject(py),
             };
             // A non-number or NaN would silently hide the event: an error naming it.
             let name = format!("events[{}]", spec.index);

@@ -1,4 +1,42 @@
 //! The Python bindings: one thin layer that converts arrays and errors and calls the core.
+
+/// `#[getter]`s that return a field as it is:
+/// `getters!(PyX { name: Type = inner.field, ... });`.
+macro_rules! getters {
+    ($ty:ident { $($name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
+        #[pyo3::pymethods]
+        #[allow(clippy::clone_on_copy)]
+        impl $ty {
+            $(#[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
+        }
+    };
+}
+pub(crate) use getters;
+
+/// `obj["key"]` and `obj.keys()` on a typed result whose attributes are the keys (the
+/// dicts it replaced were indexed so): `indexable!(PyX ["a", "b"]);`.
+macro_rules! indexable {
+    ($ty:ident [$($key:literal),* $(,)?]) => {
+        #[pyo3::pymethods]
+        impl $ty {
+            fn __getitem__<'py>(
+                slf: &pyo3::Bound<'py, Self>,
+                key: &str,
+            ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
+                use pyo3::types::PyAnyMethods;
+                match [$($key),*].contains(&key) {
+                    true => slf.getattr(key),
+                    false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
+                }
+            }
+            fn keys(&self) -> Vec<&'static str> {
+                vec![$($key),*]
+            }
+        }
+    };
+}
+pub(crate) use indexable;
+
 mod along;
 mod body;
 mod control;
@@ -14,7 +52,6 @@ mod jac;
 mod joint;
 mod loops;
 mod model;
-mod options;
 mod pickle;
 mod reactions;
 mod rk45;
@@ -47,6 +84,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<joint::PyJoint>()?;
     m.add_class::<model::PyModel>()?;
     m.add_class::<effects::PyEffect>()?;
+    m.add_class::<effects::PyContactParameters>()?;
+    m.add_class::<rk45::PyOdeSolution>()?;
     m.add_class::<events::PyStateEvent>()?;
     m.add_class::<scene::PyScene>()?;
     m.add_class::<dense::PyDenseSolution>()?;

@@ -3,7 +3,7 @@ use std::sync::Mutex;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
+use pyo3::types::{IntoPyDict, PyDict, PyList};
 
 use super::convert::{to_array, to_array1, vector};
 use super::dense::PyDenseSolution;
@@ -12,7 +12,6 @@ use super::errors::IntoPyResult;
 use super::errors::{invalid, py_error};
 use super::events::{event_spec, python_event, PyEventSpec};
 use super::jac::{jac_arg, JacArg, WithJacobian};
-use super::options::{set_method, set_outcome, t_span_arg};
 use super::run_config::{call_config, PyRunConfig};
 use crate::integrator::{self, Event, FnSystem, OdeSystem};
 use crate::io::scene::Settings;
@@ -22,8 +21,8 @@ use crate::io::scene::Settings;
 #[pyfunction]
 #[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, *, config=None, events=None, jac=None, **settings))]
 #[allow(clippy::too_many_arguments)]
-pub fn rk45<'py>(
-    py: Python<'py>,
+pub fn rk45(
+    py: Python<'_>,
     fun: &Bound<'_, PyAny>,
     t_span: &Bound<'_, PyAny>,
     y0: &Bound<'_, PyAny>,
@@ -33,7 +32,7 @@ pub fn rk45<'py>(
     events: Option<&Bound<'_, PyAny>>,
     jac: Option<&Bound<'_, PyAny>>,
     settings: Option<&Bound<'_, PyDict>>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyOdeSolution> {
     if !fun.is_callable() {
         return Err(invalid(
             py,
@@ -42,11 +41,11 @@ pub fn rk45<'py>(
             repr_of(fun),
         ));
     }
-    let t_span_given = t_span_arg(py, t_span)?;
+    let t_span_given = crate::simulate::config_args::t_span(t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
     // No scene: the caller's settings, else the defaults.
-    let run = call_config(py, config, Some(t_span), rtol, atol, settings)?
+    let run = call_config(config, Some(t_span), rtol, atol, settings)?
         .resolve(&Settings::default(), &[], dim)
         .py(py)?;
     let (t_span, opts) = (t_span_given, run.opts);
@@ -83,7 +82,7 @@ pub fn rk45<'py>(
         .ok()
         .flatten()
         .or(failure.into_inner().ok().flatten());
-    solution_dict(py, sol, raised, !specs.is_empty())
+    solution(py, sol, raised, !specs.is_empty())
 }
 
 /// `None`, one event callable, or a sequence of them.
@@ -129,53 +128,87 @@ fn python_system<'a>(
     )
 }
 
-/// The dict `pointmass_dyn.rk45` wraps (SciPy's `OdeResult` entries): `y` as (dim, N),
-/// the event lists `None` when no events were given.
-fn solution_dict<'py>(
-    py: Python<'py>,
+/// `rk45`'s result: the entries of SciPy's `OdeResult` (`pointmass_dyn.OdeResult` is built
+/// from them), `y` as (dim, N), the event lists `None` when no events were given; `error`
+/// the exception a Python callable stopped the run with.
+#[pyclass(name = "OdeSolution", module = "pointmass_dyn._core", frozen, get_all)]
+pub struct PyOdeSolution {
+    t: Py<PyAny>,
+    y: Py<PyAny>,
+    t_events: Option<Py<PyList>>,
+    y_events: Option<Py<PyList>>,
+    nfev: usize,
+    njev: usize,
+    nlu: usize,
+    method: &'static str,
+    switched_to: Option<&'static str>,
+    t_switch: Option<f64>,
+    n_accepted: usize,
+    n_rejected: usize,
+    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure.
+    status: i32,
+    message: String,
+    success: bool,
+    t_reached: f64,
+    /// `{"t", "h_lambda", "h", "lambda"}` of the first stiffness detection, if any.
+    stiff: Option<Py<PyDict>>,
+    sol: Option<Py<PyDenseSolution>>,
+    error: Option<Py<PyAny>>,
+}
+
+super::indexable!(PyOdeSolution [
+    "t", "y", "t_events", "y_events", "nfev", "njev", "nlu", "method", "switched_to", "t_switch",
+    "n_accepted", "n_rejected", "status", "message", "success", "t_reached", "stiff", "sol", "error",
+]);
+
+fn solution(
+    py: Python<'_>,
     sol: integrator::Solution,
     raised: Option<PyErr>,
     with_events: bool,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyOdeSolution> {
     let (dim, n) = (sol.dim, sol.t.len());
-    let mut y_t = vec![0.0; dim * n];
-    for i in 0..n {
-        for j in 0..dim {
-            y_t[j * n + i] = sol.y[i * dim + j];
-        }
-    }
-    let d = PyDict::new(py);
-    d.set_item("error", raised.map(|e| e.into_value(py)))?;
-    d.set_item("t", to_array1(py, &sol.t))?;
-    d.set_item("y", to_array(py, y_t, &[dim, n])?)?;
-    let te = PyList::empty(py);
-    let ye = PyList::empty(py);
+    // (N, dim) rows to (dim, N), SciPy's layout.
+    let y_t: Vec<f64> = (0..dim * n).map(|k| sol.y[(k % n) * dim + k / n]).collect();
+    let (te, ye) = (PyList::empty(py), PyList::empty(py));
     for (times, ys) in sol.t_events.iter().zip(&sol.y_events) {
         te.append(to_array1(py, times))?;
         ye.append(to_array(py, ys.clone(), &[times.len(), dim])?)?;
     }
-    let none = || py.None().into_bound(py);
-    d.set_item("t_events", if with_events { te.into_any() } else { none() })?;
-    d.set_item("y_events", if with_events { ye.into_any() } else { none() })?;
-    d.set_item("nfev", sol.nfev)?;
-    set_method(
-        &d,
-        sol.method,
-        (sol.njev, sol.nlu),
-        sol.switched_to,
-        sol.t_switch,
-    )?;
-    set_outcome(
-        &d,
-        &sol.status,
-        sol.n_accepted,
-        sol.n_rejected,
-        &sol.message,
-        sol.t_reached,
-    )?;
-    d.set_item("stiff", stiffness_dict(py, sol.stiffness)?)?;
-    d.set_item("sol", sol.dense.map(|inner| PyDenseSolution { inner }))?;
-    Ok(d)
+    let stiff = sol.stiffness.map(|s| {
+        let entries = [
+            ("t", s.t),
+            ("h_lambda", s.h_lambda),
+            ("h", s.h),
+            ("lambda", s.lambda()),
+        ];
+        entries.into_py_dict(py).map(Bound::unbind)
+    });
+    let dense = sol
+        .dense
+        .map(|inner| Py::new(py, PyDenseSolution { inner }));
+    Ok(PyOdeSolution {
+        t: to_array1(py, &sol.t).into_any().unbind(),
+        y: to_array(py, y_t, &[dim, n])?.unbind(),
+        t_events: with_events.then(|| te.unbind()),
+        y_events: with_events.then(|| ye.unbind()),
+        nfev: sol.nfev,
+        njev: sol.njev,
+        nlu: sol.nlu,
+        method: sol.method.name(),
+        switched_to: sol.switched_to.map(|m| m.name()),
+        t_switch: sol.t_switch,
+        n_accepted: sol.n_accepted,
+        n_rejected: sol.n_rejected,
+        status: sol.status.code(),
+        // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
+        message: crate::support::error::compact_numbers(&sol.message),
+        success: sol.status.is_success(),
+        t_reached: sol.t_reached,
+        stiff: stiff.transpose()?,
+        sol: dense.transpose()?,
+        error: raised.map(|e| e.into_value(py).into_any()),
+    })
 }
 
 pub(super) fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
@@ -184,22 +217,4 @@ pub(super) fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyEr
         _ => "InvalidInputError",
     };
     py_error(py, class, e.to_string())
-}
-
-/// `None`, or `{"t", "h_lambda", "h", "lambda"}` of the first detection.
-pub(super) fn stiffness_dict<'py>(
-    py: Python<'py>,
-    s: Option<integrator::Stiffness>,
-) -> PyResult<Bound<'py, PyAny>> {
-    match s {
-        None => Ok(py.None().into_bound(py)),
-        Some(s) => {
-            let d = PyDict::new(py);
-            d.set_item("t", s.t)?;
-            d.set_item("h_lambda", s.h_lambda)?;
-            d.set_item("h", s.h)?;
-            d.set_item("lambda", s.lambda())?;
-            Ok(d.into_any())
-        }
-    }
 }

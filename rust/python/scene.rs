@@ -5,9 +5,9 @@ use super::convert::{to_array1, vector};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use super::run_config::config_of;
 use crate::effects::{Disabled, Effects};
 use crate::io::scene::{Scene, Settings};
+use crate::simulate::RunConfig;
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
 pub struct PyScene {
@@ -31,24 +31,16 @@ impl PyScene {
         name: Option<String>,
         description: Option<String>,
         disable: Option<&Bound<'_, PyAny>>,
-        method: Option<&str>,
+        method: Option<&Bound<'_, PyAny>>,
         dt: Option<&Bound<'_, PyAny>>,
         max_step: Option<&Bound<'_, PyAny>>,
         max_steps: Option<&Bound<'_, PyAny>>,
         first_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let given = SettingsArgs {
-            t_span,
-            rtol,
-            atol,
-            disable,
-            method,
-            dt,
-            max_step,
-            max_steps,
-            first_step,
-        };
-        let settings = given.over(py, Settings::default())?;
+        let given = [
+            t_span, rtol, atol, disable, method, dt, max_step, max_steps, first_step,
+        ];
+        let settings = settings_over(given, Settings::default())?;
         let m = model.model();
         let mut q = match q0 {
             Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
@@ -125,25 +117,17 @@ impl PyScene {
         name: Option<String>,
         description: Option<String>,
         disable: Option<&Bound<'_, PyAny>>,
-        method: Option<&str>,
+        method: Option<&Bound<'_, PyAny>>,
         dt: Option<&Bound<'_, PyAny>>,
         max_step: Option<&Bound<'_, PyAny>>,
         max_steps: Option<&Bound<'_, PyAny>>,
         first_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         let mut inner = self.inner.clone();
-        let given = SettingsArgs {
-            t_span,
-            rtol,
-            atol,
-            disable,
-            method,
-            dt,
-            max_step,
-            max_steps,
-            first_step,
-        };
-        inner.settings = given.over(py, inner.settings)?;
+        let given = [
+            t_span, rtol, atol, disable, method, dt, max_step, max_steps, first_step,
+        ];
+        inner.settings = settings_over(given, inner.settings)?;
         if let Some(m) = model {
             let m = m.model();
             if (m.nq, m.nv) != (inner.model.nq, inner.model.nv) {
@@ -233,47 +217,10 @@ impl PyScene {
             .map(|e| e.clone().into())
             .collect()
     }
-    #[getter]
-    fn name(&self) -> String {
-        self.inner.name.clone()
-    }
-    #[getter]
-    fn description(&self) -> String {
-        self.inner.description.clone()
-    }
-    #[getter]
-    fn t_span(&self) -> Option<(f64, f64)> {
-        self.inner.settings.t_span
-    }
-    #[getter]
-    fn rtol(&self) -> Option<f64> {
-        self.inner.settings.rtol
-    }
-    #[getter]
-    fn atol(&self) -> Option<f64> {
-        self.inner.settings.atol
-    }
-    #[getter]
-    fn max_step(&self) -> Option<f64> {
-        self.inner.settings.max_step
-    }
-    #[getter]
-    fn max_steps(&self) -> Option<usize> {
-        self.inner.settings.max_steps
-    }
-    #[getter]
-    fn first_step(&self) -> Option<f64> {
-        self.inner.settings.first_step
-    }
     /// Integration method of the scene's `[simulate]` table (`None`: not set).
     #[getter]
     fn method(&self) -> Option<&'static str> {
         self.inner.settings.method.map(|m| m.name())
-    }
-    /// Fixed step of the scene's `[simulate]` table (RK4, Euler).
-    #[getter]
-    fn dt(&self) -> Option<f64> {
-        self.inner.settings.dt
     }
     /// Effect families the scene switches off (`None`: the scene says nothing).
     #[getter]
@@ -339,64 +286,35 @@ impl PyScene {
     }
 }
 
-/// `None`, one family name, or a sequence of them.
-/// The run settings a `Scene` call was given (`None`: not given), parsed as `RunConfig`'s
-/// keywords are and laid over a scene's by the core (`RunConfig::onto_scene`).
-struct SettingsArgs<'a, 'py> {
-    t_span: Option<&'a Bound<'py, PyAny>>,
-    rtol: Option<&'a Bound<'py, PyAny>>,
-    atol: Option<&'a Bound<'py, PyAny>>,
-    disable: Option<&'a Bound<'py, PyAny>>,
-    method: Option<&'a str>,
-    dt: Option<&'a Bound<'py, PyAny>>,
-    max_step: Option<&'a Bound<'py, PyAny>>,
-    max_steps: Option<&'a Bound<'py, PyAny>>,
-    first_step: Option<&'a Bound<'py, PyAny>>,
+/// `base` with the settings a `Scene` call was given (`None`: not given) laid over it,
+/// parsed as `RunConfig`'s keywords are (`RunConfig::onto_scene`).
+fn settings_over(given: [Option<&Bound<'_, PyAny>>; 9], base: Settings) -> PyResult<Settings> {
+    const KEYS: [&str; 9] = [
+        "t_span",
+        "rtol",
+        "atol",
+        "disable",
+        "method",
+        "dt",
+        "max_step",
+        "max_steps",
+        "first_step",
+    ];
+    let pairs = KEYS
+        .iter()
+        .zip(given)
+        .filter_map(|(k, v)| v.map(|v| (*k, v)));
+    Ok(RunConfig::from_args(pairs)?.onto_scene(base)?)
 }
 
-impl SettingsArgs<'_, '_> {
-    /// `base` with the given settings replaced, checked.
-    fn over(&self, py: Python<'_>, base: Settings) -> PyResult<Settings> {
-        let method = self
-            .method
-            .map(|m| pyo3::types::PyString::new(py, m).into_any());
-        let given = [
-            ("t_span", self.t_span),
-            ("rtol", self.rtol),
-            ("atol", self.atol),
-            ("disable", self.disable),
-            ("method", method.as_ref()),
-            ("dt", self.dt),
-            ("max_step", self.max_step),
-            ("max_steps", self.max_steps),
-            ("first_step", self.first_step),
-        ];
-        config_of(py, &given)?.onto_scene(base).py(py)
-    }
-}
-
-pub(super) fn disable_arg(
-    py: Python<'_>,
-    obj: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<Disabled>> {
-    let Some(obj) = obj.filter(|o| !o.is_none()) else {
-        return Ok(None);
-    };
-    let names: Vec<String> = if let Ok(s) = obj.extract::<String>() {
-        vec![s]
-    } else {
-        let bad = || {
-            invalid(
-                py,
-                "disable",
-                "None, an effect family name or a sequence of them",
-                repr_of(obj),
-            )
-        };
-        obj.try_iter()
-            .map_err(|_| bad())?
-            .map(|x| x.and_then(|x| x.extract::<String>()).map_err(|_| bad()))
-            .collect::<PyResult<_>>()?
-    };
-    Disabled::parse(&names, "disable").py(py).map(Some)
-}
+super::getters!(PyScene {
+    name: String = inner.name,
+    description: String = inner.description,
+    t_span: Option<(f64, f64)> = inner.settings.t_span,
+    rtol: Option<f64> = inner.settings.rtol,
+    atol: Option<f64> = inner.settings.atol,
+    max_step: Option<f64> = inner.settings.max_step,
+    max_steps: Option<usize> = inner.settings.max_steps,
+    first_step: Option<f64> = inner.settings.first_step,
+    dt: Option<f64> = inner.settings.dt,
+});

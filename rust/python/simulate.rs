@@ -8,15 +8,15 @@ use super::convert::{real, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
-use super::options::given;
 use super::run_config::{call_config, PyRunConfig};
-use super::scene::{disable_arg, PyScene};
+use super::scene::PyScene;
 use super::signals::{Watch, INTERVAL};
 use super::trajectory::PyRunResult;
 use crate::integrator::Event;
 use crate::io::scene::Scene;
 use crate::simulate::batch::StateRows;
 use crate::simulate::{run_scene, Dynamics, Progress, StateEvent};
+use crate::support::args::given;
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
 /// it: the `RunResult` that `pointmass_dyn.simulate` wraps.
@@ -37,7 +37,7 @@ pub fn simulate_scene(
 ) -> PyResult<PyRunResult> {
     let s = &scene.inner;
     let nq = s.model.nq;
-    let config = call_config(py, config, t_span, rtol, atol, settings)?;
+    let config = call_config(config, t_span, rtol, atol, settings)?;
     let mut watch = watch_arg(py, progress_interval)?;
     let events = SceneEvents::parse(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
@@ -139,7 +139,7 @@ pub(super) fn scene_system<'s>(
     s: &'s Scene,
     disable: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Dynamics<'s>> {
-    let disabled = crate::simulate::disabled(disable_arg(py, disable)?, &s.settings);
+    let disabled = crate::simulate::disabled(crate::effects::args::disable(disable)?, &s.settings);
     Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
 }
 
@@ -252,7 +252,7 @@ pub fn simulate_batch<'py>(
         return Err(invalid(py, "scenes", "at least one Scene", "none"));
     }
     let scenes: Vec<Scene> = scenes.iter().map(|s| s.inner.clone()).collect();
-    let config = call_config(py, config, t_span, rtol, atol, settings)?;
+    let config = call_config(config, t_span, rtol, atol, settings)?;
     let q0s = batch_states("q0", q0, scenes[0].model.nq)?;
     let v0s = batch_states("v0", v0, scenes[0].model.nv)?;
     let events = SceneEvents::parse(py, events)?;

@@ -249,37 +249,15 @@ impl PyRunResult {
                 format!("{name}: {}", error.value(py).str()?)
             }
         };
-        let empty = |shape: &[usize]| to_array(py, Vec::new(), shape).map(Bound::unbind);
-        Ok(PyRunResult {
-            t: empty(&[0])?,
-            q: empty(&[0, 0])?,
-            v: empty(&[0, 0])?,
-            energy: None,
-            constraint_residual: None,
-            constraint_drift: None,
-            singular_passage: None,
-            singular_crossings: None,
-            power: None,
-            t_events: PyList::empty(py).unbind(),
-            q_events: PyList::empty(py).unbind(),
-            v_events: PyList::empty(py).unbind(),
-            nfev: 0,
-            njev: 0,
-            nlu: 0,
-            n_accepted: 0,
-            n_rejected: 0,
-            method: "RK45",
-            switched_to: None,
-            t_switch: None,
-            status: -1,
-            outcome: PyRunStatus::NotStarted {
-                reason: message.clone(),
-            },
-            message,
-            success: false,
-            t_reached: f64::NAN,
-            error: Some(error.into_value(py).into_any()),
-        })
+        let mut r = Self::new(
+            py,
+            Trajectory::not_started(message.clone()),
+            &[],
+            Some(error),
+        )?;
+        (r.status, r.success) = (-1, false);
+        r.outcome = PyRunStatus::NotStarted { reason: message };
+        Ok(r)
     }
 }
 

@@ -8,6 +8,7 @@
 //! effects runs the bare forward dynamics.
 mod along;
 pub mod batch;
+pub mod config_args;
 pub mod derivatives;
 mod dynamics;
 mod settings;
@@ -86,6 +87,39 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
+    /// A run that never started (a batch run whose input was refused): no samples, no
+    /// evaluations, `message` saying why.
+    pub fn not_started(message: String) -> Trajectory {
+        Trajectory {
+            nq: 0,
+            nv: 0,
+            t: Vec::new(),
+            q: Vec::new(),
+            v: Vec::new(),
+            energy: None,
+            constraint_residual: None,
+            constraint_drift: None,
+            singular_passage: None,
+            singular_crossings: None,
+            effect_labels: Vec::new(),
+            power: None,
+            t_events: Vec::new(),
+            y_events: Vec::new(),
+            nfev: 0,
+            njev: 0,
+            nlu: 0,
+            n_accepted: 0,
+            n_rejected: 0,
+            method: integrator::Method::Rk45,
+            switched_to: None,
+            t_switch: None,
+            status: Status::Success,
+            message,
+            t_reached: f64::NAN,
+            success: false,
+        }
+    }
+
     /// A run its caller interrupted ([`Status::Interrupted`]) says by what: `reason`, which
     /// only the caller knows (the exception its progress callback raised, Ctrl-C).
     pub fn name_interruption(&mut self, reason: &str) {

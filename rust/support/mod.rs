@@ -1,6 +1,7 @@
 //! What every layer uses and that knows no model: errors, the 3-/6-vector algebra, fast
 //! `sin_cos`, CPU dispatch, fallible allocation, interruption, reading input files.
 pub mod alloc;
+pub mod args;
 pub mod cpu;
 pub mod error;
 pub mod files;

@@ -33,21 +33,12 @@ impl PyModel {
         mimic: bool,
     ) -> PyResult<Self> {
         let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
-        let root = match root_joint {
-            None => crate::io::urdf::RootJoint::Fixed,
-            Some(r) => match r.extract::<String>().ok().as_deref() {
-                Some("fixed") => crate::io::urdf::RootJoint::Fixed,
-                Some("free") => crate::io::urdf::RootJoint::Free,
-                _ => {
-                    return Err(invalid(
-                        py,
-                        "root_joint",
-                        "None, \"fixed\" or \"free\"",
-                        r.repr().map_or_else(|_| "?".to_string(), |x| x.to_string()),
-                    ))
-                }
-            },
-        };
+        use crate::io::urdf::RootJoint::{Fixed, Free};
+        let choices = [("fixed", Fixed), ("free", Free)];
+        let root = crate::support::args::opt(root_joint, |r| {
+            crate::support::args::choice(r, "root_joint", &choices, "None, \"fixed\" or \"free\"")
+        })?;
+        let root = root.unwrap_or(Fixed);
         let repair = repair_options(py, repair)?;
         let mut urdf =
             crate::io::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;

@@ -1,0 +1,186 @@
+//! A [`RunConfig`] from a binding's keyword arguments ([`Arg`]): one parser for
+//! `RunConfig(...)`, the run calls' keywords and a `Scene`'s settings, so each refuses a
+//! setting in the same words.
+use super::RunConfig;
+use crate::effects::args::disable;
+use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
+use crate::support::args::{choice, count, flag, int, opt, shape_str, vector, Arg, Int};
+use crate::support::error::Error;
+
+/// The settings, in the constructor's order (`t_span` may also come first by position).
+pub const KEYS: [&str; 15] = [
+    "t_span",
+    "rtol",
+    "atol",
+    "t_eval",
+    "first_step",
+    "max_step",
+    "max_steps",
+    "method",
+    "dt",
+    "controller",
+    "stiffness",
+    "disable",
+    "energy",
+    "power",
+    "dense_output",
+];
+
+impl RunConfig {
+    /// The settings given as `(keyword, value)` (a `None` value: not given), read in
+    /// [`KEYS`]' order; an unknown keyword is refused naming the ones there are.
+    pub fn from_args<'a, A: Arg + 'a>(
+        given: impl IntoIterator<Item = (&'a str, &'a A)>,
+    ) -> Result<RunConfig, A::Err> {
+        let given: Vec<(&str, &A)> = given.into_iter().collect();
+        if let Some((key, _)) = given.iter().find(|(k, _)| !KEYS.contains(k)) {
+            let expected = format!("a setting of RunConfig: {}", KEYS.join(", "));
+            return Err(Error::arg(*key, expected, "an unknown keyword").into());
+        }
+        let mut c = RunConfig::default();
+        for key in KEYS {
+            for (_, x) in given.iter().filter(|(k, x)| *k == key && !x.absent()) {
+                let x: &A = x;
+                c.set(key, x)?;
+            }
+        }
+        Ok(c)
+    }
+
+    fn set<A: Arg>(&mut self, key: &str, x: &A) -> Result<(), A::Err> {
+        match key {
+            "t_span" => self.t_span = Some(t_span(x)?),
+            "rtol" => self.rtol = Some(tol(x, key)?),
+            "atol" => self.atol = Some(tol(x, key)?),
+            "t_eval" => self.t_eval = Some(vector(x, key, None)?),
+            "first_step" => self.first_step = Some(x.real(key)?),
+            "max_step" => self.max_step = Some(x.real(key)?).filter(|h| *h != f64::INFINITY),
+            "max_steps" => self.max_steps = Some(count(x, key, "a step count >= 0 (or None)")?),
+            "method" => self.method = Some(method(x)?),
+            "dt" => self.dt = Some(x.real(key)?),
+            "controller" => self.controller = Some(controller(x)?),
+            "stiffness" => self.stiffness = Some(stiffness(x)?),
+            "disable" => self.disable = disable(Some(x))?,
+            "energy" => self.energy = Some(flag(x, key)?),
+            "power" => self.power = Some(flag(x, key)?),
+            _ => self.dense = Some(flag(x, key)?),
+        }
+        Ok(())
+    }
+}
+
+/// Two different finite times `(t0, t_end)`.
+pub fn t_span<A: Arg>(x: &A) -> Result<(f64, f64), A::Err> {
+    let v = vector(x, "t_span", Some(2))?;
+    if !(v[0].is_finite() && v[1].is_finite()) || v[0] == v[1] {
+        let expected = "two different finite times (t0, t_end)";
+        return Err(Error::arg("t_span", expected, format!("({}, {})", v[0], v[1])).into());
+    }
+    Ok((v[0], v[1]))
+}
+
+/// A tolerance: a number, or one per state component (its length is checked by the run).
+fn tol<A: Arg>(x: &A, arg: &str) -> Result<Tol, A::Err> {
+    let (shape, values) = x.array(arg)?;
+    match shape.len() {
+        0 => Ok(Tol::Scalar(values[0])),
+        1 => Ok(Tol::PerComponent(values)),
+        _ => {
+            let expected = "a number or one per state component (n,)";
+            Err(Error::arg(arg, expected, shape_str(&shape)).into())
+        }
+    }
+}
+
+/// SciPy's spelling of a method (any case).
+pub fn method<A: Arg>(x: &A) -> Result<Method, A::Err> {
+    let expected = format!("one of {}", Method::NAMES);
+    let Some(name) = x.text() else {
+        return Err(x.wrong_type("method", &expected));
+    };
+    Method::parse(&name).ok_or_else(|| Error::arg("method", expected, format!("'{name}'")).into())
+}
+
+pub fn controller<A: Arg>(x: &A) -> Result<Controller, A::Err> {
+    let pi = Controller::hairer_pi();
+    let choices = [
+        ("standard", Controller::Standard),
+        ("scipy", Controller::Standard),
+        ("pi", pi),
+    ];
+    choice(
+        x,
+        "controller",
+        &choices,
+        "'standard' (SciPy's) or 'pi' (Hairer's PI)",
+    )
+}
+
+/// `"warn"` (detect, report, steps unchanged), `"stop"` or `"off"`.
+pub fn stiffness<A: Arg>(x: &A) -> Result<StiffnessCheck, A::Err> {
+    use StiffnessCheck::*;
+    let choices = [("warn", Warn), ("stop", Stop), ("off", Off)];
+    let expected = "'warn' (detect and report), 'stop' (stop at the detection) or 'off'";
+    choice(x, "stiffness", &choices, expected)
+}
+
+impl Controller {
+    pub fn name(self) -> &'static str {
+        match self {
+            Controller::Standard => "standard",
+            Controller::PI { .. } => "pi",
+        }
+    }
+}
+
+impl StiffnessCheck {
+    pub fn name(self) -> &'static str {
+        match self {
+            StiffnessCheck::Warn => "warn",
+            StiffnessCheck::Stop => "stop",
+            StiffnessCheck::Off => "off",
+        }
+    }
+}
+
+impl super::StateEvent {
+    /// `variable` (`"q"` or `"v"`) `[index]` crossing `value` (default 0) in `direction`'s
+    /// sign (default either way), stopping the run at the `terminal`-th crossing (a bool
+    /// or a count; default never).
+    pub fn from_args<A: Arg>(
+        variable: &str,
+        index: &A,
+        value: Option<&A>,
+        direction: Option<&A>,
+        terminal: Option<&A>,
+    ) -> Result<Self, A::Err> {
+        let index = count(index, "index", "a coordinate index >= 0")?;
+        let value = opt(value, |x| x.real("value"))?.unwrap_or(0.0);
+        let direction = opt(direction, |d| {
+            int(d, "direction", i64::MIN, i64::MAX, "-1, 0 or 1")
+        })?;
+        let on_velocity = match variable {
+            "q" => false,
+            "v" => true,
+            other => return Err(Error::arg("variable", "'q' or 'v'", format!("'{other}'")).into()),
+        };
+        if !value.is_finite() {
+            return Err(Error::arg("value", "a finite number", value.to_string()).into());
+        }
+        Ok(super::StateEvent {
+            on_velocity,
+            index,
+            value,
+            direction: direction.unwrap_or(0).signum() as i32,
+            terminal: opt(terminal, terminal_count)?.unwrap_or(0),
+        })
+    }
+}
+
+/// An event's `terminal`: a bool, or the count of crossings that stops the run.
+pub fn terminal_count<A: Arg>(x: &A) -> Result<usize, A::Err> {
+    match x.int() {
+        Int::Value(n) if n >= 0 => Ok(n as usize),
+        _ => Err(Error::arg("terminal", "a bool or a count >= 0", x.shown()).into()),
+    }
+}

@@ -1,0 +1,139 @@
+//! Arguments as a binding hands them over, and the forms a caller may write them in (a body
+//! by name or index, one number or one per joint, a family name or a list of them, ...).
+//! The parsing lives here, once, so a binding only converts: it implements [`Arg`] for its
+//! own objects (Python's in `rust/python/convert.rs`) and maps [`Error`] to its exceptions.
+//! Every refusal names the argument, the expected form and what was given.
+use super::error::Error;
+use super::spatial::Vec3;
+
+/// An integer as a binding sees it: a value, one beyond 64 bits, or not an integer at all.
+pub enum Int {
+    Value(i64),
+    TooBig,
+    No,
+}
+
+/// A caller's value, not yet given a meaning. `Err` is the binding's error type: the core's
+/// errors convert into it, and the binding's own conversions (an array of the wrong dtype,
+/// Ctrl-C while converting) pass through unchanged.
+pub trait Arg: Sized {
+    type Err: From<Error>;
+    /// The "not given" value (Python's `None`).
+    fn absent(&self) -> bool;
+    fn is_bool(&self) -> bool;
+    /// A string, if it is one.
+    fn text(&self) -> Option<String>;
+    /// An integer (a bool is not one).
+    fn int(&self) -> Int;
+    /// The value as the caller wrote it, for messages.
+    fn shown(&self) -> String;
+    /// The items of a sequence (not of a string); `None` for a value that has none.
+    fn items(&self) -> Option<Result<Vec<Self>, Self::Err>>;
+    /// A real number (an array of shape `()` included).
+    fn real(&self, arg: &str) -> Result<f64, Self::Err>;
+    /// An array of real numbers: its shape and its entries in C order.
+    fn array(&self, arg: &str) -> Result<(Vec<usize>, Vec<f64>), Self::Err>;
+    /// A value of the wrong kind altogether (a float for a count): the binding's type error.
+    fn wrong_type(&self, arg: &str, expected: &str) -> Self::Err;
+}
+
+pub fn shape_str(shape: &[usize]) -> String {
+    match shape {
+        [n] => format!("shape ({n},)"),
+        _ => format!(
+            "shape ({})",
+            shape
+                .iter()
+                .map(|s| s.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// `Some(x)` for a value given (not `None`).
+pub fn given<A: Arg>(x: Option<&A>) -> Option<&A> {
+    x.filter(|x| !x.absent())
+}
+
+/// `f` of the value, if one was given.
+pub fn opt<A: Arg, T>(
+    x: Option<&A>,
+    f: impl FnOnce(&A) -> Result<T, A::Err>,
+) -> Result<Option<T>, A::Err> {
+    given(x).map(f).transpose()
+}
+
+/// An integer in `lo..=hi`; a bool or an out-of-range int is refused naming the value,
+/// another kind is the binding's type error.
+pub fn int<A: Arg>(x: &A, arg: &str, lo: i64, hi: i64, expected: &str) -> Result<i64, A::Err> {
+    if x.is_bool() {
+        return Err(Error::arg(arg, expected, format!("the bool {}", x.shown())).into());
+    }
+    match x.int() {
+        Int::Value(n) if (lo..=hi).contains(&n) => Ok(n),
+        Int::Value(n) => Err(Error::arg(arg, expected, n.to_string()).into()),
+        Int::TooBig => Err(Error::arg(arg, expected, x.shown()).into()),
+        Int::No => Err(x.wrong_type(arg, expected)),
+    }
+}
+
+/// A count or index `>= 0`.
+pub fn count<A: Arg>(x: &A, arg: &str, expected: &str) -> Result<usize, A::Err> {
+    int(x, arg, 0, i64::MAX, expected).map(|n| n as usize)
+}
+
+/// A 1-D array of length `len` (`None`: any length).
+pub fn vector<A: Arg>(x: &A, arg: &str, len: Option<usize>) -> Result<Vec<f64>, A::Err> {
+    let (shape, data) = x.array(arg)?;
+    if shape.len() != 1 || len.is_some_and(|n| n != shape[0]) {
+        let want = match len {
+            Some(n) => format!("shape ({n},)"),
+            None => "a 1-D array".into(),
+        };
+        return Err(Error::arg(arg, want, shape_str(&shape)).into());
+    }
+    Ok(data)
+}
+
+pub fn vec3<A: Arg>(x: &A, arg: &str) -> Result<Vec3, A::Err> {
+    vector(x, arg, Some(3)).map(|v| Vec3::from_column_slice(&v))
+}
+
+/// A string out of `choices` (`(spelling, value)`); `expected` says which.
+pub fn choice<A: Arg, T: Copy>(
+    x: &A,
+    arg: &str,
+    choices: &[(&str, T)],
+    expected: &str,
+) -> Result<T, A::Err> {
+    let Some(s) = x.text() else {
+        return Err(x.wrong_type(arg, expected));
+    };
+    choices
+        .iter()
+        .find(|(name, _)| *name == s)
+        .map(|(_, v)| *v)
+        .ok_or_else(|| Error::arg(arg, expected, format!("'{s}'")).into())
+}
+
+/// A bool (`True`/`False` only).
+pub fn flag<A: Arg>(x: &A, arg: &str) -> Result<bool, A::Err> {
+    match (x.is_bool(), x.int()) {
+        (true, Int::Value(n)) => Ok(n != 0),
+        _ => Err(x.wrong_type(arg, "True or False")),
+    }
+}
+
+/// A string, or the binding's type error.
+pub fn text<A: Arg>(x: &A, arg: &str, expected: &str) -> Result<String, A::Err> {
+    x.text().ok_or_else(|| x.wrong_type(arg, expected))
+}
+
+/// The items of a sequence that is not a string, or `expected` refused naming `x`.
+pub fn items<A: Arg>(x: &A, arg: &str, expected: &str) -> Result<Vec<A>, A::Err> {
+    match x.items() {
+        Some(items) if x.text().is_none() => items,
+        _ => Err(Error::arg(arg, expected, x.shown()).into()),
+    }
+}
