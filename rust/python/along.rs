@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use super::convert::{array, shape_str, to_array};
 use super::effects::take_callback_error;
 use super::errors::invalid;
-use super::scene::{disable_arg, PyScene};
+use super::scene::PyScene;
 use super::signals::detach_interruptible;
 
 /// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
@@ -55,7 +55,7 @@ pub fn scene_along<'py>(
             format!("a non-finite value at sample {k}"),
         ));
     }
-    let disabled = crate::simulate::disabled(disable_arg(py, disable)?, &s.settings);
+    let disabled = crate::simulate::disabled(crate::effects::args::disable(disable)?, &s.settings);
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     let (model, effects) = (&*s.model, &s.effects[..]);
