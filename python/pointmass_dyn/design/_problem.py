@@ -12,6 +12,7 @@ duality gap; the designed model is then analysed again along the same motion."""
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
@@ -338,6 +339,9 @@ def _solver_report(sol: dict, quantities: list[dict], before: dict, norm: str, t
         ],
         "iterations": int(sol["iterations"]),
         "rounds": int(sol["rounds"]),
+        # What did not go as asked without failing the design (a least-mass stage that did
+        # not converge): also a RuntimeWarning.
+        "notes": list(sol.get("notes", [])),
         "solve_time": float(sol["solve_time"]),
         "values": dict(zip([q["name"] for q in quantities], sol["values"].tolist())),
         "before": before,
@@ -426,6 +430,8 @@ def balance(
         binding = tuple(name for name, _z, _a, _n, _b, on, _alone in items if on)
         alone = {name: value for name, *_, value in items}
         _safety.raise_infeasible(sol["message"], relaxation, binding, alone, checked, safety)
+    for note in sol.get("notes", []):
+        warnings.warn(f"balance: {note}", RuntimeWarning, stacklevel=2)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
     # The parameters of the masses found (the solver's δ = M x holds to its tolerance only):
