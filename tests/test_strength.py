@@ -118,7 +118,8 @@ def test_safety_limit_is_honoured_on_a_reanalysis():
     assert min(s.safety for s in free.strength.values()) < 0.9
     target = 1.0
     b = pmd.balance(motion, links=plates(soft), objective={"force": 1.0}, limits={"safety": target})
-    assert b.solver["status"] == "Solved"
+    # (AlmostSolved: Clarabel within its reduced tolerances, docs/design.md §3; the gap says.)
+    assert b.solver["status"] in ("Solved", "AlmostSolved") and 0 <= b.solver["gap_rel"] <= 1e-8
     for name, s in b.strength.items():
         assert s.safety >= target * (1 - 1e-7), (name, s.safety, target)
         assert 0 <= s.sample < len(motion.t) and s.t == motion.t[s.sample]
