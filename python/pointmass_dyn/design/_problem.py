@@ -442,6 +442,13 @@ def balance(
     result = _build(motion, var, x, phi, designed)
     result.strength = _safety.analysed(checked, result.after, motion.input)
     result.solver.update(_solver_report(sol, quantities, before, norm, t0))
+    # Each quantity's value at the masses found (the solver's δ = M x holds to its
+    # feasibility tolerance only, 1e-8 when a program was solved again, §3).
+    dx = (phi - phi_base)[cols]
+    result.solver["values"] = {
+        q["name"]: _norm_value(q["rows"] @ dx + q["constant"], q["dim"], q["samples"],
+                               "peak" if q.get("peak") else norm)
+        for q in quantities}
     # Predicted quantities along the motion (what the re-analysis must reproduce).
     full = data @ phi
     result.predicted.update(
