@@ -79,8 +79,6 @@ def connected():
 
 
 def main():
-    if "--connected" in sys.argv:
-        return connected()
     scene = pmd.load_scene("fourbar")
     motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=360, q_guess=scene.q0, gravity=G)
     cells = [len(s.cells(scene.model)[0]) for s in links()]
@@ -307,6 +305,8 @@ if __name__ == "__main__":
         mechanisms_case()
     elif "--strength" in sys.argv:
         strength_case()
+    elif "--connected" in sys.argv:
+        connected()
     else:
         main()
         strength_case()

@@ -276,3 +276,73 @@ def test_a_connected_link_must_reach_its_joints():
     shape = pmd.LinkShape("coupler", box=([-0.05, -0.02, -0.004], [0.045, 0.02, 0.004]), cell=0.004)
     with pytest.raises(pmd.errors.InvalidInputError, match="LinkShape 'coupler': joint 1"):
         pmd.balance(motion, links=[shape], zero=("force",))
+
+
+DOC = __import__("pathlib").Path(__file__).resolve().parents[1] / "docs" / "design.md"
+
+
+def doc_blocks(page) -> list[str]:
+    """The page's ```python blocks (not those marked ``<!-- not run -->``), in order."""
+    lines, out, i = page.read_text(encoding="utf-8").splitlines(), [], 0
+    while i < len(lines):
+        if lines[i].strip() == "```python":
+            j = i + 1
+            while not lines[j].startswith("```"):
+                j += 1
+            if "not run" not in lines[i - 1]:
+                out.append("\n".join(lines[i + 1:j]) + "\n")
+            i = j
+        i += 1
+    return out
+
+
+@pytest.fixture(scope="module")
+def doc_designs(tmp_path_factory):
+    """Every design docs/design.md makes (its blocks run in order in one namespace, as
+    tests/test_docs.py runs them), recorded at ``balance`` (fronts' points included), with
+    ``balance``'s own warnings (a written part off the design, a stage that failed) as errors."""
+    import os
+    import warnings
+
+    from pointmass_dyn.design import _front
+
+    made = []
+    real = pmd.balance
+
+    def recording(*args, **kwargs):
+        made.append((args[0], real(*args, **kwargs)))
+        return made[-1][1]
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(pmd, "balance", recording)
+    mp.setattr(_front, "balance", recording)
+    cwd = os.getcwd()
+    os.chdir(tmp_path_factory.mktemp("doc"))
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", message="balance:", category=RuntimeWarning)
+            namespace: dict = {"__name__": "__doc__"}
+            for code in doc_blocks(DOC):
+                exec(compile(code, str(DOC), "exec"), namespace)
+    finally:
+        os.chdir(cwd)
+        mp.undo()
+    return [(m, b) for m, b in made if b.realised is not None]
+
+
+def test_every_doc_design_is_written_connected_and_within_one_percent(doc_designs, tmp_path):
+    """docs/design.md's examples (four-bar, fronts, strength, slider-crank engine, Watt
+    six-bar, RSSR): every written part one solid holding its joints (flood fill over its
+    boxes), and from its STL (mass properties by the divergence theorem) the motion analysed
+    again: shaking and bearing forces within 1 % of the design's prediction."""
+    assert len(doc_designs) >= 10
+    for k, (motion, b) in enumerate(doc_designs):
+        for name, part in b.realised.parts.items():
+            assert box_components(part.boxes) == 1, (k, name)
+            for point, _axis in pmd._core.design_pins(motion.model, name):
+                inside = np.all((part.boxes[:, 0] <= point + 1e-12) & (point - 1e-12 <= part.boxes[:, 1]),
+                                axis=1)
+                assert inside.any(), (k, name, point)
+        stl_reanalysed_within(motion, b, tmp_path, f"doc design {k}")
+        for s in b.solver["stages"]:
+            assert s["status"] in ("Solved", "AlmostSolved") and 0 <= s["gap_rel"] <= 1e-8, (k, s)

@@ -118,7 +118,8 @@ def test_safety_limit_is_honoured_on_a_reanalysis():
     assert min(s.safety for s in free.strength.values()) < 0.9
     target = 1.0
     b = pmd.balance(motion, links=plates(soft), objective={"force": 1.0}, limits={"safety": target})
-    assert b.solver["status"] == "Solved"
+    # (AlmostSolved: Clarabel within its reduced tolerances, docs/design.md §3; the gap says.)
+    assert b.solver["status"] in ("Solved", "AlmostSolved") and 0 <= b.solver["gap_rel"] <= 1e-8
     for name, s in b.strength.items():
         assert s.safety >= target * (1 - 1e-7), (name, s.safety, target)
         assert 0 <= s.sample < len(motion.t) and s.t == motion.t[s.sample]
@@ -145,6 +146,28 @@ def test_infeasible_safety_names_the_link():
     assert "nearest design" in str(err.value)
 
 
+def test_safety_just_above_the_reachable_is_our_error_and_just_below_succeeds():
+    """A safety limit at the edge of what the webs reach (docs/design.md §4a's plates at 2,900
+    rpm: about 3.6) once stopped Clarabel with a NumericalError. Asked 3.6: our error naming
+    each binding link and the factor it reaches in the nearest design; asked just below the
+    least of those: a design whose members, re-analysed from its bearing forces, hold it."""
+    scene = pmd.load_scene("fourbar")
+    fast = pmd.prescribed_motion(scene.model, "crank", speed=300.0, samples=120, q_guess=scene.q0,
+                                 gravity=G)
+    steel = pmd.Material.steel()
+    with pytest.raises(pmd.errors.InfeasibleDesignError, match=r"link .(crank|rocker).: safety factor 3.6 asked") \
+            as err:
+        pmd.balance(fast, links=plates(steel), objective={"force": 1.0}, limits={"safety": 3.6})
+    reach = {k: r for k, (a, r) in err.value.relaxation.items() if k.startswith("safety:")}
+    assert reach and all(0 < r < 3.6 for r in reach.values()), reach
+    below = 0.995 * min(reach.values())
+    b = pmd.balance(fast, links=plates(steel), objective={"force": 1.0}, limits={"safety": below})
+    assert b.solver["status"] in ("Solved", "AlmostSolved")
+    for name, st in b.strength.items():
+        assert st.safety >= below * (1 - 1e-6), (name, st.safety, below)
+        assert st.safety == pytest.approx(steel.allowable_stress / np.abs(st.stress).max(), rel=1e-12)
+
+
 def test_material_arguments_are_checked():
     with pytest.raises(pmd.errors.InvalidInputError, match="allowable_stress"):
         pmd.Material(7850.0, -1.0)
@@ -154,7 +177,8 @@ def test_material_arguments_are_checked():
 
 
 def parse_dxf(text):
-    """An independent reader of R12 entities: POLYLINE (closed flag, vertices) and CIRCLE."""
+    """An independent reader of R12 entities: POLYLINE (layer, closed flag, vertices) and
+    CIRCLE."""
     lines = text.splitlines()
     pairs = [(int(lines[i].strip()), lines[i + 1].strip()) for i in range(0, len(lines) - 1, 2)]
     polys, circles, cur, kind = [], [], None, None
@@ -164,7 +188,7 @@ def parse_dxf(text):
                 circles.append(cur)
             kind = value
             if value == "POLYLINE":
-                cur = {"closed": False, "v": []}
+                cur = {"closed": False, "v": [], "layer": None}
                 polys.append(cur)
             elif value == "CIRCLE":
                 cur = {}
@@ -173,6 +197,8 @@ def parse_dxf(text):
             continue
         if kind == "POLYLINE" and code == 70:
             cur["closed"] = bool(int(value) & 1)
+        elif kind == "POLYLINE" and code == 8:
+            cur["layer"] = value
         elif kind == "VERTEX" and code in (10, 20):
             polys[-1]["v"][-1][code // 10 - 1] = float(value)
         elif kind == "CIRCLE" and code in (10, 20, 40):
@@ -185,19 +211,53 @@ def shoelace(v):
     return 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
 
 
+def area_moments(v):
+    """Area and first moments (∫x, ∫y) of a simple polygon by the shoelace formula (signed:
+    counter-clockwise positive)."""
+    v = np.asarray(v)
+    x, y, xn, yn = v[:, 0], v[:, 1], np.roll(v[:, 0], -1), np.roll(v[:, 1], -1)
+    cross = x * yn - xn * y
+    return np.array([0.5 * cross.sum(), (cross * (x + xn)).sum() / 6, (cross * (y + yn)).sum() / 6])
+
+
 def test_dxf_outline_is_closed_with_holes_at_the_pins(tmp_path):
+    """The DXF is the realised part (the STL's geometry) seen along z: its outline loops
+    enclose exactly the area and first moments of area of the written boxes' footprint
+    (their union on the grid, computed here), each thinned column is a square on a layer
+    naming its thickness, and there is a hole at every pin."""
     _scene, motion = crank_rocker(24)
     b = pmd.balance(motion, links=plates(pmd.Material.steel()), objective={"force": 1.0})
     for name in ("crank", "rocker"):
         path = b.write_dxf(name, tmp_path / f"{name}.dxf", hole=0.0015)
         polys, circles = parse_dxf(path.read_text())
-        assert polys and all(p["closed"] and len(p["v"]) >= 4 for p in polys)
-        # Area enclosed (outer loops counter-clockwise, inner clockwise) = the columns cut.
-        shape = b.shapes[name]
-        kept = shape.centers[shape.fill >= 0.5]
-        columns = {tuple(np.round(c[:2] / shape.cell, 6)) for c in kept}
-        area = sum(shoelace(p["v"]) for p in polys)  # mm²
-        np.testing.assert_allclose(area, len(columns) * (shape.cell * 1e3) ** 2, rtol=1e-9)
+        outline = [p for p in polys if p["layer"] == "OUTLINE"]
+        assert outline and all(p["closed"] and len(p["v"]) >= 4 for p in polys)
+        # The footprint of the written boxes: each box's xy rectangle, their union as the
+        # set of distinct rectangles (boxes of one column share it), in mm.
+        part = b.realised[name]
+        rects = {tuple(np.round(np.r_[lo[:2], hi[:2]] * 1e3, 6)) for lo, hi in part.boxes}
+        want = np.zeros(3)
+        for x0, y0, x1, y1 in rects:
+            a = (x1 - x0) * (y1 - y0)
+            want += [a, a * (x0 + x1) / 2, a * (y0 + y1) / 2]
+        got = sum(area_moments(p["v"]) for p in outline)  # outer loops +, inner loops −
+        # (The boxes' corners are float32, the STL's numbers; the DXF's are the grid's: the
+        # same geometry to float32's resolution.)
+        size = np.sqrt(abs(want[0]))
+        assert np.all(np.abs(got - want) <= 1e-6 * abs(want[0]) * np.array([1, size, size])), (got, want)
+        # Columns holding less than the plate's thickness (the polish's): one square each,
+        # its layer naming the material's thickness there (µm): the boxes' heights summed.
+        thin = [p for p in polys if p["layer"] != "OUTLINE"]
+        full = np.ptp(part.boxes[:, :, 2])  # the plate's thickness (its envelope's)
+        height: dict = {}
+        for lo, hi in part.boxes:
+            key = tuple(np.round(np.r_[lo[:2], hi[:2]] * 1e3, 6))
+            height[key] = height.get(key, 0.0) + hi[2] - lo[2]
+        thinner = sorted(round(t * 1e6) for t in height.values() if t < full * (1 - 1e-6))
+        assert thinner, "the polish thins some columns here"
+        for p in thin:
+            assert re.fullmatch(r"THICK_\d+UM", p["layer"]) and len(p["v"]) == 4
+        assert sorted(int(p["layer"][6:-2]) for p in thin) == thinner
         pins = pmd._core.design_pins(b.model, name)
         assert len(circles) == len(pins)
         for (point, _axis), c in zip(pins, circles):

@@ -1261,6 +1261,7 @@ def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
     """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
     ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel`` (the last
     stage's), ``stages`` (each stage's ``(status, gap_abs, gap_rel)``: the optimum, then the
-    least mass), ``iterations``, ``rounds``, ``solve_time``. Optional ``spec["flows"]``: connected
+    least mass), ``notes`` (what did not go as asked without failing: a least-mass stage not
+    found), ``iterations``, ``rounds``, ``solve_time``. Optional ``spec["flows"]``: connected
     links, dicts with ``nodes``, ``edges`` ((a, b) tuples), ``bosses``, ``web``, ``hang``
     (rust/design/connectivity.rs)."""

@@ -97,6 +97,9 @@ pub struct Solution {
     /// Each stage's certificate (the optimum, then the least mass): status, absolute and
     /// relative duality gap of its last program. `status`/`gap_*` above are the last stage's.
     pub stages: Vec<(String, f64, f64)>,
+    /// What did not go as asked without failing the design (a least-mass stage that did not
+    /// converge): said to the user, never dropped.
+    pub notes: Vec<String>,
 }
 
 /// Each quantity's value at `δ` in `norm` (absolute units).
@@ -269,10 +272,29 @@ pub fn solve(problem: &Problem) -> Result<Solution> {
 pub fn solve_outcome(problem: &Problem) -> Result<Outcome> {
     check(problem)?;
     let mut active = initial(problem);
-    let Some((raw, rounds)) = solve_cut(problem, Stage::Optimum, &mut active)? else {
-        return relax(problem, active).map(Outcome::Infeasible);
+    let first = match solve_cut(problem, Stage::Optimum, &mut active) {
+        Ok(Some((raw, rounds))) => solution(problem, raw, rounds),
+        Ok(None) => return relax(problem, active).map(Outcome::Infeasible),
+        Err(Error::Singular(msg)) if has_requirements(problem) => {
+            // Limits at the edge of what any design reaches leave the interior point method
+            // (almost) no interior: phase 1 (every requirement with a slack, strictly
+            // feasible) says whether some design meets them, and by how much not.
+            return match relax(problem, initial(problem)) {
+                Ok(r) if r.items.iter().any(Relaxed::binding) => Ok(Outcome::Infeasible(r)),
+                Ok(r) => Err(Error::Singular(format!(
+                    "{msg}; phase 1 finds the requirements met within the solver's tolerance \
+                     (least relaxation {}): they leave no room to optimise, loosen them slightly",
+                    r.items
+                        .iter()
+                        .map(|i| format!("{} {:.3e}", i.name, i.needed - i.asked))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))),
+                Err(_) => Err(Error::Singular(msg)),
+            };
+        }
+        Err(e) => return Err(e),
     };
-    let first = solution(problem, raw, rounds);
     if !problem.least_mass {
         return Ok(Outcome::Solved(first));
     }
@@ -288,10 +310,31 @@ pub fn solve_outcome(problem: &Problem) -> Result<Outcome> {
             second.stages = [first.stages, second.stages].concat();
             Ok(Outcome::Solved(second))
         }
-        // The second solve only refines; its failure leaves the optimum found.
+        // The second solve only refines; its failure leaves the optimum found, and says so.
         Err(Error::Interrupted(w)) => Err(Error::Interrupted(w)),
-        _ => Ok(Outcome::Solved(first)),
+        other => {
+            let why = match other {
+                Err(e) => e.to_string(),
+                _ => "certified infeasible".to_string(),
+            };
+            let mut first = first;
+            first.notes.push(format!(
+                "least mass: not found ({why}); the design is an optimum of the first stage, \
+                 not the least-mass one"
+            ));
+            Ok(Outcome::Solved(first))
+        }
     }
+}
+
+/// Whether the program has requirements phase 1 relaxes (limits, zero quantities, a mass
+/// limit).
+fn has_requirements(problem: &Problem) -> bool {
+    problem.mass_limit.is_some()
+        || problem
+            .quantities
+            .iter()
+            .any(|q| q.zero || q.limit.is_some())
 }
 
 fn solution(problem: &Problem, raw: Raw, rounds: u32) -> Solution {
@@ -310,6 +353,7 @@ fn solution(problem: &Problem, raw: Raw, rounds: u32) -> Solution {
         iterations: raw.iterations,
         solve_time: raw.solve_time,
         rounds,
+        notes: vec![],
     }
 }
 

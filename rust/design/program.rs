@@ -330,7 +330,9 @@ fn inequalities(bld: &mut Builder, problem: &Problem, lay: &Layout, stage: Stage
     }
     if let (Stage::LeastMass(opt), Norm::Peak) = (stage, problem.norm) {
         // Σ w t ≤ the optimum, with the solver's own slack.
-        let r = bld.row(opt.objective * (1.0 + 1e-9) + 1e-12);
+        // (1e-9, or twice the first stage's relative gap when it was solved less tightly.)
+        let hold = 1e-9 + 2.0 * opt.gap_rel.max(0.0);
+        let r = bld.row(opt.objective * (1.0 + hold) + 1e-12);
         for &(k, t) in &lay.peaks {
             bld.put(r, t, problem.quantities[k].weight);
         }
@@ -436,6 +438,28 @@ fn objective(problem: &Problem, lay: &Layout, stage: Stage) -> (CscMatrix<f64>, 
     (p, q, constant)
 }
 
+/// Solves of one program before a numerical failure is reported (see [`settings`]).
+const ATTEMPTS: usize = 3;
+
+/// Clarabel's settings for the `attempt`-th solve of a program: tolerances 1e-10, then
+/// Clarabel's defaults (1e-8), then those with a hundred times its static regularisation.
+fn settings(attempt: usize) -> DefaultSettings<f64> {
+    let tol = if attempt == 0 { 1e-10 } else { 1e-8 };
+    let mut settings = DefaultSettings::<f64> {
+        verbose: false,
+        max_iter: 200,
+        tol_gap_abs: tol,
+        tol_gap_rel: tol,
+        tol_feas: tol,
+        max_threads: 1,
+        ..Default::default()
+    };
+    if attempt >= 2 {
+        settings.static_regularization_constant *= 100.0;
+    }
+    settings
+}
+
 /// Builds and solves one program; `None` when Clarabel certifies it infeasible.
 pub(crate) fn solve_program(
     problem: &Problem,
@@ -458,24 +482,40 @@ pub(crate) fn solve_program(
     super::connectivity::append(&mut rows, &problem.flows, &problem.upper, lay.flows);
     let (p, q, constant) = objective(problem, lay, stage);
     let a = CscMatrix::new_from_triplets(bld.m(), lay.nz, bld.rows, bld.cols, bld.vals);
-    let mut settings = DefaultSettings::<f64> {
-        verbose: false,
-        ..Default::default()
+    // Tight tolerances first; a program with many degenerate rows (connected links' flows
+    // through empty cells, limits at the edge of what is reachable) can stop Clarabel with a
+    // numerical error there, so it is solved again at Clarabel's default tolerances (1e-8),
+    // then with more static regularisation, before the failure is reported.
+    let (mut attempt, mut spent) = (0, (0, 0.0));
+    let (solver, status) = loop {
+        let mut solver = DefaultSolver::new(&p, &q, &a, &bld.b, &bld.cones, settings(attempt))
+            .map_err(|e| {
+                Error::Singular(format!(
+                    "design: the conic program could not be set up: {e}"
+                ))
+            })?;
+        solver
+            .set_termination_callback(|_info| crate::support::interrupt::check("design").is_err());
+        solver.solve();
+        let status = solver.solution.status;
+        let numerical = matches!(
+            status,
+            SolverStatus::NumericalError
+                | SolverStatus::InsufficientProgress
+                | SolverStatus::MaxIterations
+        );
+        if !numerical || attempt == ATTEMPTS - 1 {
+            break (solver, status);
+        }
+        // (The failed attempts' work is counted in the report.)
+        spent = (
+            spent.0 + solver.solution.iterations,
+            spent.1 + solver.solution.solve_time,
+        );
+        attempt += 1;
     };
-    settings.max_iter = 200;
-    settings.tol_gap_abs = 1e-10;
-    settings.tol_gap_rel = 1e-10;
-    settings.tol_feas = 1e-10;
-    settings.max_threads = 1;
-    let mut solver = DefaultSolver::new(&p, &q, &a, &bld.b, &bld.cones, settings).map_err(|e| {
-        Error::Singular(format!(
-            "design: the conic program could not be set up: {e}"
-        ))
-    })?;
-    solver.set_termination_callback(|_info| crate::support::interrupt::check("design").is_err());
-    solver.solve();
     let sol = &solver.solution;
-    match sol.status {
+    match status {
         SolverStatus::Solved | SolverStatus::AlmostSolved => {}
         SolverStatus::CallbackTerminated => return Err(Error::Interrupted("design".into())),
         SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Ok(None),
@@ -492,7 +532,7 @@ pub(crate) fn solve_program(
         objective: sol.obj_val + constant,
         gap_abs: solver.info.gap_abs,
         gap_rel: solver.info.gap_rel,
-        iterations: sol.iterations,
-        solve_time: sol.solve_time,
+        iterations: sol.iterations + spent.0,
+        solve_time: sol.solve_time + spent.1,
     }))
 }

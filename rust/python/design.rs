@@ -394,6 +394,7 @@ pub fn design_solve<'py>(py: Python<'py>, spec: ProblemSpec) -> PyResult<Bound<'
     d.set_item("gap_abs", sol.gap_abs)?;
     d.set_item("gap_rel", sol.gap_rel)?;
     d.set_item("stages", sol.stages)?;
+    d.set_item("notes", sol.notes)?;
     d.set_item("iterations", sol.iterations)?;
     d.set_item("rounds", sol.rounds)?;
     d.set_item("solve_time", sol.solve_time)?;

@@ -11,9 +11,10 @@ import numpy as np
 
 from .. import _core
 from ..errors import InvalidInputError
-from ._dxf import outline, plate_holes, write_dxf
+from ._dxf import outline, plate_holes, thinned, write_dxf
 from ._report import write_report
 from ._shaking import MotionAnalysis
+from ._shapes import warn_rounded as _warn_rounded
 from ._write import write_scene, write_urdf
 
 MAX_RING_COUNT = 1_000_000  # as many candidates as a design takes cells (rust/design/cells.rs)
@@ -116,7 +117,8 @@ class Balance:
     shapes: dict = field(default_factory=dict)
     #: The conic solver's report: status, duality gaps, iterations, times, the values it
     #: predicts in the problem's norm and those before; ``stages``: each stage's status and
-    #: gaps (the optimum, then the least mass among the optima).
+    #: gaps (the optimum, then the least mass among the optima); ``notes``: what did not go
+    #: as asked without failing the design (a least-mass stage not found; also warned).
     solver: dict = field(default_factory=dict)
     #: Strength-checked links (``LinkShape(material=…)``) by body name: a
     #: :class:`~pointmass_dyn.design.LinkStrength` each — stresses along the motion, the
@@ -144,20 +146,29 @@ class Balance:
         safety-factor table, the solver's status and time (docs/design.md §4c)."""
         return write_report(self, path)  # (matplotlib imported only here)
 
-    def write_dxf(self, body: str, path: Any, threshold: float = 0.5, hole: float | None = None) -> Any:
-        """A plate link's outline for cutting (R12 DXF, mm): the cells at least ``threshold``
-        full seen along z, and a hole of radius ``hole`` (default half a cell) at each pin."""
+    def write_dxf(self, body: str, path: Any, threshold: float | None = None,
+                  hole: float | None = None) -> Any:
+        """A plate link's outline for cutting (R12 DXF, mm): the realised part (the same as
+        ``write_stl``) seen along z on layer ``OUTLINE``, each column the polish thinned as a
+        square on a layer ``THICK_<µm>UM`` naming its thickness (a pocket milled from both
+        faces), and a hole of radius ``hole`` (default half a cell) at each pin. With
+        ``threshold``: the cells at least that full instead (not the design: warned)."""
         if body not in self.shapes:
             raise InvalidInputError(f"body: expected a designed link shape {sorted(self.shapes)}, got {body!r}")
         shape = self.shapes[body]
-        if not 0.0 <= threshold <= 1.0:
-            raise InvalidInputError(f"threshold: expected a fraction in [0, 1], got {threshold}")
+        if threshold is not None and not 0.0 <= threshold <= 1.0:
+            raise InvalidInputError(f"threshold: expected a fraction in [0, 1] or None, got {threshold}")
         r = 0.5 * shape.cell if hole is None else float(hole)
         if not (np.isfinite(r) and r > 0):
             raise InvalidInputError(f"hole: expected a radius > 0 (m), got {hole!r}")
-        loops = outline(shape.centers, shape.fill >= threshold, shape.cell)
         holes = plate_holes(_core.design_pins(self.before.model, body), r)
-        return write_dxf(path, loops, holes)
+        part = shape.realised
+        if threshold is None and part is not None:
+            return write_dxf(path, outline(shape.centers, part.cells, shape.cell), holes,
+                             thinned(part.boxes, shape.centers, shape.cell))
+        mask = shape.fill >= (0.5 if threshold is None else threshold)
+        _warn_rounded(shape, mask, 0.5 if threshold is None else threshold, "write_dxf")
+        return write_dxf(path, outline(shape.centers, mask, shape.cell), holes)
 
     def table(self) -> str:
         """Before/after RMS and peaks, as text, each quantity with its unit."""

@@ -76,19 +76,43 @@ def outline(centers: np.ndarray, filled: np.ndarray, cell: float) -> list[np.nda
     return [base + cell * np.asarray(loop, float) for loop in _loops(squares)]
 
 
-def write_dxf(path: Any, loops: list[np.ndarray], holes: list[tuple[np.ndarray, float]]) -> Path:
+def thinned(boxes: np.ndarray, centers: np.ndarray, cell: float) -> list[tuple[np.ndarray, float]]:
+    """The realised part's columns holding less material than their stack of cells (polished
+    thinner, or joined by single cells): each as its square (4, 2) and its material's
+    thickness (m), the sum of its boxes' heights."""
+    base = centers[:, :2].min(axis=0)
+    key = lambda xy: tuple(int(v) for v in np.round((xy - base) / cell))  # noqa: E731
+    stack: dict[tuple, int] = {}
+    for c in centers:
+        stack[key(c[:2])] = stack.get(key(c[:2]), 0) + 1
+    columns: dict[tuple, list] = {}
+    for lo, hi in boxes:
+        col = columns.setdefault(key(0.5 * (lo[:2] + hi[:2])), [lo[:2], hi[:2], 0.0])
+        col[2] += float(hi[2] - lo[2])
+    out = []
+    for k, (lo, hi, t) in sorted(columns.items()):
+        if t < stack.get(k, 0) * cell * (1 - 1e-6):
+            out.append((np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]]), t))
+    return out
+
+
+def write_dxf(path: Any, loops: list[np.ndarray], holes: list[tuple[np.ndarray, float]],
+              pockets: list[tuple[np.ndarray, float]] = ()) -> Path:
     """Writes ``loops`` (closed polylines) and ``holes`` (centre (2,), radius) in metres as
-    an R12 DXF in millimetres."""
+    an R12 DXF in millimetres; ``pockets`` (square (4, 2), thickness): each on a layer
+    ``THICK_<µm>UM``."""
     out = ["0", "SECTION", "2", "HEADER", "9", "$ACADVER", "1", "AC1009",
            "9", "$INSUNITS", "70", "4", "0", "ENDSEC", "0", "SECTION", "2", "ENTITIES"]
     mm = 1000.0
-    for loop in loops:
-        out += ["0", "POLYLINE", "8", "OUTLINE", "66", "1", "10", "0.0", "20", "0.0",
+    layered = [(loop, "OUTLINE") for loop in loops]
+    layered += [(sq, f"THICK_{round(t * 1e6)}UM") for sq, t in pockets]
+    for loop, layer in layered:
+        out += ["0", "POLYLINE", "8", layer, "66", "1", "10", "0.0", "20", "0.0",
                 "30", "0.0", "70", "1"]
         for x, y in loop:
-            out += ["0", "VERTEX", "8", "OUTLINE", "10", f"{x * mm:.6f}", "20", f"{y * mm:.6f}",
+            out += ["0", "VERTEX", "8", layer, "10", f"{x * mm:.6f}", "20", f"{y * mm:.6f}",
                     "30", "0.0"]
-        out += ["0", "SEQEND", "8", "OUTLINE"]
+        out += ["0", "SEQEND", "8", layer]
     for centre, radius in holes:
         out += ["0", "CIRCLE", "8", "HOLES", "10", f"{centre[0] * mm:.6f}",
                 "20", f"{centre[1] * mm:.6f}", "30", "0.0", "40", f"{radius * mm:.6f}"]

@@ -12,6 +12,7 @@ duality gap; the designed model is then analysed again along the same motion."""
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from typing import Any
@@ -338,6 +339,9 @@ def _solver_report(sol: dict, quantities: list[dict], before: dict, norm: str, t
         ],
         "iterations": int(sol["iterations"]),
         "rounds": int(sol["rounds"]),
+        # What did not go as asked without failing the design (a least-mass stage that did
+        # not converge): also a RuntimeWarning.
+        "notes": list(sol.get("notes", [])),
         "solve_time": float(sol["solve_time"]),
         "values": dict(zip([q["name"] for q in quantities], sol["values"].tolist())),
         "before": before,
@@ -426,6 +430,8 @@ def balance(
         binding = tuple(name for name, _z, _a, _n, _b, on, _alone in items if on)
         alone = {name: value for name, *_, value in items}
         _safety.raise_infeasible(sol["message"], relaxation, binding, alone, checked, safety)
+    for note in sol.get("notes", []):
+        warnings.warn(f"balance: {note}", RuntimeWarning, stacklevel=2)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
     # The parameters of the masses found (the solver's δ = M x holds to its tolerance only):
@@ -436,6 +442,13 @@ def balance(
     result = _build(motion, var, x, phi, designed)
     result.strength = _safety.analysed(checked, result.after, motion.input)
     result.solver.update(_solver_report(sol, quantities, before, norm, t0))
+    # Each quantity's value at the masses found (the solver's δ = M x holds to its
+    # feasibility tolerance only, 1e-8 when a program was solved again, §3).
+    dx = (phi - phi_base)[cols]
+    result.solver["values"] = {
+        q["name"]: _norm_value(q["rows"] @ dx + q["constant"], q["dim"], q["samples"],
+                               "peak" if q.get("peak") else norm)
+        for q in quantities}
     # Predicted quantities along the motion (what the re-analysis must reproduce).
     full = data @ phi
     result.predicted.update(

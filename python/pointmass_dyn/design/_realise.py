@@ -218,7 +218,7 @@ def _decide(spec: Any, model: Any, masses: np.ndarray) -> dict:
         solid = _connect.join(solid, fill, adj, _connect.bosses(spec, model, centers))
     base = centers.min(axis=0)
     return {"centers": centers, "cap": cap, "idx": idx, "adj": adj, "solid": solid, "kept": lower > 0,
-            "cell": float(spec.cell), "density": float(spec.density), "base": base, "fill": fill}
+            "cell": float(spec.cell), "density": spec.rho, "base": base, "fill": fill}
 
 
 def _threshold(fill: np.ndarray, cap: np.ndarray, masses: np.ndarray) -> float:

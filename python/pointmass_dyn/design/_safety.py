@@ -104,7 +104,7 @@ def raise_infeasible(message: str, relaxation: dict, binding: tuple, alone: dict
             lines.append(
                 f"link '{c.body}': safety factor {safety:g} asked, {reach:.3g} in the nearest "
                 f"design that exists (the least relaxation; its web's stress is "
-                f"{needed / asked:.3g}x the allowed: widen web= or thicken the plate)"
+                f"{needed / asked:.4g}x the allowed: widen web= or thicken the plate)"
             )
     if lines:
         message = "; ".join(lines) + f" [{message}]"

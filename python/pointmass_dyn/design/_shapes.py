@@ -303,7 +303,7 @@ class Shape:
             raise InvalidInputError(f"threshold: expected a fraction in [0, 1], got {threshold}")
         mask = self.fill >= threshold
         kept = self.centers[mask]
-        _warn_rounded(self, mask, threshold)
+        warn_rounded(self, mask, threshold)
         base = self.centers.min(axis=0)
         idx = np.round((kept - base) / self.cell).astype(np.int64)
         occupied = {tuple(i) for i in idx}
@@ -337,7 +337,7 @@ class Shape:
         return len(tris)
 
 
-def _warn_rounded(shape: Shape, mask: np.ndarray, threshold: float) -> None:
+def warn_rounded(shape: Shape, mask: np.ndarray, threshold: float, what: str = "write_stl") -> None:
     """Thresholded cells are not the design: say by how much (mass, and the COM against the
     envelope's size)."""
     designed = shape.mass_properties()["designed"]
@@ -348,6 +348,6 @@ def _warn_rounded(shape: Shape, mask: np.ndarray, threshold: float) -> None:
     dm = abs(mass - designed["mass"]) / max(designed["mass"], 1e-300)
     dc = float(np.linalg.norm(com - designed["com"])) / size
     warnings.warn(
-        f"Shape.write_stl: the cells at least {threshold:g} full are not the design: mass "
+        f"{what}: the cells at least {threshold:g} full are not the design: mass "
         f"{100 * dm:.2f} % off, COM {100 * dc:.2f} % of the part's size off (write the realised "
         "part: threshold=None)", RuntimeWarning, stacklevel=3)
