@@ -332,7 +332,8 @@ def simulate(
     two evaluations a step; tight tolerances on smooth problems), ``"RK4"`` or ``"Euler"``
     (semi-implicit, MuJoCo's) at
     the fixed step ``dt`` (required by these two only), ``"Radau"`` (implicit) or ``"auto"``
-    (RK45, or DOP853 at rtol ≤ 1e-8, then Radau from where the stiffness test fires;
+    (RK45, or Adams at rtol ≤ 1e-8 (DOP853 with closed loops), then Radau from where the
+    stiffness test fires;
     ``.switched_to``, ``.t_switch``).
     ``None`` takes the scene's ``[simulate] method``/``dt``; a scene that names none runs
     ``"auto"`` when it has a ground contact or joint limits (enabled; stiff by design, where

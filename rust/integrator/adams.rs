@@ -1,4 +1,4 @@
-//! Variable-order, variable-step Adams–Bashforth–Moulton (PECE, orders 1–12) in modified
+//! Variable-order, variable-step Adams–Bashforth–Moulton (PECE, orders 1–11) in modified
 //! divided differences: Shampine & Gordon's `STEP` (*Computer Solution of Ordinary
 //! Differential Equations*, 1975; the code behind `DE`/`ODE` and SLATEC's `DEABM`) written
 //! anew. Each step predicts with the `k`-step Adams–Bashforth formula, evaluates, corrects with
@@ -30,6 +30,11 @@ use super::{
 
 /// Rows of the difference table: `φ_1 … φ_{k+2}` (`k ≤ 12`), then the two rounding
 /// corrections of the compensated sums (`STEP`'s `φ_15`, `φ_16`).
+/// The highest order used. Order 12 (Shampine–Gordon's limit) has an instability bubble on
+/// the negative axis at `h λ ∈ (−0.12, −0.062)` (`adams_coef.rs`, [`STABILITY`]): on Kepler's
+/// orbit its error levelled off at 2e-9 from rtol 1e-11; capped at 11 it reaches 1.2e-10 at
+/// 1e-12 and chain7 needs no more evaluations for the same error (docs/integrators.md).
+const MAX_ORDER: usize = 11;
 const ROWS: usize = KMAX + 4;
 const RND_P: usize = KMAX + 2;
 const RND_Y: usize = KMAX + 3;
@@ -37,7 +42,7 @@ const RND_Y: usize = KMAX + 3;
 /// The highest order at which a step counts towards a stiffness detection. On a stiff
 /// problem the estimates at high orders are dominated by the unstable components and the
 /// order falls (Shampine & Gordon's `DE` reads "order ≤ 4 for 50 steps" as stiffness); on a
-/// smooth oscillatory one (Krogh's rigid body at rtol 1e-8…1e-10) orders 10–12 run at `h |λ|`
+/// smooth oscillatory one (Krogh's rigid body at rtol 1e-8…1e-10) orders 10–11 run at `h |λ|`
 /// above their small real-axis limits without instability, which would read as stiff.
 const STIFF_MAX_ORDER: usize = 4;
 
@@ -315,7 +320,7 @@ impl<S: OdeSystem> Adams<S> {
         let k = self.k;
         let absh = self.h.abs();
         let mut erk = e.erk;
-        if e.knew == k - 1 || k == KMAX {
+        if e.knew == k - 1 || k == MAX_ORDER {
             self.phase1 = false;
         }
         let raise = |s: &mut Self, erk: &mut f64, erkp1: f64| {
@@ -337,7 +342,7 @@ impl<S: OdeSystem> Adams<S> {
             } else if e.erkm1 <= erk.min(erkp1) {
                 self.k = k - 1;
                 erk = e.erkm1;
-            } else if erkp1 < erk && k != KMAX {
+            } else if erkp1 < erk && k != MAX_ORDER {
                 raise(self, &mut erk, erkp1);
             }
         }

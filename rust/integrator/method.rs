@@ -89,7 +89,7 @@ pub enum Method {
     Dop853,
     /// Verner's 9(8) pair (not SciPy's), for tight tolerances on smooth non-stiff problems.
     Vern9,
-    /// Variable-order (1–12), variable-step Adams–Bashforth–Moulton PECE (Shampine–Gordon),
+    /// Variable-order (1–11), variable-step Adams–Bashforth–Moulton PECE (Shampine–Gordon),
     /// two evaluations per step, for smooth non-stiff problems at tight tolerances.
     Adams,
     /// Radau IIA order 5 (implicit), SciPy's `Radau`.
