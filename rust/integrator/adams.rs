@@ -57,7 +57,7 @@ pub struct Adams<S: OdeSystem> {
     p: Vec<f64>,
     /// `f` at the prediction.
     fp: Vec<f64>,
-    /// `atol + rtol·|y|` at the step's start.
+    /// `1 / (atol + rtol·|y|)` at the step's start (a product per component in each norm).
     wt: Vec<f64>,
     c: Coefficients,
     /// Order of the next step and of the last accepted one.
@@ -146,26 +146,25 @@ impl<S: OdeSystem> Adams<S> {
         (i - 1) * self.st.dim
     }
 
-    /// `wt = atol + rtol·|y|` and `2u·‖y / wt‖`, the rounding level of the error norm.
+    /// `wt = 1 / (atol + rtol·|y|)` (`atol > 0`) and `2u·RMS(y · wt)`, the rounding level of
+    /// the error norm.
     fn weights(&mut self) -> f64 {
         let st = &self.st;
         let mut sq = 0.0;
         for i in 0..st.dim {
-            let w = st.atol[i] + st.rtol[i] * st.y[i].abs();
+            let w = 1.0 / (st.atol[i] + st.rtol[i] * st.y[i].abs());
             self.wt[i] = w;
-            if w > 0.0 {
-                sq += (st.y[i] / w).powi(2);
-            }
+            sq += (st.y[i] * w).powi(2);
         }
         2.0 * f64::EPSILON * (sq / st.dim as f64).sqrt()
     }
 
-    /// `RMS(v / wt)` of the vector `v(l)`.
+    /// `RMS(v · wt)` of the vector `v(l)`.
     #[inline(always)]
     fn norm(&self, v: impl Fn(usize) -> f64) -> f64 {
         let mut sq = 0.0;
         for l in 0..self.st.dim {
-            sq += (v(l) / self.wt[l]).powi(2);
+            sq += (v(l) * self.wt[l]).powi(2);
         }
         (sq / self.st.dim as f64).sqrt()
     }
