@@ -390,7 +390,7 @@ def cheapest_text(scene: str, rows: Sequence[dict], decades=DECADES) -> str:
 
 STYLE = {
     "RK45": ("C0", "o-"), "DOP853": ("C1", "o-"), "Radau": ("C2", "o-"), "auto": ("C9", "o:"),
-    "Vern9": ("C6", "o-"), "Adams": ("C3", "D-"), "scipy:LSODA": ("C9", "x--"),
+    "Vern9": ("C6", "o-"), "Adams": ("k", "D-"), "scipy:LSODA": ("C9", "x--"),
     "RK4": ("C4", "s-"), "Euler": ("C5", "s-"),
     "scipy:RK45": ("C0", "x--"), "scipy:DOP853": ("C1", "x--"), "scipy:Radau": ("C2", "x--"),
     "mujoco:RK4": ("C3", "^-"), "mujoco:Euler": ("C7", "v-"),
