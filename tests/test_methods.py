@@ -365,6 +365,7 @@ def test_rk45_alias_and_default_method():
 EXPLICIT = [
     dict(method="RK45"),
     dict(method="DOP853"),
+    dict(method="Adams"),
     dict(method="RK4", dt=0.01),
     dict(method="Euler", dt=1e-3),
 ]

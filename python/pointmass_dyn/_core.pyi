@@ -21,8 +21,8 @@ cpu_dispatch: str
 _Array: TypeAlias = NDArray[np.float64]
 #: ``"recursive"`` (O(n) recursion) or ``"denoc"`` (explicit DeNOC matrix products).
 _Method = str
-#: Integration method: ``"RK45"``, ``"DOP853"``, ``"Vern9"``, ``"Radau"``, ``"RK4"``, ``"Euler"``,
-#: ``"auto"`` (case-insensitive).
+#: Integration method: ``"RK45"``, ``"DOP853"``, ``"Vern9"``, ``"Adams"``, ``"Radau"``,
+#: ``"RK4"``, ``"Euler"``, ``"auto"`` (case-insensitive).
 _Integrator = str
 #: ``"standard"`` (SciPy's step-size controller, also ``"scipy"``) or ``"pi"`` (Hairer's PI).
 _Controller = str

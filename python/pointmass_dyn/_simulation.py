@@ -229,7 +229,8 @@ class SimulationResult:
     #: (``None`` if none). Passing one is how such motions go; past one the accuracy is
     #: limited (docs/mechanisms.md section 5).
     singular_crossings: tuple | None = None
-    #: The integration method that ran ("RK45", "DOP853", "Radau", "RK4", "Euler" or "auto";
+    #: The integration method that ran ("RK45", "DOP853", "Vern9", "Adams", "Radau", "RK4",
+    #: "Euler" or "auto";
     #: the one ``simulate`` chose when none was named). ``"auto"``: see ``switched_to``.
     method: str = "RK45"
     #: Jacobian evaluations and LU decompositions (implicit methods; 0 otherwise).
@@ -330,9 +331,12 @@ def simulate(
     """Integrates a scene, entirely in Rust with the GIL released.
 
     ``method``: ``"RK45"`` (SciPy's, step for step), ``"DOP853"`` (SciPy's, step for
-    step; better at tight tolerances), ``"RK4"`` or ``"Euler"`` (semi-implicit, MuJoCo's) at
+    step; better at tight tolerances), ``"Vern9"`` or ``"Adams"`` (variable-order Adams PECE,
+    two evaluations a step; tight tolerances on smooth problems), ``"RK4"`` or ``"Euler"``
+    (semi-implicit, MuJoCo's) at
     the fixed step ``dt`` (required by these two only), ``"Radau"`` (implicit) or ``"auto"``
-    (RK45, or DOP853 at rtol ≤ 1e-8, then Radau from where the stiffness test fires;
+    (RK45, or Adams at rtol ≤ 1e-8 (DOP853 with closed loops), then Radau from where the
+    stiffness test fires;
     ``.switched_to``, ``.t_switch``).
     ``None`` takes the scene's ``[simulate] method``/``dt``; a scene that names none runs
     ``"auto"`` when it has a ground contact or joint limits (enabled; stiff by design, where

@@ -67,6 +67,14 @@ impl<'a> Engine<'a> {
             Method::Radau => Engine::Radau(Radau::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Rk4 => Engine::Rk4(FixedStep::new(sys, t, y, t_bound, opts).map_err(e)?),
             Method::Euler => Engine::Euler(FixedStep::new(sys, t, y, t_bound, opts).map_err(e)?),
+            Method::Adams => {
+                return Err(Error::arg(
+                    "method",
+                    "'RK45', 'DOP853', 'Vern9', 'Radau', 'RK4' or 'Euler' for a Simulator (a \
+                     multistep method cannot restart cheaply at each control step)",
+                    "'Adams'",
+                ))
+            }
             Method::Auto => {
                 return Err(Error::arg(
                     "method",

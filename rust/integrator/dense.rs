@@ -22,6 +22,9 @@ pub enum Interpolant {
     Hermite,
     /// Verner 9(8)'s interpolant: `y_old + (q0 x + q1 x² + … + q8 x⁹)` (the factor h is in `q`).
     Vern9,
+    /// The Adams polynomial of Shampine–Gordon's `INTRP` in powers of `s = x − 1`:
+    /// `y_old + q0 + (q1 s + q2 s² + … + q13 s¹³)` (`q0 = y − y_old`, the factor h in `q`).
+    Adams,
 }
 
 impl Interpolant {
@@ -32,6 +35,7 @@ impl Interpolant {
             Interpolant::Dop853 => 7,
             Interpolant::Radau | Interpolant::Hermite => 3,
             Interpolant::Vern9 => 9,
+            Interpolant::Adams => 14,
         }
     }
 
@@ -62,6 +66,17 @@ impl Interpolant {
                         y = y * x + c;
                     }
                     *o = y * x + y_old[i];
+                }
+            }
+            Interpolant::Adams => {
+                let s = (t - t_old) / h - 1.0;
+                for (i, o) in out.iter_mut().enumerate() {
+                    let qi = &q[14 * i..14 * i + 14];
+                    let mut y = qi[13];
+                    for c in qi[1..13].iter().rev() {
+                        y = y * s + c;
+                    }
+                    *o = (y * s + qi[0]) + y_old[i];
                 }
             }
             Interpolant::Radau | Interpolant::Hermite => {

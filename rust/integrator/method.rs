@@ -89,6 +89,9 @@ pub enum Method {
     Dop853,
     /// Verner's 9(8) pair (not SciPy's), for tight tolerances on smooth non-stiff problems.
     Vern9,
+    /// Variable-order (1–11), variable-step Adams–Bashforth–Moulton PECE (Shampine–Gordon),
+    /// two evaluations per step, for smooth non-stiff problems at tight tolerances.
+    Adams,
     /// Radau IIA order 5 (implicit), SciPy's `Radau`.
     Radau,
     /// Classical Runge–Kutta 4 at a fixed step `dt`.
@@ -103,7 +106,8 @@ pub enum Method {
 
 impl Method {
     /// Every accepted name (case-insensitive), for messages.
-    pub const NAMES: &'static str = "'RK45', 'DOP853', 'Vern9', 'Radau', 'RK4', 'Euler' or 'auto'";
+    pub const NAMES: &'static str =
+        "'RK45', 'DOP853', 'Vern9', 'Adams', 'Radau', 'RK4', 'Euler' or 'auto'";
 
     /// SciPy's spelling.
     pub fn name(self) -> &'static str {
@@ -111,6 +115,7 @@ impl Method {
             Method::Rk45 => "RK45",
             Method::Dop853 => "DOP853",
             Method::Vern9 => "Vern9",
+            Method::Adams => "Adams",
             Method::Radau => "Radau",
             Method::Rk4 => "RK4",
             Method::Euler => "Euler",
@@ -124,6 +129,7 @@ impl Method {
             Method::Rk45,
             Method::Dop853,
             Method::Vern9,
+            Method::Adams,
             Method::Radau,
             Method::Rk4,
             Method::Euler,

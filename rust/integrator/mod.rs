@@ -8,6 +8,8 @@
 //! * `explicit_rk.rs` – the one explicit Runge–Kutta engine [`ExplicitRk`] over a [`Tableau`].
 //! * `stepper.rs`    – the RK45 tableau ([`Rk45`]; [`Stepper`] = the engine with it).
 //! * `dop853.rs`     – DOP853 ([`Dop853`]), its tableau in `dop853_tableau.rs`.
+//! * `adams.rs`      – variable-order Adams PECE ([`Adams`], Shampine–Gordon's `STEP`), its
+//!   coefficient recurrences in `adams_coef.rs`.
 //! * `radau.rs`      – Radau IIA ([`Radau`]), its coefficients in `radau_tableau.rs`,
 //!   finite-difference Jacobians in `num_jac.rs`.
 //! * `fixed_step.rs` – the fixed-step methods ([`FixedStep`] with [`Rk4`] or [`Euler`]).
@@ -25,6 +27,8 @@
 //! so step times can differ from SciPy's by up to ~1e-7 relative at tight tolerances (as
 //! SciPy's own do between CPUs); values at fixed times (t_end, t_eval, events) agree to ~1e-14.
 
+mod adams;
+mod adams_coef;
 mod common;
 mod dense;
 mod dop853;
@@ -42,12 +46,13 @@ mod stepper;
 mod vern9;
 mod vern9_tableau;
 
+pub use adams::Adams;
 pub use common::{StepOutcome, StepState};
 pub use dense::{eval_segment, DenseOutput, Interpolant};
 pub use dop853::{Dop853, Dop853Tableau};
 #[cfg(test)]
 pub(crate) use driver::auto as driver_auto;
-pub use driver::{rk45, solve, solve_with_jacobian, AUTO_DOP853_RTOL};
+pub use driver::{rk45, solve, solve_with_jacobian, AUTO_ADAMS_RTOL, AUTO_DOP853_RTOL};
 pub use events::{Event, EventDirection, EventFn};
 pub use explicit_rk::{ExplicitRk, Tableau};
 pub use fixed_step::{Euler, FixedStep, Rk4, Scheme, Work};
@@ -384,6 +389,11 @@ pub enum InputError {
         index: usize,
         value: f64,
     },
+    #[error(
+        "atol: component {index} must be > 0 for method 'Adams' (its error weights \
+         atol + rtol·|y| must stay positive when a component passes through 0), got {value}"
+    )]
+    AtolZeroAdams { index: usize, value: f64 },
     #[error("max_step: must be positive, got {0}")]
     MaxStep(f64),
     #[error("t_eval: {points} output times of {dim} components need {bytes} bytes, which cannot be allocated")]
@@ -412,7 +422,7 @@ pub enum InputError {
     #[error("t_eval: values must be strictly {order} (direction of integration); index {index} breaks it")]
     TEvalNotSorted { index: usize, order: &'static str },
     #[error(
-        "method: expected one of 'RK45', 'DOP853', 'Radau', 'RK4', 'Euler' or 'auto', got '{0}'"
+        "method: expected one of 'RK45', 'DOP853', 'Vern9', 'Adams', 'Radau', 'RK4', 'Euler' or 'auto', got '{0}'"
     )]
     UnknownMethod(String),
     #[error("dt: method '{method}' takes a fixed step size dt > 0, got none")]
@@ -440,7 +450,7 @@ impl InputError {
             | InputError::Y0NonFinite { .. } => "y0",
             InputError::TSpanNonFinite { .. } | InputError::TSpanEmpty(_) => "t_span",
             InputError::TolLength { name, .. } | InputError::TolInvalid { name, .. } => name,
-            InputError::AtolZeroImplicit { .. } => "atol",
+            InputError::AtolZeroImplicit { .. } | InputError::AtolZeroAdams { .. } => "atol",
             InputError::MaxStep(_) => "max_step",
             InputError::MaxSteps => "max_steps",
             InputError::FirstStepNotPositive(_) | InputError::FirstStepBeyondSpan { .. } => {

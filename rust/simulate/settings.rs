@@ -103,7 +103,8 @@ pub fn disabled(caller: Option<Disabled>, scene: &Settings) -> Disabled {
 /// `auto` when an enabled effect is a ground contact or a joint limit — compliant
 /// constraints, stiff by design, where RK45 takes 10–100× the right-hand sides of Radau
 /// (docs/contact.md §5) — else RK45 (SciPy's, step for step). `auto` steps as RK45 until
-/// Hairer's stiffness test fires (DOP853 at rtol ≤ 1e-8), then Radau; the result says so.
+/// its stiffness test fires (Adams at rtol ≤ 1e-8, DOP853 with loops), then Radau; the
+/// result says so.
 pub fn default_method(effects: &[Effect], disabled: Disabled) -> Method {
     let stiff = effects
         .iter()

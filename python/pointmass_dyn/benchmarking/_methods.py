@@ -9,7 +9,7 @@ or ``pointmass-dyn work-precision chain7 chain_stiff --methods all --plot wp.png
 
 Methods (names as ``methods=`` takes them):
 
-* ours: ``RK45``, ``DOP853``, ``Vern9``, ``Radau``, ``auto`` (adaptive, swept over ``tolerances``,
+* ours: ``RK45``, ``DOP853``, ``Vern9``, ``Adams``, ``Radau``, ``auto`` (adaptive, swept over ``tolerances``,
   rtol = atol) and ``RK4``, ``Euler`` (fixed step, swept over ``dt``), all through
   :func:`pointmass_dyn.simulate` (``method=``; a method this build does not have is skipped
   with a note);
@@ -56,7 +56,7 @@ from ..errors import InvalidInputError
 from ..io import from_mujoco_state, layout, to_mjcf, to_mujoco_state
 from ._rhs import analytic_jacobian, best_time, rk4_fixed, scene_rhs
 
-OURS_ADAPTIVE = ("RK45", "DOP853", "Vern9", "Radau", "auto")
+OURS_ADAPTIVE = ("RK45", "DOP853", "Vern9", "Adams", "Radau", "auto")
 OURS_FIXED = ("RK4", "Euler")
 SCIPY = ("scipy:RK45", "scipy:DOP853", "scipy:Radau", "scipy:LSODA")
 MUJOCO = ("mujoco:RK4", "mujoco:Euler", "mujoco:implicitfast")
@@ -390,7 +390,7 @@ def cheapest_text(scene: str, rows: Sequence[dict], decades=DECADES) -> str:
 
 STYLE = {
     "RK45": ("C0", "o-"), "DOP853": ("C1", "o-"), "Radau": ("C2", "o-"), "auto": ("C9", "o:"),
-    "Vern9": ("C6", "o-"), "scipy:LSODA": ("C9", "x--"),
+    "Vern9": ("C6", "o-"), "Adams": ("k", "D-"), "scipy:LSODA": ("C9", "x--"),
     "RK4": ("C4", "s-"), "Euler": ("C5", "s-"),
     "scipy:RK45": ("C0", "x--"), "scipy:DOP853": ("C1", "x--"), "scipy:Radau": ("C2", "x--"),
     "mujoco:RK4": ("C3", "^-"), "mujoco:Euler": ("C7", "v-"),

@@ -5,11 +5,11 @@
 use super::fixtures::{observed_orders, tol};
 use crate::integrator::{solve, FnSystem, Interpolant, Method, SolverOptions, Status};
 
-const ECC: f64 = 0.5;
+pub(super) const ECC: f64 = 0.5;
 
 /// The two-body problem `q'' = −q / |q|³` (state `(q, q')`), started at pericentre of the
 /// orbit of eccentricity [`ECC`] (period 2π).
-fn kepler() -> FnSystem<fn(f64, &[f64], &mut [f64]) -> Result<(), String>> {
+pub(super) fn kepler() -> FnSystem<fn(f64, &[f64], &mut [f64]) -> Result<(), String>> {
     FnSystem::new(4, |_t, y: &[f64], dy: &mut [f64]| {
         let r3 = (y[0] * y[0] + y[1] * y[1]).powf(1.5);
         dy[0] = y[2];
@@ -21,7 +21,7 @@ fn kepler() -> FnSystem<fn(f64, &[f64], &mut [f64]) -> Result<(), String>> {
 }
 
 /// Kepler's orbit at `t` from Kepler's equation `E − e sin E = t` (Newton to convergence).
-fn kepler_exact(t: f64) -> [f64; 4] {
+pub(super) fn kepler_exact(t: f64) -> [f64; 4] {
     let mut e_an = t;
     for _ in 0..50 {
         e_an -= (e_an - ECC * e_an.sin() - t) / (1.0 - ECC * e_an.cos());
@@ -32,11 +32,11 @@ fn kepler_exact(t: f64) -> [f64; 4] {
     [c - ECC, b * s, -s / d, b * c / d]
 }
 
-fn kepler_y0() -> [f64; 4] {
+pub(super) fn kepler_y0() -> [f64; 4] {
     [1.0 - ECC, 0.0, 0.0, ((1.0 + ECC) / (1.0 - ECC)).sqrt()]
 }
 
-fn max_diff(a: &[f64], b: &[f64]) -> f64 {
+pub(super) fn max_diff(a: &[f64], b: &[f64]) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).abs())
@@ -146,12 +146,17 @@ fn vern9_dense_output_is_its_interpolant() {
 }
 
 /// A scene run to `t_end`, the states at `t_eval`, with `method` at rtol = atol = `tl`.
-fn scene_run(path: &str, method: Method, tl: f64, t_end: f64) -> Vec<f64> {
+pub(super) fn scene_run(path: &str, method: Method, tl: f64, t_end: f64) -> Vec<f64> {
     scene_run_counted(path, method, tl, t_end).0
 }
 
 /// [`scene_run`] and its evaluations.
-fn scene_run_counted(path: &str, method: Method, tl: f64, t_end: f64) -> (Vec<f64>, usize) {
+pub(super) fn scene_run_counted(
+    path: &str,
+    method: Method,
+    tl: f64,
+    t_end: f64,
+) -> (Vec<f64>, usize) {
     let file = format!(
         "{}/python/pointmass_dyn/scenes/{path}",
         env!("CARGO_MANIFEST_DIR")
