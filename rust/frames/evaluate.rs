@@ -1,6 +1,7 @@
 //! The frame algorithms assembled for one call (what the bindings call): a frame's
 //! Jacobian at many configurations, its velocity and acceleration, the centre of mass and the
 //! centroidal quantities. Each checks its inputs and allocates its own buffers once.
+use crate::kinematics::plan::{frame_poses_along, support_of, MAX_SUPPORT};
 use crate::model::Model;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
@@ -25,6 +26,9 @@ pub fn frame_jacobians(
     check_block(model, qs, rows, stacked, "q")?;
     let (nq, nv) = (model.nq, model.nv);
     let threads = rows::threads_for(model, rows);
+    // The frame's support alone (a Jacobian needs no other link, nor any inertia).
+    let mut along = [0; MAX_SUPPORT];
+    let support = support_of(model, f.link, &mut along);
     let block = |first: usize,
                  count: usize,
                  out: &mut [f64],
@@ -36,8 +40,10 @@ pub fn frame_jacobians(
                 poll()?;
             }
             let q = &qs[(first + k) * nq..(first + k + 1) * nq];
-            // Poses and joint columns only: a Jacobian needs no inertias.
-            crate::kinematics::frame_poses(model, q, &mut links);
+            match support {
+                Some(n) => frame_poses_along(model, q, &mut links, &along[..n]),
+                None => crate::kinematics::frame_poses(model, q, &mut links),
+            }
             let j = &mut out[k * 6 * nv..(k + 1) * 6 * nv];
             jacobian::frame_jacobian_links(model, &links, f, rf, j);
         }

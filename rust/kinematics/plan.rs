@@ -6,7 +6,12 @@
 //! the turns' coordinates listed so their sines and cosines go four at a time.
 use crate::joint::Joint;
 use crate::model::Model;
-use crate::support::spatial::{mat_mat, Mat3, Vec3};
+use crate::support::spatial::{mat_mat, mat_vec, stack, Mat3, Vec3};
+
+use super::LinkState;
+
+/// The longest support [`frame_poses_along`] takes (deeper frames take the full pass).
+pub const MAX_SUPPORT: usize = 64;
 
 /// How a link's joint frame is oriented from its parent's: `R_joint = R_parent P`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,11 +50,21 @@ impl Placing {
     pub fn apply(&self, r_parent: &Mat3, p: &Mat3) -> Mat3 {
         match *self {
             Placing::Identity => *r_parent,
-            Placing::Permutation { from, sign } => Mat3::from_columns(&[
-                r_parent.column(from[0]) * sign[0],
-                r_parent.column(from[1]) * sign[1],
-                r_parent.column(from[2]) * sign[2],
-            ]),
+            Placing::Permutation { from, sign } => {
+                // Entry by entry: nalgebra's column views go through generic iterators.
+                let m = |i: usize, j: usize| r_parent[(i, from[j])] * sign[j];
+                Mat3::new(
+                    m(0, 0),
+                    m(0, 1),
+                    m(0, 2),
+                    m(1, 0),
+                    m(1, 1),
+                    m(1, 2),
+                    m(2, 0),
+                    m(2, 1),
+                    m(2, 2),
+                )
+            }
             Placing::General => mat_mat(r_parent, p),
         }
     }
@@ -135,6 +150,106 @@ impl PosePlan {
     }
 }
 
+/// The links from the root down to `link` (parents first) into `out`, their count; None
+/// when there are more than [`MAX_SUPPORT`].
+pub fn support_of(
+    model: &Model,
+    link: Option<usize>,
+    out: &mut [usize; MAX_SUPPORT],
+) -> Option<usize> {
+    let mut n = 0;
+    for l in model.support(link) {
+        if n == MAX_SUPPORT {
+            return None;
+        }
+        out[n] = l;
+        n += 1;
+    }
+    out[..n].reverse();
+    Some(n)
+}
+
+/// [`super::frame_poses`] of the links `along` only (parents first, each one's parent among
+/// them; at most [`MAX_SUPPORT`]): the poses a frame's Jacobian reads, its support alone,
+/// as Pinocchio walks it. The other links' states are left as they were.
+pub fn frame_poses_along(model: &Model, q: &[f64], st: &mut [LinkState], along: &[usize]) {
+    let plan = &model.compiled().poses;
+    // The turns' sines and cosines first, four at a time (bit for bit `sin_cos`).
+    let mut x = [0.0; MAX_SUPPORT + 4];
+    let mut nt = 0;
+    for &i in along {
+        if let Some(t) = plan.steps[i].turn {
+            x[nt] = t.sign * q[model.links[i].q_index];
+            nt += 1;
+        }
+    }
+    let (mut sn, mut cs) = ([0.0; MAX_SUPPORT + 4], [0.0; MAX_SUPPORT + 4]);
+    for c in (0..nt).step_by(4) {
+        let four = [x[c], x[c + 1], x[c + 2], x[c + 3]];
+        let (s4, c4) = crate::support::trig::sin_cos4(four).unwrap_or_else(|| {
+            let (mut s4, mut c4) = ([0.0; 4], [0.0; 4]);
+            for k in 0..4 {
+                (s4[k], c4[k]) = crate::support::trig::sin_cos(four[k]);
+            }
+            (s4, c4)
+        });
+        sn[c..c + 4].copy_from_slice(&s4);
+        cs[c..c + 4].copy_from_slice(&c4);
+    }
+    let mut at = 0;
+    for &i in along {
+        let l = &model.links[i];
+        let (r_parent, o_parent) = match l.parent {
+            Some(p) => (st[p].rotation, st[p].origin),
+            None => (Mat3::identity(), Vec3::zeros()),
+        };
+        let step = &plan.steps[i];
+        let r_joint = step.placing.apply(&r_parent, &l.placement.rotation);
+        let t = mat_vec(&r_parent, &l.placement.translation);
+        let origin = Vec3::new(o_parent.x + t.x, o_parent.y + t.y, o_parent.z + t.z);
+        let s = &mut st[i];
+        s.joint_rotation = r_joint;
+        s.origin = origin;
+        if let Some(t) = step.turn {
+            // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
+            let (sa, ca) = (sn[at], cs[at]);
+            at += 1;
+            let (a, b) = ((t.axis + 1) % 3, (t.axis + 2) % 3);
+            let mut r = r_joint;
+            for row in 0..3 {
+                let (xa, xb) = (r_joint[(row, a)], r_joint[(row, b)]);
+                r[(row, a)] = xa * ca + xb * sa;
+                r[(row, b)] = xb * ca - xa * sa;
+            }
+            s.rotation = r;
+            let k = t.axis;
+            let axis = Vec3::new(r_joint[(0, k)], r_joint[(1, k)], r_joint[(2, k)]) * t.sign;
+            s.s[0] = stack(&axis, &Vec3::zeros());
+            continue;
+        }
+        let qi = &q[l.q_index..l.q_index + l.joint.nq()];
+        let (r_q, t_q) = l.joint.transform(qi);
+        s.rotation = mat_mat(&r_joint, &r_q);
+        if let Joint::Prismatic { .. } | Joint::FreeFlyer = l.joint {
+            s.origin += mat_vec(&r_joint, &t_q);
+        }
+        // The columns past the joint's speeds are zero, as they started (as `frame_poses`).
+        let columns = l.joint.subspace(qi, &r_joint, &s.rotation);
+        let n = l.joint.nv();
+        s.s[..n].copy_from_slice(&columns[..n]);
+    }
+}
+
+/// The poses frame `link`'s Jacobian reads: its support's ([`frame_poses_along`]), or every
+/// link's when the support is deeper than [`MAX_SUPPORT`].
+pub fn frame_poses_for(model: &Model, q: &[f64], st: &mut [LinkState], link: Option<usize>) {
+    let mut along = [0; MAX_SUPPORT];
+    match support_of(model, link, &mut along) {
+        Some(n) => frame_poses_along(model, q, st, &along[..n]),
+        None => super::frame_poses(model, q, st),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -150,5 +265,26 @@ mod tests {
         let g = Mat3::new(0.6, -0.8, 0.0, 0.8, 0.6, 0.0, 0.0, 0.0, 1.0);
         assert_eq!(Placing::of(&g), Placing::General);
         assert_eq!(Placing::of(&Mat3::identity()), Placing::Identity);
+    }
+
+    /// The support's poses are the full pass's, bit for bit, on a branched tree with
+    /// placed joints (quarter turns and general ones).
+    #[test]
+    fn support_poses_equal_the_full_pass() {
+        let model = crate::benchmark_models::tree(3, 4);
+        let q: Vec<f64> = (0..model.nq).map(|k| 0.3 + 0.17 * k as f64).collect();
+        let mut q = q;
+        model.normalize(&mut q);
+        let mut full = vec![LinkState::default(); model.links.len()];
+        super::super::frame_poses(&model, &q, &mut full);
+        for leaf in 0..model.links.len() {
+            let mut part = vec![LinkState::default(); model.links.len()];
+            frame_poses_for(&model, &q, &mut part, Some(leaf));
+            for l in model.support(Some(leaf)) {
+                assert_eq!(part[l].rotation, full[l].rotation, "{leaf} {l}");
+                assert_eq!(part[l].origin, full[l].origin, "{leaf} {l}");
+                assert_eq!(part[l].s, full[l].s, "{leaf} {l}");
+            }
+        }
     }
 }

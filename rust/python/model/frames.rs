@@ -215,8 +215,8 @@ impl PyModel {
                 load_state(ws, py, q, None)?;
                 let model = &ws.version.model;
                 let f = frame_arg(model, frame, "frame")?;
-                // Poses and joint columns only: a Jacobian needs no inertias.
-                crate::kinematics::frame_poses(model, &ws.q, &mut ws.data.links);
+                // The support's poses and joint columns only (no inertias).
+                crate::kinematics::plan::frame_poses_for(model, &ws.q, &mut ws.data.links, f.link);
                 let nv = model.nv;
                 let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
                 // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
