@@ -174,28 +174,13 @@ pub fn support_of(
 /// as Pinocchio walks it. The other links' states are left as they were.
 pub fn frame_poses_along(model: &Model, q: &[f64], st: &mut [LinkState], along: &[usize]) {
     let plan = &model.compiled().poses;
-    // The turns' sines and cosines first, four at a time (bit for bit `sin_cos`).
-    let mut x = [0.0; MAX_SUPPORT + 4];
-    let mut nt = 0;
-    for &i in along {
-        if let Some(t) = plan.steps[i].turn {
-            x[nt] = t.sign * q[model.links[i].q_index];
-            nt += 1;
-        }
-    }
-    let (mut sn, mut cs) = ([0.0; MAX_SUPPORT + 4], [0.0; MAX_SUPPORT + 4]);
-    for c in (0..nt).step_by(4) {
-        let four = [x[c], x[c + 1], x[c + 2], x[c + 3]];
-        let (s4, c4) = crate::support::trig::sin_cos4(four).unwrap_or_else(|| {
-            let (mut s4, mut c4) = ([0.0; 4], [0.0; 4]);
-            for k in 0..4 {
-                (s4[k], c4[k]) = crate::support::trig::sin_cos(four[k]);
-            }
-            (s4, c4)
-        });
-        sn[c..c + 4].copy_from_slice(&s4);
-        cs[c..c + 4].copy_from_slice(&c4);
-    }
+    // The turns' sines and cosines four at a time (bit for bit `sin_cos`), taken from a
+    // second walk over the turns that runs ahead of the first: no per-call buffers.
+    let mut ahead = along.iter().filter_map(|&i| {
+        let t = plan.steps[i].turn?;
+        Some(t.sign * q[model.links[i].q_index])
+    });
+    let (mut sn, mut cs) = ([0.0; 4], [1.0; 4]);
     let mut at = 0;
     for &i in along {
         let l = &model.links[i];
@@ -211,8 +196,21 @@ pub fn frame_poses_along(model: &Model, q: &[f64], st: &mut [LinkState], along: 
         s.joint_rotation = r_joint;
         s.origin = origin;
         if let Some(t) = step.turn {
+            if at % 4 == 0 {
+                let mut four = [0.0; 4];
+                for (x, angle) in four.iter_mut().zip(&mut ahead) {
+                    *x = angle;
+                }
+                (sn, cs) = crate::support::trig::sin_cos4(four).unwrap_or_else(|| {
+                    let (mut s4, mut c4) = ([0.0; 4], [0.0; 4]);
+                    for k in 0..4 {
+                        (s4[k], c4[k]) = crate::support::trig::sin_cos(four[k]);
+                    }
+                    (s4, c4)
+                });
+            }
             // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
-            let (sa, ca) = (sn[at], cs[at]);
+            let (sa, ca) = (sn[at % 4], cs[at % 4]);
             at += 1;
             let (a, b) = ((t.axis + 1) % 3, (t.axis + 2) % 3);
             let mut r = r_joint;
