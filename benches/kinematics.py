@@ -1,7 +1,7 @@
 """Frames and inverse kinematics (docs/kinematics.md) against Pinocchio:
 
-* the frame Jacobian of Panda's hand (LOCAL) per Python call, against Pinocchio's
-  ``computeFrameJacobian``;
+* the frame Jacobian of Panda's hand (LOCAL) per Python call, by name and by index in
+  ``frame_names``, against Pinocchio's ``computeFrameJacobian`` (which takes an index);
 * over 1,000 configurations in one call, against a Python loop over Pinocchio;
 * the COM Jacobian likewise (``jacobianCenterOfMass``);
 * inverse kinematics on Panda: the hand's pose of random configurations from the neutral
@@ -44,12 +44,16 @@ def main(rounds: int = 5) -> None:
     lo, hi = pm.lowerPositionLimit, pm.upperPositionLimit
     qs = rng.uniform(lo, hi, size=(1000, pm.nq))
     q = qs[0]
+    hand = model.frame_names.index("panda_hand")
 
     # Ours and Pinocchio's alternate round by round (best of each): a busy spell of this
     # shared machine then slows both sides, not one.
     cases = {
         "frame Jacobian per call": (
             lambda: model.frame_jacobian("panda_hand", q),
+            lambda: pin.computeFrameJacobian(pm, data, q, fid), 2000, 1e6, "us"),
+        "frame Jacobian per call, by index": (
+            lambda: model.frame_jacobian(hand, q),
             lambda: pin.computeFrameJacobian(pm, data, q, fid), 2000, 1e6, "us"),
         "frame Jacobian x1000 (one call vs a Pinocchio loop)": (
             lambda: model.frame_jacobian("panda_hand", qs),

@@ -198,3 +198,39 @@ def test_mujoco_sites_are_frames_where_mujoco_puts_them():
         r, t = model.frame_placement(name, np.array([0.7, -0.15]))
         np.testing.assert_allclose(t, data.site_xpos[k], atol=1e-12)
         np.testing.assert_allclose(r, data.site_xmat[k].reshape(3, 3), atol=1e-12)
+
+
+def test_a_frame_index_in_frame_names_is_that_frame():
+    m = pendulum()
+    m.add_frame("tip", "welded", (0.2, 0.0, 0.0))
+    q = np.array([0.4])
+    for k, name in enumerate(m.frame_names):
+        np.testing.assert_array_equal(m.frame_jacobian(k, q), m.frame_jacobian(name, q))
+        np.testing.assert_array_equal(m.frame_placement(k, q)[1], m.frame_placement(name, q)[1])
+    # Index 2 is the added frame: 1.2 m along the arm turned by 0.4 about z.
+    np.testing.assert_allclose(m.frame_placement(2, q)[1], [1.2 * math.cos(0.4), 1.2 * math.sin(0.4), 0], atol=1e-15)
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"frame: expected a frame name or index.*got 3"):
+        m.frame_jacobian(3, q)
+
+
+def test_large_batches_equal_one_call_per_configuration():
+    # Big enough to be split over threads where there are several cores: each row is
+    # still the single call's, bit for bit; a bad row is named.
+    root = robots_dir()
+    if root is None:
+        pytest.skip("example-robot-data not installed")
+    model, _ = load(str(root / FIXED["panda"]), False)
+    rng = np.random.default_rng(5)
+    qs = np.array([random_q(model, rng) for _ in range(4000)])
+    jac = model.frame_jacobian("panda_hand", qs, reference="world")
+    com, jcom = model.center_of_mass(qs, jacobian=True)
+    for k in range(0, 4000, 7):
+        np.testing.assert_array_equal(jac[k], model.frame_jacobian("panda_hand", qs[k], reference="world"))
+        c, j = model.center_of_mass(qs[k], jacobian=True)
+        np.testing.assert_array_equal(com[k], c)
+        np.testing.assert_array_equal(jcom[k], j)
+    qs[3001, 2] = np.inf
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"q\[3001\]"):
+        model.frame_jacobian("panda_hand", qs)
+    with pytest.raises(pmd.errors.InvalidInputError, match=r"q\[3001\]"):
+        model.center_of_mass(qs, jacobian=True)

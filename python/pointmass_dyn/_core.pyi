@@ -198,7 +198,8 @@ class Model:
         self, frame: str | int, q: ArrayLike, reference: str = "local"
     ) -> _Array:
         """(6, nv) Jacobian, or (N, 6, nv) for q (N, nq); ``reference``: "local",
-        "world" or "local_world_aligned" (Pinocchio's)."""
+        "world" or "local_world_aligned" (Pinocchio's). ``frame``: a name or an index in
+        ``frame_names`` (as everywhere a frame is asked for)."""
     def frame_jacobian_dot(
         self, frame: str | int, q: ArrayLike, v: ArrayLike, reference: str = "local"
     ) -> _Array:

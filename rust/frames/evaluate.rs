@@ -1,6 +1,7 @@
 //! The frame algorithms assembled for one call (what the bindings call): a frame's
 //! Jacobian at many configurations, its velocity and acceleration, the centre of mass and the
 //! centroidal quantities. Each checks its inputs and allocates its own buffers once.
+use crate::kinematics::plan::{frame_poses_along, support_of, MAX_SUPPORT};
 use crate::model::Model;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
@@ -8,10 +9,11 @@ use crate::support::spatial::{Vec3, Vec6};
 use super::com::{self, Composite};
 
 use super::motion::FrameKinematics;
-use super::placement::check_rows;
+use super::rows::{self, check_block};
 use super::{centroidal, jacobian, jacobian_dot, FrameRef, ReferenceFrame};
 
-/// `J` of `f` at `rows` configurations (row-major `rows × 6 × nv` into `out`).
+/// `J` of `f` at `rows` configurations (row-major `rows × 6 × nv` into `out`), checked
+/// here once for the whole block; large blocks are split over threads (`rows::split`).
 pub fn frame_jacobians(
     model: &Model,
     f: &FrameRef,
@@ -21,24 +23,42 @@ pub fn frame_jacobians(
     stacked: bool,
     out: &mut [f64],
 ) -> Result<()> {
-    check_rows(model, qs, rows, stacked, "q")?;
-    let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
+    check_block(model, qs, rows, stacked, "q")?;
     let (nq, nv) = (model.nq, model.nv);
-    for k in 0..rows {
-        if k % 256 == 255 {
-            crate::support::interrupt::check("frame_jacobian")?;
+    let threads = rows::threads_for(model, rows);
+    // The frame's support alone (a Jacobian needs no other link, nor any inertia).
+    let mut along = [0; MAX_SUPPORT];
+    let support = support_of(model, f.link, &mut along);
+    let block = |first: usize,
+                 count: usize,
+                 out: &mut [f64],
+                 _: &mut [f64],
+                 poll: &dyn Fn() -> Result<()>| {
+        let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
+        for k in 0..count {
+            if k % 256 == 255 {
+                poll()?;
+            }
+            let q = &qs[(first + k) * nq..(first + k + 1) * nq];
+            match support {
+                Some(n) => frame_poses_along(model, q, &mut links, &along[..n]),
+                None => crate::kinematics::frame_poses(model, q, &mut links),
+            }
+            let j = &mut out[k * 6 * nv..(k + 1) * 6 * nv];
+            jacobian::frame_jacobian_links(model, &links, f, rf, j);
         }
-        // Poses and joint columns only: a Jacobian needs no inertias.
-        crate::kinematics::frame_poses(model, &qs[k * nq..(k + 1) * nq], &mut links);
-        jacobian::frame_jacobian_links(
-            model,
-            &links,
-            f,
-            rf,
-            &mut out[k * 6 * nv..(k + 1) * 6 * nv],
-        );
-    }
-    Ok(())
+        Ok(())
+    };
+    rows::split(
+        "frame_jacobian",
+        rows,
+        threads,
+        out,
+        6 * nv,
+        &mut [],
+        0,
+        block,
+    )
 }
 
 /// `J̇` of `f` (row-major 6 × nv) at `(q, v)` (checked by the caller).
@@ -96,36 +116,50 @@ fn no_mass() -> Error {
 }
 
 /// Centre of mass and, when `jac` is given, the COM Jacobian (row-major `rows × 3 × nv`) at
-/// `rows` configurations; `com_out` gets `rows × 3`.
+/// `rows` configurations; `com_out` gets `rows × 3`. Checked once for the block; large
+/// blocks are split over threads (`rows::split`).
 pub fn com_batch(
     model: &Model,
     qs: &[f64],
     rows: usize,
     stacked: bool,
     com_out: &mut [f64],
-    mut jac: Option<&mut [f64]>,
+    jac: Option<&mut [f64]>,
 ) -> Result<()> {
-    check_rows(model, qs, rows, stacked, "q")?;
-    let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
-    let mut moments = vec![0.0; 4 * model.links.len()];
+    check_block(model, qs, rows, stacked, "q")?;
     let (nq, nv) = (model.nq, model.nv);
-    for k in 0..rows {
-        if k % 256 == 255 {
-            crate::support::interrupt::check("center_of_mass")?;
+    let with_jac = jac.is_some();
+    let per_j = if with_jac { 3 * nv } else { 0 };
+    let threads = rows::threads_for(model, rows);
+    let block = |first: usize,
+                 count: usize,
+                 com: &mut [f64],
+                 j: &mut [f64],
+                 poll: &dyn Fn() -> Result<()>| {
+        let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
+        let mut moments = vec![0.0; 4 * model.links.len()];
+        for k in 0..count {
+            if k % 256 == 255 {
+                poll()?;
+            }
+            let q = &qs[(first + k) * nq..(first + k + 1) * nq];
+            let jk = with_jac.then(|| &mut j[k * per_j..(k + 1) * per_j]);
+            let c = com_at(model, q, &mut links, &mut moments, jk)?;
+            com[3 * k..3 * k + 3].copy_from_slice(c.as_slice());
         }
-        let j = jac
-            .as_deref_mut()
-            .map(|j| &mut j[k * 3 * nv..(k + 1) * 3 * nv]);
-        let c = com_at(
-            model,
-            &qs[k * nq..(k + 1) * nq],
-            &mut links,
-            &mut moments,
-            j,
-        )?;
-        com_out[3 * k..3 * k + 3].copy_from_slice(c.as_slice());
-    }
-    Ok(())
+        Ok(())
+    };
+    let jac = jac.unwrap_or(&mut []);
+    rows::split(
+        "center_of_mass",
+        rows,
+        threads,
+        com_out,
+        3,
+        jac,
+        per_j,
+        block,
+    )
 }
 
 /// The centre of mass at one checked `q` and, with `jac`, its 3 × nv Jacobian (every entry

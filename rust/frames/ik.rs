@@ -117,6 +117,8 @@ pub fn log3(r: &Mat3) -> Vec3 {
     a * theta
 }
 
+/// Every buffer of a solve, allocated once in [`solve`]: an iteration on a model without
+/// loops or couplings allocates nothing (the constrained steps' SVD and Clarabel do).
 struct Work {
     kin: FrameKinematics,
     jac: Vec<f64>,
@@ -125,6 +127,49 @@ struct Work {
     ejac: DMatrix<f64>,
     w: DVector<f64>,
     qp: BoxQp,
+    /// `W E`, the Gauss–Newton matrix `EᵀW²E`, the damped one and the gradient `EᵀW²e`.
+    wj: DMatrix<f64>,
+    h0: DMatrix<f64>,
+    h: DMatrix<f64>,
+    g: DVector<f64>,
+    step: DVector<f64>,
+    /// Cholesky factor of `h` (row-major, lower).
+    chol: Vec<f64>,
+    lo: Vec<f64>,
+    hi: Vec<f64>,
+    trial: Vec<f64>,
+    /// The constraints' residual and Jacobian at the iterate, the residual at a trial.
+    c: DVector<f64>,
+    jc: DMatrix<f64>,
+    c_trial: DVector<f64>,
+    loop_kin: Option<crate::loops::LoopKinematics>,
+}
+
+impl Work {
+    fn new(model: &Model, rows: usize) -> Work {
+        let (nv, m) = (model.nv, model.nconstraints());
+        Work {
+            kin: FrameKinematics::new(model),
+            jac: vec![0.0; 6 * nv],
+            e: DVector::zeros(rows),
+            ejac: DMatrix::zeros(rows, nv),
+            w: DVector::zeros(rows),
+            qp: BoxQp::new(nv),
+            wj: DMatrix::zeros(rows, nv),
+            h0: DMatrix::zeros(nv, nv),
+            h: DMatrix::zeros(nv, nv),
+            g: DVector::zeros(nv),
+            step: DVector::zeros(nv),
+            chol: vec![0.0; nv * nv],
+            lo: vec![0.0; nv],
+            hi: vec![0.0; nv],
+            trial: vec![0.0; model.nq],
+            c: DVector::zeros(m),
+            jc: DMatrix::zeros(m, nv),
+            c_trial: DVector::zeros(m),
+            loop_kin: (m > 0).then(|| crate::loops::LoopKinematics::new(model)),
+        }
+    }
 }
 
 /// The stacked errors and `E` at `q`; returns the largest unweighted error.
@@ -157,17 +202,18 @@ fn evaluate(model: &Model, tasks: &[Task], q: &[f64], wk: &mut Work) -> f64 {
             Target::Pose(p) => {
                 let re = p.rotation * pose.rotation.transpose();
                 let phi = log3(&re);
-                // e_R = log(R_t Rᵀ): R_t Rᵀ changes by exp(−Rᵀ... ) on the right, i.e.
-                // de = −Jr⁻¹(e) R_e ... in world axes: d(R_t Rᵀ) = −R_e [ω]×.
+                // e_R = log(R_t Rᵀ): d(R_t Rᵀ) = −R_e [ω]× δt (world axes), so
+                // de = −Jr⁻¹(e) R_eᵀ ω: each angular column of J turned by D.
                 let d = jr_inv(&phi) * re.transpose();
-                let jw = DMatrix::from_fn(3, nv, |i, c| wk.jac[i * nv + c]);
-                let dm = DMatrix::from_fn(3, 3, |i, j| d[(i, j)]);
-                let block = -(dm * jw);
+                for c in 0..nv {
+                    let jw = Vec3::new(wk.jac[c], wk.jac[nv + c], wk.jac[2 * nv + c]);
+                    let col = d * jw;
+                    for i in 0..3 {
+                        wk.ejac[(row + i, c)] = -col[i];
+                    }
+                }
                 for i in 0..3 {
                     wk.e[row + i] = phi[i];
-                    for c in 0..nv {
-                        wk.ejac[(row + i, c)] = block[(i, c)];
-                    }
                 }
                 put_lin(wk, row + 3, &p.translation);
             }
@@ -180,23 +226,64 @@ fn evaluate(model: &Model, tasks: &[Task], q: &[f64], wk: &mut Work) -> f64 {
     wk.e.amax()
 }
 
-/// The constraint residual `c` and Jacobian `J_c` at `q` (empty without constraints).
-fn constraints(model: &Model, q: &[f64]) -> (DVector<f64>, DMatrix<f64>) {
-    let m = model.nconstraints();
-    if m == 0 {
-        return (DVector::zeros(0), DMatrix::zeros(0, model.nv));
-    }
-    let mut kin = crate::loops::LoopKinematics::new(model);
+/// The constraint residual into `c` (and with `jc` the Jacobian) at `q`; the largest
+/// residual (0 without constraints).
+fn constraints(
+    model: &Model,
+    q: &[f64],
+    kin: &mut Option<crate::loops::LoopKinematics>,
+    c: &mut DVector<f64>,
+    jc: Option<&mut DMatrix<f64>>,
+) -> f64 {
+    let Some(kin) = kin else { return 0.0 };
     kin.positions(model, q);
-    let mut c = DVector::zeros(m);
-    crate::loops::residual(model, &kin, c.as_mut_slice());
-    let mut jc = DMatrix::zeros(m, model.nv);
-    crate::loops::jacobian(model, &kin, &mut jc);
-    (c, jc)
+    crate::loops::residual(model, kin, c.as_mut_slice());
+    if let Some(jc) = jc {
+        crate::loops::jacobian(model, kin, jc);
+    }
+    c.amax()
 }
 
-/// The damped step, unconstrained by limits: `δ = δ_c + N z` (`δ_c` the minimum-norm
-/// correction of the constraints, `N` a basis of their null space).
+/// Solves `h x = −g` (`h` n × n symmetric, either storage order) by its Cholesky factor in
+/// `chol`; false when `h` is not positive definite.
+fn cholesky_solve(h: &[f64], g: &[f64], chol: &mut [f64], x: &mut [f64]) -> bool {
+    let n = g.len();
+    for i in 0..n {
+        for j in 0..=i {
+            let mut s = h[i * n + j];
+            for k in 0..j {
+                s -= chol[i * n + k] * chol[j * n + k];
+            }
+            if i == j {
+                if !(s > 0.0) {
+                    return false;
+                }
+                chol[i * n + i] = s.sqrt();
+            } else {
+                chol[i * n + j] = s / chol[j * n + j];
+            }
+        }
+    }
+    for i in 0..n {
+        let mut s = -g[i];
+        for k in 0..i {
+            s -= chol[i * n + k] * x[k];
+        }
+        x[i] = s / chol[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut s = x[i];
+        for k in i + 1..n {
+            s -= chol[k * n + i] * x[k];
+        }
+        x[i] = s / chol[i * n + i];
+    }
+    true
+}
+
+/// The damped step with loop or coupling constraints, unconstrained by limits:
+/// `δ = δ_c + N z` (`δ_c` the minimum-norm correction of the constraints, `N` a basis of
+/// their null space).
 fn free_step(
     h: &DMatrix<f64>,
     g: &DVector<f64>,
@@ -204,12 +291,6 @@ fn free_step(
     jc: &DMatrix<f64>,
 ) -> DVector<f64> {
     let nv = h.nrows();
-    if jc.nrows() == 0 {
-        return match h.clone().cholesky() {
-            Some(ch) => ch.solve(&(-g)),
-            None => DVector::zeros(nv),
-        };
-    }
     let scale = 1e-10 * (1.0 + jc.amax());
     let svd = jc.clone().svd(true, true);
     let dc = svd
@@ -347,23 +428,91 @@ fn clamp(model: &Model, q: &mut [f64], limits: &(Vec<f64>, Vec<f64>)) {
 /// The largest error and constraint residual at `q`, and the weighted cost.
 fn measure(model: &Model, tasks: &[Task], q: &[f64], wk: &mut Work) -> (f64, f64) {
     let err = evaluate(model, tasks, q, wk);
-    let (c, _) = constraints(model, q);
-    let cost = wk.e.component_mul(&wk.w).norm_squared();
-    (err.max(c.amax()), cost)
+    let c = constraints(model, q, &mut wk.loop_kin, &mut wk.c_trial, None);
+    let cost =
+        wk.e.iter()
+            .zip(wk.w.iter())
+            .map(|(e, w)| (e * w) * (e * w))
+            .sum();
+    (err.max(c), cost)
 }
 
-/// One Levenberg–Marquardt run from `q`; returns the iterations used.
+/// `W E`, `h0 = (W E)ᵀ W E` and `g = (W E)ᵀ W e` from the last [`evaluate`].
+fn normal_equations(wk: &mut Work) {
+    let (rows, nv) = wk.ejac.shape();
+    for c in 0..nv {
+        for i in 0..rows {
+            wk.wj[(i, c)] = wk.ejac[(i, c)] * wk.w[i];
+        }
+    }
+    for a in 0..nv {
+        for b in 0..=a {
+            let x: f64 = (0..rows).map(|i| wk.wj[(i, a)] * wk.wj[(i, b)]).sum();
+            wk.h0[(a, b)] = x;
+            wk.h0[(b, a)] = x;
+        }
+        wk.g[a] = (0..rows).map(|i| wk.wj[(i, a)] * (wk.e[i] * wk.w[i])).sum();
+    }
+}
+
+/// The damped step from `wk.h`, `wk.g` (and the constraints at the iterate) into
+/// `wk.step`, the limits' box applied; false when no step could be found.
+fn damped_step(model: &Model, opts: &Options, q: &[f64], wk: &mut Work) -> bool {
+    let nv = model.nv;
+    if wk.jc.nrows() == 0 {
+        let solved = cholesky_solve(
+            wk.h.as_slice(),
+            wk.g.as_slice(),
+            &mut wk.chol,
+            wk.step.as_mut_slice(),
+        );
+        if !solved {
+            wk.step.fill(0.0);
+        }
+    } else {
+        wk.step = free_step(&wk.h, &wk.g, &wk.c, &wk.jc);
+    }
+    let Some(limits) = &opts.limits else {
+        return true;
+    };
+    step_bounds(model, q, limits, &mut wk.lo, &mut wk.hi);
+    let (lo, hi) = (&wk.lo, &wk.hi);
+    let outside = (0..nv).any(|k| wk.step[k] < lo[k] - 1e-15 || wk.step[k] > hi[k] + 1e-15);
+    if !outside {
+        return true;
+    }
+    // Without loop constraints, a box: the active-set solve (Clarabel where it gives up).
+    let boxed = wk.jc.nrows() == 0
+        && wk.qp.solve(
+            wk.h.as_slice(),
+            wk.g.as_slice(),
+            lo,
+            hi,
+            wk.step.as_mut_slice(),
+        );
+    if !boxed {
+        match bounded_step(&wk.h, &wk.g, &wk.c, &wk.jc, lo, hi) {
+            Some(s) => wk.step = s,
+            None => return false,
+        }
+    }
+    for k in 0..nv {
+        wk.step[k] = wk.step[k].clamp(lo[k].min(0.0), hi[k].max(0.0));
+    }
+    true
+}
+
+/// One Levenberg–Marquardt run from `q`; returns the iterations used. Allocates nothing
+/// on a model without constraints (`wk` holds every buffer).
 fn run(
     model: &Model,
     tasks: &[Task],
     opts: &Options,
-    q: &mut Vec<f64>,
+    q: &mut [f64],
     wk: &mut Work,
 ) -> Result<usize> {
     let nv = model.nv;
-    let (mut lo, mut hi) = (vec![0.0; nv], vec![0.0; nv]);
     let mut mu = 1e-3;
-    let mut trial = q.clone();
     let (mut res, mut cost) = measure(model, tasks, q, wk);
     for it in 0..opts.max_iterations {
         crate::support::interrupt::check("inverse_kinematics")?;
@@ -371,46 +520,28 @@ fn run(
             return Ok(it);
         }
         evaluate(model, tasks, q, wk);
-        let (c, jc) = constraints(model, q);
-        let we = wk.ejac.clone();
-        let mut wj = we.clone();
-        for (i, w) in wk.w.iter().enumerate() {
-            wj.row_mut(i).scale_mut(*w);
-        }
-        let werr = wk.e.component_mul(&wk.w);
-        let h0 = wj.transpose() * &wj;
-        let g = wj.transpose() * &werr;
+        constraints(model, q, &mut wk.loop_kin, &mut wk.c, Some(&mut wk.jc));
+        normal_equations(wk);
         let mut accepted = false;
         for _ in 0..12 {
             let lambda = mu * cost + 1e-14;
-            let h = &h0 + DMatrix::identity(nv, nv) * lambda;
-            let mut step = free_step(&h, &g, &c, &jc);
-            if let Some(limits) = &opts.limits {
-                step_bounds(model, q, limits, &mut lo, &mut hi);
-                let outside = (0..nv).any(|k| step[k] < lo[k] - 1e-15 || step[k] > hi[k] + 1e-15);
-                if outside {
-                    // Without loop constraints, a box: the active-set solve (Clarabel
-                    // where it gives up).
-                    let boxed = jc.nrows() == 0
-                        && wk
-                            .qp
-                            .solve(h.as_slice(), g.as_slice(), &lo, &hi, step.as_mut_slice());
-                    if !boxed {
-                        match bounded_step(&h, &g, &c, &jc, &lo, &hi) {
-                            Some(s) => step = s,
-                            None => break,
-                        }
-                    }
-                    for k in 0..nv {
-                        step[k] = step[k].clamp(lo[k].min(0.0), hi[k].max(0.0));
-                    }
-                }
+            wk.h.copy_from(&wk.h0);
+            for k in 0..nv {
+                wk.h[(k, k)] += lambda;
             }
-            crate::recursive::tangent::integrate(model, q, step.as_slice(), &mut trial);
+            if !damped_step(model, opts, q, wk) {
+                break;
+            }
+            let mut trial = std::mem::take(&mut wk.trial);
+            crate::recursive::tangent::integrate(model, q, wk.step.as_slice(), &mut trial);
             model.normalize(&mut trial);
             let (r_new, c_new) = measure(model, tasks, &trial, wk);
-            if c_new < cost || r_new < res && c_new <= cost * (1.0 + 1e-12) {
+            let better = c_new < cost || r_new < res && c_new <= cost * (1.0 + 1e-12);
+            if better {
                 q.copy_from_slice(&trial);
+            }
+            wk.trial = trial;
+            if better {
                 (res, cost) = (r_new, c_new);
                 mu = (mu * 0.3).max(1e-8);
                 accepted = true;
@@ -465,14 +596,7 @@ pub fn solve(model: &Model, tasks: &[Task], q0: &[f64], opts: &Options) -> Resul
         return Err(Error::arg("targets", "at least one target", "none"));
     }
     let rows: usize = tasks.iter().map(Task::rows).sum();
-    let mut wk = Work {
-        kin: FrameKinematics::new(model),
-        jac: vec![0.0; 6 * model.nv],
-        e: DVector::zeros(rows),
-        ejac: DMatrix::zeros(rows, model.nv),
-        w: DVector::zeros(rows),
-        qp: BoxQp::new(model.nv),
-    };
+    let mut wk = Work::new(model, rows);
     let mut state = opts.seed ^ 0x5EED;
     let mut best: Option<(f64, Vec<f64>)> = None;
     let mut iterations = 0;
@@ -540,4 +664,49 @@ pub fn joint_limits(model: &Model) -> (Vec<f64>, Vec<f64>) {
         }
     }
     (lo, hi)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The iteration allocates nothing: a whole Levenberg–Marquardt run on a 7-link chain,
+    /// its steps against tight joint limits (the box QP) and a pose target, counted by the
+    /// tests' counting allocator.
+    #[test]
+    fn iterations_allocate_nothing() {
+        let model = crate::benchmark_models::chain(7);
+        let nv = model.nv;
+        let f = model.body_frame(model.nbodies() - 1, &Placement::identity());
+        let mut goal_q = vec![0.25; nv];
+        goal_q[0] = -0.4;
+        let mut kin = FrameKinematics::new(&model);
+        kin.positions(&model, &goal_q);
+        let tasks = [Task {
+            frame: f,
+            target: Target::Pose(kin.frame_pose(&f)),
+            weights: vec![1.0; 6],
+        }];
+        let opts = Options {
+            tol: 1e-12,
+            max_iterations: 40,
+            restarts: 0,
+            limits: Some((vec![-0.45; nv], vec![0.3; nv])),
+            seed: 0,
+        };
+        let mut wk = Work::new(&model, 6);
+        let mut q = vec![0.0; nv];
+        // Built once per model, on first use: not the iteration's.
+        model.compiled();
+        let (its, allocations) =
+            crate::support::alloc::counting::count(|| run(&model, &tasks, &opts, &mut q, &mut wk));
+        let its = its.unwrap();
+        assert!(its >= 3, "{its} iterations");
+        assert_eq!(
+            allocations, 0,
+            "{allocations} allocations in {its} iterations"
+        );
+        // The limits were active on the way (else the box QP was not exercised) and hold.
+        assert!(q.iter().all(|x| (-0.45..=0.3).contains(x)), "{q:?}");
+    }
 }

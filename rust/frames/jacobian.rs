@@ -5,7 +5,7 @@
 //! origin `p`, LOCAL_WORLD_ALIGNED), then in the frame's axes for LOCAL.
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::support::spatial::{angular, linear, Mat3, Vec3};
+use crate::support::spatial::{Mat3, Vec3};
 
 use super::motion::FrameKinematics;
 use super::{FrameRef, ReferenceFrame};
@@ -54,15 +54,24 @@ pub fn point_jacobian_at(
     for j in model.support(link) {
         let l = &model.links[j];
         let st = &links[j];
-        let arm = x - st.origin;
+        let arm = [x.x - st.origin.x, x.y - st.origin.y, x.z - st.origin.z];
         for k in 0..l.joint.nv() {
+            // Entry by entry (nalgebra's generic products stay calls without LTO).
             let s = &st.s[k];
-            let a = angular(s);
-            let mut lin = linear(s) + a.cross(&arm);
+            let a = [s[0], s[1], s[2]];
+            let mut lin = [
+                s[3] + (a[1] * arm[2] - a[2] * arm[1]),
+                s[4] + (a[2] * arm[0] - a[0] * arm[2]),
+                s[5] + (a[0] * arm[1] - a[1] * arm[0]),
+            ];
             let mut ang = a;
             if let Some(r) = r {
-                ang = r.tr_mul(&ang);
-                lin = r.tr_mul(&lin);
+                let tr = |v: &[f64; 3]| {
+                    let c = |j: usize| r[(0, j)] * v[0] + r[(1, j)] * v[1] + r[(2, j)] * v[2];
+                    [c(0), c(1), c(2)]
+                };
+                ang = tr(&ang);
+                lin = tr(&lin);
             }
             let c = l.v_index + k;
             for i in 0..3 {

@@ -22,6 +22,7 @@ pub mod jacobian;
 pub mod jacobian_dot;
 pub mod motion;
 pub mod placement;
+pub mod rows;
 #[cfg(test)]
 mod tests;
 
@@ -51,10 +52,12 @@ pub enum ReferenceFrame {
 impl ReferenceFrame {
     /// From its name: "world", "local", "local_world_aligned" (any case).
     pub fn parse(arg: &str, name: &str) -> Result<ReferenceFrame> {
-        match name.to_ascii_lowercase().as_str() {
-            "world" => Ok(ReferenceFrame::World),
-            "local" => Ok(ReferenceFrame::Local),
-            "local_world_aligned" | "lwa" => Ok(ReferenceFrame::LocalWorldAligned),
+        // Compared in place: a call per Jacobian allocates no lowercase copy.
+        let is = |s: &str| name.eq_ignore_ascii_case(s);
+        match () {
+            _ if is("local") => Ok(ReferenceFrame::Local),
+            _ if is("world") => Ok(ReferenceFrame::World),
+            _ if is("local_world_aligned") || is("lwa") => Ok(ReferenceFrame::LocalWorldAligned),
             _ => Err(Error::arg(
                 arg,
                 "'world', 'local' or 'local_world_aligned'",

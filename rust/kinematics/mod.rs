@@ -1,6 +1,7 @@
 //! Forward kinematics over links: orientations, origins, joint-motion columns `P_i`, twists
 //! `t_i = [ω_i; v_i]` (velocity of the origin `O_i`) and the velocity-dependent part of the
 //! twist rate, `ξ_i = Ȧ_{i,λ} t_λ + Ṗ_i q̇_i` — all in world coordinates as in the paper (docs/method.md §2).
+pub mod plan;
 pub mod poses;
 
 use crate::joint::Subspace;
@@ -57,72 +58,43 @@ pub fn frame_poses(model: &Model, q: &[f64], st: &mut [LinkState]) {
     poses::<false, true>(model, q, st);
 }
 
-/// `(k, ±1)` when `axis` is `±e_k` exactly.
-#[inline(always)]
-fn coordinate_axis(axis: &Vec3) -> Option<(usize, f64)> {
-    let k = (0..3).find(|&k| axis[k].abs() == 1.0)?;
-    let others_zero = (0..3).all(|j| j == k || axis[j] == 0.0);
-    others_zero.then_some((k, axis[k]))
-}
-
-/// Sines and cosines of the turns `±q` of links `first..first + 4` that [`frame_poses`] turns
-/// by columns (0 for the others).
-#[inline(always)]
-fn turn_sin_cos(model: &Model, q: &[f64], first: usize) -> ([f64; 4], [f64; 4]) {
-    let mut x = [0.0; 4];
-    let end = (first + 4).min(model.links.len());
-    for (k, l) in model.links[first..end].iter().enumerate() {
-        if let crate::joint::Joint::Revolute { axis } = &l.joint {
-            if let Some((_, sign)) = coordinate_axis(axis) {
-                x[k] = sign * q[l.q_index];
-            }
-        }
-    }
-    crate::support::trig::sin_cos4(x).unwrap_or_else(|| {
-        // An angle beyond the branch-free reduction: one at a time.
-        let (mut sn, mut cs) = ([0.0; 4], [0.0; 4]);
-        for k in 0..4 {
-            (sn[k], cs[k]) = crate::support::trig::sin_cos(x[k]);
-        }
-        (sn, cs)
-    })
-}
-
 #[inline(always)]
 fn poses<const INERTIA: bool, const TURN: bool>(model: &Model, q: &[f64], st: &mut [LinkState]) {
-    // The turns' sines and cosines four links at a time: the polynomial chains of four
+    // `frame_poses` reads the model's decisions (`plan::PosePlan`, built once per model);
+    // the turns' sines and cosines four at a time, so that the polynomial chains of four
     // angles overlap instead of each waiting for the last (bit for bit `sin_cos`).
+    let plan = TURN.then(|| &model.compiled().poses);
     let mut sc = ([0.0; 4], [1.0; 4]);
     for (i, l) in model.links.iter().enumerate() {
-        if TURN && i % 4 == 0 {
-            sc = turn_sin_cos(model, q, i);
-        }
         let (r_parent, o_parent) = match l.parent {
             Some(p) => (st[p].rotation, st[p].origin),
             None => (Mat3::identity(), Vec3::zeros()),
         };
         let qi = &q[l.q_index..l.q_index + l.joint.nq()];
-        // Most joints sit at an unrotated placement: skip that product.
-        let r_joint = if l.placement_rotated {
-            r_parent * l.placement.rotation
-        } else {
-            r_parent
+        let r_joint = match plan {
+            Some(plan) => plan.steps[i]
+                .placing
+                .apply(&r_parent, &l.placement.rotation),
+            // Most joints sit at an unrotated placement: skip that product.
+            None if l.placement_rotated => r_parent * l.placement.rotation,
+            None => r_parent,
         };
-        if let (true, crate::joint::Joint::Revolute { axis }) = (TURN, &l.joint) {
-            if let Some((k, sign)) = coordinate_axis(axis) {
-                // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
-                let (sn, cs) = (sc.0[i % 4], sc.1[i % 4]);
-                let (a, b) = ((k + 1) % 3, (k + 2) % 3);
-                let (ca, cb) = (r_joint.column(a), r_joint.column(b));
-                let s = &mut st[i];
-                s.joint_rotation = r_joint;
-                s.rotation = r_joint;
-                s.rotation.set_column(a, &(ca * cs + cb * sn));
-                s.rotation.set_column(b, &(cb * cs - ca * sn));
-                s.origin = o_parent + mat_vec(&r_parent, &l.placement.translation);
-                s.s[0] = stack(&(r_joint.column(k) * sign), &Vec3::zeros());
-                continue;
+        if let Some(t) = plan.and_then(|p| p.steps[i].turn) {
+            if t.slot % 4 == 0 {
+                sc = plan.map_or(sc, |p| p.sin_cos4(q, t.slot));
             }
+            // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
+            let (sn, cs) = (sc.0[t.slot % 4], sc.1[t.slot % 4]);
+            let (a, b) = ((t.axis + 1) % 3, (t.axis + 2) % 3);
+            let (ca, cb) = (r_joint.column(a), r_joint.column(b));
+            let s = &mut st[i];
+            s.joint_rotation = r_joint;
+            s.rotation = r_joint;
+            s.rotation.set_column(a, &(ca * cs + cb * sn));
+            s.rotation.set_column(b, &(cb * cs - ca * sn));
+            s.origin = o_parent + mat_vec(&r_parent, &l.placement.translation);
+            s.s[0] = stack(&(r_joint.column(t.axis) * t.sign), &Vec3::zeros());
+            continue;
         }
         let (r_q, t_q) = l.joint.transform(qi);
         let s = &mut st[i];

@@ -139,6 +139,8 @@ pub struct Compiled {
     pub axis_angles: Vec<(usize, usize)>,
     /// Whether any link moves on a free flyer (the GIM's column walk then tests for them).
     pub has_free_flyer: bool,
+    /// The world-frame pose pass's decisions (`kinematics::frame_poses`), built beside.
+    pub poses: crate::kinematics::plan::PosePlan,
 }
 
 impl Compiled {
@@ -176,6 +178,7 @@ impl Compiled {
             links,
             axis_angles,
             has_free_flyer,
+            poses: crate::kinematics::plan::PosePlan::new(model),
         }
     }
 }

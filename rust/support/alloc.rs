@@ -67,3 +67,64 @@ mod tests {
         assert!(m.iter().all(|&x| x == 0.0));
     }
 }
+
+/// A counting global allocator for the unit tests (the project rule "hot paths allocate
+/// nothing" as a test): [`counting::count`] runs a closure and returns how many allocations
+/// (and reallocations) this thread made meanwhile; other threads are not counted.
+#[cfg(test)]
+pub mod counting {
+    use std::alloc::{GlobalAlloc, Layout, System};
+    use std::cell::Cell;
+
+    thread_local! {
+        static COUNT: Cell<Option<usize>> = const { Cell::new(None) };
+    }
+
+    struct Counting;
+
+    fn bump() {
+        let _ = COUNT.try_with(|c| {
+            if let Some(n) = c.get() {
+                c.set(Some(n + 1));
+            }
+        });
+    }
+
+    // SAFETY: every call is forwarded unchanged to the system allocator.
+    unsafe impl GlobalAlloc for Counting {
+        unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+            bump();
+            unsafe { System.alloc(layout) }
+        }
+        unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+            bump();
+            unsafe { System.alloc_zeroed(layout) }
+        }
+        unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+            bump();
+            unsafe { System.realloc(ptr, layout, new_size) }
+        }
+        unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+            unsafe { System.dealloc(ptr, layout) }
+        }
+    }
+
+    #[global_allocator]
+    static GLOBAL: Counting = Counting;
+
+    /// `f`'s result and the number of allocations it made on this thread.
+    pub fn count<R>(f: impl FnOnce() -> R) -> (R, usize) {
+        COUNT.with(|c| c.set(Some(0)));
+        let r = f();
+        let n = COUNT.with(|c| c.replace(None)).unwrap_or(0);
+        (r, n)
+    }
+
+    #[test]
+    fn counts_this_threads_allocations() {
+        let (v, n) = count(|| vec![1.0f64; 100]);
+        assert_eq!((v.len(), n), (100, 1));
+        let (_, n) = count(|| 2 + 2);
+        assert_eq!(n, 0);
+    }
+}

@@ -12,21 +12,25 @@ use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
 use crate::support::spatial::{Mat3, Placement, Vec3};
 
-/// A frame: its name (a body or an added frame) or a body index.
+/// A frame: its name (a body or an added frame) or its index in `Model.frame_names`
+/// (the bodies', then the added frames'; a body's index is its frame's).
 pub fn frame_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<FrameRef> {
-    if obj.is_instance_of::<PyString>() {
-        let name: String = obj.extract()?;
-        return model.frame_named(arg, &name).py(obj.py());
+    if let Ok(name) = obj.cast::<PyString>() {
+        // Borrowed: no copy of the name per call.
+        return model.frame_named(arg, name.to_str()?).py(obj.py());
     }
-    let n = model.nbodies() as i64;
+    let (nb, nf) = (model.nbodies(), model.frames.len());
     let k = int_arg(
         obj,
         arg,
         0,
-        n - 1,
-        "a frame name (Model.frame_names) or a body index",
-    )?;
-    Ok(model.body_frame(k as usize, &Placement::identity()))
+        (nb + nf) as i64 - 1,
+        "a frame name or index (Model.frame_names)",
+    )? as usize;
+    Ok(match k.checked_sub(nb) {
+        Some(i) => model.body_frame(model.frames[i].body, &model.frames[i].placement),
+        None => model.body_frame(k, &Placement::identity()),
+    })
 }
 
 /// A body (name or index) as an index.
@@ -60,6 +64,14 @@ pub fn configurations(
             shape_str(&shape),
         )),
     }
+}
+
+/// Whether `q` is a one-dimensional NumPy array: the one-configuration calls' path (its
+/// values then read as any `q`); anything else goes through [`configurations`]. Cheaper
+/// than a typed cast, which compares the dtype through NumPy's API.
+fn one_dimensional(q: &Bound<'_, PyAny>) -> bool {
+    q.cast::<numpy::PyUntypedArray>()
+        .is_ok_and(|a| numpy::PyUntypedArrayMethods::ndim(a) == 1)
 }
 
 fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
@@ -197,14 +209,14 @@ impl PyModel {
         reference: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let rf = reference_arg(py, reference)?;
-        if let Ok(q1) = q.cast::<numpy::PyArray1<f64>>() {
+        if one_dimensional(q) {
             // One configuration: the pooled workspace's buffers, no thread hand-off.
             return self.with_workspace(|ws| {
-                load_state(ws, py, q1.as_any(), None)?;
+                load_state(ws, py, q, None)?;
                 let model = &ws.version.model;
                 let f = frame_arg(model, frame, "frame")?;
-                // Poses and joint columns only: a Jacobian needs no inertias.
-                crate::kinematics::frame_poses(model, &ws.q, &mut ws.data.links);
+                // The support's poses and joint columns only (no inertias).
+                crate::kinematics::plan::frame_poses_for(model, &ws.q, &mut ws.data.links, f.link);
                 let nv = model.nv;
                 let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
                 // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
@@ -277,10 +289,10 @@ impl PyModel {
         q: &Bound<'_, PyAny>,
         jacobian: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
-        if let Ok(q1) = q.cast::<numpy::PyArray1<f64>>() {
+        if one_dimensional(q) {
             // One configuration: the pooled workspace's buffers, no thread hand-off.
             return self.with_workspace(|ws| {
-                load_state(ws, py, q1.as_any(), None)?;
+                load_state(ws, py, q, None)?;
                 let model = &ws.version.model;
                 let arr = jacobian.then(|| numpy::PyArray2::<f64>::zeros(py, [3, model.nv], false));
                 let j = match &arr {
