@@ -11,6 +11,42 @@ use crate::io::scene::Scene;
 use crate::simulate::derivatives::DerivativeWork;
 use nalgebra::DMatrix;
 
+/// From this size on, [`c_ordered_triple`] allocates the three matrices as one block.
+const ONE_BLOCK_NV: usize = 64;
+
+/// NumPy copies of three nv × nv matrices whose column-major data is already their C order
+/// (stored by rows, or symmetric): plain copies. From [`ONE_BLOCK_NV`] on, they are views of
+/// one (3, nv, nv) array: three separate blocks freed together at the top of glibc's heap
+/// exceed its trim threshold, so every call gave the pages back and faulted them in again
+/// (on a 300-link chain, more than the derivatives themselves); one block of that size stays
+/// allocated for the next call (the dynamic mmap threshold).
+pub(crate) fn c_ordered_triple<'py>(
+    py: Python<'py>,
+    m: [&DMatrix<f64>; 3],
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    use numpy::{PyArray2, PyArray3, PyArrayMethods};
+    let n = m[0].nrows();
+    let len = n * n;
+    if n < ONE_BLOCK_NV {
+        // SAFETY: new C-contiguous arrays of exactly n × n elements, all written.
+        let one = |x: &DMatrix<f64>| unsafe {
+            let arr = PyArray2::<f64>::new(py, [n, n], false);
+            std::ptr::copy_nonoverlapping(x.as_ptr(), arr.data(), len);
+            arr.into_any()
+        };
+        return Ok((one(m[0]), one(m[1]), one(m[2])));
+    }
+    // SAFETY: a new C-contiguous array of exactly 3 n² elements, all written.
+    let block = unsafe {
+        let arr = PyArray3::<f64>::new(py, [3, n, n], false);
+        for (k, x) in m.iter().enumerate() {
+            std::ptr::copy_nonoverlapping(x.as_ptr(), arr.data().add(k * len), len);
+        }
+        arr
+    };
+    Ok((block.get_item(0)?, block.get_item(1)?, block.get_item(2)?))
+}
+
 fn c_order(m: &DMatrix<f64>) -> Vec<f64> {
     m.transpose().as_slice().to_vec()
 }

@@ -22,6 +22,7 @@ pub(crate) mod algebra;
 pub mod armature;
 pub mod compiled;
 pub mod crba;
+mod deriv_rows;
 #[cfg(test)]
 #[path = "tests/derivatives.rs"]
 mod derivative_tests;

@@ -109,6 +109,18 @@ fn derivatives_body(
             for m in 0..3 {
                 dd.columns[(12 + m) * nvt + j] = d.bts[m];
             }
+            if dd.row_major {
+                // By rows, the other dof of each pair is the one that varies along a row.
+                for m in 0..6 {
+                    dd.columns[(15 + m) * nvt + j] = d.g[m];
+                    dd.columns[(21 + m) * nvt + j] = d.gv[m];
+                    dd.columns[(27 + m) * nvt + j] = d.da[m];
+                    dd.columns[(33 + m) * nvt + j] = d.dav[m];
+                }
+                for m in 0..3 {
+                    dd.columns[(39 + m) * nvt + j] = d.dv[m];
+                }
+            }
         }
         if let Some(pa) = l.parent {
             let parent = &mut dd.links[pa];
@@ -121,7 +133,11 @@ fn derivatives_body(
         }
     }
 
-    fill_matrices(model, dd);
+    if dd.row_major {
+        super::deriv_rows::fill_rows(model, dd);
+    } else {
+        fill_matrices(model, dd);
+    }
     if !model.armature.is_empty() {
         super::armature::add_to_forces(model, a, &mut dd.tau);
         super::armature::add_to_mass_matrix(model, &mut dd.mass);
@@ -225,20 +241,20 @@ fn fill_matrices(model: &Model, dd: &mut DerivativeData) {
 
 /// `k` moves `j`: `(Y S_j)ᵀ dA_k + (Bᵀ S_j)ᵀ dV_k`.
 #[inline(always)]
-fn moved_q(dj: &DofWork, dk: &DofWork) -> f64 {
+pub(crate) fn moved_q(dj: &DofWork, dk: &DofWork) -> f64 {
     dj.ys.dot(&dk.da) + dj.bts.dot(&angular(&dk.dv))
 }
 
 /// The same for `∂τ/∂v`: `(Y S_j)ᵀ dAv_k + (Bᵀ S_j)ᵀ S_k`.
 #[inline(always)]
-fn moved_v(dj: &DofWork, dk: &DofWork) -> f64 {
+pub(crate) fn moved_v(dj: &DofWork, dk: &DofWork) -> f64 {
     dj.ys.dot(&dk.dav) + dj.bts.dot(&angular(&dk.s))
 }
 
 /// `aᵀ b` summed in index order (the order [`upstream_rows`] and [`moved_rows`] use, so that
 /// both triangles of `M` round alike).
 #[inline(always)]
-fn dot6(a: &Vec6, b: &Vec6) -> f64 {
+pub(crate) fn dot6(a: &Vec6, b: &Vec6) -> f64 {
     let mut x = a[0] * b[0];
     for m in 1..6 {
         x += a[m] * b[m];
