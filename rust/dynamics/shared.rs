@@ -181,6 +181,21 @@ impl Workspace {
     }
 }
 
+impl Workspace {
+    /// Inverse dynamics derivatives at the loaded `(q, v, a = x)` by rows into `out`
+    /// ([`recursive::inverse_dynamics_derivatives_into`]); whether every entry is surely
+    /// finite without reading them ([`recursive::rows_surely_finite`]).
+    pub fn inverse_derivatives_into(&mut self, g: &Vec3, out: [&mut [f64]; 3]) -> bool {
+        let model: &Model = &self.version.model;
+        let dd = self
+            .deriv
+            .get_or_insert_with(|| Box::new(DerivativeData::new(model)));
+        let (data, q, v, x) = (&mut self.data, &self.q, &self.v, &self.x);
+        recursive::inverse_dynamics_derivatives_into(model, data, dd, q, v, x, g, out);
+        recursive::rows_surely_finite(dd)
+    }
+}
+
 /// A model shared by every thread that calls it: its current [`Version`] and a pool of
 /// workspaces of that version.
 pub struct SharedModel {

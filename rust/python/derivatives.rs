@@ -47,6 +47,54 @@ pub(crate) fn c_ordered_triple<'py>(
     Ok((block.get_item(0)?, block.get_item(1)?, block.get_item(2)?))
 }
 
+/// `Model.inverse_dynamics_derivatives` at the workspace's loaded `(q, v, a)`: the three
+/// arrays allocated as [`c_ordered_triple`] does, then filled by the derivatives themselves
+/// (by rows: C order), nothing copied; their entries read for finiteness only when the
+/// per-dof vectors do not already rule out an overflow. `detach`: run without the GIL.
+pub(crate) fn inverse_into_arrays<'py>(
+    py: Python<'py>,
+    ws: &mut crate::dynamics::shared::Workspace,
+    g: &crate::support::spatial::Vec3,
+    name: &str,
+    detach: bool,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    use numpy::{PyArray2, PyArray3, PyArrayMethods};
+    let n = ws.model().nv;
+    let len = n * n;
+    let run = |ws: &mut crate::dynamics::shared::Workspace, out: [&mut [f64]; 3]| {
+        if detach {
+            py.detach(|| ws.inverse_derivatives_into(g, out))
+        } else {
+            ws.inverse_derivatives_into(g, out)
+        }
+    };
+    if n < ONE_BLOCK_NV {
+        let arrays: [Bound<'py, PyArray2<f64>>; 3] =
+            std::array::from_fn(|_| unsafe { PyArray2::<f64>::new(py, [n, n], false) });
+        // SAFETY: new C-contiguous arrays no other code holds yet, every entry written by
+        // the fill before they are handed to Python.
+        let out = arrays
+            .each_ref()
+            .map(|a| unsafe { std::slice::from_raw_parts_mut(a.data(), len) });
+        if !run(ws, out) {
+            for a in &arrays {
+                check_result(py, name, unsafe { a.as_slice()? })?;
+            }
+        }
+        let [a, b, c] = arrays;
+        return Ok((a.into_any(), b.into_any(), c.into_any()));
+    }
+    // SAFETY: as above, one block of 3 n² entries.
+    let block = unsafe { PyArray3::<f64>::new(py, [3, n, n], false) };
+    let all = unsafe { std::slice::from_raw_parts_mut(block.data(), 3 * len) };
+    let (a, rest) = all.split_at_mut(len);
+    let (b, c) = rest.split_at_mut(len);
+    if !run(ws, [a, b, c]) {
+        check_result(py, name, unsafe { block.as_slice()? })?;
+    }
+    Ok((block.get_item(0)?, block.get_item(1)?, block.get_item(2)?))
+}
+
 fn c_order(m: &DMatrix<f64>) -> Vec<f64> {
     m.transpose().as_slice().to_vec()
 }

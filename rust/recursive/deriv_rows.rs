@@ -18,6 +18,29 @@ use crate::model::Model;
 /// transposes of what the column fill gives; `M` bit for bit the same and symmetric).
 #[inline(always)]
 pub(crate) fn fill_rows(model: &Model, dd: &mut DerivativeData) {
+    // Taken out for the fill (an empty matrix does not allocate) and put back.
+    let take =
+        |m: &mut nalgebra::DMatrix<f64>| std::mem::replace(m, nalgebra::DMatrix::zeros(0, 0));
+    let (mut dq, mut dv, mut mm) = (
+        take(&mut dd.dtau_dq),
+        take(&mut dd.dtau_dv),
+        take(&mut dd.mass),
+    );
+    fill_rows_into(
+        model,
+        dd,
+        (dq.as_mut_slice(), dv.as_mut_slice(), mm.as_mut_slice()),
+    );
+    (dd.dtau_dq, dd.dtau_dv, dd.mass) = (dq, dv, mm);
+}
+
+/// [`fill_rows`] into the caller's C-ordered nv × nv buffers.
+#[inline(always)]
+pub(crate) fn fill_rows_into(
+    model: &Model,
+    dd: &DerivativeData,
+    (dq, dv, mm): (&mut [f64], &mut [f64], &mut [f64]),
+) {
     let nvt = model.nv;
     let links = &model.links;
     let related_everywhere = links
@@ -29,15 +52,10 @@ pub(crate) fn fill_rows(model: &Model, dd: &mut DerivativeData) {
         .enumerate()
         .all(|(i, l)| dd.subtree_count[i] == dd.subtree_end[i] - l.v_index);
     if !related_everywhere {
-        dd.dtau_dq.as_mut_slice().fill(0.0);
-        dd.dtau_dv.as_mut_slice().fill(0.0);
-        dd.mass.as_mut_slice().fill(0.0);
+        dq.fill(0.0);
+        dv.fill(0.0);
+        mm.fill(0.0);
     }
-    let (dq, dv, mm) = (
-        dd.dtau_dq.as_mut_slice(),
-        dd.dtau_dv.as_mut_slice(),
-        dd.mass.as_mut_slice(),
-    );
     let (dofs, cols) = (&dd.dofs, &dd.columns);
     for (i, l) in links.iter().enumerate() {
         let r = l.v_index..l.v_index + l.joint.nv();
@@ -176,4 +194,12 @@ fn downstream_columns(
         dv[r] = y;
         mm[r] = z;
     }
+}
+
+/// Whether every entry [`fill_rows`] writes from `dd`'s per-dof vectors is surely finite: each
+/// is a sum of at most 15 products of those vectors' components, so components below 1e100
+/// in magnitude cannot overflow (and NaN fails the comparison). O(nv), where checking the
+/// written matrices is O(nv²).
+pub fn rows_surely_finite(dd: &DerivativeData) -> bool {
+    dd.columns.iter().fold(true, |ok, x| ok & (x.abs() < 1e100))
 }

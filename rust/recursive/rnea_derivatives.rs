@@ -70,9 +70,74 @@ crate::support::cpu::multiversion! {
     ) => derivatives_body
 }
 
+crate::support::cpu::multiversion! {
+    /// [`inverse_dynamics_derivatives`] by rows straight into `out` (`∂τ/∂q`, `∂τ/∂v`, `M`,
+    /// each nv × nv in C order, every entry written): the caller's arrays, so nothing is
+    /// copied after. `dd.row_major` is set; `dd`'s own matrices are left as they were.
+    pub fn inverse_dynamics_derivatives_into / rows_avx2 / rows_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        dd: &mut DerivativeData,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        g: &Vec3,
+        out: [&mut [f64]; 3],
+    ) => rows_body
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn rows_body(
+    model: &Model,
+    data: &mut Data,
+    dd: &mut DerivativeData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    out: [&mut [f64]; 3],
+) {
+    dd.row_major = true;
+    vectors(model, data, dd, q, v, a, g);
+    let [dq, dv, mm] = out;
+    super::deriv_rows::fill_rows_into(model, dd, (dq, dv, mm));
+    if !model.armature.is_empty() {
+        super::armature::add_to_forces(model, a, &mut dd.tau);
+        for (k, arm) in model.armature.iter().enumerate() {
+            mm[k * model.nv + k] += arm;
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn derivatives_body(
+    model: &Model,
+    data: &mut Data,
+    dd: &mut DerivativeData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+) {
+    vectors(model, data, dd, q, v, a, g);
+    if dd.row_major {
+        super::deriv_rows::fill_rows(model, dd);
+    } else {
+        fill_matrices(model, dd);
+    }
+    if !model.armature.is_empty() {
+        super::armature::add_to_forces(model, a, &mut dd.tau);
+        super::armature::add_to_mass_matrix(model, &mut dd.mass);
+    }
+}
+
+/// The outward and inward passes: every dof's vectors, `τ`, and the tree's shape, for the
+/// fills.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn vectors(
     model: &Model,
     data: &mut Data,
     dd: &mut DerivativeData,
@@ -131,16 +196,6 @@ fn derivatives_body(
             dd.subtree_count[pa] += dd.subtree_count[i];
             dd.subtree_end[pa] = dd.subtree_end[pa].max(dd.subtree_end[i]);
         }
-    }
-
-    if dd.row_major {
-        super::deriv_rows::fill_rows(model, dd);
-    } else {
-        fill_matrices(model, dd);
-    }
-    if !model.armature.is_empty() {
-        super::armature::add_to_forces(model, a, &mut dd.tau);
-        super::armature::add_to_mass_matrix(model, &mut dd.mass);
     }
 }
 

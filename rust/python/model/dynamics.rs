@@ -294,6 +294,10 @@ impl PyModel {
             }
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, x, input(direction))?;
+            if direction == Direction::Inverse {
+                let detach = ws.model().links.len() >= DETACH_LINKS;
+                return crate::python::derivatives::inverse_into_arrays(py, ws, &g, name, detach);
+            }
             // By rows: the C order NumPy returns is then a plain copy.
             let dd = if ws.model().links.len() >= DETACH_LINKS {
                 py.detach(|| ws.derivatives(direction, &g, true))

@@ -191,6 +191,18 @@ fn derivatives_by_rows_are_the_transposes_of_the_column_fill() {
         assert!(close(&rows.dtau_dv.transpose(), &cols.dtau_dv), "model {k}");
         assert_eq!(rows.mass, cols.mass, "model {k}");
         assert_eq!(rows.mass, rows.mass.transpose(), "model {k}");
+        // Straight into the caller's buffers: the same bits (NaN-filled first: every entry
+        // must be written).
+        let nv2 = model.nv * model.nv;
+        let mut out = vec![f64::NAN; 3 * nv2];
+        let (x, rest) = out.split_at_mut(nv2);
+        let (y, z) = rest.split_at_mut(nv2);
+        inverse_dynamics_derivatives_into(model, &mut data, &mut cols, &q, &v, &a, &G, [x, y, z]);
+        assert_eq!(&out[..nv2], rows.dtau_dq.as_slice(), "model {k}");
+        assert_eq!(&out[nv2..2 * nv2], rows.dtau_dv.as_slice(), "model {k}");
+        assert_eq!(&out[2 * nv2..], rows.mass.as_slice(), "model {k}");
+        assert!(rows_surely_finite(&cols));
+        cols.row_major = false;
         let tau: Vec<f64> = cols.tau.clone();
         forward_dynamics_derivatives(model, &mut data, &mut cols, &q, &v, &tau, &G).unwrap();
         forward_dynamics_derivatives(model, &mut data, &mut rows, &q, &v, &tau, &G).unwrap();
