@@ -294,15 +294,16 @@ impl PyModel {
             }
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, x, input(direction))?;
-            if direction == Direction::Inverse {
+            let rows = ws.model().nv >= crate::python::derivatives::ROWS_NV;
+            if direction == Direction::Inverse && rows {
                 let detach = ws.model().links.len() >= DETACH_LINKS;
                 return crate::python::derivatives::inverse_into_arrays(py, ws, &g, name, detach);
             }
-            // By rows: the C order NumPy returns is then a plain copy.
+            // By rows (large models): the C order NumPy returns is then a plain copy.
             let dd = if ws.model().links.len() >= DETACH_LINKS {
-                py.detach(|| ws.derivatives(direction, &g, true))
+                py.detach(|| ws.derivatives(direction, &g, rows))
             } else {
-                ws.derivatives(direction, &g, true)
+                ws.derivatives(direction, &g, rows)
             }
             .py(py)?;
             let (a, b, c) = match direction {
@@ -314,7 +315,7 @@ impl PyModel {
                     check_result(py, name, m.as_slice())?;
                 }
             }
-            crate::python::derivatives::c_ordered_triple(py, [a, b, c])
+            crate::python::derivatives::c_ordered_triple(py, [a, b, c], !rows)
         })
     }
 }
