@@ -69,29 +69,6 @@ fn spd_inverse_body(
             }
         }
     }
-    if n <= SMALL {
-        // M⁻¹ = Xᵀ X, entry (i, j) for i ≥ j the dot of X's columns i and j over rows i..n
-        // (contiguous; X is lower triangular, its upper part is not read) into `out`, then
-        // both triangles back into `m`.
-        for j in 0..n {
-            for i in j..n {
-                let (ci, cj) = (&a[i * n + i..(i + 1) * n], &a[j * n + i..(j + 1) * n]);
-                let mut x = 0.0;
-                for (p, r) in ci.iter().zip(cj) {
-                    x += p * r;
-                }
-                out[(i, j)] = x;
-            }
-        }
-        let (o, a) = (out.as_slice(), m.as_mut_slice());
-        for j in 0..n {
-            for i in j..n {
-                a[j * n + i] = o[j * n + i];
-                a[i * n + j] = o[j * n + i];
-            }
-        }
-        return Ok(());
-    }
     // M⁻¹ = Xᵀ X by one matrix product (matrixmultiply's kernels): Xᵀ into `t`, the product
     // into `out`, swapped into place.
     for j in 0..n {
@@ -117,40 +94,4 @@ fn spd_inverse_body(
         }
     }
     Ok(())
-}
-
-/// Up to this size, [`spd_inverse`]'s last product and [`product`] are plain loops:
-/// matrixmultiply allocates its packing buffers on every call, which for a 7 × 7 matrix cost
-/// more than the arithmetic.
-const SMALL: usize = 24;
-
-crate::support::cpu::multiversion! {
-    /// `c = α a b` (square, column-major): plain loops along `c`'s columns up to [`SMALL`],
-    /// then matrixmultiply's kernels.
-    pub fn product / product_avx2 / product_baseline [] (
-        c: &mut DMatrix<f64>,
-        alpha: f64,
-        a: &DMatrix<f64>,
-        b: &DMatrix<f64>,
-    ) => product_body
-}
-
-#[inline(always)]
-fn product_body(c: &mut DMatrix<f64>, alpha: f64, a: &DMatrix<f64>, b: &DMatrix<f64>) {
-    let n = a.nrows();
-    if n > SMALL {
-        c.gemm(alpha, a, b, 0.0);
-        return;
-    }
-    let (a, b, c) = (a.as_slice(), b.as_slice(), c.as_mut_slice());
-    for j in 0..n {
-        let cj = &mut c[j * n..(j + 1) * n];
-        cj.fill(0.0);
-        for k in 0..n {
-            let x = alpha * b[j * n + k];
-            for (y, p) in cj.iter_mut().zip(&a[k * n..(k + 1) * n]) {
-                *y += x * p;
-            }
-        }
-    }
 }

@@ -6,7 +6,6 @@
 //! factor and two matrix products. docs/derivatives.md.
 use super::rnea_derivatives::inverse_dynamics_derivatives;
 use super::workspace::{Data, DerivativeData};
-use crate::linalg::spd::product;
 use crate::linalg::spd_inverse;
 use crate::model::Model;
 use crate::support::error::{Error, Result};
@@ -16,8 +15,7 @@ use crate::support::spatial::Vec3;
 /// `dd.qdd`, `∂τ/∂q`, `∂τ/∂v`, `M` as [`inverse_dynamics_derivatives`] leaves them). `tau`
 /// holds the joint forces (gravity `g`, no external wrenches). Errors where the forward
 /// dynamics does (a ZYZ singularity, a singular mass matrix). Every buffer is in `dd`; the only
-/// allocations are the packing buffers matrixmultiply takes inside each of the three products
-/// (above 24 dofs).
+/// allocations are the packing buffers matrixmultiply takes inside each of the three products.
 #[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics_derivatives(
     model: &Model,
@@ -49,11 +47,11 @@ pub fn forward_dynamics_derivatives(
     })?;
     if dd.row_major {
         // Stored transposed: (−M⁻¹ D)ᵀ = −Dᵀ M⁻¹ (M⁻¹ symmetric).
-        product(&mut dd.ddq_dq, -1.0, &dd.dtau_dq, &dd.minv);
-        product(&mut dd.ddq_dv, -1.0, &dd.dtau_dv, &dd.minv);
+        dd.ddq_dq.gemm(-1.0, &dd.dtau_dq, &dd.minv, 0.0);
+        dd.ddq_dv.gemm(-1.0, &dd.dtau_dv, &dd.minv, 0.0);
     } else {
-        product(&mut dd.ddq_dq, -1.0, &dd.minv, &dd.dtau_dq);
-        product(&mut dd.ddq_dv, -1.0, &dd.minv, &dd.dtau_dv);
+        dd.ddq_dq.gemm(-1.0, &dd.minv, &dd.dtau_dq, 0.0);
+        dd.ddq_dv.gemm(-1.0, &dd.minv, &dd.dtau_dv, 0.0);
     }
     Ok(())
 }
