@@ -278,12 +278,13 @@ class Model:
     ) -> tuple[_Array, _Array, _Array]:
         """``(∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M)``, each (nv, nv); q perturbed in the tangent space
         (``q ⊕ δ``, as Pinocchio's ``computeRNEADerivatives``; docs/derivatives.md). Trees
-        only."""
+        only. New C-ordered arrays; from nv = 64 on, views of one (3, nv, nv) array."""
     def forward_dynamics_derivatives(
         self, q: ArrayLike, v: ArrayLike, tau: ArrayLike, gravity: ArrayLike | None = None
     ) -> tuple[_Array, _Array, _Array]:
         """``(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)``, each (nv, nv), as Pinocchio's
-        ``computeABADerivatives`` (docs/derivatives.md). Trees only."""
+        ``computeABADerivatives`` (docs/derivatives.md). Trees only. New C-ordered arrays;
+        from nv = 64 on, views of one (3, nv, nv) array."""
     def kinetic_energy(self, q: ArrayLike, v: ArrayLike) -> float:
         """Kinetic energy ``½ vᵀ I v`` (J), rotor inertia included."""
     def potential_energy(self, q: ArrayLike, gravity: ArrayLike) -> float:

@@ -155,12 +155,19 @@ impl Workspace {
     }
 
     /// Forward or inverse dynamics derivatives at the loaded `(q, v, x)` into the
-    /// derivatives' buffers (returned).
-    pub fn derivatives(&mut self, direction: Direction, g: &Vec3) -> Result<&DerivativeData> {
+    /// derivatives' buffers (returned), stored by rows when `row_major`
+    /// ([`DerivativeData::row_major`]).
+    pub fn derivatives(
+        &mut self,
+        direction: Direction,
+        g: &Vec3,
+        row_major: bool,
+    ) -> Result<&DerivativeData> {
         let model: &Model = &self.version.model;
         let dd = self
             .deriv
             .get_or_insert_with(|| Box::new(DerivativeData::new(model)));
+        dd.row_major = row_major;
         let (data, q, v, x) = (&mut self.data, &self.q, &self.v, &self.x);
         match direction {
             Direction::Forward => {
@@ -171,6 +178,21 @@ impl Workspace {
             }
         }
         Ok(dd)
+    }
+}
+
+impl Workspace {
+    /// Inverse dynamics derivatives at the loaded `(q, v, a = x)` by rows into `out`
+    /// ([`recursive::inverse_dynamics_derivatives_into`]); whether every entry is surely
+    /// finite without reading them ([`recursive::rows_surely_finite`]).
+    pub fn inverse_derivatives_into(&mut self, g: &Vec3, out: [&mut [f64]; 3]) -> bool {
+        let model: &Model = &self.version.model;
+        let dd = self
+            .deriv
+            .get_or_insert_with(|| Box::new(DerivativeData::new(model)));
+        let (data, q, v, x) = (&mut self.data, &self.q, &self.v, &self.x);
+        recursive::inverse_dynamics_derivatives_into(model, data, dd, q, v, x, g, out);
+        recursive::rows_surely_finite(dd)
     }
 }
 

@@ -45,7 +45,13 @@ pub fn forward_dynamics_derivatives(
             "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
         ))
     })?;
-    dd.ddq_dq.gemm(-1.0, &dd.minv, &dd.dtau_dq, 0.0);
-    dd.ddq_dv.gemm(-1.0, &dd.minv, &dd.dtau_dv, 0.0);
+    if dd.row_major {
+        // Stored transposed: (−M⁻¹ D)ᵀ = −Dᵀ M⁻¹ (M⁻¹ symmetric).
+        dd.ddq_dq.gemm(-1.0, &dd.dtau_dq, &dd.minv, 0.0);
+        dd.ddq_dv.gemm(-1.0, &dd.dtau_dv, &dd.minv, 0.0);
+    } else {
+        dd.ddq_dq.gemm(-1.0, &dd.minv, &dd.dtau_dq, 0.0);
+        dd.ddq_dv.gemm(-1.0, &dd.minv, &dd.dtau_dv, 0.0);
+    }
     Ok(())
 }

@@ -22,6 +22,7 @@ pub(crate) mod algebra;
 pub mod armature;
 pub mod compiled;
 pub mod crba;
+mod deriv_rows;
 #[cfg(test)]
 #[path = "tests/derivatives.rs"]
 mod derivative_tests;
@@ -42,8 +43,9 @@ pub use aba::forward_dynamics_local;
 pub use aba_derivatives::forward_dynamics_derivatives;
 pub use compiled::Compiled;
 pub use crba::mass_matrix_local;
+pub use deriv_rows::rows_surely_finite;
 pub use rnea::inverse_dynamics_local;
-pub use rnea_derivatives::inverse_dynamics_derivatives;
+pub use rnea_derivatives::{inverse_dynamics_derivatives, inverse_dynamics_derivatives_into};
 pub use workspace::{Data, DerivativeData};
 
 /// Accelerations `a` from `I a + C v − τ_g − Nᵀ f_ext = τ`: the body-frame articulated-body

@@ -70,9 +70,74 @@ crate::support::cpu::multiversion! {
     ) => derivatives_body
 }
 
+crate::support::cpu::multiversion! {
+    /// [`inverse_dynamics_derivatives`] by rows straight into `out` (`∂τ/∂q`, `∂τ/∂v`, `M`,
+    /// each nv × nv in C order, every entry written): the caller's arrays, so nothing is
+    /// copied after. `dd.row_major` is set; `dd`'s own matrices are left as they were.
+    pub fn inverse_dynamics_derivatives_into / rows_avx2 / rows_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        dd: &mut DerivativeData,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+        g: &Vec3,
+        out: [&mut [f64]; 3],
+    ) => rows_body
+}
+
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn rows_body(
+    model: &Model,
+    data: &mut Data,
+    dd: &mut DerivativeData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+    out: [&mut [f64]; 3],
+) {
+    dd.row_major = true;
+    vectors(model, data, dd, q, v, a, g);
+    let [dq, dv, mm] = out;
+    super::deriv_rows::fill_rows_into(model, dd, (dq, dv, mm));
+    if !model.armature.is_empty() {
+        super::armature::add_to_forces(model, a, &mut dd.tau);
+        for (k, arm) in model.armature.iter().enumerate() {
+            mm[k * model.nv + k] += arm;
+        }
+    }
+}
+
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn derivatives_body(
+    model: &Model,
+    data: &mut Data,
+    dd: &mut DerivativeData,
+    q: &[f64],
+    v: &[f64],
+    a: &[f64],
+    g: &Vec3,
+) {
+    vectors(model, data, dd, q, v, a, g);
+    if dd.row_major {
+        super::deriv_rows::fill_rows(model, dd);
+    } else {
+        fill_matrices(model, dd);
+    }
+    if !model.armature.is_empty() {
+        super::armature::add_to_forces(model, a, &mut dd.tau);
+        super::armature::add_to_mass_matrix(model, &mut dd.mass);
+    }
+}
+
+/// The outward and inward passes: every dof's vectors, `τ`, and the tree's shape, for the
+/// fills.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn vectors(
     model: &Model,
     data: &mut Data,
     dd: &mut DerivativeData,
@@ -109,6 +174,18 @@ fn derivatives_body(
             for m in 0..3 {
                 dd.columns[(12 + m) * nvt + j] = d.bts[m];
             }
+            if dd.row_major {
+                // By rows, the other dof of each pair is the one that varies along a row.
+                for m in 0..6 {
+                    dd.columns[(15 + m) * nvt + j] = d.g[m];
+                    dd.columns[(21 + m) * nvt + j] = d.gv[m];
+                    dd.columns[(27 + m) * nvt + j] = d.da[m];
+                    dd.columns[(33 + m) * nvt + j] = d.dav[m];
+                }
+                for m in 0..3 {
+                    dd.columns[(39 + m) * nvt + j] = d.dv[m];
+                }
+            }
         }
         if let Some(pa) = l.parent {
             let parent = &mut dd.links[pa];
@@ -119,12 +196,6 @@ fn derivatives_body(
             dd.subtree_count[pa] += dd.subtree_count[i];
             dd.subtree_end[pa] = dd.subtree_end[pa].max(dd.subtree_end[i]);
         }
-    }
-
-    fill_matrices(model, dd);
-    if !model.armature.is_empty() {
-        super::armature::add_to_forces(model, a, &mut dd.tau);
-        super::armature::add_to_mass_matrix(model, &mut dd.mass);
     }
 }
 
@@ -225,20 +296,20 @@ fn fill_matrices(model: &Model, dd: &mut DerivativeData) {
 
 /// `k` moves `j`: `(Y S_j)ᵀ dA_k + (Bᵀ S_j)ᵀ dV_k`.
 #[inline(always)]
-fn moved_q(dj: &DofWork, dk: &DofWork) -> f64 {
+pub(crate) fn moved_q(dj: &DofWork, dk: &DofWork) -> f64 {
     dj.ys.dot(&dk.da) + dj.bts.dot(&angular(&dk.dv))
 }
 
 /// The same for `∂τ/∂v`: `(Y S_j)ᵀ dAv_k + (Bᵀ S_j)ᵀ S_k`.
 #[inline(always)]
-fn moved_v(dj: &DofWork, dk: &DofWork) -> f64 {
+pub(crate) fn moved_v(dj: &DofWork, dk: &DofWork) -> f64 {
     dj.ys.dot(&dk.dav) + dj.bts.dot(&angular(&dk.s))
 }
 
 /// `aᵀ b` summed in index order (the order [`upstream_rows`] and [`moved_rows`] use, so that
 /// both triangles of `M` round alike).
 #[inline(always)]
-fn dot6(a: &Vec6, b: &Vec6) -> f64 {
+pub(crate) fn dot6(a: &Vec6, b: &Vec6) -> f64 {
     let mut x = a[0] * b[0];
     for m in 1..6 {
         x += a[m] * b[m];

@@ -139,6 +139,9 @@ pub struct DofWork {
     pub gv: Vec6,
 }
 
+/// Rows (of nv) of [`DerivativeData::columns`].
+pub(crate) const SOA_ROWS: usize = 42;
+
 /// The workspace and results of the dynamics derivatives
 /// ([`super::rnea_derivatives::inverse_dynamics_derivatives`],
 /// [`super::aba_derivatives::forward_dynamics_derivatives`]) for models of one size.
@@ -168,8 +171,13 @@ pub struct DerivativeData {
     pub above_count: Vec<usize>,
     pub subtree_count: Vec<usize>,
     pub subtree_end: Vec<usize>,
-    /// Per dof, structure of arrays: `S` (6 rows of nv), `Y S` (6), `Bᵀ S` (3).
+    /// Per dof, structure of arrays: `S` (6 rows of nv), `Y S` (6), `Bᵀ S` (3); with
+    /// `row_major`, also `g` (6), `g_v` (6), `dA` (6), `dAv` (6), `dV`'s angular part (3).
     pub columns: Vec<f64>,
+    /// Whether the derivatives are stored by rows: `dtau_dq`, `dtau_dv`, `ddq_dq`, `ddq_dv`
+    /// then hold the transposes (their data is the C order of the derivatives, which NumPy
+    /// returns without a transposing copy). `M`, `M⁻¹` are symmetric either way.
+    pub row_major: bool,
     /// Scratch: the reciprocal pivots of the mass matrix's Cholesky factor.
     pub inv_diag: Vec<f64>,
 }
@@ -195,7 +203,8 @@ impl DerivativeData {
             above_count: vec![0; n],
             subtree_count: vec![0; n],
             subtree_end: vec![0; n],
-            columns: vec![0.0; 15 * nv],
+            columns: vec![0.0; SOA_ROWS * nv],
+            row_major: false,
         }
     }
 

@@ -3,8 +3,7 @@
 use pyo3::prelude::*;
 
 use super::{
-    external_wrenches, gravity_arg, load_state, load_x, method_arg, square_to_array,
-    symmetric_to_array, Method, PyModel, DETACH_LINKS,
+    external_wrenches, gravity_arg, load_state, load_x, method_arg, Method, PyModel, DETACH_LINKS,
 };
 use crate::dynamics::denoc;
 use crate::dynamics::shared::{Direction, Workspace};
@@ -295,10 +294,16 @@ impl PyModel {
             }
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, x, input(direction))?;
+            let rows = ws.model().nv >= crate::python::derivatives::ROWS_NV;
+            if direction == Direction::Inverse && rows {
+                let detach = ws.model().links.len() >= DETACH_LINKS;
+                return crate::python::derivatives::inverse_into_arrays(py, ws, &g, name, detach);
+            }
+            // By rows (large models): the C order NumPy returns is then a plain copy.
             let dd = if ws.model().links.len() >= DETACH_LINKS {
-                py.detach(|| ws.derivatives(direction, &g))
+                py.detach(|| ws.derivatives(direction, &g, rows))
             } else {
-                ws.derivatives(direction, &g)
+                ws.derivatives(direction, &g, rows)
             }
             .py(py)?;
             let (a, b, c) = match direction {
@@ -310,12 +315,7 @@ impl PyModel {
                     check_result(py, name, m.as_slice())?;
                 }
             }
-            // `c` (M or M⁻¹) is exactly symmetric: its column-major data is its C order.
-            Ok((
-                square_to_array(py, a).into_any(),
-                square_to_array(py, b).into_any(),
-                symmetric_to_array(py, c).into_any(),
-            ))
+            crate::python::derivatives::c_ordered_triple(py, [a, b, c], !rows)
         })
     }
 }

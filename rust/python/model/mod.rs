@@ -163,50 +163,6 @@ fn all_finite(x: &[f64]) -> bool {
     acc.iter().all(|a| *a == 0.0)
 }
 
-/// A NumPy copy of an exactly symmetric matrix: its column-major data, copied as it is.
-fn symmetric_to_array<'py>(
-    py: Python<'py>,
-    m: &nalgebra::DMatrix<f64>,
-) -> Bound<'py, numpy::PyArray2<f64>> {
-    use numpy::{PyArray2, PyArrayMethods};
-    let (r, c) = (m.nrows(), m.ncols());
-    // SAFETY: a new C-contiguous array of exactly r × c elements, all written.
-    unsafe {
-        let arr = PyArray2::<f64>::new(py, [r, c], false);
-        std::ptr::copy_nonoverlapping(m.as_ptr(), arr.data(), r * c);
-        arr
-    }
-}
-
-/// A C-ordered NumPy copy of a (column-major) matrix, written in one pass.
-fn square_to_array<'py>(
-    py: Python<'py>,
-    m: &nalgebra::DMatrix<f64>,
-) -> Bound<'py, numpy::PyArray2<f64>> {
-    use numpy::{PyArray2, PyArrayMethods};
-    let (r, c) = (m.nrows(), m.ncols());
-    // SAFETY: a new C-contiguous array of exactly r × c elements, every one written before
-    // it is handed to Python.
-    unsafe {
-        let arr = PyArray2::<f64>::new(py, [r, c], false);
-        let src = m.as_slice();
-        let dst = arr.data();
-        // By 8 × 8 tiles: each tile's reads and writes stay within a few cache lines.
-        const T: usize = 8;
-        for j0 in (0..c).step_by(T) {
-            for i0 in (0..r).step_by(T) {
-                for j in j0..(j0 + T).min(c) {
-                    for i in i0..(i0 + T).min(r) {
-                        // In bounds: i < r, j < c.
-                        *dst.add(i * c + j) = *src.get_unchecked(j * r + i);
-                    }
-                }
-            }
-        }
-        arr
-    }
-}
-
 fn external_wrenches(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Vec6>>> {
     match obj {
         Some(f) if !f.is_none() => {

@@ -166,3 +166,48 @@ fn state_jacobian_is_not_declined_with_closed_loops() {
     // `Ok(false)` (the integrator's numerical fallback).
     assert!(!matches!(sys.jacobian(0.0, &y, &mut jac), Ok(false)));
 }
+
+#[test]
+fn derivatives_by_rows_are_the_transposes_of_the_column_fill() {
+    // Trees of every shape the fills distinguish: chains (both ranges contiguous), branches
+    // (the path above not `0..`), random parents (dofs not numbered subtree by subtree).
+    let models = [
+        random_tree(3, 12),
+        random_tree(8, 10),
+        crate::benchmark_models::chain(9),
+        crate::benchmark_models::tree(3, 3),
+        crate::benchmark_models::paper_pendulum(),
+    ];
+    for (k, model) in models.iter().enumerate() {
+        let (q, v, a) = random_state(model, 60 + k as u64);
+        let mut data = Data::new(model);
+        let (mut cols, mut rows) = (DerivativeData::new(model), DerivativeData::new(model));
+        rows.row_major = true;
+        inverse_dynamics_derivatives(model, &mut data, &mut cols, &q, &v, &a, &G);
+        inverse_dynamics_derivatives(model, &mut data, &mut rows, &q, &v, &a, &G);
+        let close =
+            |x: &DMatrix<f64>, y: &DMatrix<f64>| max_abs(&(x - y)) <= 1e-13 * (1.0 + max_abs(y));
+        assert!(close(&rows.dtau_dq.transpose(), &cols.dtau_dq), "model {k}");
+        assert!(close(&rows.dtau_dv.transpose(), &cols.dtau_dv), "model {k}");
+        assert_eq!(rows.mass, cols.mass, "model {k}");
+        assert_eq!(rows.mass, rows.mass.transpose(), "model {k}");
+        // Straight into the caller's buffers: the same bits (NaN-filled first: every entry
+        // must be written).
+        let nv2 = model.nv * model.nv;
+        let mut out = vec![f64::NAN; 3 * nv2];
+        let (x, rest) = out.split_at_mut(nv2);
+        let (y, z) = rest.split_at_mut(nv2);
+        inverse_dynamics_derivatives_into(model, &mut data, &mut cols, &q, &v, &a, &G, [x, y, z]);
+        assert_eq!(&out[..nv2], rows.dtau_dq.as_slice(), "model {k}");
+        assert_eq!(&out[nv2..2 * nv2], rows.dtau_dv.as_slice(), "model {k}");
+        assert_eq!(&out[2 * nv2..], rows.mass.as_slice(), "model {k}");
+        assert!(rows_surely_finite(&cols));
+        cols.row_major = false;
+        let tau: Vec<f64> = cols.tau.clone();
+        forward_dynamics_derivatives(model, &mut data, &mut cols, &q, &v, &tau, &G).unwrap();
+        forward_dynamics_derivatives(model, &mut data, &mut rows, &q, &v, &tau, &G).unwrap();
+        assert!(close(&rows.ddq_dq.transpose(), &cols.ddq_dq), "model {k}");
+        assert!(close(&rows.ddq_dv.transpose(), &cols.ddq_dv), "model {k}");
+        assert_eq!(rows.minv, cols.minv, "model {k}");
+    }
+}
