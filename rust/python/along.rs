@@ -73,7 +73,7 @@ fn run(
     if let Some(e) = take_callback_error() {
         return Err(e);
     }
-    out.map_err(PyErr::from)
+    out
 }
 
 /// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
