@@ -48,6 +48,44 @@ def test_shaking_along_a_result_matches_the_states_accelerations():
                                atol=1e-9 * np.abs(ref.force).max())
 
 
+@pytest.mark.parametrize("name", ["fourbar", "chain7"])
+def test_folded_shaking_is_model_shaking_at_each_state(name):
+    """``_core.scene_shaking`` (the shaking folded into the accelerations' pass) equals
+    ``Model.shaking`` called per state at the per-state accelerations, on a mechanism with a
+    loop and on a tree, about a point off the origin."""
+    scene = pmd.load_scene(name)
+    res = pmd.simulate(scene, (0.0, 0.2), t_eval=np.linspace(0.0, 0.2, 41))
+    assert res.success, res.message
+    about = np.array([0.05, -0.02, 0.1])
+    force, moment = _core.scene_shaking(scene, res.t, res.q, res.v, about=about)
+    a_ref, _ = per_sample(scene, res)
+    a_along, _ = _core.scene_along(scene, res.t, res.q, res.v)
+    ref = [scene.model.shaking(q, v, a, about=about) for q, v, a in zip(res.q, res.v, a_along)]
+    f_ref, m_ref = np.array([r[0] for r in ref]), np.array([r[1] for r in ref])
+    assert force.shape == moment.shape == (len(res.t), 3)
+    for got, want in ((force, f_ref), (moment, m_ref)):
+        np.testing.assert_allclose(got, want, rtol=0, atol=1e-12 * np.abs(want).max())
+    # And at the accelerations of the independent per-state path (forward_dynamics).
+    ref = pmd.shaking(scene.model, res.q, res.v, a_ref, about=about)
+    np.testing.assert_allclose(force, ref.force, rtol=0, atol=1e-9 * np.abs(ref.force).max())
+    s = pmd.shaking(scene, res, about=about)
+    np.testing.assert_array_equal(s.force, force)
+    np.testing.assert_array_equal(s.moment, moment)
+
+
+def test_folded_shaking_is_the_same_bits_on_any_thread_count():
+    scene = pmd.load_scene("fourbar")
+    res = pmd.simulate(scene, (0.0, 0.5), t_eval=np.linspace(0.0, 0.5, 301))
+    serial = _core.scene_shaking(scene, res.t, res.q, res.v, about=[0.1, 0, 0], threads=1)
+    for threads in (2, 3, 5):
+        f, m = _core.scene_shaking(scene, res.t, res.q, res.v, about=[0.1, 0, 0],
+                                   threads=threads)
+        np.testing.assert_array_equal(f, serial[0], err_msg=str(threads))
+        np.testing.assert_array_equal(m, serial[1], err_msg=str(threads))
+    with pytest.raises(InvalidInputError, match="about"):
+        _core.scene_shaking(scene, res.t, res.q, res.v, about=[0.0, np.nan, 0.0])
+
+
 def test_torque_saturation_is_where_the_limited_torque_reaches_its_limit():
     model = pmd.load_scene("chain7").model
     pd = pmd.PDTorque(model.joint_names[0], kp=400.0, kd=5.0, time=[0.0, 1.0], reference=[1.0, 1.0],

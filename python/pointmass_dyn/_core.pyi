@@ -1116,6 +1116,20 @@ def scene_along(
     a scene with a Python torque function: one), the same bits whatever their number. A
     sample that fails or gives a non-finite value is an error naming it."""
 
+def scene_shaking(
+    scene: Scene,
+    t: ArrayLike,
+    q: ArrayLike,
+    v: ArrayLike,
+    about: ArrayLike | None = None,
+    threads: int | None = None,
+) -> tuple[_Array, _Array]:
+    """``(force, moment)``, each (N, 3): the shaking force and moment about ``about`` (world,
+    default the origin) at the N states ``(t[k], q[k], v[k])`` and the accelerations the
+    scene gives there (as ``Model.shaking``), computed in the same pass over the samples as
+    :func:`scene_along`'s accelerations: one call, on ``threads`` threads, the same bits
+    whatever their number."""
+
 def energies(
     scene: Scene,
     q: ArrayLike,

@@ -1,34 +1,27 @@
 //! `scene_along`: a scene's accelerations and effect forces at the N states of a trajectory
-//! (`crate::simulate::along`), for the analyses along a result.
+//! (`crate::simulate::along`), for the analyses along a result; `scene_shaking`: the shaking
+//! force and moment there, from the same pass.
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::{array, shape_str, to_array};
+use super::convert::{array, shape_str, to_array, vec3};
 use super::effects::take_callback_error;
-use super::errors::invalid;
+use super::errors::{invalid, IntoPyResult};
 use super::scene::PyScene;
 use super::signals::detach_interruptible;
+use crate::simulate::{Along, Asked};
+use crate::support::spatial::Vec3;
 
-/// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
-/// `accelerations`); `forces` a dict from each enabled effect's name to its generalized force
-/// (N, nv) (empty unless `forces`). On `threads` threads (None: one per core), the same
-/// bits whatever their number.
-#[pyfunction]
-#[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false, threads=None))]
-#[allow(clippy::too_many_arguments)] // the arguments of the Python function
-pub fn scene_along<'py>(
-    py: Python<'py>,
-    scene: PyRef<'_, PyScene>,
+/// `(t, q, v)` as flat arrays after checking their shapes and that they are finite.
+type States = (Vec<f64>, Vec<f64>, Vec<f64>);
+
+fn states(
+    py: Python<'_>,
+    (nq, nv): (usize, usize),
     t: &Bound<'_, PyAny>,
     q: &Bound<'_, PyAny>,
     v: &Bound<'_, PyAny>,
-    disable: Option<&Bound<'_, PyAny>>,
-    accelerations: bool,
-    forces: bool,
-    threads: Option<usize>,
-) -> PyResult<(Option<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
-    let s = &scene.inner;
-    let (nq, nv) = (s.model.nq, s.model.nv);
+) -> PyResult<States> {
     let (ts, t) = array(t, "t")?;
     let (qs, q) = array(q, "q")?;
     let (vs, v) = array(v, "v")?;
@@ -55,6 +48,19 @@ pub fn scene_along<'py>(
             format!("a non-finite value at sample {k}"),
         ));
     }
+    Ok((t, q, v))
+}
+
+/// `crate::simulate::along` of the scene, the interpreter released (Ctrl-C heard).
+fn run(
+    py: Python<'_>,
+    scene: &PyScene,
+    (t, q, v): &States,
+    disable: Option<&Bound<'_, PyAny>>,
+    asked: Asked,
+    threads: Option<usize>,
+) -> PyResult<Along> {
+    let s = &scene.inner;
     let disabled = crate::simulate::disabled(crate::effects::args::disable(disable)?, &s.settings);
     let threads =
         threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -62,20 +68,41 @@ pub fn scene_along<'py>(
     take_callback_error();
     let out = detach_interruptible(py, || {
         let states = (&t[..], &q[..], &v[..]);
-        crate::simulate::along(
-            model,
-            effects,
-            disabled,
-            states,
-            accelerations,
-            forces,
-            threads,
-        )
+        crate::simulate::along(model, effects, disabled, states, asked, threads)
     });
     if let Some(e) = take_callback_error() {
         return Err(e);
     }
-    let out = out?;
+    out
+}
+
+/// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
+/// `accelerations`); `forces` a dict from each enabled effect's name to its generalized force
+/// (N, nv) (empty unless `forces`). On `threads` threads (None: one per core), the same
+/// bits whatever their number.
+#[pyfunction]
+#[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false, threads=None))]
+#[allow(clippy::too_many_arguments)] // the arguments of the Python function
+pub fn scene_along<'py>(
+    py: Python<'py>,
+    scene: PyRef<'_, PyScene>,
+    t: &Bound<'_, PyAny>,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    disable: Option<&Bound<'_, PyAny>>,
+    accelerations: bool,
+    forces: bool,
+    threads: Option<usize>,
+) -> PyResult<(Option<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
+    let nv = scene.inner.model.nv;
+    let x = states(py, (scene.inner.model.nq, nv), t, q, v)?;
+    let n = x.0.len();
+    let asked = Asked {
+        accelerations,
+        forces,
+        shaking: None,
+    };
+    let out = run(py, &scene, &x, disable, asked, threads)?;
     let d = PyDict::new(py);
     for (label, f) in out.labels.into_iter().zip(out.forces) {
         d.set_item(label, to_array(py, f, &[n, nv])?)?;
@@ -85,4 +112,46 @@ pub fn scene_along<'py>(
         false => None,
     };
     Ok((a, d))
+}
+
+/// `(force, moment)`, each (N, 3): the shaking force and moment about `about` at the states
+/// `(t[k], q[k], v[k])` and the accelerations the scene gives there, in the same pass (and
+/// on the same threads) as `scene_along`'s accelerations.
+#[pyfunction]
+#[pyo3(signature = (scene, t, q, v, about=None, threads=None))]
+pub fn scene_shaking<'py>(
+    py: Python<'py>,
+    scene: PyRef<'_, PyScene>,
+    t: &Bound<'_, PyAny>,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    about: Option<&Bound<'_, PyAny>>,
+    threads: Option<usize>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let model = &scene.inner.model;
+    let x = states(py, (model.nq, model.nv), t, q, v)?;
+    let n = x.0.len();
+    let about = match about.filter(|o| !o.is_none()) {
+        Some(o) => {
+            let o = vec3(o, "about")?;
+            crate::support::error::check_finite("about", o.as_slice()).py(py)?;
+            o
+        }
+        None => Vec3::zeros(),
+    };
+    let asked = Asked {
+        accelerations: false,
+        forces: false,
+        shaking: Some(about),
+    };
+    let out = run(py, &scene, &x, None, asked, threads)?;
+    let (mut force, mut moment) = (Vec::with_capacity(3 * n), Vec::with_capacity(3 * n));
+    for row in out.shaking.chunks_exact(6) {
+        force.extend_from_slice(&row[..3]);
+        moment.extend_from_slice(&row[3..]);
+    }
+    Ok((
+        to_array(py, force, &[n, 3])?,
+        to_array(py, moment, &[n, 3])?,
+    ))
 }

@@ -98,6 +98,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
     m.add_function(wrap_pyfunction!(along::scene_along, m)?)?;
+    m.add_function(wrap_pyfunction!(along::scene_shaking, m)?)?;
     m.add_function(wrap_pyfunction!(rk45::rk45, m)?)?;
     m.add_function(wrap_pyfunction!(visuals::resolve_mesh, m)?)?;
     m.add_function(wrap_pyfunction!(design::design_cells, m)?)?;

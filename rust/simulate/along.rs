@@ -10,37 +10,58 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::Dynamics;
+use crate::dynamics::reactions::shaking_at;
 use crate::effects::{Disabled, Effect, TorqueLaw};
 use crate::model::Model;
+use crate::recursive::reference::Workspace;
 use crate::support::alloc::try_zeros_vec;
 use crate::support::error::{Error, Result};
+use crate::support::spatial::Vec3;
 
 /// Fewer samples per thread than this run on fewer threads (a thread's start and its
 /// workspaces cost about as much as this many samples of a small model).
 const MIN_SAMPLES_PER_THREAD: usize = 64;
 
 /// The scene at N states, what was asked for: `accelerations` (N × nv, row after row; empty
-/// when not asked for) and each enabled effect's generalized force (`forces[k]`: N × nv for
-/// effect `labels[k]`; none when not asked for).
+/// when not asked for), each enabled effect's generalized force (`forces[k]`: N × nv for
+/// effect `labels[k]`; none when not asked for) and the shaking force and moment at those
+/// accelerations (`shaking`: N × 6, `[force; moment]` per row, world axes; empty when not
+/// asked for).
 #[derive(Debug, Clone, Default)]
 pub struct Along {
     pub samples: usize,
     pub accelerations: Vec<f64>,
     pub labels: Vec<String>,
     pub forces: Vec<Vec<f64>>,
+    pub shaking: Vec<f64>,
+}
+
+/// What [`along`] computes: the accelerations, every enabled effect's force, and the
+/// shaking force and moment about a world point (`reactions::shaking`, at the scene's
+/// accelerations: folded into the same pass, so the samples are walked once).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Asked {
+    pub accelerations: bool,
+    pub forces: bool,
+    pub shaking: Option<Vec3>,
+}
+
+/// One thread's rows of the output (empty slices: not asked for).
+struct Part<'s> {
+    acc: &'s mut [f64],
+    forces: Vec<&'s mut [f64]>,
+    shaking: &'s mut [f64],
 }
 
 /// [`Dynamics::along`] of `model` with `effects` (minus `disabled`) on up to `threads`
 /// threads (the calling thread one of them): the same result, bit for bit, whatever
 /// `threads`. Ctrl-C (the calling thread's interrupt poller) stops every thread.
-#[allow(clippy::too_many_arguments)]
 pub fn along(
     model: &Model,
     effects: &[Effect],
     disabled: Disabled,
     (t, q, v): (&[f64], &[f64], &[f64]),
-    accelerations: bool,
-    forces: bool,
+    asked: Asked,
     threads: usize,
 ) -> Result<Along> {
     if threads == 0 {
@@ -55,36 +76,41 @@ pub fn along(
         true => 1,
         false => threads.min(n / MIN_SAMPLES_PER_THREAD).max(1),
     };
-    let mut out = sys.along_output(t, q, v, accelerations, forces)?;
+    let mut out = sys.along_output(t, q, v, asked)?;
     let nv = model.nv;
     let chunk = n.div_ceil(threads).max(1);
-    let width = (chunk * nv).max(1);
-    // Each thread's rows of the accelerations and of every effect's forces.
-    let mut acc_parts: Vec<&mut [f64]> = match accelerations {
-        true => out.accelerations.chunks_mut(width).collect(),
-        false => (0..threads).map(|_| <&mut [f64]>::default()).collect(),
-    };
-    let mut force_parts: Vec<Vec<&mut [f64]>> = (0..threads).map(|_| Vec::new()).collect();
+    // Each thread's rows of the accelerations, of every effect's forces and of the shaking.
+    let rows_of = |x, w| split(x, chunk * w, threads);
+    let mut parts: Vec<Part<'_>> = rows_of(&mut out.accelerations, nv)
+        .into_iter()
+        .zip(rows_of(&mut out.shaking, 6))
+        .map(|(acc, shaking)| Part {
+            acc,
+            forces: Vec::new(),
+            shaking,
+        })
+        .collect();
     for f in out.forces.iter_mut() {
-        for (part, rows) in force_parts.iter_mut().zip(f.chunks_mut(width)) {
-            part.push(rows);
+        for (part, rows) in parts.iter_mut().zip(f.chunks_mut((chunk * nv).max(1))) {
+            part.forces.push(rows);
         }
     }
+    let about = asked.shaking;
     let stop = AtomicBool::new(false);
     let mut results: Vec<Result<()>> = Vec::with_capacity(threads);
     std::thread::scope(|s| {
         let mut handles = Vec::new();
-        let mut parts = acc_parts.drain(..).zip(force_parts.drain(..)).enumerate();
+        let mut parts = parts.drain(..).enumerate();
         let first = parts.next();
-        for (c, (acc, mut fs)) in parts {
+        for (c, mut part) in parts {
             let stop = &stop;
             handles.push(s.spawn(move || {
                 let mut sys = Dynamics::try_new(model, effects, disabled)?;
-                sys.along_rows(c * chunk, (t, q, v), acc, &mut fs, stop, false)
+                sys.along_rows(c * chunk, (t, q, v), &mut part, about, stop, false)
             }));
         }
-        if let Some((_, (acc, mut fs))) = first {
-            results.push(sys.along_rows(0, (t, q, v), acc, &mut fs, &stop, true));
+        if let Some((_, mut part)) = first {
+            results.push(sys.along_rows(0, (t, q, v), &mut part, about, &stop, true));
         }
         for h in handles {
             results.push(h.join().unwrap_or_else(|_| {
@@ -102,36 +128,32 @@ pub fn along(
     }
 }
 
+/// `x` in `threads` parts of `width` entries (the last ones shorter or empty).
+fn split(x: &mut [f64], width: usize, threads: usize) -> Vec<&mut [f64]> {
+    let mut p: Vec<&mut [f64]> = x.chunks_mut(width.max(1)).collect();
+    p.resize_with(threads, Default::default);
+    p
+}
+
 impl Dynamics<'_> {
     /// With `accelerations`, the accelerations, and with `forces`, every enabled effect's
     /// force, at the states `(t[k], q[k], v[k])`; `q` is N × nq and `v` N × nv, row after
     /// row. Ctrl-C is heard between samples. A sample whose effects or dynamics fail, or
     /// give a value that is not finite, is an error naming it.
-    pub fn along(
-        &mut self,
-        t: &[f64],
-        q: &[f64],
-        v: &[f64],
-        accelerations: bool,
-        forces: bool,
-    ) -> Result<Along> {
-        let mut out = self.along_output(t, q, v, accelerations, forces)?;
-        let mut fs: Vec<&mut [f64]> = out.forces.iter_mut().map(|f| &mut f[..]).collect();
+    pub fn along(&mut self, t: &[f64], q: &[f64], v: &[f64], asked: Asked) -> Result<Along> {
+        let mut out = self.along_output(t, q, v, asked)?;
+        let mut part = Part {
+            acc: &mut out.accelerations,
+            forces: out.forces.iter_mut().map(|f| &mut f[..]).collect(),
+            shaking: &mut out.shaking,
+        };
         let stop = AtomicBool::new(false);
-        self.along_rows(0, (t, q, v), &mut out.accelerations, &mut fs, &stop, true)?;
-        drop(fs);
+        self.along_rows(0, (t, q, v), &mut part, asked.shaking, &stop, true)?;
         Ok(out)
     }
 
     /// The output of [`Dynamics::along`], zeroed, after checking the inputs' sizes.
-    fn along_output(
-        &self,
-        t: &[f64],
-        q: &[f64],
-        v: &[f64],
-        accelerations: bool,
-        forces: bool,
-    ) -> Result<Along> {
+    fn along_output(&self, t: &[f64], q: &[f64], v: &[f64], asked: Asked) -> Result<Along> {
         let (nq, nv, n) = (self.model.nq, self.model.nv, t.len());
         if q.len() != n * nq || v.len() != n * nv {
             return Err(Error::arg(
@@ -140,11 +162,12 @@ impl Dynamics<'_> {
                 format!("{n} times, {} positions, {} speeds", q.len(), v.len()),
             ));
         }
-        let labels = match forces {
+        let labels = match asked.forces {
             true => self.effects.labels(),
             false => Vec::new(),
         };
-        let rows = if accelerations { n * nv } else { 0 };
+        let rows = if asked.accelerations { n * nv } else { 0 };
+        let shaking = if asked.shaking.is_some() { n * 6 } else { 0 };
         Ok(Along {
             samples: n,
             accelerations: try_zeros_vec(rows, "accelerations along the trajectory")?,
@@ -152,6 +175,7 @@ impl Dynamics<'_> {
                 .map(|_| try_zeros_vec(n * nv, "effect forces along the trajectory"))
                 .collect::<Result<_>>()?,
             labels,
+            shaking: try_zeros_vec(shaking, "shaking along the trajectory")?,
         })
     }
 
@@ -162,19 +186,23 @@ impl Dynamics<'_> {
         &mut self,
         k0: usize,
         (t, q, v): (&[f64], &[f64], &[f64]),
-        acc: &mut [f64],
-        forces: &mut [&mut [f64]],
+        part: &mut Part<'_>,
+        about: Option<Vec3>,
         stop: &AtomicBool,
         main: bool,
     ) -> Result<()> {
         let (nq, nv) = (self.model.nq, self.model.nv);
-        let rows = match (acc.is_empty(), forces.first()) {
-            (false, _) => acc.len() / nv.max(1),
+        let rows = match (part.acc.is_empty(), part.forces.first()) {
+            (false, _) => part.acc.len() / nv.max(1),
             (true, Some(f)) => f.len() / nv.max(1),
-            (true, None) => 0,
+            (true, None) => part.shaking.len() / 6,
         };
-        let ne = forces.len();
+        let ne = part.forces.len();
         let mut row = vec![0.0; ne * nv];
+        // The shaking needs the accelerations even when they are not returned; its own
+        // kinematics workspace (the links' motion at the sample), built once per thread.
+        let mut own_acc = vec![0.0; if about.is_some() { nv } else { 0 }];
+        let mut ws = about.map(|_| Workspace::new(self.model));
         for i in 0..rows {
             let what = "the scene along a trajectory";
             if main {
@@ -188,11 +216,20 @@ impl Dynamics<'_> {
             let k = k0 + i;
             let (qk, vk) = (&q[k * nq..(k + 1) * nq], &v[k * nv..(k + 1) * nv]);
             let at = |e: String| Error::Numerical(format!("sample {k} (t = {}): {e}", t[k]));
-            if !acc.is_empty() {
-                let a = &mut acc[i * nv..(i + 1) * nv];
+            if !part.acc.is_empty() || about.is_some() {
+                let a = match part.acc.is_empty() {
+                    false => &mut part.acc[i * nv..(i + 1) * nv],
+                    true => &mut own_acc[..],
+                };
                 self.accelerations(t[k], qk, vk, a).map_err(at)?;
                 if a.iter().any(|x| !x.is_finite()) {
                     return Err(at("the accelerations are not finite".into()));
+                }
+                if let (Some(o), Some(ws)) = (&about, ws.as_mut()) {
+                    let (f, m) = shaking_at(self.model, ws, (qk, vk, a), o);
+                    let out = &mut part.shaking[i * 6..(i + 1) * 6];
+                    out[..3].copy_from_slice(f.as_slice());
+                    out[3..].copy_from_slice(m.as_slice());
                 }
             }
             if ne > 0 {
@@ -200,7 +237,7 @@ impl Dynamics<'_> {
                 if row.iter().any(|x| !x.is_finite()) {
                     return Err(at("an effect's force is not finite".into()));
                 }
-                for (e, f) in forces.iter_mut().enumerate() {
+                for (e, f) in part.forces.iter_mut().enumerate() {
                     f[i * nv..(i + 1) * nv].copy_from_slice(&row[e * nv..(e + 1) * nv]);
                 }
             }

@@ -13,7 +13,7 @@ pub mod derivatives;
 mod dynamics;
 mod settings;
 
-pub use along::{along, Along};
+pub use along::{along, Along, Asked};
 pub use dynamics::{Dynamics, Progress};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 

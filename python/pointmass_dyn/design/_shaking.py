@@ -84,14 +84,15 @@ def shaking(
         scene = model_or_scene
         model = scene.model
         q, v = np.asarray(result.q, dtype=float), np.asarray(result.v, dtype=float)
-        a, _ = _core.scene_along(scene, result.t, q, v)
+        # The accelerations and the shaking in one pass over the samples, in the core.
+        force, moment = _core.scene_shaking(scene, result.t, q, v, about=about)
         if gravity is None:
             gravity = scene_gravity(scene)
     else:
         model = model_or_scene.model if isinstance(model_or_scene, _core.Scene) else model_or_scene
         if v is None or a is None:
             raise InvalidInputError("v, a: expected the speeds and accelerations with q, got None")
-    force, moment = model.shaking(q, v, a, about=about)
+        force, moment = model.shaking(q, v, a, about=about)
     weight = None if gravity is None else model.total_mass * np.asarray(gravity, dtype=float)
     return Shaking(force, moment, about, weight)
 
