@@ -542,13 +542,7 @@ impl<S: OdeSystem> Integrator for Adams<S> {
     }
     step_state_accessors!();
     fn counts(&self) -> Counts {
-        Counts {
-            nfev: self.st.nfev,
-            njev: 0,
-            nlu: 0,
-            n_accepted: self.st.n_accepted,
-            n_rejected: self.st.n_rejected,
-        }
+        Counts::explicit(self.st.nfev, self.st.n_accepted, self.st.n_rejected)
     }
     fn stiffness(&self) -> Option<Stiffness> {
         self.stiffness

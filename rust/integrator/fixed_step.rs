@@ -304,13 +304,7 @@ impl<S: OdeSystem, M: Scheme> Integrator for FixedStep<S, M> {
         &self.y_old
     }
     fn counts(&self) -> Counts {
-        Counts {
-            nfev: self.w.nfev,
-            njev: 0,
-            nlu: 0,
-            n_accepted: self.n_accepted,
-            n_rejected: 0,
-        }
+        Counts::explicit(self.w.nfev, self.n_accepted, 0)
     }
     fn h_next(&self) -> f64 {
         self.dt

@@ -18,6 +18,19 @@ pub struct Counts {
     pub n_rejected: usize,
 }
 
+impl Counts {
+    /// An explicit method's counts: no Jacobian, no LU.
+    pub fn explicit(nfev: usize, n_accepted: usize, n_rejected: usize) -> Self {
+        Counts {
+            nfev,
+            njev: 0,
+            nlu: 0,
+            n_accepted,
+            n_rejected,
+        }
+    }
+}
+
 impl std::ops::Add for Counts {
     type Output = Counts;
     fn add(self, o: Counts) -> Counts {
