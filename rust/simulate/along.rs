@@ -46,6 +46,9 @@ pub struct Asked {
     pub shaking: Option<Vec3>,
 }
 
+/// Samples between two looks for Ctrl-C (the calling thread's poller, the others' `stop`).
+const POLL_EVERY: usize = 16;
+
 /// One thread's rows of the output (empty slices: not asked for).
 struct Part<'s> {
     acc: &'s mut [f64],
@@ -209,12 +212,15 @@ impl Dynamics<'_> {
         let mut rates = vec![Vec6::zeros(); nl];
         for i in 0..rows {
             let what = "the scene along a trajectory";
-            if main {
+            // Every `POLL_EVERY` samples: the poller reads a clock (tens of ns, a few percent
+            // of a small model's sample), and Ctrl-C is still heard within microseconds.
+            let poll = i % POLL_EVERY == 0;
+            if poll && main {
                 if let Err(e) = crate::support::interrupt::check(what) {
                     stop.store(true, Ordering::Relaxed);
                     return Err(e);
                 }
-            } else if stop.load(Ordering::Relaxed) {
+            } else if poll && stop.load(Ordering::Relaxed) {
                 return Err(Error::Interrupted(what.into()));
             }
             let k = k0 + i;
