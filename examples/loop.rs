@@ -14,7 +14,8 @@
 //! on (the integrator's whole loop: stages, error norm, output); `loopsim` PATH ITERS: ITERS
 //! runs of `simulate` of a scene with loops (its effects, q0, v0; DOP853, rtol 1e-10,
 //! atol 1e-12, t in (0, 20): IFToMM A02's high-precision run), printing the time per
-//! right-hand side. Subtract a
+//! right-hand side; `along` PATH ITERS: ITERS passes of `simulate::along` (the shaking, one
+//! thread) over the states of one run of the scene (DOP853, rtol 1e-8, t in (0, 1)). Subtract a
 //! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
 //! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::support::cpu`).
 use std::hint::black_box;
@@ -28,13 +29,14 @@ use pointmass_dyn::support::spatial::Vec3;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: loop (fd|id|gim|idd|fdd|sim) N ITERS | loop (scene|loops) PATH ITERS";
+    let usage =
+        "usage: loop (fd|id|gim|idd|fdd|sim) N ITERS | loop (scene|loops|loopsim|along) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
     };
     let scene = match what {
-        "scene" | "loops" | "loopsim" => {
+        "scene" | "loops" | "loopsim" | "along" => {
             Some(Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?)
         }
         _ => None,
@@ -45,12 +47,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let nv = model.nv;
     let q: Vec<f64> = match (what, &scene) {
-        ("loops" | "loopsim", Some(s)) => s.q0.clone(),
+        ("loops" | "loopsim" | "along", Some(s)) => s.q0.clone(),
         ("scene", _) => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
         _ => vec![0.3; model.nq],
     };
     let v: Vec<f64> = match (what, &scene) {
-        ("loops" | "loopsim", Some(s)) => s.v0.clone(),
+        ("loops" | "loopsim" | "along", Some(s)) => s.v0.clone(),
         _ => (0..nv).map(|k| (k as f64 * 0.7).sin()).collect(),
     };
     let mut solver = pointmass_dyn::loops::LoopSolver::new(&model);
@@ -60,6 +62,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut out = vec![0.0; nv];
     let mut gim = DMatrix::zeros(nv, nv);
     let mut dd = recursive::DerivativeData::new(&model);
+    // `along`: the states of one run (DOP853, rtol 1e-8, t in (0, 1)), its shaking per pass.
+    let states = match (what, &scene) {
+        ("along", Some(s)) => {
+            let opts = pointmass_dyn::integrator::SolverOptions {
+                method: pointmass_dyn::integrator::Method::Dop853,
+                rtol: 1e-8.into(),
+                atol: 1e-10.into(),
+                ..Default::default()
+            };
+            let tr = run(&model, &s.effects, &q, &v, 1.0, &opts)?;
+            eprintln!("along: {} states a pass", tr.t.len());
+            Some(tr)
+        }
+        _ => None,
+    };
     let start = std::time::Instant::now();
     let mut nfev = 0;
     for _ in 0..iters {
@@ -107,6 +124,26 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 nfev += tr.nfev;
                 out[0] = tr.q[tr.q.len() - 1];
             }
+            "along" => {
+                let (Some(s), Some(tr)) = (&scene, &states) else {
+                    return Err(usage.into());
+                };
+                let asked = pointmass_dyn::simulate::Asked {
+                    shaking: Some(Vec3::zeros()),
+                    ..Default::default()
+                };
+                let x = (&tr.t[..], black_box(&tr.q[..]), &tr.v[..]);
+                let r = pointmass_dyn::simulate::along(
+                    &model,
+                    &s.effects,
+                    Default::default(),
+                    x,
+                    asked,
+                    1,
+                )?;
+                out[0] = r.shaking[0];
+                nfev += tr.t.len();
+            }
             "loops" => {
                 let q = black_box(&q);
                 recursive::forward_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)?;
@@ -126,7 +163,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{what} {arg}: {:.1} ns per call", per_call * 1e9);
     if nfev > 0 {
         let per_rhs = start.elapsed().as_secs_f64() / nfev as f64;
-        println!("{nfev} right-hand sides: {:.2} µs each", per_rhs * 1e6);
+        println!(
+            "{nfev} right-hand sides (along: samples): {:.3} µs each",
+            per_rhs * 1e6
+        );
         println!("last state's q[0] = {:.17e}", out[0]);
     }
     black_box((&out, &gim, &dd.dtau_dq));

@@ -48,11 +48,13 @@ def test_shaking_along_a_result_matches_the_states_accelerations():
                                atol=1e-9 * np.abs(ref.force).max())
 
 
-@pytest.mark.parametrize("name", ["fourbar", "chain7"])
+@pytest.mark.parametrize("name", ["fourbar", "chain7", "rssr", "iftomm_a04_bricard", "slider_crank"])
 def test_folded_shaking_is_model_shaking_at_each_state(name):
-    """``_core.scene_shaking`` (the shaking folded into the accelerations' pass) equals
-    ``Model.shaking`` called per state at the per-state accelerations, on a mechanism with a
-    loop and on a tree, about a point off the origin."""
+    """``_core.scene_shaking`` (the shaking folded into the accelerations' pass, from each
+    link's summed point masses) equals ``Model.shaking`` (the sum over every point mass)
+    called per state at the per-state accelerations, on planar and spatial mechanisms with a
+    loop (RSSR: a ball cut joint and a skew axis; Bricard: overconstrained) and on a tree,
+    about a point off the origin."""
     scene = pmd.load_scene(name)
     res = pmd.simulate(scene, (0.0, 0.2), t_eval=np.linspace(0.0, 0.2, 41))
     assert res.success, res.message
@@ -73,11 +75,16 @@ def test_folded_shaking_is_model_shaking_at_each_state(name):
     np.testing.assert_array_equal(s.moment, moment)
 
 
-def test_folded_shaking_is_the_same_bits_on_any_thread_count():
-    scene = pmd.load_scene("fourbar")
+@pytest.mark.parametrize("name", ["fourbar", "rssr"])
+def test_folded_shaking_is_the_same_bits_on_any_thread_count(name):
+    scene = pmd.load_scene(name)
     res = pmd.simulate(scene, (0.0, 0.5), t_eval=np.linspace(0.0, 0.5, 301))
     serial = _core.scene_shaking(scene, res.t, res.q, res.v, about=[0.1, 0, 0], threads=1)
-    for threads in (2, 3, 5):
+    ref = [scene.model.shaking(q, v, a, about=[0.1, 0, 0]) for q, v, a in
+           zip(res.q, res.v, _core.scene_along(scene, res.t, res.q, res.v, threads=1)[0])]
+    np.testing.assert_allclose(serial[1], [r[1] for r in ref], rtol=0,
+                               atol=1e-12 * np.abs([r[1] for r in ref]).max())
+    for threads in (2, 3, 5, 64):
         f, m = _core.scene_shaking(scene, res.t, res.q, res.v, about=[0.1, 0, 0],
                                    threads=threads)
         np.testing.assert_array_equal(f, serial[0], err_msg=str(threads))

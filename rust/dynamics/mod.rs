@@ -1,6 +1,8 @@
 //! What callers ask of a model's dynamics beyond one recursion: the explicit DeNOC matrices
-//! (`denoc`), what a moving mechanism does to its supports (`reactions`), and a model many
+//! (`denoc`), what a moving mechanism does to its supports (`reactions`; per sample along a
+//! trajectory from the links' summed point masses, `link_shaking`), and a model many
 //! threads call at once with its pool of per-call workspaces (`shared`).
 pub mod denoc;
+pub mod link_shaking;
 pub mod reactions;
 pub mod shared;

@@ -121,31 +121,6 @@ pub fn shaking(points: &PointMotion, about: &Vec3) -> (Vec3, Vec3) {
     (force, moment)
 }
 
-/// [`shaking`] at `(q, v, a)` straight from the links' motion, without filling a
-/// [`PointMotion`] (the same sums in the same order as [`point_motion`] then [`shaking`]):
-/// for the per-sample pass along a trajectory, which allocates nothing per sample.
-pub fn shaking_at(
-    model: &Model,
-    ws: &mut Workspace,
-    (q, v, a): (&[f64], &[f64], &[f64]),
-    about: &Vec3,
-) -> (Vec3, Vec3) {
-    link_accelerations(model, ws, q, v, a);
-    let mut force = Vec3::zeros();
-    let mut moment = Vec3::zeros();
-    for (i, l) in model.links.iter().enumerate() {
-        let s = &ws.links[i];
-        for (m, p) in l.points.masses.iter().zip(&l.points.positions) {
-            let d = s.rotation * p;
-            let (_, acc) = carried_point(&s.twist, &ws.accel[i], &d);
-            let f = acc * *m;
-            force -= f;
-            moment -= ((s.origin + d) - about).cross(&f);
-        }
-    }
-    (force, moment)
-}
-
 /// Adds each cut joint's wrench (`cut[k] = [force; moment]` on body b at frame b's origin in
 /// frame a's axes, minus it on body a: what `loops::constraint_forces` returns) to
 /// `external`, one wrench per link `[moment about the link origin; force]` in world axes.

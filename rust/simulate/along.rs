@@ -10,13 +10,13 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::Dynamics;
-use crate::dynamics::reactions::shaking_at;
+use crate::dynamics::link_shaking::{link_rates, shaking_of_links};
 use crate::effects::{Disabled, Effect, TorqueLaw};
+use crate::kinematics;
 use crate::model::Model;
-use crate::recursive::reference::Workspace;
 use crate::support::alloc::try_zeros_vec;
 use crate::support::error::{Error, Result};
-use crate::support::spatial::Vec3;
+use crate::support::spatial::{Vec3, Vec6};
 
 /// Fewer samples per thread than this run on fewer threads (a thread's start and its
 /// workspaces cost about as much as this many samples of a small model).
@@ -45,6 +45,9 @@ pub struct Asked {
     pub forces: bool,
     pub shaking: Option<Vec3>,
 }
+
+/// Samples between two looks for Ctrl-C (the calling thread's poller, the others' `stop`).
+const POLL_EVERY: usize = 16;
 
 /// One thread's rows of the output (empty slices: not asked for).
 struct Part<'s> {
@@ -199,18 +202,25 @@ impl Dynamics<'_> {
         };
         let ne = part.forces.len();
         let mut row = vec![0.0; ne * nv];
-        // The shaking needs the accelerations even when they are not returned; its own
-        // kinematics workspace (the links' motion at the sample), built once per thread.
-        let mut own_acc = vec![0.0; if about.is_some() { nv } else { 0 }];
-        let mut ws = about.map(|_| Workspace::new(self.model));
+        // The shaking needs the accelerations even when they are not returned, and the links'
+        // motion at the sample: the loop solver's (it has just moved its links there), else
+        // its own, built once per thread; the links' twist rates in `rates`.
+        let shakes = about.is_some();
+        let mut own_acc = vec![0.0; if shakes { nv } else { 0 }];
+        let nl = if shakes { self.model.links.len() } else { 0 };
+        let mut own_links = vec![kinematics::LinkState::default(); nl];
+        let mut rates = vec![Vec6::zeros(); nl];
         for i in 0..rows {
             let what = "the scene along a trajectory";
-            if main {
+            // Every `POLL_EVERY` samples: the poller reads a clock (tens of ns, a few percent
+            // of a small model's sample), and Ctrl-C is still heard within microseconds.
+            let poll = i % POLL_EVERY == 0;
+            if poll && main {
                 if let Err(e) = crate::support::interrupt::check(what) {
                     stop.store(true, Ordering::Relaxed);
                     return Err(e);
                 }
-            } else if stop.load(Ordering::Relaxed) {
+            } else if poll && stop.load(Ordering::Relaxed) {
                 return Err(Error::Interrupted(what.into()));
             }
             let k = k0 + i;
@@ -225,8 +235,17 @@ impl Dynamics<'_> {
                 if a.iter().any(|x| !x.is_finite()) {
                     return Err(at("the accelerations are not finite".into()));
                 }
-                if let (Some(o), Some(ws)) = (&about, ws.as_mut()) {
-                    let (f, m) = shaking_at(self.model, ws, (qk, vk, a), o);
+                if let Some(o) = &about {
+                    let links = match self.loops.as_ref() {
+                        Some(solver) => &solver.kin.links[..],
+                        None => {
+                            kinematics::frames(self.model, qk, &mut own_links);
+                            kinematics::velocities(self.model, qk, vk, &mut own_links);
+                            &own_links[..]
+                        }
+                    };
+                    link_rates(self.model, links, a, &mut rates);
+                    let (f, m) = shaking_of_links(self.model, links, &rates, o);
                     let out = &mut part.shaking[i * 6..(i + 1) * 6];
                     out[..3].copy_from_slice(f.as_slice());
                     out[3..].copy_from_slice(m.as_slice());
