@@ -1,6 +1,7 @@
 //! The effects built from a binding's arguments ([`Arg`]): the forms a caller writes
 //! (`pmd.Spring(joints, stiffness, ...)` in Python) read here, once, so the binding only
 //! converts. A scene file's `[[effect]]` tables are read by `scene_file.rs`.
+use super::ground_contact::ContactStates;
 use super::{
     ContactPoint, Damper, Disabled, Effect, External, Frame, Friction, GroundContact, JointLimit,
     JointRef, Matrix, PerJoint, PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLimit,
@@ -336,4 +337,22 @@ pub fn numbers<A: Arg>(x: &A, arg: &str, expected: &str) -> R<Vec<f64>, A> {
         return Err(Error::arg(arg, expected, shape_str(&shape)).into());
     }
     Ok(values)
+}
+
+/// A ground contact along states `q` (N, nq) and `v` (N, nv): N and the contact at each.
+pub fn contact_states<A: Arg>(
+    contact: &GroundContact,
+    model: &Model,
+    q: &A,
+    v: &A,
+) -> R<(usize, ContactStates), A> {
+    let (qs, qv) = q.array("q")?;
+    let (vs, vv) = v.array("v")?;
+    let (nq, nv) = (model.nq, model.nv);
+    if qs.len() != 2 || qs[1] != nq || vs.len() != 2 || vs[1] != nv || vs[0] != qs[0] {
+        let expected = format!("arrays (N, {nq}) and (N, {nv})");
+        let got = format!("{} and {}", shape_str(&qs), shape_str(&vs));
+        return Err(Error::arg("q, v", expected, got).into());
+    }
+    Ok((qs[0], contact.states(model, &qv, &vv)?))
 }
