@@ -155,7 +155,8 @@ pub trait Declaration {
 
 /// The registry: one line per effect type, `pattern => its declaration; its type`. It
 /// writes [`Effect::declaration`] (the one match over the variants: exhaustive, so a new
-/// variant without its line does not compile) and the scene file's list of types.
+/// variant without its line does not compile) and the scene file's list of types. A line
+/// may carry attributes (the test build's toy effect: `#[cfg(test)]`).
 macro_rules! registry {
     ($($(#[$attr:meta])* $pattern:pat => $declaration:expr; $ty:ty),* $(,)?) => {
         impl Effect {
@@ -168,6 +169,9 @@ macro_rules! registry {
         }
 
         /// Every scene-file `type`, in the order error messages list them.
+        // Pushed one by one: a line's `#[cfg]` applies to a statement, not to an item of
+        // `vec![...]`.
+        #[allow(clippy::vec_init_then_push)]
         fn all_toml_types() -> impl Iterator<Item = &'static TomlType> + Clone {
             let mut types: Vec<&'static [TomlType]> = Vec::new();
             $($(#[$attr])* types.push(<$ty as Declaration>::toml_types());)*

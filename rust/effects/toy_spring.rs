@@ -149,7 +149,7 @@ mod tests {
         let e = Effect::from_toml(&table).unwrap();
         assert_eq!(e.repr(), "ToySpring(joints=all)");
         assert_eq!(Effect::from_toml(&e.to_toml().unwrap()).unwrap(), e);
-        let mut sys = Dynamics::try_new(&m, &[e.clone()], Disabled::none()).unwrap();
+        let mut sys = Dynamics::try_new(&m, std::slice::from_ref(&e), Disabled::none()).unwrap();
         let (q, v) = ([0.3], [0.0]);
         let mut a = [0.0];
         sys.accelerations(0.0, &q, &v, &mut a).unwrap();
