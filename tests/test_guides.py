@@ -141,3 +141,35 @@ def test_a_guide_names_every_item_an_implementation_must_write(guide, trait, pat
     count = re.search(rf"impl {trait}` \((\d+) methods\)", text)
     if count:  # the checklist's count
         assert int(count.group(1)) == len(required)
+
+
+# --- The toy effect the effect guide shows whole --------------------------------------------
+TOY = "rust/effects/toy_spring.rs"
+
+
+def _rust_blocks(page: Path) -> list[str]:
+    return re.findall(r"```rust\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S)
+
+
+def test_the_effect_guides_toy_is_the_file_the_crate_compiles():
+    # The guide's block is the file, character for character: the file compiles in the
+    # crate's test build and its unit test runs it through the registry, so a guide whose
+    # code drifted from what compiles fails here.
+    blocks = _rust_blocks(GUIDES[0])
+    source = (ROOT / TOY).read_text(encoding="utf-8")
+    assert source in blocks, f"docs/adding-an-effect.md: no ```rust block equal to {TOY}"
+    assert "fn the_toy_spring_runs_through_the_registry" in source  # its test, in the block
+
+
+def test_the_effect_guides_registry_lines_are_the_registrys():
+    # The three lines that make the toy an effect (module, variant, registry line), each
+    # under its `#[cfg(test)]`, are in rust/effects/mod.rs as the guide writes them.
+    lines = [b for b in _rust_blocks(GUIDES[0]) if "Effect::ToySpring(e) => e" in b]
+    assert len(lines) == 1, "the guide's block of registry lines"
+    registry = [x.strip() for x in (ROOT / "rust/effects/mod.rs").read_text().splitlines()]
+    wanted = [x.strip() for x in lines[0].splitlines() if x.strip()]
+    assert len(wanted) == 6
+    for attr, line in zip(wanted[::2], wanted[1::2]):
+        assert attr == "#[cfg(test)]"
+        at = [i for i, x in enumerate(registry) if x == line]
+        assert at and registry[at[0] - 1] == attr, f"rust/effects/mod.rs lacks `{attr} {line}`"

@@ -7,6 +7,6 @@ mod owned;
 pub mod sensors;
 mod stepping;
 
-pub use owned::OwnedSimulator;
+pub use owned::{OwnedSimulator, Stepping};
 pub use sensors::Imu;
 pub use stepping::{ControlKind, Simulator};

@@ -9,8 +9,12 @@
 //! reasoning in a macro (and a dependency).
 use std::sync::Arc;
 
-use super::Simulator;
+use super::{ControlKind, Simulator};
+use crate::integrator::Method;
+use crate::io::scene::Scene;
 use crate::model::Model;
+use crate::simulate::RunConfig;
+use crate::support::error::Result as CoreResult;
 
 /// A [`Simulator`] together with the model it borrows.
 pub struct OwnedSimulator {
@@ -58,5 +62,47 @@ impl OwnedSimulator {
 
     pub fn model(&self) -> &Model {
         &self.model
+    }
+}
+
+/// What a scene's stepping simulator is asked for, beyond the run configuration.
+pub struct Stepping<'a> {
+    pub t0: f64,
+    /// Seconds between control updates.
+    pub period: f64,
+    pub kind: ControlKind,
+    pub record: bool,
+    /// Recorded times (`None`: every step).
+    pub t_eval: Option<&'a [f64]>,
+}
+
+impl OwnedSimulator {
+    /// The stepping simulator of `scene` with the run configuration `call` (the same checks
+    /// and precedence over the scene's settings as `simulate`): from `t0` without an end, no
+    /// cap on the steps of the whole run (a long run of short calls), and Radau where
+    /// `simulate` would choose automatically (what it starts stiff scenes with; a simulator
+    /// does not switch).
+    pub fn of_scene(scene: &Scene, call: RunConfig, at: Stepping<'_>) -> CoreResult<Self> {
+        let s = scene;
+        let named = call.method.is_some() || s.settings.method.is_some();
+        let call = RunConfig {
+            t_span: Some((at.t0, at.t0)),
+            ..call
+        };
+        let run = call.resolve(&s.settings, &s.effects, s.model.nq + s.model.nv)?;
+        let (off, mut opts) = (run.disabled, run.opts);
+        opts.max_steps = usize::MAX;
+        if opts.method == Method::Auto && !named {
+            opts.method = Method::Radau;
+        }
+        let (q0, v0, effects) = (&s.q0, &s.v0, &s.effects);
+        let (t0, period, kind, record) = (at.t0, at.period, at.kind, at.record);
+        let mut sim = OwnedSimulator::new(s.model.clone(), |m| {
+            Simulator::new(m, effects, off, (q0, v0), t0, opts, period, kind, record)
+        })?;
+        if let Some(te) = at.t_eval {
+            sim.with_mut(|s| s.set_t_eval(te))?;
+        }
+        Ok(sim)
     }
 }

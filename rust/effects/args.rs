@@ -1,10 +1,12 @@
 //! The effects built from a binding's arguments ([`Arg`]): the forms a caller writes
 //! (`pmd.Spring(joints, stiffness, ...)` in Python) read here, once, so the binding only
 //! converts. A scene file's `[[effect]]` tables are read by `scene_file.rs`.
+use super::ground_contact::ContactStates;
 use super::{
     ContactPoint, Damper, Disabled, Effect, External, Frame, Friction, GroundContact, JointLimit,
     JointRef, Matrix, PerJoint, PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLimit,
 };
+use crate::model::Model;
 use crate::support::args::{given, int, items, opt, shape_str, vec3, vector, Arg, Int};
 use crate::support::error::Error;
 use crate::support::spatial::Vec3;
@@ -309,4 +311,48 @@ pub fn joint_limit<A: Arg>(
     Ok(Effect::JointLimit(JointLimit::new(
         name, joints, lower, upper, k, c,
     )?))
+}
+
+/// A joint given as a body index, a URDF joint name or a body name: its body's index
+/// ([`resolve_joint_body`](super::resolve_joint_body)).
+pub fn joint_body<A: Arg>(model: &Model, x: &A, arg: &str) -> R<usize, A> {
+    let r = match x.text() {
+        Some(name) => JointRef::Name(name),
+        None => {
+            let expected = "a body index, a joint name or a body name";
+            JointRef::Index(int(x, arg, 0, i64::MAX, expected)? as usize)
+        }
+    };
+    Ok(super::resolve_joint_body(model, &r, arg)?)
+}
+
+/// One number or a 1-D array of them (a joint's armature: one per speed); a bool is refused
+/// as a number.
+pub fn numbers<A: Arg>(x: &A, arg: &str, expected: &str) -> R<Vec<f64>, A> {
+    if x.is_bool() {
+        return Err(Error::arg(arg, expected, format!("the bool {}", x.shown())).into());
+    }
+    let (shape, values) = x.array(arg)?;
+    if shape.len() > 1 {
+        return Err(Error::arg(arg, expected, shape_str(&shape)).into());
+    }
+    Ok(values)
+}
+
+/// A ground contact along states `q` (N, nq) and `v` (N, nv): N and the contact at each.
+pub fn contact_states<A: Arg>(
+    contact: &GroundContact,
+    model: &Model,
+    q: &A,
+    v: &A,
+) -> R<(usize, ContactStates), A> {
+    let (qs, qv) = q.array("q")?;
+    let (vs, vv) = v.array("v")?;
+    let (nq, nv) = (model.nq, model.nv);
+    if qs.len() != 2 || qs[1] != nq || vs.len() != 2 || vs[1] != nv || vs[0] != qs[0] {
+        let expected = format!("arrays (N, {nq}) and (N, {nv})");
+        let got = format!("{} and {}", shape_str(&qs), shape_str(&vs));
+        return Err(Error::arg("q, v", expected, got).into());
+    }
+    Ok((qs[0], contact.states(model, &qv, &vv)?))
 }

@@ -76,6 +76,9 @@ pub mod spring;
 pub mod table;
 pub mod torque;
 pub mod torque_limit;
+// The toy effect docs/adding-an-effect.md shows whole (tests/test_guides.py).
+#[cfg(test)]
+pub mod toy_spring;
 
 use crate::model::Model;
 use crate::support::error::{Error, Result};
@@ -116,6 +119,8 @@ pub enum Effect {
     PointSpring(PointSpring),
     GroundContact(GroundContact),
     JointLimit(JointLimit),
+    #[cfg(test)]
+    ToySpring(toy_spring::ToySpring),
 }
 
 /// What each declared effect type implements, in its own file. Every method is required, so
@@ -150,21 +155,27 @@ pub trait Declaration {
 
 /// The registry: one line per effect type, `pattern => its declaration; its type`. It
 /// writes [`Effect::declaration`] (the one match over the variants: exhaustive, so a new
-/// variant without its line does not compile) and the scene file's list of types.
+/// variant without its line does not compile) and the scene file's list of types. A line
+/// may carry attributes (the test build's toy effect: `#[cfg(test)]`).
 macro_rules! registry {
-    ($($pattern:pat => $declaration:expr; $ty:ty),* $(,)?) => {
+    ($($(#[$attr:meta])* $pattern:pat => $declaration:expr; $ty:ty),* $(,)?) => {
         impl Effect {
             /// This effect's declaration, whatever its type.
             pub fn declaration(&self) -> &dyn Declaration {
                 match self {
-                    $($pattern => $declaration,)*
+                    $($(#[$attr])* $pattern => $declaration,)*
                 }
             }
         }
 
         /// Every scene-file `type`, in the order error messages list them.
+        // Pushed one by one: a line's `#[cfg]` applies to a statement, not to an item of
+        // `vec![...]`.
+        #[allow(clippy::vec_init_then_push)]
         fn all_toml_types() -> impl Iterator<Item = &'static TomlType> + Clone {
-            [$(<$ty as Declaration>::toml_types()),*].into_iter().flatten()
+            let mut types: Vec<&'static [TomlType]> = Vec::new();
+            $($(#[$attr])* types.push(<$ty as Declaration>::toml_types());)*
+            types.into_iter().flatten()
         }
     };
 }
@@ -179,6 +190,8 @@ registry! {
     Effect::PointSpring(e) => e; PointSpring,
     Effect::GroundContact(e) => e; GroundContact,
     Effect::JointLimit(e) => e; JointLimit,
+    #[cfg(test)]
+    Effect::ToySpring(e) => e; toy_spring::ToySpring,
 }
 
 impl Effect {

@@ -31,6 +31,18 @@ fn overflow(mass: f64, com: &Vec3, inertia: &Mat3) -> Error {
 }
 
 impl RigidBody {
+    /// How Python shows it: `RigidBody(mass=m, com=[x, y, z], inertia=[[..], [..], [..]])`.
+    pub fn repr(&self) -> String {
+        let i = &self.inertia;
+        let row = |r: usize| format!("[{}, {}, {}]", i[(r, 0)], i[(r, 1)], i[(r, 2)]);
+        let c = &self.com;
+        let (m, i0, i1, i2) = (self.mass, row(0), row(1), row(2));
+        format!(
+            "RigidBody(mass={m}, com=[{}, {}, {}], inertia=[{i0}, {i1}, {i2}])",
+            c.x, c.y, c.z
+        )
+    }
+
     /// Validates and builds a body. Rules, each with its own message: finite numbers,
     /// mass > 0, symmetric tensor, positive semidefinite, triangle inequality of the
     /// principal moments (each ≤ the sum of the other two).

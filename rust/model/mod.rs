@@ -2,6 +2,7 @@
 //! welded into their moving ancestor (a "link"), so dynamics runs over links only. Each link
 //! carries its merged rigid body, its seven point masses and the 6×6 mass matrix about its
 //! origin built once from those points, in the link frame.
+pub mod args;
 pub mod body;
 pub mod constraints;
 pub mod frame;

@@ -94,23 +94,7 @@ impl PyRigidBody {
     }
 
     fn __repr__(&self) -> String {
-        let i = &self.inner.inertia;
-        format!(
-            "RigidBody(mass={}, com=[{}, {}, {}], inertia=[[{}, {}, {}], [{}, {}, {}], [{}, {}, {}]])",
-            self.inner.mass,
-            self.inner.com.x,
-            self.inner.com.y,
-            self.inner.com.z,
-            i[(0, 0)],
-            i[(0, 1)],
-            i[(0, 2)],
-            i[(1, 0)],
-            i[(1, 1)],
-            i[(1, 2)],
-            i[(2, 0)],
-            i[(2, 1)],
-            i[(2, 2)]
-        )
+        self.inner.repr()
     }
 }
 

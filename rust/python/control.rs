@@ -6,13 +6,12 @@ use pyo3::prelude::*;
 
 use super::convert::{to_array, to_array1, vector};
 use super::effects::take_callback_error;
-use super::errors::{invalid, IntoPyResult};
+use super::errors::IntoPyResult;
 use super::run_config::config_of;
 use super::scene::PyScene;
 use super::trajectory::PyRunResult;
-use crate::control::{ControlKind, Imu, OwnedSimulator, Simulator};
-use crate::integrator::Method;
-use crate::simulate::RunConfig;
+use crate::control::{ControlKind, Imu, OwnedSimulator, Stepping};
+use crate::support::args;
 use crate::support::spatial::{Mat3, Vec3};
 
 #[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
@@ -25,19 +24,6 @@ impl PySimulator {
     fn lock(&self) -> MutexGuard<'_, OwnedSimulator> {
         // A panic cannot leave it poisoned mid-update in a way we could repair: take it as is.
         self.inner.lock().unwrap_or_else(|e| e.into_inner())
-    }
-}
-
-fn kind_arg(py: Python<'_>, control: &str) -> PyResult<ControlKind> {
-    match control {
-        "torque" => Ok(ControlKind::Torque),
-        "pd" => Ok(ControlKind::PdTarget),
-        other => Err(invalid(
-            py,
-            "control",
-            "'torque' (joint torques) or 'pd' (targets of the scene's PD torques)",
-            format!("'{other}'"),
-        )),
     }
 }
 
@@ -62,50 +48,33 @@ impl PySimulator {
         t0: f64,
         t_eval: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let s = &scene.inner;
-        let kind = kind_arg(py, control)?;
-        let period = control_period;
-        // The run configuration `simulate` reads (the same checks, the same precedence over
-        // the scene's settings); the Simulator steps on from `t0` without an end.
+        let choices = [
+            ("torque", ControlKind::Torque),
+            ("pd", ControlKind::PdTarget),
+        ];
+        let expected = "'torque' (joint torques) or 'pd' (targets of the scene's PD torques)";
+        let control = pyo3::types::PyString::new(py, control).into_any();
+        let kind = args::choice(&control, "control", &choices, expected)?;
         let method = method.map(|m| pyo3::types::PyString::new(py, m).into_any());
-        let call = config_of(
-            py,
-            &[
-                ("method", method.as_ref()),
-                ("rtol", rtol),
-                ("atol", atol),
-                ("dt", dt),
-                ("disable", disable),
-                ("first_step", first_step),
-                ("max_step", max_step),
-            ],
-        )?;
-        let dim = s.model.nq + s.model.nv;
-        let named = call.method.is_some() || s.settings.method.is_some();
-        let run = RunConfig {
-            t_span: Some((t0, t0)),
-            ..call
-        }
-        .resolve(&s.settings, &s.effects, dim)
-        .py(py)?;
-        let (off, mut opts) = (run.disabled, run.opts);
-        // A long run of short calls: no cap on the steps of the whole run.
-        opts.max_steps = usize::MAX;
-        if opts.method == Method::Auto && !named {
-            // What `simulate` would start stiff scenes with; the Simulator does not switch.
-            opts.method = Method::Radau;
-        }
-        let model = s.model.clone();
-        let (q0, v0) = (s.q0.clone(), s.v0.clone());
-        let effects = s.effects.clone();
-        let mut inner = OwnedSimulator::new(model, |m| {
-            Simulator::new(m, &effects, off, (&q0, &v0), t0, opts, period, kind, record)
-        })
-        .py(py)?;
-        if let Some(te) = t_eval {
-            let te = vector(te, "t_eval", None)?;
-            inner.with_mut(|s| s.set_t_eval(&te)).py(py)?;
-        }
+        let given = [
+            ("method", method.as_ref()),
+            ("rtol", rtol),
+            ("atol", atol),
+            ("dt", dt),
+            ("disable", disable),
+            ("first_step", first_step),
+            ("max_step", max_step),
+        ];
+        let call = config_of(py, &given)?;
+        let t_eval = args::opt(t_eval, |te| vector(te, "t_eval", None))?;
+        let at = Stepping {
+            t0,
+            period: control_period,
+            kind,
+            record,
+            t_eval: t_eval.as_deref(),
+        };
+        let inner = OwnedSimulator::of_scene(&scene.inner, call, at).py(py)?;
         Ok(PySimulator {
             inner: Mutex::new(inner),
         })

@@ -16,10 +16,11 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString, PyType};
 
 use super::errors::{invalid, py_error};
-use crate::support::args::{self, Arg, Int};
+use crate::support::args::{Arg, Int};
 use crate::support::spatial::{Mat3, Vec3};
 
-pub use crate::support::args::shape_str;
+// The core's parsers under the names the bindings call them by.
+pub use crate::support::args::{count as count_arg, int as int_arg, mat3, shape_str, vector};
 
 fn type_name(obj: &Bound<'_, PyAny>) -> String {
     obj.get_type()
@@ -187,31 +188,6 @@ pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
     Ok(x.as_array().iter().next().copied().unwrap_or(f64::NAN))
 }
 
-/// An integer argument (index or count) in `lo..=hi` (`crate::support::args::int`).
-pub fn int_arg(
-    obj: &Bound<'_, PyAny>,
-    arg: &str,
-    lo: i64,
-    hi: i64,
-    expected: &str,
-) -> PyResult<i64> {
-    args::int(obj, arg, lo, hi, expected)
-}
-
-/// A count or index `>= 0` (at most `i64::MAX`).
-pub fn count_arg(obj: &Bound<'_, PyAny>, arg: &str, expected: &str) -> PyResult<usize> {
-    args::count(obj, arg, expected)
-}
-
-/// An optional count (`None` → `None`).
-pub fn opt_count(
-    obj: Option<&Bound<'_, PyAny>>,
-    arg: &str,
-    expected: &str,
-) -> PyResult<Option<usize>> {
-    args::opt(obj, |o| args::count(o, arg, expected))
-}
-
 /// A Python object as the core's [`Arg`]: the core parses, this only converts.
 impl Arg for Bound<'_, PyAny> {
     type Err = PyErr;
@@ -242,6 +218,10 @@ impl Arg for Bound<'_, PyAny> {
     }
     fn array(&self, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
         array(self, arg)
+    }
+    fn get(&self, key: &str) -> Option<Option<Self>> {
+        let d = self.cast::<pyo3::types::PyDict>().ok()?;
+        Some(d.get_item(key).ok().flatten())
     }
     fn wrong_type(&self, arg: &str, expected: &str) -> PyErr {
         let got = short_repr(self);
@@ -282,11 +262,6 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
         _ => arr.as_array().iter().copied().collect(),
     };
     Ok((shape, data))
-}
-
-/// A 1-D array of length `len` (`None`: any length).
-pub fn vector(obj: &Bound<'_, PyAny>, arg: &str, len: Option<usize>) -> PyResult<Vec<f64>> {
-    args::vector(obj, arg, len)
 }
 
 /// A 1-D, C-contiguous, aligned, native-order float64 `numpy.ndarray` (exactly that type) as a
@@ -336,14 +311,6 @@ pub fn vec3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec3> {
     let mut v = [0.0; 3];
     vector_into(obj, arg, &mut v)?;
     Ok(Vec3::from(v))
-}
-
-pub fn mat3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Mat3> {
-    let (shape, data) = array(obj, arg)?;
-    if shape != [3, 3] {
-        return Err(invalid(obj.py(), arg, "shape (3, 3)", shape_str(&shape)));
-    }
-    Ok(Mat3::from_row_slice(&data))
 }
 
 /// An (n, 3) array of points (also accepts (a, b, 3), flattened over the leading axes).

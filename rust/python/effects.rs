@@ -6,7 +6,7 @@ use std::sync::Arc;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use super::convert::{array, shape_str, vector};
+use super::convert::vector;
 use super::errors::{invalid, IntoPyResult};
 use crate::effects::{args, Effect, PerJoint, TorqueFunction, TorqueLimit};
 
@@ -286,18 +286,7 @@ impl PyEffect {
                 format!("a {} effect", self.inner.kind().name()),
             ));
         };
-        let m = model.model();
-        let (qs, qv) = array(q, "q")?;
-        let (vs, vv) = array(v, "v")?;
-        if qs.len() != 2 || qs[1] != m.nq || vs.len() != 2 || vs[1] != m.nv || vs[0] != qs[0] {
-            return Err(invalid(
-                py,
-                "q, v",
-                format!("arrays (N, {}) and (N, {})", m.nq, m.nv),
-                format!("{} and {}", shape_str(&qs), shape_str(&vs)),
-            ));
-        }
-        let s = c.states(&m, &qv, &vv).py(py)?;
+        let (n, s) = args::contact_states(c, &model.model(), q, v)?;
         // Finite states, but a law whose numbers overflow there (a damping of 1e307).
         for (what, x) in [
             ("position", &s.position),
@@ -307,7 +296,7 @@ impl PyEffect {
         ] {
             super::errors::check_result(py, &format!("contact_state['{what}']"), x)?;
         }
-        let (n, np) = (qs[0], s.points);
+        let np = s.points;
         let d = pyo3::types::PyDict::new(py);
         let to = super::convert::to_array;
         d.set_item("position", to(py, s.position, &[n, np, 3])?)?;

@@ -1,13 +1,14 @@
 //! `Scene`: a model, its initial state, effects and the settings of its runs.
 use pyo3::prelude::*;
 
-use super::convert::{to_array1, vector};
+use super::convert::to_array1;
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use crate::effects::{Disabled, Effects};
+use crate::effects::Effect;
 use crate::io::scene::{Scene, Settings};
 use crate::simulate::RunConfig;
+use crate::support::args::given as given_arg;
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
 pub struct PyScene {
@@ -40,61 +41,13 @@ impl PyScene {
         let given = [
             t_span, rtol, atol, disable, method, dt, max_step, max_steps, first_step,
         ];
-        let settings = settings_over(given, Settings::default())?;
-        let m = model.model();
-        let mut q = match q0 {
-            Some(q) if !q.is_none() => vector(q, "q0", Some(m.nq))?,
-            _ => m.neutral(),
-        };
-        let v = match v0 {
-            Some(v) if !v.is_none() => vector(v, "v0", Some(m.nv))?,
-            _ => vec![0.0; m.nv],
-        };
-        m.check_state(&q, Some(&v))
-            .map_err(|e| super::errors::to_py(py, e.map_arg(|a| format!("{a}0"))))?;
-        m.normalize(&mut q);
-        let mut list = Vec::new();
-        if let Some(effs) = effects {
-            if !effs.is_none() {
-                // A lone effect is a common slip: say what a list is, not "not iterable".
-                let items = effs.try_iter().map_err(|_| {
-                    invalid(
-                        py,
-                        "effects",
-                        "a list of effects such as [pmd.Gravity()]",
-                        repr_of(effs),
-                    )
-                })?;
-                for (k, e) in items.enumerate() {
-                    let e = e?;
-                    let eff = e.cast::<PyEffect>().map_err(|_| {
-                        invalid(
-                            py,
-                            &format!("effects[{k}]"),
-                            "an effect such as pmd.Gravity(...)",
-                            repr_of(&e),
-                        )
-                    })?;
-                    list.push(eff.get().inner.clone());
-                }
-            }
-        }
-        // Joint limits without bounds and torques limited at "effort" take the model's
-        // (URDF <limit>, MJCF range).
-        crate::effects::fill_model_limits(&m, &m.records.joints, &mut list, "effects").py(py)?;
-        // Joint and body names, table widths and effect names must fit the model.
-        Effects::new(&m, &list, Disabled::none(), "effects").py(py)?;
-        Ok(PyScene {
-            inner: Scene {
-                name: name.unwrap_or_else(|| "scene".into()),
-                description: description.unwrap_or_default(),
-                model: m,
-                q0: q,
-                v0: v,
-                effects: list,
-                settings,
-            },
-        })
+        let mut inner = Scene::of_model(model.model());
+        inner.settings = settings_over(given, Settings::default())?;
+        inner.name = name.unwrap_or(inner.name);
+        inner.description = description.unwrap_or_default();
+        let effects = given_arg(effects).map(|e| effect_list(py, e)).transpose()?;
+        let inner = inner.replaced(None, effects, q0, v0)?;
+        Ok(PyScene { inner })
     }
 
     /// A copy with what is given replaced and everything else kept: the model (of this
@@ -106,7 +59,6 @@ impl PyScene {
     #[allow(clippy::too_many_arguments)]
     fn replace(
         &self,
-        py: Python<'_>,
         model: Option<PyRef<'_, PyModel>>,
         effects: Option<Vec<PyRef<'_, PyEffect>>>,
         q0: Option<&Bound<'_, PyAny>>,
@@ -123,43 +75,14 @@ impl PyScene {
         max_steps: Option<&Bound<'_, PyAny>>,
         first_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
-        let mut inner = self.inner.clone();
         let given = [
             t_span, rtol, atol, disable, method, dt, max_step, max_steps, first_step,
         ];
+        let effects = effects.map(|list| list.iter().map(|e| e.inner.clone()).collect());
+        let mut inner = self
+            .inner
+            .replaced(model.map(|m| m.model()), effects, q0, v0)?;
         inner.settings = settings_over(given, inner.settings)?;
-        if let Some(m) = model {
-            let m = m.model();
-            if (m.nq, m.nv) != (inner.model.nq, inner.model.nv) {
-                return Err(invalid(
-                    py,
-                    "model",
-                    format!(
-                        "a model with nq = {}, nv = {} (this scene's)",
-                        inner.model.nq, inner.model.nv
-                    ),
-                    format!("nq = {}, nv = {}", m.nq, m.nv),
-                ));
-            }
-            inner.model = m;
-        }
-        if let Some(list) = effects {
-            inner.effects = list.iter().map(|e| e.inner.clone()).collect();
-            let (m, list) = (&inner.model, &mut inner.effects);
-            // New effects take their missing limits from the model's URDF joints.
-            crate::effects::fill_model_limits(m, &m.records.joints, list, "effects").py(py)?;
-        }
-        Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").py(py)?;
-        let m = &inner.model;
-        if let Some(q) = q0.filter(|q| !q.is_none()) {
-            inner.q0 = vector(q, "q0", Some(m.nq))?;
-        }
-        if let Some(v) = v0.filter(|v| !v.is_none()) {
-            inner.v0 = vector(v, "v0", Some(m.nv))?;
-        }
-        m.check_state(&inner.q0, Some(&inner.v0))
-            .map_err(|e| super::errors::to_py(py, e.map_arg(|a| format!("{a}0"))))?;
-        m.normalize(&mut inner.q0);
         inner.name = name.unwrap_or(inner.name);
         inner.description = description.unwrap_or(inner.description);
         Ok(PyScene { inner })
@@ -284,6 +207,23 @@ impl PyScene {
                 .join(", ")
         )
     }
+}
+
+/// A list of effects (a lone effect is a common slip: the error says what a list is, not
+/// "not iterable").
+fn effect_list(py: Python<'_>, effects: &Bound<'_, PyAny>) -> PyResult<Vec<Effect>> {
+    let expected = "a list of effects such as [pmd.Gravity()]";
+    let items = effects
+        .try_iter()
+        .map_err(|_| invalid(py, "effects", expected, repr_of(effects)))?;
+    let one = |(k, e): (usize, PyResult<Bound<'_, PyAny>>)| -> PyResult<Effect> {
+        let e = e?;
+        let expected = "an effect such as pmd.Gravity(...)";
+        let eff = e.cast::<PyEffect>();
+        let eff = eff.map_err(|_| invalid(py, &format!("effects[{k}]"), expected, repr_of(&e)))?;
+        Ok(eff.get().inner.clone())
+    };
+    items.enumerate().map(one).collect()
 }
 
 /// `base` with the settings a `Scene` call was given (`None`: not given) laid over it,

@@ -265,7 +265,9 @@ pub fn simulate_batch<'py>(
         ));
     }
     let expected = "a thread count >= 1 (or None: one per core)";
-    let threads = match super::convert::opt_count(threads, "threads", expected)? {
+    let threads = match crate::support::args::opt(threads, |t| {
+        crate::support::args::count(t, "threads", expected)
+    })? {
         Some(0) => return Err(invalid(py, "threads", expected, 0)),
         Some(n) => n,
         None => std::thread::available_parallelism().map_or(1, |n| n.get()),

@@ -5,11 +5,10 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use super::convert::{mat3, vec3};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
 use crate::model::visual::{Shape, Visual};
-use crate::support::spatial::{Placement, Vec3};
+use crate::support::spatial::Vec3;
 
 fn repr(obj: &Bound<'_, PyAny>) -> String {
     obj.repr()
@@ -59,106 +58,6 @@ fn to_dict<'py>(py: Python<'py>, v: &Visual, body_name: &str) -> PyResult<Bound<
     Ok(d)
 }
 
-/// A `Visual` from a dict as `to_dict` writes it (`rotation`, `translation` default to the
-/// identity; `rgba` to None; a mesh's `path` to its `uri`, `scale` to ones).
-fn from_dict(py: Python<'_>, d: &Bound<'_, PyAny>, arg: &str) -> PyResult<Visual> {
-    let d = d
-        .cast::<PyDict>()
-        .map_err(|_| invalid(py, arg, "a dict with 'body' and 'kind'", repr(d)))?;
-    let key = |k: &str| -> PyResult<Bound<'_, PyAny>> {
-        d.get_item(k)?
-            .ok_or_else(|| invalid(py, &format!("{arg}['{k}']"), "a value", "nothing"))
-    };
-    let num = |k: &str| -> PyResult<f64> {
-        let v = key(k)?;
-        v.extract::<f64>()
-            .map_err(|_| invalid(py, &format!("{arg}['{k}']"), "a number", repr(&v)))
-    };
-    let three = |k: &str| -> PyResult<Vec3> { vec3(&key(k)?, &format!("{arg}['{k}']")) };
-    let body_obj = key("body")?;
-    let body = body_obj.extract::<usize>().map_err(|_| {
-        invalid(
-            py,
-            &format!("{arg}['body']"),
-            "a body index",
-            repr(&body_obj),
-        )
-    })?;
-    let kind_obj = key("kind")?;
-    let kind: String = kind_obj.extract().unwrap_or_default();
-    let shape = match kind.as_str() {
-        "box" => Shape::Box {
-            size: three("size")?,
-        },
-        "cylinder" => Shape::Cylinder {
-            radius: num("radius")?,
-            length: num("length")?,
-        },
-        "capsule" => Shape::Capsule {
-            radius: num("radius")?,
-            length: num("length")?,
-        },
-        "sphere" => Shape::Sphere {
-            radius: num("radius")?,
-        },
-        "ellipsoid" => Shape::Ellipsoid {
-            radii: three("radii")?,
-        },
-        "mesh" => {
-            let uri: String = key("uri")?
-                .extract()
-                .map_err(|_| invalid(py, &format!("{arg}['uri']"), "a string", "another type"))?;
-            let path = match d.get_item("path")? {
-                Some(p) if !p.is_none() => {
-                    Some(p.extract::<PathBuf>()?.to_string_lossy().into_owned())
-                }
-                Some(_) => None,
-                None => Some(uri.clone()),
-            };
-            let scale = match d.get_item("scale")? {
-                Some(s) => vec3(&s, &format!("{arg}['scale']"))?,
-                None => Vec3::new(1.0, 1.0, 1.0),
-            };
-            Shape::Mesh { uri, path, scale }
-        }
-        _ => {
-            return Err(invalid(
-                py,
-                &format!("{arg}['kind']"),
-                "'box', 'cylinder', 'capsule', 'sphere', 'ellipsoid' or 'mesh'",
-                repr(&kind_obj),
-            ))
-        }
-    };
-    let rotation = match d.get_item("rotation")? {
-        Some(r) => mat3(&r, &format!("{arg}['rotation']"))?,
-        None => crate::support::spatial::Mat3::identity(),
-    };
-    let translation = match d.get_item("translation")? {
-        Some(t) => vec3(&t, &format!("{arg}['translation']"))?,
-        None => Vec3::zeros(),
-    };
-    let rgba = match d.get_item("rgba")? {
-        Some(c) if !c.is_none() => Some(c.extract::<[f64; 4]>().map_err(|_| {
-            invalid(
-                py,
-                &format!("{arg}['rgba']"),
-                "four numbers in [0, 1]",
-                repr(&c),
-            )
-        })?),
-        _ => None,
-    };
-    let rotation =
-        crate::model::checked_rotation(&rotation, &format!("{arg}['rotation']")).py(py)?;
-    Ok(Visual {
-        body,
-        origin: Placement::new(rotation, translation),
-        shape,
-        rgba,
-    })
-}
-
 #[pymethods]
 impl PyModel {
     /// The visual geometry (URDF `<visual>`, MJCF geoms; docs/visualisation.md): one dict per
@@ -196,7 +95,7 @@ impl PyModel {
         let mut out = Vec::with_capacity(visuals.len());
         for (k, d) in visuals.iter().enumerate() {
             let arg = format!("visuals[{k}]");
-            let v = from_dict(py, d, &arg)?;
+            let v = crate::model::args::visual(d, &arg)?;
             v.check(nbodies, &arg).py(py)?;
             out.push(v);
         }

@@ -4,7 +4,7 @@
 //! own objects (Python's in `rust/python/convert.rs`) and maps [`Error`] to its exceptions.
 //! Every refusal names the argument, the expected form and what was given.
 use super::error::Error;
-use super::spatial::Vec3;
+use super::spatial::{Mat3, Placement, Vec3};
 
 /// An integer as a binding sees it: a value, one beyond 64 bits, or not an integer at all.
 pub enum Int {
@@ -35,6 +35,9 @@ pub trait Arg: Sized {
     fn array(&self, arg: &str) -> Result<(Vec<usize>, Vec<f64>), Self::Err>;
     /// A value of the wrong kind altogether (a float for a count): the binding's type error.
     fn wrong_type(&self, arg: &str, expected: &str) -> Self::Err;
+    /// A mapping's (a dict's) value under `key`: `Some(None)` for a key it lacks, `None` for
+    /// a value that is no mapping.
+    fn get(&self, key: &str) -> Option<Option<Self>>;
 }
 
 pub fn shape_str(shape: &[usize]) -> String {
@@ -136,4 +139,25 @@ pub fn items<A: Arg>(x: &A, arg: &str, expected: &str) -> Result<Vec<A>, A::Err>
         Some(items) if x.text().is_none() => items,
         _ => Err(Error::arg(arg, expected, x.shown()).into()),
     }
+}
+
+/// A 3 × 3 matrix, given in rows.
+pub fn mat3<A: Arg>(x: &A, arg: &str) -> Result<Mat3, A::Err> {
+    let (shape, data) = x.array(arg)?;
+    if shape != [3, 3] {
+        return Err(Error::arg(arg, "shape (3, 3)", shape_str(&shape)).into());
+    }
+    Ok(Mat3::from_row_slice(&data))
+}
+
+/// A frame from an optional translation (default zero) and rotation (default identity).
+pub fn placement<A: Arg>(
+    t: Option<&A>,
+    r: Option<&A>,
+    t_arg: &str,
+    r_arg: &str,
+) -> Result<Placement, A::Err> {
+    let t = opt(t, |t| vec3(t, t_arg))?.unwrap_or_else(Vec3::zeros);
+    let r = opt(r, |r| mat3(r, r_arg))?.unwrap_or_else(Mat3::identity);
+    Ok(Placement::new(r, t))
 }

@@ -614,8 +614,10 @@ fn toml_tables_parse_and_refuse() {
 #[test]
 fn error_messages_list_every_type_and_family() {
     let parse = |s: &str| Effect::from_toml(&s.parse::<toml::Table>().unwrap());
+    // The test build registers the guide's toy effect too (`toy_spring.rs`), last.
     let types = "one of \"gravity\", \"spring\", \"damper\", \"friction\", \"torque\", \
-\"tabulated_torque\", \"pd_torque\", \"external\", \"point_spring\", \"ground_contact\", \"joint_limit\"";
+\"tabulated_torque\", \"pd_torque\", \"external\", \"point_spring\", \"ground_contact\", \"joint_limit\", \
+\"toy_spring\"";
     for (text, got) in [
         ("type = \"springs\"", "\"springs\""),
         ("g = [0, 0, 1]", "nothing"),

@@ -11,6 +11,7 @@ use crate::effects::{Disabled, Effect, Effects};
 use crate::model::Model;
 use crate::support::error::{Error, FileKind, Location, Result};
 
+mod args;
 mod bodies;
 mod couplings;
 mod loops;

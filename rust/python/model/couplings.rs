@@ -2,32 +2,12 @@
 //! (`set_armature`, `armature`): argument conversion around `crate::loops::coupling` and
 //! `crate::recursive::armature`.
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyString};
 
 use super::{gravity_arg, load_state, load_x, PyModel};
-use crate::dynamics::shared::Version;
+use crate::effects::args::{joint_body, numbers};
 use crate::loops;
-use crate::python::convert::{int_arg, real, to_array1};
-use crate::python::errors::{check_result, invalid, IntoPyResult};
-
-/// A joint given as a body index, a URDF joint name or a body name: its body's index
-/// (`crate::effects::resolve_joint_body`).
-fn joint_ref(ver: &Version, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<usize> {
-    let py = obj.py();
-    let r = if let Ok(name) = obj.cast::<PyString>() {
-        crate::effects::JointRef::Name(name.to_cow()?.into_owned())
-    } else {
-        let k = int_arg(
-            obj,
-            arg,
-            0,
-            i64::MAX,
-            "a body index, a joint name or a body name",
-        )?;
-        crate::effects::JointRef::Index(k as usize)
-    };
-    crate::effects::resolve_joint_body(&ver.model, &r, arg).py(py)
-}
+use crate::python::convert::{real, to_array1};
+use crate::python::errors::{check_result, IntoPyResult};
 
 #[pymethods]
 impl PyModel {
@@ -49,10 +29,11 @@ impl PyModel {
             .map(|x| real(x, "offset"))
             .transpose()?
             .unwrap_or(0.0);
-        let ver = self.version();
-        let j = joint_ref(&ver, joint, "joint")?;
-        let r = joint_ref(&ver, reference, "reference")?;
-        drop(ver);
+        let model = self.model();
+        let j = joint_body(&model, joint, "joint")?;
+        let r = joint_body(&model, reference, "reference")?;
+        // The handle let go first, so that the update extends the model in place.
+        drop(model);
         self.shared
             .update(|m| m.add_coupling(j, r, ratio, offset, name))
             .py(py)
@@ -111,21 +92,9 @@ impl PyModel {
         joint: &Bound<'_, PyAny>,
         value: &Bound<'_, PyAny>,
     ) -> PyResult<()> {
-        let ver = self.version();
-        let j = joint_ref(&ver, joint, "joint")?;
-        drop(ver);
-        if value.is_instance_of::<PyBool>() {
-            return Err(invalid(
-                py,
-                "value",
-                "a number >= 0, or one per speed of the joint",
-                format!("the bool {value}"),
-            ));
-        }
-        let values = match value.extract::<f64>() {
-            Ok(x) => vec![x],
-            Err(_) => crate::python::convert::vector(value, "value", None)?,
-        };
+        let j = joint_body(&self.model(), joint, "joint")?;
+        let expected = "a number >= 0, or one per speed of the joint";
+        let values = numbers(value, "value", expected)?;
         self.shared.update(|m| m.set_armature(j, &values)).py(py)
     }
 

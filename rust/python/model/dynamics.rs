@@ -2,9 +2,7 @@
 //! matrix, bias forces and energies.
 use pyo3::prelude::*;
 
-use super::{
-    external_wrenches, gravity_arg, load_state, load_x, method_arg, Method, PyModel, DETACH_LINKS,
-};
+use super::{gravity_arg, load_state, load_x, method_arg, Method, PyModel, DETACH_LINKS};
 use crate::dynamics::denoc;
 use crate::dynamics::shared::{Direction, Workspace};
 use crate::kinematics;
@@ -64,7 +62,7 @@ impl PyModel {
         actuated: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model();
-        let Some(actuated) = crate::python::loops::loop_actuation(py, &model, actuated)? else {
+        let Some(actuated) = crate::model::args::loop_actuation(&model, actuated)? else {
             return self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method);
         };
         let tree = self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method)?;
@@ -230,7 +228,7 @@ impl PyModel {
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, x, input(direction))?;
-            let ext = external_wrenches(ws.model(), external)?;
+            let ext = crate::model::args::external(ws.model(), external)?;
             match method {
                 Method::Recursive => {
                     let ext = ext.as_deref();

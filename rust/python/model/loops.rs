@@ -3,13 +3,13 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::{external_wrenches, gravity_arg, load_state, load_x, rename, PyModel};
+use super::{gravity_arg, load_state, load_x, rename, PyModel};
 use crate::loops;
-use crate::python::convert::{dmatrix_to_array, mat3, to_array, to_array1, vec3};
+use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::joint::PyJoint;
 use crate::python::loops::body_ref;
-use crate::support::spatial::{Placement, Vec3};
+use crate::support::args::placement;
 
 #[pymethods]
 impl PyModel {
@@ -28,23 +28,8 @@ impl PyModel {
         rotation_b: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
     ) -> PyResult<usize> {
-        let frame = |t: Option<&Bound<'_, PyAny>>,
-                     r: Option<&Bound<'_, PyAny>>,
-                     ta: &str,
-                     ra: &str|
-         -> PyResult<Placement> {
-            let t = match t.filter(|x| !x.is_none()) {
-                Some(t) => vec3(t, ta)?,
-                None => Vec3::zeros(),
-            };
-            let r = match r.filter(|x| !x.is_none()) {
-                Some(r) => mat3(r, ra)?,
-                None => crate::support::spatial::Mat3::identity(),
-            };
-            Ok(Placement::new(r, t))
-        };
-        let fa = frame(translation_a, rotation_a, "translation_a", "rotation_a")?;
-        let fb = frame(translation_b, rotation_b, "translation_b", "rotation_b")?;
+        let fa = placement(translation_a, rotation_a, "translation_a", "rotation_a")?;
+        let fb = placement(translation_b, rotation_b, "translation_b", "rotation_b")?;
         let model = self.model();
         let a = body_ref(&model, body_a, "body_a")?;
         let b = body_ref(&model, body_b, "body_b")?;
@@ -200,7 +185,7 @@ impl PyModel {
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, tau, "tau")?;
-            let ext = external_wrenches(ws.model(), external)?;
+            let ext = crate::model::args::external(ws.model(), external)?;
             let w = ws.constraint_forces(&g, ext.as_deref()).py(py)?;
             let flat: Vec<f64> = w.iter().flatten().copied().collect();
             check_result(py, "constraint_forces", &flat)?;

@@ -10,9 +10,9 @@ use pyo3::prelude::*;
 
 use crate::dynamics::shared::{SharedModel, Version, Workspace};
 use crate::model::Model;
-use crate::python::convert::{vec3, vector_into};
+use crate::python::convert::vector_into;
 use crate::python::errors::{invalid, IntoPyResult};
-use crate::support::spatial::{Vec3, Vec6};
+use crate::support::spatial::Vec3;
 
 mod couplings;
 mod dynamics;
@@ -34,15 +34,8 @@ pub struct PyModel {
 }
 
 /// `None` means no gravity: a model computes only what it is asked for.
-pub fn gravity_arg(py: Python<'_>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
-    match gravity {
-        Some(g) if !g.is_none() => {
-            let g = vec3(g, "gravity")?;
-            crate::support::error::check_finite("gravity", g.as_slice()).py(py)?;
-            Ok(g)
-        }
-        _ => Ok(Vec3::zeros()),
-    }
+pub fn gravity_arg(_py: Python<'_>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
+    crate::model::args::gravity(gravity)
 }
 
 enum Method {
@@ -161,23 +154,6 @@ fn all_finite(x: &[f64]) -> bool {
         *a += v * 0.0;
     }
     acc.iter().all(|a| *a == 0.0)
-}
-
-fn external_wrenches(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Vec<Vec6>>> {
-    match obj {
-        Some(f) if !f.is_none() => {
-            let (shape, data) = crate::python::convert::array(f, "external")?;
-            let n = model.links.len();
-            if shape != [n, 6] {
-                return Err(invalid(f.py(), "external", format!("shape ({n}, 6): one wrench [moment about the link origin; force] per moving link, world axes"), crate::python::convert::shape_str(&shape)));
-            }
-            crate::support::error::check_finite("external", &data).py(f.py())?;
-            Ok(Some(
-                data.chunks_exact(6).map(Vec6::from_column_slice).collect(),
-            ))
-        }
-        _ => Ok(None),
-    }
 }
 
 /// An error about argument `from` renamed to `to` (`q` → `q_guess`).

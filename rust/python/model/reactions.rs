@@ -3,11 +3,11 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::{external_wrenches, gravity_arg, PyModel};
+use super::{gravity_arg, PyModel};
 use crate::dynamics::reactions;
+use crate::model::args::loop_actuation;
 use crate::python::convert::{to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, to_py, IntoPyResult};
-use crate::python::loops::loop_actuation;
 use crate::python::signals::{detach_watched, stopped_with_partial};
 use crate::recursive;
 use crate::support::spatial::Vec3;
@@ -208,8 +208,8 @@ impl PyModel {
                 "a stack of states",
             ));
         }
-        let ext = external_wrenches(&model, external)?;
-        let actuated = loop_actuation(py, &model, actuated)?;
+        let ext = crate::model::args::external(&model, external)?;
+        let actuated = loop_actuation(&model, actuated)?;
         let out = reactions::bearing_forces(
             &model,
             &qs,

@@ -4,12 +4,13 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::PyModel;
+use crate::model::args::some_body;
 use crate::model::Model;
 use crate::python::body::PyRigidBody;
-use crate::python::convert::{mat3, to_array1, vec3};
-use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::convert::to_array1;
+use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
-use crate::support::spatial::{Placement, Vec3};
+use crate::support::args;
 
 #[pymethods]
 impl PyModel {
@@ -38,60 +39,11 @@ impl PyModel {
         name: Option<String>,
         point_mass_center: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<usize> {
-        let t = match translation {
-            Some(t) if !t.is_none() => vec3(t, "translation")?,
-            _ => Vec3::zeros(),
-        };
-        let r = match rotation {
-            Some(r) if !r.is_none() => mat3(r, "rotation")?,
-            _ => crate::support::spatial::Mat3::identity(),
-        };
-        let center = match point_mass_center {
-            Some(c) if !c.is_none() => Some(vec3(c, "point_mass_center")?),
-            _ => None,
-        };
-        // -1, None or "world" is the world; a name is resolved by the model; any int is taken
-        // (no OverflowError), anything else is a TypeError.
-        let parent = match parent.filter(|p| !p.is_none()) {
-            None => -1,
-            Some(p) if p.is_instance_of::<pyo3::types::PyString>() => {
-                match p.extract::<String>()?.as_str() {
-                    "world" => -1,
-                    name => self.model().body_named("parent", name).py(py)? as i64,
-                }
-            }
-            Some(p) => crate::python::convert::int_arg(
-                p,
-                "parent",
-                i64::MIN,
-                i64::MAX,
-                "-1 or 'world' (the world), a body index >= 0 or a body name",
-            )?,
-        };
+        let frame = args::placement(translation, rotation, "translation", "rotation")?;
+        let center = args::opt(point_mass_center, |c| args::vec3(c, "point_mass_center"))?;
+        let parent = crate::model::args::body(&self.model(), parent, "parent")?;
         self.shared
-            .update(|model| {
-                let parent = match parent {
-                    -1 => None,
-                    p if p >= 0 => Some(p as usize),
-                    p => {
-                        return Err(crate::support::error::Error::model(
-                            "parent",
-                            format!(
-                                "expected -1 (the world) or a body index 0..{}, got {p}",
-                                model.nbodies()
-                            ),
-                        ))
-                    }
-                };
-                model.add_body(
-                    body.inner,
-                    joint.inner,
-                    parent,
-                    Placement::new(r, t),
-                    name,
-                    center,
-                )
-            })
+            .update(|model| model.add_body(body.inner, joint.inner, parent, frame, name, center))
             .py(py)
     }
 
@@ -174,16 +126,9 @@ impl PyModel {
     }
 
     /// Body `body`'s own rigid body (mass, COM and inertia in its frame), as added.
-    fn body(&self, py: Python<'_>, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
+    fn body(&self, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
         let model = self.model();
-        let b = crate::python::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
-            invalid(
-                py,
-                "body",
-                "a body of the model (not the world)",
-                "the world",
-            )
-        })?;
+        let b = some_body(&model, body, "body")?;
         Ok(PyRigidBody {
             inner: model.bodies[b].body,
         })
@@ -198,15 +143,7 @@ impl PyModel {
         rigid_body: PyRef<'_, PyRigidBody>,
     ) -> PyResult<Self> {
         let ver = self.version();
-        let b =
-            crate::python::loops::body_ref(&ver.model, Some(body), "body")?.ok_or_else(|| {
-                invalid(
-                    py,
-                    "body",
-                    "a body of the model (not the world)",
-                    "the world",
-                )
-            })?;
+        let b = some_body(&ver.model, body, "body")?;
         let mut model = (*ver.model).clone();
         model.replace_body(b, rigid_body.inner).py(py)?;
         Ok(PyModel::from_model(model))
