@@ -261,11 +261,10 @@ fn blocks(first: usize, count: usize) -> impl Iterator<Item = ([usize; LANES], u
     })
 }
 
-/// Frame `f`'s Jacobians (row-major 6 × nv each) at rows `first..first + count` of `qs`
-/// into `out` (its first row is row `first`'s; every entry written). `walk` is
-/// `f.link`'s support; `poll` is asked every 256 rows.
+/// [`frame_jacobian_rows`]' body.
 #[allow(clippy::too_many_arguments)]
-pub fn frame_jacobian_rows(
+#[inline(always)]
+fn frame_rows(
     model: &Model,
     walk: &Walk,
     f: &FrameRef,
@@ -331,11 +330,10 @@ pub fn frame_jacobian_rows(
     Ok(())
 }
 
-/// The centre of mass (`com`, 3 per row) and, with `jac`, its Jacobian (row-major 3 × nv per
-/// row; every entry written) at rows `first..first + count` of `qs`; `walk` covers every
-/// link (in link order); `total` is the moving mass (> 0).
+/// [`com_rows`]' body.
 #[allow(clippy::too_many_arguments)]
-pub fn com_rows(
+#[inline(always)]
+fn com_rows_impl(
     model: &Model,
     walk: &Walk,
     qs: &[f64],
@@ -378,7 +376,7 @@ pub fn com_rows(
         let base = rows[0] - first;
         for l in 0..real {
             for i in 0..3 {
-                com[3 * (base + l) + i] = h[i].div(t).0[l];
+                com[3 * (base + l) + i] = (h[i] / t).0[l];
             }
         }
         let Some(jac) = jac.as_deref_mut() else {
@@ -391,7 +389,7 @@ pub fn com_rows(
             let col = lanes::add3(&lanes::scale3(&c.lin, m), &lanes::cross(&c.ang, &arm));
             for l in 0..real {
                 for i in 0..3 {
-                    out[l * 3 * nv + i * nv + c.v] = col[i].div(t).0[l];
+                    out[l * 3 * nv + i * nv + c.v] = (col[i] / t).0[l];
                 }
             }
         }
@@ -407,3 +405,80 @@ fn mass_sums(walk: &Walk, w: &mut Work) {
         }
     }
 }
+
+/// Whether this CPU has AVX2: the lanes then run four to an instruction (tested once by
+/// the standard library, cached).
+#[inline]
+fn avx2() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx2")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// The same code compiled twice: for baseline x86-64 and with AVX2 enabled (no FMA, so
+/// every lane rounds as the baseline build does), chosen per call by [`avx2`].
+macro_rules! dispatch {
+    ($(#[$doc:meta])* $name:ident, $avx:ident, $imp:ident, ($($arg:ident: $ty:ty),*)) => {
+        $(#[$doc])*
+        #[allow(clippy::too_many_arguments)]
+        pub fn $name($($arg: $ty),*) -> crate::support::error::Result<()> {
+            #[cfg(target_arch = "x86_64")]
+            if avx2() {
+                // SAFETY: AVX2 is present (checked just above).
+                return unsafe { $avx($($arg),*) };
+            }
+            $imp($($arg),*)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        #[allow(clippy::too_many_arguments)]
+        unsafe fn $avx($($arg: $ty),*) -> crate::support::error::Result<()> {
+            $imp($($arg),*)
+        }
+    };
+}
+
+dispatch!(
+    /// Frame `f`'s Jacobians (row-major 6 × nv each) at rows `first..first + count` of `qs`
+    /// into `out` (its first row is row `first`'s; every entry written). `walk` is
+    /// `f.link`'s support; `poll` is asked every 256 rows.
+    frame_jacobian_rows,
+    frame_rows_avx2,
+    frame_rows,
+    (
+        model: &Model,
+        walk: &Walk,
+        f: &FrameRef,
+        rf: ReferenceFrame,
+        qs: &[f64],
+        first: usize,
+        count: usize,
+        out: &mut [f64],
+        poll: &dyn Fn() -> crate::support::error::Result<()>
+    )
+);
+
+dispatch!(
+    /// The centre of mass (`com`, 3 per row) and, with `jac`, its Jacobian (row-major
+    /// 3 × nv per row; every entry written) at rows `first..first + count` of `qs`; `walk`
+    /// covers every link (in link order) of a model with moving mass.
+    com_rows,
+    com_rows_avx2,
+    com_rows_impl,
+    (
+        model: &Model,
+        walk: &Walk,
+        qs: &[f64],
+        first: usize,
+        count: usize,
+        com: &mut [f64],
+        jac: Option<&mut [f64]>,
+        poll: &dyn Fn() -> crate::support::error::Result<()>
+    )
+);

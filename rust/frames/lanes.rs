@@ -4,7 +4,7 @@
 //! compiler turns the lane loops into vector instructions (two lanes per instruction on
 //! baseline x86-64, four where `batch` dispatches to AVX); there are no fused
 //! multiply-adds, so every lane is bit for bit the scalar formula.
-use std::ops::{Add, Mul, Neg, Sub};
+use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Rows processed together.
 pub const LANES: usize = 4;
@@ -27,12 +27,6 @@ impl V {
             r[l] = f(self.0[l], o.0[l]);
         }
         V(r)
-    }
-
-    /// Division lane by lane.
-    #[inline(always)]
-    pub fn div(self, o: V) -> V {
-        self.zip(o, |a, b| a / b)
     }
 }
 
@@ -65,6 +59,14 @@ impl Mul<f64> for V {
     #[inline(always)]
     fn mul(self, o: f64) -> V {
         self.zip(V::splat(o), |a, b| a * b)
+    }
+}
+
+impl Div for V {
+    type Output = V;
+    #[inline(always)]
+    fn div(self, o: V) -> V {
+        self.zip(o, |a, b| a / b)
     }
 }
 

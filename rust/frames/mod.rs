@@ -23,6 +23,7 @@ pub mod jacobian;
 pub mod jacobian_dot;
 pub mod lanes;
 pub mod motion;
+mod null_step;
 pub mod placement;
 pub mod rows;
 #[cfg(test)]

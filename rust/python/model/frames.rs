@@ -80,6 +80,21 @@ fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
     s
 }
 
+/// An uninitialised C-ordered float64 array of `shape` (the caller writes every entry).
+fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArrayDyn<f64>> {
+    // SAFETY: f64 has no invalid bit patterns; the callers fill the array before Python
+    // sees it.
+    unsafe { numpy::PyArrayDyn::<f64>::new(py, numpy::ndarray::IxDyn(shape), false) }
+}
+
+/// [`check_result`] after one vectorised pass (the entry-by-entry search only on a failure).
+fn check_finite_result(py: Python<'_>, what: &str, out: &[f64]) -> PyResult<()> {
+    match crate::frames::rows::all_finite(out) {
+        true => Ok(()),
+        false => check_result(py, what, out),
+    }
+}
+
 fn optional_vector(
     model: &Model,
     py: Python<'_>,
@@ -230,12 +245,15 @@ impl PyModel {
         let f = frame_arg(&model, frame, "frame")?;
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
         let nv = model.nv;
-        let mut out = vec![0.0; rows * 6 * nv];
+        let arr = new_array(py, &lead(stacked, rows, &[6, nv]));
+        // SAFETY: a new array no Python code has seen yet, C-contiguous; every entry is
+        // written before it is returned (dropped unseen on an error).
+        let out = unsafe { arr.as_slice_mut() }?;
         detach_interruptible(py, || {
-            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, &mut out)
+            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, out)
         })?;
-        check_result(py, "frame_jacobian", &out)?;
-        to_array(py, out, &lead(stacked, rows, &[6, nv]))
+        check_finite_result(py, "frame_jacobian", out)?;
+        Ok(arr.into_any())
     }
 
     /// `J̇` of `frame` in `reference` at (q, v): the time derivative of `frame_jacobian`.
@@ -312,23 +330,25 @@ impl PyModel {
         let model = self.model();
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
         let nv = model.nv;
-        let mut com = vec![0.0; 3 * rows];
-        let mut jac = vec![0.0; if jacobian { rows * 3 * nv } else { 0 }];
-        let j = jacobian.then_some(jac.as_mut_slice());
+        let com = new_array(py, &lead(stacked, rows, &[3]));
+        let jac = jacobian.then(|| new_array(py, &lead(stacked, rows, &[3, nv])));
+        // SAFETY: new arrays no Python code has seen yet, C-contiguous; every entry is
+        // written before they are returned (dropped unseen on an error).
+        let c = unsafe { com.as_slice_mut() }?;
+        let j = match &jac {
+            Some(a) => Some(unsafe { a.as_slice_mut() }?),
+            None => None,
+        };
         if rows == 1 {
-            evaluate::com_batch(&model, &qs, rows, stacked, &mut com, j).py(py)?;
+            evaluate::com_batch(&model, &qs, rows, stacked, c, j).py(py)?;
         } else {
-            detach_interruptible(py, || {
-                evaluate::com_batch(&model, &qs, rows, stacked, &mut com, j)
-            })?;
+            detach_interruptible(py, || evaluate::com_batch(&model, &qs, rows, stacked, c, j))?;
         }
-        check_result(py, "center_of_mass", &com)?;
-        let c = to_array(py, com, &lead(stacked, rows, &[3]))?;
-        if !jacobian {
-            return Ok(c);
+        check_finite_result(py, "center_of_mass", c)?;
+        match jac {
+            Some(j) => Ok((com, j).into_pyobject(py)?.into_any()),
+            None => Ok(com.into_any()),
         }
-        let j = to_array(py, jac, &lead(stacked, rows, &[3, nv]))?;
-        Ok((c, j).into_pyobject(py)?.into_any())
     }
 
     /// (position, velocity, acceleration) of the centre of mass at (q, v, a); `a=None` is zero.
