@@ -233,7 +233,8 @@ impl PyModel {
                 // The support's poses and joint columns only (no inertias).
                 crate::kinematics::plan::frame_poses_for(model, &ws.q, &mut ws.data.links, f.link);
                 let nv = model.nv;
-                let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
+                // Uninitialised: `frame_jacobian_links` writes every entry.
+                let arr = new_array(py, &[6, nv]);
                 // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
                 let out = unsafe { arr.as_slice_mut() }?;
                 jacobian::frame_jacobian_links(model, &ws.data.links, &f, rf, out);
@@ -312,7 +313,8 @@ impl PyModel {
             return self.with_workspace(|ws| {
                 load_state(ws, py, q, None)?;
                 let model = &ws.version.model;
-                let arr = jacobian.then(|| numpy::PyArray2::<f64>::zeros(py, [3, model.nv], false));
+                // Uninitialised: `com_one` writes every entry of the Jacobian.
+                let arr = jacobian.then(|| new_array(py, &[3, model.nv]));
                 let j = match &arr {
                     // SAFETY: a new array no Python code has seen yet, C-contiguous, 3 × nv.
                     Some(a) => Some(unsafe { a.as_slice_mut() }?),
