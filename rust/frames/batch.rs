@@ -71,6 +71,8 @@ pub struct Work {
     /// Subtree mass and first moment per step (the COM).
     mass: Vec<f64>,
     moment: Vec<V3>,
+    /// The frame's orientation (LOCAL Jacobians).
+    local: M3,
 }
 
 impl Walk {
@@ -140,6 +142,7 @@ impl Walk {
                 .map(|s| model.links[s.link].rigid.mass)
                 .collect(),
             moment: vec![zero; n],
+            local: IDENTITY,
         }
     }
 }
@@ -147,7 +150,11 @@ impl Walk {
 /// The configurations of rows `rows` (row-major in `qs`, `nq` each), coordinate `i`.
 #[inline(always)]
 fn gather(qs: &[f64], nq: usize, rows: &[usize; LANES], i: usize) -> V {
-    V(std::array::from_fn(|l| qs[rows[l] * nq + i]))
+    let mut x = [0.0; LANES];
+    for l in 0..LANES {
+        x[l] = qs[rows[l] * nq + i];
+    }
+    V(x)
 }
 
 /// Lane `l` of a lane matrix, as a `Mat3`.
@@ -155,26 +162,46 @@ fn lane_mat(m: &M3, l: usize) -> Mat3 {
     Mat3::from_column_slice(&std::array::from_fn::<f64, 9, _>(|k| m[k].0[l]))
 }
 
+const IDENTITY: M3 = {
+    let (o, z) = (V([1.0; LANES]), V([0.0; LANES]));
+    [o, z, z, z, o, z, z, z, o]
+};
+
+/// Column `j` of the joint frame's orientation `R_parent P` (as `Placing::apply`).
+#[inline(always)]
+fn joint_column(rp: &M3, placing: &Placing, p: &[f64; 9], j: usize) -> V3 {
+    match *placing {
+        Placing::Identity => [rp[3 * j], rp[3 * j + 1], rp[3 * j + 2]],
+        // Exact: a signed permutation picks and negates the parent's columns.
+        Placing::Permutation { from, sign } => {
+            let (c, sg) = (3 * from[j], sign[j]);
+            [rp[c] * sg, rp[c + 1] * sg, rp[c + 2] * sg]
+        }
+        Placing::General => lanes::mat_vec_c(rp, &[p[3 * j], p[3 * j + 1], p[3 * j + 2]]),
+    }
+}
+
+#[inline(always)]
+fn set_column(m: &mut M3, j: usize, c: &V3) {
+    m[3 * j] = c[0];
+    m[3 * j + 1] = c[1];
+    m[3 * j + 2] = c[2];
+}
+
 /// Poses and joint columns of every step at the four rows `rows` (checked configurations).
+/// Each rotation is written in place column by column (whole-matrix copies of lanes are
+/// calls to `memcpy`).
 #[inline(always)]
 fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut Work) {
     let nq = model.nq;
-    let ident: M3 = std::array::from_fn(|k| V::splat(if k % 4 == 0 { 1.0 } else { 0.0 }));
     for (k, s) in walk.steps.iter().enumerate() {
-        let (r_parent, o_parent) = match s.parent {
-            Some(p) => (w.rot[p], w.org[p]),
-            None => (ident, [V::ZERO; 3]),
+        let (done, rest) = w.rot.split_at_mut(k);
+        let rk = &mut rest[0];
+        let (rp, o_parent) = match s.parent {
+            Some(p) => (&done[p], w.org[p]),
+            None => (&IDENTITY, [V::ZERO; 3]),
         };
-        let r_joint = match s.placing {
-            Placing::Identity => r_parent,
-            // Exact: a signed permutation picks and negates the parent's columns.
-            Placing::Permutation { from, sign } => std::array::from_fn(|e| {
-                let (i, j) = (e % 3, e / 3);
-                r_parent[i + 3 * from[j]] * sign[j]
-            }),
-            Placing::General => lanes::mat_mat_c(&r_parent, &s.p),
-        };
-        let origin = lanes::add3(&o_parent, &lanes::mat_vec_c(&r_parent, &s.t));
+        let origin = lanes::add3(&o_parent, &lanes::mat_vec_c(rp, &s.t));
         match s.mv {
             Move::Turn { axis, sign } => {
                 let x = gather(qs, nq, rows, s.q) * sign;
@@ -188,37 +215,46 @@ fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut 
                 });
                 let (sn, cs) = (V(sn), V(cs));
                 let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
-                let mut r = r_joint;
-                for row in 0..3 {
-                    let (xa, xb) = (r_joint[row + 3 * a], r_joint[row + 3 * b]);
-                    r[row + 3 * a] = xa * cs + xb * sn;
-                    r[row + 3 * b] = xb * cs - xa * sn;
-                }
-                w.rot[k] = r;
+                // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
+                let ca = joint_column(rp, &s.placing, &s.p, a);
+                let cb = joint_column(rp, &s.placing, &s.p, b);
+                let ck = joint_column(rp, &s.placing, &s.p, axis);
+                let turned_a: V3 = std::array::from_fn(|i| ca[i] * cs + cb[i] * sn);
+                let turned_b: V3 = std::array::from_fn(|i| cb[i] * cs - ca[i] * sn);
+                set_column(rk, a, &turned_a);
+                set_column(rk, b, &turned_b);
+                set_column(rk, axis, &ck);
                 w.org[k] = origin;
-                let c = &mut w.cols[s.col];
-                c.ang = std::array::from_fn(|i| r_joint[i + 3 * axis] * sign);
+                w.cols[s.col].ang = [ck[0] * sign, ck[1] * sign, ck[2] * sign];
             }
             Move::Slide { axis } => {
+                for j in 0..3 {
+                    let c = joint_column(rp, &s.placing, &s.p, j);
+                    set_column(rk, j, &c);
+                }
                 let x = gather(qs, nq, rows, s.q);
                 let t = [x * axis[0], x * axis[1], x * axis[2]];
-                w.rot[k] = r_joint;
-                w.org[k] = lanes::add3(&origin, &lanes::mat_vec(&r_joint, &t));
-                w.cols[s.col].lin = lanes::mat_vec_c(&r_joint, &axis);
+                w.org[k] = lanes::add3(&origin, &lanes::mat_vec(rk, &t));
+                w.cols[s.col].lin = lanes::mat_vec_c(rk, &axis);
             }
-            Move::Other => other4(model, s, qs, rows, &r_joint, &origin, k, w),
+            Move::Other => {
+                for j in 0..3 {
+                    let c = joint_column(rp, &s.placing, &s.p, j);
+                    set_column(rk, j, &c);
+                }
+                other4(model, s, qs, rows, &origin, k, w);
+            }
         }
     }
 }
 
-/// A joint the lanes do not specialise: the scalar code of `frame_poses_along`, per lane.
-#[allow(clippy::too_many_arguments)]
+/// A joint the lanes do not specialise: the scalar code of `frame_poses_along`, per lane,
+/// from the joint frame's orientation in `w.rot[k]` (replaced by the link's).
 fn other4(
     model: &Model,
     s: &Step,
     qs: &[f64],
     rows: &[usize; LANES],
-    r_joint: &M3,
     origin: &V3,
     k: usize,
     w: &mut Work,
@@ -227,7 +263,7 @@ fn other4(
     let (nq, n) = (model.nq, l.joint.nv());
     for lane in 0..LANES {
         let q = &qs[rows[lane] * nq + s.q..rows[lane] * nq + s.q + l.joint.nq()];
-        let rj = lane_mat(r_joint, lane);
+        let rj = lane_mat(&w.rot[k], lane);
         let (r_q, t_q) = l.joint.transform(q);
         let rot = crate::support::spatial::mat_mat(&rj, &r_q);
         let mut o = Vec3::new(origin[0].0[lane], origin[1].0[lane], origin[2].0[lane]);
@@ -287,6 +323,8 @@ fn frame_rows(
     let ft = [fp.translation.x, fp.translation.y, fp.translation.z];
     let mut fr = [0.0; 9];
     fr.copy_from_slice(fp.rotation.as_slice());
+    // Zero in every lane while the results are finite (`x · 0` is NaN for inf and NaN).
+    let mut finite = V::ZERO;
     for (b, (rows, real)) in blocks(first, count).enumerate() {
         if b % (256 / LANES) == 256 / LANES - 1 {
             poll()?;
@@ -299,16 +337,26 @@ fn frame_rows(
             ReferenceFrame::World => [V::ZERO; 3],
             _ => p,
         };
-        let local = (rf == ReferenceFrame::Local).then(|| lanes::mat_mat_c(r, &fr));
+        let local = rf == ReferenceFrame::Local;
+        if local {
+            // `R P_f` in place, column by column as `mat_mat` (no whole-matrix copy).
+            for j in 0..3 {
+                let c = lanes::mat_vec_c(r, &[fr[3 * j], fr[3 * j + 1], fr[3 * j + 2]]);
+                set_column(&mut w.local, j, &c);
+            }
+        }
         let base = (rows[0] - first) * 6 * nv;
         let out = &mut out[base..base + real * 6 * nv];
         for c in &w.cols {
             let arm = lanes::sub3(&x, &w.org[c.step]);
             let mut lin = lanes::add3(&c.lin, &lanes::cross(&c.ang, &arm));
             let mut ang = c.ang;
-            if let Some(rl) = &local {
-                ang = lanes::tr_vec(rl, &ang);
-                lin = lanes::tr_vec(rl, &lin);
+            if local {
+                ang = lanes::tr_vec(&w.local, &ang);
+                lin = lanes::tr_vec(&w.local, &lin);
+            }
+            for i in 0..3 {
+                finite = finite + ang[i] * 0.0 + lin[i] * 0.0;
             }
             for l in 0..real {
                 let row = &mut out[l * 6 * nv..(l + 1) * 6 * nv];
@@ -327,7 +375,17 @@ fn frame_rows(
             }
         }
     }
-    Ok(())
+    overflowed("frame_jacobian", finite)
+}
+
+/// The error for results that are not finite from finite inputs (`finite` not all zero).
+fn overflowed(what: &str, finite: V) -> crate::support::error::Result<()> {
+    match finite.0.iter().all(|x| *x == 0.0) {
+        true => Ok(()),
+        false => Err(crate::support::error::Error::Numerical(format!(
+            "{what}: the result is not finite although the inputs are: a configuration overflows double precision"
+        ))),
+    }
 }
 
 /// [`com_rows`]' body.
@@ -347,6 +405,7 @@ fn com_rows_impl(
     let mut w = walk.work(model);
     mass_sums(walk, &mut w);
     let n = walk.steps.len();
+    let mut finite = V::ZERO;
     for (b, (rows, real)) in blocks(first, count).enumerate() {
         if b % (256 / LANES) == 256 / LANES - 1 {
             poll()?;
@@ -374,9 +433,11 @@ fn com_rows_impl(
         }
         let t = V::splat(total);
         let base = rows[0] - first;
+        let c = [h[0] / t, h[1] / t, h[2] / t];
+        finite = finite + c[0] * 0.0 + c[1] * 0.0 + c[2] * 0.0;
         for l in 0..real {
             for i in 0..3 {
-                com[3 * (base + l) + i] = (h[i] / t).0[l];
+                com[3 * (base + l) + i] = c[i].0[l];
             }
         }
         let Some(jac) = jac.as_deref_mut() else {
@@ -387,14 +448,16 @@ fn com_rows_impl(
             let m = V::splat(w.mass[c.step]);
             let arm = lanes::sub3(&w.moment[c.step], &lanes::scale3(&w.org[c.step], m));
             let col = lanes::add3(&lanes::scale3(&c.lin, m), &lanes::cross(&c.ang, &arm));
+            let col = [col[0] / t, col[1] / t, col[2] / t];
+            finite = finite + col[0] * 0.0 + col[1] * 0.0 + col[2] * 0.0;
             for l in 0..real {
                 for i in 0..3 {
-                    out[l * 3 * nv + i * nv + c.v] = (col[i] / t).0[l];
+                    out[l * 3 * nv + i * nv + c.v] = col[i].0[l];
                 }
             }
         }
     }
-    Ok(())
+    overflowed("center_of_mass", finite)
 }
 
 /// `walk`'s work with each step's mass replaced by its subtree's (what [`com_rows`] reads).

@@ -100,17 +100,6 @@ pub fn mat_vec_c(r: &M3, v: &[f64; 3]) -> V3 {
     [row(0), row(1), row(2)]
 }
 
-/// `a b` for a constant `b`, column by column as [`crate::support::spatial::mat_mat`].
-#[inline(always)]
-pub fn mat_mat_c(a: &M3, b: &[f64; 9]) -> M3 {
-    let mut out = [V::ZERO; 9];
-    for j in 0..3 {
-        let c = mat_vec_c(a, &[b[3 * j], b[3 * j + 1], b[3 * j + 2]]);
-        out[3 * j..3 * j + 3].copy_from_slice(&c);
-    }
-    out
-}
-
 /// `rᵀ v` (the coordinates of `v` in the axes `r`'s columns), as the frame Jacobians' LOCAL.
 #[inline(always)]
 pub fn tr_vec(r: &M3, v: &V3) -> V3 {

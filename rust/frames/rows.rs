@@ -23,7 +23,7 @@ pub fn check_block(model: &Model, qs: &[f64], rows: usize, stacked: bool, arg: &
 
 /// Whether every value is finite, in one vectorisable pass (`x · 0` is NaN exactly for a
 /// non-finite `x`; eight independent lanes).
-pub fn all_finite(x: &[f64]) -> bool {
+fn all_finite(x: &[f64]) -> bool {
     let mut acc = [0.0f64; 8];
     let chunks = x.chunks_exact(8);
     let rest = chunks.remainder();

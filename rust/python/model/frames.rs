@@ -87,14 +87,6 @@ fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArray
     unsafe { numpy::PyArrayDyn::<f64>::new(py, numpy::ndarray::IxDyn(shape), false) }
 }
 
-/// [`check_result`] after one vectorised pass (the entry-by-entry search only on a failure).
-fn check_finite_result(py: Python<'_>, what: &str, out: &[f64]) -> PyResult<()> {
-    match crate::frames::rows::all_finite(out) {
-        true => Ok(()),
-        false => check_result(py, what, out),
-    }
-}
-
 fn optional_vector(
     model: &Model,
     py: Python<'_>,
@@ -253,7 +245,7 @@ impl PyModel {
         detach_interruptible(py, || {
             evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, out)
         })?;
-        check_finite_result(py, "frame_jacobian", out)?;
+        // (Finiteness checked by the core, in its pass.)
         Ok(arr.into_any())
     }
 
@@ -346,7 +338,7 @@ impl PyModel {
         } else {
             detach_interruptible(py, || evaluate::com_batch(&model, &qs, rows, stacked, c, j))?;
         }
-        check_finite_result(py, "center_of_mass", c)?;
+        // (Finiteness checked by the core, in its pass.)
         match jac {
             Some(j) => Ok((com, j).into_pyobject(py)?.into_any()),
             None => Ok(com.into_any()),
