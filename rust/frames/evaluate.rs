@@ -1,7 +1,6 @@
 //! The frame algorithms assembled for one call (what the bindings call): a frame's
 //! Jacobian at many configurations, its velocity and acceleration, the centre of mass and the
 //! centroidal quantities. Each checks its inputs and allocates its own buffers once.
-use crate::kinematics::plan::{frame_poses_along, support_of, MAX_SUPPORT};
 use crate::model::Model;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
@@ -10,7 +9,7 @@ use super::com::{self, Composite};
 
 use super::motion::FrameKinematics;
 use super::rows::{self, check_block};
-use super::{centroidal, jacobian, jacobian_dot, FrameRef, ReferenceFrame};
+use super::{batch, centroidal, jacobian, jacobian_dot, FrameRef, ReferenceFrame};
 
 /// `J` of `f` at `rows` configurations (row-major `rows × 6 × nv` into `out`), checked
 /// here once for the whole block; large blocks are split over threads (`rows::split`).
@@ -24,30 +23,19 @@ pub fn frame_jacobians(
     out: &mut [f64],
 ) -> Result<()> {
     check_block(model, qs, rows, stacked, "q")?;
-    let (nq, nv) = (model.nq, model.nv);
+    let nv = model.nv;
     let threads = rows::threads_for(model, rows);
-    // The frame's support alone (a Jacobian needs no other link, nor any inertia).
-    let mut along = [0; MAX_SUPPORT];
-    let support = support_of(model, f.link, &mut along);
+    // The frame's support alone (a Jacobian needs no other link, nor any inertia), its
+    // per-link decisions made once for the whole block.
+    let mut support: Vec<usize> = model.support(f.link).collect();
+    support.reverse();
+    let walk = batch::Walk::new(model, &support);
     let block = |first: usize,
                  count: usize,
                  out: &mut [f64],
                  _: &mut [f64],
                  poll: &dyn Fn() -> Result<()>| {
-        let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
-        for k in 0..count {
-            if k % 256 == 255 {
-                poll()?;
-            }
-            let q = &qs[(first + k) * nq..(first + k + 1) * nq];
-            match support {
-                Some(n) => frame_poses_along(model, q, &mut links, &along[..n]),
-                None => crate::kinematics::frame_poses(model, q, &mut links),
-            }
-            let j = &mut out[k * 6 * nv..(k + 1) * 6 * nv];
-            jacobian::frame_jacobian_links(model, &links, f, rf, j);
-        }
-        Ok(())
+        batch::frame_jacobian_rows(model, &walk, f, rf, qs, first, count, out, poll)
     };
     rows::split(
         "frame_jacobian",
@@ -127,27 +115,22 @@ pub fn com_batch(
     jac: Option<&mut [f64]>,
 ) -> Result<()> {
     check_block(model, qs, rows, stacked, "q")?;
-    let (nq, nv) = (model.nq, model.nv);
+    let nv = model.nv;
+    if !model.links.iter().any(|l| l.rigid.mass > 0.0) {
+        return Err(no_mass());
+    }
     let with_jac = jac.is_some();
     let per_j = if with_jac { 3 * nv } else { 0 };
     let threads = rows::threads_for(model, rows);
+    let all: Vec<usize> = (0..model.links.len()).collect();
+    let walk = batch::Walk::new(model, &all);
     let block = |first: usize,
                  count: usize,
                  com: &mut [f64],
                  j: &mut [f64],
                  poll: &dyn Fn() -> Result<()>| {
-        let mut links = vec![crate::kinematics::LinkState::default(); model.links.len()];
-        let mut moments = vec![0.0; 4 * model.links.len()];
-        for k in 0..count {
-            if k % 256 == 255 {
-                poll()?;
-            }
-            let q = &qs[(first + k) * nq..(first + k + 1) * nq];
-            let jk = with_jac.then(|| &mut j[k * per_j..(k + 1) * per_j]);
-            let c = com_at(model, q, &mut links, &mut moments, jk)?;
-            com[3 * k..3 * k + 3].copy_from_slice(c.as_slice());
-        }
-        Ok(())
+        let j = with_jac.then_some(j);
+        batch::com_rows(model, &walk, qs, first, count, com, j, poll)
     };
     let jac = jac.unwrap_or(&mut []);
     rows::split(

@@ -2,9 +2,9 @@
 //! errors, `min ‖W (e + E δ)‖² + λ ‖δ‖²` per step, with `λ = μ ‖W e‖²` (Yamashita–Fukushima:
 //! Gauss–Newton near a solution, gradient-like far from it) and `μ` raised on a rejected step.
 //! The loops' and couplings' constraints hold to first order in every step (`J_c δ = −c`,
-//! the minimum-norm correction plus a step in the null space of `J_c`); where a step would
-//! leave the joint limits, the step is the same quadratic program with the limits as bounds,
-//! solved by Clarabel. A run that does not converge restarts from pseudo-random
+//! the minimum-norm correction plus a step in the null space of `J_c`, `null_step`); where
+//! a step would leave the joint limits, the step is the same quadratic program with the
+//! limits as bounds (a box QP on a tree, Clarabel with constraints). A run that does not converge restarts from pseudo-random
 //! configurations within the limits and returns the best it found, saying it did not converge.
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
@@ -17,6 +17,7 @@ use crate::support::spatial::{skew, Mat3, Placement, Vec3};
 use super::box_qp::BoxQp;
 use super::jacobian::point_jacobian_at;
 use super::motion::FrameKinematics;
+use super::null_step::NullStep;
 use super::FrameRef;
 
 /// What a frame should reach.
@@ -117,8 +118,9 @@ pub fn log3(r: &Mat3) -> Vec3 {
     a * theta
 }
 
-/// Every buffer of a solve, allocated once in [`solve`]: an iteration on a model without
-/// loops or couplings allocates nothing (the constrained steps' SVD and Clarabel do).
+/// Every buffer of a solve, allocated once in [`solve`]: an iteration allocates nothing,
+/// with loops and couplings too, unless a step meets the joint limits with constraints
+/// present (Clarabel's QP, [`bounded_step`]).
 struct Work {
     kin: FrameKinematics,
     jac: Vec<f64>,
@@ -143,6 +145,8 @@ struct Work {
     jc: DMatrix<f64>,
     c_trial: DVector<f64>,
     loop_kin: Option<crate::loops::LoopKinematics>,
+    /// The constrained step's factorisation and buffers (loops or couplings only).
+    null: Option<NullStep>,
 }
 
 impl Work {
@@ -168,6 +172,7 @@ impl Work {
             jc: DMatrix::zeros(m, nv),
             c_trial: DVector::zeros(m),
             loop_kin: (m > 0).then(|| crate::loops::LoopKinematics::new(model)),
+            null: (m > 0).then(|| NullStep::new(nv, m)),
         }
     }
 }
@@ -246,7 +251,7 @@ fn constraints(
 
 /// Solves `h x = −g` (`h` n × n symmetric, either storage order) by its Cholesky factor in
 /// `chol`; false when `h` is not positive definite.
-fn cholesky_solve(h: &[f64], g: &[f64], chol: &mut [f64], x: &mut [f64]) -> bool {
+pub(super) fn cholesky_solve(h: &[f64], g: &[f64], chol: &mut [f64], x: &mut [f64]) -> bool {
     let n = g.len();
     for i in 0..n {
         for j in 0..=i {
@@ -281,41 +286,11 @@ fn cholesky_solve(h: &[f64], g: &[f64], chol: &mut [f64], x: &mut [f64]) -> bool
     true
 }
 
-/// The damped step with loop or coupling constraints, unconstrained by limits:
-/// `δ = δ_c + N z` (`δ_c` the minimum-norm correction of the constraints, `N` a basis of
-/// their null space).
-fn free_step(
-    h: &DMatrix<f64>,
-    g: &DVector<f64>,
-    c: &DVector<f64>,
-    jc: &DMatrix<f64>,
-) -> DVector<f64> {
-    let nv = h.nrows();
-    let scale = 1e-10 * (1.0 + jc.amax());
-    let svd = jc.clone().svd(true, true);
-    let dc = svd
-        .solve(&(-c), scale)
-        .unwrap_or_else(|_| DVector::zeros(nv));
-    let basis = null_basis(jc);
-    let hn = basis.transpose() * h * &basis;
-    let gn = basis.transpose() * (g + h * &dc);
-    let z = match hn.cholesky() {
-        Some(ch) => ch.solve(&(-gn)),
-        None => DVector::zeros(basis.ncols()),
-    };
-    dc + basis * z
-}
-
-/// An orthonormal basis of the null space of `jc` (eigenvectors of `J_cᵀ J_c` at zero).
-fn null_basis(jc: &DMatrix<f64>) -> DMatrix<f64> {
-    let nv = jc.ncols();
-    let eig = (jc.transpose() * jc).symmetric_eigen();
-    let tol = 1e-12 * (1.0 + jc.amax()).powi(2);
-    let keep: Vec<usize> = (0..nv).filter(|&k| eig.eigenvalues[k] <= tol).collect();
-    eig.eigenvectors.select_columns(keep.iter())
-}
-
-/// The step as a QP with the bounds `lo ≤ δ ≤ hi` (and `J_c δ = −c`) on Clarabel.
+/// The step as a QP with the bounds `lo ≤ δ ≤ hi` (and `J_c δ = −c`) on Clarabel. This
+/// allocates (the problem's sparse matrices, Clarabel's solver and its factorisation are
+/// built per call; Clarabel has no way to refill a solver's matrices in place): it is taken
+/// only where a step with loops or couplings would leave the limits, or where the box QP
+/// gives up (docs/kinematics.md §4).
 fn bounded_step(
     h: &DMatrix<f64>,
     g: &DVector<f64>,
@@ -469,8 +444,14 @@ fn damped_step(model: &Model, opts: &Options, q: &[f64], wk: &mut Work) -> bool 
         if !solved {
             wk.step.fill(0.0);
         }
-    } else {
-        wk.step = free_step(&wk.h, &wk.g, &wk.c, &wk.jc);
+    } else if let Some(null) = &mut wk.null {
+        null.solve(
+            wk.h.as_slice(),
+            wk.g.as_slice(),
+            wk.c.as_slice(),
+            wk.jc.as_slice(),
+            wk.step.as_mut_slice(),
+        );
     }
     let Some(limits) = &opts.limits else {
         return true;
@@ -492,7 +473,7 @@ fn damped_step(model: &Model, opts: &Options, q: &[f64], wk: &mut Work) -> bool 
         );
     if !boxed {
         match bounded_step(&wk.h, &wk.g, &wk.c, &wk.jc, lo, hi) {
-            Some(s) => wk.step = s,
+            Some(s) => wk.step.copy_from(&s),
             None => return false,
         }
     }
@@ -708,5 +689,88 @@ mod tests {
         );
         // The limits were active on the way (else the box QP was not exercised) and hold.
         assert!(q.iter().all(|x| (-0.45..=0.3).contains(x)), "{q:?}");
+    }
+
+    /// A planar four-bar (revolute cut joint: five rows of rank two) whose coupler point
+    /// reaches a point of its coupler curve, and a chain with a coupling: the constrained
+    /// steps (`NullStep`) allocate nothing either, and the constraints hold at the end.
+    #[test]
+    fn constrained_iterations_allocate_nothing() {
+        use crate::joint::Joint;
+        use crate::model::body::RigidBody;
+        let at = |x: f64| Placement::new(Mat3::identity(), Vec3::new(x, 0.0, 0.0));
+        let rod = |l: f64| {
+            let i = Mat3::from_diagonal(&Vec3::new(1e-6, l * l / 12.0, l * l / 12.0));
+            RigidBody::new(1.0, Vec3::new(l / 2.0, 0.0, 0.0), i).unwrap()
+        };
+        let z = || Joint::revolute(Vec3::z()).unwrap();
+        let mut fourbar = Model::new();
+        fourbar
+            .add_body(rod(0.3), z(), None, at(0.0), None, None)
+            .unwrap();
+        fourbar
+            .add_body(rod(0.8), z(), Some(0), at(0.3), None, None)
+            .unwrap();
+        fourbar
+            .add_body(rod(0.5), z(), None, at(0.6), None, None)
+            .unwrap();
+        fourbar
+            .add_loop(Some(1), Some(2), z(), at(0.8), at(0.5), None)
+            .unwrap();
+        let mut chain = crate::benchmark_models::chain(7);
+        chain.add_coupling(3, 2, 0.5, 0.1, None).unwrap();
+        let mut only_3 = vec![true; chain.nv];
+        only_3[3] = false;
+        let cases = [
+            (
+                &fourbar,
+                vec![true, false, false],
+                [1.2, -0.9, 1.9],
+                [1.5, -1.0, 2.0],
+                1,
+            ),
+            (&chain, only_3, [0.1; 3], [0.3, -0.2, 0.4], 6),
+        ];
+        for (model, fixed, start, goal, body) in cases {
+            let nv = model.nv;
+            let closed = |x: &[f64; 3]| {
+                let mut q = vec![0.2; nv];
+                q[..3].copy_from_slice(x);
+                crate::loops::assemble(model, &q, &fixed, 1e-14, 50).unwrap()
+            };
+            let goal_q = closed(&goal);
+            let point = Placement::new(Mat3::identity(), Vec3::new(0.4, 0.1, 0.0));
+            let f = model.body_frame(body, &point);
+            let mut kin = FrameKinematics::new(model);
+            kin.positions(model, &goal_q);
+            let tasks = [Task {
+                frame: f,
+                target: Target::Position(kin.frame_pose(&f).translation),
+                weights: vec![1.0; 3],
+            }];
+            let opts = Options {
+                tol: 1e-11,
+                max_iterations: 60,
+                restarts: 0,
+                limits: None,
+                seed: 0,
+            };
+            let mut wk = Work::new(model, 3);
+            let mut q = closed(&start);
+            model.compiled();
+            // The loops' row records are made on the first evaluation, not per iteration.
+            measure(model, &tasks, &q, &mut wk);
+            let (its, allocations) = crate::support::alloc::counting::count(|| {
+                run(model, &tasks, &opts, &mut q, &mut wk)
+            });
+            let its = its.unwrap();
+            assert!(its >= 2, "{its} iterations");
+            assert_eq!(
+                allocations, 0,
+                "{allocations} allocations in {its} iterations"
+            );
+            let (res, _) = measure(model, &tasks, &q, &mut wk);
+            assert!(res <= 1e-11, "residual {res}");
+        }
     }
 }

@@ -12,6 +12,7 @@ use crate::model::{checked_rotation, Model};
 use crate::support::error::{check_finite, Error, Result};
 use crate::support::spatial::Placement;
 
+pub mod batch;
 mod box_qp;
 pub mod centroidal;
 pub mod com;
@@ -20,7 +21,9 @@ pub mod evaluate;
 pub mod ik;
 pub mod jacobian;
 pub mod jacobian_dot;
+pub mod lanes;
 pub mod motion;
+mod null_step;
 pub mod placement;
 pub mod rows;
 #[cfg(test)]

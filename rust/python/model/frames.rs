@@ -80,6 +80,13 @@ fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
     s
 }
 
+/// An uninitialised C-ordered float64 array of `shape` (the caller writes every entry).
+fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArrayDyn<f64>> {
+    // SAFETY: f64 has no invalid bit patterns; the callers fill the array before Python
+    // sees it.
+    unsafe { numpy::PyArrayDyn::<f64>::new(py, numpy::ndarray::IxDyn(shape), false) }
+}
+
 fn optional_vector(
     model: &Model,
     py: Python<'_>,
@@ -218,7 +225,8 @@ impl PyModel {
                 // The support's poses and joint columns only (no inertias).
                 crate::kinematics::plan::frame_poses_for(model, &ws.q, &mut ws.data.links, f.link);
                 let nv = model.nv;
-                let arr = numpy::PyArray2::<f64>::zeros(py, [6, nv], false);
+                // Uninitialised: `frame_jacobian_links` writes every entry.
+                let arr = new_array(py, &[6, nv]);
                 // SAFETY: a new array no Python code has seen yet, C-contiguous, 6 × nv.
                 let out = unsafe { arr.as_slice_mut() }?;
                 jacobian::frame_jacobian_links(model, &ws.data.links, &f, rf, out);
@@ -230,12 +238,15 @@ impl PyModel {
         let f = frame_arg(&model, frame, "frame")?;
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
         let nv = model.nv;
-        let mut out = vec![0.0; rows * 6 * nv];
+        let arr = new_array(py, &lead(stacked, rows, &[6, nv]));
+        // SAFETY: a new array no Python code has seen yet, C-contiguous; every entry is
+        // written before it is returned (dropped unseen on an error).
+        let out = unsafe { arr.as_slice_mut() }?;
         detach_interruptible(py, || {
-            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, &mut out)
+            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, out)
         })?;
-        check_result(py, "frame_jacobian", &out)?;
-        to_array(py, out, &lead(stacked, rows, &[6, nv]))
+        // (Finiteness checked by the core, in its pass.)
+        Ok(arr.into_any())
     }
 
     /// `J̇` of `frame` in `reference` at (q, v): the time derivative of `frame_jacobian`.
@@ -294,7 +305,8 @@ impl PyModel {
             return self.with_workspace(|ws| {
                 load_state(ws, py, q, None)?;
                 let model = &ws.version.model;
-                let arr = jacobian.then(|| numpy::PyArray2::<f64>::zeros(py, [3, model.nv], false));
+                // Uninitialised: `com_one` writes every entry of the Jacobian.
+                let arr = jacobian.then(|| new_array(py, &[3, model.nv]));
                 let j = match &arr {
                     // SAFETY: a new array no Python code has seen yet, C-contiguous, 3 × nv.
                     Some(a) => Some(unsafe { a.as_slice_mut() }?),
@@ -312,23 +324,25 @@ impl PyModel {
         let model = self.model();
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
         let nv = model.nv;
-        let mut com = vec![0.0; 3 * rows];
-        let mut jac = vec![0.0; if jacobian { rows * 3 * nv } else { 0 }];
-        let j = jacobian.then_some(jac.as_mut_slice());
+        let com = new_array(py, &lead(stacked, rows, &[3]));
+        let jac = jacobian.then(|| new_array(py, &lead(stacked, rows, &[3, nv])));
+        // SAFETY: new arrays no Python code has seen yet, C-contiguous; every entry is
+        // written before they are returned (dropped unseen on an error).
+        let c = unsafe { com.as_slice_mut() }?;
+        let j = match &jac {
+            Some(a) => Some(unsafe { a.as_slice_mut() }?),
+            None => None,
+        };
         if rows == 1 {
-            evaluate::com_batch(&model, &qs, rows, stacked, &mut com, j).py(py)?;
+            evaluate::com_batch(&model, &qs, rows, stacked, c, j).py(py)?;
         } else {
-            detach_interruptible(py, || {
-                evaluate::com_batch(&model, &qs, rows, stacked, &mut com, j)
-            })?;
+            detach_interruptible(py, || evaluate::com_batch(&model, &qs, rows, stacked, c, j))?;
         }
-        check_result(py, "center_of_mass", &com)?;
-        let c = to_array(py, com, &lead(stacked, rows, &[3]))?;
-        if !jacobian {
-            return Ok(c);
+        // (Finiteness checked by the core, in its pass.)
+        match jac {
+            Some(j) => Ok((com, j).into_pyobject(py)?.into_any()),
+            None => Ok(com.into_any()),
         }
-        let j = to_array(py, jac, &lead(stacked, rows, &[3, nv]))?;
-        Ok((c, j).into_pyobject(py)?.into_any())
     }
 
     /// (position, velocity, acceleration) of the centre of mass at (q, v, a); `a=None` is zero.
