@@ -459,3 +459,47 @@ def floating_robot(request):
     assert model.joint_names == list(pm.names)[1:]
     return request.param, model, pm
 
+
+
+@pytest.fixture(scope="session")
+def design_page_run(tmp_path_factory):
+    """docs/design.md's python blocks run once for the whole session, in order in one
+    namespace, in a scratch directory (tests/test_docs.py's way: its ``blocks`` and markers),
+    every ``balance`` recorded (fronts' points included) and ``balance``'s own warnings (a
+    written part off the design, a least-mass stage that failed) raised as errors. Returns
+    ``(motion, Balance)`` of each design made. tests/test_docs.py and
+    tests/test_design_connected.py share it (the page takes ~18 s)."""
+    import warnings
+
+    from pointmass_dyn.design import _front
+    from test_docs import REQUIREMENTS, ROOT, blocks
+
+    pytest.importorskip("matplotlib").use("Agg")  # blocks that plot write files only
+    page = ROOT / "docs" / "design.md"
+    made = []
+    real = pmd.balance
+
+    def recording(*args, **kwargs):
+        made.append((args[0], real(*args, **kwargs)))
+        return made[-1][1]
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(pmd, "balance", recording)
+    mp.setattr(_front, "balance", recording)
+    mp.chdir(tmp_path_factory.mktemp("design-page"))
+    try:
+        with warnings.catch_warnings():
+            warnings.filterwarnings("error", message="balance:", category=RuntimeWarning)
+            namespace: dict = {"__name__": "docs.design"}
+            for line, marker, code in blocks(page):
+                if marker == "not run" or (marker and not all(
+                        REQUIREMENTS[r.strip()]() for r in marker.split(":", 1)[1].split(","))):
+                    continue
+                where = f"{page.relative_to(ROOT)}:{line}"
+                try:
+                    exec(compile(code, where, "exec"), namespace)
+                except Exception as e:
+                    raise AssertionError(f"the python block at {where} fails: {e!r}") from e
+    finally:
+        mp.undo()
+    return made

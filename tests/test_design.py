@@ -7,10 +7,15 @@ from __future__ import annotations
 
 import pickle
 import time
+import warnings
 
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
+
+# No design here may fall back from the least-mass stage or miss the realised 1 %
+# (both are a RuntimeWarning "balance: …"; issue 39).
+pytestmark = pytest.mark.filterwarnings("error:balance:RuntimeWarning")
 
 G = np.array([0.0, -9.81, 0.0])
 SPEED = 30.0
@@ -143,6 +148,17 @@ def test_peak_bearing_design_beats_the_unbalanced_and_the_force_balanced(peak_de
     assert ours < peak_bearing(motion)
     assert ours < peak_bearing(designs["force-balanced"].after)
     assert ours == pytest.approx(b.solver["values"]["bearing"], rel=1e-6)  # the epigraph value, to the solver tolerance
+    # Both stages solved (the least-mass one once stopped numerically here and fell back):
+    # against the first stage alone (a separate solve), no more mass, the peak bearing force
+    # within the stage's 1e-6 of it (docs/design.md §3), and the written parts within 1 %.
+    assert [s.stage for s in b.solver["stages"]] == ["optimum", "least mass"] and not b.solver["notes"]
+    with warnings.catch_warnings():  # the first stage alone spreads material thin: its
+        warnings.simplefilter("ignore", RuntimeWarning)  # written parts are off (said)
+        first = pmd.balance(motion, links=shapes(), objective={"bearing": 1.0}, norm="peak",
+                            limits={"force": limit}, least_mass=False)
+    assert b.masses.sum() < first.masses.sum()
+    assert ours <= peak_bearing(first.after) * (1 + 1e-6 + 1e-8)
+    assert b.realised.within
 
 
 def test_predictions_equal_the_reanalysed_design(peak_designs):
@@ -256,7 +272,12 @@ def test_no_design_found_by_differential_evolution_is_better(fourbar):
         de_time = time.perf_counter() - t0
         print(f"{norm}: conic {ours:.12g} in {ours_time:.3f} s; DE {de.fun:.12g} in {de_time:.2f} s "
               f"({de_time / ours_time:.0f}x)")
-        assert de.fun >= ours - 1e-7 * abs(ours)
+        # The first stage's optimum (its objective is this score) is the least any design
+        # reaches; the least-mass stage may give up 1e-6 of it (docs/design.md §3).
+        optimum = b.solver["stages"][0]["objective"]
+        assert de.fun >= optimum - 1e-7 * abs(optimum)
+        assert ours <= optimum * (1 + 1e-6 + 1e-8)
+        assert b.solver["stages"][-1].objective == pytest.approx(ours, rel=1e-9)
 
 
 def test_a_spatial_rssr_is_designed_too():
@@ -293,6 +314,17 @@ def test_a_polygon_link_symmetric_about_its_plane_and_its_stl(tmp_path, fourbar)
     body = b.bodies["crank"]
     assert abs(body.com[2]) <= 1e-9 * np.abs(body.com).max()
     assert abs(body.inertia[0, 2]) <= 1e-9 * body.inertia.max()
+    # The written model keeps the rocker's counterweights (a point-mass body, written as
+    # designed), so its shaking force, analysed along the motion, is the designed model's
+    # to 1 % of the design's peak (it once lost them: 775 %).
+    real = b.realised
+    rocker = b.bodies["rocker"]
+    assert real.model.body("rocker").mass == pytest.approx(rocker.mass, rel=1e-12)
+    np.testing.assert_allclose(real.model.body("rocker").com, rocker.com, rtol=1e-12)
+    scale = max(np.linalg.norm(b.after.shaking.force, axis=1).max(),
+                1e-3 * np.linalg.norm(motion.shaking.force, axis=1).max())
+    diff = np.linalg.norm(real.after.shaking.force - b.after.shaking.force, axis=1).max()
+    assert diff <= 0.01 * scale and real.within
     # The STL: a closed surface (each edge in two triangles) enclosing the kept cells.
     path = tmp_path / "crank.stl"
     with pytest.warns(RuntimeWarning, match="not the design: mass"):  # thresholded, not realised
@@ -350,7 +382,8 @@ def test_an_infeasible_limit_says_by_how_much(fourbar):
     the bounds reaches — the optimum of that quantity alone (a separate program)."""
     _, motion = fourbar
     ring = [pmd.Counterweight.ring("crank", [0, 0, 0], 0.02, 8, max_mass=0.01)]
-    best = pmd.balance(motion, counterweights=ring, norm="peak", objective={"force": 1.0})
+    # (The optimum itself: the least-mass stage may give up 1e-6 of it, docs/design.md §3.)
+    best = pmd.balance(motion, counterweights=ring, norm="peak", objective={"force": 1.0}, least_mass=False)
     least = best.solver["values"]["force"]
     with pytest.raises(pmd.errors.InfeasibleDesignError, match="limits") as info:
         pmd.balance(motion, counterweights=ring, norm="peak", limits={"force": 1e-6})

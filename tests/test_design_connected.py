@@ -278,56 +278,12 @@ def test_a_connected_link_must_reach_its_joints():
         pmd.balance(motion, links=[shape], zero=("force",))
 
 
-DOC = __import__("pathlib").Path(__file__).resolve().parents[1] / "docs" / "design.md"
-
-
-def doc_blocks(page) -> list[str]:
-    """The page's ```python blocks (not those marked ``<!-- not run -->``), in order."""
-    lines, out, i = page.read_text(encoding="utf-8").splitlines(), [], 0
-    while i < len(lines):
-        if lines[i].strip() == "```python":
-            j = i + 1
-            while not lines[j].startswith("```"):
-                j += 1
-            if "not run" not in lines[i - 1]:
-                out.append("\n".join(lines[i + 1:j]) + "\n")
-            i = j
-        i += 1
-    return out
-
-
 @pytest.fixture(scope="module")
-def doc_designs(tmp_path_factory):
-    """Every design docs/design.md makes (its blocks run in order in one namespace, as
-    tests/test_docs.py runs them), recorded at ``balance`` (fronts' points included), with
-    ``balance``'s own warnings (a written part off the design, a stage that failed) as errors."""
-    import os
-    import warnings
-
-    from pointmass_dyn.design import _front
-
-    made = []
-    real = pmd.balance
-
-    def recording(*args, **kwargs):
-        made.append((args[0], real(*args, **kwargs)))
-        return made[-1][1]
-
-    mp = pytest.MonkeyPatch()
-    mp.setattr(pmd, "balance", recording)
-    mp.setattr(_front, "balance", recording)
-    cwd = os.getcwd()
-    os.chdir(tmp_path_factory.mktemp("doc"))
-    try:
-        with warnings.catch_warnings():
-            warnings.filterwarnings("error", message="balance:", category=RuntimeWarning)
-            namespace: dict = {"__name__": "__doc__"}
-            for code in doc_blocks(DOC):
-                exec(compile(code, str(DOC), "exec"), namespace)
-    finally:
-        os.chdir(cwd)
-        mp.undo()
-    return [(m, b) for m, b in made if b.realised is not None]
+def doc_designs(design_page_run):
+    """Every design docs/design.md makes with link shapes (its blocks run once per session,
+    conftest.py's ``design_page_run``, shared with tests/test_docs.py), with ``balance``'s own
+    warnings (a written part off the design, a stage that failed) as errors."""
+    return [(m, b) for m, b in design_page_run if b.realised is not None]
 
 
 def test_every_doc_design_is_written_connected_and_within_one_percent(doc_designs, tmp_path):

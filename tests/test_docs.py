@@ -55,7 +55,11 @@ def test_every_page_is_collected():
 
 
 @pytest.mark.parametrize("page", PAGES, ids=[p.relative_to(ROOT).as_posix() for p in PAGES])
-def test_python_blocks_run(page, tmp_path, monkeypatch):
+def test_python_blocks_run(page, tmp_path, monkeypatch, request):
+    if page == ROOT / "docs" / "design.md":
+        # Run once per session, shared with tests/test_design_connected.py (conftest.py).
+        request.getfixturevalue("design_page_run")
+        return
     found = blocks(page)
     monkeypatch.chdir(tmp_path)
     pytest.importorskip("matplotlib").use("Agg")  # blocks that plot write files only

@@ -56,6 +56,36 @@ def test_straight_link_stress_is_the_beam_formula():
                 assert abs(sigma[corner] - want) <= 1e-9 * abs(want), (k, side, corner)
 
 
+def test_straight_link_stress_under_a_spatial_load_is_the_biaxial_beam_formula():
+    """A spatial member (the RSSR's, docs/design.md §7c): a pin force with components along,
+    across and out of the link's plane gives σ = N/A − M_z y/I_z − M_y z/I_y at every corner
+    (axial force and bending about both section axes; torsion and shear are not counted)."""
+    length, cell = 0.1, 0.002
+    model = bar_model(length)
+    shape = pmd.LinkShape("bar", box=([-0.006, -0.003, -0.002], [0.106, 0.003, 0.002]), cell=cell,
+                          material=pmd.Material.steel(), web=0.006)
+    centers, lower, cap = shape.cells(model)
+    pins = _strength.link_pins(model, "bar")
+    (member,) = _strength.members(pins, shape.boss_radius())
+    member = _strength.with_sections(member, centers, lower >= cap, cell, shape.boss_radius(),
+                                     shape.web_width())
+    w = _strength.stress_weights(member, pins)
+    width, thick = 0.006, 0.004
+    area, i_z, i_y = width * thick, thick * width**3 / 12, width * thick**3 / 12
+    f = np.array([-80.0, 35.0, 20.0])  # at the far pin: compression, in-plane and out-of-plane
+    # A massless link in equilibrium: the first pin carries −f and the couple r_B × f.
+    couple = -np.cross([length, 0.0, 0.0], f)
+    forces = np.array([[*-f, *couple], [*f, 0, 0, 0]])
+    for k, sec in enumerate(member.sections):
+        arm = length - sec.s
+        for side in (0, 1):
+            sigma = np.einsum("cjd,jd->c", w[k, side], forces)
+            for corner, (y, z) in enumerate(sec.corners):
+                # Far pin's force f at arm (L − s): +y and +z fibres in compression.
+                want = f[0] / area - f[1] * arm * y / i_z - f[2] * arm * z / i_y
+                assert abs(sigma[corner] - want) <= 1e-9 * np.abs(f).max() / area * 100, (k, side, corner)
+
+
 def crank_rocker(samples=60):
     scene = pmd.load_scene("fourbar")
     motion = pmd.prescribed_motion(scene.model, "crank", speed=30.0, samples=samples,

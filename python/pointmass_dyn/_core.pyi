@@ -1276,8 +1276,8 @@ def design_pin_loads(model: Model, body: int | str) -> list[dict[str, Any]]:
 def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
     """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
     ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel`` (the last
-    stage's), ``stages`` (each stage's ``(status, gap_abs, gap_rel)``: the optimum, then the
-    least mass), ``notes`` (what did not go as asked without failing: a least-mass stage not
+    stage's), ``stages`` (each stage's ``(status, gap_abs, gap_rel, objective)``, the first
+    stage's objective at that stage's design: the optimum, then the least mass), ``notes`` (what did not go as asked without failing: a least-mass stage not
     found), ``iterations``, ``rounds``, ``solve_time``. Optional ``spec["flows"]``: connected
     links, dicts with ``nodes``, ``edges`` ((a, b) tuples), ``bosses``, ``web``, ``hang``
     (rust/design/connectivity.rs)."""

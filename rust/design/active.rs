@@ -115,16 +115,22 @@ fn add_violated(
         let mut inside = vec![false; n];
         active[k].iter().for_each(|&b| inside[b] = true);
         let over = |b: usize| !inside[b] && norms[b] > limit;
+        // A connected link's program costs a full solve per round and its cones little:
+        // every violated block enters (the least-mass stage's peaks otherwise move one
+        // sample per round: 40 rounds on a front's end, issue 39).
+        let all = !problem.flows.is_empty();
         let mut new: Vec<usize> = (0..n)
             .filter(|&b| over(b))
             .filter(|&b| {
-                let before = if b >= per { norms[b - per] } else { f64::MIN };
-                let after = if b + per < n {
-                    norms[b + per]
-                } else {
-                    f64::MIN
-                };
-                norms[b] >= before && norms[b] >= after
+                all || {
+                    let before = if b >= per { norms[b - per] } else { f64::MIN };
+                    let after = if b + per < n {
+                        norms[b + per]
+                    } else {
+                        f64::MIN
+                    };
+                    norms[b] >= before && norms[b] >= after
+                }
             })
             .collect();
         if new.is_empty() {

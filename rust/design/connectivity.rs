@@ -188,13 +188,12 @@ mod tests {
     use super::*;
     use crate::design::{solve, Norm, Problem};
 
-    /// A row of five cells, bosses at both ends (held full): with the mass minimised, the
-    /// web makes the three between carry a fill of `web` each (min-cut: one face each).
-    #[test]
-    fn a_web_fills_the_cells_between_two_bosses() {
-        let n = 5;
-        let problem = |web: f64, flows: bool| Problem {
-            lower: vec![1.0, 0.0, 0.0, 0.0, 1.0],
+    /// A row of cells `0..lower.len()` (each of bound 1) with the mass minimised, joined by
+    /// `flow` (bosses, web, hang) when given.
+    fn row(lower: Vec<f64>, flow: Option<(Vec<Vec<usize>>, f64, f64)>) -> Problem {
+        let n = lower.len();
+        Problem {
+            lower,
             upper: vec![1.0; n],
             map: (0..n).map(|j| (0, j, 1.0)).collect(),
             ndelta: 1,
@@ -206,54 +205,40 @@ mod tests {
             mass_reference: 1.0,
             mass_limit: None,
             least_mass: false,
-            flows: if flows {
-                vec![Flow {
+            flows: flow
+                .map(|(bosses, web, hang)| Flow {
                     nodes: (0..n).collect(),
                     edges: (0..n - 1).map(|j| (j, j + 1)).collect(),
-                    bosses: vec![vec![0], vec![4]],
+                    bosses,
                     web,
-                    hang: 0.0,
-                }]
-            } else {
-                vec![]
-            },
-        };
-        let s = solve(&problem(0.5, true)).unwrap();
+                    hang,
+                })
+                .into_iter()
+                .collect(),
+        }
+    }
+
+    /// A row of five cells, bosses at both ends (held full): with the mass minimised, the
+    /// web makes the three between carry a fill of `web` each (min-cut: one face each).
+    #[test]
+    fn a_web_fills_the_cells_between_two_bosses() {
+        let ends = || vec![1.0, 0.0, 0.0, 0.0, 1.0];
+        let web = |web: f64| row(ends(), Some((vec![vec![0], vec![4]], web, 0.0)));
+        let s = solve(&web(0.5)).unwrap();
         for j in 1..4 {
             assert!((s.x[j] - 0.5).abs() < 1e-7, "{:?}", s.x);
         }
-        let s = solve(&problem(0.0, false)).unwrap();
+        let s = solve(&row(ends(), None)).unwrap();
         assert!(s.x[1..4].iter().all(|&x| x.abs() < 1e-7), "{:?}", s.x);
         // A web of more than a full cell cannot pass one cell's face.
-        assert!(solve(&problem(1.5, true)).is_err());
+        assert!(solve(&web(1.5)).is_err());
     }
 
     /// Hanging: a cell forced to hold material (lower bound) pulls a path of fill at least
     /// its own fill / hang back to the boss.
     #[test]
     fn hanging_material_is_joined_to_a_boss() {
-        let n = 4;
-        let problem = Problem {
-            lower: vec![1.0, 0.0, 0.0, 0.8],
-            upper: vec![1.0; n],
-            map: (0..n).map(|j| (0, j, 1.0)).collect(),
-            ndelta: 1,
-            groups: vec![],
-            equal: vec![],
-            quantities: vec![],
-            norm: Norm::Rms,
-            mass_weight: 1.0,
-            mass_reference: 1.0,
-            mass_limit: None,
-            least_mass: false,
-            flows: vec![Flow {
-                nodes: (0..n).collect(),
-                edges: (0..n - 1).map(|j| (j, j + 1)).collect(),
-                bosses: vec![vec![0]],
-                web: 0.0,
-                hang: 4.0,
-            }],
-        };
+        let problem = row(vec![1.0, 0.0, 0.0, 0.8], Some((vec![vec![0]], 0.0, 4.0)));
         let s = solve(&problem).unwrap();
         // A face carries what hangs beyond it, at most 4 × the lesser fill: face 1–2 carries
         // f2 + 0.8 ≤ 4 f2, face 0–1 carries f1 + f2 + 0.8 ≤ 4 f1. The least f1 + f2:

@@ -95,8 +95,9 @@ pub struct Solution {
     /// Programs solved: one per stage for RMS, one per cutting-plane round for peak.
     pub rounds: u32,
     /// Each stage's certificate (the optimum, then the least mass): status, absolute and
-    /// relative duality gap of its last program. `status`/`gap_*` above are the last stage's.
-    pub stages: Vec<(String, f64, f64)>,
+    /// relative duality gap of its last program, and the first stage's objective at that
+    /// stage's design ([`objective_at`]). `status`/`gap_*` above are the last stage's.
+    pub stages: Vec<(String, f64, f64, f64)>,
     /// What did not go as asked without failing the design (a least-mass stage that did not
     /// converge): said to the user, never dropped.
     pub notes: Vec<String>,
@@ -118,6 +119,21 @@ pub fn values(problem: &Problem, delta: &[f64]) -> Vec<f64> {
             }
         })
         .collect()
+}
+
+/// The first stage's objective at a design: `Σ w_q (value_q / reference_q)` over the
+/// weighted peak quantities (their squares with RMS, whose objective weighs mean squares),
+/// plus the mass term; `values` as [`values`] gives them.
+pub fn objective_at(problem: &Problem, x: &[f64], values: &[f64]) -> f64 {
+    let weighted = problem.quantities.iter().zip(values);
+    let sum: f64 = weighted
+        .filter(|(q, _)| q.weight > 0.0 && !q.zero && !q.peak)
+        .map(|(q, &v)| {
+            let r = v / q.reference.max(1e-300);
+            q.weight * if problem.norm == Norm::Rms { r * r } else { r }
+        })
+        .sum();
+    sum + problem.mass_weight * x.iter().sum::<f64>() / problem.mass_reference.max(1e-300)
 }
 
 fn check(problem: &Problem) -> Result<()> {
@@ -341,11 +357,13 @@ fn solution(problem: &Problem, raw: Raw, rounds: u32) -> Solution {
     let (nx, nd) = (problem.lower.len(), problem.ndelta);
     let delta = raw.z[nx..nx + nd].to_vec();
     let status = format!("{:?}", raw.status);
+    let values = values(problem, &delta);
+    let at = objective_at(problem, &raw.z[..nx], &values);
     Solution {
-        values: values(problem, &delta),
+        values,
         x: raw.z[..nx].to_vec(),
         delta,
-        stages: vec![(status.clone(), raw.gap_abs, raw.gap_rel)],
+        stages: vec![(status.clone(), raw.gap_abs, raw.gap_rel, at)],
         status,
         objective: raw.objective,
         gap_abs: raw.gap_abs,

@@ -329,10 +329,16 @@ fn inequalities(bld: &mut Builder, problem: &Problem, lay: &Layout, stage: Stage
         }
     }
     if let (Stage::LeastMass(opt), Norm::Peak) = (stage, problem.norm) {
-        // Σ w t ≤ the optimum, with the solver's own slack.
-        // (1e-9, or twice the first stage's relative gap when it was solved less tightly.)
-        let hold = 1e-9 + 2.0 * opt.gap_rel.max(0.0);
-        let r = bld.row(opt.objective * (1.0 + hold) + 1e-12);
+        // Σ w t ≤ the optimum relaxed by LEAST_MASS_HOLD (relative; plus twice the first
+        // stage's relative gap, and an absolute floor for an optimum of zero): held to 1e-9
+        // it leaves the program no interior and Clarabel stops numerically (issue 39).
+        let hold = LEAST_MASS_HOLD + 2.0 * opt.gap_rel.max(0.0);
+        let weights: f64 = lay
+            .peaks
+            .iter()
+            .map(|&(k, _)| problem.quantities[k].weight)
+            .sum();
+        let r = bld.row(opt.objective * (1.0 + hold) + LEAST_MASS_FLOOR * weights);
         for &(k, t) in &lay.peaks {
             bld.put(r, t, problem.quantities[k].weight);
         }
@@ -438,6 +444,13 @@ fn objective(problem: &Problem, lay: &Layout, stage: Stage) -> (CscMatrix<f64>, 
     (p, q, constant)
 }
 
+/// How far (relative) the least-mass stage of a peak program may raise the first stage's
+/// optimal objective (docs/design.md §3): room for the interior point method, far below any
+/// trade-off a designer sees.
+pub const LEAST_MASS_HOLD: f64 = 1e-6;
+/// The hold's absolute part per unit weight (peaks are relative to their values before).
+const LEAST_MASS_FLOOR: f64 = 1e-9;
+
 /// Solves of one program before a numerical failure is reported (see [`settings`]).
 const ATTEMPTS: usize = 3;
 
@@ -480,16 +493,22 @@ pub(crate) fn solve_program(
         cones: &mut bld.cones,
     };
     super::connectivity::append(&mut rows, &problem.flows, &problem.upper, lay.flows);
-    let (p, q, constant) = objective(problem, lay, stage);
+    let (p, mut q, constant) = objective(problem, lay, stage);
+    let cs = column_scales(problem, lay);
+    for (v, &c) in bld.vals.iter_mut().zip(&bld.cols) {
+        *v *= cs[c];
+    }
+    q.iter_mut().zip(&cs).for_each(|(v, s)| *v *= s);
+    let p = scale_quadratic(p, &cs);
     let a = CscMatrix::new_from_triplets(bld.m(), lay.nz, bld.rows, bld.cols, bld.vals);
     // Tight tolerances first; a program with many degenerate rows (connected links' flows
     // through empty cells, limits at the edge of what is reachable) can stop Clarabel with a
     // numerical error there, so it is solved again at Clarabel's default tolerances (1e-8),
     // then with more static regularisation, before the failure is reported.
-    // The least-mass stage of connected links holds the objective at its optimum, which
-    // leaves the flows' degenerate rows almost no interior: the first two settings stop
-    // numerically there (issue 39's four-bar: twice, ~1.9 s each, before the third solves),
-    // so that program starts with the third and falls back to the others.
+    // The least-mass stage of connected links starts with the third (more regularisation):
+    // with the objective held at its optimum the flows' degenerate rows have little
+    // interior, and there it converges in as many iterations to "Solved" where the first
+    // often reaches only "AlmostSolved" (issue 39's four-bar and fronts).
     let order: [usize; ATTEMPTS] = match stage {
         Stage::LeastMass(_) if !problem.flows.is_empty() => [2, 0, 1],
         _ => [0, 1, 2],
@@ -536,7 +555,7 @@ pub(crate) fn solve_program(
         }
     }
     Ok(Some(Raw {
-        z: sol.x.clone(),
+        z: sol.x.iter().zip(&cs).map(|(z, s)| z * s).collect(),
         status: sol.status,
         objective: sol.obj_val + constant,
         gap_abs: solver.info.gap_abs,
@@ -544,4 +563,47 @@ pub(crate) fn solve_program(
         iterations: sol.iterations + spent.0,
         solve_time: sol.solve_time + spent.1,
     }))
+}
+
+/// Each variable's scale: the program is solved in `z / scale` (Clarabel's equilibration
+/// scales rows and columns of the constraints only within bounds; design masses of 1e-4 kg
+/// beside second moments of 1e-7 kg m² leave it ill-conditioned). Cells and bounded
+/// candidates: their upper bound (the fill); δ: the most its parameter can change.
+pub(crate) fn column_scales(problem: &Problem, lay: &Layout) -> Vec<f64> {
+    let mut cs = vec![1.0; lay.nz];
+    let finite: Vec<f64> = problem
+        .upper
+        .iter()
+        .copied()
+        .filter(|u| u.is_finite() && *u > 0.0)
+        .collect();
+    let typical = if finite.is_empty() {
+        1.0
+    } else {
+        finite.iter().sum::<f64>() / finite.len() as f64
+    };
+    for j in 0..lay.nx {
+        let u = problem.upper[j];
+        cs[j] = if u.is_finite() && u > 0.0 { u } else { typical };
+    }
+    let mut reach = vec![0.0; lay.nd];
+    for &(r, c, v) in &problem.map {
+        reach[r] += v.abs() * cs[c];
+    }
+    for (j, r) in reach.iter().enumerate() {
+        if *r > 0.0 && r.is_finite() {
+            cs[lay.nx + j] = *r;
+        }
+    }
+    cs
+}
+
+fn scale_quadratic(p: CscMatrix<f64>, cs: &[f64]) -> CscMatrix<f64> {
+    let mut p = p;
+    for c in 0..p.n {
+        for k in p.colptr[c]..p.colptr[c + 1] {
+            p.nzval[k] *= cs[p.rowval[k]] * cs[c];
+        }
+    }
+    p
 }

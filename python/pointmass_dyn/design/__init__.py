@@ -8,7 +8,7 @@ driving torque, bearing forces and mass — a convex program (QP or SOCP) solved
                     zero=("force",))
 """
 
-from ._balance import Balance, Counterweight
+from ._balance import Balance, Counterweight, SolverStage
 from ._connect import HANG
 from ._front import TIE_WEIGHT, ParetoFront, analysed_value, pareto_front
 from ._material import Material
@@ -37,6 +37,7 @@ __all__ = [
     "RealisedPart",
     "Shape",
     "Shaking",
+    "SolverStage",
     "analyze_motion",
     "analysed_value",
     "balance",

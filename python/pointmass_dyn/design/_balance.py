@@ -80,6 +80,26 @@ class Counterweight:
         return Counterweight(body, pts, max_mass)
 
 
+@dataclass(frozen=True)
+class SolverStage:
+    """One stage of a design's solve (``Balance.solver["stages"]``): ``stage``
+    (``"optimum"``, then ``"least mass"``), Clarabel's ``status``, the absolute and relative
+    duality gaps of its last program, and ``objective``: the first stage's weighted objective
+    at this stage's design (docs/design.md §3: the least-mass stage keeps it within
+    ``LEAST_MASS_HOLD`` of the optimum's). ``stage["status"]`` reads a field too."""
+
+    stage: str
+    status: str
+    gap_abs: float
+    gap_rel: float
+    objective: float
+
+    def __getitem__(self, name: str) -> Any:
+        if name not in self.__dataclass_fields__:
+            raise KeyError(name)
+        return getattr(self, name)
+
+
 def _vector(x, arg: str) -> np.ndarray:
     """``x`` as a finite (x, y, z), or our error naming ``arg``."""
     try:  # (complex values: NumPy would drop the imaginary part with only a warning)
@@ -116,8 +136,8 @@ class Balance:
     #: Designed link shapes by body name (:class:`~pointmass_dyn.Shape`).
     shapes: dict = field(default_factory=dict)
     #: The conic solver's report: status, duality gaps, iterations, times, the values it
-    #: predicts in the problem's norm and those before; ``stages``: each stage's status and
-    #: gaps (the optimum, then the least mass among the optima); ``notes``: what did not go
+    #: predicts in the problem's norm and those before; ``stages``: a :class:`SolverStage`
+    #: each (the optimum, then the least mass among the optima); ``notes``: what did not go
     #: as asked without failing the design (a least-mass stage not found; also warned).
     solver: dict = field(default_factory=dict)
     #: Strength-checked links (``LinkShape(material=…)``) by body name: a

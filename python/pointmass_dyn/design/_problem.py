@@ -22,7 +22,7 @@ import numpy as np
 from .. import _core
 from ..errors import InvalidInputError
 from . import _connect, _safety
-from ._balance import Balance, Counterweight
+from ._balance import Balance, Counterweight, SolverStage
 from ._realise import realise
 from ._shaking import MotionAnalysis, analyze_motion
 from ._shapes import LinkShape, Shape
@@ -334,8 +334,8 @@ def _solver_report(sol: dict, quantities: list[dict], before: dict, norm: str, t
         "gap_rel": float(sol["gap_rel"]),
         # Every stage's certificate: the optimum, then (least_mass) the least mass.
         "stages": [
-            {"stage": stage, "status": st, "gap_abs": float(ga), "gap_rel": float(gr)}
-            for stage, (st, ga, gr) in zip(("optimum", "least mass"), sol["stages"])
+            SolverStage(stage, st, float(ga), float(gr), float(obj))
+            for stage, (st, ga, gr, obj) in zip(("optimum", "least mass"), sol["stages"])
         ],
         "iterations": int(sol["iterations"]),
         "rounds": int(sol["rounds"]),

@@ -426,6 +426,11 @@ def _row_scale(rows: int, predicted: dict, before: dict) -> np.ndarray:
 def _written(motion, shapes, decided, columns, t, phi, designed, bodies, body_from) -> Realisation:
     model = motion.model
     parts, real_bodies, new_model = {}, {}, model
+    # The designed bodies without a shape (counterweights only) are as designed: point masses.
+    shaped = {name for name, *_ in shapes}
+    for name, body in bodies.items():
+        if name not in shaped:
+            new_model = new_model.with_body(name, body)
     for (name, link, spec, _), d, cl, tk, m in zip(shapes, decided, columns, t, designed):
         boxes = _boxes(d, cl, tk)
         written = box_moments(boxes[:, 0], boxes[:, 1], d["density"]).sum(axis=0)
