@@ -456,12 +456,23 @@ fn outward_link(
     let w = angular(&vc);
     let u = linear(&vc);
     let iw = y.rotational * w;
-    let (sw, sh) = (skew(&w), skew(&y.first_moment));
+    let h = &y.first_moment;
+    // `[w]× R − R [w]× = A + Aᵀ` with `A = [w]× R` (`R` symmetric), its columns `w × R_c`;
+    // `[h]× [u]× = u hᵀ − (h · u) I`: no 3 × 3 products.
+    let r = &y.rotational;
+    let swr = Mat3::from_columns(&[
+        w.cross(&r.column(0).into_owned()),
+        w.cross(&r.column(1).into_owned()),
+        w.cross(&r.column(2).into_owned()),
+    ]);
+    let hu2 = 2.0 * h.dot(&u);
+    let baa = swr + swr.transpose() - skew(&iw) - (u * h.transpose()) * 2.0
+        + Mat3::from_diagonal_element(hu2);
     let lk = &mut dd.links[i];
     lk.v = vc;
     lk.a = ac;
     lk.f = y.mul_twist(&ac) + cross_force(&vc, &yv);
-    lk.baa = sw * y.rotational - y.rotational * sw - skew(&iw) - sh * skew(&u) * 2.0;
+    lk.baa = baa;
     lk.bla = skew(&(u * y.mass - y.first_moment.cross(&w))) * -2.0;
     lk.y = y;
 }
