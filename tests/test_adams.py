@@ -117,17 +117,23 @@ def test_auto_on_a_joint_limit_scene_at_tight_tolerance_against_radau():
 
 
 def test_adams_on_a_loop_scene_by_name():
-    """The four-bar (closed loop, kept on its constraint manifold) with Adams asked by name:
-    refused with an error naming the method (its error control does not see the
-    projection), or, if run, agreeing with DOP853 at 1e-12."""
+    """The four-bar (closed loop, kept on its constraint manifold by projection) with Adams
+    asked by name: against DOP853 at 1e-12, as accurate as DOP853 at the same tolerance (within
+    a factor 10: at rtol 1e-9 every method's error here is ~1e-7) on fewer evaluations (`auto`
+    keeps loops on DOP853, whose error control knows the projection; by name Adams runs)."""
     scene = pmd.load_scene("fourbar")
     t_eval = np.linspace(0.0, 1.0, 6)
     ref = pmd.simulate(scene, (0.0, 1.0), method="DOP853", rtol=1e-12, atol=1e-12,
                        t_eval=t_eval)
     ref.raise_for_status()
-    r = pmd.simulate(scene, (0.0, 1.0), method="Adams", rtol=1e-9, atol=1e-9, t_eval=t_eval)
-    r.raise_for_status()
-    assert r.method == "Adams"
-    got = np.concatenate([r.q, r.v], axis=1)
     want = np.concatenate([ref.q, ref.v], axis=1)
-    assert rel_err(got, want) < 1e-6, rel_err(got, want)
+    runs = {}
+    for method in ("Adams", "DOP853"):
+        r = pmd.simulate(scene, (0.0, 1.0), method=method, rtol=1e-9, atol=1e-9,
+                         t_eval=t_eval)
+        r.raise_for_status()
+        assert r.method == method
+        runs[method] = (rel_err(np.concatenate([r.q, r.v], axis=1), want), r.nfev)
+    (err, nfev), (err_dop, nfev_dop) = runs["Adams"], runs["DOP853"]
+    assert err < max(10 * err_dop, 1e-8), runs
+    assert nfev < nfev_dop, runs
