@@ -15,7 +15,10 @@
 //! runs of `simulate` of a scene with loops (its effects, q0, v0; DOP853, rtol 1e-10,
 //! atol 1e-12, t in (0, 20): IFToMM A02's high-precision run), printing the time per
 //! right-hand side; `along` PATH ITERS: ITERS passes of `simulate::along` (the shaking, one
-//! thread) over the states of one run of the scene (DOP853, rtol 1e-8, t in (0, 1)). Subtract a
+//! thread) over the states of one run of the scene (DOP853, rtol 1e-8, t in (0, 1));
+//! `adams`/`dop853` N ITERS: ITERS runs of the chain without effects
+//! (rtol = atol = 1e-9, t in (0, 1)) with that method, the evaluations counted (instructions
+//! per evaluation: the method's own cost beside the forward dynamics'). Subtract a
 //! run with ITERS = 0 to remove the setup. If valgrind stops at an AVX instruction it does not
 //! decode, `POINTMASS_DYN_BASELINE=1` counts the baseline build instead (`pointmass_dyn::support::cpu`).
 use std::hint::black_box;
@@ -30,7 +33,7 @@ use pointmass_dyn::support::spatial::Vec3;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let usage =
-        "usage: loop (fd|id|gim|idd|fdd|sim) N ITERS | loop (scene|loops|loopsim|along) PATH ITERS";
+        "usage: loop (fd|id|gim|idd|fdd|sim|adams|dop853) N ITERS | loop (scene|loops|loopsim|along) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
@@ -107,6 +110,23 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     ..Default::default()
                 };
                 let tr = run(&model, &[], black_box(&q), &v, 1.0, &opts)?;
+                out[0] = tr.q[tr.q.len() - 1];
+            }
+            "adams" | "dop853" => {
+                // The cost per right-hand side of each method at a tight tolerance: the
+                // evaluations are the same forward dynamics, the rest is the method's own.
+                let opts = pointmass_dyn::integrator::SolverOptions {
+                    method: if what == "adams" {
+                        pointmass_dyn::integrator::Method::Adams
+                    } else {
+                        pointmass_dyn::integrator::Method::Dop853
+                    },
+                    rtol: 1e-9.into(),
+                    atol: 1e-9.into(),
+                    ..Default::default()
+                };
+                let tr = run(&model, &[], black_box(&q), &v, 1.0, &opts)?;
+                nfev += tr.nfev;
                 out[0] = tr.q[tr.q.len() - 1];
             }
             "loopsim" => {

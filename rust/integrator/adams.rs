@@ -181,17 +181,21 @@ impl<S: OdeSystem> Adams<S> {
         self.phi.copy_within(r1..r1 + n, r2);
         self.phi[r1..r1 + n].fill(0.0);
         self.p.fill(0.0);
+        // Row by row as slices (no bounds checks in the loops the compiler vectorises).
+        let p = &mut self.p[..n];
         for i in (1..=k).rev() {
-            let (g, ri, rn) = (self.c.g[i], self.row(i), self.row(i + 1));
-            for l in 0..n {
-                self.p[l] += g * self.phi[ri + l];
-                self.phi[ri + l] += self.phi[rn + l];
+            let g = self.c.g[i];
+            let (head, tail) = self.phi.split_at_mut(i * n);
+            let (row, next) = (&mut head[(i - 1) * n..], &tail[..n]);
+            for ((pl, x), y) in p.iter_mut().zip(row.iter_mut()).zip(next) {
+                *pl += g * *x;
+                *x += y;
             }
         }
         let h = self.h;
         if self.nornd {
-            for l in 0..n {
-                self.p[l] = self.st.y[l] + h * self.p[l];
+            for (pl, yl) in p.iter_mut().zip(&self.st.y[..n]) {
+                *pl = yl + h * *pl;
             }
         } else {
             let (c15, c16) = (self.row(RND_P + 1), self.row(RND_Y + 1));
@@ -301,14 +305,23 @@ impl<S: OdeSystem> Adams<S> {
             })?;
         check_state(&st.y, t, t_new)?;
         call_rhs(&mut self.sys, &mut st.nfev, t, t_new, &st.y, &mut st.f)?;
-        for l in 0..n {
-            self.phi[rk1 + l] = st.f[l] - self.phi[p1 + l];
-            self.phi[rk2 + l] = self.phi[rk1 + l] - self.phi[rk2 + l];
+        debug_assert!(p1 == 0 && rk2 == rk1 + n);
+        // Rows 1..=k, k + 1, k + 2 as slices: no bounds checks in the loops.
+        let (low, high) = self.phi.split_at_mut(rk1);
+        let (e, rest) = high.split_at_mut(n);
+        let next = &mut rest[..n];
+        for (((el, nl), fl), p1l) in e
+            .iter_mut()
+            .zip(next.iter_mut())
+            .zip(&st.f[..n])
+            .zip(&low[..n])
+        {
+            *el = fl - p1l;
+            *nl = *el - *nl;
         }
-        for i in 1..=k {
-            let ri = self.row(i);
-            for l in 0..n {
-                self.phi[ri + l] += self.phi[rk1 + l];
+        for row in low[..k * n].chunks_exact_mut(n) {
+            for (x, el) in row.iter_mut().zip(&*e) {
+                *x += el;
             }
         }
         Ok(())

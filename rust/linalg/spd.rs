@@ -26,6 +26,12 @@ fn spd_inverse_body(
     inv_diag: &mut [f64],
 ) -> std::result::Result<(), usize> {
     let n = m.nrows();
+    if n < SMALL {
+        factor_invert_small(m.as_mut_slice(), n, inv_diag)?;
+        xtx_small(m.as_slice(), n, out.as_mut_slice());
+        std::mem::swap(m, out);
+        return Ok(());
+    }
     let a = m.as_mut_slice();
     // Cholesky, left-looking: column j −= L_jk · column k (rows j..n), k < j.
     for j in 0..n {
@@ -91,6 +97,71 @@ fn spd_inverse_body(
     for j in 0..n {
         for i in j + 1..n {
             a[i * n + j] = a[j * n + i];
+        }
+    }
+    Ok(())
+}
+
+/// Below this size the factor, `X = L⁻¹` and `Xᵀ X` are scalar sums entry by entry: the
+/// column loops' vector set-up (lengths 1…n) and matrixmultiply's packing buffers (allocated
+/// per product) cost more than the n³/6 products of each (chain7's forward derivatives:
+/// 5.8k instructions per call → see benches/README.md, callgrind).
+pub const SMALL: usize = 24;
+
+/// `out = Xᵀ X` for `X` lower triangular in the columns of `x` (its upper triangle is not
+/// read): `(i, j) = Σ_{k ≥ max(i, j)} X_ki X_kj`, each entry computed once and mirrored, so
+/// the result is exactly symmetric.
+#[inline(always)]
+fn xtx_small(x: &[f64], n: usize, out: &mut [f64]) {
+    for j in 0..n {
+        let cj = &x[j * n..(j + 1) * n];
+        for i in j..n {
+            let ci = &x[i * n..(i + 1) * n];
+            let mut s = 0.0;
+            for k in i..n {
+                s += ci[k] * cj[k];
+            }
+            out[j * n + i] = s;
+            out[i * n + j] = s;
+        }
+    }
+}
+
+/// `M = L Lᵀ` then `X = L⁻¹` in place (lower triangles, column-major), entry by entry as dot
+/// products: the same operations in the same order as the column loops above (`L_ij = (M_ij −
+/// Σ_{k<j} L_ik L_jk) / L_jj`, `X_ij = (−L_ij / L_jj − Σ_{j<k<i} L_ik X_kj) / L_ii`), so the
+/// same bits.
+#[inline(always)]
+fn factor_invert_small(a: &mut [f64], n: usize, inv_diag: &mut [f64]) -> Result<(), usize> {
+    let a = &mut a[..n * n];
+    let inv_diag = &mut inv_diag[..n];
+    for j in 0..n {
+        for i in j..n {
+            let mut s = a[j * n + i];
+            for k in 0..j {
+                s -= a[k * n + j] * a[k * n + i];
+            }
+            if i == j {
+                if !(s > 0.0 && s.is_finite()) {
+                    return Err(j);
+                }
+                let d = s.sqrt();
+                a[j * n + j] = d;
+                inv_diag[j] = 1.0 / d;
+            } else {
+                a[j * n + i] = s * inv_diag[j];
+            }
+        }
+    }
+    for j in 0..n {
+        let xj = inv_diag[j];
+        a[j * n + j] = xj;
+        for i in j + 1..n {
+            let mut s = a[j * n + i] * -xj;
+            for k in j + 1..i {
+                s -= a[j * n + k] * a[k * n + i];
+            }
+            a[j * n + i] = s * inv_diag[i];
         }
     }
     Ok(())

@@ -45,6 +45,19 @@ pub fn forward_dynamics_derivatives(
             "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
         ))
     })?;
+    let n = model.nv;
+    if n < crate::linalg::spd::SMALL && !dd.row_major {
+        // Small: `−M⁻¹ D` column by column as sums of `M⁻¹`'s (contiguous) columns, no
+        // packing buffers (see [`crate::linalg::spd::SMALL`]).
+        let minv = dd.minv.as_slice();
+        for (d, out) in [
+            (dd.dtau_dq.as_slice(), dd.ddq_dq.as_mut_slice()),
+            (dd.dtau_dv.as_slice(), dd.ddq_dv.as_mut_slice()),
+        ] {
+            neg_product_small(minv, d, out, n);
+        }
+        return Ok(());
+    }
     if dd.row_major {
         // Stored transposed: (−M⁻¹ D)ᵀ = −Dᵀ M⁻¹ (M⁻¹ symmetric).
         dd.ddq_dq.gemm(-1.0, &dd.dtau_dq, &dd.minv, 0.0);
@@ -54,4 +67,46 @@ pub fn forward_dynamics_derivatives(
         dd.ddq_dv.gemm(-1.0, &dd.minv, &dd.dtau_dv, 0.0);
     }
     Ok(())
+}
+
+crate::support::cpu::multiversion! {
+    /// `out = −A D` for n × n column-major `A` (symmetric), `D`. AVX2 where the CPU has it.
+    fn neg_product_small / neg_product_avx2 / neg_product_baseline [] (
+        a: &[f64],
+        d: &[f64],
+        out: &mut [f64],
+        n: usize,
+    ) => neg_product_body
+}
+
+/// Column `j` of `out` is `−Σ_k D_kj A[:, k]`, four rows at a time in fixed-size
+/// accumulators (one vector register with AVX2): short variable-length loops (n = 7) cost
+/// more in their vector set-up than in the products.
+#[inline(always)]
+fn neg_product_body(a: &[f64], d: &[f64], out: &mut [f64], n: usize) {
+    let (a, d, out) = (&a[..n * n], &d[..n * n], &mut out[..n * n]);
+    for j in 0..n {
+        let dj = &d[j * n..(j + 1) * n];
+        let mut i = 0;
+        while i + 4 <= n {
+            let mut acc = [0.0; 4];
+            for (k, x) in dj.iter().enumerate() {
+                let ak = &a[k * n + i..k * n + i + 4];
+                for r in 0..4 {
+                    acc[r] -= x * ak[r];
+                }
+            }
+            out[j * n + i..j * n + i + 4].copy_from_slice(&acc);
+            i += 4;
+        }
+        for i in i..n {
+            // `A` symmetric: row `i` is column `i`, contiguous.
+            let ai = &a[i * n..(i + 1) * n];
+            let mut acc = 0.0;
+            for (x, y) in dj.iter().zip(ai) {
+                acc -= x * y;
+            }
+            out[j * n + i] = acc;
+        }
+    }
 }

@@ -99,7 +99,7 @@ fn rows_body(
     out: [&mut [f64]; 3],
 ) {
     dd.row_major = true;
-    vectors(model, data, dd, q, v, a, g);
+    vectors::<true>(model, data, dd, q, v, a, g);
     let [dq, dv, mm] = out;
     super::deriv_rows::fill_rows_into(model, dd, (dq, dv, mm));
     if !model.armature.is_empty() {
@@ -121,10 +121,10 @@ fn derivatives_body(
     a: &[f64],
     g: &Vec3,
 ) {
-    vectors(model, data, dd, q, v, a, g);
     if dd.row_major {
-        super::deriv_rows::fill_rows(model, dd);
+        by_rows(model, data, dd, (q, v, a), g);
     } else {
+        vectors::<false>(model, data, dd, q, v, a, g);
         fill_matrices(model, dd);
     }
     if !model.armature.is_empty() {
@@ -133,11 +133,36 @@ fn derivatives_body(
     }
 }
 
+crate::support::cpu::multiversion! {
+    /// The by-rows passes and fill, out of line (their own AVX2 copy): the column path
+    /// (small models) carries none of their code.
+    fn by_rows / by_rows_avx2 / by_rows_baseline [] (
+        model: &Model,
+        data: &mut Data,
+        dd: &mut DerivativeData,
+        qva: (&[f64], &[f64], &[f64]),
+        g: &Vec3,
+    ) => by_rows_body
+}
+
+#[inline(always)]
+fn by_rows_body(
+    model: &Model,
+    data: &mut Data,
+    dd: &mut DerivativeData,
+    (q, v, a): (&[f64], &[f64], &[f64]),
+    g: &Vec3,
+) {
+    vectors::<true>(model, data, dd, q, v, a, g);
+    super::deriv_rows::fill_rows(model, dd);
+}
+
 /// The outward and inward passes: every dof's vectors, `τ`, and the tree's shape, for the
-/// fills.
+/// fills; `ROWS`: also the per-dof arrays the fill by rows reads
+/// ([`super::deriv_rows`]), a separate copy so that the column path tests nothing per dof.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn vectors(
+fn vectors<const ROWS: bool>(
     model: &Model,
     data: &mut Data,
     dd: &mut DerivativeData,
@@ -174,7 +199,7 @@ fn vectors(
             for m in 0..3 {
                 dd.columns[(12 + m) * nvt + j] = d.bts[m];
             }
-            if dd.row_major {
+            if ROWS {
                 // By rows, the other dof of each pair is the one that varies along a row.
                 for m in 0..6 {
                     dd.columns[(15 + m) * nvt + j] = d.g[m];
@@ -456,12 +481,23 @@ fn outward_link(
     let w = angular(&vc);
     let u = linear(&vc);
     let iw = y.rotational * w;
-    let (sw, sh) = (skew(&w), skew(&y.first_moment));
+    let h = &y.first_moment;
+    // `[w]× R − R [w]× = A + Aᵀ` with `A = [w]× R` (`R` symmetric), its columns `w × R_c`;
+    // `[h]× [u]× = u hᵀ − (h · u) I`: no 3 × 3 products.
+    let r = &y.rotational;
+    let swr = Mat3::from_columns(&[
+        w.cross(&r.column(0).into_owned()),
+        w.cross(&r.column(1).into_owned()),
+        w.cross(&r.column(2).into_owned()),
+    ]);
+    let hu2 = 2.0 * h.dot(&u);
+    let baa = swr + swr.transpose() - skew(&iw) - (u * h.transpose()) * 2.0
+        + Mat3::from_diagonal_element(hu2);
     let lk = &mut dd.links[i];
     lk.v = vc;
     lk.a = ac;
     lk.f = y.mul_twist(&ac) + cross_force(&vc, &yv);
-    lk.baa = sw * y.rotational - y.rotational * sw - skew(&iw) - sh * skew(&u) * 2.0;
+    lk.baa = baa;
     lk.bla = skew(&(u * y.mass - y.first_moment.cross(&w))) * -2.0;
     lk.y = y;
 }
