@@ -469,52 +469,12 @@ fn mass_sums(walk: &Walk, w: &mut Work) {
     }
 }
 
-/// Whether this CPU has AVX2: the lanes then run four to an instruction (tested once by
-/// the standard library, cached).
-#[inline]
-fn avx2() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx2")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
-
-/// The same code compiled twice: for baseline x86-64 and with AVX2 enabled (no FMA, so
-/// every lane rounds as the baseline build does), chosen per call by [`avx2`].
-macro_rules! dispatch {
-    ($(#[$doc:meta])* $name:ident, $avx:ident, $imp:ident, ($($arg:ident: $ty:ty),*)) => {
-        $(#[$doc])*
-        #[allow(clippy::too_many_arguments)]
-        pub fn $name($($arg: $ty),*) -> crate::support::error::Result<()> {
-            #[cfg(target_arch = "x86_64")]
-            if avx2() {
-                // SAFETY: AVX2 is present (checked just above).
-                return unsafe { $avx($($arg),*) };
-            }
-            $imp($($arg),*)
-        }
-
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx2")]
-        #[allow(clippy::too_many_arguments)]
-        unsafe fn $avx($($arg: $ty),*) -> crate::support::error::Result<()> {
-            $imp($($arg),*)
-        }
-    };
-}
-
-dispatch!(
+crate::support::cpu::multiversion! {
     /// Frame `f`'s Jacobians (row-major 6 × nv each) at rows `first..first + count` of `qs`
     /// into `out` (its first row is row `first`'s; every entry written). `walk` is
-    /// `f.link`'s support; `poll` is asked every 256 rows.
-    frame_jacobian_rows,
-    frame_rows_avx2,
-    frame_rows,
-    (
+    /// `f.link`'s support; `poll` is asked every 256 rows. The lanes run four to an
+    /// instruction in the AVX2 copy (no FMA: the baseline build's bits).
+    pub fn frame_jacobian_rows / frame_rows_avx2 / frame_rows_baseline [] (
         model: &Model,
         walk: &Walk,
         f: &FrameRef,
@@ -524,17 +484,14 @@ dispatch!(
         count: usize,
         out: &mut [f64],
         poll: &dyn Fn() -> crate::support::error::Result<()>
-    )
-);
+    ) -> crate::support::error::Result<()> => frame_rows
+}
 
-dispatch!(
+crate::support::cpu::multiversion! {
     /// The centre of mass (`com`, 3 per row) and, with `jac`, its Jacobian (row-major
     /// 3 × nv per row; every entry written) at rows `first..first + count` of `qs`; `walk`
     /// covers every link (in link order) of a model with moving mass.
-    com_rows,
-    com_rows_avx2,
-    com_rows_impl,
-    (
+    pub fn com_rows / com_rows_avx2 / com_rows_baseline [] (
         model: &Model,
         walk: &Walk,
         qs: &[f64],
@@ -543,5 +500,5 @@ dispatch!(
         com: &mut [f64],
         jac: Option<&mut [f64]>,
         poll: &dyn Fn() -> crate::support::error::Result<()>
-    )
-);
+    ) -> crate::support::error::Result<()> => com_rows_impl
+}
