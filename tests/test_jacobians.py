@@ -92,6 +92,39 @@ def test_batched_frame_jacobians_match_pinocchio_and_one_configuration(robot):  
                 assert record(f"batched frame jacobian {name}", rel_err(jb[k], want)) < TOL
 
 
+def test_batched_jacobians_do_not_depend_on_how_q_is_laid_out():
+    """A C-ordered float64 block short enough for one thread is read in place with the
+    interpreter held; any other layout (Fortran order, a strided view, a list, a read-only
+    array) or a block long enough for several threads is copied first. The same rows give
+    the same bits whichever way, and a non-finite entry is refused by name either way."""
+    model = pmd.robots.example_robot("panda")
+    rng = np.random.default_rng(3)
+    qs = np.array([random_q(model, rng) for _ in range(9)])
+    frame = model.frame_names[-1]
+    ref_j = model.frame_jacobian(frame, qs, reference="world")
+    ref_c, ref_cj = model.center_of_mass(qs, jacobian=True)
+    frozen = qs.copy()
+    frozen.flags.writeable = False
+    wide = np.zeros((9, 2 * model.nq))
+    wide[:, ::2] = qs
+    for q in (np.asfortranarray(qs), wide[:, ::2], qs.tolist(), frozen):
+        np.testing.assert_array_equal(model.frame_jacobian(frame, q, reference="world"), ref_j)
+        c, cj = model.center_of_mass(q, jacobian=True)
+        np.testing.assert_array_equal(c, ref_c)
+        np.testing.assert_array_equal(cj, ref_cj)
+    # Enough rows for several threads (copied, detached): the first rows unchanged.
+    many = np.concatenate([qs] * 4000)
+    np.testing.assert_array_equal(model.frame_jacobian(frame, many, reference="world")[:9], ref_j)
+    np.testing.assert_array_equal(model.center_of_mass(many, jacobian=True)[1][:9], ref_cj)
+    bad = qs.copy()
+    bad[4, 2] = np.nan
+    for q in (bad, np.asfortranarray(bad)):
+        with pytest.raises(pmd.errors.InvalidInputError, match="q"):
+            model.frame_jacobian(frame, q)
+        with pytest.raises(pmd.errors.InvalidInputError, match="q"):
+            model.center_of_mass(q, jacobian=True)
+
+
 def test_frame_velocity_and_acceleration_match_pinocchio(robot):  # noqa: F811
     name, model, pm = robot
     data = pm.createData()

@@ -268,18 +268,29 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
 /// slice, read from the array's own fields: rust-numpy's checked cast (dtype objects compared
 /// through NumPy's API) costs more than copying a short vector. `None` for anything else.
 fn plain_f64<'a>(obj: &'a Bound<'_, PyAny>) -> Option<&'a [f64]> {
+    plain_f64_nd::<1>(obj).map(|(s, _)| s)
+}
+
+/// As [`plain_f64`] for a 2-D array: its data (C order) and its shape `(rows, cols)`.
+pub fn plain_f64_rows<'a>(obj: &'a Bound<'_, PyAny>) -> Option<(&'a [f64], [usize; 2])> {
+    plain_f64_nd::<2>(obj)
+}
+
+fn plain_f64_nd<'a, const ND: usize>(
+    obj: &'a Bound<'_, PyAny>,
+) -> Option<(&'a [f64], [usize; ND])> {
     use numpy::npyffi::{self, NPY_TYPES};
     if !is_exact_ndarray(obj) {
         return None;
     }
     const FLAGS: std::os::raw::c_int = npyffi::NPY_ARRAY_C_CONTIGUOUS | npyffi::NPY_ARRAY_ALIGNED;
     // SAFETY: `obj` is exactly a NumPy array (checked above), so it has the array object's
-    // layout; its descriptor and, for nd = 1, its one dimension are valid while `obj` lives.
-    // The data is read at once by the caller, attached to the interpreter (no Python code
-    // runs meanwhile), as the checked path does.
+    // layout; its descriptor and, for nd = ND, its ND dimensions are valid while `obj` lives.
+    // The data is read by the caller attached to the interpreter (no Python code runs
+    // meanwhile), as the checked path does.
     unsafe {
         let arr = &(*(obj.as_ptr() as *const npyffi::PyArrayObject)).fields;
-        if arr.nd != 1 || arr.flags & FLAGS != FLAGS {
+        if arr.nd != ND as std::os::raw::c_int || arr.flags & FLAGS != FLAGS {
             return None;
         }
         let d = &(*arr.descr).fields;
@@ -288,8 +299,15 @@ fn plain_f64<'a>(obj: &'a Bound<'_, PyAny>) -> Option<&'a [f64]> {
         {
             return None;
         }
-        let len = usize::try_from(*arr.dimensions).ok()?;
-        Some(std::slice::from_raw_parts(arr.data as *const f64, len))
+        let mut shape = [0usize; ND];
+        for (k, n) in shape.iter_mut().enumerate() {
+            *n = usize::try_from(*arr.dimensions.add(k)).ok()?;
+        }
+        let len = shape.iter().try_fold(1usize, |a, &n| a.checked_mul(n))?;
+        Some((
+            std::slice::from_raw_parts(arr.data as *const f64, len),
+            shape,
+        ))
     }
 }
 
