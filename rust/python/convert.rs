@@ -223,6 +223,13 @@ impl Arg for Bound<'_, PyAny> {
         let d = self.cast::<pyo3::types::PyDict>().ok()?;
         Some(d.get_item(key).ok().flatten())
     }
+    fn keys(&self) -> Option<Vec<Self>> {
+        let d = self.cast::<pyo3::types::PyDict>().ok()?;
+        Some(d.keys().iter().collect())
+    }
+    fn attr(&self, name: &str) -> Option<Self> {
+        self.getattr(name).ok()
+    }
     fn wrong_type(&self, arg: &str, expected: &str) -> PyErr {
         let got = short_repr(self);
         py_error(

@@ -1,11 +1,11 @@
 //! Arguments and results of the identification functions (crate::identification).
 //! Conversion only.
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use super::convert::{array, dmatrix_to_array, points, to_array1};
 use super::errors::{check_result, invalid};
 use super::model::{gravity_arg, PyModel};
+use super::record::{record, Field};
 use super::signals::detach_interruptible;
 use crate::identification::{self as ident, Extras, LinkCells, Method, Options};
 
@@ -75,7 +75,7 @@ pub fn identification_base<'py>(
     py: Python<'py>,
     y: &Bound<'_, PyAny>,
     rank_tol: f64,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyBase> {
     let (shape, data) = array(y, "regressor")?;
     if shape.len() != 2 {
         return Err(invalid(
@@ -86,24 +86,35 @@ pub fn identification_base<'py>(
         ));
     }
     let m = nalgebra::DMatrix::from_row_slice(shape[0], shape[1], &data);
-    let base = detach_interruptible(py, || {
-        Ok(ident::base_parameters(
-            &ident::identify::reduced(&m).r,
-            rank_tol,
-        ))
-    })?;
-    base_dict(py, &base)
+    let reduced = |m| ident::identify::reduced(m).r;
+    let base = detach_interruptible(py, || Ok(ident::base_parameters(&reduced(&m), rank_tol)))?;
+    Ok(PyBase(base))
 }
 
-fn base_dict<'py>(py: Python<'py>, base: &ident::Base) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    d.set_item("rank", base.rank)?;
-    d.set_item("independent", base.independent.clone())?;
-    d.set_item("dependent", base.dependent.clone())?;
-    d.set_item("coefficients", dmatrix_to_array(py, &base.coefficients)?)?;
-    d.set_item("pivots", to_array1(py, &base.pivots))?;
-    Ok(d)
-}
+record!(
+    /// The base parameters of a regressor (`crate::identification::Base`).
+    PyBase("IdentificationBase", ident::Base) {
+        rank, independent, dependent, coefficients, pivots
+    }
+);
+
+record!(
+    /// An identification's result (`crate::identification::Identified`).
+    PyIdentified("Identified", ident::Identified) {
+        names,
+        free,
+        base: |r: &ident::Identified, py| Bound::new(py, PyBase(r.base.clone())).map(Bound::into_any),
+        base_names,
+        beta: |r: &ident::Identified, py| r.fit.beta.field(py),
+        std: |r: &ident::Identified, py| r.fit.std.field(py),
+        pi: |r: &ident::Identified, py| r.fit.pi.field(py),
+        rss: |r: &ident::Identified, py| r.fit.rss.field(py),
+        condition: |r: &ident::Identified, py| r.fit.condition.field(py),
+        structural_rank,
+        residuals,
+        masses,
+    }
+);
 
 /// The identification (crate::identification::identify); `cells`: a list of
 /// `(link index, centres (K, 3), side)` for method "cells".
@@ -130,7 +141,7 @@ pub fn identification_fit<'py>(
     offset: bool,
     rank_tol: f64,
     actuated: Vec<usize>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyIdentified> {
     let model = model.model();
     let g = gravity_arg(py, gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
@@ -170,25 +181,7 @@ pub fn identification_fit<'py>(
     let out = detach_interruptible(py, || {
         ident::identify(&model, &qs, &vs, &accs, &taus, &g, &opt)
     })?;
-    let d = PyDict::new(py);
-    d.set_item("names", out.names.clone())?;
-    d.set_item("free", out.free.clone())?;
-    d.set_item("base", base_dict(py, &out.base)?)?;
-    d.set_item("base_names", out.base_names.clone())?;
-    d.set_item("beta", to_array1(py, &out.fit.beta))?;
-    d.set_item("std", to_array1(py, &out.fit.std))?;
-    d.set_item("pi", to_array1(py, &out.fit.pi))?;
-    d.set_item("rss", out.fit.rss)?;
-    d.set_item("condition", out.fit.condition)?;
-    d.set_item("structural_rank", out.structural_rank)?;
-    d.set_item("residuals", to_array1(py, &out.residuals))?;
-    let masses: Vec<Bound<'py, PyAny>> = out
-        .masses
-        .iter()
-        .map(|m| to_array1(py, m).into_any())
-        .collect();
-    d.set_item("masses", masses)?;
-    Ok(d)
+    Ok(PyIdentified(out))
 }
 
 /// A copy of `model` with links `links` given the parameters `pi` (10 per link, all links)

@@ -54,6 +54,7 @@ mod loops;
 mod model;
 mod pickle;
 mod reactions;
+mod record;
 mod rk45;
 mod run_config;
 mod scene;

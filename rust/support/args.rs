@@ -38,6 +38,14 @@ pub trait Arg: Sized {
     /// A mapping's (a dict's) value under `key`: `Some(None)` for a key it lacks, `None` for
     /// a value that is no mapping.
     fn get(&self, key: &str) -> Option<Option<Self>>;
+    /// A mapping's keys; `None` for a value that is no mapping.
+    fn keys(&self) -> Option<Vec<Self>> {
+        None
+    }
+    /// An object's attribute `name` (a record such as a dataclass), if it has one.
+    fn attr(&self, _name: &str) -> Option<Self> {
+        None
+    }
 }
 
 pub fn shape_str(shape: &[usize]) -> String {

@@ -141,7 +141,7 @@ def excitation_trajectory(
     best = rng.normal(size=shape)
     q, v, a = fourier(*_fit_into(best, lo, hi, vmax, amax, tc, omega, margin), tc, omega)
     y = _core.identification_regressor(model, q, v, a, gravity, viscous, coulomb, False, False)
-    cols = _core.identification_base(y, 1e-8)["independent"]
+    cols = _core.identification_base(y, 1e-8).independent
     best_c = condition(best)
     step = 0.5
     for _ in range(int(iterations)):

@@ -233,10 +233,10 @@ def identify(
         model, q, v, a, tau.reshape(-1), gravity, method, list(map(bool, free)), list(map(float, values)),
         float(prior_weight), list(weights), cell_args, flags[0], flags[1], armature, offset, rank_tol, act,
     )
-    free_names = [names[i] for i in out["free"]]
-    base = base_parameters_from(out["base"], free_names, len(free_names))
-    pi = np.asarray(out["pi"])
-    residuals = np.asarray(out["residuals"]).reshape(-1, rows)
+    free_names = [names[i] for i in out.free]
+    base = base_parameters_from(out.base, free_names, len(free_names))
+    pi = out.pi
+    residuals = out.residuals.reshape(-1, rows)
     bodies_out = {n: body_of(n, pi[10 * links.index(n) : 10 * links.index(n) + 10], boxes.get(n)) for n in chosen}
     joints = [links[_link_of(model, j)] for j in one_dof_joints(model)]
     extra = {k: {} for k in ("fv", "fc", "armature", "offset")}
@@ -246,11 +246,11 @@ def identify(
             extra[kind][owner] = float(x)
     friction_out = {j: {"viscous": extra["fv"].get(j, 0.0), "coulomb": extra["fc"].get(j, 0.0)} for j in joints} if any(flags) else {}
     ident_model, err = _identified_model(model, pi, [links.index(n) for n in chosen], extra["armature"], joints, armature)
-    masses = {n: (cell_grids[n][0], np.asarray(m), cell_grids[n][1]) for n, m in zip(chosen, out["masses"])}
+    masses = {n: (cell_grids[n][0], np.asarray(m), cell_grids[n][1]) for n, m in zip(chosen, out.masses)}
     return Identification(
-        method, names, pi, base, np.asarray(out["beta"]), np.asarray(out["std"]), float(out["condition"]),
+        method, names, pi, base, out.beta, out.std, float(out.condition),
         residuals, np.sqrt(np.mean(residuals**2, axis=0)), bodies_out, friction_out, extra["armature"],
-        extra["offset"], ident_model, err, masses, int(out["structural_rank"]), tuple(act),
+        extra["offset"], ident_model, err, masses, int(out.structural_rank), tuple(act),
     )
 
 

@@ -132,10 +132,10 @@ class BaseParameters:
         return self.map @ np.asarray(parameters, float)
 
 
-def base_parameters_from(base: dict, names: list[str], p: int) -> BaseParameters:
-    """A :class:`BaseParameters` from the core's dict (indices into ``names``)."""
-    ind, dep, coef = base["independent"], base["dependent"], np.asarray(base["coefficients"])
-    k = np.zeros((base["rank"], p))
+def base_parameters_from(base, names: list[str], p: int) -> BaseParameters:
+    """A :class:`BaseParameters` from the core's record (indices into ``names``)."""
+    ind, dep, coef = base.independent, base.dependent, base.coefficients
+    k = np.zeros((base.rank, p))
     labels = []
     for i, c in enumerate(ind):
         k[i, c] = 1.0
@@ -149,7 +149,7 @@ def base_parameters_from(base: dict, names: list[str], p: int) -> BaseParameters
                 mag = abs(row[d])
                 label += f" {sign} {names[e]}" if abs(mag - 1) < 1e-12 else f" {sign} {mag:.6g}*{names[e]}"
         labels.append(label)
-    return BaseParameters(base["rank"], list(ind), list(dep), coef, np.asarray(base["pivots"]), labels, k)
+    return BaseParameters(base.rank, list(ind), list(dep), coef, base.pivots, labels, k)
 
 
 def base_parameters(regressor, names: list[str] | None = None, rank_tol: float = 1e-8) -> BaseParameters:

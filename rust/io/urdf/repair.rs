@@ -8,6 +8,7 @@ use super::parse::{Inertial, Kind, RobotData};
 use super::tree::Tree;
 use super::RepairRecord;
 use crate::model::body::RigidBody;
+use crate::support::args::{flag, given, Arg};
 use crate::support::error::Error;
 use crate::support::spatial::{Mat3, Vec3};
 
@@ -34,6 +35,67 @@ impl Default for Repair {
             bound_inertia: 0.0,
             weld_massless: true,
         }
+    }
+}
+
+impl Repair {
+    /// `repair=` as a caller writes it: absent or false (no repairs), true (the defaults), a
+    /// mapping of the fields, or an object with them all as attributes (`pmd.InertiaRepair`).
+    pub fn parse<A: Arg>(x: Option<&A>) -> Result<Option<Repair>, A::Err> {
+        const FIELDS: [&str; 4] = [
+            "balance_inertia",
+            "bound_mass",
+            "bound_inertia",
+            "weld_massless",
+        ];
+        let expected = "None, False, True, a dict with keys balance_inertia, bound_mass, bound_inertia, weld_massless, or pmd.InertiaRepair(...)";
+        let Some(x) = given(x) else { return Ok(None) };
+        if x.is_bool() {
+            return Ok(flag(x, "repair")?.then(Repair::default));
+        }
+        let keys = x.keys();
+        let unknown = keys
+            .iter()
+            .flatten()
+            .find(|k| !k.text().is_some_and(|k| FIELDS.contains(&k.as_str())));
+        if let Some(k) = unknown {
+            return Err(
+                Error::arg("repair", expected, format!("a dict with key {}", k.shown())).into(),
+            );
+        }
+        let mut out = Repair::default();
+        for name in FIELDS {
+            let v = match keys {
+                Some(_) => x.get(name).flatten(),
+                None => Some(
+                    x.attr(name)
+                        .ok_or_else(|| Error::arg("repair", expected, x.shown()))?,
+                ),
+            };
+            let Some(v) = v else { continue };
+            let arg = format!("repair.{name}");
+            let bad = |want: &str| Error::arg(&arg, want, v.shown());
+            // Not `flag`/`real`'s type errors: 1 is no bool, and True is not a 1 kg bound.
+            let b = || match v.is_bool() {
+                true => flag(&v, &arg),
+                false => Err(bad("True or False").into()),
+            };
+            let x = || match v.is_bool() {
+                true => None,
+                false => v
+                    .real(&arg)
+                    .ok()
+                    .filter(|x: &f64| x.is_finite() && *x >= 0.0),
+            };
+            let x = || x().ok_or_else(|| bad("a finite number >= 0"));
+            match name {
+                "balance_inertia" => out.balance_inertia = b()?,
+                "weld_massless" => out.weld_massless = b()?,
+                "bound_mass" => out.bound_mass = x()?,
+                _ => out.bound_inertia = x()?,
+            }
+        }
+        Ok(Some(out))
     }
 }
 

@@ -10,6 +10,7 @@ use super::PyModel;
 use crate::python::convert::{mat3, vec3};
 use crate::python::errors::{invalid, IntoPyResult};
 use crate::python::joint::PyJoint;
+use crate::python::record::record;
 use crate::support::spatial::Placement;
 
 #[pymethods]
@@ -39,7 +40,7 @@ impl PyModel {
             crate::support::args::choice(r, "root_joint", &choices, "None, \"fixed\" or \"free\"")
         })?;
         let root = root.unwrap_or(Fixed);
-        let repair = repair_options(py, repair)?;
+        let repair = crate::io::urdf::Repair::parse(repair)?;
         let mut urdf =
             crate::io::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
         if !mimic {
@@ -166,113 +167,21 @@ impl PyModel {
         Ok(out)
     }
 
-    /// What `from_urdf(..., repair=...)` changed: one dict per link or welded joint with
-    /// `link`, `joint` (the welded joint, else None), `rules`, `mass` (before, after),
-    /// `principal_moments` (before, after; ascending) and `joint_type` (before, after; welds
-    /// only). Empty for a model loaded without repairs.
+    /// What `from_urdf(..., repair=...)` changed: one record per link or welded joint.
     #[getter]
-    fn repairs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, pyo3::types::PyList>> {
-        let out = pyo3::types::PyList::empty(py);
-        for r in self.records().repairs.iter() {
-            let d = PyDict::new(py);
-            d.set_item("link", &r.link)?;
-            d.set_item("joint", &r.joint)?;
-            d.set_item("rules", &r.rules)?;
-            d.set_item("mass", r.mass)?;
-            d.set_item(
-                "principal_moments",
-                (
-                    (
-                        r.principal_moments.0[0],
-                        r.principal_moments.0[1],
-                        r.principal_moments.0[2],
-                    ),
-                    (
-                        r.principal_moments.1[0],
-                        r.principal_moments.1[1],
-                        r.principal_moments.1[2],
-                    ),
-                ),
-            )?;
-            d.set_item("joint_type", &r.joint_type)?;
-            out.append(d)?;
-        }
-        Ok(out)
+    fn repairs(&self) -> Vec<PyRepair> {
+        self.records()
+            .repairs
+            .iter()
+            .cloned()
+            .map(PyRepair)
+            .collect()
     }
 }
 
-/// `repair=`: None/False (no repairs), True (the defaults), a dict of the fields, or an
-/// object with them as attributes (`pmd.InertiaRepair`).
-fn repair_options(
-    py: Python<'_>,
-    repair: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<crate::io::urdf::Repair>> {
-    const FIELDS: [&str; 4] = [
-        "balance_inertia",
-        "bound_mass",
-        "bound_inertia",
-        "weld_massless",
-    ];
-    let expected = "None, False, True, a dict with keys balance_inertia, bound_mass, bound_inertia, weld_massless, or pmd.InertiaRepair(...)";
-    let shown = |x: &Bound<'_, PyAny>| x.repr().map_or_else(|_| "?".to_string(), |r| r.to_string());
-    let Some(r) = repair else { return Ok(None) };
-    if r.is_none() {
-        return Ok(None);
-    }
-    if let Ok(b) = r.cast::<pyo3::types::PyBool>() {
-        return Ok(b.is_true().then(crate::io::urdf::Repair::default));
-    }
-    let get = |name: &str| -> PyResult<Option<Bound<'_, PyAny>>> {
-        if let Ok(d) = r.cast::<PyDict>() {
-            d.get_item(name)
-        } else if r.hasattr(name)? {
-            Ok(Some(r.getattr(name)?))
-        } else {
-            Err(invalid(py, "repair", expected, shown(r)))
-        }
-    };
-    if let Ok(d) = r.cast::<PyDict>() {
-        for k in d.keys() {
-            let key: Option<String> = k.extract().ok();
-            if !key.as_deref().is_some_and(|k| FIELDS.contains(&k)) {
-                return Err(invalid(
-                    py,
-                    "repair",
-                    expected,
-                    format!("a dict with key {}", shown(&k)),
-                ));
-            }
-        }
-    }
-    let mut out = crate::io::urdf::Repair::default();
-    for name in FIELDS {
-        let Some(v) = get(name)? else { continue };
-        let arg = format!("repair.{name}");
-        match name {
-            "balance_inertia" | "weld_massless" => {
-                let b = v
-                    .cast::<pyo3::types::PyBool>()
-                    .map_err(|_| invalid(py, &arg, "True or False", shown(&v)))?
-                    .is_true();
-                if name == "balance_inertia" {
-                    out.balance_inertia = b;
-                } else {
-                    out.weld_massless = b;
-                }
-            }
-            _ => {
-                // `real` refuses bools (True is not a 1 kg bound).
-                let x = crate::python::convert::real(&v, &arg)
-                    .ok()
-                    .filter(|x: &f64| x.is_finite() && *x >= 0.0)
-                    .ok_or_else(|| invalid(py, &arg, "a finite number >= 0", shown(&v)))?;
-                if name == "bound_mass" {
-                    out.bound_mass = x;
-                } else {
-                    out.bound_inertia = x;
-                }
-            }
-        }
-    }
-    Ok(Some(out))
-}
+record!(
+    /// One link or welded joint changed by `from_urdf(..., repair=...)` (`model.repairs`).
+    PyRepair("UrdfRepair", crate::io::urdf::RepairRecord) {
+        link, joint, rules, mass, principal_moments, joint_type
+    } eq
+);

@@ -1,0 +1,132 @@
+//! Typed results: a core record crossing the boundary as a frozen Python class that holds
+//! it, each field a read-only attribute converted when read ([`Field`]), instead of a dict
+//! built field by field. The class also answers `r["field"]` and `r.keys()` (the dicts it
+//! replaced were read so), and has a `repr` naming its fields.
+use nalgebra::DMatrix;
+use pyo3::prelude::*;
+use pyo3::IntoPyObjectExt;
+
+use super::convert::{dmatrix_to_array, to_array1};
+
+/// A record's field as Python sees it: numbers, strings and index lists as themselves, real
+/// vectors and matrices as NumPy arrays.
+pub trait Field {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>>;
+}
+
+macro_rules! as_itself {
+    ($($t:ty),*) => {
+        $(impl Field for $t {
+            fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+                self.clone().into_bound_py_any(py)
+            }
+        })*
+    };
+}
+as_itself!(
+    bool,
+    usize,
+    f64,
+    String,
+    Option<String>,
+    Vec<String>,
+    Vec<usize>,
+    Vec<bool>
+);
+as_itself!((f64, f64), Option<(String, String)>);
+
+impl Field for ([f64; 3], [f64; 3]) {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let t = |x: &[f64; 3]| (x[0], x[1], x[2]);
+        (t(&self.0), t(&self.1)).into_bound_py_any(py)
+    }
+}
+
+impl Field for Vec<f64> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(to_array1(py, self).into_any())
+    }
+}
+
+impl Field for DMatrix<f64> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        dmatrix_to_array(py, self)
+    }
+}
+
+impl Field for Vec<Vec<f64>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let items: Vec<_> = self.iter().map(|x| to_array1(py, x)).collect();
+        items.into_bound_py_any(py)
+    }
+}
+
+/// `record!(PyX("Name", core::X) { a, b: |r, py| expr, ... } eq);`: a frozen class
+/// `Name` holding a `core::X` as `.0`; field `a` read through [`Field`], `b` through the
+/// conversion given (`r` the record, `py` the interpreter). A trailing `eq` compares two
+/// records by their fields (the core type's `PartialEq`).
+macro_rules! record {
+    (@get $s:ident, $py:ident, $f:ident) => { $crate::python::record::Field::field(&$s.0.$f, $py) };
+    (@get $s:ident, $py:ident, $f:ident, $conv:expr) => { ($conv)(&$s.0, $py) };
+    (@eq $ty:ident) => {
+        #[pyo3::pymethods]
+        impl $ty {
+            fn __eq__(&self, other: &pyo3::Bound<'_, pyo3::PyAny>) -> bool {
+                other.cast::<Self>().is_ok_and(|o| o.get().0 == self.0)
+            }
+        }
+    };
+    ($(#[$m:meta])* $ty:ident($name:literal, $inner:ty) {
+        $($f:ident $(: $conv:expr)?),* $(,)?
+    } $($eq:ident)?) => {
+        $(#[$m])*
+        #[pyo3::pyclass(name = $name, module = "pointmass_dyn._core", frozen)]
+        pub struct $ty(pub $inner);
+
+        #[pyo3::pymethods]
+        impl $ty {
+            $(#[getter]
+            fn $f<'py>(&self, py: pyo3::Python<'py>) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
+                $crate::python::record::record!(@get self, py, $f $(, $conv)?)
+            })*
+            fn __repr__(slf: &pyo3::Bound<'_, Self>) -> pyo3::PyResult<String> {
+                $crate::python::record::repr(slf, $name, &Self::KEYS)
+            }
+            fn __getitem__<'py>(
+                slf: &pyo3::Bound<'py, Self>,
+                key: &str,
+            ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
+                $crate::python::record::item(slf, key, &Self::KEYS)
+            }
+            fn keys(&self) -> Vec<&'static str> {
+                Self::KEYS.to_vec()
+            }
+        }
+        impl $ty {
+            const KEYS: [&'static str; [$(stringify!($f)),*].len()] = [$(stringify!($f)),*];
+        }
+        $($crate::python::record::record!(@$eq $ty);)?
+    };
+}
+pub(crate) use record;
+
+/// `obj[key]` for one of a record's `fields`, else `KeyError`.
+pub fn item<'py>(
+    obj: &Bound<'py, PyAny>,
+    key: &str,
+    fields: &[&str],
+) -> PyResult<Bound<'py, PyAny>> {
+    match fields.contains(&key) {
+        true => obj.getattr(key),
+        false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
+    }
+}
+
+/// `Name(a=..., b=...)` of a record's fields.
+pub fn repr(obj: &Bound<'_, PyAny>, name: &str, fields: &[&str]) -> PyResult<String> {
+    let parts: PyResult<Vec<String>> = fields
+        .iter()
+        .map(|f| Ok(format!("{f}={}", obj.getattr(*f)?.repr()?)))
+        .collect();
+    Ok(format!("{name}({})", parts?.join(", ")))
+}
