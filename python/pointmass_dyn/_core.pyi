@@ -31,6 +31,120 @@ _Controller = str
 _EventFunc: TypeAlias = Callable[..., float]
 
 @final
+class UrdfRepair:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    link: str
+    joint: str | None
+    rules: list[str]
+    mass: tuple[float, float]
+    principal_moments: tuple[tuple[float, float, float], tuple[float, float, float]]
+    joint_type: tuple[str, str] | None
+
+@final
+class PointMotion:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    masses: _Array
+    positions: _Array
+    velocities: _Array
+    accelerations: _Array
+
+@final
+class BearingForces:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    joints: _Array
+    loops: _Array
+    tau: _Array
+
+@final
+class Denoc:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    D: _Array
+    Nl: _Array
+    Nd: _Array
+    N: _Array
+    masses: _Array
+    points: _Array
+
+@final
+class DenocRates:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    D: _Array
+    Nl: _Array
+    Nd: _Array
+    N: _Array
+
+@final
+class LoopSolverInfo:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    banded: bool
+    order: list[int]
+    profile: int
+    model_profile: int
+
+@final
+class IkSolution:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    q: _Array
+    residual: float
+    errors: list[_Array]
+    iterations: int
+    restarts: int
+    converged: bool
+    message: str
+
+@final
+class IdentificationBase:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    rank: int
+    independent: list[int]
+    dependent: list[int]
+    coefficients: _Array
+    pivots: _Array
+
+@final
+class Identified:
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def __getitem__(self, key: str) -> Any: ...
+    names: list[str]
+    free: list[int]
+    base: IdentificationBase
+    base_names: list[str]
+    beta: _Array
+    std: _Array
+    pi: _Array
+    rss: float
+    condition: float
+    structural_rank: int
+    residuals: _Array
+    masses: list[_Array]
+
+@final
 class RigidBody:
     """A rigid body: mass (kg), centre of mass (body frame) and inertia tensor about the COM
     (body frame, standard sign convention ``I_xy = -Σ m x y``). Invalid values raise
@@ -228,11 +342,11 @@ class Model:
     def _inverse_kinematics(
         self, tasks: list, q0: ArrayLike, limits: bool, tol: float, max_iterations: int,
         restarts: int, seed: int,
-    ) -> dict[str, Any]: ...
-    def denoc(self, q: ArrayLike) -> dict[str, _Array]:
+    ) -> IkSolution: ...
+    def denoc(self, q: ArrayLike) -> Denoc:
         """The DeNOC matrices at ``q``: keys ``D``, ``Nl``, ``Nd``, ``N``, ``masses`` (7n,)
         and ``points`` (7n, 3)."""
-    def denoc_rates(self, q: ArrayLike, v: ArrayLike) -> dict[str, _Array]:
+    def denoc_rates(self, q: ArrayLike, v: ArrayLike) -> DenocRates:
         """Time derivatives of the DeNOC matrices: keys ``D``, ``Nl``, ``Nd``, ``N``."""
     def mass_matrix(self, q: ArrayLike, method: _Method = "recursive") -> _Array:
         """Generalized inertia matrix (GIM) ``Nᵀ M N``, shape (nv, nv)."""
@@ -325,7 +439,7 @@ class Model:
         """Velocity-level constraint Jacobian ``J``, shape (nconstraints, nv): ``J v = 0``
         keeps the loops closed. Rows of redundant constraints (a planar loop closed by a
         spatial joint) are zero or dependent."""
-    def loop_solver_info(self) -> dict[str, Any]:
+    def loop_solver_info(self) -> LoopSolverInfo:
         """How the loop solver factors this model (docs/loops.md §3): ``banded`` (the banded
         QRs of long mechanisms, or the dense ones), ``order`` (the v indices in the order the
         factorisations take them: the model's own unless the banded solver reorders),
@@ -406,7 +520,7 @@ class Model:
     def with_body(self, body: int | str, rigid_body: RigidBody) -> Model:
         """A copy with body ``body``'s rigid body replaced (joint, placement, loops, names
         kept); this model is unchanged."""
-    def point_motion(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> dict[str, _Array]:
+    def point_motion(self, q: ArrayLike, v: ArrayLike, a: ArrayLike) -> PointMotion:
         """Every link's seven point masses in motion at one state: keys ``masses`` (nlinks,
         7), ``positions``, ``velocities``, ``accelerations`` (nlinks, 7, 3), world axes, no
         gravity."""
@@ -425,7 +539,7 @@ class Model:
         external: ArrayLike | None = None,
         actuated: Sequence[int | str] | None = None,
         frame: Literal["joint", "world"] = "joint",
-    ) -> dict[str, _Array]:
+    ) -> BearingForces:
         """The wrench every joint transmits at one state: keys ``joints`` (nlinks, 6),
         ``[force; moment]`` the parent applies to the link's subtree at the link origin, in
         the link's axes (``frame="joint"``) or the world's; ``loops`` (nloops, 6), the cut
@@ -500,8 +614,8 @@ class Model:
         joints set (URDF names); joints the model does not move are skipped with one
         ``UrdfWarning``. Raises ``UrdfError`` naming the file, pose and joint."""
     @property
-    def repairs(self) -> list[dict[str, Any]]:
-        """What ``from_urdf(..., repair=...)`` changed: one dict per link or welded joint
+    def repairs(self) -> list[UrdfRepair]:
+        """What ``from_urdf(..., repair=...)`` changed: one record per link or welded joint
         (``link``, ``joint``, ``rules``, ``mass`` and ``principal_moments`` as (before,
         after), ``joint_type`` (before, after) for welds). Empty otherwise."""
     @staticmethod
@@ -1228,7 +1342,7 @@ def identification_parameters(
 ) -> tuple[list[str], _Array]:
     """Column names and the model's values (friction and offsets 0, armature 0 here)."""
 
-def identification_base(y: ArrayLike, rank_tol: float = 1e-8) -> dict[str, Any]:
+def identification_base(y: ArrayLike, rank_tol: float = 1e-8) -> IdentificationBase:
     """Base parameters of a regressor: ``rank``, ``independent``, ``dependent``,
     ``coefficients`` (rank, p − rank), ``pivots``."""
 
@@ -1251,7 +1365,7 @@ def identification_fit(
     offset: bool,
     rank_tol: float = 1e-8,
     actuated: list[int] = ...,
-) -> dict[str, Any]:
+) -> Identified:
     """The identification (pointmass_dyn.identification.identify builds the arguments):
     ``names``, ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``,
     ``condition``, ``structural_rank``, ``residuals``, ``masses``."""

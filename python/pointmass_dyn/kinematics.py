@@ -111,14 +111,14 @@ def inverse_kinematics(
     out = model._inverse_kinematics(
         tasks, q0, bool(limits), float(tol), int(max_iterations), int(restarts), int(seed)
     )
-    errors = {frame: e for (frame, *_), e in zip(tasks, out["errors"])}
+    errors = {frame: e for (frame, *_), e in zip(tasks, out.errors)}
     return IKResult(
-        q=out["q"],
-        residual=out["residual"],
-        converged=out["converged"],
-        iterations=out["iterations"],
-        restarts=out["restarts"],
-        message=out["message"],
+        q=out.q,
+        residual=out.residual,
+        converged=out.converged,
+        iterations=out.iterations,
+        restarts=out.restarts,
+        message=out.message,
         errors=errors,
     )
 

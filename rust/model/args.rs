@@ -154,6 +154,38 @@ pub fn gravity<A: Arg>(x: Option<&A>) -> R<Vec3, A> {
     Ok(g)
 }
 
+/// The point moments are taken about (3,), finite; `None`: the world origin.
+pub fn about<A: Arg>(x: Option<&A>) -> R<Vec3, A> {
+    let Some(x) = given(x) else {
+        return Ok(Vec3::zeros());
+    };
+    let o = vec3(x, "about")?;
+    check_finite("about", o.as_slice())?;
+    Ok(o)
+}
+
+/// A trajectory's samples `t` (N,), `q` (N, nq), `v` (N, nv), finite (a bad one named by
+/// its sample), as flat arrays.
+pub fn samples<A: Arg>(model: &Model, t: &A, q: &A, v: &A) -> R<[Vec<f64>; 3], A> {
+    let ((ts, t), (qs, q), (vs, v)) = (t.array("t")?, q.array("q")?, v.array("v")?);
+    let (n, nq, nv) = (t.len(), model.nq, model.nv);
+    if ts.len() != 1 || qs != [n, nq] || vs != [n, nv] {
+        let got = [&ts, &qs, &vs].map(|s| shape_str(s)).join(", ");
+        let expected = format!("shapes (N,), (N, {nq}), (N, {nv})");
+        return Err(Error::arg("t, q, v", expected, got).into());
+    }
+    let row = |k: usize| {
+        q[k * nq..(k + 1) * nq]
+            .iter()
+            .chain(&v[k * nv..(k + 1) * nv])
+    };
+    if let Some(k) = (0..n).find(|&k| !t[k].is_finite() || row(k).any(|x| !x.is_finite())) {
+        let got = format!("a non-finite value at sample {k}");
+        return Err(Error::arg("t, q, v", "finite values", got).into());
+    }
+    Ok([t, q, v])
+}
+
 /// External wrenches, one `[moment about the link origin; force]` per moving link (world
 /// axes), finite; `None`: none.
 pub fn external<A: Arg>(model: &Model, x: Option<&A>) -> R<Option<Vec<Vec6>>, A> {

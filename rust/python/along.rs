@@ -4,58 +4,20 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::{array, shape_str, to_array, vec3};
+use super::convert::to_array;
 use super::effects::take_callback_error;
-use super::errors::{invalid, IntoPyResult};
 use super::scene::PyScene;
 use super::signals::detach_interruptible;
 use crate::simulate::{Along, Asked};
-use crate::support::spatial::Vec3;
 
-/// `(t, q, v)` as flat arrays after checking their shapes and that they are finite.
-type States = (Vec<f64>, Vec<f64>, Vec<f64>);
-
-fn states(
-    py: Python<'_>,
-    (nq, nv): (usize, usize),
-    t: &Bound<'_, PyAny>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-) -> PyResult<States> {
-    let (ts, t) = array(t, "t")?;
-    let (qs, q) = array(q, "q")?;
-    let (vs, v) = array(v, "v")?;
-    let n = t.len();
-    if ts.len() != 1 || qs != [n, nq] || vs != [n, nv] {
-        return Err(invalid(
-            py,
-            "t, q, v",
-            format!("shapes (N,), (N, {nq}), (N, {nv})"),
-            format!("{}, {}, {}", shape_str(&ts), shape_str(&qs), shape_str(&vs)),
-        ));
-    }
-    if let Some(k) = (0..n).find(|&k| {
-        !t[k].is_finite()
-            || q[k * nq..(k + 1) * nq]
-                .iter()
-                .chain(&v[k * nv..(k + 1) * nv])
-                .any(|x| !x.is_finite())
-    }) {
-        return Err(invalid(
-            py,
-            "t, q, v",
-            "finite values",
-            format!("a non-finite value at sample {k}"),
-        ));
-    }
-    Ok((t, q, v))
-}
+/// `(t, q, v)` as flat arrays, checked (`crate::model::args::samples`).
+type States = [Vec<f64>; 3];
 
 /// `crate::simulate::along` of the scene, the interpreter released (Ctrl-C heard).
 fn run(
     py: Python<'_>,
     scene: &PyScene,
-    (t, q, v): &States,
+    [t, q, v]: &States,
     disable: Option<&Bound<'_, PyAny>>,
     asked: Asked,
     threads: Option<usize>,
@@ -95,8 +57,8 @@ pub fn scene_along<'py>(
     threads: Option<usize>,
 ) -> PyResult<(Option<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
     let nv = scene.inner.model.nv;
-    let x = states(py, (scene.inner.model.nq, nv), t, q, v)?;
-    let n = x.0.len();
+    let x = crate::model::args::samples(&scene.inner.model, t, q, v)?;
+    let n = x[0].len();
     let asked = Asked {
         accelerations,
         forces,
@@ -128,17 +90,9 @@ pub fn scene_shaking<'py>(
     about: Option<&Bound<'_, PyAny>>,
     threads: Option<usize>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-    let model = &scene.inner.model;
-    let x = states(py, (model.nq, model.nv), t, q, v)?;
-    let n = x.0.len();
-    let about = match about.filter(|o| !o.is_none()) {
-        Some(o) => {
-            let o = vec3(o, "about")?;
-            crate::support::error::check_finite("about", o.as_slice()).py(py)?;
-            o
-        }
-        None => Vec3::zeros(),
-    };
+    let x = crate::model::args::samples(&scene.inner.model, t, q, v)?;
+    let n = x[0].len();
+    let about = crate::model::args::about(about)?;
     let asked = Asked {
         accelerations: false,
         forces: false,

@@ -94,6 +94,9 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<control::PySimulator>()?;
     m.add_class::<trajectory::PyRunResult>()?;
     m.add_class::<trajectory::PyRunStatus>()?;
+    model::add_records(m)?;
+    m.add_class::<identification::PyBase>()?;
+    m.add_class::<identification::PyIdentified>()?;
     m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::simulate_batch, m)?)?;
     m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;

@@ -48,6 +48,12 @@ impl Field for Vec<f64> {
     }
 }
 
+impl Field for nalgebra::DVector<f64> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        Ok(to_array1(py, self.as_slice()).into_any())
+    }
+}
+
 impl Field for DMatrix<f64> {
     fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         dmatrix_to_array(py, self)
@@ -64,7 +70,8 @@ impl Field for Vec<Vec<f64>> {
 /// `record!(PyX("Name", core::X) { a, b: |r, py| expr, ... } eq);`: a frozen class
 /// `Name` holding a `core::X` as `.0`; field `a` read through [`Field`], `b` through the
 /// conversion given (`r` the record, `py` the interpreter). A trailing `eq` compares two
-/// records by their fields (the core type's `PartialEq`).
+/// records by their fields (the core type's `PartialEq`). Iterating one gives its field
+/// names, as a dict's keys.
 macro_rules! record {
     (@get $s:ident, $py:ident, $f:ident) => { $crate::python::record::Field::field(&$s.0.$f, $py) };
     (@get $s:ident, $py:ident, $f:ident, $conv:expr) => { ($conv)(&$s.0, $py) };
@@ -86,6 +93,7 @@ macro_rules! record {
         #[pyo3::pymethods]
         impl $ty {
             $(#[getter]
+            #[allow(non_snake_case)]
             fn $f<'py>(&self, py: pyo3::Python<'py>) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
                 $crate::python::record::record!(@get self, py, $f $(, $conv)?)
             })*
@@ -100,6 +108,15 @@ macro_rules! record {
             }
             fn keys(&self) -> Vec<&'static str> {
                 Self::KEYS.to_vec()
+            }
+            fn __iter__<'py>(
+                slf: &pyo3::Bound<'py, Self>,
+            ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::types::PyIterator>> {
+                use pyo3::types::PyAnyMethods;
+                pyo3::types::PyList::new(slf.py(), Self::KEYS)?.as_any().try_iter()
+            }
+            fn __contains__(&self, key: &str) -> bool {
+                Self::KEYS.contains(&key)
             }
         }
         impl $ty {

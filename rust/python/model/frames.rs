@@ -8,11 +8,11 @@ use super::{load_state, PyModel};
 use crate::frames::{evaluate, jacobian, placement, FrameRef, ReferenceFrame};
 use crate::model::Model;
 use crate::python::convert::{
-    array, int_arg, mat3, plain_f64_rows, shape_str, to_array, to_array1, vec3,
+    array, int_arg, plain_f64_rows, shape_str, to_array, to_array1, vec3,
 };
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
-use crate::support::spatial::{Mat3, Placement, Vec3};
+use crate::support::spatial::Placement;
 
 /// A frame: its name (a body or an added frame) or its index in `Model.frame_names`
 /// (the bodies', then the added frames'; a body's index is its frame's).
@@ -33,16 +33,6 @@ pub fn frame_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<F
         Some(i) => model.body_frame(model.frames[i].body, &model.frames[i].placement),
         None => model.body_frame(k, &Placement::identity()),
     })
-}
-
-/// A body (name or index) as an index.
-fn body_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<usize> {
-    if obj.is_instance_of::<PyString>() {
-        let name: String = obj.extract()?;
-        return model.body_named(arg, &name).py(obj.py());
-    }
-    let n = model.nbodies() as i64;
-    Ok(int_arg(obj, arg, 0, n - 1, "a body name or index")? as usize)
 }
 
 fn reference_arg(py: Python<'_>, reference: &str) -> PyResult<ReferenceFrame> {
@@ -68,14 +58,37 @@ pub fn configurations(
     }
 }
 
-/// `q` read in place when it is a C-ordered float64 (N, nq) array whose block one thread
+/// `q` (nq,) or (N, nq) for a call over rows, as (rows, stacked, whether to run it here).
+/// Read in place when it is a C-ordered float64 (N, nq) array whose block one thread
 /// computes in well under a millisecond (`frames::rows::threads_for` gives 1): then the
 /// call keeps the interpreter, so nothing can change `q` meanwhile and it need not be
-/// copied (the copy was ~2 % of a 1,000-row Jacobian). `None`: copy and detach.
-fn short_block<'a>(model: &Model, q: &'a Bound<'_, PyAny>) -> Option<(&'a [f64], usize)> {
-    let (data, [rows, cols]) = plain_f64_rows(q)?;
-    (cols == model.nq && rows > 0 && crate::frames::rows::threads_for(model, rows) == 1)
-        .then_some((data, rows))
+/// copied (the copy was ~2 % of a 1,000-row Jacobian). Otherwise copied into `buf`, and
+/// run detached (Ctrl-C heard) unless it is one row.
+fn rows_of<'a>(
+    model: &Model,
+    q: &'a Bound<'_, PyAny>,
+    buf: &'a mut Vec<f64>,
+) -> PyResult<(&'a [f64], usize, bool, bool)> {
+    if let Some((data, [rows, cols])) = plain_f64_rows(q) {
+        if cols == model.nq && rows > 0 && crate::frames::rows::threads_for(model, rows) == 1 {
+            return Ok((data, rows, true, true));
+        }
+    }
+    let (rows, data, stacked) = configurations(model, q, "q")?;
+    *buf = data;
+    Ok((buf.as_slice(), rows, stacked, rows == 1))
+}
+
+/// `f` here (`inline`) or with the interpreter released, Ctrl-C heard.
+fn run(
+    py: Python<'_>,
+    inline: bool,
+    f: impl FnOnce() -> crate::support::error::Result<()> + Send,
+) -> PyResult<()> {
+    match inline {
+        true => f().py(py),
+        false => detach_interruptible(py, f),
+    }
 }
 
 /// Whether `q` is a one-dimensional NumPy array: the one-configuration calls' path (its
@@ -135,18 +148,9 @@ impl PyModel {
         translation: Option<&Bound<'_, PyAny>>,
         rotation: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<usize> {
-        let b = body_arg(&self.model(), body, "body")?;
-        let t = match translation {
-            Some(t) if !t.is_none() => vec3(t, "translation")?,
-            _ => Vec3::zeros(),
-        };
-        let r = match rotation {
-            Some(r) if !r.is_none() => mat3(r, "rotation")?,
-            _ => Mat3::identity(),
-        };
-        self.shared
-            .update(|m| m.add_frame(&name, b, Placement::new(r, t)))
-            .py(py)
+        let b = crate::model::args::some_body(&self.model(), body, "body")?;
+        let at = crate::support::args::placement(translation, rotation, "translation", "rotation")?;
+        self.shared.update(|m| m.add_frame(&name, b, at)).py(py)
     }
 
     /// World placement of `frame` at q (nq,) or (N, nq): (rotation (3, 3) or (N, 3, 3),
@@ -248,21 +252,14 @@ impl PyModel {
         }
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
-        let nv = model.nv;
-        if let Some((qs, rows)) = short_block(&model, q) {
-            let arr = new_array(py, &[rows, 6, nv]);
-            // SAFETY: as below.
-            let out = unsafe { arr.as_slice_mut() }?;
-            evaluate::frame_jacobians(&model, &f, rf, qs, rows, true, out).py(py)?;
-            return Ok(arr.into_any());
-        }
-        let (rows, qs, stacked) = configurations(&model, q, "q")?;
-        let arr = new_array(py, &lead(stacked, rows, &[6, nv]));
+        let mut buf = Vec::new();
+        let (qs, rows, stacked, inline) = rows_of(&model, q, &mut buf)?;
+        let arr = new_array(py, &lead(stacked, rows, &[6, model.nv]));
         // SAFETY: a new array no Python code has seen yet, C-contiguous; every entry is
         // written before it is returned (dropped unseen on an error).
         let out = unsafe { arr.as_slice_mut() }?;
-        detach_interruptible(py, || {
-            evaluate::frame_jacobians(&model, &f, rf, &qs, rows, stacked, out)
+        run(py, inline, || {
+            evaluate::frame_jacobians(&model, &f, rf, qs, rows, stacked, out)
         })?;
         // (Finiteness checked by the core, in its pass.)
         Ok(arr.into_any())
@@ -341,19 +338,10 @@ impl PyModel {
             });
         }
         let model = self.model();
-        let short = short_block(&model, q);
-        let copied;
-        let (rows, qs, stacked) = match short {
-            Some((qs, rows)) => (rows, qs, true),
-            None => {
-                let (rows, qs, stacked) = configurations(&model, q, "q")?;
-                copied = qs;
-                (rows, copied.as_slice(), stacked)
-            }
-        };
-        let nv = model.nv;
+        let mut buf = Vec::new();
+        let (qs, rows, stacked, inline) = rows_of(&model, q, &mut buf)?;
         let com = new_array(py, &lead(stacked, rows, &[3]));
-        let jac = jacobian.then(|| new_array(py, &lead(stacked, rows, &[3, nv])));
+        let jac = jacobian.then(|| new_array(py, &lead(stacked, rows, &[3, model.nv])));
         // SAFETY: new arrays no Python code has seen yet, C-contiguous; every entry is
         // written before they are returned (dropped unseen on an error).
         let c = unsafe { com.as_slice_mut() }?;
@@ -361,11 +349,9 @@ impl PyModel {
             Some(a) => Some(unsafe { a.as_slice_mut() }?),
             None => None,
         };
-        if rows == 1 || short.is_some() {
-            evaluate::com_batch(&model, qs, rows, stacked, c, j).py(py)?;
-        } else {
-            detach_interruptible(py, || evaluate::com_batch(&model, qs, rows, stacked, c, j))?;
-        }
+        run(py, inline, || {
+            evaluate::com_batch(&model, qs, rows, stacked, c, j)
+        })?;
         // (Finiteness checked by the core, in its pass.)
         match jac {
             Some(j) => Ok((com, j).into_pyobject(py)?.into_any()),

@@ -1,13 +1,13 @@
 //! `Model._inverse_kinematics` (`crate::frames::ik`), called by
 //! `pointmass_dyn.inverse_kinematics`, which normalises the targets.
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use super::frames::frame_arg;
 use super::PyModel;
 use crate::frames::ik::{self, Options, Target, Task};
-use crate::python::convert::{mat3, to_array1, vec3};
+use crate::python::convert::{mat3, vec3};
 use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::record::record;
 use crate::python::signals::detach_interruptible;
 use crate::support::spatial::Placement;
 
@@ -32,7 +32,7 @@ impl PyModel {
         max_iterations: usize,
         restarts: usize,
         seed: u64,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<PyIkSolution> {
         let (model, q0) = self
             .state_only(py, q0)
             .map_err(|e| super::rename(py, e, "q", "q0"))?;
@@ -79,15 +79,11 @@ impl PyModel {
             seed,
         };
         let sol = detach_interruptible(py, || ik::solve(&model, &list, &q0, &opts))?;
-        let d = PyDict::new(py);
-        d.set_item("q", to_array1(py, &sol.q))?;
-        d.set_item("residual", sol.residual)?;
-        let errors: Vec<_> = sol.errors.iter().map(|e| to_array1(py, e)).collect();
-        d.set_item("errors", errors)?;
-        d.set_item("iterations", sol.iterations)?;
-        d.set_item("restarts", sol.restarts)?;
-        d.set_item("converged", sol.converged)?;
-        d.set_item("message", sol.message)?;
-        Ok(d)
+        Ok(PyIkSolution(sol))
     }
 }
+
+record!(
+    /// What `Model._inverse_kinematics` found (`crate::frames::ik::Solution`).
+    PyIkSolution("IkSolution", ik::Solution) { q, residual, errors, iterations, restarts, converged, message }
+);

@@ -9,6 +9,7 @@ use crate::kinematics;
 use crate::model::Model;
 use crate::python::convert::{dmatrix_to_array, points, to_array, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::record::{record, Field};
 use crate::python::signals::detach_interruptible;
 
 #[pymethods]
@@ -105,41 +106,29 @@ impl PyModel {
         })
     }
 
-    /// The DeNOC matrices at `q`: dict with D, Nl, Nd, N, masses (7n,), points (7n, 3).
-    fn denoc<'py>(&self, py: Python<'py>, q: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyDict>> {
+    /// The DeNOC matrices at `q`: D, Nl, Nd, N, masses (7n,), points (7n, 3).
+    fn denoc(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<PyDenoc> {
         let (model, qv) = self.state_only(py, q)?;
         let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
         for (k, m) in [("D", &den.d), ("N", &den.n), ("points", &den.points)] {
             check_result(py, &format!("denoc['{k}']"), m.as_slice())?;
         }
-        let d = PyDict::new(py);
-        d.set_item("D", dmatrix_to_array(py, &den.d)?)?;
-        d.set_item("Nl", dmatrix_to_array(py, &den.nl)?)?;
-        d.set_item("Nd", dmatrix_to_array(py, &den.nd)?)?;
-        d.set_item("N", dmatrix_to_array(py, &den.n)?)?;
-        d.set_item("masses", to_array1(py, den.masses.as_slice()))?;
-        d.set_item("points", dmatrix_to_array(py, &den.points)?)?;
-        Ok(d)
+        Ok(PyDenoc(den))
     }
 
-    /// Time derivatives of the DeNOC matrices at `(q, v)`: dict with D, Nl, Nd, N.
-    fn denoc_rates<'py>(
+    /// Time derivatives of the DeNOC matrices at `(q, v)`: D, Nl, Nd, N.
+    fn denoc_rates(
         &self,
-        py: Python<'py>,
+        py: Python<'_>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<PyDenocRates> {
         let (model, qv, vv) = self.state(py, q, v)?;
         let (_, rates) = detach_interruptible(py, || denoc::matrices_and_rates(&model, &qv, &vv))?;
         for (k, m) in [("D", &rates.d), ("N", &rates.n)] {
             check_result(py, &format!("denoc_rates['{k}']"), m.as_slice())?;
         }
-        let d = PyDict::new(py);
-        d.set_item("D", dmatrix_to_array(py, &rates.d)?)?;
-        d.set_item("Nl", dmatrix_to_array(py, &rates.nl)?)?;
-        d.set_item("Nd", dmatrix_to_array(py, &rates.nd)?)?;
-        d.set_item("N", dmatrix_to_array(py, &rates.n)?)?;
-        Ok(d)
+        Ok(PyDenocRates(rates))
     }
 
     /// Convective matrix `C = Nᵀ M Ṅ` (explicit DeNOC products).
@@ -203,3 +192,25 @@ impl PyModel {
         })
     }
 }
+
+record!(
+    /// The DeNOC matrices at one configuration (`Model.denoc`), keys as the paper's names.
+    PyDenoc("Denoc", denoc::Denoc) {
+        D: |r: &denoc::Denoc, py| r.d.field(py),
+        Nl: |r: &denoc::Denoc, py| r.nl.field(py),
+        Nd: |r: &denoc::Denoc, py| r.nd.field(py),
+        N: |r: &denoc::Denoc, py| r.n.field(py),
+        masses,
+        points,
+    }
+);
+
+record!(
+    /// The DeNOC matrices' time derivatives (`Model.denoc_rates`).
+    PyDenocRates("DenocRates", denoc::DenocRates) {
+        D: |r: &denoc::DenocRates, py| r.d.field(py),
+        Nl: |r: &denoc::DenocRates, py| r.nl.field(py),
+        Nd: |r: &denoc::DenocRates, py| r.nd.field(py),
+        N: |r: &denoc::DenocRates, py| r.n.field(py),
+    }
+);

@@ -1,7 +1,6 @@
 //! `Model`'s closed loops: cut joints, their residuals and Jacobian, assembly, and the cut
 //! joints' forces.
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
 use super::{gravity_arg, load_state, load_x, rename, PyModel};
 use crate::loops;
@@ -9,6 +8,7 @@ use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::joint::PyJoint;
 use crate::python::loops::body_ref;
+use crate::python::record::record;
 use crate::support::args::placement;
 
 #[pymethods]
@@ -89,14 +89,8 @@ impl PyModel {
 
     /// How the loop solver factors this model: banded or dense QRs, its order of the
     /// coordinates and that order's structural profile (docs/loops.md §3).
-    fn loop_solver_info<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let layout = loops::solver_layout(&self.model());
-        let out = PyDict::new(py);
-        out.set_item("banded", layout.banded)?;
-        out.set_item("order", layout.order)?;
-        out.set_item("profile", layout.profile)?;
-        out.set_item("model_profile", layout.model_profile)?;
-        Ok(out)
+    fn loop_solver_info(&self) -> PyLoopLayout {
+        PyLoopLayout(loops::solver_layout(&self.model()))
     }
 
     /// The closed configuration nearest `q_guess`, the coordinates in `fixed` held.
@@ -193,3 +187,8 @@ impl PyModel {
         })
     }
 }
+
+record!(
+    /// How the loop solver factors a model (`Model.loop_solver_info`).
+    PyLoopLayout("LoopSolverInfo", loops::Layout) { banded, order, profile, model_profile }
+);

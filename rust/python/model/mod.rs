@@ -33,6 +33,17 @@ pub struct PyModel {
     shared: SharedModel,
 }
 
+/// The typed results of `Model`'s methods (rust/python/record.rs), for the module.
+pub fn add_records(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<import::PyRepair>()?;
+    m.add_class::<ik::PyIkSolution>()?;
+    m.add_class::<kinematics::PyDenoc>()?;
+    m.add_class::<kinematics::PyDenocRates>()?;
+    m.add_class::<loops::PyLoopLayout>()?;
+    m.add_class::<reactions::PyPointMotion>()?;
+    m.add_class::<reactions::PyBearingForces>()
+}
+
 /// `None` means no gravity: a model computes only what it is asked for.
 pub fn gravity_arg(_py: Python<'_>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
     crate::model::args::gravity(gravity)

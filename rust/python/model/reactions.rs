@@ -6,50 +6,37 @@ use pyo3::types::PyDict;
 use super::{gravity_arg, PyModel};
 use crate::dynamics::reactions;
 use crate::model::args::loop_actuation;
-use crate::python::convert::{to_array, to_array1, vec3};
+use crate::python::convert::to_array;
 use crate::python::errors::{check_result, invalid, to_py, IntoPyResult};
+use crate::python::record::record;
 use crate::python::signals::{detach_watched, stopped_with_partial};
 use crate::recursive;
 use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
-    /// Every link's seven point masses in motion at `(q, v, a)`: dict with `masses` (n, 7),
+    /// Every link's seven point masses in motion at `(q, v, a)`: `masses` (n, 7),
     /// `positions`, `velocities`, `accelerations` (n, 7, 3), world axes, no gravity.
-    fn point_motion<'py>(
+    fn point_motion(
         &self,
-        py: Python<'py>,
+        py: Python<'_>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
         a: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<PyPointMotion> {
         let model = self.model();
-        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
-        if count.is_some() {
-            return Err(invalid(
-                py,
-                "q",
-                format!("shape ({},): one state", model.nq),
-                "a stack of states",
-            ));
-        }
+        let (qs, vs, accs) = one_state(&model, q, v, a)?;
         let mut ws = recursive::reference::Workspace::new(&model);
         let mut pm = reactions::PointMotion::default();
         reactions::point_motion(&model, &mut ws, &qs, &vs, &accs, &mut pm);
-        let n = model.links.len();
-        let flat = |x: &[Vec3]| x.iter().flat_map(|p| [p.x, p.y, p.z]).collect::<Vec<f64>>();
-        let d = PyDict::new(py);
-        d.set_item("masses", to_array(py, pm.masses.clone(), &[n, 7])?)?;
         for (k, x) in [
             ("positions", &pm.positions),
             ("velocities", &pm.velocities),
             ("accelerations", &pm.accelerations),
         ] {
-            let f = flat(x);
-            check_result(py, &format!("point_motion['{k}']"), &f)?;
-            d.set_item(k, to_array(py, f, &[n, 7, 3])?)?;
+            check_result(py, &format!("point_motion['{k}']"), &flat(x))?;
         }
-        Ok(d)
+        Ok(PyPointMotion(pm))
     }
 
     /// Per point and state, what the balancing regressors need (`docs/balancing.md`): world
@@ -142,14 +129,7 @@ impl PyModel {
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let model = self.model();
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
-        let about = match about.filter(|x| !x.is_none()) {
-            Some(o) => {
-                let o = vec3(o, "about")?;
-                crate::support::error::check_finite("about", o.as_slice()).py(py)?;
-                o
-            }
-            None => Vec3::zeros(),
-        };
+        let about = crate::model::args::about(about)?;
         let states = reactions::States {
             rows: count.unwrap_or(1),
             q: &qs,
@@ -178,16 +158,16 @@ impl PyModel {
         }
     }
 
-    /// The wrench every joint transmits at `(q, v, a)`: dict with `joints` (nlinks, 6),
-    /// `[force; moment]` that the parent applies to the link's subtree at the link origin, in
-    /// the link's axes (`frame="joint"`) or the world's; `loops` (nloops, 6), the cut joints'
+    /// The wrench every joint transmits at `(q, v, a)`: `joints` (nlinks, 6), `[force;
+    /// moment]` that the parent applies to the link's subtree at the link origin, in the
+    /// link's axes (`frame="joint"`) or the world's; `loops` (nloops, 6), the cut joints'
     /// wrenches as `constraint_forces` gives them; `tau` (nv,), the joint forces (the actuated
     /// ones' for a model with loops, zero elsewhere).
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
     #[allow(clippy::too_many_arguments)]
-    fn bearing_forces<'py>(
+    fn bearing_forces(
         &self,
-        py: Python<'py>,
+        py: Python<'_>,
         q: &Bound<'_, PyAny>,
         v: &Bound<'_, PyAny>,
         a: &Bound<'_, PyAny>,
@@ -195,41 +175,67 @@ impl PyModel {
         external: Option<&Bound<'_, PyAny>>,
         actuated: Option<&Bound<'_, PyAny>>,
         frame: &str,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyResult<PyBearingForces> {
         let world = crate::python::reactions::world_frame(py, frame)?;
         let model = self.model();
-        let g = gravity_arg(py, gravity)?;
-        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
-        if count.is_some() {
-            return Err(invalid(
-                py,
-                "q",
-                format!("shape ({},): one state", model.nq),
-                "a stack of states",
-            ));
-        }
+        let g = crate::model::args::gravity(gravity)?;
+        let (qs, vs, accs) = one_state(&model, q, v, a)?;
         let ext = crate::model::args::external(&model, external)?;
         let actuated = loop_actuation(&model, actuated)?;
-        let out = reactions::bearing_forces(
-            &model,
-            &qs,
-            &vs,
-            &accs,
-            &g,
-            ext.as_deref(),
-            actuated.as_deref(),
-            world,
-        )
-        .py(py)?;
+        let (ext, actuated) = (ext.as_deref(), actuated.as_deref());
+        let out = reactions::bearing_forces(&model, &qs, &vs, &accs, &g, ext, actuated, world);
+        let out = out.py(py)?;
         check_result(py, "bearing_forces", &out.joints)?;
-        let d = PyDict::new(py);
-        d.set_item("joints", to_array(py, out.joints, &[model.links.len(), 6])?)?;
-        let flat: Vec<f64> = out.loops.iter().flatten().copied().collect();
-        d.set_item("loops", to_array(py, flat, &[out.loops.len(), 6])?)?;
-        d.set_item("tau", to_array1(py, &out.tau))?;
-        Ok(d)
+        Ok(PyBearingForces(out))
     }
 }
+
+/// `(q, v, a)` of one state (`crate::python::reactions::states`), a stack refused.
+fn one_state(
+    model: &crate::model::Model,
+    q: &Bound<'_, PyAny>,
+    v: &Bound<'_, PyAny>,
+    a: &Bound<'_, PyAny>,
+) -> PyResult<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+    match crate::python::reactions::states(model, q, v, a)? {
+        (None, qs, vs, accs) => Ok((qs, vs, accs)),
+        _ => {
+            let expected = format!("shape ({},): one state", model.nq);
+            Err(invalid(q.py(), "q", expected, "a stack of states"))
+        }
+    }
+}
+
+fn flat(x: &[Vec3]) -> Vec<f64> {
+    x.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+}
+
+/// Points of the links, seven per link, as (n, 7, 3).
+fn sevens<'py>(py: Python<'py>, x: &[Vec3]) -> PyResult<Bound<'py, PyAny>> {
+    to_array(py, flat(x), &[x.len() / 7, 7, 3])
+}
+
+record!(
+    /// The links' point masses in motion (`Model.point_motion`).
+    PyPointMotion("PointMotion", reactions::PointMotion) {
+        masses: |r: &reactions::PointMotion, py| to_array(py, r.masses.clone(), &[r.masses.len() / 7, 7]),
+        positions: |r: &reactions::PointMotion, py| sevens(py, &r.positions),
+        velocities: |r: &reactions::PointMotion, py| sevens(py, &r.velocities),
+        accelerations: |r: &reactions::PointMotion, py| sevens(py, &r.accelerations),
+    }
+);
+
+record!(
+    /// What every joint transmits at one state (`Model.bearing_forces`).
+    PyBearingForces("BearingForces", reactions::BearingForces) {
+        joints: |r: &reactions::BearingForces, py| to_array(py, r.joints.clone(), &[r.joints.len() / 6, 6]),
+        loops: |r: &reactions::BearingForces, py| {
+            let flat: Vec<f64> = r.loops.iter().flatten().copied().collect();
+            to_array(py, flat, &[r.loops.len(), 6])
+        },
+        tau,
+    }
+);
 
 /// The exception of a computation over `total` states stopped after `reached`: `partial`
 /// (completed with `states` and `message`) attached as `.result`.
