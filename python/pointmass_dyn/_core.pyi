@@ -322,23 +322,25 @@ class Model:
         self, frame: str | int, q: ArrayLike, v: ArrayLike, a: ArrayLike | None = None,
         reference: str = "local",
     ) -> tuple[_Array, _Array]:
-        """(J v, J a + J̇ v) of ``frame``, (6,) each."""
+        """(J v, J a + J̇ v) of ``frame`` in ``reference``, (6,) each, angular first;
+        ``a=None`` is zero (the acceleration is then ``J̇ v``)."""
     def center_of_mass(self, q: ArrayLike, jacobian: bool = False) -> Any:
         """COM of the moving bodies (3,) or (N, 3); with ``jacobian=True`` also the COM
         Jacobian (3, nv) or (N, 3, nv)."""
     def center_of_mass_motion(
         self, q: ArrayLike, v: ArrayLike, a: ArrayLike | None = None
     ) -> tuple[_Array, _Array, _Array]:
-        """COM position, velocity and acceleration."""
+        """COM position, velocity and acceleration; ``a=None`` is zero."""
     def centroidal(
         self, q: ArrayLike, v: ArrayLike | None = None, a: ArrayLike | None = None
     ) -> dict[str, _Array]:
-        """``A`` (A_g, 6 × nv, [k_G; p]) and with ``v`` ``momentum`` and ``rate``
-        (A_g a + Ȧ_g v)."""
+        """``A`` (A_g, 6 × nv, [k_G; p], about the centre of mass, world axes) and with ``v``
+        ``momentum`` (A_g v) and ``rate`` (A_g a + Ȧ_g v; with a=None the bias Ȧ_g v)."""
     def independent_map(
         self, q: ArrayLike, independent: Any = None
     ) -> tuple[_Array, list[int]]:
-        """G (nv, k) with v = G v_I for the independent speeds, and their v indices."""
+        """G (nv, k) with v = G v_I for the independent speeds ``independent`` (v indices or
+        body names; None: chosen from the constraint Jacobian), and their v indices."""
     def _inverse_kinematics(
         self, tasks: list, q0: ArrayLike, limits: bool, tol: float, max_iterations: int,
         restarts: int, seed: int,
@@ -353,7 +355,8 @@ class Model:
     def convective_matrix(self, q: ArrayLike, v: ArrayLike) -> _Array:
         """Convective matrix ``C = Nᵀ M Ṅ``, shape (nv, nv)."""
     def gravity_forces(self, q: ArrayLike, gravity: ArrayLike) -> _Array:
-        """Generalized gravity force ``Nᵀ f^G`` (right-hand side), shape (nv,)."""
+        """Generalized gravity force ``Nᵀ f^G`` (right-hand side; Pinocchio's
+        ``computeGeneralizedGravity`` is its negative), shape (nv,)."""
     def generalized_forces(self, q: ArrayLike, forces: ArrayLike) -> _Array:
         """``Nᵀ f`` for world forces on the point masses, shape (nlinks, 7, 3) or
         (7·nlinks, 3); returns shape (nv,)."""
@@ -529,7 +532,9 @@ class Model:
     ) -> tuple[_Array, _Array]:
         """Shaking force and moment ``(−Σ m a, −Σ m (r − O) × a)`` over every point mass,
         gravity excluded, about ``about`` (world; default the origin): at one state (q (nq,),
-        v, a (nv,)) each (3,), or at N (q (N, nq), v, a (N, nv)) each (N, 3)."""
+        v, a (nv,)) each (3,), or at N (q (N, nq), v, a (N, nv)) each (N, 3). Ctrl-C stops
+        it: the ``KeyboardInterrupt`` carries the states done as ``.result``, a dict with
+        ``force``, ``moment`` (states done, 3), ``states`` (how many of N) and ``message``."""
     def bearing_forces(
         self,
         q: ArrayLike,
@@ -556,7 +561,9 @@ class Model:
     ) -> dict[str, _Array]:
         """Per state and point: ``positions``, ``accelerations`` ((N,) P, 3) and
         ``generalized`` ((N,) P, nv) ``= J_pᵀ (a_p − g)``. ``points``: None for all point
-        masses, or (body, point in its frame) pairs."""
+        masses, or (body, point in its frame) pairs. Ctrl-C stops it: the
+        ``KeyboardInterrupt`` carries the states done as ``.result``, this dict cut to them,
+        with ``states`` (how many of N) and ``message``."""
     @staticmethod
     def from_urdf(
         path: Any,
@@ -1368,7 +1375,8 @@ def identification_fit(
 ) -> Identified:
     """The identification (pointmass_dyn.identification.identify builds the arguments):
     ``names``, ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``,
-    ``condition``, ``structural_rank``, ``residuals``, ``masses``."""
+    ``condition``, ``structural_rank``, ``residuals``, ``masses``. ``cells``: a list of
+    ``(link index, centres (K, 3), side)`` for method "cells"."""
 
 def identification_model(
     model: Model, pi: list[float], links: list[int], armature: list[float] | None = None

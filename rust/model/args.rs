@@ -271,6 +271,31 @@ pub fn visual<A: Arg>(x: &A, arg: &str) -> R<Visual, A> {
     })
 }
 
+/// Configurations `q` (nq,) or (N, nq): (rows, the values row by row, whether stacked).
+pub fn configurations<A: Arg>(model: &Model, q: &A, arg: &str) -> R<(usize, Vec<f64>, bool), A> {
+    let (shape, data) = q.array(arg)?;
+    match shape.as_slice() {
+        [n] if *n == model.nq => Ok((1, data, false)),
+        [rows, n] if *n == model.nq => Ok((*rows, data, true)),
+        _ => {
+            let expected = format!("shape ({0},) or (N, {0})", model.nq);
+            Err(Error::arg(arg, expected, shape_str(&shape)).into())
+        }
+    }
+}
+
+/// Speeds `v` for `rows` configurations: (rows, nv), or (nv,) for one; finite; `None`: none.
+pub fn speeds<A: Arg>(model: &Model, v: Option<&A>, rows: usize) -> R<Option<Vec<f64>>, A> {
+    let Some(v) = given(v) else { return Ok(None) };
+    let (shape, data) = v.array("v")?;
+    if shape != [rows, model.nv] && !(rows == 1 && shape == [model.nv]) {
+        let expected = format!("shape ({rows}, {})", model.nv);
+        return Err(Error::arg("v", expected, shape_str(&shape)).into());
+    }
+    check_finite("v", &data)?;
+    Ok(Some(data))
+}
+
 /// One state or a stack of them: N (`None` for a single state) and the states row by row.
 pub type Stack = (Option<usize>, Vec<f64>, Vec<f64>, Vec<f64>);
 
@@ -326,8 +351,15 @@ pub fn check_rows(
 }
 
 /// `[(body, [x, y, z]), ...]`: points in their bodies' frames as `(link, offset in the link
-/// frame)`. A body welded to the world carries no moving point and is refused.
-pub fn body_points<A: Arg>(model: &Model, list: &A) -> R<Vec<(usize, Vec3)>, A> {
+/// frame)`; `None`: every link's seven point masses, link by link. A body welded to the world
+/// carries no moving point and is refused.
+pub fn body_points<A: Arg>(model: &Model, list: Option<&A>) -> R<Vec<(usize, Vec3)>, A> {
+    let Some(list) = given(list) else {
+        let links = model.links.iter().enumerate();
+        return Ok(links
+            .flat_map(|(i, l)| l.points.positions.iter().map(move |p| (i, *p)))
+            .collect());
+    };
     let expected =
         "a list of (body, [x, y, z]) pairs: a body index or name and a point in its frame";
     let mut out = Vec::new();

@@ -38,10 +38,6 @@ fn run(
     out
 }
 
-/// `(a, forces)` at the states `(t[k], q[k], v[k])`: `a` (N, nv) (None unless
-/// `accelerations`); `forces` a dict from each enabled effect's name to its generalized force
-/// (N, nv) (empty unless `forces`). On `threads` threads (None: one per core), the same
-/// bits whatever their number.
 #[pyfunction]
 #[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false, threads=None))]
 #[allow(clippy::too_many_arguments)] // the arguments of the Python function
@@ -76,9 +72,6 @@ pub fn scene_along<'py>(
     Ok((a, d))
 }
 
-/// `(force, moment)`, each (N, 3): the shaking force and moment about `about` at the states
-/// `(t[k], q[k], v[k])` and the accelerations the scene gives there, in the same pass (and
-/// on the same threads) as `scene_along`'s accelerations.
 #[pyfunction]
 #[pyo3(signature = (scene, t, q, v, about=None, threads=None))]
 pub fn scene_shaking<'py>(

@@ -18,8 +18,6 @@ fn extras(viscous: bool, coulomb: bool, armature: bool, offset: bool) -> Extras 
     }
 }
 
-/// The joint torque regressor along N states: (N · nv, p), sample-major rows; with
-/// `actuated` (v indices) the driven joints' forces, (N · na, p).
 #[pyfunction]
 #[pyo3(signature = (model, q, v, a, gravity=None, viscous=false, coulomb=false, armature=false, offset=false, actuated=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
@@ -67,8 +65,6 @@ pub fn identification_parameters<'py>(
     Ok((names, to_array1(py, &values).into_any()))
 }
 
-/// Base parameters of a regressor `y` (rows, p): `(rank, independent, dependent,
-/// coefficients (rank, p − rank), pivots)`.
 #[pyfunction]
 #[pyo3(signature = (y, rank_tol=1e-8))]
 pub fn identification_base<'py>(
@@ -116,8 +112,6 @@ record!(
     }
 );
 
-/// The identification (crate::identification::identify); `cells`: a list of
-/// `(link index, centres (K, 3), side)` for method "cells".
 #[pyfunction]
 #[pyo3(signature = (model, q, v, a, tau, gravity, method, free, prior, prior_weight, weights, cells, viscous, coulomb, armature, offset, rank_tol=1e-8, actuated=Vec::new()))]
 #[allow(clippy::too_many_arguments)]
@@ -184,8 +178,6 @@ pub fn identification_fit<'py>(
     Ok(PyIdentified(out))
 }
 
-/// A copy of `model` with links `links` given the parameters `pi` (10 per link, all links)
-/// and the armature of the 1-dof joints when given.
 #[pyfunction]
 #[pyo3(signature = (model, pi, links, armature=None))]
 pub fn identification_model(

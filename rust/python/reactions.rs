@@ -7,8 +7,6 @@ use super::signals::detach_interruptible;
 use crate::model::args::{self, Stack};
 use crate::model::Model;
 
-pub use crate::model::args::body_points;
-
 /// One state or a stack of them (`crate::model::args::states`), every row checked with the
 /// interpreter released and Ctrl-C honoured.
 pub fn states(

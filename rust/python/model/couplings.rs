@@ -11,8 +11,6 @@ use crate::python::errors::{check_result, IntoPyResult};
 
 #[pymethods]
 impl PyModel {
-    /// Couples two 1-dof joints: `q_joint = ratio · q_reference + offset` (docs/couplings.md).
-    /// Returns the coupling's index.
     #[pyo3(signature = (joint, reference, ratio=None, offset=None, name=None))]
     fn add_coupling(
         &self,
@@ -39,13 +37,11 @@ impl PyModel {
             .py(py)
     }
 
-    /// Number of joint couplings.
     #[getter]
     fn ncouplings(&self) -> usize {
         self.model().ncouplings()
     }
 
-    /// The couplings as `(name, joint body, reference body, ratio, offset)`.
     #[getter]
     fn couplings(&self) -> Vec<(String, String, String, f64, f64)> {
         let m = self.model();
@@ -63,8 +59,6 @@ impl PyModel {
             .collect()
     }
 
-    /// Each coupling's generalized force on its joint under the forces `tau` (the reference
-    /// joint feels `−ratio` times it).
     #[pyo3(signature = (q, v, tau, gravity=None))]
     fn coupling_forces<'py>(
         &self,
@@ -85,7 +79,6 @@ impl PyModel {
         })
     }
 
-    /// Sets the rotor inertia (armature) of a joint: one number, or one per speed of the joint.
     fn set_armature(
         &self,
         py: Python<'_>,
@@ -98,7 +91,6 @@ impl PyModel {
         self.shared.update(|m| m.set_armature(j, &values)).py(py)
     }
 
-    /// The rotor inertia of every speed (length nv; zeros when none is set).
     #[getter]
     fn armature<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
         let m = self.model();

@@ -30,7 +30,6 @@ fn input(direction: Direction) -> &'static str {
 
 #[pymethods]
 impl PyModel {
-    /// Accelerations from `I a + C v = τ + τ_g + τ_ext`.
     #[pyo3(signature = (q, v, tau, gravity=None, external=None, method="recursive"))]
     #[allow(clippy::too_many_arguments)]
     fn forward_dynamics<'py>(
@@ -46,8 +45,6 @@ impl PyModel {
         self.dynamics(py, Direction::Forward, q, v, tau, gravity, external, method)
     }
 
-    /// Joint forces `τ = I a + C v − τ_g − τ_ext`. With loops, the forces of the `actuated`
-    /// coordinates alone (the cut joints carry the rest).
     #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive", actuated=None))]
     #[allow(clippy::too_many_arguments)]
     fn inverse_dynamics<'py>(
@@ -76,8 +73,6 @@ impl PyModel {
         })
     }
 
-    /// `(∂τ/∂q, ∂τ/∂v, ∂τ/∂a = M)` of the inverse dynamics at `(q, v, a)`, each nv × nv;
-    /// `q` is perturbed in the tangent space (`q ⊕ δ`, docs/derivatives.md).
     #[pyo3(signature = (q, v, a, gravity=None))]
     fn inverse_dynamics_derivatives<'py>(
         &self,
@@ -90,8 +85,6 @@ impl PyModel {
         self.derivatives(py, Direction::Inverse, q, v, a, gravity)
     }
 
-    /// `(∂q̈/∂q, ∂q̈/∂v, ∂q̈/∂τ = M⁻¹)` of the forward dynamics at `(q, v, τ)`, each nv × nv;
-    /// `q` is perturbed in the tangent space (`q ⊕ δ`, docs/derivatives.md).
     #[pyo3(signature = (q, v, tau, gravity=None))]
     fn forward_dynamics_derivatives<'py>(
         &self,
@@ -104,7 +97,6 @@ impl PyModel {
         self.derivatives(py, Direction::Forward, q, v, tau, gravity)
     }
 
-    /// Generalized inertia matrix (GIM), nv × nv.
     #[pyo3(signature = (q, method="recursive"))]
     fn mass_matrix<'py>(
         &self,
@@ -143,7 +135,6 @@ impl PyModel {
         }
     }
 
-    /// Bias forces `C v − τ_g` (Pinocchio's `nonLinearEffects`).
     #[pyo3(signature = (q, v, gravity=None))]
     fn bias_forces<'py>(
         &self,
@@ -171,7 +162,6 @@ impl PyModel {
         })
     }
 
-    /// Kinetic energy `½ vᵀ I v`.
     fn kinetic_energy(
         &self,
         py: Python<'_>,
@@ -190,7 +180,6 @@ impl PyModel {
         })
     }
 
-    /// Gravitational potential energy `−Σ m_ij g·x_ij` (zero at the world origin).
     fn potential_energy(
         &self,
         py: Python<'_>,

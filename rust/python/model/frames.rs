@@ -7,9 +7,7 @@ use pyo3::types::{PyDict, PyString};
 use super::{load_state, PyModel};
 use crate::frames::{evaluate, jacobian, placement, FrameRef, ReferenceFrame};
 use crate::model::Model;
-use crate::python::convert::{
-    array, int_arg, plain_f64_rows, shape_str, to_array, to_array1, vec3,
-};
+use crate::python::convert::{int_arg, plain_f64_rows, to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
 use crate::support::spatial::Placement;
@@ -39,24 +37,7 @@ fn reference_arg(py: Python<'_>, reference: &str) -> PyResult<ReferenceFrame> {
     ReferenceFrame::parse("reference", reference).py(py)
 }
 
-/// `q` as (rows, data, stacked): shape (nq,) or (N, nq).
-pub fn configurations(
-    model: &Model,
-    q: &Bound<'_, PyAny>,
-    arg: &str,
-) -> PyResult<(usize, Vec<f64>, bool)> {
-    let (shape, data) = array(q, arg)?;
-    match shape.as_slice() {
-        [n] if *n == model.nq => Ok((1, data, false)),
-        [rows, n] if *n == model.nq => Ok((*rows, data, true)),
-        _ => Err(invalid(
-            q.py(),
-            arg,
-            format!("shape ({0},) or (N, {0})", model.nq),
-            shape_str(&shape),
-        )),
-    }
-}
+pub use crate::model::args::configurations;
 
 /// `q` (nq,) or (N, nq) for a call over rows, as (rows, stacked, whether to run it here).
 /// Read in place when it is a C-ordered float64 (N, nq) array whose block one thread
@@ -99,7 +80,7 @@ fn one_dimensional(q: &Bound<'_, PyAny>) -> bool {
         .is_ok_and(|a| numpy::PyUntypedArrayMethods::ndim(a) == 1)
 }
 
-fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
+pub fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
     let mut s = if stacked { vec![rows] } else { vec![] };
     s.extend_from_slice(tail);
     s
@@ -130,15 +111,11 @@ fn optional_vector(
 
 #[pymethods]
 impl PyModel {
-    /// Every frame's name: each body's (URDF links welded by fixed joints included), then the
-    /// frames added with `add_frame`.
     #[getter]
     fn frame_names(&self) -> Vec<String> {
         self.model().frame_names()
     }
 
-    /// Adds a frame fixed on `body` (name or index) at `translation`, `rotation` (3 × 3, frame
-    /// axes in the body frame); returns its index among the added frames.
     #[pyo3(signature = (name, body, translation=None, rotation=None))]
     fn add_frame(
         &self,
@@ -153,8 +130,6 @@ impl PyModel {
         self.shared.update(|m| m.add_frame(&name, b, at)).py(py)
     }
 
-    /// World placement of `frame` at q (nq,) or (N, nq): (rotation (3, 3) or (N, 3, 3),
-    /// translation (3,) or (N, 3)).
     fn frame_placement<'py>(
         &self,
         py: Python<'py>,
@@ -176,8 +151,6 @@ impl PyModel {
         ))
     }
 
-    /// World positions (and with `v`, velocities) of `point` (in the frame or body `frame`)
-    /// at q (N, nq): (positions (N, 3), velocities (N, 3) or None).
     #[pyo3(signature = (frame, point, q, v=None))]
     fn point_path<'py>(
         &self,
@@ -192,22 +165,7 @@ impl PyModel {
         let p = vec3(point, "point")?;
         crate::support::error::check_finite("point", p.as_slice()).py(py)?;
         let (rows, qs, _) = configurations(&model, q, "q")?;
-        let vs = match v {
-            Some(v) if !v.is_none() => {
-                let (shape, data) = array(v, "v")?;
-                if shape != [rows, model.nv] && !(rows == 1 && shape == [model.nv]) {
-                    return Err(invalid(
-                        py,
-                        "v",
-                        format!("shape ({rows}, {})", model.nv),
-                        shape_str(&shape),
-                    ));
-                }
-                crate::support::error::check_finite("v", &data).py(py)?;
-                Some(data)
-            }
-            _ => None,
-        };
+        let vs = crate::model::args::speeds(&model, v, rows)?;
         let (mut pos, mut vel) = (vec![0.0; 3 * rows], vec![0.0; 3 * rows]);
         detach_interruptible(py, || {
             placement::check_rows(&model, &qs, rows, true, "q")?;
@@ -221,8 +179,6 @@ impl PyModel {
         Ok((to_array(py, pos, &[rows, 3])?, vel))
     }
 
-    /// The 6 × nv Jacobian of `frame` (angular rows first) in `reference` ('local',
-    /// 'world' or 'local_world_aligned', Pinocchio's conventions) at q (nq,) or (N, nq).
     #[pyo3(signature = (frame, q, reference="local"))]
     fn frame_jacobian<'py>(
         &self,
@@ -265,7 +221,6 @@ impl PyModel {
         Ok(arr.into_any())
     }
 
-    /// `J̇` of `frame` in `reference` at (q, v): the time derivative of `frame_jacobian`.
     #[pyo3(signature = (frame, q, v, reference="local"))]
     fn frame_jacobian_dot<'py>(
         &self,
@@ -283,8 +238,6 @@ impl PyModel {
         to_array(py, out, &[6, model.nv])
     }
 
-    /// (velocity `J v`, acceleration `J a + J̇ v`) of `frame` in `reference`, six-vectors
-    /// angular first; `a=None` is zero (the acceleration is then `J̇ v`).
     #[pyo3(signature = (frame, q, v, a=None, reference="local"))]
     fn frame_motion<'py>(
         &self,
@@ -307,8 +260,6 @@ impl PyModel {
         ))
     }
 
-    /// Centre of mass of the moving links at q (nq,) or (N, nq); with `jacobian=True`,
-    /// (com, COM Jacobian (3, nv) or (N, 3, nv)).
     #[pyo3(signature = (q, jacobian=false))]
     fn center_of_mass<'py>(
         &self,
@@ -359,7 +310,6 @@ impl PyModel {
         }
     }
 
-    /// (position, velocity, acceleration) of the centre of mass at (q, v, a); `a=None` is zero.
     #[pyo3(signature = (q, v, a=None))]
     fn center_of_mass_motion<'py>(
         &self,
@@ -380,9 +330,6 @@ impl PyModel {
         Ok(t.into_pyobject(py)?.into_any())
     }
 
-    /// Centroidal momentum at q (and v, a): dict with `A` (A_g, 6 × nv, angular rows first,
-    /// about the centre of mass, world axes), `com`; with `v` also `momentum` (A_g v) and
-    /// `rate` (A_g a + Ȧ_g v; with a=None the bias Ȧ_g v).
     #[pyo3(signature = (q, v=None, a=None))]
     fn centroidal<'py>(
         &self,
@@ -409,8 +356,6 @@ impl PyModel {
         Ok(d)
     }
 
-    /// `G` (nv × k) with `v = G v_I` for the independent speeds `independent` (v indices or
-    /// body names; None: chosen from the constraint Jacobian), and those v indices.
     #[pyo3(signature = (q, independent=None))]
     fn independent_map<'py>(
         &self,

@@ -15,14 +15,6 @@ use crate::support::spatial::Placement;
 
 #[pymethods]
 impl PyModel {
-    /// Loads a robot from a URDF file (joint order and body names as Pinocchio's
-    /// `buildModelFromUrdf`), fixed-base or, with `root_joint="free"`, on a free flyer.
-    /// `repair` (None/False, True, a dict or `pmd.InertiaRepair`) allows MuJoCo-style
-    /// inertia repairs (docs/robots.md); each change is listed in one `UrdfRepairWarning` and
-    /// in `model.repairs`. Raises `UrdfError`; warnings go through `warnings.warn` as
-    /// `UrdfWarning`. `<mimic>` joints are couplings; `mimic=False` loads them as independent
-    /// joints (Pinocchio's default), with a warning. Mesh URIs (`package://...`) are looked for in `package_dirs` (a path
-    /// or a list of paths), `ROS_PACKAGE_PATH` and the file's ancestors (`model.visuals`).
     #[staticmethod]
     #[pyo3(signature = (path, *, root_joint=None, repair=None, package_dirs=None, mimic=true))]
     fn from_urdf(
@@ -46,17 +38,10 @@ impl PyModel {
         if !mimic {
             urdf.independent_mimics(&crate::support::files::display_path(&path));
         }
-        let warnings = py.import("warnings")?;
-        if !urdf.warnings.is_empty() {
-            let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
-            for w in &urdf.warnings {
-                warnings.call_method1("warn", (w.as_str(), &category, 1))?;
-            }
+        for w in &urdf.warnings {
+            warn(py, "UrdfWarning", w)?;
         }
         if !urdf.repairs().is_empty() {
-            let category = py
-                .import("pointmass_dyn.errors")?
-                .getattr("UrdfRepairWarning")?;
             let lines: Vec<String> = urdf.repairs().iter().map(|r| r.describe()).collect();
             let message = format!(
                 "{}: repaired {} link(s)/joint(s) (model.repairs lists them):\n  {}",
@@ -64,15 +49,11 @@ impl PyModel {
                 urdf.repairs().len(),
                 lines.join("\n  ")
             );
-            warnings.call_method1("warn", (message, &category, 1))?;
+            warn(py, "UrdfRepairWarning", &message)?;
         }
         Ok(PyModel::from_model(urdf.model))
     }
 
-    /// For the importers (python/pointmass_dyn/io/_importers.py): a model from bodies in tree
-    /// order, each `(name, parent, joint, translation, rotation, joint_name, mass, com,
-    /// inertia)` (parent -1: the world); mass 0 is a massless intermediate body. `ranges`:
-    /// per part, its joint's range `(lower, upper)` or None (`Model.joint_limits()`).
     #[staticmethod]
     #[pyo3(signature = (parts, ranges=None))]
     fn _from_parts(
@@ -138,11 +119,6 @@ impl PyModel {
         Ok(PyModel::from_model(built.model))
     }
 
-    /// `{pose name: q}` of the SRDF file `srdf`'s `<group_state>` elements (`"standing"`,
-    /// `"half_sitting"`, …) for this model, as Pinocchio's `loadReferenceConfigurations`:
-    /// each starts from the neutral configuration and sets the joints it names (URDF names).
-    /// Joints the model does not move are skipped, listed in one `UrdfWarning`. Raises
-    /// `UrdfError` naming the file, the pose and the joint.
     fn reference_poses<'py>(
         &self,
         py: Python<'py>,
@@ -151,14 +127,12 @@ impl PyModel {
         let model = self.model();
         let (poses, skipped) = crate::io::urdf::load_reference_poses(&model, &srdf).py(py)?;
         if !skipped.is_empty() {
-            let category = py.import("pointmass_dyn.errors")?.getattr("UrdfWarning")?;
             let message = format!(
                 "{}: joints the model does not move, skipped: {}",
                 crate::support::files::display_path(&srdf),
                 skipped.join(", ")
             );
-            py.import("warnings")?
-                .call_method1("warn", (message, &category, 1))?;
+            warn(py, "UrdfWarning", &message)?;
         }
         let out = PyDict::new(py);
         for p in poses {
@@ -167,7 +141,6 @@ impl PyModel {
         Ok(out)
     }
 
-    /// What `from_urdf(..., repair=...)` changed: one record per link or welded joint.
     #[getter]
     fn repairs(&self) -> Vec<PyRepair> {
         self.records()
@@ -177,6 +150,14 @@ impl PyModel {
             .map(PyRepair)
             .collect()
     }
+}
+
+/// `warnings.warn(message, pointmass_dyn.errors.<category>)`.
+fn warn(py: Python<'_>, category: &str, message: &str) -> PyResult<()> {
+    let category = py.import("pointmass_dyn.errors")?.getattr(category)?;
+    py.import("warnings")?
+        .call_method1("warn", (message, &category, 1))
+        .map(drop)
 }
 
 record!(

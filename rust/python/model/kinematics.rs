@@ -8,13 +8,12 @@ use crate::dynamics::denoc;
 use crate::kinematics;
 use crate::model::Model;
 use crate::python::convert::{dmatrix_to_array, points, to_array, to_array1};
-use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::errors::{check_result, IntoPyResult};
 use crate::python::record::{record, Field};
 use crate::python::signals::detach_interruptible;
 
 #[pymethods]
 impl PyModel {
-    /// World placements of every body at `q`: (rotations (nbodies, 3, 3), origins (nbodies, 3)).
     fn placements<'py>(
         &self,
         py: Python<'py>,
@@ -33,42 +32,18 @@ impl PyModel {
         })
     }
 
-    /// Everything a viewer draws, at one configuration (q (nq,)) or N (q (N, nq)): dict of
-    /// world-frame arrays `rotations` ((N,) nbodies, 3, 3), `origins`, `joint_origins`,
-    /// `joint_axes` ((N,) nbodies, 3), `points` ((N,) nlinks, 7, 3) and per cut joint
-    /// `loop_a`, `loop_b`, `loop_axes` ((N,) nloops, 3). (docs/visualisation.md §2)
     fn body_poses<'py>(
         &self,
         py: Python<'py>,
         q: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
-        let (sq, qs) = crate::python::convert::array(q, "q")?;
-        let count = match sq.as_slice() {
-            [n] if *n == model.nq => None,
-            [rows, n] if *n == model.nq => Some(*rows),
-            _ => {
-                return Err(invalid(
-                    py,
-                    "q",
-                    format!("shape ({0},) or (N, {0})", model.nq),
-                    crate::python::convert::shape_str(&sq),
-                ))
-            }
-        };
-        let rows = count.unwrap_or(1);
+        let (rows, qs, stacked) = super::frames::configurations(&model, q, "q")?;
         let poses = detach_interruptible(py, || {
-            crate::kinematics::poses::Poses::at(&model, &qs, rows, count.is_some())
+            crate::kinematics::poses::Poses::at(&model, &qs, rows, stacked)
         })?;
         let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
-        let shape = |tail: &[usize]| -> Vec<usize> {
-            count
-                .map(|n| vec![n])
-                .unwrap_or_default()
-                .into_iter()
-                .chain(tail.iter().copied())
-                .collect()
-        };
+        let shape = |tail: &[usize]| super::frames::lead(stacked, rows, tail);
         let d = PyDict::new(py);
         for (key, buf, tail) in [
             ("rotations", poses.rotations, vec![nb, 3, 3]),
@@ -86,8 +61,6 @@ impl PyModel {
         Ok(d)
     }
 
-    /// The seven point masses of every moving link: (masses (nlinks, 7), world positions
-    /// (nlinks, 7, 3)) at `q`.
     fn point_masses<'py>(
         &self,
         py: Python<'py>,
@@ -106,7 +79,6 @@ impl PyModel {
         })
     }
 
-    /// The DeNOC matrices at `q`: D, Nl, Nd, N, masses (7n,), points (7n, 3).
     fn denoc(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<PyDenoc> {
         let (model, qv) = self.state_only(py, q)?;
         let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
@@ -116,7 +88,6 @@ impl PyModel {
         Ok(PyDenoc(den))
     }
 
-    /// Time derivatives of the DeNOC matrices at `(q, v)`: D, Nl, Nd, N.
     fn denoc_rates(
         &self,
         py: Python<'_>,
@@ -131,7 +102,6 @@ impl PyModel {
         Ok(PyDenocRates(rates))
     }
 
-    /// Convective matrix `C = Nᵀ M Ṅ` (explicit DeNOC products).
     fn convective_matrix<'py>(
         &self,
         py: Python<'py>,
@@ -144,8 +114,6 @@ impl PyModel {
         dmatrix_to_array(py, &c)
     }
 
-    /// Generalized gravity force `Nᵀ f^G` (right-hand side; Pinocchio's
-    /// `computeGeneralizedGravity` is its negative).
     fn gravity_forces<'py>(
         &self,
         py: Python<'py>,
@@ -159,7 +127,6 @@ impl PyModel {
         Ok(to_array1(py, tg.as_slice()).into_any())
     }
 
-    /// `Nᵀ f` for forces on the point masses, shape (nlinks, 7, 3) or (7·nlinks, 3), world.
     fn generalized_forces<'py>(
         &self,
         py: Python<'py>,
@@ -176,7 +143,6 @@ impl PyModel {
         Ok(to_array1(py, tau.as_slice()).into_any())
     }
 
-    /// `q̇` from `v` (differs from `v` only for quaternion joints).
     fn velocity_to_qdot<'py>(
         &self,
         py: Python<'py>,

@@ -13,7 +13,6 @@ use crate::support::args::placement;
 
 #[pymethods]
 impl PyModel {
-    /// Adds a cut joint closing a kinematic loop; returns its index. See the package docs.
     #[pyo3(signature = (body_a, body_b, joint, translation_a=None, translation_b=None, rotation_a=None, rotation_b=None, name=None))]
     #[allow(clippy::too_many_arguments)]
     fn add_loop(
@@ -40,13 +39,11 @@ impl PyModel {
             .py(py)
     }
 
-    /// Number of cut joints (closed loops).
     #[getter]
     fn nloops(&self) -> usize {
         self.model().nloops()
     }
 
-    /// Number of scalar loop constraints (rows of `constraint_jacobian`).
     #[getter]
     fn nconstraints(&self) -> usize {
         self.model().nconstraints()
@@ -57,7 +54,6 @@ impl PyModel {
         self.model().loops.iter().map(|l| l.name.clone()).collect()
     }
 
-    /// Position-level residual of every cut joint (frame a's axes; zero when closed).
     fn constraint_residual<'py>(
         &self,
         py: Python<'py>,
@@ -72,7 +68,6 @@ impl PyModel {
         Ok(to_array1(py, &r).into_any())
     }
 
-    /// Velocity-level constraint Jacobian `J` (nconstraints × nv): `J v = 0` keeps the loops.
     fn constraint_jacobian<'py>(
         &self,
         py: Python<'py>,
@@ -87,13 +82,10 @@ impl PyModel {
         dmatrix_to_array(py, &j)
     }
 
-    /// How the loop solver factors this model: banded or dense QRs, its order of the
-    /// coordinates and that order's structural profile (docs/loops.md §3).
     fn loop_solver_info(&self) -> PyLoopLayout {
         PyLoopLayout(loops::solver_layout(&self.model()))
     }
 
-    /// The closed configuration nearest `q_guess`, the coordinates in `fixed` held.
     #[pyo3(signature = (q_guess, fixed=None, tol=1e-12, max_iterations=None))]
     fn assemble<'py>(
         &self,
@@ -126,7 +118,6 @@ impl PyModel {
         Ok(to_array1(py, &q).into_any())
     }
 
-    /// `v_guess` projected onto `J v = 0` (nearest, the speeds in `fixed` held).
     #[pyo3(signature = (q, v_guess, fixed=None))]
     fn assemble_velocity<'py>(
         &self,
@@ -144,7 +135,6 @@ impl PyModel {
         Ok(to_array1(py, &v).into_any())
     }
 
-    /// `a_guess` projected onto `J a + J̇ v = 0` (nearest, the entries in `fixed` held).
     #[pyo3(signature = (q, v, a_guess, fixed=None))]
     fn assemble_acceleration<'py>(
         &self,
@@ -163,8 +153,6 @@ impl PyModel {
         Ok(to_array1(py, &a).into_any())
     }
 
-    /// Per loop `[force, moment]` the cut joint applies to body b (minus that on body a) at
-    /// frame b's origin, in frame a's axes, under the forces `tau` (shape (nloops, 6)).
     #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
     fn constraint_forces<'py>(
         &self,

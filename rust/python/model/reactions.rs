@@ -15,8 +15,6 @@ use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
-    /// Every link's seven point masses in motion at `(q, v, a)`: `masses` (n, 7),
-    /// `positions`, `velocities`, `accelerations` (n, 7, 3), world axes, no gravity.
     fn point_motion(
         &self,
         py: Python<'_>,
@@ -39,13 +37,6 @@ impl PyModel {
         Ok(PyPointMotion(pm))
     }
 
-    /// Per point and state, what the balancing regressors need (`docs/balancing.md`): world
-    /// `positions` and `accelerations` (N, P, 3) and `generalized` (N, P, nv) `= J_pᵀ (a_p − g)`,
-    /// the joint forces that a unit mass at the point needs. `points`: None for every link's
-    /// seven point masses (P = 7 n, link by link), or `[(body, [x, y, z]), ...]` points given in
-    /// their bodies' frames. q (N, nq), v and a (N, nv), or one state (then N is dropped).
-    /// Ctrl-C stops it: the `KeyboardInterrupt` carries the states done as `.result`, this
-    /// dict cut to them, with `states` (how many of N) and `message`.
     #[pyo3(signature = (q, v, a, points=None, gravity=None))]
     fn point_regressor<'py>(
         &self,
@@ -59,15 +50,7 @@ impl PyModel {
         let model = self.model();
         let g = gravity_arg(py, gravity)?;
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
-        let pts: Vec<(usize, Vec3)> = match points.filter(|p| !p.is_none()) {
-            None => model
-                .links
-                .iter()
-                .enumerate()
-                .flat_map(|(i, l)| l.points.positions.iter().map(move |p| (i, *p)))
-                .collect(),
-            Some(list) => crate::python::reactions::body_points(&model, list)?,
-        };
+        let pts = crate::model::args::body_points(&model, points)?;
         let rows = count.unwrap_or(1);
         let (np, nv) = (pts.len(), model.nv);
         let states = reactions::States {
@@ -114,10 +97,6 @@ impl PyModel {
         }
     }
 
-    /// Shaking force and moment about `about` at one state (q (nq,), v, a (nv,)) or at N
-    /// (q (N, nq), v, a (N, nv)): `(force, moment)`, each (3,) or (N, 3). Ctrl-C stops it:
-    /// the `KeyboardInterrupt` carries the states done as `.result`, a dict with `force`,
-    /// `moment` (states done, 3), `states` (how many of N) and `message`.
     #[pyo3(signature = (q, v, a, about=None))]
     fn shaking<'py>(
         &self,
@@ -158,11 +137,6 @@ impl PyModel {
         }
     }
 
-    /// The wrench every joint transmits at `(q, v, a)`: `joints` (nlinks, 6), `[force;
-    /// moment]` that the parent applies to the link's subtree at the link origin, in the
-    /// link's axes (`frame="joint"`) or the world's; `loops` (nloops, 6), the cut joints'
-    /// wrenches as `constraint_forces` gives them; `tau` (nv,), the joint forces (the actuated
-    /// ones' for a model with loops, zero elsewhere).
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
     #[allow(clippy::too_many_arguments)]
     fn bearing_forces(

@@ -62,7 +62,6 @@ impl PyModel {
         self.version().model.nbodies()
     }
 
-    /// Moving links (bodies on Fixed joints are welded into their parent's link).
     #[getter]
     fn nlinks(&self) -> usize {
         self.version().model.links.len()
@@ -74,7 +73,6 @@ impl PyModel {
         m.bodies.iter().map(|b| b.name.clone()).collect()
     }
 
-    /// Names of the bodies that define each moving link, in q/v order.
     #[getter]
     fn link_names(&self) -> Vec<String> {
         let m = self.model();
@@ -89,7 +87,6 @@ impl PyModel {
         self.model().total_mass()
     }
 
-    /// Per body: (name, joint kind, parent index or -1, link index or -1).
     fn body_info(
         &self,
         py: Python<'_>,
@@ -112,7 +109,6 @@ impl PyModel {
         ))
     }
 
-    /// (q index, v index, nq, nv) of each link's joint.
     fn joint_slices(&self) -> Vec<(usize, usize, usize, usize)> {
         self.model()
             .links
@@ -125,7 +121,6 @@ impl PyModel {
         to_array1(py, &self.model().neutral()).into_any()
     }
 
-    /// Body `body`'s own rigid body (mass, COM and inertia in its frame), as added.
     fn body(&self, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
         let model = self.model();
         let b = some_body(&model, body, "body")?;
@@ -134,8 +129,6 @@ impl PyModel {
         })
     }
 
-    /// A copy of this model with body `body`'s own rigid body replaced by `rigid_body` (its
-    /// joint, placement, loops and names kept); this model is unchanged.
     fn with_body(
         &self,
         py: Python<'_>,
@@ -167,16 +160,11 @@ impl PyModel {
         )
     }
 
-    /// Names of the moving joints in q/v order: the URDF joint names for a model from
-    /// `from_urdf`, otherwise the names of the bodies that define each link.
     #[getter]
     fn joint_names(&self) -> Vec<String> {
         self.model().joint_names()
     }
 
-    /// `{joint name: (lower, upper, effort, velocity)}` for the moving joints in q/v order.
-    /// What the file does not give is unbounded: ±inf position bounds (always, for
-    /// continuous joints), inf effort and velocity.
     fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
         let d = PyDict::new(py);
@@ -191,8 +179,6 @@ impl PyModel {
         Ok(d)
     }
 
-    /// `{joint name: (damping, friction)}` from the URDF `<dynamics>` elements, for the
-    /// moving joints in q/v order (0 where absent). Not applied by the model itself.
     fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
         let d = PyDict::new(py);
