@@ -6,7 +6,7 @@ use pyo3::types::{PyDict, PyList};
 
 use super::convert::{array, mat3_to_array, to_array, to_array1};
 use super::errors::{check_result, invalid};
-use super::model::{gravity_arg, PyModel};
+use super::model::PyModel;
 use super::signals::detach_interruptible;
 use crate::design::{self, Envelope, Norm, Problem, Quantity};
 use crate::support::spatial::{Mat3, Vec3};
@@ -122,7 +122,7 @@ pub fn design_regressor<'py>(
     actuated: Vec<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = model.model();
-    let g = gravity_arg(py, gravity)?;
+    let g = crate::model::args::gravity(gravity)?;
     let about = super::convert::vec3(about, "about")?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
     let reg = detach_interruptible(py, || {

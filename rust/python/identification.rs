@@ -4,7 +4,7 @@ use pyo3::prelude::*;
 
 use super::convert::{array, dmatrix_to_array, points, to_array1};
 use super::errors::{check_result, invalid};
-use super::model::{gravity_arg, PyModel};
+use super::model::PyModel;
 use super::record::{record, Field};
 use super::signals::detach_interruptible;
 use crate::identification::{self as ident, Extras, LinkCells, Method, Options};
@@ -35,7 +35,7 @@ pub fn identification_regressor<'py>(
     actuated: Vec<usize>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let model = model.model();
-    let g = gravity_arg(py, gravity)?;
+    let g = crate::model::args::gravity(gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
     let ex = extras(viscous, coulomb, armature, offset);
     let y = detach_interruptible(py, || {
@@ -137,7 +137,7 @@ pub fn identification_fit<'py>(
     actuated: Vec<usize>,
 ) -> PyResult<PyIdentified> {
     let model = model.model();
-    let g = gravity_arg(py, gravity)?;
+    let g = crate::model::args::gravity(gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
     let (_, taus) = array(tau, "tau")?;
     let method = match method {

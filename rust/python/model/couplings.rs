@@ -3,7 +3,7 @@
 //! `crate::recursive::armature`.
 use pyo3::prelude::*;
 
-use super::{gravity_arg, load_state, load_x, PyModel};
+use super::{load_state, load_x, PyModel};
 use crate::effects::args::{joint_body, numbers};
 use crate::loops;
 use crate::python::convert::{real, to_array1};
@@ -68,7 +68,7 @@ impl PyModel {
         tau: &Bound<'_, PyAny>,
         gravity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let g = gravity_arg(py, gravity)?;
+        let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, tau, "tau")?;

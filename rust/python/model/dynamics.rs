@@ -2,7 +2,7 @@
 //! matrix, bias forces and energies.
 use pyo3::prelude::*;
 
-use super::{gravity_arg, load_state, load_x, method_arg, Method, PyModel, DETACH_LINKS};
+use super::{load_state, load_x, method_arg, Method, PyModel, DETACH_LINKS};
 use crate::dynamics::denoc;
 use crate::dynamics::shared::{Direction, Workspace};
 use crate::kinematics;
@@ -143,7 +143,7 @@ impl PyModel {
         v: &Bound<'_, PyAny>,
         gravity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let g = gravity_arg(py, gravity)?;
+        let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             ws.x.fill(0.0);
@@ -186,7 +186,7 @@ impl PyModel {
         q: &Bound<'_, PyAny>,
         gravity: &Bound<'_, PyAny>,
     ) -> PyResult<f64> {
-        let g = gravity_arg(py, Some(gravity))?;
+        let g = crate::model::args::gravity(Some(gravity))?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, None)?;
             kinematics::positions(&ws.version.model, &ws.q, &mut ws.data.links);
@@ -213,7 +213,7 @@ impl PyModel {
         method: &str,
     ) -> PyResult<Bound<'py, PyAny>> {
         let method = method_arg(py, method)?;
-        let g = gravity_arg(py, gravity)?;
+        let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, x, input(direction))?;
@@ -259,7 +259,7 @@ impl PyModel {
         x: &Bound<'_, PyAny>,
         gravity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
-        let g = gravity_arg(py, gravity)?;
+        let g = crate::model::args::gravity(gravity)?;
         let name = match direction {
             Direction::Forward => "forward_dynamics_derivatives",
             Direction::Inverse => "inverse_dynamics_derivatives",

@@ -3,7 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::{gravity_arg, load_state, PyModel};
+use super::{load_state, PyModel};
 use crate::dynamics::denoc;
 use crate::kinematics;
 use crate::model::Model;
@@ -120,7 +120,7 @@ impl PyModel {
         q: &Bound<'_, PyAny>,
         gravity: &Bound<'_, PyAny>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let g = gravity_arg(py, Some(gravity))?;
+        let g = crate::model::args::gravity(Some(gravity))?;
         let (model, qv) = self.state_only(py, q)?;
         let tg = detach_interruptible(py, || denoc::gravity_forces(&model, &qv, &g))?;
         check_result(py, "gravity_forces", tg.as_slice())?;

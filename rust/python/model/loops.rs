@@ -2,7 +2,7 @@
 //! joints' forces.
 use pyo3::prelude::*;
 
-use super::{gravity_arg, load_state, load_x, rename, PyModel};
+use super::{load_state, load_x, rename, PyModel};
 use crate::loops;
 use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
@@ -163,7 +163,7 @@ impl PyModel {
         gravity: Option<&Bound<'_, PyAny>>,
         external: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
-        let g = gravity_arg(py, gravity)?;
+        let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             load_x(ws, py, tau, "tau")?;

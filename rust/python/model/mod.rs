@@ -12,7 +12,6 @@ use crate::dynamics::shared::{SharedModel, Version, Workspace};
 use crate::model::Model;
 use crate::python::convert::vector_into;
 use crate::python::errors::{invalid, IntoPyResult};
-use crate::support::spatial::Vec3;
 
 mod couplings;
 mod dynamics;
@@ -42,11 +41,6 @@ pub fn add_records(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<loops::PyLoopLayout>()?;
     m.add_class::<reactions::PyPointMotion>()?;
     m.add_class::<reactions::PyBearingForces>()
-}
-
-/// `None` means no gravity: a model computes only what it is asked for.
-pub fn gravity_arg(_py: Python<'_>, gravity: Option<&Bound<'_, PyAny>>) -> PyResult<Vec3> {
-    crate::model::args::gravity(gravity)
 }
 
 enum Method {

@@ -3,7 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::{gravity_arg, PyModel};
+use super::PyModel;
 use crate::dynamics::reactions;
 use crate::model::args::loop_actuation;
 use crate::python::convert::to_array;
@@ -48,7 +48,7 @@ impl PyModel {
         gravity: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
-        let g = gravity_arg(py, gravity)?;
+        let g = crate::model::args::gravity(gravity)?;
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
         let pts = crate::model::args::body_points(&model, points)?;
         let rows = count.unwrap_or(1);

@@ -1,7 +1,7 @@
 //! `Model`'s tree: building it body by body, its sizes and names, bodies and joints.
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{IntoPyDict, PyDict};
 
 use super::PyModel;
 use crate::model::args::some_body;
@@ -167,25 +167,23 @@ impl PyModel {
 
     fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
-        let d = PyDict::new(py);
-        for (joint, name) in model.link_joints().zip(model.joint_names()) {
-            let inf = f64::INFINITY;
-            let lim = joint
-                .and_then(|j| j.limit)
-                .map(|x| (x.lower, x.upper, x.effort, x.velocity))
-                .unwrap_or((-inf, inf, inf, inf));
-            d.set_item(name, lim)?;
-        }
-        Ok(d)
+        let inf = f64::INFINITY;
+        let limits = model.link_joints().map(|j| match j.and_then(|j| j.limit) {
+            Some(x) => (x.lower, x.upper, x.effort, x.velocity),
+            None => (-inf, inf, inf, inf),
+        });
+        model.joint_names().into_iter().zip(limits).into_py_dict(py)
     }
 
     fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
-        let d = PyDict::new(py);
-        for (joint, name) in model.link_joints().zip(model.joint_names()) {
-            let dyn_ = joint.map(|j| (j.damping, j.friction)).unwrap_or((0.0, 0.0));
-            d.set_item(name, dyn_)?;
-        }
-        Ok(d)
+        let dynamics = model
+            .link_joints()
+            .map(|j| j.map_or((0.0, 0.0), |j| (j.damping, j.friction)));
+        model
+            .joint_names()
+            .into_iter()
+            .zip(dynamics)
+            .into_py_dict(py)
     }
 }
