@@ -118,6 +118,17 @@ macro_rules! record {
             fn __contains__(&self, key: &str) -> bool {
                 Self::KEYS.contains(&key)
             }
+            fn __len__(&self) -> usize {
+                Self::KEYS.len()
+            }
+            fn items<'py>(slf: &pyo3::Bound<'py, Self>) -> pyo3::PyResult<Vec<(&'static str, pyo3::Bound<'py, pyo3::PyAny>)>> {
+                $crate::python::record::items(slf, &Self::KEYS)
+            }
+            /// Pickled as the dict of its fields (the form these results had before).
+            fn __reduce__<'py>(slf: &pyo3::Bound<'py, Self>) -> pyo3::PyResult<(pyo3::Bound<'py, pyo3::PyAny>, (Vec<(&'static str, pyo3::Bound<'py, pyo3::PyAny>)>,))> {
+                let dict = slf.py().get_type::<pyo3::types::PyDict>().into_any();
+                Ok((dict, ($crate::python::record::items(slf, &Self::KEYS)?,)))
+            }
         }
         impl $ty {
             const KEYS: [&'static str; [$(stringify!($f)),*].len()] = [$(stringify!($f)),*];
@@ -137,6 +148,14 @@ pub fn item<'py>(
         true => obj.getattr(key),
         false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
     }
+}
+
+/// `(name, value)` of each of a record's `fields`, in order.
+pub fn items<'py>(
+    obj: &Bound<'py, PyAny>,
+    fields: &[&'static str],
+) -> PyResult<Vec<(&'static str, Bound<'py, PyAny>)>> {
+    fields.iter().map(|f| Ok((*f, obj.getattr(*f)?))).collect()
 }
 
 /// `Name(a=..., b=...)` of a record's fields.
