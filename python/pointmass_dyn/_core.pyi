@@ -534,8 +534,9 @@ class Effect:
 
     def __init__(self, type: str, /, **keys: Any) -> None:
         """The effect of scene-file ``type`` (``"spring"``, ``"torque"``, ``"external"``, ...)
-        with that type's keys (docs/scenes.md) as keyword arguments, arrays as NumPy arrays
-        or sequences; what every factory calls. Errors name the key."""
+        with that type's keys as keyword arguments (README "Effects"; the table in
+        rust/effects/mod.rs), arrays as NumPy arrays or sequences; what every factory calls.
+        Errors name the key."""
 
     def with_parameter(self, name: str, value: ArrayLike) -> Effect:
         """A copy with one parameter replaced and checked: gravity ``g``; a spring's
@@ -840,12 +841,9 @@ class _Simulator:
     ) -> None: ...
     t: float
     nq: int
-    nv: int
     control_period: float
     method: str
-    control_kind: str
     control_len: int
-    steps: int
     y: _Array
     control: _Array | None
     def set_control(self, u: ArrayLike) -> None: ...

@@ -117,8 +117,8 @@ pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
 
 #[pymethods]
 impl PyEffect {
-    /// The effect of scene-file type `type` with that type's keys as keyword arguments
-    /// (docs/scenes.md): the core reads them (`effects::args::effect`).
+    /// The effect of scene-file type `type` with that type's keys as keyword arguments: the
+    /// core reads them (`effects::args::effect`).
     #[new]
     #[pyo3(signature = (r#type, /, **keys))]
     fn new(py: Python<'_>, r#type: &str, keys: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
