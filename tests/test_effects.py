@@ -528,6 +528,24 @@ def test_scene_file_declares_every_effect(tmp_path):
     assert set(r1.power) == set(forces)
 
 
+def test_effect_takes_a_scene_file_type_and_its_keys(tmp_path):
+    # Each effect the scene file declares (read by the scene-file reader), rebuilt from its
+    # table by the generic constructor (the keyword reader the factories use), is equal.
+    scene = pmd.load_scene(write(tmp_path, SCENE))
+    contact = pmd.GroundContact([("cart", [0, 0, 0], 0.1)], friction=0.5, stiffness=1e4)
+    limit = pmd.JointLimit("cart", -1.0, 2.0, stiffness=1e3, damping=[5.0])
+    for e in [*scene.effects, contact, limit]:
+        table = e.to_dict()
+        assert pmd.Effect(table.pop("type"), **table) == e, table
+    with pytest.raises(pmd.InvalidInputError,
+                       match=r'^stifness: expected a key of a "spring" effect \(type, name, joints, stiffness, rest\)'):
+        pmd.Effect("spring", stifness=1.0)
+    with pytest.raises(pmd.InvalidInputError, match=r'^type: expected one of "gravity", .*got "sprung"'):
+        pmd.Effect("sprung", stiffness=1.0)
+    with pytest.raises(pmd.InvalidInputError, match=r"^stiffness: expected a value, got nothing"):
+        pmd.Effect("spring", joints=0)
+
+
 @pytest.mark.parametrize(
     "old, new, key, words",
     [

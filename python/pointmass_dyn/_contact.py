@@ -63,8 +63,9 @@ def GroundContact(
     ``c`` the critical damping of the contact mode at that sink. The scene's effects hold
     the values it runs with (``scene.effects[i].contact_parameters``, their repr). How to
     choose k and c: docs/contact.md §1."""
-    return Effect.ground_contact(
-        points, normal, height, stiffness, exponent, damping, friction, v_eps, name
+    return Effect(
+        "ground_contact", points=points, normal=normal, height=height, stiffness=stiffness,
+        exponent=exponent, damping=damping, friction=friction, v_eps=v_eps, name=name,
     )
 
 
@@ -83,7 +84,10 @@ def JointLimit(
     and prismatic joint. ``lower``/``upper``: one number or one per joint (±inf: no bound);
     ``None`` takes the model's own (``Model.joint_limits()``: URDF ``<limit>``, MJCF
     ``range``) when the scene is built. Potential ``½ k δ²`` (in ``energies``)."""
-    return Effect.joint_limit(joints, lower, upper, stiffness, damping, name)
+    return Effect(
+        "joint_limit", joints=joints, lower=lower, upper=upper, stiffness=stiffness,
+        damping=damping, name=name,
+    )
 
 
 def urdf_contact_points(

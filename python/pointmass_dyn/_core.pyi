@@ -643,10 +643,6 @@ class Model:
         """``{joint: (damping, friction)}`` from URDF ``<dynamics>``, in q/v order (0 where
         absent); recorded, not applied by the model."""
 
-#: Joints selected by body name or body index, one or a sequence; ``None``: every moving joint.
-_Joints: TypeAlias = str | int | Sequence[str | int] | None
-#: One number for all selected joints, or one per joint.
-_PerJoint: TypeAlias = float | ArrayLike
 #: Effect families, as ``disable`` names them.
 _Family: TypeAlias = Literal[
     "gravity", "springs", "dampers", "friction", "torques", "external", "contact", "limits"
@@ -656,6 +652,12 @@ _Family: TypeAlias = Literal[
 class Effect:
     """Something a scene applies to its model; build with the factories (``pmd.Gravity``,
     ``pmd.Spring``, ...). Each is computed only when declared; SI units, radians."""
+
+    def __init__(self, type: str, /, **keys: Any) -> None:
+        """The effect of scene-file ``type`` (``"spring"``, ``"torque"``, ``"external"``, ...)
+        with that type's keys as keyword arguments (README "Effects"; the table in
+        rust/effects/mod.rs), arrays as NumPy arrays or sequences; what every factory calls.
+        Errors name the key."""
 
     def with_parameter(self, name: str, value: ArrayLike) -> Effect:
         """A copy with one parameter replaced and checked: gravity ``g``; a spring's
@@ -675,92 +677,8 @@ class Effect:
     def gravity(g: ArrayLike | None = None) -> Effect:
         """Uniform gravity ``g`` (m/s², world frame); default ``(0, 0, -9.81)``."""
     @staticmethod
-    def spring(
-        joints: _Joints, stiffness: _PerJoint, rest: _PerJoint | None = None, name: str | None = None
-    ) -> Effect:
-        """Joint springs ``τ = −k (q − rest)``; on quaternion joints ``τ = −k θ`` with θ the
-        rotation vector of ``rest⁻¹ q``. ``rest``: one number for the 1-dof joints, or the
-        selected joints' coordinates (4 per quaternion joint)."""
-    @staticmethod
-    def damper(joints: _Joints, damping: _PerJoint, name: str | None = None) -> Effect:
-        """Viscous dampers ``τ = −c v`` on every speed of the selected joints."""
-    @staticmethod
-    def friction(
-        joints: _Joints, friction: _PerJoint, v_eps: float | None = None, name: str | None = None
-    ) -> Effect:
-        """Regularised Coulomb friction ``τ = −F tanh(v / v_eps)`` (default v_eps 1e-3)."""
-    @staticmethod
-    def joint_torque(joints: _Joints, tau: _PerJoint, name: str | None = None) -> Effect:
-        """Constant torques: one number for every speed of the selected joints, or one per speed."""
-    @staticmethod
-    def tabulated_torque(
-        joints: _Joints, time: ArrayLike, values: ArrayLike, name: str | None = None
-    ) -> Effect:
-        """Torques tabulated in time (N,) with values (N, speeds), linear, clamped outside."""
-    @staticmethod
-    def pd_torque(
-        joints: _Joints,
-        kp: _PerJoint,
-        kd: _PerJoint,
-        time: ArrayLike,
-        reference: ArrayLike,
-        name: str | None = None,
-    ) -> Effect:
-        """``τ = kp (q_ref(t) − q) + kd (q̇_ref(t) − v)`` on 1-dof joints; ``q̇_ref`` is the
-        table's slope."""
-    @staticmethod
     def torque_function(f: Callable[[float, _Array, _Array], ArrayLike], name: str | None = None) -> Effect:
         """Generalized forces ``f(t, q, v) -> (nv,)`` from Python (one Python call per evaluation)."""
-    @staticmethod
-    def external_force(
-        body: str | int,
-        force: ArrayLike | None = None,
-        point: ArrayLike | None = None,
-        moment: ArrayLike | None = None,
-        time: ArrayLike | None = None,
-        frame: Literal["world", "body"] = "world",
-        name: str | None = None,
-    ) -> Effect:
-        """A force at a body-fixed ``point`` plus a ``moment``, constant (3,) or tabulated
-        ((N, 3) with ``time`` (N,)), in world or body axes."""
-    @staticmethod
-    def point_spring(
-        body_a: str | int | None,
-        point_a: ArrayLike,
-        body_b: str | int | None,
-        point_b: ArrayLike,
-        stiffness: float,
-        rest_length: float | None = None,
-        damping: float | None = None,
-        name: str | None = None,
-    ) -> Effect:
-        """A spring–damper ``k (l − l0) + c l̇`` along the line between a point of body a and
-        one of body b (each in its body's frame; ``"world"``/-1/None: the ground)."""
-    @staticmethod
-    def ground_contact(
-        points: Sequence[Any],
-        normal: ArrayLike,
-        height: float,
-        stiffness: float | None,
-        exponent: float,
-        damping: float | None,
-        friction: float,
-        v_eps: float,
-        name: str | None = None,
-    ) -> Effect:
-        """Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
-        force ``max(0, k δⁿ + c δⁿ δ̇)``, regularised Coulomb friction. ``stiffness`` or
-        ``damping`` None: the defaults from the model's weight, filled in by a scene."""
-    @staticmethod
-    def joint_limit(
-        joints: str | int | Sequence[str | int] | None,
-        lower: ArrayLike | None,
-        upper: ArrayLike | None,
-        stiffness: ArrayLike,
-        damping: ArrayLike,
-        name: str | None = None,
-    ) -> Effect:
-        """One-sided spring–dampers outside ``[lower, upper]`` (None: the model's limits)."""
     def with_torque_limit(self, limit: ArrayLike | str | None) -> Effect:
         """A torque effect clamped per speed at ``±limit`` (``"effort"``: the URDF's)."""
     @property
@@ -1044,12 +962,9 @@ class _Simulator:
     ) -> None: ...
     t: float
     nq: int
-    nv: int
     control_period: float
     method: str
-    control_kind: str
     control_len: int
-    steps: int
     y: _Array
     control: _Array | None
     def set_control(self, u: ArrayLike) -> None: ...

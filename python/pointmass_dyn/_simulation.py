@@ -65,13 +65,13 @@ def Spring(joints: Any, stiffness: Any, rest: Any = None, *, name: str | None = 
     (``SphericalZYZ``) joints are refused. ``stiffness`` ≥ 0: one number or one per joint;
     ``rest``: one number for the 1-dof joints (quaternion joints then rest at the identity),
     or the selected joints' coordinates in order (4 per quaternion joint, x y z w)."""
-    return Effect.spring(joints, stiffness, rest, name)
+    return Effect("spring", joints=joints, stiffness=stiffness, rest=rest, name=name)
 
 
 def Damper(joints: Any, damping: Any, *, name: str | None = None) -> Effect:
     """Viscous joint dampers ``τ = −c v`` on every speed of the selected joints, family
     ``dampers``; ``damping`` ≥ 0, one number or one per joint."""
-    return Effect.damper(joints, damping, name)
+    return Effect("damper", joints=joints, damping=damping, name=name)
 
 
 def JointFriction(
@@ -81,14 +81,14 @@ def JointFriction(
     speed (``τ = −F tanh(|ω|/v_eps) ω/|ω|`` on a quaternion joint). ``F`` (``friction`` ≥ 0,
     N·m or N) is reached when sliding well above ``v_eps`` (rad/s or m/s); below, the law is
     viscous with slope ``F / v_eps``: smooth, no stick-slip switching, no true sticking."""
-    return Effect.friction(joints, friction, v_eps, name)
+    return Effect("friction", joints=joints, friction=friction, v_eps=v_eps, name=name)
 
 
 def JointTorque(joints: Any, tau: Any, *, limit: Any = None, name: str | None = None) -> Effect:
     """Constant joint torques (forces on prismatic joints), family ``torques``: one number
     for every speed of the selected joints, or one per speed (3 for a spherical joint).
     ``limit``: as :func:`PDTorque`'s, per speed."""
-    return _limited(Effect.joint_torque(joints, tau, name), limit)
+    return Effect("torque", joints=joints, tau=tau, limit=limit, name=name)
 
 
 def TabulatedTorque(
@@ -98,7 +98,9 @@ def TabulatedTorque(
     increasing, ``values`` (N, n) with one column per speed of the selected joints ((N,)
     for one). Linear interpolation between rows (as ``numpy.interp``), the end rows held
     outside the table. ``limit``: as :func:`PDTorque`'s, per speed."""
-    return _limited(Effect.tabulated_torque(joints, time, values, name), limit)
+    return Effect(
+        "tabulated_torque", joints=joints, time=time, values=values, limit=limit, name=name
+    )
 
 
 def PDTorque(
@@ -119,7 +121,10 @@ def PDTorque(
     clamped per joint at ``±limit`` (one number, one per joint, or ``"effort"``: each joint's
     URDF ``<limit effort>``, taken when the scene is built); :func:`simulate` then reports
     where it saturated (``.saturated``)."""
-    return _limited(Effect.pd_torque(joints, kp, kd, time, reference, name), limit)
+    return Effect(
+        "pd_torque", joints=joints, kp=kp, kd=kd, time=time, reference=reference, limit=limit,
+        name=name,
+    )
 
 
 def TorqueFunction(
@@ -133,11 +138,7 @@ def TorqueFunction(
     ``PDTorque`` when they fit. An exception it raises stops the run and is re-raised by
     :func:`simulate`. ``limit``: as :func:`PDTorque`'s, one number or one per speed (all
     ``nv``)."""
-    return _limited(Effect.torque_function(f, name), limit)
-
-
-def _limited(effect: Effect, limit: Any) -> Effect:
-    """``effect`` clamped at ``limit`` (see :func:`PDTorque`), or as it is for None."""
+    effect = Effect.torque_function(f, name)
     return effect if limit is None else effect.with_torque_limit(limit)
 
 
@@ -156,7 +157,10 @@ def ExternalForce(
     ``frame="body"``: components in the body frame, turning with it. Constant (3-vectors),
     or with ``time`` (N,) tables ``force``/``moment`` (N, 3), linear between rows and held
     outside. Bodies on Fixed joints are welded into their link; the force acts there."""
-    return Effect.external_force(body, force, point, moment, time, frame, name)
+    return Effect(
+        "external", body=body, force=force, point=point, moment=moment, time=time, frame=frame,
+        name=name,
+    )
 
 
 def PointSpring(
@@ -180,8 +184,9 @@ def PointSpring(
     makes it dissipative: its power is ``−dV/dt − c l̇²``. A run stops with an error where the
     two points coincide (the force's direction is undefined there), except for ``l0 = 0``
     and ``c = 0``, whose force ``−k (p_b − p_a)`` is defined everywhere."""
-    return Effect.point_spring(
-        body_a, point_a, body_b, point_b, stiffness, rest_length, damping, name
+    return Effect(
+        "point_spring", body_a=body_a, point_a=point_a, body_b=body_b, point_b=point_b,
+        stiffness=stiffness, rest_length=rest_length, damping=damping, name=name,
     )
 
 

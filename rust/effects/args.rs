@@ -1,13 +1,13 @@
 //! The effects built from a binding's arguments ([`Arg`]): the forms a caller writes
-//! (`pmd.Spring(joints, stiffness, ...)` in Python) read here, once, so the binding only
-//! converts. A scene file's `[[effect]]` tables are read by `scene_file.rs`.
+//! (`pmd.Effect("spring", joints=..., stiffness=...)` in Python, [`effect`]) read here, once,
+//! so the binding only converts. A scene file's `[[effect]]` tables are read by `scene_file.rs`.
 use super::ground_contact::ContactStates;
 use super::{
     ContactPoint, Damper, Disabled, Effect, External, Frame, Friction, GroundContact, JointLimit,
-    JointRef, Matrix, PerJoint, PointSpring, Spring, Table, Torque, TorqueFunction, TorqueLimit,
+    JointRef, Matrix, PerJoint, PointSpring, Spring, Table, Torque, TorqueLimit,
 };
 use crate::model::Model;
-use crate::support::args::{given, int, items, opt, shape_str, vec3, vector, Arg, Int};
+use crate::support::args::{flag, given, int, items, opt, shape_str, text, vec3, vector, Arg, Int};
 use crate::support::error::Error;
 use crate::support::spatial::Vec3;
 
@@ -89,12 +89,6 @@ pub fn matrix<A: Arg>(x: &A, arg: &str) -> R<Matrix, A> {
     })
 }
 
-pub fn table<A: Arg>(time: &A, values: &A, values_arg: &str) -> R<Table, A> {
-    let t = vector(time, "time", None)?;
-    let m = matrix(values, values_arg)?;
-    Ok(Table::new(t, m, "time", values_arg)?)
-}
-
 /// Contact points: a sequence of `(body, [x, y, z])` or `(body, [x, y, z], radius)`.
 pub fn contact_points<A: Arg>(x: &A) -> R<Vec<ContactPoint>, A> {
     const EXPECTED: &str =
@@ -156,161 +150,171 @@ pub fn gravity<A: Arg>(g: Option<&A>) -> R<Effect, A> {
     Ok(Effect::gravity(g)?)
 }
 
-pub fn spring<A: Arg>(
-    joints_: Option<&A>,
-    k: &A,
-    rest: Option<&A>,
-    name: Option<String>,
-) -> R<Effect, A> {
-    let joints = joints(joints_)?;
-    let k = per_joint(k, "stiffness")?;
-    let rest = opt(rest, |r| per_joint(r, "rest"))?;
-    Ok(Effect::Spring(Spring::new(name, joints, k, rest)?))
+/// The effect of scene-file type `ty` (`"spring"`, `"torque"`, ...: the registry's types) from
+/// keyword arguments `kw`, a mapping of that type's keys (`keys`: those given): the one
+/// constructor behind `pmd.Effect(type, **keys)` and every Python factory. Arrays are read
+/// here with errors in the caller's terms (NumPy shapes) naming the argument; a type without
+/// its line below (a new effect) is read by its scene-file parser, its arguments written as
+/// a file would state them, so it needs no code here.
+pub fn effect<A: Arg>(ty: &str, keys: &[String], kw: &A) -> R<Effect, A> {
+    let found = super::scene_file::find_type(Some(ty), super::all_toml_types())?;
+    super::scene_file::check_keys(found, keys)?;
+    let k = Keywords(kw);
+    let name = k.parse("name", |x, key| text(x, key, "a string"))?;
+    let limit = || torque_limit(k.opt("limit").as_ref());
+    let real = |x: &A, key: &str| x.real(key);
+    let e = match ty {
+        "gravity" => return gravity(k.opt("g").as_ref()),
+        "spring" => {
+            let (joints, stiffness) = (k.joints()?, k.req("stiffness", per_joint)?);
+            Effect::Spring(Spring::new(
+                name,
+                joints,
+                stiffness,
+                k.parse("rest", per_joint)?,
+            )?)
+        }
+        "damper" => {
+            let (joints, damping) = (k.joints()?, k.req("damping", per_joint)?);
+            Effect::Damper(Damper::new(name, joints, damping)?)
+        }
+        "friction" => {
+            let v_eps = k.parse("v_eps", real)?;
+            let (joints, f) = (k.joints()?, k.req("friction", per_joint)?);
+            Effect::Friction(Friction::new(name, joints, f, v_eps)?)
+        }
+        "torque" => {
+            let (joints, tau) = (k.joints()?, k.req("tau", per_joint)?);
+            Effect::Torque(Torque::constant(name, joints, tau)?.with_limit(limit()?))
+        }
+        "tabulated_torque" => {
+            let (joints, table) = (k.joints()?, k.table("values")?);
+            Effect::Torque(Torque::tabulated(name, joints, table)?.with_limit(limit()?))
+        }
+        "pd_torque" => {
+            let joints = k.joints()?;
+            let (kp, kd) = (k.req("kp", per_joint)?, k.req("kd", per_joint)?);
+            let table = k.table("reference")?;
+            Effect::Torque(Torque::pd(name, joints, kp, kd, table)?.with_limit(limit()?))
+        }
+        "external" => external(&k, name)?,
+        "point_spring" => {
+            let (body_a, point_a) = (k.req("body_a", body_or_world)?, k.req("point_a", vec3)?);
+            let (body_b, point_b) = (k.req("body_b", body_or_world)?, k.req("point_b", vec3)?);
+            let stiffness = k.req("stiffness", real)?;
+            let rest = k.parse("rest_length", real)?.unwrap_or(0.0);
+            let c = k.parse("damping", real)?.unwrap_or(0.0);
+            let (a, b) = ((body_a, point_a), (body_b, point_b));
+            Effect::PointSpring(PointSpring::new(
+                name, a.0, a.1, b.0, b.1, stiffness, rest, c,
+            )?)
+        }
+        "ground_contact" => Effect::GroundContact(GroundContact::new(
+            name,
+            k.req("points", |x, _| contact_points(x))?,
+            k.req("normal", vec3)?,
+            k.req("height", real)?,
+            k.parse("stiffness", real)?,
+            k.req("exponent", real)?,
+            k.parse("damping", real)?,
+            k.req("friction", real)?,
+            k.req("v_eps", real)?,
+        )?),
+        "joint_limit" => {
+            let joints = k.joints()?;
+            let (lower, upper) = (k.parse("lower", per_joint)?, k.parse("upper", per_joint)?);
+            let (s, c) = (k.req("stiffness", per_joint)?, k.req("damping", per_joint)?);
+            Effect::JointLimit(JointLimit::new(name, joints, lower, upper, s, c)?)
+        }
+        _ => Effect::from_toml(&k.scene_table(found.name, keys)?)?,
+    };
+    Ok(e)
 }
 
-pub fn damper<A: Arg>(joints_: Option<&A>, c: &A, name: Option<String>) -> R<Effect, A> {
-    let joints = joints(joints_)?;
-    let c = per_joint(c, "damping")?;
-    Ok(Effect::Damper(Damper::new(name, joints, c)?))
-}
-
-pub fn friction<A: Arg>(
-    joints_: Option<&A>,
-    f: &A,
-    v_eps: Option<&A>,
-    name: Option<String>,
-) -> R<Effect, A> {
-    let v_eps = opt(v_eps, |x| x.real("v_eps"))?;
-    let joints = joints(joints_)?;
-    let f = per_joint(f, "friction")?;
-    Ok(Effect::Friction(Friction::new(name, joints, f, v_eps)?))
-}
-
-pub fn joint_torque<A: Arg>(joints_: Option<&A>, tau: &A, name: Option<String>) -> R<Effect, A> {
-    let joints = joints(joints_)?;
-    let tau = per_joint(tau, "tau")?;
-    Ok(Effect::Torque(Torque::constant(name, joints, tau)?))
-}
-
-pub fn tabulated_torque<A: Arg>(
-    joints_: Option<&A>,
-    time: &A,
-    values: &A,
-    name: Option<String>,
-) -> R<Effect, A> {
-    let joints = joints(joints_)?;
-    let table = table(time, values, "values")?;
-    Ok(Effect::Torque(Torque::tabulated(name, joints, table)?))
-}
-
-/// PD torques tracking a tabulated reference: `gains` = (kp, kd), `reference` = (time, values).
-pub fn pd_torque<A: Arg>(
-    joints_: Option<&A>,
-    gains: (&A, &A),
-    reference: (&A, &A),
-    name: Option<String>,
-) -> R<Effect, A> {
-    let joints = joints(joints_)?;
-    let kp = per_joint(gains.0, "kp")?;
-    let kd = per_joint(gains.1, "kd")?;
-    let table = table(reference.0, reference.1, "reference")?;
-    Ok(Effect::Torque(Torque::pd(name, joints, kp, kd, table)?))
-}
-
-pub fn torque_function(f: TorqueFunction, name: Option<String>) -> Effect {
-    Effect::Torque(Torque::function(name, f))
-}
-
-/// A force and a moment on a body at a body-fixed point: `load` = (force, moment), each
-/// constant, or tabulated at `time` (rows per time).
-pub fn external_force<A: Arg>(
-    body: &A,
-    load: (Option<&A>, Option<&A>),
-    point: Option<&A>,
-    time: Option<&A>,
-    frame: &str,
-    name: Option<String>,
-) -> R<Effect, A> {
-    let body = joint_ref(body, "body")?;
-    let point = opt(point, |p| vec3(p, "point"))?.unwrap_or_else(Vec3::zeros);
-    let frame = Frame::parse(frame, "frame")?;
-    let (force, moment) = (given(load.0), given(load.1));
+/// A force and a moment on a body at a body-fixed point, each constant, or tabulated at
+/// `time` (rows per time).
+fn external<A: Arg>(k: &Keywords<'_, A>, name: Option<String>) -> R<Effect, A> {
+    let body = k.req("body", joint_ref)?;
+    let point = k.parse("point", vec3)?.unwrap_or_else(Vec3::zeros);
+    let frame = k.parse("frame", |x, key| text(x, key, "\"world\" or \"body\""))?;
+    let frame = Frame::parse(frame.as_deref().unwrap_or("world"), "frame")?;
+    let (force, moment) = (k.opt("force"), k.opt("moment"));
     if force.is_none() && moment.is_none() {
         return Err(Error::arg("force", "a force (or a moment)", "None").into());
     }
-    let inner = match given(time) {
+    let inner = match k.parse("time", |x, key| vector(x, key, None))? {
         Some(t) => {
-            let t = vector(t, "time", None)?;
-            let f = opt(force, |f| matrix(f, "force"))?;
-            let m = opt(moment, |m| matrix(m, "moment"))?;
+            let f = opt(force.as_ref(), |f| matrix(f, "force"))?;
+            let m = opt(moment.as_ref(), |m| matrix(m, "moment"))?;
             External::tabulated(name, body, point, t, f, m, frame)?
         }
         None => {
-            let f = opt(force, |f| vec3(f, "force"))?.unwrap_or_else(Vec3::zeros);
-            let m = opt(moment, |m| vec3(m, "moment"))?.unwrap_or_else(Vec3::zeros);
+            let f = opt(force.as_ref(), |f| vec3(f, "force"))?.unwrap_or_else(Vec3::zeros);
+            let m = opt(moment.as_ref(), |m| vec3(m, "moment"))?.unwrap_or_else(Vec3::zeros);
             External::constant(name, body, point, f, m, frame)?
         }
     };
     Ok(Effect::External(inner))
 }
 
-/// A spring–damper between `a` = (body, point) and `b` = (body, point); `law` = (stiffness,
-/// rest length (default 0), damping (default 0)).
-pub fn point_spring<A: Arg>(
-    a: (&A, &A),
-    b: (&A, &A),
-    law: (&A, Option<&A>, Option<&A>),
-    name: Option<String>,
-) -> R<Effect, A> {
-    let body_a = body_or_world(a.0, "body_a")?;
-    let point_a = vec3(a.1, "point_a")?;
-    let body_b = body_or_world(b.0, "body_b")?;
-    let point_b = vec3(b.1, "point_b")?;
-    let k = law.0.real("stiffness")?;
-    let rest = opt(law.1, |x| x.real("rest_length"))?.unwrap_or(0.0);
-    let c = opt(law.2, |x| x.real("damping"))?.unwrap_or(0.0);
-    let inner = PointSpring::new(name, body_a, point_a, body_b, point_b, k, rest, c)?;
-    Ok(Effect::PointSpring(inner))
+/// The keyword arguments of one effect: a mapping (Python's `**kwargs`) of its scene-file keys.
+struct Keywords<'a, A>(&'a A);
+
+impl<A: Arg> Keywords<'_, A> {
+    /// The value under `key`, if one was given (`None` is not one).
+    fn opt(&self, key: &str) -> Option<A> {
+        self.0.get(key).flatten().filter(|x| !x.absent())
+    }
+    /// `parse` of the value under `key`, if one was given.
+    fn parse<T>(&self, key: &str, parse: impl Fn(&A, &str) -> R<T, A>) -> R<Option<T>, A> {
+        self.opt(key).map(|x| parse(&x, key)).transpose()
+    }
+    /// `parse` of the value under `key`, which must be there (a `None` goes to `parse`).
+    fn req<T>(&self, key: &str, parse: impl Fn(&A, &str) -> R<T, A>) -> R<T, A> {
+        match self.0.get(key).flatten() {
+            Some(x) => parse(&x, key),
+            None => Err(Error::arg(key, "a value", "nothing").into()),
+        }
+    }
+    /// `None` (every moving joint), one body name or index, or a sequence of them.
+    fn joints(&self) -> R<Option<Vec<JointRef>>, A> {
+        joints(self.opt("joints").as_ref())
+    }
+    /// `time` and the rows of `values` at those times.
+    fn table(&self, values: &str) -> R<Table, A> {
+        let t = self.req("time", |x, key| vector(x, key, None))?;
+        let m = self.req(values, matrix)?;
+        Ok(Table::new(t, m, "time", values)?)
+    }
+    /// The `[[effect]]` table of type `ty` stating the arguments `keys` (`None`s left out).
+    fn scene_table(&self, ty: &str, keys: &[String]) -> R<toml::Table, A> {
+        let mut t = toml::Table::new();
+        t.insert("type".into(), ty.into());
+        for key in keys {
+            if let Some(x) = self.opt(key) {
+                t.insert(key.clone(), toml_value(&x, key)?);
+            }
+        }
+        Ok(t)
+    }
 }
 
-/// Ground contact: `plane` = (normal, height); `law` = (stiffness, exponent, damping,
-/// friction, v_eps), stiffness and damping optional (the model's defaults).
-pub fn ground_contact<A: Arg>(
-    points: &A,
-    plane: (&A, &A),
-    law: (Option<&A>, &A, Option<&A>, &A, &A),
-    name: Option<String>,
-) -> R<Effect, A> {
-    let inner = GroundContact::new(
-        name,
-        contact_points(points)?,
-        vec3(plane.0, "normal")?,
-        plane.1.real("height")?,
-        opt(law.0, |x| x.real("stiffness"))?,
-        law.1.real("exponent")?,
-        opt(law.2, |x| x.real("damping"))?,
-        law.3.real("friction")?,
-        law.4.real("v_eps")?,
-    )?;
-    Ok(Effect::GroundContact(inner))
-}
-
-/// Compliant joint ranges: `bounds` = (lower, upper), each optional (the model's).
-pub fn joint_limit<A: Arg>(
-    joints_: Option<&A>,
-    bounds: (Option<&A>, Option<&A>),
-    stiffness: &A,
-    damping: &A,
-    name: Option<String>,
-) -> R<Effect, A> {
-    let joints = joints(joints_)?;
-    let lower = opt(bounds.0, |x| per_joint(x, "lower"))?;
-    let upper = opt(bounds.1, |x| per_joint(x, "upper"))?;
-    let k = per_joint(stiffness, "stiffness")?;
-    let c = per_joint(damping, "damping")?;
-    Ok(Effect::JointLimit(JointLimit::new(
-        name, joints, lower, upper, k, c,
-    )?))
+/// A value as a scene file states it: a bool, a string, an integer, a number, or a list
+/// of those (an array's rows).
+fn toml_value<A: Arg>(x: &A, arg: &str) -> R<toml::Value, A> {
+    Ok(if x.is_bool() {
+        toml::Value::Boolean(flag(x, arg)?)
+    } else if let Some(s) = x.text() {
+        toml::Value::String(s)
+    } else if let Int::Value(i) = x.int() {
+        toml::Value::Integer(i)
+    } else if let Some(items) = x.items() {
+        let items = items?;
+        let values = (items.iter().enumerate()).map(|(k, x)| toml_value(x, &format!("{arg}[{k}]")));
+        toml::Value::Array(values.collect::<R<_, A>>()?)
+    } else {
+        toml::Value::Float(x.real(arg)?)
+    })
 }
 
 /// A joint given as a body index, a URDF joint name or a body name: its body's index
@@ -356,3 +360,7 @@ pub fn contact_states<A: Arg>(
     }
     Ok((qs[0], contact.states(model, &qv, &vv)?))
 }
+
+#[cfg(test)]
+#[path = "tests/args.rs"]
+mod tests;

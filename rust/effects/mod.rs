@@ -15,7 +15,8 @@
 //! Adding an effect type is one new file here (the declaration, its [`Declaration`], the law,
 //! tests' fixtures stay in `tests.rs`) and one line in the [`registry!`] below; the compiler
 //! flags a declaration that forgets a method or a variant without its registry line.
-//! `docs/adding-an-effect.md` walks through it, with persistence, the Python binding and docs.
+//! `docs/adding-an-effect.md` walks through it, with persistence and docs; Python constructs
+//! it as `pmd.Effect("foo", **keys)` through `args::effect`, with no binding code.
 //!
 //! Uniform gravity is a law whose [`ForceLaw::base_acceleration`] the engine puts on the
 //! base twist rate `[0; −g]`, so it costs no extra pass. Every other law adds generalized

@@ -22,19 +22,45 @@ pub(super) fn parse<'t>(
     types: impl Iterator<Item = &'t TomlType> + Clone,
 ) -> Result<Effect> {
     let mut f = Fields::new(table);
-    let one_of = || {
-        let names: Vec<String> = types.clone().map(|t| format!("\"{}\"", t.name)).collect();
-        format!("one of {}", names.join(", "))
-    };
-    let ty = f
-        .string("type")?
-        .ok_or_else(|| Error::arg("type", one_of(), "nothing"))?;
-    let Some(found) = types.clone().find(|t| t.name == ty) else {
-        return Err(Error::arg("type", one_of(), format!("\"{ty}\"")));
-    };
+    let ty = f.string("type")?;
+    let found = find_type(ty.as_deref(), types)?;
     // A misspelt key first: it is usually why a required one is missing.
-    f.check_keys(&ty, found.keys)?;
-    (found.parse)(&ty, &mut f)
+    check_keys(found, table.keys().filter(|k| *k != "type"))?;
+    (found.parse)(found.name, &mut f)
+}
+
+/// The type named `ty` among `types`; an error naming `type` and listing them otherwise.
+pub(super) fn find_type<'t>(
+    ty: Option<&str>,
+    mut types: impl Iterator<Item = &'t TomlType> + Clone,
+) -> Result<&'t TomlType> {
+    let names: Vec<String> = types.clone().map(|t| format!("\"{}\"", t.name)).collect();
+    let one_of = format!("one of {}", names.join(", "));
+    match ty {
+        None => Err(Error::arg("type", one_of, "nothing")),
+        Some(ty) => types
+            .find(|t| t.name == ty)
+            .ok_or_else(|| Error::arg("type", one_of, format!("\"{ty}\""))),
+    }
+}
+
+/// Errors on a key that is not one of `ty`'s, listing those.
+pub(super) fn check_keys<S: AsRef<str>>(
+    ty: &TomlType,
+    given: impl IntoIterator<Item = S>,
+) -> Result<()> {
+    for key in given {
+        let key = key.as_ref();
+        if !ty.keys.contains(&key) {
+            let expected = format!(
+                "a key of a \"{}\" effect (type, {})",
+                ty.name,
+                ty.keys.join(", ")
+            );
+            return Err(Error::arg(key, expected, "an unknown key"));
+        }
+    }
+    Ok(())
 }
 
 /// The keys of one `[[effect]]` table, read with errors that name the key; `check_keys` refuses
@@ -80,20 +106,6 @@ impl<'a> Fields<'a> {
 
     pub fn has(&self, key: &str) -> bool {
         self.table.contains_key(key)
-    }
-
-    /// Errors on a key that is not `type` or one of `keys`, listing those.
-    pub fn check_keys(&self, ty: &str, keys: &[&str]) -> Result<()> {
-        for key in self.table.keys() {
-            if key != "type" && !keys.contains(&key.as_str()) {
-                return Err(Error::arg(
-                    key.as_str(),
-                    format!("a key of a \"{ty}\" effect (type, {})", keys.join(", ")),
-                    "an unknown key",
-                ));
-            }
-        }
-        Ok(())
     }
 
     /// `key`'s value as `convert` reads it, `None` when the key is absent; an error naming

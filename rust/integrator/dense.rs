@@ -337,6 +337,31 @@ impl DenseOutput {
         self.eval_into(t, &mut out);
         out
     }
+
+    /// The states at `ts`, `dim × ts.len()` row-major (one column per time, as SciPy's
+    /// `OdeSolution`). Refuses a non-finite time, and a state that is not finite: outside
+    /// the integrated interval the interpolant extrapolates, and overflows far away. Panics
+    /// if there are no segments.
+    pub fn sample(&self, ts: &[f64]) -> crate::support::error::Result<Vec<f64>> {
+        use crate::support::error::Error;
+        if let Some(bad) = ts.iter().find(|x| !x.is_finite()) {
+            return Err(Error::arg("t", "finite times", bad.to_string()));
+        }
+        let (n, mut buf) = (ts.len(), vec![0.0; self.dim]);
+        let mut out = vec![0.0; self.dim * n];
+        for (j, &t) in ts.iter().enumerate() {
+            self.eval_into(t, &mut buf);
+            if buf.iter().any(|v| !v.is_finite()) {
+                let (a, b) = (self.ts[0], self.ts[self.ts.len() - 1]);
+                let (lo, hi) = (a.min(b), a.max(b));
+                return Err(Error::Numerical(format!("sol(t): the dense output at t = {t:e} is not finite: it extrapolates the solution on [{lo}, {hi}] far outside it")));
+            }
+            for (i, y) in buf.iter().enumerate() {
+                out[i * n + j] = *y;
+            }
+        }
+        Ok(out)
+    }
 }
 
 #[cfg(test)]

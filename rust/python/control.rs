@@ -89,10 +89,6 @@ impl PySimulator {
         self.lock().with(|s| s.nq())
     }
     #[getter]
-    fn nv(&self) -> usize {
-        self.lock().with(|s| s.nv())
-    }
-    #[getter]
     fn control_period(&self) -> f64 {
         self.lock().with(|s| s.period())
     }
@@ -101,19 +97,8 @@ impl PySimulator {
         self.lock().with(|s| s.method().name())
     }
     #[getter]
-    fn control_kind(&self) -> &'static str {
-        match self.lock().with(|s| s.kind()) {
-            ControlKind::Torque => "torque",
-            ControlKind::PdTarget => "pd",
-        }
-    }
-    #[getter]
     fn control_len(&self) -> usize {
         self.lock().with(|s| s.control_len())
-    }
-    #[getter]
-    fn steps(&self) -> usize {
-        self.lock().with(|s| s.steps())
     }
     /// The state `[q; v]` (a copy).
     #[getter]

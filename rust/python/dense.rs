@@ -2,7 +2,7 @@
 use pyo3::prelude::*;
 
 use super::convert::{array, to_array, to_array1};
-use super::errors::{invalid, py_error};
+use super::errors::{invalid, py_error, IntoPyResult};
 use crate::integrator::DenseOutput;
 
 /// The dense output of an `rk45` run: `sol(t)` for a scalar (shape (n,)) or an array of
@@ -27,49 +27,15 @@ impl PyDenseSolution {
             ));
         }
         let (shape, ts) = array(t, "t")?;
-        if let Some(bad) = ts.iter().find(|x| !x.is_finite()) {
-            return Err(invalid(py, "t", "finite times", bad));
+        if shape.len() > 1 {
+            let got = format!("shape {shape:?}");
+            return Err(invalid(py, "t", "a scalar or a 1-D array", got));
         }
-        // Outside the integrated interval the interpolant extrapolates, and overflows far away.
-        let check = |x: f64, y: &[f64]| -> PyResult<()> {
-            if y.iter().all(|v| v.is_finite()) {
-                return Ok(());
-            }
-            let b = self.inner.breakpoints();
-            let (first, last) = (
-                b.first().copied().unwrap_or(f64::NAN),
-                b.last().copied().unwrap_or(f64::NAN),
-            );
-            let (lo, hi) = (first.min(last), first.max(last));
-            Err(py_error(
-                py,
-                "NumericalError",
-                format!("sol(t): the dense output at t = {x:e} is not finite: it extrapolates the solution on [{lo}, {hi}] far outside it"),
-            ))
-        };
-        if shape.is_empty() {
-            let y = self.inner.eval(ts[0]);
-            check(ts[0], &y)?;
-            return Ok(to_array1(py, &y).into_any());
+        let y = self.inner.sample(&ts).py(py)?;
+        match shape.len() {
+            0 => Ok(to_array1(py, &y).into_any()),
+            _ => to_array(py, y, &[dim, ts.len()]),
         }
-        if shape.len() != 1 {
-            return Err(invalid(
-                py,
-                "t",
-                "a scalar or a 1-D array",
-                format!("shape {shape:?}"),
-            ));
-        }
-        let mut out = vec![0.0; dim * ts.len()];
-        let mut buf = vec![0.0; dim];
-        for (j, x) in ts.iter().enumerate() {
-            self.inner.eval_into(*x, &mut buf);
-            check(*x, &buf)?;
-            for i in 0..dim {
-                out[i * ts.len() + j] = buf[i];
-            }
-        }
-        to_array(py, out, &[dim, ts.len()])
     }
     #[getter]
     fn ts<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {

@@ -5,10 +5,11 @@ use std::sync::Arc;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use super::convert::vector;
 use super::errors::{invalid, IntoPyResult};
-use crate::effects::{args, Effect, PerJoint, TorqueFunction, TorqueLimit};
+use crate::effects::{args, Effect, PerJoint, Torque, TorqueFunction, TorqueLimit};
 
 /// An argument the core parses (`crate::effects::args`).
 type A<'py> = Bound<'py, PyAny>;
@@ -116,157 +117,30 @@ pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
 
 #[pymethods]
 impl PyEffect {
+    /// The effect of scene-file type `type` with that type's keys as keyword arguments: the
+    /// core reads them (`effects::args::effect`).
+    #[new]
+    #[pyo3(signature = (r#type, /, **keys))]
+    fn new(py: Python<'_>, r#type: &str, keys: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let keys = keys.cloned().unwrap_or_else(|| PyDict::new(py));
+        let names: Vec<String> = keys.keys().extract()?;
+        Ok(args::effect(r#type, &names, keys.as_any())?.into())
+    }
     /// Uniform gravity `g` (m/s², world frame).
     #[staticmethod]
     #[pyo3(signature = (g=None))]
     fn gravity(g: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
         Ok(args::gravity(g.as_ref())?.into())
     }
-    /// Joint springs `τ = −k (q − rest)` (rotation-vector spring on quaternion joints).
-    #[staticmethod]
-    #[pyo3(signature = (joints, stiffness, rest=None, name=None))]
-    fn spring(
-        joints: Option<A<'_>>,
-        stiffness: A<'_>,
-        rest: Option<A<'_>>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        Ok(args::spring(joints.as_ref(), &stiffness, rest.as_ref(), name)?.into())
-    }
-    /// Viscous joint dampers `τ = −c v`.
-    #[staticmethod]
-    #[pyo3(signature = (joints, damping, name=None))]
-    fn damper(joints: Option<A<'_>>, damping: A<'_>, name: Option<String>) -> PyResult<Self> {
-        Ok(args::damper(joints.as_ref(), &damping, name)?.into())
-    }
-    /// Regularised Coulomb friction `τ = −F tanh(v / v_eps)`.
-    #[staticmethod]
-    #[pyo3(signature = (joints, friction, v_eps=None, name=None))]
-    fn friction(
-        joints: Option<A<'_>>,
-        friction: A<'_>,
-        v_eps: Option<A<'_>>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        Ok(args::friction(joints.as_ref(), &friction, v_eps.as_ref(), name)?.into())
-    }
-    /// Constant joint torques (forces on prismatic joints), one per speed or one for all.
-    #[staticmethod]
-    #[pyo3(signature = (joints, tau, name=None))]
-    fn joint_torque(joints: Option<A<'_>>, tau: A<'_>, name: Option<String>) -> PyResult<Self> {
-        Ok(args::joint_torque(joints.as_ref(), &tau, name)?.into())
-    }
-    /// Joint torques tabulated in time: linear between rows, clamped outside.
-    #[staticmethod]
-    #[pyo3(signature = (joints, time, values, name=None))]
-    fn tabulated_torque(
-        joints: Option<A<'_>>,
-        time: A<'_>,
-        values: A<'_>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        Ok(args::tabulated_torque(joints.as_ref(), &time, &values, name)?.into())
-    }
-    /// PD torques tracking a tabulated reference on 1-dof joints.
-    #[staticmethod]
-    #[pyo3(signature = (joints, kp, kd, time, reference, name=None))]
-    fn pd_torque(
-        joints: Option<A<'_>>,
-        kp: A<'_>,
-        kd: A<'_>,
-        time: A<'_>,
-        reference: A<'_>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        Ok(args::pd_torque(joints.as_ref(), (&kp, &kd), (&time, &reference), name)?.into())
-    }
     /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
     #[staticmethod]
     #[pyo3(signature = (f, name=None))]
     fn torque_function(py: Python<'_>, f: A<'_>, name: Option<String>) -> PyResult<Self> {
         if !f.is_callable() {
-            return Err(invalid(
-                py,
-                "f",
-                "a callable f(t, q, v) -> tau",
-                repr_of(&f),
-            ));
+            let expected = "a callable f(t, q, v) -> tau";
+            return Err(invalid(py, "f", expected, repr_of(&f)));
         }
-        Ok(args::torque_function(torque_callback(f.unbind()), name).into())
-    }
-    /// A force (and moment) on a body at a body-fixed point, constant or tabulated.
-    #[staticmethod]
-    #[pyo3(signature = (body, force=None, point=None, moment=None, time=None, frame="world", name=None))]
-    fn external_force(
-        body: A<'_>,
-        force: Option<A<'_>>,
-        point: Option<A<'_>>,
-        moment: Option<A<'_>>,
-        time: Option<A<'_>>,
-        frame: &str,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        let load = (force.as_ref(), moment.as_ref());
-        Ok(args::external_force(&body, load, point.as_ref(), time.as_ref(), frame, name)?.into())
-    }
-    /// A linear spring–damper between a point of body a and a point of body b (each in its
-    /// body's frame; the world: `"world"`, −1 or `None`).
-    #[staticmethod]
-    #[pyo3(signature = (body_a, point_a, body_b, point_b, stiffness, rest_length=None, damping=None, name=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn point_spring(
-        body_a: A<'_>,
-        point_a: A<'_>,
-        body_b: A<'_>,
-        point_b: A<'_>,
-        stiffness: A<'_>,
-        rest_length: Option<A<'_>>,
-        damping: Option<A<'_>>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        let law = (&stiffness, rest_length.as_ref(), damping.as_ref());
-        Ok(args::point_spring((&body_a, &point_a), (&body_b, &point_b), law, name)?.into())
-    }
-    /// Compliant contact of body points (or spheres) with a plane: Hunt–Crossley normal
-    /// force, regularised Coulomb friction. `stiffness`/`damping` `None`: the defaults from
-    /// the model's weight, filled in when a scene is built.
-    #[staticmethod]
-    #[pyo3(signature = (points, normal, height, stiffness, exponent, damping, friction, v_eps, name=None))]
-    #[allow(clippy::too_many_arguments)]
-    fn ground_contact(
-        points: A<'_>,
-        normal: A<'_>,
-        height: A<'_>,
-        stiffness: Option<A<'_>>,
-        exponent: A<'_>,
-        damping: Option<A<'_>>,
-        friction: A<'_>,
-        v_eps: A<'_>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        let law = (
-            stiffness.as_ref(),
-            &exponent,
-            damping.as_ref(),
-            &friction,
-            &v_eps,
-        );
-        Ok(args::ground_contact(&points, (&normal, &height), law, name)?.into())
-    }
-    /// Compliant joint ranges (one-sided spring–dampers outside `[lower, upper]`); bounds
-    /// `None`: the model's own, filled in when a scene is built.
-    #[staticmethod]
-    #[pyo3(signature = (joints, lower, upper, stiffness, damping, name=None))]
-    fn joint_limit(
-        joints: Option<A<'_>>,
-        lower: Option<A<'_>>,
-        upper: Option<A<'_>>,
-        stiffness: A<'_>,
-        damping: A<'_>,
-        name: Option<String>,
-    ) -> PyResult<Self> {
-        let bounds = (lower.as_ref(), upper.as_ref());
-        Ok(args::joint_limit(joints.as_ref(), bounds, &stiffness, &damping, name)?.into())
+        Ok(Effect::Torque(Torque::function(name, torque_callback(f.unbind()))).into())
     }
 
     /// A ground contact's points along states `q` (N, nq), `v` (N, nv): a dict of

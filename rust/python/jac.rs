@@ -65,32 +65,25 @@ pub(super) fn jac_arg<'a>(
     if jac.is_callable() {
         if method == Method::Auto {
             let (t0, y0) = start;
-            let m = matrix(
-                &jac.call1((t0, PyArray1::from_slice(py, y0)))?,
-                "jac(t, y)",
-                dim,
-            )?;
-            if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                return Err(invalid(
-                    py,
-                    "jac(t0, y0)",
-                    "finite entries",
-                    format!("{v} at ({}, {})", i / dim, i % dim),
-                ));
-            }
+            let m = jac.call1((t0, PyArray1::from_slice(py, y0)))?;
+            finite(py, &matrix(&m, "jac(t, y)", dim)?, dim, "jac(t0, y0)")?;
         }
         return Ok(JacArg::Callable(jac));
     }
     let m = matrix(jac, "jac", dim)?;
-    if let Some((i, v)) = m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        return Err(invalid(
-            py,
-            "jac",
-            "finite entries",
-            format!("{v} at ({}, {})", i / dim, i % dim),
-        ));
-    }
+    finite(py, &m, dim, "jac")?;
     Ok(JacArg::Constant(m))
+}
+
+/// Refuses a non-finite entry of the `dim × dim` matrix `m`, naming its row and column.
+fn finite(py: Python<'_>, m: &[f64], dim: usize, arg: &str) -> PyResult<()> {
+    match m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        Some((i, v)) => {
+            let got = format!("{v} at ({}, {})", i / dim, i % dim);
+            Err(invalid(py, arg, "finite entries", got))
+        }
+        None => Ok(()),
+    }
 }
 
 /// A system with the Jacobian from a Python callable `jac(t, y)`; an exception from `jac` is kept in `failure`
