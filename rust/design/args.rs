@@ -5,8 +5,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{Envelope, Flow, Norm, Problem, Quantity};
 use crate::support::args::{choice, count, flag, given, items, text, vector, Arg};
-use crate::support::spatial::Vec3;
 use crate::support::error::Error;
+use crate::support::spatial::Vec3;
 
 /// `spec[key]`, required (`None` counts as given: optional keys read it so).
 fn key<A: Arg>(spec: &A, key: &str) -> Result<A, A::Err> {
@@ -81,7 +81,11 @@ impl Problem {
             return Err(Error::arg("map", expected, "different lengths").into());
         }
         let groups = tuples(&key(spec, "groups")?, "groups", 3, |t| {
-            Ok((counts(&t[0], "groups")?, t[1].real("groups")?, t[2].real("groups")?))
+            Ok((
+                counts(&t[0], "groups")?,
+                t[1].real("groups")?,
+                t[2].real("groups")?,
+            ))
         })?;
         let norm = [("rms", Norm::Rms), ("peak", Norm::Peak)];
         let quantities = items(&key(spec, "quantities")?, "quantities", "a list of dicts")?;
@@ -92,11 +96,19 @@ impl Problem {
         Ok(Problem {
             lower: reals(&key(spec, "lower")?, "lower")?,
             upper: reals(&key(spec, "upper")?, "upper")?,
-            map: rows.into_iter().zip(cols).zip(vals).map(|((r, c), v)| (r, c, v)).collect(),
+            map: rows
+                .into_iter()
+                .zip(cols)
+                .zip(vals)
+                .map(|((r, c), v)| (r, c, v))
+                .collect(),
             ndelta,
             groups,
             equal: pairs(&key(spec, "equal")?, "equal")?,
-            quantities: quantities.iter().map(|q| quantity(q, ndelta)).collect::<Result<_, _>>()?,
+            quantities: quantities
+                .iter()
+                .map(|q| quantity(q, ndelta))
+                .collect::<Result<_, _>>()?,
             norm: choice(&key(spec, "norm")?, "norm", &norm, "\"rms\" or \"peak\"")?,
             mass_weight: real(spec, "mass_weight")?,
             mass_reference: real(spec, "mass_reference")?,
@@ -141,7 +153,10 @@ fn flow<A: Arg>(f: &A) -> Result<Flow, A::Err> {
     Ok(Flow {
         nodes: counts(&key(f, "nodes")?, "nodes")?,
         edges: pairs(&key(f, "edges")?, "edges")?,
-        bosses: bosses.iter().map(|b| counts(b, "bosses")).collect::<Result<_, _>>()?,
+        bosses: bosses
+            .iter()
+            .map(|b| counts(b, "bosses"))
+            .collect::<Result<_, _>>()?,
         web: real(f, "web")?,
         hang: real(f, "hang")?,
     })
@@ -174,7 +189,10 @@ impl Envelope {
                     let got = format!("{} points", c.len() / 3);
                     return Err(Error::arg("box", "(lower, upper) corners", got).into());
                 }
-                Envelope::Box { lower: v(&c[..3]), upper: v(&c[3..]) }
+                Envelope::Box {
+                    lower: v(&c[..3]),
+                    upper: v(&c[3..]),
+                }
             }
             (None, Some(p), None) => {
                 let p = rows(p, "polygon", &[2], "a (P, 2) array of vertices")?;
@@ -183,11 +201,17 @@ impl Envelope {
                 };
                 let z = vector(z, "z", Some(2))?;
                 let polygon = p.chunks(2).map(|c| [c[0], c[1]]).collect();
-                Envelope::Prism { polygon, z: (z[0], z[1]) }
+                Envelope::Prism {
+                    polygon,
+                    z: (z[0], z[1]),
+                }
             }
             (None, None, Some(t)) => {
                 let t = rows(t, "triangles", &[3, 3], "a (T, 3, 3) array")?;
-                let triangles = t.chunks(9).map(|c| [v(c), v(&c[3..]), v(&c[6..])]).collect();
+                let triangles = t
+                    .chunks(9)
+                    .map(|c| [v(c), v(&c[3..]), v(&c[6..])])
+                    .collect();
                 Envelope::Mesh { triangles }
             }
             _ => {

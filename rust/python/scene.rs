@@ -39,7 +39,12 @@ impl PyScene {
         disable: Option<&Bound<'_, PyAny>>,
         settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let named = [("t_span", t_span), ("rtol", rtol), ("atol", atol), ("disable", disable)];
+        let named = [
+            ("t_span", t_span),
+            ("rtol", rtol),
+            ("atol", atol),
+            ("disable", disable),
+        ];
         let mut inner = Scene::of_model(model.model());
         inner.settings = settings_over(named, settings, Settings::default())?;
         inner.name = name.unwrap_or(inner.name);

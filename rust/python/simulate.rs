@@ -143,6 +143,14 @@ pub(super) fn scene_system<'s>(
     Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
 }
 
+/// A finite time `t`.
+pub(super) fn time_arg(py: Python<'_>, t: f64) -> PyResult<f64> {
+    match t.is_finite() {
+        true => Ok(t),
+        false => Err(invalid(py, "t", "a finite time", t)),
+    }
+}
+
 /// `(q, v)` checked against the scene's model.
 pub(super) fn scene_state(
     py: Python<'_>,
@@ -169,10 +177,7 @@ pub fn effect_forces<'py>(
     disable: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
-    let t = real(t, "t")?;
-    if !t.is_finite() {
-        return Err(invalid(py, "t", "a finite time", t));
-    }
+    let t = time_arg(py, real(t, "t")?)?;
     let (q, v) = scene_state(py, s, q, v)?;
     let mut sys = scene_system(py, s, disable)?;
     let nv = s.model.nv;
@@ -264,14 +269,7 @@ pub fn simulate_batch<'py>(
             "a callable",
         ));
     }
-    let expected = "a thread count >= 1 (or None: one per core)";
-    let threads = match crate::support::args::opt(threads, |t| {
-        crate::support::args::count(t, "threads", expected)
-    })? {
-        Some(0) => return Err(invalid(py, "threads", expected, 0)),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let threads = crate::support::args::threads(threads)?;
     // Settings per scene (each resolves the caller's against its own file's).
     let resolved = scenes
         .iter()

@@ -51,7 +51,9 @@ impl FromPyObject<'_, '_> for NonFiniteKind {
     fn extract(obj: Borrowed<'_, '_, PyAny>) -> PyResult<Self> {
         let name: String = obj.extract()?;
         let kind = NonFiniteKind::ALL.into_iter().find(|k| k.name() == name);
-        kind.ok_or_else(|| super::errors::invalid(obj.py(), "what", "derivative, state or jacobian", name))
+        kind.ok_or_else(|| {
+            super::errors::invalid(obj.py(), "what", "derivative, state or jacobian", name)
+        })
     }
 }
 
