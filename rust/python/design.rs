@@ -71,6 +71,17 @@ pub fn design_regressor<'py>(
     Ok(d)
 }
 
+/// `body` (a name or an index) as a body of `model`, the world refused.
+fn design_body(
+    py: Python<'_>,
+    model: &crate::model::Model,
+    body: &Bound<'_, PyAny>,
+) -> PyResult<usize> {
+    let b = super::loops::body_ref(model, Some(body), "body")?;
+    let expected = "a body of the model (not the world)";
+    b.ok_or_else(|| invalid(py, "body", expected, "the world"))
+}
+
 /// The joints a body carries, in its own frame: `(point, axis)` pairs (axis zero for a
 /// spherical joint) — its own joint, its children's, and the cut joints on it.
 #[pyfunction]
@@ -80,14 +91,7 @@ pub fn design_pins<'py>(
     body: &Bound<'_, PyAny>,
 ) -> PyResult<Bound<'py, PyList>> {
     let model = model.model();
-    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
-        invalid(
-            py,
-            "body",
-            "a body of the model (not the world)",
-            "the world",
-        )
-    })?;
+    let b = design_body(py, &model, body)?;
     let pins = design::pins(&model, b);
     let out = PyList::empty(py);
     for (p, axis) in pins {
@@ -108,14 +112,7 @@ pub fn design_pin_loads<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     use crate::design::strength::{pin_loads, PinSource};
     let model = model.model();
-    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
-        invalid(
-            py,
-            "body",
-            "a body of the model (not the world)",
-            "the world",
-        )
-    })?;
+    let b = design_body(py, &model, body)?;
     let out = PyList::empty(py);
     for pin in pin_loads(&model, b) {
         let d = PyDict::new(py);
