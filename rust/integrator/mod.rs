@@ -526,6 +526,7 @@ macro_rules! status_variants {
         ] [$($($extra)*)?]}
     };
 }
+#[allow(unused_imports)] // used by the binding only (the `python` feature)
 pub(crate) use status_variants;
 
 macro_rules! declare_status {
