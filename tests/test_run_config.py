@@ -1,6 +1,7 @@
 """``pmd.RunConfig``: one run's settings, layered as the call's keywords over the config over
 the scene's ``[simulate]`` table over the defaults (docs/architecture.md)."""
 
+import inspect
 import pickle
 
 import numpy as np
@@ -107,6 +108,22 @@ def test_a_scene_and_a_config_read_a_setting_alike(key, bad):
     with pytest.raises(pmd.InvalidInputError) as replaced:
         pendulum().replace(**{key: bad})
     assert str(replaced.value) == str(config.value)
+
+
+def test_a_scene_takes_the_settings_its_signature_names_and_no_other():
+    # The keywords a Scene documents (its signature) against those the parser takes: each
+    # run setting outside them (t_eval, energy, ..., a typo) is refused as an unexpected
+    # keyword is, a TypeError naming it, even when None; each inside is held.
+    documented = set(inspect.signature(pmd.Scene).parameters)
+    settings = set(pmd.RunConfig((0.0, 1.0), rtol=1e-6, t_eval=[0.5], energy=True,
+                                 controller="pi", stiffness="off", power=True,
+                                 dense_output=True, first_step=1e-3).as_dict())
+    for key in sorted(settings - documented) + ["rtl"]:
+        for value in (None, 1.0):
+            with pytest.raises(TypeError, match=f"^{key}: expected a keyword of Scene"):
+                pendulum().replace(**{key: value})
+    assert pendulum(max_steps=7).replace(first_step=1e-3).max_steps == 7
+    assert pendulum().replace(first_step=1e-3, dt=0.01).first_step == 1e-3
 
 
 def test_a_scene_holds_one_tolerance_for_every_component():

@@ -7,6 +7,7 @@
 //! the linear maps along a motion, [`problem`] states the trade-off as a conic program and
 //! solves it with Clarabel (in place of a hand-written interior point).
 mod active;
+mod args;
 pub mod cells;
 pub mod connectivity;
 pub mod pins;

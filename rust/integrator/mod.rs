@@ -482,46 +482,64 @@ pub enum NonFiniteKind {
     Jacobian,
 }
 
-/// How an integration ended. In every variant `t` is the time reached (last accepted
-/// state, or the event time); `at` is the time of the offending evaluation.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Status {
-    /// Reached `t_end`.
-    Success,
-    /// Event number `event` reached its terminal count at time `t`.
-    TerminalEvent { event: usize, t: f64 },
-    /// The required step fell below `min_step = 10 * ulp(t)` (SciPy's failure).
-    StepTooSmall { t: f64, min_step: f64 },
-    /// Radau's simplified Newton iteration failed at every step size down to `min_step`
-    /// (`singular`: the last Newton matrix could not be factorised).
-    NewtonFailed {
-        t: f64,
-        min_step: f64,
-        singular: bool,
-    },
-    /// `max_steps` accepted steps were taken before reaching `t_end`.
-    MaxSteps { t: f64, max_steps: usize },
-    /// A derivative or the state became NaN/inf.
-    NonFinite {
-        t: f64,
-        at: f64,
-        what: NonFiniteKind,
-    },
-    /// The right-hand side returned `Err(message)`.
-    RhsError { t: f64, at: f64, message: String },
-    /// Event number `event` was NaN at `at` (a Python event that raised reports NaN); the
-    /// step that reached `at` was discarded.
-    EventNaN { t: f64, at: f64, event: usize },
-    /// Stiffness was detected and [`StiffnessCheck::Stop`] asked to stop (see [`Stiffness`]).
-    Stiff { t: f64, h_lambda: f64, h: f64 },
-    /// The caller stopped the run from the evaluation at `at` (Ctrl-C, its progress callback,
-    /// a stopped batch); `reason` says which when the caller has named it.
-    Interrupted {
-        t: f64,
-        at: f64,
-        reason: Option<String>,
-    },
+impl NonFiniteKind {
+    pub const ALL: [NonFiniteKind; 3] = [Self::Derivative, Self::State, Self::Jacobian];
+    /// `"derivative"`, `"state"` or `"jacobian"`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Derivative => "derivative",
+            Self::State => "state",
+            Self::Jacobian => "jacobian",
+        }
+    }
 }
+
+/// The variants of [`Status`], listed once: `status_variants!(m)` calls the macro `m` with
+/// them (and with the `extra` variants given, apart), so the core declares [`Status`] from this list
+/// and a binding its typed mirror (rust/python/trajectory.rs) without repeating it.
+macro_rules! status_variants {
+    ($m:ident $(, $($extra:tt)*)?) => {
+        $m! {[
+            /// Reached `t_end`.
+            Success,
+            /// Event number `event` reached its terminal count at time `t`.
+            TerminalEvent { event: usize, t: f64 },
+            /// The required step fell below `min_step = 10 * ulp(t)` (SciPy's failure).
+            StepTooSmall { t: f64, min_step: f64 },
+            /// Radau's simplified Newton iteration failed at every step size down to `min_step`
+            /// (`singular`: the last Newton matrix could not be factorised).
+            NewtonFailed { t: f64, min_step: f64, singular: bool },
+            /// `max_steps` accepted steps were taken before reaching `t_end`.
+            MaxSteps { t: f64, max_steps: usize },
+            /// A derivative or the state became NaN/inf.
+            NonFinite { t: f64, at: f64, what: NonFiniteKind },
+            /// The right-hand side returned `Err(message)`.
+            RhsError { t: f64, at: f64, message: String },
+            /// Event number `event` was NaN at `at` (a Python event that raised reports NaN); the
+            /// step that reached `at` was discarded.
+            EventNaN { t: f64, at: f64, event: usize },
+            /// Stiffness was detected and [`StiffnessCheck::Stop`] asked to stop (see [`Stiffness`]).
+            Stiff { t: f64, h_lambda: f64, h: f64 },
+            /// The caller stopped the run from the evaluation at `at` (Ctrl-C, its progress callback,
+            /// a stopped batch); `reason` says which when the caller has named it.
+            Interrupted { t: f64, at: f64, reason: Option<String> },
+        ] [$($($extra)*)?]}
+    };
+}
+#[allow(unused_imports)] // used by the binding only (the `python` feature)
+pub(crate) use status_variants;
+
+macro_rules! declare_status {
+    ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*] []) => {
+        /// How an integration ended. In every variant `t` is the time reached (last accepted
+        /// state, or the event time); `at` is the time of the offending evaluation.
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Status {
+            $($(#[$doc])* $v $({ $($f: $t),* })?,)*
+        }
+    };
+}
+status_variants!(declare_status);
 
 impl Status {
     /// SciPy's status code: 0 reached the end, 1 terminal event, -1 failure.

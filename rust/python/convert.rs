@@ -250,17 +250,8 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
         if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
             return e;
         }
-        let ty = obj
-            .get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into());
-        invalid(
-            py,
-            arg,
-            "an array of real numbers",
-            format!("an object of type {ty}"),
-        )
+        let got = format!("an object of type {}", type_name(obj));
+        invalid(py, arg, "an array of real numbers", got)
     })?;
     let shape = arr.shape().to_vec();
     // Raw memory only in C order; Fortran-ordered or strided arrays are read logically.

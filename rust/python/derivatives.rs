@@ -6,7 +6,7 @@ use pyo3::types::PyDict;
 use super::convert::{to_array, vector};
 use super::effects::take_callback_error;
 use super::errors::{check_result, invalid, py_error, to_py, IntoPyResult};
-use super::simulate::{scene_state, scene_system};
+use super::simulate::{scene_state, scene_system, time_arg};
 use crate::io::scene::Scene;
 use crate::simulate::derivatives::DerivativeWork;
 use nalgebra::DMatrix;
@@ -114,13 +114,6 @@ pub(crate) fn inverse_into_arrays<'py>(
 
 fn c_order(m: &DMatrix<f64>) -> Vec<f64> {
     m.transpose().as_slice().to_vec()
-}
-
-fn time_arg(py: Python<'_>, t: f64) -> PyResult<f64> {
-    if !t.is_finite() {
-        return Err(invalid(py, "t", "a finite time", t));
-    }
-    Ok(t)
 }
 
 fn refuse_loops(py: Python<'_>, s: &Scene, name: &str) -> PyResult<()> {

@@ -1,31 +1,14 @@
 //! Arguments and results of the design functions (crate::design): cells of an envelope, the
 //! maps along a motion, a body's pins, and the conic program. Conversion only.
-use nalgebra::{DMatrix, DVector};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use super::convert::{array, mat3_to_array, to_array, to_array1};
+use super::convert::{mat3_to_array, to_array, to_array1};
 use super::errors::{check_result, invalid};
 use super::model::PyModel;
 use super::signals::detach_interruptible;
-use crate::design::{self, Envelope, Norm, Problem, Quantity};
-use crate::support::spatial::{Mat3, Vec3};
-
-fn points3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec<Vec3>> {
-    let (shape, data) = array(obj, arg)?;
-    if shape.len() != 2 || shape[1] != 3 {
-        return Err(invalid(
-            obj.py(),
-            arg,
-            "an (N, 3) array",
-            format!("shape {shape:?}"),
-        ));
-    }
-    Ok(data
-        .chunks(3)
-        .map(|c| Vec3::new(c[0], c[1], c[2]))
-        .collect())
-}
+use crate::design::{self, Envelope, Problem};
+use crate::support::spatial::Mat3;
 
 /// Cell centres (K, 3) of side `cell` in a `box` (2, 3), a `polygon` (P, 2) extruded over
 /// `z` (2,), or a mesh of `triangles` (T, 3, 3).
@@ -36,67 +19,10 @@ pub fn design_cells<'py>(
     cell: f64,
     r#box: Option<&Bound<'_, PyAny>>,
     polygon: Option<&Bound<'_, PyAny>>,
-    z: Option<(f64, f64)>,
+    z: Option<&Bound<'_, PyAny>>,
     triangles: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let env = match (r#box, polygon, triangles) {
-        (Some(b), None, None) => {
-            let c = points3(b, "box")?;
-            if c.len() != 2 {
-                return Err(invalid(
-                    py,
-                    "box",
-                    "(lower, upper) corners",
-                    format!("{} points", c.len()),
-                ));
-            }
-            Envelope::Box {
-                lower: c[0],
-                upper: c[1],
-            }
-        }
-        (None, Some(p), None) => {
-            let (shape, data) = array(p, "polygon")?;
-            if shape.len() != 2 || shape[1] != 2 {
-                return Err(invalid(
-                    py,
-                    "polygon",
-                    "a (P, 2) array of vertices",
-                    format!("shape {shape:?}"),
-                ));
-            }
-            let z = z.ok_or_else(|| invalid(py, "z", "(z_low, z_high) for a polygon", "None"))?;
-            Envelope::Prism {
-                polygon: data.chunks(2).map(|c| [c[0], c[1]]).collect(),
-                z,
-            }
-        }
-        (None, None, Some(t)) => {
-            let (shape, data) = array(t, "triangles")?;
-            if shape.len() != 3 || shape[1] != 3 || shape[2] != 3 {
-                return Err(invalid(
-                    py,
-                    "triangles",
-                    "a (T, 3, 3) array",
-                    format!("shape {shape:?}"),
-                ));
-            }
-            let v = |k: usize| Vec3::new(data[3 * k], data[3 * k + 1], data[3 * k + 2]);
-            Envelope::Mesh {
-                triangles: (0..shape[0])
-                    .map(|t| [v(3 * t), v(3 * t + 1), v(3 * t + 2)])
-                    .collect(),
-            }
-        }
-        _ => {
-            return Err(invalid(
-                py,
-                "envelope",
-                "exactly one of box, polygon or triangles",
-                "none or several",
-            ))
-        }
-    };
+    let env = Envelope::from_args(r#box, polygon, z, triangles)?;
     let cells = detach_interruptible(py, || design::fill(&env, cell))?;
     let n = cells.len();
     to_array(
@@ -145,6 +71,17 @@ pub fn design_regressor<'py>(
     Ok(d)
 }
 
+/// `body` (a name or an index) as a body of `model`, the world refused.
+fn design_body(
+    py: Python<'_>,
+    model: &crate::model::Model,
+    body: &Bound<'_, PyAny>,
+) -> PyResult<usize> {
+    let b = super::loops::body_ref(model, Some(body), "body")?;
+    let expected = "a body of the model (not the world)";
+    b.ok_or_else(|| invalid(py, "body", expected, "the world"))
+}
+
 /// The joints a body carries, in its own frame: `(point, axis)` pairs (axis zero for a
 /// spherical joint) — its own joint, its children's, and the cut joints on it.
 #[pyfunction]
@@ -154,14 +91,7 @@ pub fn design_pins<'py>(
     body: &Bound<'_, PyAny>,
 ) -> PyResult<Bound<'py, PyList>> {
     let model = model.model();
-    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
-        invalid(
-            py,
-            "body",
-            "a body of the model (not the world)",
-            "the world",
-        )
-    })?;
+    let b = design_body(py, &model, body)?;
     let pins = design::pins(&model, b);
     let out = PyList::empty(py);
     for (p, axis) in pins {
@@ -182,14 +112,7 @@ pub fn design_pin_loads<'py>(
 ) -> PyResult<Bound<'py, PyList>> {
     use crate::design::strength::{pin_loads, PinSource};
     let model = model.model();
-    let b = super::loops::body_ref(&model, Some(body), "body")?.ok_or_else(|| {
-        invalid(
-            py,
-            "body",
-            "a body of the model (not the world)",
-            "the world",
-        )
-    })?;
+    let b = design_body(py, &model, body)?;
     let out = PyList::empty(py);
     for pin in pin_loads(&model, b) {
         let d = PyDict::new(py);
@@ -214,152 +137,13 @@ pub fn design_pin_loads<'py>(
     Ok(out)
 }
 
-/// The design program as `pointmass_dyn.design` states it: a dict read key by key into
-/// typed fields (`design_solve`'s argument; built by our Python, not by users).
-#[derive(FromPyObject)]
-#[pyo3(from_item_all)]
-pub struct ProblemSpec {
-    ndelta: usize,
-    #[pyo3(from_py_with = reals)]
-    lower: Vec<f64>,
-    #[pyo3(from_py_with = reals)]
-    upper: Vec<f64>,
-    map_rows: Vec<usize>,
-    map_cols: Vec<usize>,
-    #[pyo3(from_py_with = reals)]
-    map_vals: Vec<f64>,
-    groups: Vec<(Vec<usize>, f64, f64)>,
-    equal: Vec<(usize, usize)>,
-    quantities: Vec<QuantitySpec>,
-    norm: String,
-    mass_weight: f64,
-    mass_reference: f64,
-    mass_limit: Option<f64>,
-    least_mass: bool,
-    /// Connected links' flows (crate::design::connectivity).
-    #[pyo3(default)]
-    flows: Vec<FlowSpec>,
-}
-
-#[derive(FromPyObject)]
-#[pyo3(from_item_all)]
-struct QuantitySpec {
-    name: String,
-    #[pyo3(from_py_with = shaped)]
-    rows: (Vec<usize>, Vec<f64>),
-    #[pyo3(from_py_with = reals)]
-    constant: Vec<f64>,
-    dim: usize,
-    samples: usize,
-    weight: f64,
-    reference: f64,
-    limit: Option<f64>,
-    zero: bool,
-    /// A member's stress: its limit at every sample whatever the norm.
-    #[pyo3(default)]
-    peak: bool,
-}
-
-#[derive(FromPyObject)]
-#[pyo3(from_item_all)]
-struct FlowSpec {
-    nodes: Vec<usize>,
-    edges: Vec<(usize, usize)>,
-    bosses: Vec<Vec<usize>>,
-    web: f64,
-    hang: f64,
-}
-
-fn reals(obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-    Ok(array(obj, "problem")?.1)
-}
-
-fn shaped(obj: &Bound<'_, PyAny>) -> PyResult<(Vec<usize>, Vec<f64>)> {
-    array(obj, "quantities")
-}
-
-impl ProblemSpec {
-    /// The core's problem, the sizes checked against each other.
-    fn problem(self, py: Python<'_>) -> PyResult<Problem> {
-        let n = self.map_rows.len();
-        if self.map_cols.len() != n || self.map_vals.len() != n {
-            let got = "different lengths";
-            return Err(invalid(
-                py,
-                "map",
-                "rows, columns and values of one length",
-                got,
-            ));
-        }
-        let norm = match self.norm.as_str() {
-            "rms" => Norm::Rms,
-            "peak" => Norm::Peak,
-            other => {
-                return Err(invalid(
-                    py,
-                    "norm",
-                    "\"rms\" or \"peak\"",
-                    format!("'{other}'"),
-                ))
-            }
-        };
-        let ndelta = self.ndelta;
-        let quantities = self.quantities.into_iter().map(|q| {
-            let (shape, rows) = q.rows;
-            if shape.len() != 2 || shape[1] != ndelta {
-                let want = format!("rows of shape (R, {ndelta})");
-                return Err(invalid(py, &q.name, want, format!("{shape:?}")));
-            }
-            Ok(Quantity {
-                rows: DMatrix::from_row_slice(shape[0], ndelta, &rows),
-                constant: DVector::from_vec(q.constant),
-                dim: q.dim,
-                samples: q.samples,
-                weight: q.weight,
-                reference: q.reference,
-                limit: q.limit,
-                zero: q.zero,
-                peak: q.peak,
-                name: q.name,
-            })
-        });
-        let map = self
-            .map_rows
-            .into_iter()
-            .zip(self.map_cols)
-            .zip(self.map_vals);
-        Ok(Problem {
-            lower: self.lower,
-            upper: self.upper,
-            map: map.map(|((r, c), v)| (r, c, v)).collect(),
-            ndelta,
-            groups: self.groups,
-            equal: self.equal,
-            quantities: quantities.collect::<PyResult<_>>()?,
-            norm,
-            mass_weight: self.mass_weight,
-            mass_reference: self.mass_reference,
-            mass_limit: self.mass_limit,
-            least_mass: self.least_mass,
-            flows: self
-                .flows
-                .into_iter()
-                .map(|f| design::Flow {
-                    nodes: f.nodes,
-                    edges: f.edges,
-                    bosses: f.bosses,
-                    web: f.web,
-                    hang: f.hang,
-                })
-                .collect(),
-        })
-    }
-}
-
 /// Solves the design program (see `pointmass_dyn`'s design module).
 #[pyfunction]
-pub fn design_solve<'py>(py: Python<'py>, spec: ProblemSpec) -> PyResult<Bound<'py, PyDict>> {
-    let problem = spec.problem(py)?;
+pub fn design_solve<'py>(
+    py: Python<'py>,
+    spec: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let problem = Problem::from_arg(spec)?;
     let outcome = detach_interruptible(py, || design::solve_outcome(&problem))?;
     let d = PyDict::new(py);
     let sol = match outcome {

@@ -129,7 +129,7 @@ super::getters!(PyRunConfig {
 });
 
 /// A call's `**settings` and its named keywords given (not `None`), by keyword.
-fn keywords<'py, const N: usize>(
+pub(super) fn keywords<'py, const N: usize>(
     settings: Option<&Bound<'py, PyDict>>,
     named: [(&str, Option<&Bound<'py, PyAny>>); N],
 ) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {

@@ -1,5 +1,6 @@
 //! `Scene`: a model, its initial state, effects and the settings of its runs.
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use super::convert::to_array1;
 use super::effects::{repr_of, PyEffect};
@@ -17,8 +18,12 @@ pub struct PyScene {
 
 #[pymethods]
 impl PyScene {
+    /// Settings by keyword beyond `disable`: `crate::simulate::config_args::SCENE_KEYS`.
     #[new]
-    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, *, method=None, dt=None, max_step=None, max_steps=None, first_step=None))]
+    #[pyo3(signature = (model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, **settings))]
+    #[pyo3(
+        text_signature = "(model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, *, method=None, dt=None, max_step=None, max_steps=None, first_step=None)"
+    )]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
@@ -32,17 +37,16 @@ impl PyScene {
         name: Option<String>,
         description: Option<String>,
         disable: Option<&Bound<'_, PyAny>>,
-        method: Option<&Bound<'_, PyAny>>,
-        dt: Option<&Bound<'_, PyAny>>,
-        max_step: Option<&Bound<'_, PyAny>>,
-        max_steps: Option<&Bound<'_, PyAny>>,
-        first_step: Option<&Bound<'_, PyAny>>,
+        settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let given = [
-            t_span, rtol, atol, disable, method, dt, max_step, max_steps, first_step,
+        let named = [
+            ("t_span", t_span),
+            ("rtol", rtol),
+            ("atol", atol),
+            ("disable", disable),
         ];
         let mut inner = Scene::of_model(model.model());
-        inner.settings = settings_over(given, Settings::default())?;
+        inner.settings = settings_over(named, settings, Settings::default())?;
         inner.name = name.unwrap_or(inner.name);
         inner.description = description.unwrap_or_default();
         let effects = given_arg(effects).map(|e| effect_list(py, e)).transpose()?;
@@ -53,36 +57,27 @@ impl PyScene {
     /// A copy with what is given replaced and everything else kept: the model (of this
     /// scene's sizes), the effects (checked against the model as the constructor checks
     /// them), the start state (`q0`, `v0`: checked, `q0` normalised), the name and
-    /// description, and any run setting (`t_span`, `rtol`, `atol`, `method`, `dt`,
-    /// `max_step`, `max_steps`, `first_step`, `disable`).
-    #[pyo3(signature = (model=None, effects=None, *, q0=None, v0=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, method=None, dt=None, max_step=None, max_steps=None, first_step=None))]
-    #[allow(clippy::too_many_arguments)]
+    /// description, and any run setting (`SCENE_KEYS`: `t_span`, `rtol`, `atol`, `method`,
+    /// `dt`, `max_step`, `max_steps`, `first_step`, `disable`).
+    #[pyo3(signature = (model=None, effects=None, *, q0=None, v0=None, name=None, description=None, **settings))]
+    #[pyo3(
+        text_signature = "(self, model=None, effects=None, *, q0=None, v0=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, method=None, dt=None, max_step=None, max_steps=None, first_step=None)"
+    )]
     fn replace(
         &self,
         model: Option<PyRef<'_, PyModel>>,
         effects: Option<Vec<PyRef<'_, PyEffect>>>,
         q0: Option<&Bound<'_, PyAny>>,
         v0: Option<&Bound<'_, PyAny>>,
-        t_span: Option<&Bound<'_, PyAny>>,
-        rtol: Option<&Bound<'_, PyAny>>,
-        atol: Option<&Bound<'_, PyAny>>,
         name: Option<String>,
         description: Option<String>,
-        disable: Option<&Bound<'_, PyAny>>,
-        method: Option<&Bound<'_, PyAny>>,
-        dt: Option<&Bound<'_, PyAny>>,
-        max_step: Option<&Bound<'_, PyAny>>,
-        max_steps: Option<&Bound<'_, PyAny>>,
-        first_step: Option<&Bound<'_, PyAny>>,
+        settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let given = [
-            t_span, rtol, atol, disable, method, dt, max_step, max_steps, first_step,
-        ];
         let effects = effects.map(|list| list.iter().map(|e| e.inner.clone()).collect());
         let mut inner = self
             .inner
             .replaced(model.map(|m| m.model()), effects, q0, v0)?;
-        inner.settings = settings_over(given, inner.settings)?;
+        inner.settings = settings_over([], settings, inner.settings)?;
         inner.name = name.unwrap_or(inner.name);
         inner.description = description.unwrap_or(inner.description);
         Ok(PyScene { inner })
@@ -226,25 +221,16 @@ fn effect_list(py: Python<'_>, effects: &Bound<'_, PyAny>) -> PyResult<Vec<Effec
     items.enumerate().map(one).collect()
 }
 
-/// `base` with the settings a `Scene` call was given (`None`: not given) laid over it,
-/// parsed as `RunConfig`'s keywords are (`RunConfig::onto_scene`).
-fn settings_over(given: [Option<&Bound<'_, PyAny>>; 9], base: Settings) -> PyResult<Settings> {
-    const KEYS: [&str; 9] = [
-        "t_span",
-        "rtol",
-        "atol",
-        "disable",
-        "method",
-        "dt",
-        "max_step",
-        "max_steps",
-        "first_step",
-    ];
-    let pairs = KEYS
-        .iter()
-        .zip(given)
-        .filter_map(|(k, v)| v.map(|v| (*k, v)));
-    Ok(RunConfig::from_args(pairs)?.onto_scene(base)?)
+/// `base` with the settings a `Scene` call was given (its `named` ones and `**settings`;
+/// `None`: not given) laid over it, parsed as `RunConfig`'s keywords are (the core's
+/// `RunConfig::scene_args`).
+fn settings_over<const N: usize>(
+    named: [(&str, Option<&Bound<'_, PyAny>>); N],
+    settings: Option<&Bound<'_, PyDict>>,
+    base: Settings,
+) -> PyResult<Settings> {
+    let given = super::run_config::keywords(settings, named)?;
+    RunConfig::scene_args(given.iter().map(|(k, v)| (k.as_str(), v)), base)
 }
 
 super::getters!(PyScene {

@@ -15,7 +15,7 @@ use super::trajectory::PyRunResult;
 use crate::integrator::Event;
 use crate::io::scene::Scene;
 use crate::simulate::batch::StateRows;
-use crate::simulate::{run_scene, Dynamics, Progress, StateEvent};
+use crate::simulate::{run_scene, Dynamics, EventList, Progress};
 use crate::support::args::given;
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
@@ -39,12 +39,12 @@ pub fn simulate_scene(
     let nq = s.model.nq;
     let config = call_config(config, t_span, rtol, atol, settings)?;
     let mut watch = watch_arg(py, progress_interval)?;
-    let events = SceneEvents::parse(py, events)?;
+    let events = scene_events(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
     let result = py.detach(|| {
         let extra: Vec<Event<'_>> = events
-            .python
+            .other
             .iter()
             .map(|spec| python_event(spec, Some(nq), &failure))
             .collect();
@@ -91,45 +91,22 @@ fn watch_arg(py: Python<'_>, progress_interval: Option<f64>) -> PyResult<Watch> 
     }
 }
 
-/// A run's events: the state events (evaluated in Rust, first) and the Python ones (after
-/// them), and where each stood in the caller's list.
-struct SceneEvents {
-    state: Vec<StateEvent>,
-    python: Vec<PyEventSpec>,
-    /// Per caller's event: (is a Python event, index in its list).
-    order: Vec<(bool, usize)>,
-}
+/// A run's events: `StateEvent`s (evaluated in Rust) and Python callables, in the
+/// caller's order (the core's `EventList`).
+type SceneEvents = EventList<PyEventSpec>;
 
-impl SceneEvents {
-    fn parse(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<Self> {
-        let mut out = SceneEvents {
-            state: Vec::new(),
-            python: Vec::new(),
-            order: Vec::new(),
-        };
-        if let Some(evs) = events.filter(|e| !e.is_none()) {
-            for (k, e) in evs.try_iter()?.enumerate() {
-                let e = e?;
-                if let Ok(se) = e.cast::<PyStateEvent>() {
-                    out.order.push((false, out.state.len()));
-                    out.state.push(se.get().inner.clone());
-                } else {
-                    out.order.push((true, out.python.len()));
-                    out.python.push(event_spec(py, k, &e)?);
-                }
+fn scene_events(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<SceneEvents> {
+    let mut out = SceneEvents::default();
+    if let Some(evs) = events.filter(|e| !e.is_none()) {
+        for (k, e) in evs.try_iter()?.enumerate() {
+            let e = e?;
+            match e.cast::<PyStateEvent>() {
+                Ok(se) => out.push_state(se.get().inner.clone()),
+                Err(_) => out.push_other(event_spec(py, k, &e)?),
             }
         }
-        Ok(out)
     }
-
-    /// The trajectory's slot of each event, in the caller's order.
-    fn slots(&self) -> Vec<usize> {
-        let ns = self.state.len();
-        self.order
-            .iter()
-            .map(|&(is_py, k)| if is_py { ns + k } else { k })
-            .collect()
-    }
+    Ok(out)
 }
 
 /// The scene's equations of motion with the `disable`d families (the caller's, else the
@@ -141,6 +118,14 @@ pub(super) fn scene_system<'s>(
 ) -> PyResult<Dynamics<'s>> {
     let disabled = crate::simulate::disabled(crate::effects::args::disable(disable)?, &s.settings);
     Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
+}
+
+/// A finite time `t`.
+pub(super) fn time_arg(py: Python<'_>, t: f64) -> PyResult<f64> {
+    match t.is_finite() {
+        true => Ok(t),
+        false => Err(invalid(py, "t", "a finite time", t)),
+    }
 }
 
 /// `(q, v)` checked against the scene's model.
@@ -169,10 +154,7 @@ pub fn effect_forces<'py>(
     disable: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
-    let t = real(t, "t")?;
-    if !t.is_finite() {
-        return Err(invalid(py, "t", "a finite time", t));
-    }
+    let t = time_arg(py, real(t, "t")?)?;
     let (q, v) = scene_state(py, s, q, v)?;
     let mut sys = scene_system(py, s, disable)?;
     let nv = s.model.nv;
@@ -255,8 +237,8 @@ pub fn simulate_batch<'py>(
     let config = call_config(config, t_span, rtol, atol, settings)?;
     let q0s = batch_states("q0", q0, scenes[0].model.nq)?;
     let v0s = batch_states("v0", v0, scenes[0].model.nv)?;
-    let events = SceneEvents::parse(py, events)?;
-    if !events.python.is_empty() {
+    let events = scene_events(py, events)?;
+    if !events.other.is_empty() {
         return Err(invalid(
             py,
             "events",
@@ -264,14 +246,7 @@ pub fn simulate_batch<'py>(
             "a callable",
         ));
     }
-    let expected = "a thread count >= 1 (or None: one per core)";
-    let threads = match crate::support::args::opt(threads, |t| {
-        crate::support::args::count(t, "threads", expected)
-    })? {
-        Some(0) => return Err(invalid(py, "threads", expected, 0)),
-        Some(n) => n,
-        None => std::thread::available_parallelism().map_or(1, |n| n.get()),
-    };
+    let threads = crate::support::args::threads(threads)?;
     // Settings per scene (each resolves the caller's against its own file's).
     let resolved = scenes
         .iter()

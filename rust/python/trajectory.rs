@@ -4,65 +4,57 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use super::convert::{to_array, to_array1};
-use crate::integrator::{NonFiniteKind, Status};
+use crate::integrator::{status_variants, NonFiniteKind, Status};
 use crate::simulate::Trajectory;
 use crate::support::error::compact_numbers;
 
-/// How a run ended, one variant per cause: `t` the time the run reached, `at` where the
-/// failure (or interruption) happened. A typed copy of the core's `Status`, plus
-/// `NotStarted` for a run of a batch whose input was refused.
-#[pyclass(name = "RunStatus", module = "pointmass_dyn._core", frozen)]
-#[derive(Clone, Debug)]
-pub enum PyRunStatus {
-    Success(),
-    TerminalEvent {
-        event: usize,
-        t: f64,
-    },
-    StepTooSmall {
-        t: f64,
-        min_step: f64,
-    },
-    NewtonFailed {
-        t: f64,
-        min_step: f64,
-        singular: bool,
-    },
-    MaxSteps {
-        t: f64,
-        max_steps: usize,
-    },
-    /// `what`: "derivative", "state" or "jacobian".
-    NonFinite {
-        t: f64,
-        at: f64,
-        what: String,
-    },
-    RhsError {
-        t: f64,
-        at: f64,
-        message: String,
-    },
-    EventNaN {
-        t: f64,
-        at: f64,
-        event: usize,
-    },
-    Stiff {
-        t: f64,
-        h_lambda: f64,
-        h: f64,
-    },
-    /// Ctrl-C, a raising progress callback or a stopped batch; `reason` names it.
-    Interrupted {
-        t: f64,
-        at: f64,
-        reason: Option<String>,
-    },
+macro_rules! declare_py_status {
+    ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*]
+     [$($(#[$xdoc:meta])* $x:ident { $($xf:ident: $xt:ty),* },)*]) => {
+        /// How a run ended, one variant per cause: `t` the time the run reached, `at` where
+        /// the failure (or interruption) happened. The core's `Status` variants
+        /// (`status_variants!`), plus `NotStarted` for a run of a batch whose input was refused.
+        #[pyclass(name = "RunStatus", module = "pointmass_dyn._core", frozen)]
+        #[derive(Clone, Debug)]
+        pub enum PyRunStatus {
+            $($(#[$doc])* $v { $($($f: $t),*)? },)*
+            $($(#[$xdoc])* $x { $($xf: $xt),* },)*
+        }
+
+        impl From<&Status> for PyRunStatus {
+            fn from(s: &Status) -> Self {
+                match s.clone() {
+                    $(Status::$v $({ $($f),* })? => Self::$v { $($($f),*)? },)*
+                }
+            }
+        }
+    };
+}
+status_variants!(
+    declare_py_status,
     /// A run of a batch that never started: its input was refused, or the batch stopped.
-    NotStarted {
-        reason: String,
-    },
+    NotStarted { reason: String },
+);
+
+/// `NonFinite.what` in Python: "derivative", "state" or "jacobian".
+impl<'py> IntoPyObject<'py> for NonFiniteKind {
+    type Target = pyo3::types::PyString;
+    type Output = Bound<'py, Self::Target>;
+    type Error = std::convert::Infallible;
+    fn into_pyobject(self, py: Python<'py>) -> Result<Self::Output, Self::Error> {
+        Ok(pyo3::types::PyString::new(py, self.name()))
+    }
+}
+
+impl FromPyObject<'_, '_> for NonFiniteKind {
+    type Error = PyErr;
+    fn extract(obj: Borrowed<'_, '_, PyAny>) -> PyResult<Self> {
+        let name: String = obj.extract()?;
+        let kind = NonFiniteKind::ALL.into_iter().find(|k| k.name() == name);
+        kind.ok_or_else(|| {
+            super::errors::invalid(obj.py(), "what", "derivative, state or jacobian", name)
+        })
+    }
 }
 
 #[pymethods]
@@ -102,40 +94,6 @@ impl PyRunStatus {
             .collect::<PyResult<Vec<_>>>()?;
         let name = slf.as_any().get_type().name()?.to_string();
         Ok((name, pyo3::types::PyTuple::new(slf.py(), values)?))
-    }
-}
-
-impl From<&Status> for PyRunStatus {
-    fn from(s: &Status) -> Self {
-        match s.clone() {
-            Status::Success => Self::Success(),
-            Status::TerminalEvent { event, t } => Self::TerminalEvent { event, t },
-            Status::StepTooSmall { t, min_step } => Self::StepTooSmall { t, min_step },
-            Status::NewtonFailed {
-                t,
-                min_step,
-                singular,
-            } => Self::NewtonFailed {
-                t,
-                min_step,
-                singular,
-            },
-            Status::MaxSteps { t, max_steps } => Self::MaxSteps { t, max_steps },
-            Status::NonFinite { t, at, what } => Self::NonFinite {
-                t,
-                at,
-                what: match what {
-                    NonFiniteKind::Derivative => "derivative",
-                    NonFiniteKind::State => "state",
-                    NonFiniteKind::Jacobian => "jacobian",
-                }
-                .into(),
-            },
-            Status::RhsError { t, at, message } => Self::RhsError { t, at, message },
-            Status::EventNaN { t, at, event } => Self::EventNaN { t, at, event },
-            Status::Stiff { t, h_lambda, h } => Self::Stiff { t, h_lambda, h },
-            Status::Interrupted { t, at, reason } => Self::Interrupted { t, at, reason },
-        }
     }
 }
 

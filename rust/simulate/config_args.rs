@@ -4,6 +4,7 @@
 use super::RunConfig;
 use crate::effects::args::disable;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
+use crate::io::scene::Settings;
 use crate::support::args::{choice, count, flag, int, opt, shape_str, vector, Arg, Int};
 use crate::support::error::Error;
 
@@ -26,6 +27,20 @@ pub const KEYS: [&str; 15] = [
     "dense_output",
 ];
 
+/// The settings a scene holds (a scene file's `[simulate]` table): the keywords of a
+/// `Scene`'s constructor and `replace`.
+pub const SCENE_KEYS: [&str; 9] = [
+    "t_span",
+    "rtol",
+    "atol",
+    "first_step",
+    "max_step",
+    "max_steps",
+    "method",
+    "dt",
+    "disable",
+];
+
 impl RunConfig {
     /// The settings given as `(keyword, value)` (a `None` value: not given), read in
     /// [`KEYS`]' order; an unknown keyword is refused naming the ones there are.
@@ -45,6 +60,21 @@ impl RunConfig {
             }
         }
         Ok(c)
+    }
+
+    /// `base` with the scene settings given (`(keyword, value)`, a `None` value: not given)
+    /// laid over it and checked ([`RunConfig::onto_scene`]); a keyword no scene holds is
+    /// the binding's type error (as an unexpected keyword argument), naming those it holds.
+    pub fn scene_args<'a, A: Arg + 'a>(
+        given: impl IntoIterator<Item = (&'a str, &'a A)>,
+        base: Settings,
+    ) -> Result<Settings, A::Err> {
+        let given: Vec<(&str, &A)> = given.into_iter().collect();
+        if let Some((key, x)) = given.iter().find(|(k, _)| !SCENE_KEYS.contains(k)) {
+            let expected = format!("a keyword of Scene: {}", SCENE_KEYS.join(", "));
+            return Err(x.wrong_type(key, &expected));
+        }
+        Ok(RunConfig::from_args(given)?.onto_scene(base)?)
     }
 
     fn set<A: Arg>(&mut self, key: &str, x: &A) -> Result<(), A::Err> {

@@ -11,10 +11,12 @@ pub mod batch;
 pub mod config_args;
 pub mod derivatives;
 mod dynamics;
+mod event_list;
 mod settings;
 
 pub use along::{along, Along, Asked};
 pub use dynamics::{Dynamics, Progress};
+pub use event_list::EventList;
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};

@@ -94,6 +94,15 @@ pub fn count<A: Arg>(x: &A, arg: &str, expected: &str) -> Result<usize, A::Err> 
     int(x, arg, 0, i64::MAX, expected).map(|n| n as usize)
 }
 
+/// A thread count `>= 1`; `None` (not given): one per core.
+pub fn threads<A: Arg>(x: Option<&A>) -> Result<usize, A::Err> {
+    let expected = "a thread count >= 1 (or None: one per core)";
+    match opt(x, |t| int(t, "threads", 1, i64::MAX, expected))? {
+        Some(n) => Ok(n as usize),
+        None => Ok(std::thread::available_parallelism().map_or(1, |n| n.get())),
+    }
+}
+
 /// A 1-D array of length `len` (`None`: any length).
 pub fn vector<A: Arg>(x: &A, arg: &str, len: Option<usize>) -> Result<Vec<f64>, A::Err> {
     let (shape, data) = x.array(arg)?;

@@ -1,0 +1,42 @@
+//! A caller's list of events as a run takes it: the state events (evaluated in the core,
+//! first) and the caller's own (`P`: a binding's callables, after them), with where each
+//! stood in the caller's list, so the trajectory's events come back in the caller's order.
+use super::StateEvent;
+
+pub struct EventList<P> {
+    pub state: Vec<StateEvent>,
+    pub other: Vec<P>,
+    /// Per caller's event: (is one of `other`, index in its list).
+    order: Vec<(bool, usize)>,
+}
+
+impl<P> Default for EventList<P> {
+    fn default() -> Self {
+        EventList {
+            state: Vec::new(),
+            other: Vec::new(),
+            order: Vec::new(),
+        }
+    }
+}
+
+impl<P> EventList<P> {
+    pub fn push_state(&mut self, e: StateEvent) {
+        self.order.push((false, self.state.len()));
+        self.state.push(e);
+    }
+
+    pub fn push_other(&mut self, e: P) {
+        self.order.push((true, self.other.len()));
+        self.other.push(e);
+    }
+
+    /// The trajectory's slot of each event, in the caller's order.
+    pub fn slots(&self) -> Vec<usize> {
+        let ns = self.state.len();
+        self.order
+            .iter()
+            .map(|&(other, k)| if other { ns + k } else { k })
+            .collect()
+    }
+}
