@@ -164,3 +164,26 @@ def test_replace_changes_what_is_given_and_keeps_the_rest():
         chain.replace(rtol=-1.0)
     with pytest.raises(pmd.errors.InvalidInputError, match="method"):
         chain.replace(method="RK99")
+
+
+def test_a_typed_result_reads_as_the_dict_it_replaced_and_pickles_as_one():
+    """A record (here `point_motion`) answers `r[key]`, `keys()`, `items()`, `len()` and `in`
+    as the dict it replaced did, and pickles to that dict with equal values: the attribute read
+    and the unpickled entry are the same numbers."""
+    model = pmd.load_scene("fourbar").model
+    rng = np.random.default_rng(3)
+    q = model.neutral()
+    v, a = rng.normal(size=model.nv), rng.normal(size=model.nv)
+    r = model.point_motion(q, v, a)
+    keys = list(r.keys())
+    assert keys and len(r) == len(keys) and list(r) == keys
+    assert all(k in r for k in keys) and "not a field" not in r
+    for k, value in r.items():
+        np.testing.assert_array_equal(np.asarray(value), np.asarray(getattr(r, k)))
+        np.testing.assert_array_equal(np.asarray(r[k]), np.asarray(getattr(r, k)))
+    back = pickle.loads(pickle.dumps(r))
+    assert isinstance(back, dict) and list(back) == keys
+    for k in keys:
+        np.testing.assert_array_equal(np.asarray(back[k]), np.asarray(getattr(r, k)))
+    with pytest.raises(KeyError):
+        r["not a field"]
