@@ -387,7 +387,6 @@ fn frame_rows(
     overflowed("frame_jacobian", finite)
 }
 
-/// The error for results that are not finite from finite inputs (`finite` not all zero).
 /// Row `l` of `out` (rows of `stage.len()` entries) gets lane `l` of every entry of
 /// `stage`, for the first `real` rows: one pass per row over contiguous memory (the
 /// entry-by-entry scatter into strided rows cost a quarter of a Jacobian row).
@@ -403,6 +402,7 @@ fn unstage(stage: &[V], out: &mut [f64], real: usize) {
     }
 }
 
+/// The error for results that are not finite from finite inputs (`finite` not all zero).
 fn overflowed(what: &str, finite: V) -> crate::support::error::Result<()> {
     match finite.0.iter().all(|x| *x == 0.0) {
         true => Ok(()),
