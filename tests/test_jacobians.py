@@ -61,24 +61,24 @@ def test_frame_jacobians_match_pinocchio(robot):  # noqa: F811
 
 
 def test_batched_frame_jacobians_match_pinocchio_and_one_configuration(robot):  # noqa: F811
-    """The (N, nq) path (four rows at a time, `frames::batch`) row by row against Pinocchio
-    and against the one-configuration call (bit for bit): five rows (a padded block of
-    four), an angle beyond the fast sine's range, a welded frame, an added frame with a
-    rotation, every reference frame."""
+    """The (N, nq) path (eight rows at a time, `frames::batch`) row by row against Pinocchio
+    and against the one-configuration call (bit for bit): eleven rows (a full block of
+    eight and a padded one), an angle beyond the fast sine's range in each block, a welded
+    frame, an added frame with a rotation, every reference frame."""
     name, model, pm = robot
     model = pickle.loads(pickle.dumps(model))  # the fixture's model stays without the tool
     data = pm.createData()
     rng = np.random.default_rng(12)
-    qs = np.array([random_q(model, rng) for _ in range(5)])
+    qs = np.array([random_q(model, rng) for _ in range(11)])
     if model.nq == pm.nq and all(pm.joints[j].nq == 1 for j in range(1, pm.njoints)):
-        qs[3, 0] += 2e5  # an angle beyond the branch-free sine's reduction (a revolute joint)
+        qs[[3, 9], 0] += 2e5  # angles beyond the branch-free sine's reduction (revolute joints)
     frames = three_frames(pm)
     tool = f"tool_{name}"
     model.add_frame(tool, frames[0], [0.1, -0.2, 0.3], pin.rpy.rpyToMatrix(0.3, -0.5, 0.7))
     for ref, rf in REFS.items():
         for frame in [*frames, tool]:
             jb = model.frame_jacobian(frame, qs, reference=ref)
-            assert jb.shape == (5, 6, model.nv)
+            assert jb.shape == (11, 6, model.nv)
             for k, q in enumerate(qs):
                 # The same operations in the same order: equal, not merely close.
                 np.testing.assert_array_equal(jb[k], model.frame_jacobian(frame, q, reference=ref))

@@ -1,4 +1,4 @@
-//! Frame and COM Jacobians over many configurations, four rows at a time ([`V`] lanes).
+//! Frame and COM Jacobians over many configurations, [`LANES`] rows at a time ([`V`] lanes).
 //!
 //! What the one-configuration path decides per call (which links, how each joint frame
 //! follows its parent's, which joints turn about a coordinate axis) is resolved once per
@@ -14,7 +14,7 @@ use crate::joint::Joint;
 use crate::kinematics::plan::Placing;
 use crate::model::Model;
 use crate::support::spatial::{Mat3, Vec3};
-use crate::support::trig::{sin_cos, sin_cos4};
+use crate::support::trig::{sin_cos, sin_cos_lanes};
 
 use super::lanes::{self, LANES, M3, V, V3};
 use super::{FrameRef, ReferenceFrame};
@@ -22,8 +22,14 @@ use super::{FrameRef, ReferenceFrame};
 /// How a link's joint moves it, as the lanes compute it.
 #[derive(Debug, Clone, Copy)]
 enum Move {
-    /// Revolute about `sign · e_axis` of the joint frame: two columns turned by sin/cos.
-    Turn { axis: usize, sign: f64 },
+    /// Revolute about `sign · e_axis` of the joint frame: columns `a`, `b` (the next two
+    /// axes, cyclically; decided here, not per row) turned by sin/cos.
+    Turn {
+        axis: usize,
+        a: usize,
+        b: usize,
+        sign: f64,
+    },
     /// Prismatic along `axis` (joint frame).
     Slide { axis: [f64; 3] },
     /// Any other joint: its scalar code, lane by lane.
@@ -50,8 +56,6 @@ struct Step {
 pub struct Walk {
     steps: Vec<Step>,
     ncols: usize,
-    /// The speeds (v indices) no step moves: zero columns of a frame Jacobian.
-    idle: Vec<usize>,
 }
 
 /// A joint column `[a; l]` about its link's origin, world axes, and its speed's index.
@@ -73,6 +77,10 @@ pub struct Work {
     moment: Vec<V3>,
     /// The frame's orientation (LOCAL Jacobians).
     local: M3,
+    /// One block's Jacobian entries (row-major 6 × nv, or 3 × nv for the COM), lane `l`
+    /// row `l`'s: the columns land here as whole lanes, then each row is written out in
+    /// one contiguous pass ([`unstage`]). Speeds the walk does not move stay zero.
+    stage: Vec<V>,
 }
 
 impl Walk {
@@ -82,13 +90,14 @@ impl Walk {
         let mut at = vec![usize::MAX; model.links.len()];
         let mut steps = Vec::with_capacity(links.len());
         let mut ncols = 0;
-        let mut moved = vec![false; model.nv];
         for (k, &i) in links.iter().enumerate() {
             let l = &model.links[i];
             at[i] = k;
             let mv = match (&l.joint, plan.steps[i].turn) {
                 (_, Some(t)) => Move::Turn {
                     axis: t.axis,
+                    a: (t.axis + 1) % 3,
+                    b: (t.axis + 2) % 3,
                     sign: t.sign,
                 },
                 (Joint::Prismatic { axis }, _) => Move::Slide {
@@ -110,10 +119,8 @@ impl Walk {
                 col: ncols,
             });
             ncols += l.joint.nv();
-            moved[l.v_index..l.v_index + l.joint.nv()].fill(true);
         }
-        let idle = (0..model.nv).filter(|&c| !moved[c]).collect();
-        Walk { steps, ncols, idle }
+        Walk { steps, ncols }
     }
 
     /// Buffers for this walk.
@@ -143,6 +150,7 @@ impl Walk {
                 .collect(),
             moment: vec![zero; n],
             local: IDENTITY,
+            stage: vec![V::ZERO; 6 * model.nv],
         }
     }
 }
@@ -188,11 +196,11 @@ fn set_column(m: &mut M3, j: usize, c: &V3) {
     m[3 * j + 2] = c[2];
 }
 
-/// Poses and joint columns of every step at the four rows `rows` (checked configurations).
+/// Poses and joint columns of every step at the rows `rows` (checked configurations).
 /// Each rotation is written in place column by column (whole-matrix copies of lanes are
 /// calls to `memcpy`).
 #[inline(always)]
-fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut Work) {
+fn walk_lanes(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut Work) {
     let nq = model.nq;
     for (k, s) in walk.steps.iter().enumerate() {
         let (done, rest) = w.rot.split_at_mut(k);
@@ -203,9 +211,9 @@ fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut 
         };
         let origin = lanes::add3(&o_parent, &lanes::mat_vec_c(rp, &s.t));
         match s.mv {
-            Move::Turn { axis, sign } => {
+            Move::Turn { axis, a, b, sign } => {
                 let x = gather(qs, nq, rows, s.q) * sign;
-                let (sn, cs) = sin_cos4(x.0).unwrap_or_else(|| {
+                let (sn, cs) = sin_cos_lanes(x.0).unwrap_or_else(|| {
                     // An angle beyond the branch-free reduction: one at a time.
                     let mut sc = ([0.0; LANES], [0.0; LANES]);
                     for l in 0..LANES {
@@ -214,13 +222,21 @@ fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut 
                     sc
                 });
                 let (sn, cs) = (V(sn), V(cs));
-                let (a, b) = ((axis + 1) % 3, (axis + 2) % 3);
                 // R_joint R_k(±q): columns a, b of R_joint turn in their plane.
                 let ca = joint_column(rp, &s.placing, &s.p, a);
                 let cb = joint_column(rp, &s.placing, &s.p, b);
                 let ck = joint_column(rp, &s.placing, &s.p, axis);
-                let turned_a: V3 = std::array::from_fn(|i| ca[i] * cs + cb[i] * sn);
-                let turned_b: V3 = std::array::from_fn(|i| cb[i] * cs - ca[i] * sn);
+                // Written out: `array::from_fn` stayed a call per column (callgrind).
+                let turned_a: V3 = [
+                    ca[0] * cs + cb[0] * sn,
+                    ca[1] * cs + cb[1] * sn,
+                    ca[2] * cs + cb[2] * sn,
+                ];
+                let turned_b: V3 = [
+                    cb[0] * cs - ca[0] * sn,
+                    cb[1] * cs - ca[1] * sn,
+                    cb[2] * cs - ca[2] * sn,
+                ];
                 set_column(rk, a, &turned_a);
                 set_column(rk, b, &turned_b);
                 set_column(rk, axis, &ck);
@@ -242,7 +258,7 @@ fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut 
                     let c = joint_column(rp, &s.placing, &s.p, j);
                     set_column(rk, j, &c);
                 }
-                other4(model, s, qs, rows, &origin, k, w);
+                other_lanes(model, s, qs, rows, &origin, k, w);
             }
         }
     }
@@ -250,7 +266,7 @@ fn walk4(model: &Model, walk: &Walk, qs: &[f64], rows: &[usize; LANES], w: &mut 
 
 /// A joint the lanes do not specialise: the scalar code of `frame_poses_along`, per lane,
 /// from the joint frame's orientation in `w.rot[k]` (replaced by the link's).
-fn other4(
+fn other_lanes(
     model: &Model,
     s: &Step,
     qs: &[f64],
@@ -287,7 +303,7 @@ fn other4(
     }
 }
 
-/// The rows `first..first + count` as blocks of four row indices (the last block padded
+/// The rows `first..first + count` as blocks of [`LANES`] row indices (the last block padded
 /// with its last row) and how many of each block are real.
 fn blocks(first: usize, count: usize) -> impl Iterator<Item = ([usize; LANES], usize)> {
     (0..count.div_ceil(LANES)).map(move |b| {
@@ -329,7 +345,7 @@ fn frame_rows(
         if b % (256 / LANES) == 256 / LANES - 1 {
             poll()?;
         }
-        walk4(model, walk, qs, &rows, &mut w);
+        walk_lanes(model, walk, qs, &rows, &mut w);
         let (r, o) = (&w.rot[tip], &w.org[tip]);
         // The frame's pose, as `Placement::compose`.
         let p = lanes::add3(&lanes::mat_vec_c(r, &ft), o);
@@ -355,27 +371,35 @@ fn frame_rows(
                 ang = lanes::tr_vec(&w.local, &ang);
                 lin = lanes::tr_vec(&w.local, &lin);
             }
+            // A revolute or prismatic joint's angular rows are (turned) unit axes or zero,
+            // whatever q: only the linear ones can overflow there.
+            finite = finite + lin[0] * 0.0 + lin[1] * 0.0 + lin[2] * 0.0;
+            if let Move::Other = walk.steps[c.step].mv {
+                finite = finite + ang[0] * 0.0 + ang[1] * 0.0 + ang[2] * 0.0;
+            }
             for i in 0..3 {
-                finite = finite + ang[i] * 0.0 + lin[i] * 0.0;
-            }
-            for l in 0..real {
-                let row = &mut out[l * 6 * nv..(l + 1) * 6 * nv];
-                for i in 0..3 {
-                    row[i * nv + c.v] = ang[i].0[l];
-                    row[(3 + i) * nv + c.v] = lin[i].0[l];
-                }
+                w.stage[i * nv + c.v] = ang[i];
+                w.stage[(3 + i) * nv + c.v] = lin[i];
             }
         }
-        for l in 0..real {
-            let row = &mut out[l * 6 * nv..(l + 1) * 6 * nv];
-            for &c in &walk.idle {
-                for i in 0..6 {
-                    row[i * nv + c] = 0.0;
-                }
-            }
-        }
+        unstage(&w.stage, out, real);
     }
     overflowed("frame_jacobian", finite)
+}
+
+/// Row `l` of `out` (rows of `stage.len()` entries) gets lane `l` of every entry of
+/// `stage`, for the first `real` rows: one pass per row over contiguous memory (the
+/// entry-by-entry scatter into strided rows cost a quarter of a Jacobian row).
+#[inline(always)]
+fn unstage(stage: &[V], out: &mut [f64], real: usize) {
+    if stage.is_empty() {
+        return; // nv = 0: nothing to write (and no zero-sized chunks)
+    }
+    for (l, row) in out.chunks_exact_mut(stage.len()).take(real).enumerate() {
+        for (o, v) in row.iter_mut().zip(stage) {
+            *o = v.0[l];
+        }
+    }
 }
 
 /// The error for results that are not finite from finite inputs (`finite` not all zero).
@@ -410,7 +434,7 @@ fn com_rows_impl(
         if b % (256 / LANES) == 256 / LANES - 1 {
             poll()?;
         }
-        walk4(model, walk, qs, &rows, &mut w);
+        walk_lanes(model, walk, qs, &rows, &mut w);
         // Subtree first moments, as `com::subtree_moments`.
         for k in 0..n {
             let rb = &model.links[walk.steps[k].link].rigid;
@@ -444,18 +468,18 @@ fn com_rows_impl(
             continue;
         };
         let out = &mut jac[base * 3 * nv..(base + real) * 3 * nv];
+        let stage = &mut w.stage[..3 * nv];
         for c in &w.cols {
             let m = V::splat(w.mass[c.step]);
             let arm = lanes::sub3(&w.moment[c.step], &lanes::scale3(&w.org[c.step], m));
             let col = lanes::add3(&lanes::scale3(&c.lin, m), &lanes::cross(&c.ang, &arm));
             let col = [col[0] / t, col[1] / t, col[2] / t];
             finite = finite + col[0] * 0.0 + col[1] * 0.0 + col[2] * 0.0;
-            for l in 0..real {
-                for i in 0..3 {
-                    out[l * 3 * nv + i * nv + c.v] = col[i].0[l];
-                }
+            for i in 0..3 {
+                stage[i * nv + c.v] = col[i];
             }
         }
+        unstage(stage, out, real);
     }
     overflowed("center_of_mass", finite)
 }
@@ -469,12 +493,87 @@ fn mass_sums(walk: &Walk, w: &mut Work) {
     }
 }
 
-crate::support::cpu::multiversion! {
+/// Whether the AVX-512 copies run: the AVX2 ones would (so `POINTMASS_DYN_BASELINE`
+/// turns both off) and the CPU has AVX-512F. Read once.
+#[cfg(target_arch = "x86_64")]
+fn has_avx512() -> bool {
+    static AVX512: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *AVX512
+        .get_or_init(|| crate::support::cpu::has_avx2() && std::is_x86_feature_detected!("avx512f"))
+}
+
+/// Defines `$name`, which runs `$wide` (the body compiled for AVX-512F: a lane block in
+/// one register) where [`has_avx512`] says so, else the AVX2/baseline dispatcher `$narrow`.
+/// As there, only the instructions differ: Rust fuses no multiply-add, so the bits are the
+/// baseline build's.
+macro_rules! widened {
+    (
+        $(#[$meta:meta])*
+        $vis:vis fn $name:ident / $wide:ident / $narrow:ident
+        ($($arg:ident : $ty:ty),* $(,)?) -> $ret:ty => $body:ident
+    ) => {
+        $(#[$meta])*
+        #[allow(clippy::too_many_arguments)]
+        $vis fn $name($($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            if has_avx512() {
+                // SAFETY: the CPU supports AVX-512F, checked just above.
+                return unsafe { $wide($($arg),*) };
+            }
+            $narrow($($arg),*)
+        }
+
+        /// The body compiled for AVX-512F.
+        ///
+        /// # Safety
+        /// The CPU must support AVX-512F.
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        #[allow(clippy::too_many_arguments)]
+        unsafe fn $wide($($arg: $ty),*) -> $ret {
+            $body($($arg),*)
+        }
+    };
+}
+
+widened! {
     /// Frame `f`'s Jacobians (row-major 6 × nv each) at rows `first..first + count` of `qs`
     /// into `out` (its first row is row `first`'s; every entry written). `walk` is
-    /// `f.link`'s support; `poll` is asked every 256 rows. The lanes run four to an
-    /// instruction in the AVX2 copy (no FMA: the baseline build's bits).
-    pub fn frame_jacobian_rows / frame_rows_avx2 / frame_rows_baseline [] (
+    /// `f.link`'s support; `poll` is asked every 256 rows. The lanes run eight to an
+    /// instruction in the AVX-512 copy, four in the AVX2 one (no FMA: the baseline
+    /// build's bits).
+    pub fn frame_jacobian_rows / frame_rows_avx512 / frame_rows_narrow (
+        model: &Model,
+        walk: &Walk,
+        f: &FrameRef,
+        rf: ReferenceFrame,
+        qs: &[f64],
+        first: usize,
+        count: usize,
+        out: &mut [f64],
+        poll: &dyn Fn() -> crate::support::error::Result<()>
+    ) -> crate::support::error::Result<()> => frame_rows
+}
+
+widened! {
+    /// The centre of mass (`com`, 3 per row) and, with `jac`, its Jacobian (row-major
+    /// 3 × nv per row; every entry written) at rows `first..first + count` of `qs`; `walk`
+    /// covers every link (in link order) of a model with moving mass.
+    pub fn com_rows / com_rows_avx512 / com_rows_narrow (
+        model: &Model,
+        walk: &Walk,
+        qs: &[f64],
+        first: usize,
+        count: usize,
+        com: &mut [f64],
+        jac: Option<&mut [f64]>,
+        poll: &dyn Fn() -> crate::support::error::Result<()>
+    ) -> crate::support::error::Result<()> => com_rows_impl
+}
+
+crate::support::cpu::multiversion! {
+    /// [`frame_jacobian_rows`] without AVX-512: the AVX2 copy or the baseline one.
+    fn frame_rows_narrow / frame_rows_avx2 / frame_rows_baseline [] (
         model: &Model,
         walk: &Walk,
         f: &FrameRef,
@@ -488,10 +587,8 @@ crate::support::cpu::multiversion! {
 }
 
 crate::support::cpu::multiversion! {
-    /// The centre of mass (`com`, 3 per row) and, with `jac`, its Jacobian (row-major
-    /// 3 × nv per row; every entry written) at rows `first..first + count` of `qs`; `walk`
-    /// covers every link (in link order) of a model with moving mass.
-    pub fn com_rows / com_rows_avx2 / com_rows_baseline [] (
+    /// [`com_rows`] without AVX-512: the AVX2 copy or the baseline one.
+    fn com_rows_narrow / com_rows_avx2 / com_rows_baseline [] (
         model: &Model,
         walk: &Walk,
         qs: &[f64],

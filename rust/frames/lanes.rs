@@ -1,13 +1,16 @@
-//! Four configurations side by side: a value of [`V`] holds the same quantity at four rows
-//! of a batch, and its arithmetic is lane by lane, so that the batched kinematics
-//! (`frames::batch`) run the single-configuration formulas on four rows at once. The
+//! Eight configurations side by side: a value of [`V`] holds the same quantity at eight
+//! rows of a batch, and its arithmetic is lane by lane, so that the batched kinematics
+//! (`frames::batch`) run the single-configuration formulas on eight rows at once. The
 //! compiler turns the lane loops into vector instructions (two lanes per instruction on
-//! baseline x86-64, four where `batch` dispatches to AVX); there are no fused
-//! multiply-adds, so every lane is bit for bit the scalar formula.
+//! baseline x86-64, four where `batch` dispatches to AVX2, all eight in one AVX-512
+//! register); there are no fused multiply-adds, so every lane is bit for bit the scalar
+//! formula. Eight rather than four so that the AVX-512 copy holds a block's quantity in one
+//! register (half the instructions of four-wide AVX2 for the same rows); the AVX2 and
+//! baseline copies run each operation as two or four independent halves.
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 /// Rows processed together.
-pub const LANES: usize = 4;
+pub const LANES: usize = 8;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct V(pub [f64; LANES]);

@@ -6,9 +6,12 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use crate::model::Model;
 use crate::support::error::Result;
 
-/// Rows (times links) below which one thread does the block: a thread costs some tens of
-/// microseconds to start, a Panda row a fraction of one.
-const ROWS_LINKS_PER_THREAD: usize = 16_384;
+/// Rows (times links) per thread: one thread does blocks below twice this. Measured on a
+/// 2-core machine (`examples/frames_batch.rs split`: Panda's hand, one thread against
+/// `split` over two, best of 30 each, load ~14): two threads lost at 4,096 rows (36,864
+/// rows × links, 1.14× one thread's time; the hand-off ~27 µs, a row ~72 ns) and won at
+/// 8,192 (73,728; 0.86×). Below the threshold a C-ordered block is also read in place.
+const ROWS_LINKS_PER_THREAD: usize = 32_768;
 
 /// Checks the rows of `qs` (errors name `q[k]` when `stacked`, as
 /// [`super::placement::check_rows`]). Without quaternions a configuration is valid when it

@@ -58,17 +58,18 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     }
 }
 
-/// [`sin_cos`] of four angles at once, bit for bit the same values, written without
-/// branches so that the lanes vectorise (quadrants by selects and sign-bit flips); `None`
-/// when an angle needs the system routine (|x| ≥ 1e5, inf, NaN).
+/// [`sin_cos`] of `N` angles at once, bit for bit the same values, written without
+/// branches so that the lanes vectorise (quadrants by selects and sign-bit flips, the
+/// range test one packed compare: `&`, not a short-circuiting `all`); `None` when an angle
+/// needs the system routine (|x| ≥ 1e5, inf, NaN).
 #[inline(always)]
-pub fn sin_cos4(x: [f64; 4]) -> Option<([f64; 4], [f64; 4])> {
-    if !x.iter().all(|v| v.abs() < REDUCE_LIMIT) {
+pub fn sin_cos_lanes<const N: usize>(x: [f64; N]) -> Option<([f64; N], [f64; N])> {
+    if !x.iter().fold(true, |ok, v| ok & (v.abs() < REDUCE_LIMIT)) {
         return None;
     }
-    let mut sin = [0.0; 4];
-    let mut cos = [0.0; 4];
-    for l in 0..4 {
+    let mut sin = [0.0; N];
+    let mut cos = [0.0; N];
+    for l in 0..N {
         let shifted = x[l] * TWO_OVER_PI + ROUND_MAGIC;
         let quadrant = shifted.to_bits() & 3;
         let n = shifted - ROUND_MAGIC;
@@ -81,6 +82,12 @@ pub fn sin_cos4(x: [f64; 4]) -> Option<([f64; 4], [f64; 4])> {
         cos[l] = f64::from_bits(b.to_bits() ^ (((quadrant + 1) & 2) << 62));
     }
     Some((sin, cos))
+}
+
+/// [`sin_cos_lanes`] of four angles (the recursions' groups).
+#[inline(always)]
+pub fn sin_cos4(x: [f64; 4]) -> Option<([f64; 4], [f64; 4])> {
+    sin_cos_lanes(x)
 }
 
 /// fdlibm's `__kernel_sin(r, 0)` and `__kernel_cos(r, 0)` for |r| ≤ π/4.
@@ -99,7 +106,7 @@ fn kernel(r: f64) -> (f64, f64) {
 
 #[cfg(test)]
 mod tests {
-    use super::{sin_cos, sin_cos4};
+    use super::{sin_cos, sin_cos_lanes};
 
     /// Distance in units in the last place of the larger magnitude (absolute near zeros).
     fn ulps(a: f64, b: f64) -> f64 {
@@ -142,7 +149,7 @@ mod tests {
     }
 
     #[test]
-    fn four_at_once_is_bit_identical() {
+    fn lanes_at_once_are_bit_identical() {
         // Every quadrant, both signs, the kernel's interval ends, tiny and signed zeros.
         let mut xs: Vec<f64> = (-20_000..20_000).map(|k| k as f64 * 1.37e-3).collect();
         for k in -40..=40 {
@@ -153,14 +160,15 @@ mod tests {
         let bits = |v: [f64; 4]| v.map(f64::to_bits);
         for quad in xs.chunks_exact(4) {
             let x = [quad[0], quad[1], quad[2], quad[3]];
-            let (s4, c4) = sin_cos4(x).expect("moderate angles");
+            let (s4, c4) = sin_cos_lanes(x).expect("moderate angles");
             let one = x.map(sin_cos);
             assert_eq!(bits(s4), bits(one.map(|p| p.0)), "{x:?}");
             assert_eq!(bits(c4), bits(one.map(|p| p.1)), "{x:?}");
         }
         // An angle the kernel does not take sends the whole group to the caller.
         for bad in [1e5, f64::NAN, f64::NEG_INFINITY] {
-            assert!(sin_cos4([0.1, bad, 0.2, 0.3]).is_none());
+            assert!(sin_cos_lanes([0.1, bad, 0.2, 0.3]).is_none());
+            assert!(sin_cos_lanes([0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, bad]).is_none());
         }
     }
 
