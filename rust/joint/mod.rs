@@ -25,6 +25,8 @@ pub mod rotation;
 mod spherical;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod toy_cardan;
 mod zyz;
 
 use crate::support::error::{check_finite, Error, Result};
@@ -46,6 +48,8 @@ pub enum Joint {
     Spherical,
     Fixed,
     FreeFlyer,
+    #[cfg(test)]
+    ToyCardan,
 }
 
 /// Columns of `P` (world coordinates), `dof` of them in use.
@@ -268,6 +272,11 @@ macro_rules! dispatch {
             }
             Joint::FreeFlyer => {
                 let $j = free_flyer::FreeFlyer;
+                $body
+            }
+            #[cfg(test)]
+            Joint::ToyCardan => {
+                let $j = toy_cardan::ToyCardan;
                 $body
             }
         }
