@@ -173,3 +173,52 @@ def test_the_effect_guides_registry_lines_are_the_registrys():
         assert attr == "#[cfg(test)]"
         at = [i for i, x in enumerate(registry) if x == line]
         assert at and registry[at[0] - 1] == attr, f"rust/effects/mod.rs lacks `{attr} {line}`"
+
+
+# --- The toy joint the joint guide shows whole ----------------------------------------------
+TOY_JOINT = "rust/joint/toy_cardan.rs"
+
+
+def test_the_joint_guides_toy_is_the_file_the_crate_compiles():
+    # As for the effect: the guide's block is the file the test build compiles, with the
+    # unit tests that hold it to Rodrigues' rotation and to the quaternion ball joint.
+    blocks = _rust_blocks(GUIDES[1])
+    source = (ROOT / TOY_JOINT).read_text(encoding="utf-8")
+    assert source in blocks, f"docs/adding-a-joint.md: no ```rust block equal to {TOY_JOINT}"
+    assert "fn the_toy_cardan_joint_moves_as_the_ball_joint" in source
+
+
+def test_the_joint_guides_dispatch_lines_are_the_dispatchs():
+    # The module line, the variant and the dispatch arm, each under its `#[cfg(test)]`, are
+    # in rust/joint/mod.rs as the guide writes them (each group of lines in a row).
+    lines = [b for b in _rust_blocks(GUIDES[1]) if "Joint::ToyCardan => {" in b]
+    assert len(lines) == 1, "the guide's block of dispatch lines"
+    source = [x.strip() for x in (ROOT / "rust/joint/mod.rs").read_text().splitlines()]
+    wanted = [x.strip() for x in lines[0].splitlines() if x.strip()]
+    starts = [i for i, x in enumerate(wanted) if x == "#[cfg(test)]"]
+    assert len(starts) == 3 and starts[0] == 0
+    for a, b in zip(starts, starts[1:] + [len(wanted)]):
+        group = wanted[a:b]
+        at = [i for i in range(len(source)) if source[i : i + len(group)] == group]
+        assert at, f"rust/joint/mod.rs lacks the lines {group}"
+
+
+def test_no_match_on_joint_variants_outside_the_dispatch():
+    # "A new joint: one file plus one dispatch arm": no exhaustive match on `Joint` outside
+    # rust/joint/ (a match listing the variants with no catch-all arm) that a new variant
+    # would break. Kind checks (`matches!`, `if let`, arms beside `_ =>`) may stay.
+    variant = re.compile(r"\bJoint::(Revolute|Prismatic|SphericalZYZ|Spherical|Fixed|FreeFlyer)\b")
+    offenders = []
+    for path, text in _sources().items():
+        if not path.startswith("rust/") or path.startswith("rust/joint/") or "/tests/" in path:
+            continue
+        for m in re.finditer(r"\bmatch\b[^{;]*\{", text):
+            depth, i = 1, m.end()
+            while depth and i < len(text):
+                depth += {"{": 1, "}": -1}.get(text[i], 0)
+                i += 1
+            body = text[m.end() : i]
+            arms = set(variant.findall(body))
+            if len(arms) >= 5 and not re.search(r"^\s*_\s*=>", body, re.M):
+                offenders.append(f"{path}: match at offset {m.start()}")
+    assert offenders == []

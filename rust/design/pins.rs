@@ -7,10 +7,9 @@ use crate::support::spatial::{Placement, Vec3};
 /// `(point, axis)` in the body's frame per revolute or spherical joint on body `b` (axis
 /// zero for a ball joint); prismatic, fixed and free joints carry no pin.
 pub fn pins(model: &Model, b: usize) -> Vec<(Vec3, Vec3)> {
-    let pin = |joint: &Joint, frame: &Placement| match joint {
-        Joint::Revolute { axis } => Some((frame.translation, frame.rotation * axis)),
-        Joint::Spherical | Joint::SphericalZYZ => Some((frame.translation, Vec3::zeros())),
-        _ => None,
+    let pin = |joint: &Joint, frame: &Placement| {
+        let axis = joint.pin()?;
+        Some((frame.translation, frame.rotation * axis))
     };
     let mut out = Vec::new();
     out.extend(pin(&model.bodies[b].joint, &Placement::identity()));

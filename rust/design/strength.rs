@@ -2,7 +2,6 @@
 //! (`pointmass_dyn.design._strength`, docs/design.md §4a): each pin of [`super::pins`] with
 //! the joint whose bearing force acts there and its sign, so that the force on the link at
 //! the pin is a signed block of the design regressor's rows (`regressor::Layout`).
-use crate::joint::Joint;
 use crate::model::Model;
 use crate::support::spatial::{Mat3, Vec3};
 
@@ -31,19 +30,11 @@ pub struct PinLoad {
     pub source: PinSource,
 }
 
-fn carries_pin(joint: &Joint) -> Option<Vec3> {
-    match joint {
-        Joint::Revolute { axis } => Some(*axis),
-        Joint::Spherical | Joint::SphericalZYZ => Some(Vec3::zeros()),
-        _ => None,
-    }
-}
-
 /// Every pin on body `b` with the source of its force.
 pub fn pin_loads(model: &Model, b: usize) -> Vec<PinLoad> {
     let mut out = Vec::new();
     let body = &model.bodies[b];
-    if let (Some(axis), Some(link)) = (carries_pin(&body.joint), body.link) {
+    if let (Some(axis), Some(link)) = (body.joint.pin(), body.link) {
         out.push(PinLoad {
             point: Vec3::zeros(),
             axis,
@@ -51,7 +42,7 @@ pub fn pin_loads(model: &Model, b: usize) -> Vec<PinLoad> {
         });
     }
     for child in model.bodies.iter().filter(|c| c.parent == Some(b)) {
-        if let (Some(axis), Some(link)) = (carries_pin(&child.joint), child.link) {
+        if let (Some(axis), Some(link)) = (child.joint.pin(), child.link) {
             out.push(PinLoad {
                 point: child.placement.translation,
                 axis: child.placement.rotation * axis,
@@ -60,7 +51,7 @@ pub fn pin_loads(model: &Model, b: usize) -> Vec<PinLoad> {
         }
     }
     for (k, lp) in model.loops.iter().enumerate() {
-        let Some(axis) = carries_pin(&lp.joint) else {
+        let Some(axis) = lp.joint.pin() else {
             continue;
         };
         let source = |sign| PinSource::Cut {

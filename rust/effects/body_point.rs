@@ -8,7 +8,7 @@
 //! many points' paths once per evaluation (a robot's feet share its base), and builds a
 //! point's columns only when asked (a foot in the air needs none).
 use super::{resolve_body, JointRef};
-use crate::joint::{axis_angle, Joint, Subspace};
+use crate::joint::{axis_angle, Subspace};
 use crate::kinematics::{body_placement, LinkState};
 use crate::model::Model;
 use crate::recursive::algebra::{mat_mul, mul};
@@ -131,7 +131,7 @@ impl End {
                 let col = &mut self.columns[c];
                 col.v = l.v_index + k;
                 col.link = i;
-                col.chain = matches!(l.joint, Joint::SphericalZYZ);
+                col.chain = l.joint.chained_columns();
                 col.origin = o;
                 col.s = *s;
                 c += 1;
@@ -308,7 +308,7 @@ impl PointSet {
                 r
             };
             let at = &mut self.links[k];
-            if let Joint::Revolute { axis } = l.joint {
+            if let Some(axis) = l.joint.revolute_axis() {
                 // The common case, written out: one column, no translation.
                 at.origin = o + mul(&r, &l.placement.translation);
                 at.rotation = mat_mul(&r_joint, &axis_angle(&axis, qi[0]));
@@ -338,7 +338,7 @@ impl PointSet {
         for &slot in &point.path {
             let at = &self.links[slot];
             let l = &model.links[at.link];
-            let chain = matches!(l.joint, Joint::SphericalZYZ);
+            let chain = l.joint.chained_columns();
             let arm = p - at.origin;
             for (i, s) in at.s.iter().take(l.joint.nv()).enumerate() {
                 point.columns[c] = Column {

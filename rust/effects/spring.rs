@@ -147,7 +147,7 @@ impl Declaration for Spring {
                         rest_conj: [-r[0] / n, -r[1] / n, -r[2] / n, r[3] / n],
                     });
                 }
-                Joint::SphericalZYZ | Joint::Fixed | Joint::FreeFlyer => {
+                _ => {
                     return Err(Error::arg(
                         "joints",
                         "revolute, prismatic or quaternion Spherical joints (a spring on Euler angles is not a rotational spring: use the Spherical joint; a free flyer is held by a point spring or external forces)",

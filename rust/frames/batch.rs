@@ -283,7 +283,7 @@ fn other_lanes(
         let (r_q, t_q) = l.joint.transform(q);
         let rot = crate::support::spatial::mat_mat(&rj, &r_q);
         let mut o = Vec3::new(origin[0].0[lane], origin[1].0[lane], origin[2].0[lane]);
-        if let Joint::Prismatic { .. } | Joint::FreeFlyer = l.joint {
+        if l.joint.translates() {
             o += crate::support::spatial::mat_vec(&rj, &t_q);
         }
         let columns = l.joint.subspace(q, &rj, &rot);

@@ -9,6 +9,7 @@ impl JointType for Fixed {
     const NAME: &'static str = "Fixed";
     const NQ: usize = 0;
     const MOTION: MotionClass = MotionClass::Rigid;
+    const URDF_TYPE: &'static str = "fixed";
 
     fn q_is_angle(&self, _k: usize) -> bool {
         false

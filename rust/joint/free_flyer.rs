@@ -20,6 +20,8 @@ impl JointType for FreeFlyer {
     const NAME: &'static str = "FreeFlyer";
     const NQ: usize = 7;
     const MOTION: MotionClass = MotionClass::Free;
+    const URDF_TYPE: &'static str = "floating";
+    const QUATERNION_AT: Option<usize> = Some(3);
 
     fn neutral(&self, q: &mut [f64]) {
         q.fill(0.0);

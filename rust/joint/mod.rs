@@ -25,6 +25,8 @@ pub mod rotation;
 mod spherical;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod toy_cardan;
 mod zyz;
 
 use crate::support::error::{check_finite, Error, Result};
@@ -36,12 +38,18 @@ pub use zyz::{zyz_rate_matrix, ZYZ_SINGULAR_SIN};
 
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Joint {
-    Revolute { axis: Vec3 },
-    Prismatic { axis: Vec3 },
+    Revolute {
+        axis: Vec3,
+    },
+    Prismatic {
+        axis: Vec3,
+    },
     SphericalZYZ,
     Spherical,
     Fixed,
     FreeFlyer,
+    #[cfg(test)]
+    ToyCardan,
 }
 
 /// Columns of `P` (world coordinates), `dof` of them in use.
@@ -69,6 +77,10 @@ impl MotionClass {
             MotionClass::Angular3 => 3,
             MotionClass::Free => 6,
         }
+    }
+    /// Whether the motion moves the body origin in the joint frame.
+    pub const fn translates(self) -> bool {
+        matches!(self, MotionClass::Linear1 | MotionClass::Free)
     }
     /// Angular motion columns (`[A; 0]`); false for linear motion and for the free flyer,
     /// whose columns are both (code that reads this handles `Free` first).
@@ -130,9 +142,26 @@ pub trait JointType {
     /// with them together (the derivatives of the recursions differ).
     const CHAINED_COLUMNS: bool = false;
 
+    /// Its `type` in a URDF `<joint>` and in the joint records of a model (`UrdfJoint::kind`,
+    /// what the MuJoCo and Pinocchio importers hand over).
+    const URDF_TYPE: &'static str;
+    /// Where its unit quaternion starts in its `q`, if it has one (normalisation, the
+    /// integrator and `assemble` keep it on its manifold).
+    const QUATERNION_AT: Option<usize> = None;
+
     /// The axis of a rotation about one axis fixed in the joint frame (the compiled
     /// recursions specialise it when it is a coordinate axis); `None` for other motions.
     fn revolute_axis(&self) -> Option<Vec3> {
+        None
+    }
+    /// Its parameter: the unit axis (joint frame) a scene file, a URDF record and Python's
+    /// `Joint.axis` give for it; `None` for a joint without one.
+    fn axis(&self) -> Option<Vec3> {
+        None
+    }
+    /// The pin through its body that a design keeps material around (docs/design.md): the
+    /// hinge's axis (joint frame), zero for a ball joint; `None` for a joint without a pin.
+    fn pin(&self) -> Option<Vec3> {
         None
     }
     /// `out = q ⊕ δ` on this joint's coordinates (`δ` its nv tangent directions): the sum
@@ -245,6 +274,11 @@ macro_rules! dispatch {
                 let $j = free_flyer::FreeFlyer;
                 $body
             }
+            #[cfg(test)]
+            Joint::ToyCardan => {
+                let $j = toy_cardan::ToyCardan;
+                $body
+            }
         }
     };
 }
@@ -256,6 +290,14 @@ fn constants<J: JointType>(_: &J) -> (&'static str, usize, MotionClass) {
 
 fn chained_columns<J: JointType>(_: &J) -> bool {
     J::CHAINED_COLUMNS
+}
+
+fn urdf_type<J: JointType>(_: &J) -> &'static str {
+    J::URDF_TYPE
+}
+
+fn quaternion_at<J: JointType>(_: &J) -> Option<usize> {
+    J::QUATERNION_AT
 }
 
 fn unit_axis(axis: Vec3) -> Result<Vec3> {
@@ -303,6 +345,31 @@ impl Joint {
     #[inline]
     pub fn motion(&self) -> MotionClass {
         dispatch!(self, j => constants(&j).2)
+    }
+    /// Its `type` in URDF and in a model's joint records ("revolute", "floating", ...).
+    pub fn urdf_type(&self) -> &'static str {
+        dispatch!(self, j => urdf_type(&j))
+    }
+    /// See [`JointType::axis`].
+    pub fn axis(&self) -> Option<Vec3> {
+        dispatch!(self, j => j.axis())
+    }
+    /// See [`JointType::pin`].
+    pub fn pin(&self) -> Option<Vec3> {
+        dispatch!(self, j => j.pin())
+    }
+    /// How Python shows it: `Revolute(axis=[0, 0, 1])`, `Spherical()`.
+    pub fn repr(&self) -> String {
+        match self.axis() {
+            Some(a) => format!("{}(axis=[{}, {}, {}])", self.kind(), a.x, a.y, a.z),
+            None => format!("{}()", self.kind()),
+        }
+    }
+    /// Whether its transform moves the body origin (linear motion, the free flyer): the
+    /// kinematics add the transform's translation only then.
+    #[inline]
+    pub fn translates(&self) -> bool {
+        self.motion().translates()
     }
     /// Whether the joint's motion subspace is purely angular (`P = [A; 0]`): true for every
     /// joint but `Prismatic` (purely linear) and `FreeFlyer` (both).
@@ -386,11 +453,7 @@ impl Joint {
     /// Where this joint's unit quaternion starts in its `q`, if it has one.
     #[inline]
     pub fn quaternion_at(&self) -> Option<usize> {
-        match self {
-            Joint::Spherical => Some(0),
-            Joint::FreeFlyer => Some(3),
-            _ => None,
-        }
+        dispatch!(self, j => quaternion_at(&j))
     }
     /// `q̇` from the speeds `v` (they differ only for the quaternion joints).
     pub fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {

@@ -11,7 +11,11 @@ impl JointType for Prismatic {
     const NAME: &'static str = "Prismatic";
     const NQ: usize = 1;
     const MOTION: MotionClass = MotionClass::Linear1;
+    const URDF_TYPE: &'static str = "prismatic";
 
+    fn axis(&self) -> Option<Vec3> {
+        Some(self.axis)
+    }
     fn q_is_angle(&self, _k: usize) -> bool {
         false
     }

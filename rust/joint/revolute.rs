@@ -13,11 +13,18 @@ impl JointType for Revolute {
     const NAME: &'static str = "Revolute";
     const NQ: usize = 1;
     const MOTION: MotionClass = MotionClass::Angular1;
+    const URDF_TYPE: &'static str = "revolute";
 
     fn q_is_angle(&self, _k: usize) -> bool {
         true
     }
     fn revolute_axis(&self) -> Option<Vec3> {
+        Some(self.axis)
+    }
+    fn axis(&self) -> Option<Vec3> {
+        Some(self.axis)
+    }
+    fn pin(&self) -> Option<Vec3> {
         Some(self.axis)
     }
     #[inline]

@@ -16,7 +16,13 @@ impl JointType for Spherical {
     const NAME: &'static str = "Spherical";
     const NQ: usize = 4;
     const MOTION: MotionClass = MotionClass::Angular3;
+    const URDF_TYPE: &'static str = "spherical";
+    const QUATERNION_AT: Option<usize> = Some(0);
 
+    /// A ball: a pin without an axis.
+    fn pin(&self) -> Option<Vec3> {
+        Some(Vec3::zeros())
+    }
     fn neutral(&self, q: &mut [f64]) {
         q.fill(0.0);
         q[3] = 1.0;

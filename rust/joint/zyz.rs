@@ -26,7 +26,12 @@ impl JointType for SphericalZyz {
     const MOTION: MotionClass = MotionClass::Angular3;
     /// Three revolutes in a chain: each column is fixed in the frame of the angles before it.
     const CHAINED_COLUMNS: bool = true;
+    const URDF_TYPE: &'static str = "spherical_zyz";
 
+    /// A ball: a pin without an axis.
+    fn pin(&self) -> Option<Vec3> {
+        Some(Vec3::zeros())
+    }
     fn q_is_angle(&self, _k: usize) -> bool {
         true
     }

@@ -107,7 +107,7 @@ fn poses<const INERTIA: bool, const TURN: bool>(model: &Model, q: &[f64], st: &m
             s.rotation = mat_mat(&r_joint, &r_q);
             s.origin = o_parent + mat_vec(&r_parent, &l.placement.translation);
         }
-        if let crate::joint::Joint::Prismatic { .. } | crate::joint::Joint::FreeFlyer = l.joint {
+        if l.joint.translates() {
             s.origin += r_joint * t_q;
         }
         let columns = l.joint.subspace(qi, &r_joint, &s.rotation);

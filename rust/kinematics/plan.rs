@@ -228,7 +228,7 @@ pub fn frame_poses_along(model: &Model, q: &[f64], st: &mut [LinkState], along: 
         let qi = &q[l.q_index..l.q_index + l.joint.nq()];
         let (r_q, t_q) = l.joint.transform(qi);
         s.rotation = mat_mat(&r_joint, &r_q);
-        if let Joint::Prismatic { .. } | Joint::FreeFlyer = l.joint {
+        if l.joint.translates() {
             s.origin += mat_vec(&r_joint, &t_q);
         }
         // The columns past the joint's speeds are zero, as they started (as `frame_poses`).

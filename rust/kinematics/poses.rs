@@ -2,7 +2,6 @@
 //! every joint's frame origin and axis, every link's seven point masses and both ends of
 //! every cut joint, for many configurations at once. One state fills one row of
 //! preallocated buffers: nothing is allocated per configuration.
-use crate::joint::Joint;
 use crate::kinematics::{self, body_placement, LinkState};
 use crate::model::Model;
 use crate::support::error::Result;
@@ -89,10 +88,10 @@ impl Poses {
                 None => Placement::identity(),
             };
             let jf = parent.compose(&rec.placement);
-            let axis = match rec.joint {
-                Joint::Revolute { axis } | Joint::Prismatic { axis } => jf.rotation * axis,
-                _ => Vec3::zeros(),
-            };
+            let axis = rec
+                .joint
+                .axis()
+                .map_or_else(Vec3::zeros, |a| jf.rotation * a);
             let r = p.rotation.transpose();
             self.rotations[(k * nb + b) * 9..(k * nb + b) * 9 + 9].copy_from_slice(r.as_slice());
             put(&mut self.origins, nb, b, &p.translation);
@@ -128,6 +127,7 @@ impl Poses {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::joint::Joint;
     use crate::model::body::RigidBody;
     use crate::support::spatial::Mat3;
 

@@ -60,10 +60,7 @@ impl LoopJoint {
 
     /// The joint axis in frame a (zero for spherical and fixed cut joints).
     pub fn axis(&self) -> Vec3 {
-        match self.joint {
-            Joint::Revolute { axis } | Joint::Prismatic { axis } => axis,
-            _ => Vec3::zeros(),
-        }
+        self.joint.axis().unwrap_or_else(Vec3::zeros)
     }
 }
 

@@ -63,25 +63,10 @@ impl PyJoint {
     }
     #[getter]
     fn axis<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
-        match self.inner {
-            Joint::Revolute { axis } | Joint::Prismatic { axis } => {
-                Some(to_array1(py, axis.as_slice()).into_any())
-            }
-            _ => None,
-        }
+        let axis = self.inner.axis()?;
+        Some(to_array1(py, axis.as_slice()).into_any())
     }
     fn __repr__(&self) -> String {
-        match self.inner {
-            Joint::Revolute { axis } | Joint::Prismatic { axis } => {
-                format!(
-                    "{}(axis=[{}, {}, {}])",
-                    self.inner.kind(),
-                    axis.x,
-                    axis.y,
-                    axis.z
-                )
-            }
-            _ => format!("{}()", self.inner.kind()),
-        }
+        self.inner.repr()
     }
 }

@@ -44,17 +44,9 @@ fn string(s: &str) -> Value {
 
 fn joint(j: &Joint) -> Value {
     let mut t = toml::Table::new();
-    let (ty, axis) = match j {
-        Joint::Revolute { axis } => ("Revolute", Some(axis)),
-        Joint::Prismatic { axis } => ("Prismatic", Some(axis)),
-        Joint::SphericalZYZ => ("SphericalZYZ", None),
-        Joint::Spherical => ("Spherical", None),
-        Joint::Fixed => ("Fixed", None),
-        Joint::FreeFlyer => ("FreeFlyer", None),
-    };
-    t.insert("type".into(), string(ty));
-    if let Some(a) = axis {
-        t.insert("axis".into(), vec3(a));
+    t.insert("type".into(), string(j.kind()));
+    if let Some(a) = j.axis() {
+        t.insert("axis".into(), vec3(&a));
     }
     Value::Table(t)
 }

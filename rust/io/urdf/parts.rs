@@ -26,17 +26,6 @@ pub struct Part {
     pub range: Option<(f64, f64)>,
 }
 
-fn kind(j: &Joint) -> &'static str {
-    match j {
-        Joint::Revolute { .. } => "revolute",
-        Joint::Prismatic { .. } => "prismatic",
-        Joint::Fixed => "fixed",
-        Joint::FreeFlyer => "floating",
-        Joint::Spherical => "spherical",
-        Joint::SphericalZYZ => "spherical_zyz",
-    }
-}
-
 /// The model of `parts` (each parent before its children); errors name the body.
 pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
     let placeholder = RigidBody {
@@ -110,7 +99,7 @@ pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
             };
             UrdfJoint {
                 name: p.joint_name.clone(),
-                kind: kind(&p.joint),
+                kind: p.joint.urdf_type(),
                 parent: p
                     .parent
                     .map_or_else(|| "world".to_string(), |q| parts[q].name.clone()),
@@ -119,10 +108,7 @@ pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
                 link,
                 q_index: idx(|l| l.q_index),
                 v_index: idx(|l| l.v_index),
-                axis: match p.joint {
-                    Joint::Revolute { axis } | Joint::Prismatic { axis } => axis,
-                    _ => Vec3::x(),
-                },
+                axis: p.joint.axis().unwrap_or_else(Vec3::x),
                 limit: p.range.map(|(lower, upper)| super::Limit {
                     lower,
                     upper,
