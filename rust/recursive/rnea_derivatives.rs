@@ -25,7 +25,7 @@
 //! (the rigid turns of `S_j` and `F_j` cancel in the pairing); the same with `dAv_k`, `S_k`
 //! for `∂τ/∂v`.
 use super::base_accel;
-use super::workspace::{Data, DerivativeData};
+use super::workspace::{Data, DerivativeData, DofWork};
 use crate::kinematics;
 use crate::model::Model;
 use crate::support::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
@@ -125,7 +125,7 @@ fn derivatives_body(
         by_rows(model, data, dd, (q, v, a), g);
     } else {
         vectors::<false>(model, data, dd, q, v, a, g);
-        super::deriv_rows::fill_columns(model, dd);
+        fill_matrices(model, dd);
     }
     if !model.armature.is_empty() {
         super::armature::add_to_forces(model, a, &mut dd.tau);
@@ -221,6 +221,192 @@ fn vectors<const ROWS: bool>(
             dd.subtree_count[pa] += dd.subtree_count[i];
             dd.subtree_end[pa] = dd.subtree_end[pa].max(dd.subtree_end[i]);
         }
+    }
+}
+
+/// `∂τ/∂q`, `∂τ/∂v` and `M` from the dofs' vectors, column by column: in column `c`, the
+/// rows upstream of `c` are `S_rᵀ g_c` (and `S_rᵀ g_v,c`, `S_rᵀ Y S_c`), the rows `c` moves
+/// are `(Y S_r)ᵀ dA_c + (Bᵀ S_r)ᵀ dV_c` (and the `v` and `M` counterparts), the rows of
+/// neither are zero. Upstream rows that are `0..` (a chain) and moved rows that are one range
+/// (children numbered after their parent, subtree by subtree) are written by loops over
+/// contiguous memory, vectorised; other trees walk the upstream path and, for the moved
+/// rows, write row by row. `M` is exactly symmetric: both triangles take the same products
+/// in the same order.
+#[inline(always)]
+fn fill_matrices(model: &Model, dd: &mut DerivativeData) {
+    let nvt = model.nv;
+    let links = &model.links;
+    let related_everywhere = links
+        .iter()
+        .enumerate()
+        .all(|(i, l)| l.joint.nv() == 0 || dd.above_count[i] + dd.subtree_count[i] == nvt);
+    let preorder = links
+        .iter()
+        .enumerate()
+        .all(|(i, l)| dd.subtree_count[i] == dd.subtree_end[i] - l.v_index);
+    if !related_everywhere {
+        dd.dtau_dq.as_mut_slice().fill(0.0);
+        dd.dtau_dv.as_mut_slice().fill(0.0);
+        dd.mass.as_mut_slice().fill(0.0);
+    }
+    let (dq, dv, mm) = (
+        dd.dtau_dq.as_mut_slice(),
+        dd.dtau_dv.as_mut_slice(),
+        dd.mass.as_mut_slice(),
+    );
+    let (dofs, cols) = (&dd.dofs, &dd.columns);
+    for (i, l) in links.iter().enumerate() {
+        let r = l.v_index..l.v_index + l.joint.nv();
+        let chain = l.joint.chained_columns();
+        // The joint's own block.
+        for j in r.clone() {
+            let dj = &dofs[j];
+            for k in r.clone() {
+                let dk = &dofs[k];
+                let at = k * nvt + j;
+                dq[at] = if chain && k > j {
+                    dj.s.dot(&dk.g)
+                } else {
+                    moved_q(dj, dk)
+                };
+                dv[at] = moved_v(dj, dk);
+                if k >= j {
+                    let m = dot6(&dj.s, &dk.ys);
+                    mm[at] = m;
+                    mm[j * nvt + k] = m;
+                }
+            }
+        }
+        let contiguous_above = dd.above_count[i] == l.v_index;
+        let moved = r.end..dd.subtree_end[i];
+        for c in r.clone() {
+            let dc = &dofs[c];
+            let col = c * nvt;
+            // Upstream rows.
+            if contiguous_above {
+                upstream_rows(cols, nvt, dc, 0..l.v_index, col, (dq, dv, mm));
+            } else {
+                let mut k = dd.dof_parent[l.v_index];
+                while k != NO_DOF {
+                    let dk = &dofs[k];
+                    dq[col + k] = dk.s.dot(&dc.g);
+                    dv[col + k] = dk.s.dot(&dc.gv);
+                    mm[col + k] = dot6(&dk.s, &dc.ys);
+                    k = dd.dof_parent[k];
+                }
+            }
+            if preorder {
+                moved_rows(cols, nvt, dc, moved.clone(), col, (dq, dv, mm));
+            }
+        }
+    }
+    if !preorder {
+        // Moved rows one by one: row `j`, the dofs `k` upstream of it.
+        for l in links {
+            for j in l.v_index..l.v_index + l.joint.nv() {
+                let dj = &dofs[j];
+                let mut k = dd.dof_parent[l.v_index];
+                while k != NO_DOF {
+                    let dk = &dofs[k];
+                    let at = k * nvt + j;
+                    dq[at] = moved_q(dj, dk);
+                    dv[at] = moved_v(dj, dk);
+                    mm[at] = dot6(&dk.s, &dj.ys);
+                    k = dd.dof_parent[k];
+                }
+            }
+        }
+    }
+}
+
+/// `k` moves `j`: `(Y S_j)ᵀ dA_k + (Bᵀ S_j)ᵀ dV_k`.
+#[inline(always)]
+pub(crate) fn moved_q(dj: &DofWork, dk: &DofWork) -> f64 {
+    dj.ys.dot(&dk.da) + dj.bts.dot(&angular(&dk.dv))
+}
+
+/// The same for `∂τ/∂v`: `(Y S_j)ᵀ dAv_k + (Bᵀ S_j)ᵀ S_k`.
+#[inline(always)]
+pub(crate) fn moved_v(dj: &DofWork, dk: &DofWork) -> f64 {
+    dj.ys.dot(&dk.dav) + dj.bts.dot(&angular(&dk.s))
+}
+
+/// `aᵀ b` summed in index order (the order [`upstream_rows`] and [`moved_rows`] use, so that
+/// both triangles of `M` round alike).
+#[inline(always)]
+pub(crate) fn dot6(a: &Vec6, b: &Vec6) -> f64 {
+    let mut x = a[0] * b[0];
+    for m in 1..6 {
+        x += a[m] * b[m];
+    }
+    x
+}
+
+/// Column `c` (from `col`), rows `rows` upstream of it: `S_rᵀ g_c`, `S_rᵀ g_v,c`, `S_rᵀ Y S_c`.
+#[inline(always)]
+fn upstream_rows(
+    cols: &[f64],
+    nvt: usize,
+    dc: &DofWork,
+    rows: std::ops::Range<usize>,
+    col: usize,
+    (dq, dv, mm): (&mut [f64], &mut [f64], &mut [f64]),
+) {
+    let len = rows.len();
+    let s: [&[f64]; 6] = std::array::from_fn(|m| &cols[m * nvt + rows.start..][..len]);
+    let (dq, dv, mm) = (
+        &mut dq[col + rows.start..][..len],
+        &mut dv[col + rows.start..][..len],
+        &mut mm[col + rows.start..][..len],
+    );
+    let (g, gv, ys) = (dc.g, dc.gv, dc.ys);
+    for r in 0..len {
+        let (mut x, mut y, mut z) = (s[0][r] * g[0], s[0][r] * gv[0], s[0][r] * ys[0]);
+        for m in 1..6 {
+            x += s[m][r] * g[m];
+            y += s[m][r] * gv[m];
+            z += s[m][r] * ys[m];
+        }
+        dq[r] = x;
+        dv[r] = y;
+        mm[r] = z;
+    }
+}
+
+/// Column `c` (from `col`), rows `rows` that `c` moves: `(Y S_r)ᵀ dA_c + (Bᵀ S_r)ᵀ dV_c`,
+/// `(Y S_r)ᵀ dAv_c + (Bᵀ S_r)ᵀ S_c`, `S_cᵀ Y S_r`.
+#[inline(always)]
+fn moved_rows(
+    cols: &[f64],
+    nvt: usize,
+    dc: &DofWork,
+    rows: std::ops::Range<usize>,
+    col: usize,
+    (dq, dv, mm): (&mut [f64], &mut [f64], &mut [f64]),
+) {
+    let len = rows.len();
+    let ys: [&[f64]; 6] = std::array::from_fn(|m| &cols[(6 + m) * nvt + rows.start..][..len]);
+    let bts: [&[f64]; 3] = std::array::from_fn(|m| &cols[(12 + m) * nvt + rows.start..][..len]);
+    let (dq, dv, mm) = (
+        &mut dq[col + rows.start..][..len],
+        &mut dv[col + rows.start..][..len],
+        &mut mm[col + rows.start..][..len],
+    );
+    let (da, dav, s, dvc) = (dc.da, dc.dav, dc.s, dc.dv);
+    for r in 0..len {
+        let (mut x, mut y, mut z) = (ys[0][r] * da[0], ys[0][r] * dav[0], s[0] * ys[0][r]);
+        for m in 1..6 {
+            x += ys[m][r] * da[m];
+            y += ys[m][r] * dav[m];
+            z += s[m] * ys[m][r];
+        }
+        for m in 0..3 {
+            x += bts[m][r] * dvc[m];
+            y += bts[m][r] * s[m];
+        }
+        dq[r] = x;
+        dv[r] = y;
+        mm[r] = z;
     }
 }
 
