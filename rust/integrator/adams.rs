@@ -219,19 +219,28 @@ impl<S: OdeSystem> Adams<S> {
 
     /// Block 2's estimates at orders `k`, `k − 1`, `k − 2` and whether to lower the order.
     fn estimate(&self) -> Estimates {
-        let (k, absh) = (self.k, self.h.abs());
-        let (p1, fp) = (self.row(1), &self.fp);
-        let d = |l: usize| fp[l] - self.phi[p1 + l];
-        let erk_raw = self.norm(d);
+        let (k, absh, n) = (self.k, self.h.abs(), self.st.dim);
+        // The three norms in one pass over the rows (each summed in the order it would be
+        // alone); rows `k`, `k − 1` stand in for absent ones at the lowest orders.
+        let (rk, rkm1) = (self.row(k.max(1)), self.row(k.saturating_sub(1).max(1)));
+        let (fp, p1, wt) = (&self.fp[..n], &self.phi[..n], &self.wt[..n]);
+        let (a, b) = (&self.phi[rk..rk + n], &self.phi[rkm1..rkm1 + n]);
+        let (mut s0, mut s1, mut s2) = (0.0f64, 0.0f64, 0.0f64);
+        for l in 0..n {
+            let d = fp[l] - p1[l];
+            s0 += (d * wt[l]).powi(2);
+            s1 += ((a[l] + d) * wt[l]).powi(2);
+            s2 += ((b[l] + d) * wt[l]).powi(2);
+        }
+        let rms = |sq: f64| (sq / n as f64).sqrt();
+        let erk_raw = rms(s0);
         let mut erkm1 = 0.0;
         let mut erkm2 = 0.0;
         if k >= 2 {
-            let rk = self.row(k);
-            erkm1 = absh * self.c.sig[k] * GSTR[k - 1] * self.norm(|l| self.phi[rk + l] + d(l));
+            erkm1 = absh * self.c.sig[k] * GSTR[k - 1] * rms(s1);
         }
         if k >= 3 {
-            let rk = self.row(k - 1);
-            erkm2 = absh * self.c.sig[k - 1] * GSTR[k - 2] * self.norm(|l| self.phi[rk + l] + d(l));
+            erkm2 = absh * self.c.sig[k - 1] * GSTR[k - 2] * rms(s2);
         }
         let temp5 = absh * erk_raw;
         let err = temp5 * (self.c.g[k] - self.c.g[k + 1]);
@@ -376,20 +385,30 @@ impl<S: OdeSystem> Adams<S> {
     /// only at the low orders a stability-limited Adams run falls to.
     fn stiffness_test(&mut self, k: usize, h: f64, t_new: f64) {
         let (n, st) = (self.st.dim, &self.st);
-        let (mut sk, mut sy) = (0.0f64, 0.0f64);
+        let (f, fp, y, p) = (&st.f[..n], &self.fp[..n], &st.y[..n], &self.p[..n]);
+        // One pass: the largest differences and the plain sums of squares; the sums scaled by
+        // the largest only where the plain ones could overflow or underflow.
+        let (mut sk, mut sy, mut nf, mut ny) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
         for l in 0..n {
-            sk = sk.max((st.f[l] - self.fp[l]).abs());
-            sy = sy.max((st.y[l] - self.p[l]).abs());
+            let (df, dy) = ((f[l] - fp[l]).abs(), (y[l] - p[l]).abs());
+            sk = sk.max(df);
+            sy = sy.max(dy);
+            nf += df * df;
+            ny += dy * dy;
         }
         if !(sy > 0.0 && sy.is_finite() && sk.is_finite()) {
             return;
         }
-        let (mut num, mut den) = (0.0, 0.0);
-        for l in 0..n {
-            num += ((st.f[l] - self.fp[l]) / sk.max(f64::MIN_POSITIVE)).powi(2);
-            den += ((st.y[l] - self.p[l]) / sy).powi(2);
-        }
-        let h_lambda = h * (sk / sy) * (num / den).sqrt();
+        let h_lambda = if nf < 1e300 && ny > 1e-300 {
+            h * (nf / ny).sqrt()
+        } else {
+            let (mut num, mut den) = (0.0, 0.0);
+            for l in 0..n {
+                num += ((f[l] - fp[l]) / sk.max(f64::MIN_POSITIVE)).powi(2);
+                den += ((y[l] - p[l]) / sy).powi(2);
+            }
+            h * (sk / sy) * (num / den).sqrt()
+        };
         if !h_lambda.is_finite() {
             return;
         }
