@@ -228,18 +228,18 @@ def effect_scene(with_numerical=True):
     assert sph and len(one) >= 2
     effects = [
         E.gravity(),
-        E.damper(None, 0.3),
-        E.friction(one + sph, 0.2, v_eps=0.5),
-        E.spring(one, 2.0, 0.1),
-        E.spring(sph, 1.5, name="ball"),
-        E.pd_torque(one[:1], 3.0, 0.5, [0, 1], [[0.2], [0.4]]),
-        E.joint_torque(one[1:2], 0.7),
+        pmd.Damper(None, 0.3),
+        pmd.JointFriction(one + sph, 0.2, v_eps=0.5),
+        pmd.Spring(one, 2.0, 0.1),
+        pmd.Spring(sph, 1.5, name="ball"),
+        pmd.PDTorque(one[:1], 3.0, 0.5, [0, 1], [[0.2], [0.4]]),
+        pmd.JointTorque(one[1:2], 0.7),
     ]
     if with_numerical:
         effects += [
-            E.external_force(names[-1], force=[1, 2, 3], point=[0.1, 0, 0], frame="body"),
-            E.point_spring(names[0], [0.1, 0, 0], names[-1], [0, 0.1, 0], 5.0, 0.2, 0.3),
-            E.torque_function(lambda t, q, v: -0.1 * v, name="callback"),
+            pmd.ExternalForce(names[-1], force=[1, 2, 3], point=[0.1, 0, 0], frame="body"),
+            pmd.PointSpring(names[0], [0.1, 0, 0], names[-1], [0, 0.1, 0], 5.0, 0.2, 0.3),
+            pmd.TorqueFunction(lambda t, q, v: -0.1 * v, name="callback"),
         ]
     return model, pmd.Scene(model, effects=effects)
 
@@ -306,7 +306,7 @@ def test_friction_derivative_at_rest_is_the_smooth_law_slope():
     """At v = 0 the regularised friction's slope is −F/v_eps (finite: the law is smooth)."""
     m = pmd.Model()
     m.add_body(pmd.RigidBody(2.0, [0.1, 0, 0], np.diag([0.1, 0.2, 0.2])), pmd.Revolute([0, 0, 1]))
-    s = pmd.Scene(m, effects=[E.friction(None, 0.4, v_eps=0.01)])
+    s = pmd.Scene(m, effects=[pmd.JointFriction(None, 0.4, v_eps=0.01)])
     r = s.inverse_dynamics_derivatives([0.3], [0.0], [0.0])
     assert r["dv"][0, 0] == pytest.approx(0.4 / 0.01, rel=1e-12)
 
@@ -376,7 +376,7 @@ def test_point_spring_derivatives_are_analytic_and_match_central_differences(end
     scene = pmd.Scene(
         model,
         effects=[
-            E.point_spring(
+            pmd.PointSpring(
                 body[0], [0.1, -0.05, 0.02], body[1], [0.0, 0.1, 0.03], 7.0, rest, damping
             )
         ],
