@@ -291,8 +291,9 @@ impl PyEffect {
         }
     }
     /// The effect's scene-file `[[effect]]` table as a dict (`type`, `name`, its keys;
-    /// docs/scenes.md): every parameter it holds, SI units and radians. Raises
-    /// `InvalidInputError` for a torque function (Python code no file can state).
+    /// README.md, "Scenes and the command line"): every parameter it holds, SI units and
+    /// radians. Raises `InvalidInputError` for a torque function (Python code no file can
+    /// state).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         let table = self.inner.to_toml().py(py)?;
         toml_to_py(py, &toml::Value::Table(table))

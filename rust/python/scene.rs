@@ -102,7 +102,7 @@ impl PyScene {
     }
 
     /// The scene as scene-file text that `Scene.from_toml` reads back as an equal scene
-    /// (docs/scenes.md, "Saving a scene"). Raises `InvalidInputError` naming an effect no
+    /// (README.md, "Scenes and the command line"). Raises `InvalidInputError` naming an effect no
     /// file can state (a torque function).
     fn to_toml(&self, py: Python<'_>) -> PyResult<String> {
         self.inner.to_toml().py(py)
