@@ -1,6 +1,7 @@
 //! `scene_along`: a scene's accelerations and effect forces at the N states of a trajectory
 //! (`crate::simulate::along`), for the analyses along a result; `scene_shaking`: the shaking
 //! force and moment there, from the same pass.
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -18,7 +19,7 @@ fn run(
     py: Python<'_>,
     scene: &PyScene,
     [t, q, v]: &States,
-    disable: Option<&Bound<'_, PyAny>>,
+    disable: Option<&Obj>,
     asked: Asked,
     threads: Option<usize>,
 ) -> PyResult<Along> {
@@ -44,14 +45,14 @@ fn run(
 pub fn scene_along<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,
-    t: &Bound<'_, PyAny>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    disable: Option<&Bound<'_, PyAny>>,
+    t: &Obj,
+    q: &Obj,
+    v: &Obj,
+    disable: Option<&Obj>,
     accelerations: bool,
     forces: bool,
     threads: Option<usize>,
-) -> PyResult<(Option<Bound<'py, PyAny>>, Bound<'py, PyDict>)> {
+) -> PyResult<(Option<Obj<'py>>, Bound<'py, PyDict>)> {
     let nv = scene.inner.model.nv;
     let x = crate::model::args::samples(&scene.inner.model, t, q, v)?;
     let n = x[0].len();
@@ -77,12 +78,12 @@ pub fn scene_along<'py>(
 pub fn scene_shaking<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,
-    t: &Bound<'_, PyAny>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    about: Option<&Bound<'_, PyAny>>,
+    t: &Obj,
+    q: &Obj,
+    v: &Obj,
+    about: Option<&Obj>,
     threads: Option<usize>,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+) -> PyResult<(Obj<'py>, Obj<'py>)> {
     let x = crate::model::args::samples(&scene.inner.model, t, q, v)?;
     let n = x[0].len();
     let about = crate::model::args::about(about)?;

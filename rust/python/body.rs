@@ -1,4 +1,5 @@
 //! `RigidBody` and its seven point masses.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{mat3, mat3_to_array, points, real, to_array, to_array1, vec3, vector};
@@ -21,12 +22,7 @@ pub struct PyRigidBody {
 impl PyRigidBody {
     #[new]
     #[pyo3(signature = (mass, com, inertia))]
-    fn new(
-        py: Python<'_>,
-        mass: &Bound<'_, PyAny>,
-        com: &Bound<'_, PyAny>,
-        inertia: &Bound<'_, PyAny>,
-    ) -> PyResult<Self> {
+    fn new(py: Python<'_>, mass: &Obj, com: &Obj, inertia: &Obj) -> PyResult<Self> {
         let mass = real(mass, "mass")?;
         let inner = RigidBody::new(mass, vec3(com, "com")?, mat3(inertia, "inertia")?).py(py)?;
         Ok(PyRigidBody { inner })
@@ -34,11 +30,7 @@ impl PyRigidBody {
 
     /// Mass, COM and inertia about the COM of a set of point masses.
     #[staticmethod]
-    fn from_point_masses(
-        py: Python<'_>,
-        masses: &Bound<'_, PyAny>,
-        positions: &Bound<'_, PyAny>,
-    ) -> PyResult<Self> {
+    fn from_point_masses(py: Python<'_>, masses: &Obj, positions: &Obj) -> PyResult<Self> {
         let m = vector(masses, "masses", None)?;
         let p = points(positions, "positions")?;
         Ok(PyRigidBody {
@@ -51,20 +43,16 @@ impl PyRigidBody {
         self.inner.mass
     }
     #[getter]
-    fn com<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn com<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, self.inner.com.as_slice()).into_any()
     }
     #[getter]
-    fn inertia<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn inertia<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         mat3_to_array(py, &self.inner.inertia)
     }
 
     /// Inertia about `point` (body frame), by the parallel-axis theorem.
-    fn inertia_about<'py>(
-        &self,
-        py: Python<'py>,
-        point: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn inertia_about<'py>(&self, py: Python<'py>, point: &Obj) -> PyResult<Obj<'py>> {
         let p = vec3(point, "point")?;
         crate::support::error::check_finite("point", p.as_slice()).py(py)?;
         let i = self.inner.inertia_about(&p);
@@ -74,11 +62,7 @@ impl PyRigidBody {
 
     /// The equimomental seven point masses, box centred at `center` (default: the COM).
     #[pyo3(signature = (center=None))]
-    fn point_masses(
-        &self,
-        py: Python<'_>,
-        center: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<PyPointMasses> {
+    fn point_masses(&self, py: Python<'_>, center: Option<&Obj>) -> PyResult<PyPointMasses> {
         let c = match center {
             Some(c) if !c.is_none() => {
                 let c = vec3(c, "center")?;
@@ -107,12 +91,12 @@ pub struct PyPointMasses {
 impl PyPointMasses {
     /// The seven masses (kg); some may be negative.
     #[getter]
-    fn masses<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn masses<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, &self.inner.masses).into_any()
     }
     /// Positions in the body frame, shape (7, 3).
     #[getter]
-    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let flat: Vec<f64> = self
             .inner
             .positions
@@ -122,11 +106,11 @@ impl PyPointMasses {
         to_array(py, flat, &[7, 3])
     }
     #[getter]
-    fn half_sides<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn half_sides<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, self.inner.half_sides.as_slice()).into_any()
     }
     #[getter]
-    fn center<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn center<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, self.inner.center.as_slice()).into_any()
     }
     /// The rigid body these points represent (mass, COM, inertia rebuilt from them).

@@ -1,5 +1,6 @@
 //! `_Simulator`: the stepping simulator (`crate::control`), converted; `pointmass_dyn.Simulator`
 //! wraps it.
+use crate::python::Obj;
 use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
@@ -36,17 +37,17 @@ impl PySimulator {
         py: Python<'_>,
         scene: PyRef<'_, PyScene>,
         method: Option<&str>,
-        rtol: Option<&Bound<'_, PyAny>>,
-        atol: Option<&Bound<'_, PyAny>>,
-        dt: Option<&Bound<'_, PyAny>>,
+        rtol: Option<&Obj>,
+        atol: Option<&Obj>,
+        dt: Option<&Obj>,
         control_period: f64,
         control: &str,
         record: bool,
-        disable: Option<&Bound<'_, PyAny>>,
-        first_step: Option<&Bound<'_, PyAny>>,
-        max_step: Option<&Bound<'_, PyAny>>,
+        disable: Option<&Obj>,
+        first_step: Option<&Obj>,
+        max_step: Option<&Obj>,
         t0: f64,
-        t_eval: Option<&Bound<'_, PyAny>>,
+        t_eval: Option<&Obj>,
     ) -> PyResult<Self> {
         let choices = [
             ("torque", ControlKind::Torque),
@@ -102,26 +103,21 @@ impl PySimulator {
     }
     /// The state `[q; v]` (a copy).
     #[getter]
-    fn y<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn y<'py>(&self, py: Python<'py>) -> Obj<'py> {
         self.lock().with(|s| to_array1(py, s.y()).into_any())
     }
     #[getter]
-    fn control<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+    fn control<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
         self.lock()
             .with(|s| s.control().map(|u| to_array1(py, u).into_any()))
     }
 
-    fn set_control(&self, py: Python<'_>, u: &Bound<'_, PyAny>) -> PyResult<()> {
+    fn set_control(&self, py: Python<'_>, u: &Obj) -> PyResult<()> {
         let u = vector(u, "control", None)?;
         self.lock().with_mut(|s| s.set_control(&u)).py(py)
     }
 
-    fn set_state(
-        &self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-    ) -> PyResult<()> {
+    fn set_state(&self, py: Python<'_>, q: &Obj, v: &Obj) -> PyResult<()> {
         let q = vector(q, "q", None)?;
         let v = vector(v, "v", None)?;
         self.lock().with_mut(|s| s.set_state(&q, &v)).py(py)
@@ -150,7 +146,7 @@ impl PySimulator {
     }
 
     /// The actuators' joint torques now (nv): the torque control plus the scene's torques.
-    fn joint_torques<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn joint_torques<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let mut out = vec![0.0; self.lock().with(|s| s.nv())];
         self.lock().with_mut(|s| s.joint_torques(&mut out)).py(py)?;
         Ok(to_array1(py, &out).into_any())
@@ -158,10 +154,10 @@ impl PySimulator {
 
     /// IMU readings now, (n, 6): specific force then angular velocity, sensor axes; each IMU
     /// `(body index, position (3,), rotation (3, 3))` in the body's frame.
-    fn imu<'py>(&self, py: Python<'py>, imus: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn imu<'py>(&self, py: Python<'py>, imus: &Obj) -> PyResult<Obj<'py>> {
         let mut list = Vec::new();
         for (k, item) in imus.try_iter()?.enumerate() {
-            let (body, p, r): (usize, Bound<'_, PyAny>, Bound<'_, PyAny>) = item?.extract()?;
+            let (body, p, r): (usize, Obj, Obj) = item?.extract()?;
             let p = vector(&p, &format!("imu[{k}].position"), Some(3))?;
             let r = super::convert::mat3(&r, &format!("imu[{k}].rotation"))?;
             list.push(Imu {

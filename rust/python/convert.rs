@@ -5,6 +5,7 @@
 //! object arrays (ragged lists, `Decimal`, huge ints), masked arrays (the mask would be
 //! silently dropped). A wrong shape names the argument, the expected and the given shape.
 //! Index and count arguments are Python ints (or NumPy integers) converted by [`int_arg`].
+use crate::python::Obj;
 use nalgebra::DMatrix;
 use numpy::{
     AllowTypeChange, PyArray1, PyArrayDescrMethods, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray,
@@ -22,7 +23,7 @@ use crate::support::spatial::{Mat3, Vec3};
 // The core's parsers under the names the bindings call them by.
 pub use crate::support::args::{count as count_arg, int as int_arg, mat3, shape_str, vector};
 
-fn type_name(obj: &Bound<'_, PyAny>) -> String {
+fn type_name(obj: &Obj) -> String {
     obj.get_type()
         .name()
         .map(|n| n.to_string())
@@ -30,7 +31,7 @@ fn type_name(obj: &Bound<'_, PyAny>) -> String {
 }
 
 /// `repr(obj)`, cut to 60 characters.
-fn short_repr(obj: &Bound<'_, PyAny>) -> String {
+fn short_repr(obj: &Obj) -> String {
     let r = obj.repr().map(|r| r.to_string()).unwrap_or_default();
     if r.chars().count() > 60 {
         let head: String = r.chars().take(50).collect();
@@ -40,14 +41,14 @@ fn short_repr(obj: &Bound<'_, PyAny>) -> String {
     }
 }
 
-fn is_exact_ndarray(obj: &Bound<'_, PyAny>) -> bool {
+fn is_exact_ndarray(obj: &Obj) -> bool {
     let py = obj.py();
     let t = <PyUntypedArray as pyo3::PyTypeInfo>::type_object_raw(py);
     // SAFETY: `obj` is a live object; reading its type pointer takes no reference.
     unsafe { pyo3::ffi::Py_TYPE(obj.as_ptr()) == t }
 }
 
-fn is_masked(obj: &Bound<'_, PyAny>) -> bool {
+fn is_masked(obj: &Obj) -> bool {
     static MASKED: PyOnceLock<Py<PyType>> = PyOnceLock::new();
     let py = obj.py();
     // No masked array can exist before numpy.ma is imported, and importing it here would
@@ -102,7 +103,7 @@ fn unless_interrupt(py: Python<'_>, e: PyErr, fallback: impl FnOnce() -> PyErr) 
 }
 
 /// `obj` as a NumPy array of real (integer or floating) dtype, or `InvalidInputError`.
-pub fn real_array<'py>(obj: &Bound<'py, PyAny>, arg: &str) -> PyResult<Bound<'py, PyAny>> {
+pub fn real_array<'py>(obj: &Obj<'py>, arg: &str) -> PyResult<Obj<'py>> {
     let py = obj.py();
     if let Ok(a) = obj.cast::<PyUntypedArray>() {
         if !is_exact_ndarray(obj) && is_masked(obj) {
@@ -154,7 +155,7 @@ pub fn real_array<'py>(obj: &Bound<'py, PyAny>, arg: &str) -> PyResult<Bound<'py
 
 /// A real number: a Python float or int, a NumPy integer or floating scalar, or a 0-d array
 /// of those. NaN and inf pass (callers decide); an int beyond the double range does not.
-pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
+pub fn real(obj: &Obj, arg: &str) -> PyResult<f64> {
     let py = obj.py();
     if let Ok(f) = obj.cast_exact::<PyFloat>() {
         return Ok(f.value());
@@ -189,7 +190,7 @@ pub fn real(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<f64> {
 }
 
 /// A Python object as the core's [`Arg`]: the core parses, this only converts.
-impl Arg for Bound<'_, PyAny> {
+impl Arg for Obj<'_> {
     type Err = PyErr;
     fn absent(&self) -> bool {
         self.is_none()
@@ -241,7 +242,7 @@ impl Arg for Bound<'_, PyAny> {
 }
 
 /// Any array-like of real numbers: its shape and its entries in C order.
-pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let py = obj.py();
     let obj = &real_array(obj, arg)?;
     let extracted = obj.extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>();
@@ -265,18 +266,16 @@ pub fn array(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<(Vec<usize>, Vec<f64
 /// A 1-D, C-contiguous, aligned, native-order float64 `numpy.ndarray` (exactly that type) as a
 /// slice, read from the array's own fields: rust-numpy's checked cast (dtype objects compared
 /// through NumPy's API) costs more than copying a short vector. `None` for anything else.
-fn plain_f64<'a>(obj: &'a Bound<'_, PyAny>) -> Option<&'a [f64]> {
+fn plain_f64<'a>(obj: &'a Obj) -> Option<&'a [f64]> {
     plain_f64_nd::<1>(obj).map(|(s, _)| s)
 }
 
 /// As [`plain_f64`] for a 2-D array: its data (C order) and its shape `(rows, cols)`.
-pub fn plain_f64_rows<'a>(obj: &'a Bound<'_, PyAny>) -> Option<(&'a [f64], [usize; 2])> {
+pub fn plain_f64_rows<'a>(obj: &'a Obj) -> Option<(&'a [f64], [usize; 2])> {
     plain_f64_nd::<2>(obj)
 }
 
-fn plain_f64_nd<'a, const ND: usize>(
-    obj: &'a Bound<'_, PyAny>,
-) -> Option<(&'a [f64], [usize; ND])> {
+fn plain_f64_nd<'a, const ND: usize>(obj: &'a Obj) -> Option<(&'a [f64], [usize; ND])> {
     use numpy::npyffi::{self, NPY_TYPES};
     if !is_exact_ndarray(obj) {
         return None;
@@ -311,7 +310,7 @@ fn plain_f64_nd<'a, const ND: usize>(
 
 /// Fast path for the per-call dynamics functions: a contiguous float64 1-D array is copied
 /// straight into `out`; anything else goes through `vector`.
-pub fn vector_into(obj: &Bound<'_, PyAny>, arg: &str, out: &mut [f64]) -> PyResult<()> {
+pub fn vector_into(obj: &Obj, arg: &str, out: &mut [f64]) -> PyResult<()> {
     if let Some(s) = plain_f64(obj) {
         if s.len() == out.len() {
             out.copy_from_slice(s);
@@ -323,14 +322,14 @@ pub fn vector_into(obj: &Bound<'_, PyAny>, arg: &str, out: &mut [f64]) -> PyResu
     Ok(())
 }
 
-pub fn vec3(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec3> {
+pub fn vec3(obj: &Obj, arg: &str) -> PyResult<Vec3> {
     let mut v = [0.0; 3];
     vector_into(obj, arg, &mut v)?;
     Ok(Vec3::from(v))
 }
 
 /// An (n, 3) array of points (also accepts (a, b, 3), flattened over the leading axes).
-pub fn points(obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<Vec<Vec3>> {
+pub fn points(obj: &Obj, arg: &str) -> PyResult<Vec<Vec3>> {
     let (shape, data) = array(obj, arg)?;
     if shape.len() < 2 || shape[shape.len() - 1] != 3 {
         return Err(invalid(obj.py(), arg, "shape (n, 3)", shape_str(&shape)));
@@ -343,20 +342,16 @@ pub fn to_array1<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
 }
 
 /// A row-major array of the given shape from C-ordered data.
-pub fn to_array<'py>(
-    py: Python<'py>,
-    data: Vec<f64>,
-    shape: &[usize],
-) -> PyResult<Bound<'py, PyAny>> {
+pub fn to_array<'py>(py: Python<'py>, data: Vec<f64>, shape: &[usize]) -> PyResult<Obj<'py>> {
     let flat = PyArray1::from_vec(py, data);
     Ok(flat.reshape(shape.to_vec())?.into_any())
 }
 
-pub fn mat3_to_array<'py>(py: Python<'py>, m: &Mat3) -> PyResult<Bound<'py, PyAny>> {
+pub fn mat3_to_array<'py>(py: Python<'py>, m: &Mat3) -> PyResult<Obj<'py>> {
     to_array(py, m.transpose().as_slice().to_vec(), &[3, 3])
 }
 
-pub fn dmatrix_to_array<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Bound<'py, PyAny>> {
+pub fn dmatrix_to_array<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Obj<'py>> {
     // nalgebra is column-major; NumPy wants C order.
     to_array(
         py,

@@ -1,4 +1,5 @@
 //! `DenseSolution`: the dense output of an `rk45` run, callable as SciPy's `OdeSolution`.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{array, to_array, to_array1};
@@ -14,7 +15,7 @@ pub struct PyDenseSolution {
 
 #[pymethods]
 impl PyDenseSolution {
-    fn __call__<'py>(&self, py: Python<'py>, t: &Bound<'_, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    fn __call__<'py>(&self, py: Python<'py>, t: &Obj) -> PyResult<Obj<'py>> {
         let dim = self.inner.dim();
         if self.inner.n_segments() == 0 {
             return Err(py_error(
@@ -38,7 +39,7 @@ impl PyDenseSolution {
         }
     }
     #[getter]
-    fn ts<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn ts<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, self.inner.breakpoints()).into_any()
     }
 }

@@ -1,5 +1,6 @@
 //! `Scene.forward_dynamics_derivatives`, `Scene.inverse_dynamics_derivatives` and
 //! `Scene.state_jacobian`: the scene-level derivatives (docs/derivatives.md).
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -31,7 +32,7 @@ pub(crate) fn c_ordered_triple<'py>(
     py: Python<'py>,
     m: [&DMatrix<f64>; 3],
     transpose: bool,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
     use numpy::{PyArray2, PyArray3, PyArrayMethods};
     let n = m[0].nrows();
     let len = n * n;
@@ -74,7 +75,7 @@ pub(crate) fn inverse_into_arrays<'py>(
     g: &crate::support::spatial::Vec3,
     name: &str,
     detach: bool,
-) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
     use numpy::{PyArray2, PyArray3, PyArrayMethods};
     let n = ws.model().nv;
     let len = n * n;
@@ -138,7 +139,7 @@ fn refuse_loops(py: Python<'_>, s: &Scene, name: &str) -> PyResult<()> {
 fn run<'py>(
     py: Python<'py>,
     s: &Scene,
-    disable: Option<&Bound<'_, PyAny>>,
+    disable: Option<&Obj>,
     name: &str,
     keys: [&str; 3],
     f: impl FnOnce(
@@ -177,11 +178,11 @@ fn run<'py>(
 pub(super) fn forward<'py>(
     py: Python<'py>,
     s: &Scene,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    tau: Option<&Bound<'_, PyAny>>,
+    q: &Obj,
+    v: &Obj,
+    tau: Option<&Obj>,
     t: f64,
-    disable: Option<&Bound<'_, PyAny>>,
+    disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let t = time_arg(py, t)?;
     let (q, v) = scene_state(py, s, q, v)?;
@@ -207,11 +208,11 @@ pub(super) fn forward<'py>(
 pub(super) fn inverse<'py>(
     py: Python<'py>,
     s: &Scene,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    a: &Bound<'_, PyAny>,
+    q: &Obj,
+    v: &Obj,
+    a: &Obj,
     t: f64,
-    disable: Option<&Bound<'_, PyAny>>,
+    disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let t = time_arg(py, t)?;
     let (q, v) = scene_state(py, s, q, v)?;
@@ -233,10 +234,10 @@ pub(super) fn inverse<'py>(
 pub(super) fn state_jacobian<'py>(
     py: Python<'py>,
     s: &Scene,
-    y: &Bound<'_, PyAny>,
+    y: &Obj,
     t: f64,
-    disable: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Option<Bound<'py, PyAny>>> {
+    disable: Option<&Obj>,
+) -> PyResult<Option<Obj<'py>>> {
     use crate::integrator::OdeSystem;
     let t = time_arg(py, t)?;
     let (nq, nv) = (s.model.nq, s.model.nv);

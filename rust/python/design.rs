@@ -1,5 +1,6 @@
 //! Arguments and results of the design functions (crate::design): cells of an envelope, the
 //! maps along a motion, a body's pins, and the conic program. Conversion only.
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -17,11 +18,11 @@ use crate::support::spatial::Mat3;
 pub fn design_cells<'py>(
     py: Python<'py>,
     cell: f64,
-    r#box: Option<&Bound<'_, PyAny>>,
-    polygon: Option<&Bound<'_, PyAny>>,
-    z: Option<&Bound<'_, PyAny>>,
-    triangles: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Bound<'py, PyAny>> {
+    r#box: Option<&Obj>,
+    polygon: Option<&Obj>,
+    z: Option<&Obj>,
+    triangles: Option<&Obj>,
+) -> PyResult<Obj<'py>> {
     let env = Envelope::from_args(r#box, polygon, z, triangles)?;
     let cells = detach_interruptible(py, || design::fill(&env, cell))?;
     let n = cells.len();
@@ -40,11 +41,11 @@ pub fn design_cells<'py>(
 pub fn design_regressor<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    a: &Bound<'_, PyAny>,
-    gravity: Option<&Bound<'_, PyAny>>,
-    about: &Bound<'_, PyAny>,
+    q: &Obj,
+    v: &Obj,
+    a: &Obj,
+    gravity: Option<&Obj>,
+    about: &Obj,
     actuated: Vec<usize>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let model = model.model();
@@ -72,11 +73,7 @@ pub fn design_regressor<'py>(
 }
 
 /// `body` (a name or an index) as a body of `model`, the world refused.
-fn design_body(
-    py: Python<'_>,
-    model: &crate::model::Model,
-    body: &Bound<'_, PyAny>,
-) -> PyResult<usize> {
+fn design_body(py: Python<'_>, model: &crate::model::Model, body: &Obj) -> PyResult<usize> {
     let b = super::loops::body_ref(model, Some(body), "body")?;
     let expected = "a body of the model (not the world)";
     b.ok_or_else(|| invalid(py, "body", expected, "the world"))
@@ -88,7 +85,7 @@ fn design_body(
 pub fn design_pins<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
-    body: &Bound<'_, PyAny>,
+    body: &Obj,
 ) -> PyResult<Bound<'py, PyList>> {
     let model = model.model();
     let b = design_body(py, &model, body)?;
@@ -108,7 +105,7 @@ pub fn design_pins<'py>(
 pub fn design_pin_loads<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
-    body: &Bound<'_, PyAny>,
+    body: &Obj,
 ) -> PyResult<Bound<'py, PyList>> {
     use crate::design::strength::{pin_loads, PinSource};
     let model = model.model();
@@ -139,10 +136,7 @@ pub fn design_pin_loads<'py>(
 
 /// Solves the design program (see `pointmass_dyn`'s design module).
 #[pyfunction]
-pub fn design_solve<'py>(
-    py: Python<'py>,
-    spec: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyDict>> {
+pub fn design_solve<'py>(py: Python<'py>, spec: &Obj<'py>) -> PyResult<Bound<'py, PyDict>> {
     let problem = Problem::from_arg(spec)?;
     let outcome = detach_interruptible(py, || design::solve_outcome(&problem))?;
     let d = PyDict::new(py);

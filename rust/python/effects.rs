@@ -1,5 +1,6 @@
 //! `Effect`: the constructors of the effect families and the parsers of their arguments;
 //! Python torque functions as Rust callbacks.
+use crate::python::Obj;
 use std::cell::RefCell;
 use std::sync::Arc;
 
@@ -12,7 +13,7 @@ use super::errors::{invalid, IntoPyResult};
 use crate::effects::{args, Effect, PerJoint, Torque, TorqueFunction, TorqueLimit};
 
 /// An argument the core parses (`crate::effects::args`).
-type A<'py> = Bound<'py, PyAny>;
+type A<'py> = Obj<'py>;
 
 #[pyclass(
     name = "Effect",
@@ -72,7 +73,7 @@ pub(super) fn take_callback_error() -> Option<PyErr> {
     CALLBACK_ERROR.with(|c| c.borrow_mut().take())
 }
 
-pub(super) fn repr_of(obj: &Bound<'_, PyAny>) -> String {
+pub(super) fn repr_of(obj: &Obj) -> String {
     obj.repr().map(|r| r.to_string()).unwrap_or_default()
 }
 
@@ -129,7 +130,7 @@ impl PyEffect {
     /// Uniform gravity `g` (m/s², world frame).
     #[staticmethod]
     #[pyo3(signature = (g=None))]
-    fn gravity(g: Option<Bound<'_, PyAny>>) -> PyResult<Self> {
+    fn gravity(g: Option<Obj>) -> PyResult<Self> {
         Ok(args::gravity(g.as_ref())?.into())
     }
     /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
@@ -149,8 +150,8 @@ impl PyEffect {
         &self,
         py: Python<'py>,
         model: PyRef<'_, super::model::PyModel>,
-        q: &Bound<'py, PyAny>,
-        v: &Bound<'py, PyAny>,
+        q: &Obj<'py>,
+        v: &Obj<'py>,
     ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         let Effect::GroundContact(c) = &self.inner else {
             return Err(invalid(
@@ -183,11 +184,7 @@ impl PyEffect {
     /// A torque effect clamped per speed at `limit`: one number or one per speed of its
     /// joints (all `nv` for a torque function), or `"effort"` (the model's URDF `effort`,
     /// filled in when a scene is built); None removes the limit.
-    fn with_torque_limit(
-        &self,
-        py: Python<'_>,
-        limit: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Self> {
+    fn with_torque_limit(&self, py: Python<'_>, limit: Option<&Obj>) -> PyResult<Self> {
         let Effect::Torque(t) = &self.inner else {
             return Err(invalid(
                 py,
@@ -206,7 +203,7 @@ impl PyEffect {
         &self,
         py: Python<'py>,
         model: PyRef<'_, super::model::PyModel>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    ) -> PyResult<Obj<'py>> {
         let m = model.model();
         let out = match &self.inner {
             Effect::Torque(t) => t.limit_per_speed(&m).py(py)?,
@@ -218,7 +215,7 @@ impl PyEffect {
     /// A torque effect's limit: a number or an array (per speed), `"effort"` (until a scene
     /// fills it in), or None.
     #[getter]
-    fn torque_limit<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+    fn torque_limit<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
         let Effect::Torque(t) = &self.inner else {
             return None;
         };
@@ -242,12 +239,7 @@ impl PyEffect {
     /// A copy with one parameter replaced (checked as the factory checks it): gravity `g`;
     /// a spring's `stiffness`, `rest`; a damper's `damping`; friction's `friction`, `v_eps`;
     /// a point spring's `stiffness`, `rest_length`, `damping`.
-    fn with_parameter(
-        &self,
-        py: Python<'_>,
-        name: &str,
-        value: &Bound<'_, PyAny>,
-    ) -> PyResult<Self> {
+    fn with_parameter(&self, py: Python<'_>, name: &str, value: &Obj) -> PyResult<Self> {
         let (_, values) = super::convert::array(value, name)?;
         Ok(self.inner.with_parameter(name, &values).py(py)?.into())
     }
@@ -294,7 +286,7 @@ impl PyEffect {
     /// README.md, "Scenes and the command line"): every parameter it holds, SI units and
     /// radians. Raises `InvalidInputError` for a torque function (Python code no file can
     /// state).
-    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let table = self.inner.to_toml().py(py)?;
         toml_to_py(py, &toml::Value::Table(table))
     }
@@ -307,7 +299,7 @@ impl PyEffect {
 }
 
 /// A TOML value as Python data (dicts, lists, str, int, float, bool).
-fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Obj<'py>> {
     use pyo3::IntoPyObjectExt;
     Ok(match v {
         toml::Value::String(s) => s.into_bound_py_any(py)?,

@@ -1,4 +1,5 @@
 //! Events: `StateEvent` (evaluated in Rust) and Python event callables (SciPy's convention).
+use crate::python::Obj;
 use std::sync::Mutex;
 
 use numpy::PyArray1;
@@ -29,10 +30,10 @@ impl PyStateEvent {
     #[pyo3(signature = (variable, index, value=None, direction=None, terminal=None))]
     fn new(
         variable: &str,
-        index: Bound<'_, PyAny>,
-        value: Option<Bound<'_, PyAny>>,
-        direction: Option<Bound<'_, PyAny>>,
-        terminal: Option<Bound<'_, PyAny>>,
+        index: Obj,
+        value: Option<Obj>,
+        direction: Option<Obj>,
+        terminal: Option<Obj>,
     ) -> PyResult<Self> {
         let (value, direction, terminal) = (value.as_ref(), direction.as_ref(), terminal.as_ref());
         let inner = StateEvent::from_args(variable, &index, value, direction, terminal)?;
@@ -69,7 +70,7 @@ pub(super) struct PyEventSpec {
     direction: f64,
 }
 
-pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Bound<'_, PyAny>) -> PyResult<PyEventSpec> {
+pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventSpec> {
     if !e.is_callable() {
         return Err(invalid(
             py,

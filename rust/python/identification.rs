@@ -1,5 +1,6 @@
 //! Arguments and results of the identification functions (crate::identification).
 //! Conversion only.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{array, dmatrix_to_array, points, to_array1};
@@ -24,16 +25,16 @@ fn extras(viscous: bool, coulomb: bool, armature: bool, offset: bool) -> Extras 
 pub fn identification_regressor<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    a: &Bound<'_, PyAny>,
-    gravity: Option<&Bound<'_, PyAny>>,
+    q: &Obj,
+    v: &Obj,
+    a: &Obj,
+    gravity: Option<&Obj>,
     viscous: bool,
     coulomb: bool,
     armature: bool,
     offset: bool,
     actuated: Vec<usize>,
-) -> PyResult<Bound<'py, PyAny>> {
+) -> PyResult<Obj<'py>> {
     let model = model.model();
     let g = crate::model::args::gravity(gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
@@ -56,7 +57,7 @@ pub fn identification_parameters<'py>(
     coulomb: bool,
     armature: bool,
     offset: bool,
-) -> PyResult<(Vec<String>, Bound<'py, PyAny>)> {
+) -> PyResult<(Vec<String>, Obj<'py>)> {
     let model = model.model();
     let ex = extras(viscous, coulomb, armature, offset);
     let names = ident::parameter_names(&model, &ex);
@@ -67,11 +68,7 @@ pub fn identification_parameters<'py>(
 
 #[pyfunction]
 #[pyo3(signature = (y, rank_tol=1e-8))]
-pub fn identification_base<'py>(
-    py: Python<'py>,
-    y: &Bound<'_, PyAny>,
-    rank_tol: f64,
-) -> PyResult<PyBase> {
+pub fn identification_base<'py>(py: Python<'py>, y: &Obj, rank_tol: f64) -> PyResult<PyBase> {
     let (shape, data) = array(y, "regressor")?;
     if shape.len() != 2 {
         return Err(invalid(
@@ -118,17 +115,17 @@ record!(
 pub fn identification_fit<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    a: &Bound<'_, PyAny>,
-    tau: &Bound<'_, PyAny>,
-    gravity: Option<&Bound<'_, PyAny>>,
+    q: &Obj,
+    v: &Obj,
+    a: &Obj,
+    tau: &Obj,
+    gravity: Option<&Obj>,
     method: &str,
     free: Vec<bool>,
     prior: Vec<f64>,
     prior_weight: f64,
     weights: Vec<f64>,
-    cells: Vec<(usize, Bound<'_, PyAny>, f64)>,
+    cells: Vec<(usize, Obj, f64)>,
     viscous: bool,
     coulomb: bool,
     armature: bool,

@@ -2,6 +2,7 @@
 //! method (Radau, and `auto` once it switches), as SciPy takes it: a callable
 //! `jac(t, y) -> (n, n)` (an array-like or a SciPy sparse matrix), or a constant `(n, n)`
 //! array-like.
+use crate::python::Obj;
 use std::sync::Mutex;
 
 use numpy::PyArray1;
@@ -14,13 +15,13 @@ use crate::integrator::{Method, OdeSystem};
 /// The `jac` argument.
 pub(super) enum JacArg<'a> {
     None,
-    Callable(&'a Bound<'a, PyAny>),
+    Callable(&'a Obj<'a>),
     /// Row-major `dim × dim`.
     Constant(Vec<f64>),
 }
 
 /// A dense `(dim, dim)` matrix from an array-like or anything with `toarray()` (SciPy sparse).
-fn matrix(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Vec<f64>> {
+fn matrix(obj: &Obj, arg: &str, dim: usize) -> PyResult<Vec<f64>> {
     let dense;
     let obj = if obj.hasattr("toarray")? {
         dense = obj.call_method0("toarray")?;
@@ -46,7 +47,7 @@ fn matrix(obj: &Bound<'_, PyAny>, arg: &str, dim: usize) -> PyResult<Vec<f64>> {
 /// but `auto` only if it switches, which would leave a wrong `jac` unnoticed until then.
 pub(super) fn jac_arg<'a>(
     py: Python<'_>,
-    jac: Option<&'a Bound<'a, PyAny>>,
+    jac: Option<&'a Obj<'a>>,
     dim: usize,
     method: Method,
     start: (f64, &[f64]),
@@ -90,7 +91,7 @@ fn finite(py: Python<'_>, m: &[f64], dim: usize, arg: &str) -> PyResult<()> {
 /// (the run stops with its message, and the caller re-raises it).
 pub(super) struct WithJacobian<'a, S> {
     pub inner: S,
-    pub jac: &'a Bound<'a, PyAny>,
+    pub jac: &'a Obj<'a>,
     pub failure: &'a Mutex<Option<PyErr>>,
 }
 

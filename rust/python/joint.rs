@@ -1,4 +1,5 @@
 //! `Joint`: the joint types a body hangs on (revolute, prismatic, spherical, fixed, free).
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{to_array1, vec3};
@@ -14,13 +15,13 @@ pub struct PyJoint {
 #[pymethods]
 impl PyJoint {
     #[staticmethod]
-    fn revolute(py: Python<'_>, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn revolute(py: Python<'_>, axis: &Obj) -> PyResult<Self> {
         Ok(PyJoint {
             inner: Joint::revolute(vec3(axis, "axis")?).py(py)?,
         })
     }
     #[staticmethod]
-    fn prismatic(py: Python<'_>, axis: &Bound<'_, PyAny>) -> PyResult<Self> {
+    fn prismatic(py: Python<'_>, axis: &Obj) -> PyResult<Self> {
         Ok(PyJoint {
             inner: Joint::prismatic(vec3(axis, "axis")?).py(py)?,
         })
@@ -62,7 +63,7 @@ impl PyJoint {
         self.inner.nv()
     }
     #[getter]
-    fn axis<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+    fn axis<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
         let axis = self.inner.axis()?;
         Some(to_array1(py, axis.as_slice()).into_any())
     }

@@ -37,6 +37,9 @@ macro_rules! indexable {
 }
 pub(crate) use indexable;
 
+/// Any Python object, as the bindings take their arguments (converted in the core's terms).
+pub type Obj<'py> = pyo3::Bound<'py, pyo3::PyAny>;
+
 mod along;
 mod body;
 mod control;

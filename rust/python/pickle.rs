@@ -8,6 +8,7 @@
 //! bit-identical. Python callables inside (`TorqueFunction(f)`) are not in the bytes: they
 //! travel as the tuple `callables`, in effect order, which pickle stores by reference like
 //! any function (a lambda then fails with pickle's own error).
+use crate::python::Obj;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
@@ -107,7 +108,7 @@ fn restore(py: Python<'_>, effects: &mut [Effect], callables: &Bound<'_, PyTuple
 #[pyfunction]
 pub fn _dumps<'py>(
     py: Python<'py>,
-    obj: &Bound<'py, PyAny>,
+    obj: &Obj<'py>,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyTuple>)> {
     let mut extras: Vec<Py<PyAny>> = Vec::new();
     let payload = if let Ok(x) = obj.cast::<PyRigidBody>() {

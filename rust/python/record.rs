@@ -2,6 +2,7 @@
 //! it, each field a read-only attribute converted when read ([`Field`]), instead of a dict
 //! built field by field. The class also answers `r["field"]` and `r.keys()` (the dicts it
 //! replaced were read so), and has a `repr` naming its fields.
+use crate::python::Obj;
 use nalgebra::DMatrix;
 use pyo3::prelude::*;
 use pyo3::IntoPyObjectExt;
@@ -11,13 +12,13 @@ use super::convert::{dmatrix_to_array, to_array1};
 /// A record's field as Python sees it: numbers, strings and index lists as themselves, real
 /// vectors and matrices as NumPy arrays.
 pub trait Field {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>>;
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>>;
 }
 
 macro_rules! as_itself {
     ($($t:ty),*) => {
         $(impl Field for $t {
-            fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+            fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
                 self.clone().into_bound_py_any(py)
             }
         })*
@@ -36,32 +37,32 @@ as_itself!(
 as_itself!((f64, f64), Option<(String, String)>);
 
 impl Field for ([f64; 3], [f64; 3]) {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let t = |x: &[f64; 3]| (x[0], x[1], x[2]);
         (t(&self.0), t(&self.1)).into_bound_py_any(py)
     }
 }
 
 impl Field for Vec<f64> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         Ok(to_array1(py, self).into_any())
     }
 }
 
 impl Field for nalgebra::DVector<f64> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         Ok(to_array1(py, self.as_slice()).into_any())
     }
 }
 
 impl Field for DMatrix<f64> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         dmatrix_to_array(py, self)
     }
 }
 
 impl Field for Vec<Vec<f64>> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let items: Vec<_> = self.iter().map(|x| to_array1(py, x)).collect();
         items.into_bound_py_any(py)
     }
@@ -139,11 +140,7 @@ macro_rules! record {
 pub(crate) use record;
 
 /// `obj[key]` for one of a record's `fields`, else `KeyError`.
-pub fn item<'py>(
-    obj: &Bound<'py, PyAny>,
-    key: &str,
-    fields: &[&str],
-) -> PyResult<Bound<'py, PyAny>> {
+pub fn item<'py>(obj: &Obj<'py>, key: &str, fields: &[&str]) -> PyResult<Obj<'py>> {
     match fields.contains(&key) {
         true => obj.getattr(key),
         false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
@@ -152,14 +149,14 @@ pub fn item<'py>(
 
 /// `(name, value)` of each of a record's `fields`, in order.
 pub fn items<'py>(
-    obj: &Bound<'py, PyAny>,
+    obj: &Obj<'py>,
     fields: &[&'static str],
-) -> PyResult<Vec<(&'static str, Bound<'py, PyAny>)>> {
+) -> PyResult<Vec<(&'static str, Obj<'py>)>> {
     fields.iter().map(|f| Ok((*f, obj.getattr(*f)?))).collect()
 }
 
 /// `Name(a=..., b=...)` of a record's fields.
-pub fn repr(obj: &Bound<'_, PyAny>, name: &str, fields: &[&str]) -> PyResult<String> {
+pub fn repr(obj: &Obj, name: &str, fields: &[&str]) -> PyResult<String> {
     let parts: PyResult<Vec<String>> = fields
         .iter()
         .map(|f| Ok(format!("{f}={}", obj.getattr(*f)?.repr()?)))

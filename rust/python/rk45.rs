@@ -1,4 +1,5 @@
 //! `rk45` (`solve_ivp`): our integrators (RK45 by default) on a Python right-hand side.
+use crate::python::Obj;
 use std::sync::Mutex;
 
 use numpy::PyArray1;
@@ -23,14 +24,14 @@ use crate::io::scene::Settings;
 #[allow(clippy::too_many_arguments)]
 pub fn rk45(
     py: Python<'_>,
-    fun: &Bound<'_, PyAny>,
-    t_span: &Bound<'_, PyAny>,
-    y0: &Bound<'_, PyAny>,
-    rtol: Option<&Bound<'_, PyAny>>,
-    atol: Option<&Bound<'_, PyAny>>,
+    fun: &Obj,
+    t_span: &Obj,
+    y0: &Obj,
+    rtol: Option<&Obj>,
+    atol: Option<&Obj>,
     config: Option<PyRef<'_, PyRunConfig>>,
-    events: Option<&Bound<'_, PyAny>>,
-    jac: Option<&Bound<'_, PyAny>>,
+    events: Option<&Obj>,
+    jac: Option<&Obj>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyOdeSolution> {
     if !fun.is_callable() {
@@ -86,7 +87,7 @@ pub fn rk45(
 }
 
 /// `None`, one event callable, or a sequence of them.
-fn event_specs(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<PyEventSpec>> {
+fn event_specs(py: Python<'_>, events: Option<&Obj>) -> PyResult<Vec<PyEventSpec>> {
     let mut specs = Vec::new();
     if let Some(evs) = events.filter(|e| !e.is_none()) {
         if evs.is_callable() {
@@ -104,7 +105,7 @@ fn event_specs(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<Ve
 /// `failure` (the run stops with its message).
 fn python_system<'a>(
     py: Python<'a>,
-    fun: &'a Bound<'_, PyAny>,
+    fun: &'a Obj,
     dim: usize,
     failure: &'a Mutex<Option<PyErr>>,
 ) -> impl OdeSystem + 'a {

@@ -2,6 +2,7 @@
 //! is said) built from keyword arguments and read back through typed getters. The runs
 //! (`simulate_scene`, `simulate_batch`, `rk45`) take one, plus the same keywords, which beat
 //! it; which setting a run uses is the core's `RunConfig::resolve`.
+use crate::python::Obj;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyTuple};
@@ -26,21 +27,18 @@ impl PyRunConfig {
     #[pyo3(
         text_signature = "(t_span=None, *, rtol=None, atol=None, t_eval=None, first_step=None, max_step=None, max_steps=None, method=None, dt=None, controller=None, stiffness=None, disable=None, energy=None, power=None, dense_output=None)"
     )]
-    fn new(
-        t_span: Option<Bound<'_, PyAny>>,
-        settings: Option<&Bound<'_, PyDict>>,
-    ) -> PyResult<Self> {
+    fn new(t_span: Option<Obj>, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
         let given = keywords(settings, [("t_span", t_span.as_ref())])?;
         let inner = RunConfig::from_args(given.iter().map(|(k, v)| (k.as_str(), v)))?;
         Ok(PyRunConfig { inner })
     }
     /// A number, or an array of one per state component.
     #[getter]
-    fn rtol<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+    fn rtol<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
         self.inner.rtol.as_ref().map(|t| tol_py(py, t))
     }
     #[getter]
-    fn atol<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyAny>> {
+    fn atol<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
         self.inner.atol.as_ref().map(|t| tol_py(py, t))
     }
     #[getter]
@@ -131,9 +129,9 @@ super::getters!(PyRunConfig {
 /// A call's `**settings` and its named keywords given (not `None`), by keyword.
 pub(super) fn keywords<'py, const N: usize>(
     settings: Option<&Bound<'py, PyDict>>,
-    named: [(&str, Option<&Bound<'py, PyAny>>); N],
-) -> PyResult<Vec<(String, Bound<'py, PyAny>)>> {
-    let mut given: Vec<(String, Bound<'py, PyAny>)> = Vec::new();
+    named: [(&str, Option<&Obj<'py>>); N],
+) -> PyResult<Vec<(String, Obj<'py>)>> {
+    let mut given: Vec<(String, Obj<'py>)> = Vec::new();
     for (k, v) in settings.into_iter().flatten() {
         given.push((k.extract()?, v));
     }
@@ -151,9 +149,9 @@ pub(super) fn keywords<'py, const N: usize>(
 /// `RunConfig`'s constructor takes them) over `config`'s.
 pub(super) fn call_config(
     config: Option<PyRef<'_, PyRunConfig>>,
-    t_span: Option<&Bound<'_, PyAny>>,
-    rtol: Option<&Bound<'_, PyAny>>,
-    atol: Option<&Bound<'_, PyAny>>,
+    t_span: Option<&Obj>,
+    rtol: Option<&Obj>,
+    atol: Option<&Obj>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<RunConfig> {
     let below = config.map(|c| c.inner.clone()).unwrap_or_default();
@@ -166,14 +164,11 @@ pub(super) fn call_config(
 }
 
 /// The `RunConfig` of the keywords given (`None`: not given).
-pub(super) fn config_of(
-    _py: Python<'_>,
-    given: &[(&str, Option<&Bound<'_, PyAny>>)],
-) -> PyResult<RunConfig> {
+pub(super) fn config_of(_py: Python<'_>, given: &[(&str, Option<&Obj>)]) -> PyResult<RunConfig> {
     RunConfig::from_args(given.iter().filter_map(|(k, v)| v.map(|v| (*k, v))))
 }
 
-fn tol_py<'py>(py: Python<'py>, tol: &Tol) -> Bound<'py, PyAny> {
+fn tol_py<'py>(py: Python<'py>, tol: &Tol) -> Obj<'py> {
     match tol {
         Tol::Scalar(x) => PyFloat::new(py, *x).into_any(),
         Tol::PerComponent(v) => PyArray1::from_slice(py, v).into_any(),

@@ -1,4 +1,5 @@
 //! `Scene`: a model, its initial state, effects and the settings of its runs.
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -28,15 +29,15 @@ impl PyScene {
     fn new(
         py: Python<'_>,
         model: PyRef<'_, PyModel>,
-        q0: Option<&Bound<'_, PyAny>>,
-        v0: Option<&Bound<'_, PyAny>>,
-        effects: Option<&Bound<'_, PyAny>>,
-        t_span: Option<&Bound<'_, PyAny>>,
-        rtol: Option<&Bound<'_, PyAny>>,
-        atol: Option<&Bound<'_, PyAny>>,
+        q0: Option<&Obj>,
+        v0: Option<&Obj>,
+        effects: Option<&Obj>,
+        t_span: Option<&Obj>,
+        rtol: Option<&Obj>,
+        atol: Option<&Obj>,
         name: Option<String>,
         description: Option<String>,
-        disable: Option<&Bound<'_, PyAny>>,
+        disable: Option<&Obj>,
         settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let named = [
@@ -67,8 +68,8 @@ impl PyScene {
         &self,
         model: Option<PyRef<'_, PyModel>>,
         effects: Option<Vec<PyRef<'_, PyEffect>>>,
-        q0: Option<&Bound<'_, PyAny>>,
-        v0: Option<&Bound<'_, PyAny>>,
+        q0: Option<&Obj>,
+        v0: Option<&Obj>,
         name: Option<String>,
         description: Option<String>,
         settings: Option<&Bound<'_, PyDict>>,
@@ -120,11 +121,11 @@ impl PyScene {
         PyModel::from_shared(self.inner.model.clone())
     }
     #[getter]
-    fn q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn q0<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, &self.inner.q0).into_any()
     }
     #[getter]
-    fn v0<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn v0<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, &self.inner.v0).into_any()
     }
     #[getter]
@@ -153,11 +154,11 @@ impl PyScene {
     fn forward_dynamics_derivatives<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        tau: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: &Obj,
+        tau: Option<&Obj>,
         t: f64,
-        disable: Option<&Bound<'_, PyAny>>,
+        disable: Option<&Obj>,
     ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         super::derivatives::forward(py, &self.inner, q, v, tau, t, disable)
     }
@@ -167,11 +168,11 @@ impl PyScene {
     fn inverse_dynamics_derivatives<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
+        q: &Obj,
+        v: &Obj,
+        a: &Obj,
         t: f64,
-        disable: Option<&Bound<'_, PyAny>>,
+        disable: Option<&Obj>,
     ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
         super::derivatives::inverse(py, &self.inner, q, v, a, t, disable)
     }
@@ -181,10 +182,10 @@ impl PyScene {
     fn state_jacobian<'py>(
         &self,
         py: Python<'py>,
-        y: &Bound<'_, PyAny>,
+        y: &Obj,
         t: f64,
-        disable: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Option<Bound<'py, PyAny>>> {
+        disable: Option<&Obj>,
+    ) -> PyResult<Option<Obj<'py>>> {
         super::derivatives::state_jacobian(py, &self.inner, y, t, disable)
     }
     fn __repr__(&self) -> String {
@@ -206,12 +207,12 @@ impl PyScene {
 
 /// A list of effects (a lone effect is a common slip: the error says what a list is, not
 /// "not iterable").
-fn effect_list(py: Python<'_>, effects: &Bound<'_, PyAny>) -> PyResult<Vec<Effect>> {
+fn effect_list(py: Python<'_>, effects: &Obj) -> PyResult<Vec<Effect>> {
     let expected = "a list of effects such as [pmd.Gravity()]";
     let items = effects
         .try_iter()
         .map_err(|_| invalid(py, "effects", expected, repr_of(effects)))?;
-    let one = |(k, e): (usize, PyResult<Bound<'_, PyAny>>)| -> PyResult<Effect> {
+    let one = |(k, e): (usize, PyResult<Obj>)| -> PyResult<Effect> {
         let e = e?;
         let expected = "an effect such as pmd.Gravity(...)";
         let eff = e.cast::<PyEffect>();
@@ -225,7 +226,7 @@ fn effect_list(py: Python<'_>, effects: &Bound<'_, PyAny>) -> PyResult<Vec<Effec
 /// `None`: not given) laid over it, parsed as `RunConfig`'s keywords are (the core's
 /// `RunConfig::scene_args`).
 fn settings_over<const N: usize>(
-    named: [(&str, Option<&Bound<'_, PyAny>>); N],
+    named: [(&str, Option<&Obj>); N],
     settings: Option<&Bound<'_, PyDict>>,
     base: Settings,
 ) -> PyResult<Settings> {

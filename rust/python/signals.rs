@@ -4,6 +4,7 @@
 //! evaluation; when re-attaching had to wait (a busy Python thread), the interval doubles up
 //! to [`MAX_INTERVAL`], so such a neighbour costs a few per cent, and Ctrl-C still answers
 //! within a quarter of a second.
+use crate::python::Obj;
 use std::cell::RefCell;
 use std::rc::Rc;
 use std::time::{Duration, Instant};
@@ -118,7 +119,7 @@ pub fn stopped_with_partial(
     py: Python<'_>,
     raised: Option<PyErr>,
     stopped: crate::support::error::Error,
-    partial: &Bound<'_, PyAny>,
+    partial: &Obj,
     note: &str,
 ) -> PyErr {
     let err = raised.unwrap_or_else(|| super::errors::to_py(py, stopped));

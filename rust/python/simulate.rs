@@ -1,4 +1,5 @@
 //! `simulate_scene`, `effect_forces` and `energies`: runs and evaluations of a scene.
+use crate::python::Obj;
 use std::sync::Mutex;
 
 use pyo3::prelude::*;
@@ -26,11 +27,11 @@ use crate::support::args::given;
 pub fn simulate_scene(
     py: Python<'_>,
     scene: PyRef<'_, PyScene>,
-    t_span: Option<&Bound<'_, PyAny>>,
-    rtol: Option<&Bound<'_, PyAny>>,
-    atol: Option<&Bound<'_, PyAny>>,
+    t_span: Option<&Obj>,
+    rtol: Option<&Obj>,
+    atol: Option<&Obj>,
     config: Option<PyRef<'_, PyRunConfig>>,
-    events: Option<&Bound<'_, PyAny>>,
+    events: Option<&Obj>,
     progress: Option<Py<PyAny>>,
     progress_interval: Option<f64>,
     settings: Option<&Bound<'_, PyDict>>,
@@ -95,7 +96,7 @@ fn watch_arg(py: Python<'_>, progress_interval: Option<f64>) -> PyResult<Watch> 
 /// caller's order (the core's `EventList`).
 type SceneEvents = EventList<PyEventSpec>;
 
-fn scene_events(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<SceneEvents> {
+fn scene_events(py: Python<'_>, events: Option<&Obj>) -> PyResult<SceneEvents> {
     let mut out = SceneEvents::default();
     if let Some(evs) = events.filter(|e| !e.is_none()) {
         for (k, e) in evs.try_iter()?.enumerate() {
@@ -114,7 +115,7 @@ fn scene_events(py: Python<'_>, events: Option<&Bound<'_, PyAny>>) -> PyResult<S
 pub(super) fn scene_system<'s>(
     py: Python<'_>,
     s: &'s Scene,
-    disable: Option<&Bound<'_, PyAny>>,
+    disable: Option<&Obj>,
 ) -> PyResult<Dynamics<'s>> {
     let disabled = crate::simulate::disabled(crate::effects::args::disable(disable)?, &s.settings);
     Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
@@ -132,8 +133,8 @@ pub(super) fn time_arg(py: Python<'_>, t: f64) -> PyResult<f64> {
 pub(super) fn scene_state(
     py: Python<'_>,
     s: &Scene,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
+    q: &Obj,
+    v: &Obj,
 ) -> PyResult<(Vec<f64>, Vec<f64>)> {
     let q = vector(q, "q", Some(s.model.nq))?;
     let v = vector(v, "v", Some(s.model.nv))?;
@@ -148,10 +149,10 @@ pub(super) fn scene_state(
 pub fn effect_forces<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,
-    t: &Bound<'_, PyAny>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    disable: Option<&Bound<'_, PyAny>>,
+    t: &Obj,
+    q: &Obj,
+    v: &Obj,
+    disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
     let t = time_arg(py, real(t, "t")?)?;
@@ -186,9 +187,9 @@ pub fn effect_forces<'py>(
 pub fn energies<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    disable: Option<&Bound<'_, PyAny>>,
+    q: &Obj,
+    v: &Obj,
+    disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
     let (q, v) = scene_state(py, s, q, v)?;
@@ -218,14 +219,14 @@ pub fn energies<'py>(
 pub fn simulate_batch<'py>(
     py: Python<'py>,
     scenes: Vec<PyRef<'_, PyScene>>,
-    q0: Option<&Bound<'_, PyAny>>,
-    v0: Option<&Bound<'_, PyAny>>,
-    t_span: Option<&Bound<'_, PyAny>>,
-    rtol: Option<&Bound<'_, PyAny>>,
-    atol: Option<&Bound<'_, PyAny>>,
+    q0: Option<&Obj>,
+    v0: Option<&Obj>,
+    t_span: Option<&Obj>,
+    rtol: Option<&Obj>,
+    atol: Option<&Obj>,
     config: Option<PyRef<'_, PyRunConfig>>,
-    events: Option<&Bound<'_, PyAny>>,
-    threads: Option<&Bound<'_, PyAny>>,
+    events: Option<&Obj>,
+    threads: Option<&Obj>,
     progress: Option<Py<PyAny>>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Vec<PyRunResult>, Option<Py<PyAny>>)> {
@@ -308,11 +309,7 @@ pub fn simulate_batch<'py>(
 }
 
 /// Per-run initial states: one (1-D) for every run, or a row per run (2-D `(B, width)`).
-fn batch_states(
-    arg: &str,
-    obj: Option<&Bound<'_, PyAny>>,
-    width: usize,
-) -> PyResult<Option<StateRows>> {
+fn batch_states(arg: &str, obj: Option<&Obj>, width: usize) -> PyResult<Option<StateRows>> {
     let Some(obj) = given(obj) else {
         return Ok(None);
     };

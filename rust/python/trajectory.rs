@@ -1,5 +1,6 @@
 //! A run's result as one typed object (`_core.RunResult`, its status a `_core.RunStatus`
 //! variant), not a dict: `pointmass_dyn.SimulationResult` is built from its getters.
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
@@ -73,7 +74,7 @@ impl PyRunStatus {
     /// Pickled as its variant called with its fields (a result's `outcome` travels with it).
     fn __reduce__<'py>(
         slf: &Bound<'py, Self>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, pyo3::types::PyTuple>)> {
+    ) -> PyResult<(Obj<'py>, Bound<'py, pyo3::types::PyTuple>)> {
         Ok((slf.as_any().get_type().into_any(), Self::variant(slf)?.1))
     }
 }

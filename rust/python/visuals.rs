@@ -1,5 +1,6 @@
 //! `Model.visuals`, `Model.name`, `Model.set_visuals` and the `package_dirs` argument of
 //! `from_urdf`: the visual geometry (crate::model::visual) as plain Python data, a list of dicts.
+use crate::python::Obj;
 use std::path::PathBuf;
 
 use pyo3::prelude::*;
@@ -10,16 +11,13 @@ use super::model::PyModel;
 use crate::model::visual::{Shape, Visual};
 use crate::support::spatial::Vec3;
 
-fn repr(obj: &Bound<'_, PyAny>) -> String {
+fn repr(obj: &Obj) -> String {
     obj.repr()
         .map_or_else(|_| "?".to_string(), |x| x.to_string())
 }
 
 /// `package_dirs`: None, one path or a sequence of paths.
-pub(super) fn package_dirs(
-    py: Python<'_>,
-    obj: Option<&Bound<'_, PyAny>>,
-) -> PyResult<Vec<PathBuf>> {
+pub(super) fn package_dirs(py: Python<'_>, obj: Option<&Obj>) -> PyResult<Vec<PathBuf>> {
     let Some(obj) = obj.filter(|o| !o.is_none()) else {
         return Ok(Vec::new());
     };
@@ -85,12 +83,7 @@ impl PyModel {
     /// Replaces the visual geometry with `visuals` (dicts as `Model.visuals` gives them; a
     /// mesh's `path` defaults to its `uri`) and, if given, the name. The dynamics is unchanged.
     #[pyo3(signature = (visuals, *, name=None))]
-    fn set_visuals(
-        &self,
-        py: Python<'_>,
-        visuals: Vec<Bound<'_, PyAny>>,
-        name: Option<String>,
-    ) -> PyResult<()> {
+    fn set_visuals(&self, py: Python<'_>, visuals: Vec<Obj>, name: Option<String>) -> PyResult<()> {
         let nbodies = self.model().nbodies();
         let mut out = Vec::with_capacity(visuals.len());
         for (k, d) in visuals.iter().enumerate() {
@@ -118,7 +111,7 @@ pub fn resolve_mesh(
     py: Python<'_>,
     uri: &str,
     base_dir: Option<PathBuf>,
-    package_dirs: Option<&Bound<'_, PyAny>>,
+    package_dirs: Option<&Obj>,
 ) -> PyResult<Option<PathBuf>> {
     let dirs = self::package_dirs(py, package_dirs)?;
     Ok(crate::model::visual::resolve_mesh(

@@ -1,6 +1,7 @@
 //! `Model`'s joint couplings (`add_coupling`, their forces) and rotor inertia
 //! (`set_armature`, `armature`): argument conversion around `crate::loops::coupling` and
 //! `crate::recursive::armature`.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::{load_state, load_x, PyModel};
@@ -15,10 +16,10 @@ impl PyModel {
     fn add_coupling(
         &self,
         py: Python<'_>,
-        joint: &Bound<'_, PyAny>,
-        reference: &Bound<'_, PyAny>,
-        ratio: Option<&Bound<'_, PyAny>>,
-        offset: Option<&Bound<'_, PyAny>>,
+        joint: &Obj,
+        reference: &Obj,
+        ratio: Option<&Obj>,
+        offset: Option<&Obj>,
         name: Option<String>,
     ) -> PyResult<usize> {
         // `real` refuses bools and strings with the argument's name (a bare f64 took True as 1).
@@ -63,11 +64,11 @@ impl PyModel {
     fn coupling_forces<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        tau: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        v: &Obj,
+        tau: &Obj,
+        gravity: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
@@ -79,12 +80,7 @@ impl PyModel {
         })
     }
 
-    fn set_armature(
-        &self,
-        py: Python<'_>,
-        joint: &Bound<'_, PyAny>,
-        value: &Bound<'_, PyAny>,
-    ) -> PyResult<()> {
+    fn set_armature(&self, py: Python<'_>, joint: &Obj, value: &Obj) -> PyResult<()> {
         let j = joint_body(&self.model(), joint, "joint")?;
         let expected = "a number >= 0, or one per speed of the joint";
         let values = numbers(value, "value", expected)?;
@@ -92,7 +88,7 @@ impl PyModel {
     }
 
     #[getter]
-    fn armature<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn armature<'py>(&self, py: Python<'py>) -> Obj<'py> {
         let m = self.model();
         let a = if m.armature.is_empty() {
             vec![0.0; m.nv]

@@ -1,5 +1,6 @@
 //! `Model`'s dynamics: forward and inverse (either path), their derivatives, the mass
 //! matrix, bias forces and energies.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::{load_state, load_x, method_arg, Method, PyModel, DETACH_LINKS};
@@ -35,13 +36,13 @@ impl PyModel {
     fn forward_dynamics<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        tau: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-        external: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: &Obj,
+        tau: &Obj,
+        gravity: Option<&Obj>,
+        external: Option<&Obj>,
         method: &str,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    ) -> PyResult<Obj<'py>> {
         self.dynamics(py, Direction::Forward, q, v, tau, gravity, external, method)
     }
 
@@ -50,14 +51,14 @@ impl PyModel {
     fn inverse_dynamics<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-        external: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: &Obj,
+        a: &Obj,
+        gravity: Option<&Obj>,
+        external: Option<&Obj>,
         method: &str,
-        actuated: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        actuated: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let model = self.model();
         let Some(actuated) = crate::model::args::loop_actuation(&model, actuated)? else {
             return self.dynamics(py, Direction::Inverse, q, v, a, gravity, external, method);
@@ -77,11 +78,11 @@ impl PyModel {
     fn inverse_dynamics_derivatives<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        q: &Obj,
+        v: &Obj,
+        a: &Obj,
+        gravity: Option<&Obj>,
+    ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
         self.derivatives(py, Direction::Inverse, q, v, a, gravity)
     }
 
@@ -89,21 +90,16 @@ impl PyModel {
     fn forward_dynamics_derivatives<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        tau: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        q: &Obj,
+        v: &Obj,
+        tau: &Obj,
+        gravity: Option<&Obj>,
+    ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
         self.derivatives(py, Direction::Forward, q, v, tau, gravity)
     }
 
     #[pyo3(signature = (q, method="recursive"))]
-    fn mass_matrix<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        method: &str,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn mass_matrix<'py>(&self, py: Python<'py>, q: &Obj, method: &str) -> PyResult<Obj<'py>> {
         let method = method_arg(py, method)?;
         match method {
             Method::Recursive => self.with_workspace(|ws| {
@@ -139,10 +135,10 @@ impl PyModel {
     fn bias_forces<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        v: &Obj,
+        gravity: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
@@ -162,12 +158,7 @@ impl PyModel {
         })
     }
 
-    fn kinetic_energy(
-        &self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-    ) -> PyResult<f64> {
+    fn kinetic_energy(&self, py: Python<'_>, q: &Obj, v: &Obj) -> PyResult<f64> {
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             let model: &Model = &ws.version.model;
@@ -180,12 +171,7 @@ impl PyModel {
         })
     }
 
-    fn potential_energy(
-        &self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        gravity: &Bound<'_, PyAny>,
-    ) -> PyResult<f64> {
+    fn potential_energy(&self, py: Python<'_>, q: &Obj, gravity: &Obj) -> PyResult<f64> {
         let g = crate::model::args::gravity(Some(gravity))?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, None)?;
@@ -205,13 +191,13 @@ impl PyModel {
         &self,
         py: Python<'py>,
         direction: Direction,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        x: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-        external: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: &Obj,
+        x: &Obj,
+        gravity: Option<&Obj>,
+        external: Option<&Obj>,
         method: &str,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    ) -> PyResult<Obj<'py>> {
         let method = method_arg(py, method)?;
         let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
@@ -254,11 +240,11 @@ impl PyModel {
         &self,
         py: Python<'py>,
         direction: Direction,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        x: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        q: &Obj,
+        v: &Obj,
+        x: &Obj,
+        gravity: Option<&Obj>,
+    ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
         let g = crate::model::args::gravity(gravity)?;
         let name = match direction {
             Direction::Forward => "forward_dynamics_derivatives",

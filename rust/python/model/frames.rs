@@ -1,5 +1,6 @@
 //! `Model`'s frames, frame Jacobians, centre of mass and centroidal methods
 //! (`crate::frames`): arguments converted, the core called, results converted.
+use crate::python::Obj;
 use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
@@ -14,7 +15,7 @@ use crate::support::spatial::Placement;
 
 /// A frame: its name (a body or an added frame) or its index in `Model.frame_names`
 /// (the bodies', then the added frames'; a body's index is its frame's).
-pub fn frame_arg(model: &Model, obj: &Bound<'_, PyAny>, arg: &str) -> PyResult<FrameRef> {
+pub fn frame_arg(model: &Model, obj: &Obj, arg: &str) -> PyResult<FrameRef> {
     if let Ok(name) = obj.cast::<PyString>() {
         // Borrowed: no copy of the name per call.
         return model.frame_named(arg, name.to_str()?).py(obj.py());
@@ -47,7 +48,7 @@ pub use crate::model::args::configurations;
 /// run detached (Ctrl-C heard) unless it is one row.
 fn rows_of<'a>(
     model: &Model,
-    q: &'a Bound<'_, PyAny>,
+    q: &'a Obj,
     buf: &'a mut Vec<f64>,
 ) -> PyResult<(&'a [f64], usize, bool, bool)> {
     if let Some((data, [rows, cols])) = plain_f64_rows(q) {
@@ -75,7 +76,7 @@ fn run(
 /// Whether `q` is a one-dimensional NumPy array: the one-configuration calls' path (its
 /// values then read as any `q`); anything else goes through [`configurations`]. Cheaper
 /// than a typed cast, which compares the dtype through NumPy's API.
-fn one_dimensional(q: &Bound<'_, PyAny>) -> bool {
+fn one_dimensional(q: &Obj) -> bool {
     q.cast::<numpy::PyUntypedArray>()
         .is_ok_and(|a| numpy::PyUntypedArrayMethods::ndim(a) == 1)
 }
@@ -96,7 +97,7 @@ fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArray
 fn optional_vector(
     model: &Model,
     py: Python<'_>,
-    x: Option<&Bound<'_, PyAny>>,
+    x: Option<&Obj>,
     arg: &str,
 ) -> PyResult<Option<Vec<f64>>> {
     match x {
@@ -121,9 +122,9 @@ impl PyModel {
         &self,
         py: Python<'_>,
         name: String,
-        body: &Bound<'_, PyAny>,
-        translation: Option<&Bound<'_, PyAny>>,
-        rotation: Option<&Bound<'_, PyAny>>,
+        body: &Obj,
+        translation: Option<&Obj>,
+        rotation: Option<&Obj>,
     ) -> PyResult<usize> {
         let b = crate::model::args::some_body(&self.model(), body, "body")?;
         let at = crate::support::args::placement(translation, rotation, "translation", "rotation")?;
@@ -133,9 +134,9 @@ impl PyModel {
     fn frame_placement<'py>(
         &self,
         py: Python<'py>,
-        frame: &Bound<'_, PyAny>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        frame: &Obj,
+        q: &Obj,
+    ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
@@ -155,11 +156,11 @@ impl PyModel {
     fn point_path<'py>(
         &self,
         py: Python<'py>,
-        frame: &Bound<'_, PyAny>,
-        point: &Bound<'_, PyAny>,
-        q: &Bound<'_, PyAny>,
-        v: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>)> {
+        frame: &Obj,
+        point: &Obj,
+        q: &Obj,
+        v: Option<&Obj>,
+    ) -> PyResult<(Obj<'py>, Option<Obj<'py>>)> {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let p = vec3(point, "point")?;
@@ -183,10 +184,10 @@ impl PyModel {
     fn frame_jacobian<'py>(
         &self,
         py: Python<'py>,
-        frame: &Bound<'_, PyAny>,
-        q: &Bound<'_, PyAny>,
+        frame: &Obj,
+        q: &Obj,
         reference: &str,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    ) -> PyResult<Obj<'py>> {
         let rf = reference_arg(py, reference)?;
         if one_dimensional(q) {
             // One configuration: the pooled workspace's buffers, no thread hand-off.
@@ -225,11 +226,11 @@ impl PyModel {
     fn frame_jacobian_dot<'py>(
         &self,
         py: Python<'py>,
-        frame: &Bound<'_, PyAny>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
+        frame: &Obj,
+        q: &Obj,
+        v: &Obj,
         reference: &str,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    ) -> PyResult<Obj<'py>> {
         let (model, q, v) = self.state(py, q, v)?;
         let f = frame_arg(&model, frame, "frame")?;
         let rf = reference_arg(py, reference)?;
@@ -242,12 +243,12 @@ impl PyModel {
     fn frame_motion<'py>(
         &self,
         py: Python<'py>,
-        frame: &Bound<'_, PyAny>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: Option<&Bound<'_, PyAny>>,
+        frame: &Obj,
+        q: &Obj,
+        v: &Obj,
+        a: Option<&Obj>,
         reference: &str,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let (model, q, v) = self.state(py, q, v)?;
         let a = optional_vector(&model, py, a, "a")?;
         let f = frame_arg(&model, frame, "frame")?;
@@ -261,12 +262,7 @@ impl PyModel {
     }
 
     #[pyo3(signature = (q, jacobian=false))]
-    fn center_of_mass<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        jacobian: bool,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn center_of_mass<'py>(&self, py: Python<'py>, q: &Obj, jacobian: bool) -> PyResult<Obj<'py>> {
         if one_dimensional(q) {
             // One configuration: the pooled workspace's buffers, no thread hand-off.
             return self.with_workspace(|ws| {
@@ -314,10 +310,10 @@ impl PyModel {
     fn center_of_mass_motion<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        v: &Obj,
+        a: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let (model, q, v) = self.state(py, q, v)?;
         let a = optional_vector(&model, py, a, "a")?;
         let [c, vc, ac] = evaluate::com_motion(&model, &q, &v, a.as_deref()).py(py)?;
@@ -334,9 +330,9 @@ impl PyModel {
     fn centroidal<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: Option<&Bound<'_, PyAny>>,
-        a: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: Option<&Obj>,
+        a: Option<&Obj>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (model, q) = self.state_only(py, q)?;
         let v = optional_vector(&model, py, v, "v")?;
@@ -360,9 +356,9 @@ impl PyModel {
     fn independent_map<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        independent: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Vec<usize>)> {
+        q: &Obj,
+        independent: Option<&Obj>,
+    ) -> PyResult<(Obj<'py>, Vec<usize>)> {
         let (model, q) = self.state_only(py, q)?;
         let idx = match independent {
             Some(x) if !x.is_none() => crate::python::loops::actuated_indices(&model, x)

@@ -1,5 +1,6 @@
 //! `Model._inverse_kinematics` (`crate::frames::ik`), called by
 //! `pointmass_dyn.inverse_kinematics`, which normalises the targets.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::frames::frame_arg;
@@ -20,13 +21,8 @@ impl PyModel {
     fn _inverse_kinematics<'py>(
         &self,
         py: Python<'py>,
-        tasks: Vec<(
-            Bound<'py, PyAny>,
-            Option<Bound<'py, PyAny>>,
-            Bound<'py, PyAny>,
-            Vec<f64>,
-        )>,
-        q0: &Bound<'_, PyAny>,
+        tasks: Vec<(Obj<'py>, Option<Obj<'py>>, Obj<'py>, Vec<f64>)>,
+        q0: &Obj,
         limits: bool,
         tol: f64,
         max_iterations: usize,

@@ -3,6 +3,7 @@
 //! (`urdf::model_from_parts`). `Model.from_mujoco` and `Model.from_pinocchio` are those
 //! importers, attached to the class in Python: nothing here calls back into Python.
 
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -20,9 +21,9 @@ impl PyModel {
     fn from_urdf(
         py: Python<'_>,
         path: std::path::PathBuf,
-        root_joint: Option<&Bound<'_, PyAny>>,
-        repair: Option<&Bound<'_, PyAny>>,
-        package_dirs: Option<&Bound<'_, PyAny>>,
+        root_joint: Option<&Obj>,
+        repair: Option<&Obj>,
+        package_dirs: Option<&Obj>,
         mimic: bool,
     ) -> PyResult<Self> {
         let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
@@ -58,7 +59,7 @@ impl PyModel {
     #[pyo3(signature = (parts, ranges=None))]
     fn _from_parts(
         py: Python<'_>,
-        parts: Vec<Bound<'_, PyAny>>,
+        parts: Vec<Obj>,
         ranges: Option<Vec<Option<(f64, f64)>>>,
     ) -> PyResult<Self> {
         let ranges = ranges.unwrap_or_else(|| vec![None; parts.len()]);
@@ -77,12 +78,12 @@ impl PyModel {
                 String,
                 i64,
                 PyRef<'_, PyJoint>,
-                Bound<'_, PyAny>,
-                Bound<'_, PyAny>,
+                Obj,
+                Obj,
                 String,
                 f64,
-                Bound<'_, PyAny>,
-                Bound<'_, PyAny>,
+                Obj,
+                Obj,
             ) = p.extract().map_err(|_| {
                 invalid(
                     py,

@@ -1,5 +1,6 @@
 //! `Model`'s kinematics: placements, poses and point masses at a configuration, and the
 //! DeNOC matrices and the explicit products built from them.
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -14,11 +15,7 @@ use crate::python::signals::detach_interruptible;
 
 #[pymethods]
 impl PyModel {
-    fn placements<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    fn placements<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<(Obj<'py>, Obj<'py>)> {
         self.with_workspace(|ws| {
             load_state(ws, py, q, None)?;
             let model: &Model = &ws.version.model;
@@ -32,11 +29,7 @@ impl PyModel {
         })
     }
 
-    fn body_poses<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    fn body_poses<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
         let (rows, qs, stacked) = super::frames::configurations(&model, q, "q")?;
         let poses = detach_interruptible(py, || {
@@ -61,11 +54,7 @@ impl PyModel {
         Ok(d)
     }
 
-    fn point_masses<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    fn point_masses<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<(Obj<'py>, Obj<'py>)> {
         self.with_workspace(|ws| {
             load_state(ws, py, q, None)?;
             let (masses, points) = denoc::point_positions(ws.model(), &ws.q);
@@ -79,7 +68,7 @@ impl PyModel {
         })
     }
 
-    fn denoc(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<PyDenoc> {
+    fn denoc(&self, py: Python<'_>, q: &Obj) -> PyResult<PyDenoc> {
         let (model, qv) = self.state_only(py, q)?;
         let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
         for (k, m) in [("D", &den.d), ("N", &den.n), ("points", &den.points)] {
@@ -88,12 +77,7 @@ impl PyModel {
         Ok(PyDenoc(den))
     }
 
-    fn denoc_rates(
-        &self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-    ) -> PyResult<PyDenocRates> {
+    fn denoc_rates(&self, py: Python<'_>, q: &Obj, v: &Obj) -> PyResult<PyDenocRates> {
         let (model, qv, vv) = self.state(py, q, v)?;
         let (_, rates) = detach_interruptible(py, || denoc::matrices_and_rates(&model, &qv, &vv))?;
         for (k, m) in [("D", &rates.d), ("N", &rates.n)] {
@@ -102,24 +86,14 @@ impl PyModel {
         Ok(PyDenocRates(rates))
     }
 
-    fn convective_matrix<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn convective_matrix<'py>(&self, py: Python<'py>, q: &Obj, v: &Obj) -> PyResult<Obj<'py>> {
         let (model, qv, vv) = self.state(py, q, v)?;
         let c = detach_interruptible(py, || denoc::convective_matrix(&model, &qv, &vv))?;
         check_result(py, "convective_matrix", c.as_slice())?;
         dmatrix_to_array(py, &c)
     }
 
-    fn gravity_forces<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        gravity: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn gravity_forces<'py>(&self, py: Python<'py>, q: &Obj, gravity: &Obj) -> PyResult<Obj<'py>> {
         let g = crate::model::args::gravity(Some(gravity))?;
         let (model, qv) = self.state_only(py, q)?;
         let tg = detach_interruptible(py, || denoc::gravity_forces(&model, &qv, &g))?;
@@ -130,9 +104,9 @@ impl PyModel {
     fn generalized_forces<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        forces: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        forces: &Obj,
+    ) -> PyResult<Obj<'py>> {
         let (model, qv) = self.state_only(py, q)?;
         let f = points(forces, "forces")?;
         for p in &f {
@@ -143,12 +117,7 @@ impl PyModel {
         Ok(to_array1(py, tau.as_slice()).into_any())
     }
 
-    fn velocity_to_qdot<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn velocity_to_qdot<'py>(&self, py: Python<'py>, q: &Obj, v: &Obj) -> PyResult<Obj<'py>> {
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;
             let mut qd = vec![0.0; ws.model().nq];

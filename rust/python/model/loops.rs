@@ -1,5 +1,6 @@
 //! `Model`'s closed loops: cut joints, their residuals and Jacobian, assembly, and the cut
 //! joints' forces.
+use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::{load_state, load_x, rename, PyModel};
@@ -18,13 +19,13 @@ impl PyModel {
     fn add_loop(
         &self,
         py: Python<'_>,
-        body_a: Option<&Bound<'_, PyAny>>,
-        body_b: Option<&Bound<'_, PyAny>>,
+        body_a: Option<&Obj>,
+        body_b: Option<&Obj>,
         joint: PyRef<'_, PyJoint>,
-        translation_a: Option<&Bound<'_, PyAny>>,
-        translation_b: Option<&Bound<'_, PyAny>>,
-        rotation_a: Option<&Bound<'_, PyAny>>,
-        rotation_b: Option<&Bound<'_, PyAny>>,
+        translation_a: Option<&Obj>,
+        translation_b: Option<&Obj>,
+        rotation_a: Option<&Obj>,
+        rotation_b: Option<&Obj>,
         name: Option<String>,
     ) -> PyResult<usize> {
         let fa = placement(translation_a, rotation_a, "translation_a", "rotation_a")?;
@@ -54,11 +55,7 @@ impl PyModel {
         self.model().loops.iter().map(|l| l.name.clone()).collect()
     }
 
-    fn constraint_residual<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn constraint_residual<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
         let (model, q) = self.state_only(py, q)?;
         let mut kin = loops::LoopKinematics::new(&model);
         kin.positions(&model, &q);
@@ -68,11 +65,7 @@ impl PyModel {
         Ok(to_array1(py, &r).into_any())
     }
 
-    fn constraint_jacobian<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+    fn constraint_jacobian<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
         let (model, q) = self.state_only(py, q)?;
         let mut kin = loops::LoopKinematics::new(&model);
         kin.positions(&model, &q);
@@ -90,11 +83,11 @@ impl PyModel {
     fn assemble<'py>(
         &self,
         py: Python<'py>,
-        q_guess: &Bound<'_, PyAny>,
-        fixed: Option<&Bound<'_, PyAny>>,
+        q_guess: &Obj,
+        fixed: Option<&Obj>,
         tol: f64,
-        max_iterations: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        max_iterations: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let (model, q) = self
             .state_only(py, q_guess)
             .map_err(|e| rename(py, e, "q", "q_guess"))?;
@@ -122,10 +115,10 @@ impl PyModel {
     fn assemble_velocity<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v_guess: &Bound<'_, PyAny>,
-        fixed: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        v_guess: &Obj,
+        fixed: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let (model, q, mut v) = self
             .state(py, q, v_guess)
             .map_err(|e| rename(py, e, "v", "v_guess"))?;
@@ -139,11 +132,11 @@ impl PyModel {
     fn assemble_acceleration<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a_guess: &Bound<'_, PyAny>,
-        fixed: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        v: &Obj,
+        a_guess: &Obj,
+        fixed: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let (model, q, v) = self.state(py, q, v)?;
         let mut a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
         crate::support::error::check_finite("a_guess", &a).py(py)?;
@@ -157,12 +150,12 @@ impl PyModel {
     fn constraint_forces<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        tau: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-        external: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<Bound<'py, PyAny>> {
+        q: &Obj,
+        v: &Obj,
+        tau: &Obj,
+        gravity: Option<&Obj>,
+        external: Option<&Obj>,
+    ) -> PyResult<Obj<'py>> {
         let g = crate::model::args::gravity(gravity)?;
         self.with_workspace(|ws| {
             load_state(ws, py, q, Some(v))?;

@@ -4,6 +4,7 @@
 //! ([`dynamics`]), closed loops ([`loops`]), shaking and bearing forces ([`reactions`]). Each
 //! converts arguments, calls the core (`crate::dynamics::shared` holds the versions and the workspace
 //! pool) and converts the result.
+use crate::python::Obj;
 use std::sync::Arc;
 
 use pyo3::prelude::*;
@@ -62,12 +63,7 @@ fn method_arg(py: Python<'_>, method: &str) -> PyResult<Method> {
 }
 
 /// Reads q (and v) into the workspace's buffers and validates them.
-fn load_state(
-    ws: &mut Workspace,
-    py: Python<'_>,
-    q: &Bound<'_, PyAny>,
-    v: Option<&Bound<'_, PyAny>>,
-) -> PyResult<()> {
+fn load_state(ws: &mut Workspace, py: Python<'_>, q: &Obj, v: Option<&Obj>) -> PyResult<()> {
     vector_into(q, "q", &mut ws.q)?;
     if let Some(v) = v {
         vector_into(v, "v", &mut ws.v)?;
@@ -76,7 +72,7 @@ fn load_state(
 }
 
 /// Reads the argument that is not a state (τ or a) into the workspace and validates it.
-fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Bound<'_, PyAny>, arg: &str) -> PyResult<()> {
+fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Obj, arg: &str) -> PyResult<()> {
     vector_into(x, arg, &mut ws.x)?;
     crate::support::error::check_finite(arg, &ws.x).py(py)
 }
@@ -121,7 +117,7 @@ impl PyModel {
 
     /// The current model and a checked copy of `q`, for the calls that run detached and
     /// need no workspace.
-    fn state_only(&self, py: Python<'_>, q: &Bound<'_, PyAny>) -> PyResult<(Arc<Model>, Vec<f64>)> {
+    fn state_only(&self, py: Python<'_>, q: &Obj) -> PyResult<(Arc<Model>, Vec<f64>)> {
         let model = self.model();
         let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
         model.check_state(&q, None).py(py)?;
@@ -133,8 +129,8 @@ impl PyModel {
     fn state(
         &self,
         py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
+        q: &Obj,
+        v: &Obj,
     ) -> PyResult<(Arc<Model>, Vec<f64>, Vec<f64>)> {
         let model = self.model();
         let q = crate::python::convert::vector(q, "q", Some(model.nq))?;

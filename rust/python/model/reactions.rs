@@ -1,5 +1,6 @@
 //! `Model`'s reactions (`crate::dynamics::reactions`): the point masses in motion, the balancing
 //! regressors, shaking forces and bearing forces.
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -15,13 +16,7 @@ use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
-    fn point_motion(
-        &self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
-    ) -> PyResult<PyPointMotion> {
+    fn point_motion(&self, py: Python<'_>, q: &Obj, v: &Obj, a: &Obj) -> PyResult<PyPointMotion> {
         let model = self.model();
         let (qs, vs, accs) = one_state(&model, q, v, a)?;
         let mut ws = recursive::reference::Workspace::new(&model);
@@ -41,11 +36,11 @@ impl PyModel {
     fn point_regressor<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
-        points: Option<&Bound<'_, PyAny>>,
-        gravity: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: &Obj,
+        a: &Obj,
+        points: Option<&Obj>,
+        gravity: Option<&Obj>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
         let g = crate::model::args::gravity(gravity)?;
@@ -101,11 +96,11 @@ impl PyModel {
     fn shaking<'py>(
         &self,
         py: Python<'py>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
-        about: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        q: &Obj,
+        v: &Obj,
+        a: &Obj,
+        about: Option<&Obj>,
+    ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let model = self.model();
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
         let about = crate::model::args::about(about)?;
@@ -142,12 +137,12 @@ impl PyModel {
     fn bearing_forces(
         &self,
         py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        v: &Bound<'_, PyAny>,
-        a: &Bound<'_, PyAny>,
-        gravity: Option<&Bound<'_, PyAny>>,
-        external: Option<&Bound<'_, PyAny>>,
-        actuated: Option<&Bound<'_, PyAny>>,
+        q: &Obj,
+        v: &Obj,
+        a: &Obj,
+        gravity: Option<&Obj>,
+        external: Option<&Obj>,
+        actuated: Option<&Obj>,
         frame: &str,
     ) -> PyResult<PyBearingForces> {
         let world = crate::python::reactions::world_frame(py, frame)?;
@@ -167,9 +162,9 @@ impl PyModel {
 /// `(q, v, a)` of one state (`crate::python::reactions::states`), a stack refused.
 fn one_state(
     model: &crate::model::Model,
-    q: &Bound<'_, PyAny>,
-    v: &Bound<'_, PyAny>,
-    a: &Bound<'_, PyAny>,
+    q: &Obj,
+    v: &Obj,
+    a: &Obj,
 ) -> PyResult<(Vec<f64>, Vec<f64>, Vec<f64>)> {
     match crate::python::reactions::states(model, q, v, a)? {
         (None, qs, vs, accs) => Ok((qs, vs, accs)),
@@ -185,7 +180,7 @@ fn flat(x: &[Vec3]) -> Vec<f64> {
 }
 
 /// Points of the links, seven per link, as (n, 7, 3).
-fn sevens<'py>(py: Python<'py>, x: &[Vec3]) -> PyResult<Bound<'py, PyAny>> {
+fn sevens<'py>(py: Python<'py>, x: &[Vec3]) -> PyResult<Obj<'py>> {
     to_array(py, flat(x), &[x.len() / 7, 7, 3])
 }
 

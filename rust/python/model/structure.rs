@@ -1,5 +1,6 @@
 //! `Model`'s tree: building it body by body, its sizes and names, bodies and joints.
 
+use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyDict};
 
@@ -33,11 +34,11 @@ impl PyModel {
         py: Python<'_>,
         body: PyRef<'_, PyRigidBody>,
         joint: PyRef<'_, PyJoint>,
-        parent: Option<&Bound<'_, PyAny>>,
-        translation: Option<&Bound<'_, PyAny>>,
-        rotation: Option<&Bound<'_, PyAny>>,
+        parent: Option<&Obj>,
+        translation: Option<&Obj>,
+        rotation: Option<&Obj>,
         name: Option<String>,
-        point_mass_center: Option<&Bound<'_, PyAny>>,
+        point_mass_center: Option<&Obj>,
     ) -> PyResult<usize> {
         let frame = args::placement(translation, rotation, "translation", "rotation")?;
         let center = args::opt(point_mass_center, |c| args::vec3(c, "point_mass_center"))?;
@@ -87,11 +88,7 @@ impl PyModel {
         self.model().total_mass()
     }
 
-    fn body_info(
-        &self,
-        py: Python<'_>,
-        index: &Bound<'_, PyAny>,
-    ) -> PyResult<(String, String, i64, i64)> {
+    fn body_info(&self, py: Python<'_>, index: &Obj) -> PyResult<(String, String, i64, i64)> {
         let index = crate::python::convert::count_arg(index, "index", "a body index >= 0")?;
         let m = self.model();
         let b = m.bodies.get(index).ok_or_else(|| {
@@ -117,11 +114,11 @@ impl PyModel {
             .collect()
     }
 
-    fn neutral<'py>(&self, py: Python<'py>) -> Bound<'py, PyAny> {
+    fn neutral<'py>(&self, py: Python<'py>) -> Obj<'py> {
         to_array1(py, &self.model().neutral()).into_any()
     }
 
-    fn body(&self, body: &Bound<'_, PyAny>) -> PyResult<PyRigidBody> {
+    fn body(&self, body: &Obj) -> PyResult<PyRigidBody> {
         let model = self.model();
         let b = some_body(&model, body, "body")?;
         Ok(PyRigidBody {
@@ -132,7 +129,7 @@ impl PyModel {
     fn with_body(
         &self,
         py: Python<'_>,
-        body: &Bound<'_, PyAny>,
+        body: &Obj,
         rigid_body: PyRef<'_, PyRigidBody>,
     ) -> PyResult<Self> {
         let ver = self.version();
