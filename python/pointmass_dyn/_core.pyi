@@ -710,7 +710,7 @@ class Effect:
         fills in their defaults); None for other effects."""
     def contact_state(
         self, model: Model, q: ArrayLike, v: ArrayLike
-    ) -> dict[str, NDArray[np.float64]]:
+    ) -> ContactStates:
         """A ground contact's ``position`` (N, P, 3), ``penetration`` (N, P),
         ``normal_force`` (N, P) and ``force`` (N, P, 3) along states ``q`` (N, nq), ``v``."""
     @property
@@ -1039,7 +1039,8 @@ class RunStatus:
 
 @final
 class ContactParameters:
-    """A ground contact's law parameters (SI); ``p["stiffness"]`` indexes them as well."""
+    """A ground contact's law parameters (SI); ``p["stiffness"]`` indexes them as well (a
+    typed record, rust/python/record.rs)."""
     height: float
     stiffness: float | None
     exponent: float
@@ -1048,6 +1049,22 @@ class ContactParameters:
     v_eps: float
     def __getitem__(self, key: str) -> float | None: ...
     def keys(self) -> list[str]: ...
+    def items(self) -> list[tuple[str, Any]]: ...
+    def __len__(self) -> int: ...
+
+@final
+class ContactStates:
+    """A ground contact's points along N states (``Effect.contact_state``): a typed record,
+    fields as attributes or ``r["field"]``."""
+
+    def keys(self) -> list[str]: ...
+    def items(self) -> list[tuple[str, Any]]: ...
+    def __len__(self) -> int: ...
+    def __getitem__(self, key: str) -> Any: ...
+    position: _Array
+    penetration: _Array
+    normal_force: _Array
+    force: _Array
 
 @final
 class OdeSolution:

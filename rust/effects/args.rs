@@ -343,13 +343,9 @@ pub fn numbers<A: Arg>(x: &A, arg: &str, expected: &str) -> R<Vec<f64>, A> {
     Ok(values)
 }
 
-/// A ground contact along states `q` (N, nq) and `v` (N, nv): N and the contact at each.
-pub fn contact_states<A: Arg>(
-    contact: &GroundContact,
-    model: &Model,
-    q: &A,
-    v: &A,
-) -> R<(usize, ContactStates), A> {
+/// A ground contact's points along states `q` (N, nq) and `v` (N, nv)
+/// ([`Effect::contact_states`]).
+pub fn contact_states<A: Arg>(effect: &Effect, model: &Model, q: &A, v: &A) -> R<ContactStates, A> {
     let (qs, qv) = q.array("q")?;
     let (vs, vv) = v.array("v")?;
     let (nq, nv) = (model.nq, model.nv);
@@ -358,7 +354,7 @@ pub fn contact_states<A: Arg>(
         let got = format!("{} and {}", shape_str(&qs), shape_str(&vs));
         return Err(Error::arg("q, v", expected, got).into());
     }
-    Ok((qs[0], contact.states(model, &qv, &vv)?))
+    Ok(effect.contact_states(model, &qv, &vv)?)
 }
 
 #[cfg(test)]

@@ -473,6 +473,8 @@ impl GroundContact {
 /// normal force and the whole force on it (3 each, world frame: normal plus friction).
 #[derive(Debug, Clone, Default)]
 pub struct ContactStates {
+    /// How many states, and points per state.
+    pub states: usize,
     pub points: usize,
     pub position: Vec<f64>,
     pub penetration: Vec<f64>,
@@ -509,6 +511,7 @@ impl GroundContact {
         let mut law = self.law(model)?;
         let np = law.npoints();
         let mut out = ContactStates {
+            states: n,
             points: np,
             position: vec![0.0; n * np * 3],
             penetration: vec![0.0; n * np],

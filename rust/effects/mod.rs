@@ -58,6 +58,7 @@
 //! scene is built ([`fill_model_limits`]).
 //!
 //! `[simulate] disable = ["gravity", "springs"]` switches families off.
+mod accessors;
 pub mod args;
 mod body_point;
 pub mod damper;
@@ -85,6 +86,7 @@ use crate::model::Model;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::Vec3;
 
+pub use accessors::{torque_functions, ContactParameters};
 pub use damper::Damper;
 pub use external::{External, ExternalLoad, Frame};
 pub use family::{Disabled, Kind};

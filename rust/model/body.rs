@@ -4,7 +4,7 @@
 //! `I_xy = −Σ m x y`. The paper writes products of inertia with the opposite sign; that is
 //! converted at the boundary, never here.
 use crate::model::point_masses::EquimomentalSet;
-use crate::support::error::{check_finite, Error, Result};
+use crate::support::error::{check_finite, check_result, Error, Result};
 use crate::support::spatial::{BodyInertia, Mat3, Vec3};
 
 /// Relative tolerance for symmetry, definiteness and the triangle inequality, scaled by the
@@ -169,6 +169,15 @@ impl RigidBody {
     pub fn inertia_about(&self, point: &Vec3) -> Mat3 {
         let r = self.com - point;
         self.inertia + (Mat3::identity() * r.norm_squared() - r * r.transpose()) * self.mass
+    }
+
+    /// [`inertia_about`](Self::inertia_about) a caller's point: the point checked finite, the
+    /// result too (a point far enough away overflows it).
+    pub fn inertia_about_checked(&self, point: &Vec3) -> Result<Mat3> {
+        check_finite("point", point.as_slice())?;
+        let i = self.inertia_about(point);
+        check_result("inertia_about", i.as_slice())?;
+        Ok(i)
     }
 
     /// Second moments about the COM, `J = Σ m d dᵀ`, without cancellation: each diagonal

@@ -8,6 +8,7 @@
 //! entries 0 and ±1/4 and condition number 2.83, whatever the body's shape. The paper's
 //! h-scaled form has condition number ~(h_max/h_min)² and is never used.
 use crate::model::body::RigidBody;
+use crate::support::error::{check_finite, check_result, Result};
 use crate::support::spatial::Vec3;
 
 /// Vertex signs (paper Table I); the eighth vertex (−,−,−) is not used.
@@ -50,6 +51,18 @@ fn bounded_ratio(num: f64, den: f64, limit: f64) -> f64 {
 }
 
 impl EquimomentalSet {
+    /// The set of `body` around a caller's `center` (default: the COM): the centre checked
+    /// finite, the result too (a centre far enough away overflows the second moments).
+    pub fn around(body: &RigidBody, center: Option<Vec3>) -> Result<Self> {
+        if let Some(c) = &center {
+            check_finite("center", c.as_slice())?;
+        }
+        let set = Self::solve(body, &center.unwrap_or(body.com));
+        check_result("point_masses", &set.masses)?;
+        check_result("point_masses", set.half_sides.as_slice())?;
+        Ok(set)
+    }
+
     /// Solves for the seven masses with the box centred at `center` (body frame).
     pub fn solve(body: &RigidBody, center: &Vec3) -> Self {
         let m = body.mass;

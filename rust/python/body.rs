@@ -3,7 +3,7 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{mat3, mat3_to_array, points, real, to_array, to_array1, vec3, vector};
-use super::errors::{check_result, IntoPyResult};
+use super::errors::IntoPyResult;
 use crate::model::body::RigidBody;
 use crate::model::point_masses::EquimomentalSet;
 
@@ -53,27 +53,15 @@ impl PyRigidBody {
 
     /// Inertia about `point` (body frame), by the parallel-axis theorem.
     fn inertia_about<'py>(&self, py: Python<'py>, point: &Obj) -> PyResult<Obj<'py>> {
-        let p = vec3(point, "point")?;
-        crate::support::error::check_finite("point", p.as_slice()).py(py)?;
-        let i = self.inner.inertia_about(&p);
-        check_result(py, "inertia_about", i.as_slice())?;
-        mat3_to_array(py, &i)
+        let i = self.inner.inertia_about_checked(&vec3(point, "point")?);
+        mat3_to_array(py, &i.py(py)?)
     }
 
     /// The equimomental seven point masses, box centred at `center` (default: the COM).
     #[pyo3(signature = (center=None))]
     fn point_masses(&self, py: Python<'_>, center: Option<&Obj>) -> PyResult<PyPointMasses> {
-        let c = match center {
-            Some(c) if !c.is_none() => {
-                let c = vec3(c, "center")?;
-                crate::support::error::check_finite("center", c.as_slice()).py(py)?;
-                c
-            }
-            _ => self.inner.com,
-        };
-        let inner = EquimomentalSet::solve(&self.inner, &c);
-        check_result(py, "point_masses", &inner.masses)?;
-        check_result(py, "point_masses", inner.half_sides.as_slice())?;
+        let center = crate::support::args::opt(center, |c| vec3(c, "center"))?;
+        let inner = EquimomentalSet::around(&self.inner, center).py(py)?;
         Ok(PyPointMasses { inner })
     }
 

@@ -8,9 +8,13 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::vector;
+use super::convert::{to_array, to_array1, vector};
 use super::errors::{invalid, IntoPyResult};
-use crate::effects::{args, Effect, PerJoint, Torque, TorqueFunction, TorqueLimit};
+use super::record::record;
+use crate::effects::ground_contact::ContactStates;
+use crate::effects::TorqueLimit;
+use crate::effects::{args, ContactParameters, Effect, PerJoint, Torque, TorqueFunction};
+use pyo3::IntoPyObjectExt;
 
 /// An argument the core parses (`crate::effects::args`).
 type A<'py> = Obj<'py>;
@@ -32,36 +36,23 @@ impl From<Effect> for PyEffect {
     }
 }
 
-/// A ground contact's law parameters (SI): attributes, and `p["stiffness"]` as well.
-#[pyclass(
-    name = "ContactParameters",
-    module = "pointmass_dyn._core",
-    frozen,
-    get_all,
-    eq
-)]
-#[derive(Clone, PartialEq, Debug)]
-pub struct PyContactParameters {
-    height: f64,
-    stiffness: Option<f64>,
-    exponent: f64,
-    damping: Option<f64>,
-    friction: f64,
-    v_eps: f64,
-}
+record!(
+    /// A ground contact's law parameters (SI): attributes, and `p["stiffness"]` as well.
+    PyContactParameters("ContactParameters", ContactParameters) {
+        height, stiffness, exponent, damping, friction, v_eps
+    } eq
+);
 
-super::indexable!(PyContactParameters ["height", "stiffness", "exponent", "damping", "friction", "v_eps"]);
-
-#[pymethods]
-impl PyContactParameters {
-    fn __repr__(&self) -> String {
-        let opt = |x: Option<f64>| x.map_or("None".into(), |x| format!("{x:?}"));
-        format!(
-            "ContactParameters(height={:?}, stiffness={}, exponent={:?}, damping={}, friction={:?}, v_eps={:?})",
-            self.height, opt(self.stiffness), self.exponent, opt(self.damping), self.friction, self.v_eps
-        )
+record!(
+    /// A ground contact's points along N states: `position` (N, P, 3), `penetration` (N, P),
+    /// `normal_force` (N, P), `force` (N, P, 3).
+    PyContactStates("ContactStates", ContactStates) {
+        position: |s: &ContactStates, py| to_array(py, s.position.clone(), &[s.states, s.points, 3]),
+        penetration: |s: &ContactStates, py| to_array(py, s.penetration.clone(), &[s.states, s.points]),
+        normal_force: |s: &ContactStates, py| to_array(py, s.normal_force.clone(), &[s.states, s.points]),
+        force: |s: &ContactStates, py| to_array(py, s.force.clone(), &[s.states, s.points, 3]),
     }
-}
+);
 
 thread_local! {
     /// The first exception a Python torque function raised during the current call (the
@@ -144,57 +135,29 @@ impl PyEffect {
         Ok(Effect::Torque(Torque::function(name, torque_callback(f.unbind()))).into())
     }
 
-    /// A ground contact's points along states `q` (N, nq), `v` (N, nv): a dict of
-    /// `position` (N, P, 3), `penetration` (N, P), `normal_force` (N, P), `force` (N, P, 3).
-    fn contact_state<'py>(
+    /// A ground contact's points along states `q` (N, nq), `v` (N, nv): a `ContactStates`
+    /// (indexable as a dict) of `position` (N, P, 3), `penetration` (N, P), `normal_force`
+    /// (N, P), `force` (N, P, 3).
+    fn contact_state(
         &self,
-        py: Python<'py>,
         model: PyRef<'_, super::model::PyModel>,
-        q: &Obj<'py>,
-        v: &Obj<'py>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        let Effect::GroundContact(c) = &self.inner else {
-            return Err(invalid(
-                py,
-                "self",
-                "a GroundContact effect",
-                format!("a {} effect", self.inner.kind().name()),
-            ));
-        };
-        let (n, s) = args::contact_states(c, &model.model(), q, v)?;
-        // Finite states, but a law whose numbers overflow there (a damping of 1e307).
-        for (what, x) in [
-            ("position", &s.position),
-            ("penetration", &s.penetration),
-            ("normal_force", &s.normal_force),
-            ("force", &s.force),
-        ] {
-            super::errors::check_result(py, &format!("contact_state['{what}']"), x)?;
-        }
-        let np = s.points;
-        let d = pyo3::types::PyDict::new(py);
-        let to = super::convert::to_array;
-        d.set_item("position", to(py, s.position, &[n, np, 3])?)?;
-        d.set_item("penetration", to(py, s.penetration, &[n, np])?)?;
-        d.set_item("normal_force", to(py, s.normal_force, &[n, np])?)?;
-        d.set_item("force", to(py, s.force, &[n, np, 3])?)?;
-        Ok(d)
+        q: &Obj,
+        v: &Obj,
+    ) -> PyResult<PyContactStates> {
+        Ok(PyContactStates(args::contact_states(
+            &self.inner,
+            &model.model(),
+            q,
+            v,
+        )?))
     }
 
     /// A torque effect clamped per speed at `limit`: one number or one per speed of its
     /// joints (all `nv` for a torque function), or `"effort"` (the model's URDF `effort`,
     /// filled in when a scene is built); None removes the limit.
     fn with_torque_limit(&self, py: Python<'_>, limit: Option<&Obj>) -> PyResult<Self> {
-        let Effect::Torque(t) = &self.inner else {
-            return Err(invalid(
-                py,
-                "limit",
-                "a torque effect (JointTorque, TabulatedTorque, PDTorque, TorqueFunction)",
-                format!("a {} effect", self.inner.kind().name()),
-            ));
-        };
         let limit = args::torque_limit(limit)?;
-        Ok(Effect::Torque(t.clone().with_limit(limit)).into())
+        Ok(self.inner.with_torque_limit(limit).py(py)?.into())
     }
 
     /// A torque effect's limit on each of `model`'s speeds (inf where unlimited or not
@@ -204,25 +167,19 @@ impl PyEffect {
         py: Python<'py>,
         model: PyRef<'_, super::model::PyModel>,
     ) -> PyResult<Obj<'py>> {
-        let m = model.model();
-        let out = match &self.inner {
-            Effect::Torque(t) => t.limit_per_speed(&m).py(py)?,
-            _ => vec![f64::INFINITY; m.nv],
-        };
-        Ok(super::convert::to_array1(py, &out).into_any())
+        let out = self.inner.torque_limit_per_speed(&model.model()).py(py)?;
+        Ok(to_array1(py, &out).into_any())
     }
 
     /// A torque effect's limit: a number or an array (per speed), `"effort"` (until a scene
     /// fills it in), or None.
     #[getter]
-    fn torque_limit<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
-        let Effect::Torque(t) = &self.inner else {
-            return None;
-        };
-        Some(match t.limit.as_ref()? {
-            TorqueLimit::Effort => pyo3::types::PyString::new(py, "effort").into_any(),
-            TorqueLimit::Given(PerJoint::All(x)) => pyo3::types::PyFloat::new(py, *x).into_any(),
-            TorqueLimit::Given(PerJoint::Each(v)) => super::convert::to_array1(py, v).into_any(),
+    fn torque_limit<'py>(&self, py: Python<'py>) -> PyResult<Option<Obj<'py>>> {
+        Ok(match self.inner.torque_limit() {
+            None => None,
+            Some(TorqueLimit::Effort) => Some("effort".into_bound_py_any(py)?),
+            Some(TorqueLimit::Given(PerJoint::All(x))) => Some(x.into_bound_py_any(py)?),
+            Some(TorqueLimit::Given(PerJoint::Each(v))) => Some(to_array1(py, v).into_any()),
         })
     }
 
@@ -248,26 +205,14 @@ impl PyEffect {
     /// effects.
     #[getter]
     fn contact_parameters(&self) -> Option<PyContactParameters> {
-        let Effect::GroundContact(c) = &self.inner else {
-            return None;
-        };
-        let (height, stiffness, exponent) = (c.height, c.stiffness, c.exponent);
-        let (damping, friction, v_eps) = (c.damping, c.friction, c.v_eps);
-        Some(PyContactParameters {
-            height,
-            stiffness,
-            exponent,
-            damping,
-            friction,
-            v_eps,
-        })
+        self.inner.contact_parameters().map(PyContactParameters)
     }
     /// A gravity effect's acceleration `g` (3,); `None` for other effects.
     #[getter]
     #[pyo3(name = "g")]
     fn gravity_vector<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
         match &self.inner {
-            Effect::Gravity { g } => Some(super::convert::to_array1(py, g.as_slice())),
+            Effect::Gravity { g } => Some(to_array1(py, g.as_slice())),
             _ => None,
         }
     }
@@ -276,9 +221,7 @@ impl PyEffect {
     #[getter]
     fn plane<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, numpy::PyArray1<f64>>, f64)> {
         match &self.inner {
-            Effect::GroundContact(c) => {
-                Some((super::convert::to_array1(py, c.normal.as_slice()), c.height))
-            }
+            Effect::GroundContact(c) => Some((to_array1(py, c.normal.as_slice()), c.height)),
             _ => None,
         }
     }

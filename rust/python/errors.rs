@@ -3,7 +3,7 @@
 use pyo3::prelude::*;
 use pyo3::types::PyType;
 
-use crate::support::error::{Error, FileKind};
+use crate::support::error::{compact_numbers, Error};
 
 /// Builds an instance of `pointmass_dyn.errors.<class_name>` with `message`.
 pub fn py_error(py: Python<'_>, class_name: &str, message: String) -> PyErr {
@@ -19,32 +19,11 @@ pub fn py_error(py: Python<'_>, class_name: &str, message: String) -> PyErr {
 }
 
 pub fn to_py(py: Python<'_>, err: Error) -> PyErr {
-    let class = match &err {
-        Error::InvalidArgument { .. } | Error::InvalidSetting(_) => "InvalidInputError",
-        Error::InvalidInertia { .. } => "InertiaError",
-        Error::InvalidModel { .. } => "ModelStructureError",
-        Error::Singular(_) => "SingularityError",
-        Error::Numerical(_) => "NumericalError",
-        Error::Closure(_) => "LoopClosureError",
-        Error::OutOfMemory { .. } => "OutOfMemoryError",
-        Error::File {
-            kind: FileKind::Urdf,
-            ..
-        } => "UrdfError",
-        Error::File {
-            kind: FileKind::Scene,
-            ..
-        } => "SceneError",
+    match err.kind_name() {
+        Some(class) => py_error(py, class, compact_numbers(&err.to_string())),
         // Only when no signal handler left its own exception to re-raise.
-        Error::Interrupted(_) => {
-            return pyo3::exceptions::PyKeyboardInterrupt::new_err(err.to_string());
-        }
-    };
-    py_error(
-        py,
-        class,
-        crate::support::error::compact_numbers(&err.to_string()),
-    )
+        None => pyo3::exceptions::PyKeyboardInterrupt::new_err(err.to_string()),
+    }
 }
 
 /// For `?` on the core's results where no `py` is at hand (the core's parsers, [`crate::support::args`]).
@@ -66,14 +45,7 @@ impl<T> IntoPyResult<T> for Result<T, Error> {
 
 /// Raises `NumericalError` if a result computed from finite inputs is not finite.
 pub fn check_result(py: Python<'_>, what: &str, values: &[f64]) -> PyResult<()> {
-    match values.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(k) => Err(py_error(
-            py,
-            "NumericalError",
-            format!("{what}: the result is not finite ({} at index {k}) although the inputs are: the state overflows double precision", values[k]),
-        )),
-    }
+    crate::support::error::check_result(what, values).py(py)
 }
 
 /// `InvalidInputError`: `arg: expected ..., got ...` ([`Error::InvalidArgument`]'s text).

@@ -89,6 +89,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<model::PyModel>()?;
     m.add_class::<effects::PyEffect>()?;
     m.add_class::<effects::PyContactParameters>()?;
+    m.add_class::<effects::PyContactStates>()?;
     m.add_class::<rk45::PyOdeSolution>()?;
     m.add_class::<events::PyStateEvent>()?;
     m.add_class::<scene::PyScene>()?;

@@ -9,7 +9,7 @@
 //! travel as the tuple `callables`, in effect order, which pickle stores by reference like
 //! any function (a lambda then fails with pickle's own error).
 use crate::python::Obj;
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyTuple};
 use serde::{Deserialize, Serialize};
@@ -22,7 +22,7 @@ use super::events::PyStateEvent;
 use super::joint::PyJoint;
 use super::model::PyModel;
 use super::scene::PyScene;
-use crate::effects::{Disabled, Effect, Effects, TorqueFunction, TorqueLaw};
+use crate::effects::{torque_functions, Disabled, Effect, Effects};
 use crate::integrator::DenseOutput;
 use crate::io::scene::Scene;
 use crate::joint::Joint;
@@ -31,19 +31,63 @@ use crate::model::point_masses::EquimomentalSet;
 use crate::model::Model;
 use crate::simulate::StateEvent;
 
-/// One pickled object. Append new variants at the end (postcard numbers them in order); any
-/// other change of a serialised type needs `persist::FORMAT_VERSION` bumped.
-#[derive(Serialize, Deserialize)]
-enum Payload {
-    RigidBody(RigidBody),
-    PointMasses(EquimomentalSet),
-    Joint(Joint),
+/// The pickled classes: `Variant(core type) = Class { its core value; the class holding one }`.
+/// One generic path serves them all ([`_dumps`], [`_loads`]).
+macro_rules! payloads {
+    ($($(#[$m:meta])* $v:ident($t:ty) = $class:ident { $read:expr; $make:expr }),* $(,)?) => {
+        /// One pickled object. Append new variants at the end (postcard numbers them in
+        /// order); any other change of a serialised type needs `persist::FORMAT_VERSION` bumped.
+        #[derive(Serialize, Deserialize)]
+        enum Payload {
+            $($(#[$m])* $v($t)),*
+        }
+
+        impl Payload {
+            /// The payload of a pointmass_dyn object; `None` for any other object.
+            fn of(obj: &Obj) -> Option<Payload> {
+                $(if let Ok(x) = obj.cast::<$class>() {
+                    return Some(Payload::$v(($read)(x.get())));
+                })*
+                None
+            }
+
+            /// The Python object this payload describes.
+            fn object(self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+                Ok(match self {
+                    $(Payload::$v(x) => Py::new(py, ($make)(x))?.into_any()),*
+                })
+            }
+        }
+    };
+}
+
+payloads! {
+    RigidBody(RigidBody) = PyRigidBody { |x: &PyRigidBody| x.inner; |inner| PyRigidBody { inner } },
+    PointMasses(EquimomentalSet) = PyPointMasses {
+        |x: &PyPointMasses| x.inner; |inner| PyPointMasses { inner }
+    },
+    Joint(Joint) = PyJoint { |x: &PyJoint| x.inner; |inner| PyJoint { inner } },
     /// A model, its joint records (names, limits, repairs) included.
-    Model(std::sync::Arc<Model>),
-    Effect(Effect),
-    StateEvent(StateEvent),
-    Scene(Scene),
-    DenseSolution(DenseOutput),
+    Model(std::sync::Arc<Model>) = PyModel { |x: &PyModel| x.model(); PyModel::from_shared },
+    Effect(Effect) = PyEffect { |x: &PyEffect| x.inner.clone(); |inner| PyEffect { inner } },
+    StateEvent(StateEvent) = PyStateEvent {
+        |x: &PyStateEvent| x.inner.clone(); |inner| PyStateEvent { inner }
+    },
+    Scene(Scene) = PyScene { |x: &PyScene| x.inner.clone(); |inner| PyScene { inner } },
+    DenseSolution(DenseOutput) = PyDenseSolution {
+        |x: &PyDenseSolution| x.inner.clone(); |inner| PyDenseSolution { inner }
+    },
+}
+
+impl Payload {
+    /// The effects it holds, whose torque functions' callables travel beside the bytes.
+    fn effects(&mut self) -> &mut [Effect] {
+        match self {
+            Payload::Effect(e) => std::slice::from_mut(e),
+            Payload::Scene(s) => &mut s.effects,
+            _ => &mut [],
+        }
+    }
 }
 
 fn unpickling_error(py: Python<'_>, message: impl std::fmt::Display) -> PyErr {
@@ -54,97 +98,35 @@ fn unpickling_error(py: Python<'_>, message: impl std::fmt::Display) -> PyErr {
     )
 }
 
-/// The torque functions among `effects`, in order.
-fn functions_mut(effects: &mut [Effect]) -> impl Iterator<Item = &mut TorqueFunction> {
-    effects.iter_mut().filter_map(|e| match e {
-        Effect::Torque(t) => match &mut t.law {
-            TorqueLaw::Function(f) => Some(f),
-            _ => None,
-        },
-        _ => None,
-    })
-}
-
-/// The Python callables of the torque functions among `effects`, in order.
-fn callables(py: Python<'_>, effects: &[Effect]) -> PyResult<Vec<Py<PyAny>>> {
-    let mut out = Vec::new();
-    for e in effects {
-        if let Effect::Torque(t) = e {
-            if let TorqueLaw::Function(f) = &t.law {
-                let obj = f
-                    .source()
-                    .and_then(|s| s.downcast_ref::<Py<PyAny>>())
-                    .ok_or_else(|| {
-                        pyo3::exceptions::PyValueError::new_err(
-                            "a torque function not made from a Python callable cannot be pickled",
-                        )
-                    })?;
-                out.push(obj.clone_ref(py));
-            }
-        }
-    }
-    Ok(out)
-}
-
-/// Rebuilds the torque functions of `effects` from `callables` (one each, in order).
-fn restore(py: Python<'_>, effects: &mut [Effect], callables: &Bound<'_, PyTuple>) -> PyResult<()> {
-    let n = functions_mut(effects).count();
-    if n != callables.len() {
-        return Err(unpickling_error(
-            py,
-            format!(
-                "the data holds {n} torque functions but {} callables came with it",
-                callables.len()
-            ),
-        ));
-    }
-    for (f, c) in functions_mut(effects).zip(callables.iter()) {
-        *f = torque_callback(c.unbind());
-    }
-    Ok(())
-}
-
 /// `(data, callables)` of a pointmass_dyn object; `_loads(data, callables)` rebuilds it.
 #[pyfunction]
 pub fn _dumps<'py>(
     py: Python<'py>,
     obj: &Obj<'py>,
 ) -> PyResult<(Bound<'py, PyBytes>, Bound<'py, PyTuple>)> {
-    let mut extras: Vec<Py<PyAny>> = Vec::new();
-    let payload = if let Ok(x) = obj.cast::<PyRigidBody>() {
-        Payload::RigidBody(x.get().inner)
-    } else if let Ok(x) = obj.cast::<PyPointMasses>() {
-        Payload::PointMasses(x.get().inner)
-    } else if let Ok(x) = obj.cast::<PyJoint>() {
-        Payload::Joint(x.get().inner)
-    } else if let Ok(x) = obj.cast::<PyModel>() {
-        Payload::Model(x.get().model())
-    } else if let Ok(x) = obj.cast::<PyEffect>() {
-        let e = x.get().inner.clone();
-        extras = callables(py, std::slice::from_ref(&e))?;
-        Payload::Effect(e)
-    } else if let Ok(x) = obj.cast::<PyStateEvent>() {
-        Payload::StateEvent(x.get().inner.clone())
-    } else if let Ok(x) = obj.cast::<PyScene>() {
-        let s = x.get().inner.clone();
-        extras = callables(py, &s.effects)?;
-        Payload::Scene(s)
-    } else if let Ok(x) = obj.cast::<PyDenseSolution>() {
-        Payload::DenseSolution(x.get().inner.clone())
-    } else {
+    let Some(mut payload) = Payload::of(obj) else {
         return Err(PyTypeError::new_err(format!(
             "_dumps: expected a pointmass_dyn object, got {}",
             obj.get_type().name()?
         )));
     };
+    let callables = torque_functions(payload.effects())
+        .map(
+            |f| match f.source().and_then(|s| s.downcast_ref::<Py<PyAny>>()) {
+                Some(c) => Ok(c.clone_ref(py)),
+                None => Err(PyValueError::new_err(
+                    "a torque function not made from a Python callable cannot be pickled",
+                )),
+            },
+        )
+        .collect::<PyResult<Vec<_>>>()?;
     let data = crate::io::persist::encode(&payload).map_err(|e| {
-        let pickle = py.import("pickle");
-        match pickle.and_then(|m| m.getattr("PicklingError")) {
+        match py.import("pickle").and_then(|m| m.getattr("PicklingError")) {
             Ok(cls) => PyErr::from_value(cls.call1((e.to_string(),)).unwrap_or(cls)),
             Err(err) => err,
         }
     })?;
-    Ok((PyBytes::new(py, &data), PyTuple::new(py, extras)?))
+    Ok((PyBytes::new(py, &data), PyTuple::new(py, callables)?))
 }
 
 /// The object `_dumps` described. Raises `pointmass_dyn.errors.UnpicklingError` for data that
@@ -156,30 +138,28 @@ pub fn _loads(
     data: &Bound<'_, PyBytes>,
     callables: Option<&Bound<'_, PyTuple>>,
 ) -> PyResult<Py<PyAny>> {
-    let payload: Payload =
+    let mut payload: Payload =
         crate::io::persist::decode(data.as_bytes()).map_err(|e| unpickling_error(py, e))?;
-    let empty = PyTuple::empty(py);
-    let callables = callables.unwrap_or(&empty);
-    let check = |r: crate::Result<()>| r.map_err(|e| unpickling_error(py, e));
-    Ok(match payload {
-        Payload::RigidBody(inner) => Py::new(py, PyRigidBody { inner })?.into_any(),
-        Payload::PointMasses(inner) => Py::new(py, PyPointMasses { inner })?.into_any(),
-        Payload::Joint(inner) => Py::new(py, PyJoint { inner })?.into_any(),
-        Payload::Model(model) => Py::new(py, PyModel::from_shared(model))?.into_any(),
-        Payload::Effect(mut inner) => {
-            restore(py, std::slice::from_mut(&mut inner), callables)?;
-            Py::new(py, PyEffect { inner })?.into_any()
-        }
-        Payload::StateEvent(inner) => Py::new(py, PyStateEvent { inner })?.into_any(),
-        Payload::Scene(mut inner) => {
-            restore(py, &mut inner.effects, callables)?;
-            // What `Scene(...)` checks: the state fits the model, the effects resolve.
-            check(inner.model.check_state(&inner.q0, Some(&inner.v0)))?;
-            check(
-                Effects::new(&inner.model, &inner.effects, Disabled::none(), "effects").map(|_| ()),
-            )?;
-            Py::new(py, PyScene { inner })?.into_any()
-        }
-        Payload::DenseSolution(inner) => Py::new(py, PyDenseSolution { inner })?.into_any(),
-    })
+    let (n, m) = (
+        torque_functions(payload.effects()).count(),
+        callables.map_or(0, |c| c.len()),
+    );
+    if n != m {
+        let got = format!("the data holds {n} torque functions but {m} callables came with it");
+        return Err(unpickling_error(py, got));
+    }
+    let given = callables.iter().flat_map(|c| c.iter());
+    for (f, c) in torque_functions(payload.effects()).zip(given) {
+        *f = torque_callback(c.unbind());
+    }
+    if let Payload::Scene(s) = &payload {
+        // What `Scene(...)` checks: the state fits the model, the effects resolve.
+        let effects = Effects::new(&s.model, &s.effects, Disabled::none(), "effects");
+        let checked = s
+            .model
+            .check_state(&s.q0, Some(&s.v0))
+            .and(effects.map(|_| ()));
+        checked.map_err(|e| unpickling_error(py, e))?;
+    }
+    payload.object(py)
 }

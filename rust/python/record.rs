@@ -28,6 +28,7 @@ as_itself!(
     bool,
     usize,
     f64,
+    Option<f64>,
     String,
     Option<String>,
     Vec<String>,

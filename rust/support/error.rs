@@ -116,6 +116,29 @@ pub fn human_bytes(bytes: u128) -> String {
 }
 
 impl Error {
+    /// The error's kind as the bindings' exception hierarchy names it (`pointmass_dyn.errors`
+    /// in Python); `None` for an interruption, which a binding raises as its own (Ctrl-C).
+    pub fn kind_name(&self) -> Option<&'static str> {
+        Some(match self {
+            Error::InvalidArgument { .. } | Error::InvalidSetting(_) => "InvalidInputError",
+            Error::InvalidInertia { .. } => "InertiaError",
+            Error::InvalidModel { .. } => "ModelStructureError",
+            Error::Singular(_) => "SingularityError",
+            Error::Numerical(_) => "NumericalError",
+            Error::Closure(_) => "LoopClosureError",
+            Error::OutOfMemory { .. } => "OutOfMemoryError",
+            Error::File {
+                kind: FileKind::Urdf,
+                ..
+            } => "UrdfError",
+            Error::File {
+                kind: FileKind::Scene,
+                ..
+            } => "SceneError",
+            Error::Interrupted(_) => return None,
+        })
+    }
+
     pub fn arg(
         arg: impl Into<String>,
         expected: impl Into<String>,
@@ -273,6 +296,18 @@ pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
             "finite numbers",
             format!("{} at index {}", num(values[k]), k),
         )),
+    }
+}
+
+/// `Error::Numerical` if a result computed from finite inputs is not finite (`what` names it).
+pub fn check_result(what: &str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(Error::Numerical(format!(
+            "{what}: the result is not finite ({} at index {k}) although the inputs are: the \
+             state overflows double precision",
+            values[k]
+        ))),
     }
 }
 
