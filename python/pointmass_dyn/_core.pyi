@@ -15,7 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __version__: str
-#: Which copy of the multiversioned loops runs: "avx2" or "baseline" (POINTMASS_DYN_BASELINE=1).
+#: The widest copy of the multiversioned loops that runs: "avx512" (the batched frame kernels;
+#: the rest in AVX2), "avx2" or "baseline" (POINTMASS_DYN_BASELINE=1).
 cpu_dispatch: str
 
 _Array: TypeAlias = NDArray[np.float64]

@@ -663,6 +663,10 @@ impl ForceLaw for FunctionLaw {
     ) -> std::result::Result<bool, String> {
         self.out.fill(0.0);
         (self.f.0)(cx.t, cx.q, cx.v, &mut self.out)?;
+        // A non-finite torque fails the run like any effect's (`success=False` with the time),
+        // whichever binding's callback gave it.
+        crate::support::error::check_finite("torque function f(t, q, v)", &self.out)
+            .map_err(|e| e.to_string())?;
         for (t, x) in tau.iter_mut().zip(&self.out) {
             *t += x;
         }

@@ -493,14 +493,8 @@ fn mass_sums(walk: &Walk, w: &mut Work) {
     }
 }
 
-/// Whether the AVX-512 copies run: the AVX2 ones would (so `POINTMASS_DYN_BASELINE`
-/// turns both off) and the CPU has AVX-512F. Read once.
 #[cfg(target_arch = "x86_64")]
-fn has_avx512() -> bool {
-    static AVX512: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *AVX512
-        .get_or_init(|| crate::support::cpu::has_avx2() && std::is_x86_feature_detected!("avx512f"))
-}
+use crate::support::cpu::has_avx512;
 
 /// Defines `$name`, which runs `$wide` (the body compiled for AVX-512F: a lane block in
 /// one register) where [`has_avx512`] says so, else the AVX2/baseline dispatcher `$narrow`.

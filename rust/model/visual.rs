@@ -102,6 +102,41 @@ impl Visual {
         }
         Ok(())
     }
+
+    /// The visual as `Model.visuals` lists it (`model::args::visual` reads it back): `(key,
+    /// value)` in order, `None` for a value it lacks (`rgba`, a mesh's `path`). The shape's
+    /// frame as `rotation` (rows) and `translation`; sizes as the shape names them.
+    pub fn fields(&self, body_name: &str) -> Vec<(&'static str, Option<toml::Value>)> {
+        use toml::Value as V;
+        let xyz = |x: &Vec3| V::from(x.as_slice().to_vec());
+        let r = &self.origin.rotation;
+        let rows: Vec<V> = (0..3)
+            .map(|i| V::from(vec![r[(i, 0)], r[(i, 1)], r[(i, 2)]]))
+            .collect();
+        let mut out = vec![
+            ("body", Some(V::Integer(self.body as i64))),
+            ("body_name", Some(V::from(body_name))),
+            ("kind", Some(V::from(self.shape.kind()))),
+            ("rotation", Some(V::Array(rows))),
+            ("translation", Some(xyz(&self.origin.translation))),
+        ];
+        match &self.shape {
+            Shape::Box { size } => out.push(("size", Some(xyz(size)))),
+            Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
+                out.push(("radius", Some(V::Float(*radius))));
+                out.push(("length", Some(V::Float(*length))));
+            }
+            Shape::Sphere { radius } => out.push(("radius", Some(V::Float(*radius)))),
+            Shape::Ellipsoid { radii } => out.push(("radii", Some(xyz(radii)))),
+            Shape::Mesh { uri, path, scale } => {
+                out.push(("uri", Some(V::from(uri.as_str()))));
+                out.push(("path", path.as_deref().map(V::from)));
+                out.push(("scale", Some(xyz(scale))));
+            }
+        }
+        out.push(("rgba", self.rgba.map(|c| V::from(c.to_vec()))));
+        out
+    }
 }
 
 /// Where a mesh `uri` of a model file in `base_dir` is, as Pinocchio resolves it:

@@ -31,7 +31,7 @@ fn type_name(obj: &Obj) -> String {
 }
 
 /// `repr(obj)`, cut to 60 characters.
-fn short_repr(obj: &Obj) -> String {
+pub fn short_repr(obj: &Obj) -> String {
     let r = obj.repr().map(|r| r.to_string()).unwrap_or_default();
     if r.chars().count() > 60 {
         let head: String = r.chars().take(50).collect();
@@ -140,16 +140,8 @@ pub fn real_array<'py>(obj: &Obj<'py>, arg: &str) -> PyResult<Obj<'py>> {
         .import("numpy")
         .and_then(|np| np.call_method1("asarray", (obj,)))
         .map_err(|e| unless_interrupt(py, e, not_an_array))?;
-    let arr = a.cast::<PyUntypedArray>().map_err(|_| not_an_array())?;
-    if is_masked(&a) {
-        return Err(invalid(
-            py,
-            arg,
-            "real numbers (a plain array)",
-            "a masked array",
-        ));
-    }
-    check_dtype(arr, arg)?;
+    // `asarray` gives a base-class array: no mask left to check.
+    check_dtype(a.cast::<PyUntypedArray>().map_err(|_| not_an_array())?, arg)?;
     Ok(a)
 }
 
@@ -241,19 +233,42 @@ impl Arg for Obj<'_> {
     }
 }
 
+/// A TOML value (the core's tree of plain data: an effect's `[[effect]]` table, a visual's
+/// fields) as Python data: dicts, lists, str, int, float, bool.
+pub fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Obj<'py>> {
+    use pyo3::IntoPyObjectExt;
+    Ok(match v {
+        toml::Value::String(s) => s.into_bound_py_any(py)?,
+        toml::Value::Integer(i) => i.into_bound_py_any(py)?,
+        toml::Value::Float(x) => x.into_bound_py_any(py)?,
+        toml::Value::Boolean(b) => b.into_bound_py_any(py)?,
+        toml::Value::Datetime(d) => d.to_string().into_bound_py_any(py)?,
+        toml::Value::Array(a) => {
+            let items = a.iter().map(|x| toml_to_py(py, x));
+            pyo3::types::PyList::new(py, items.collect::<PyResult<Vec<_>>>()?)?.into_any()
+        }
+        toml::Value::Table(t) => {
+            let d = pyo3::types::PyDict::new(py);
+            for (k, x) in t {
+                d.set_item(k, toml_to_py(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
 /// Any array-like of real numbers: its shape and its entries in C order.
 pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let py = obj.py();
     let obj = &real_array(obj, arg)?;
-    let extracted = obj.extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>();
-    let arr = extracted.map_err(|e| {
-        let e: PyErr = e;
-        if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
-            return e;
-        }
-        let got = format!("an object of type {}", type_name(obj));
-        invalid(py, arg, "an array of real numbers", got)
-    })?;
+    let arr = obj
+        .extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>()
+        .map_err(|e| {
+            unless_interrupt(py, e.into(), || {
+                let got = format!("an object of type {}", type_name(obj));
+                invalid(py, arg, "an array of real numbers", got)
+            })
+        })?;
     let shape = arr.shape().to_vec();
     // Raw memory only in C order; Fortran-ordered or strided arrays are read logically.
     let data = match arr.as_slice() {

@@ -8,7 +8,7 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::{to_array, to_array1, vector};
+use super::convert::{to_array, to_array1, toml_to_py, vector};
 use super::errors::{invalid, IntoPyResult};
 use super::record::record;
 use crate::effects::ground_contact::ContactStates;
@@ -70,41 +70,31 @@ pub(super) fn repr_of(obj: &Obj) -> String {
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
 /// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
-/// caller to re-raise; a non-finite torque fails the run like any effect's (`success=False`
-/// with the time), so it is not an exception. `func` is also kept as the function's source,
-/// which pickling carries (`pickle.rs`).
+/// caller to re-raise; a non-finite torque fails the run like any effect's (the core checks
+/// it), so it is not an exception. `func` is also kept as the function's source, which
+/// pickling carries (`pickle.rs`).
 pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
     let source = Python::attach(|py| func.clone_ref(py));
-    let f = TorqueFunction::new(Arc::new(
-        move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
-            Python::attach(|py| {
-                let call = || -> PyResult<Vec<f64>> {
-                    let r = func.bind(py).call1((
-                        t,
-                        PyArray1::from_slice(py, q),
-                        PyArray1::from_slice(py, v),
-                    ))?;
-                    vector(&r, "torque function f(t, q, v)", Some(out.len()))
-                };
-                match call() {
-                    Ok(x) => {
-                        crate::support::error::check_finite("torque function f(t, q, v)", &x)
-                            .map_err(|e| e.to_string())?;
-                        out.copy_from_slice(&x);
-                        Ok(())
-                    }
-                    Err(e) => {
-                        let msg = e.to_string();
-                        CALLBACK_ERROR.with(|c| {
-                            c.borrow_mut().get_or_insert(e);
-                        });
-                        Err(msg)
-                    }
+    let f = move |t: f64, q: &[f64], v: &[f64], out: &mut [f64]| -> Result<(), String> {
+        Python::attach(|py| {
+            let (q, v) = (PyArray1::from_slice(py, q), PyArray1::from_slice(py, v));
+            let tau = func.bind(py).call1((t, q, v));
+            match tau.and_then(|r| vector(&r, "torque function f(t, q, v)", Some(out.len()))) {
+                Ok(x) => {
+                    out.copy_from_slice(&x);
+                    Ok(())
                 }
-            })
-        },
-    ));
-    TorqueFunction::with_source(f.0, Arc::new(source))
+                Err(e) => {
+                    let msg = e.to_string();
+                    CALLBACK_ERROR.with(|c| {
+                        c.borrow_mut().get_or_insert(e);
+                    });
+                    Err(msg)
+                }
+            }
+        })
+    };
+    TorqueFunction::with_source(Arc::new(f), Arc::new(source))
 }
 
 #[pymethods]
@@ -239,30 +229,4 @@ impl PyEffect {
     fn __eq__(&self, other: PyRef<'_, PyEffect>) -> bool {
         self.inner == other.inner
     }
-}
-
-/// A TOML value as Python data (dicts, lists, str, int, float, bool).
-fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Obj<'py>> {
-    use pyo3::IntoPyObjectExt;
-    Ok(match v {
-        toml::Value::String(s) => s.into_bound_py_any(py)?,
-        toml::Value::Integer(i) => i.into_bound_py_any(py)?,
-        toml::Value::Float(x) => x.into_bound_py_any(py)?,
-        toml::Value::Boolean(b) => b.into_bound_py_any(py)?,
-        toml::Value::Datetime(d) => d.to_string().into_bound_py_any(py)?,
-        toml::Value::Array(a) => {
-            let items = a
-                .iter()
-                .map(|x| toml_to_py(py, x))
-                .collect::<PyResult<Vec<_>>>()?;
-            pyo3::types::PyList::new(py, items)?.into_any()
-        }
-        toml::Value::Table(t) => {
-            let d = pyo3::types::PyDict::new(py);
-            for (k, x) in t {
-                d.set_item(k, toml_to_py(py, x)?)?;
-            }
-            d.into_any()
-        }
-    })
 }

@@ -12,43 +12,37 @@ pub struct PyJoint {
     pub inner: Joint,
 }
 
+impl From<Joint> for PyJoint {
+    fn from(inner: Joint) -> Self {
+        PyJoint { inner }
+    }
+}
+
 #[pymethods]
 impl PyJoint {
     #[staticmethod]
     fn revolute(py: Python<'_>, axis: &Obj) -> PyResult<Self> {
-        Ok(PyJoint {
-            inner: Joint::revolute(vec3(axis, "axis")?).py(py)?,
-        })
+        Ok(Joint::revolute(vec3(axis, "axis")?).py(py)?.into())
     }
     #[staticmethod]
     fn prismatic(py: Python<'_>, axis: &Obj) -> PyResult<Self> {
-        Ok(PyJoint {
-            inner: Joint::prismatic(vec3(axis, "axis")?).py(py)?,
-        })
+        Ok(Joint::prismatic(vec3(axis, "axis")?).py(py)?.into())
     }
     #[staticmethod]
     fn spherical_zyz() -> Self {
-        PyJoint {
-            inner: Joint::SphericalZYZ,
-        }
+        Joint::SphericalZYZ.into()
     }
     #[staticmethod]
     fn spherical() -> Self {
-        PyJoint {
-            inner: Joint::Spherical,
-        }
+        Joint::Spherical.into()
     }
     #[staticmethod]
     fn fixed() -> Self {
-        PyJoint {
-            inner: Joint::Fixed,
-        }
+        Joint::Fixed.into()
     }
     #[staticmethod]
     fn free_flyer() -> Self {
-        PyJoint {
-            inner: Joint::FreeFlyer,
-        }
+        Joint::FreeFlyer.into()
     }
     #[getter]
     fn kind(&self) -> &'static str {

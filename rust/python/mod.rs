@@ -80,8 +80,8 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
         )));
     }
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    // Which copy of the multiversioned loops runs (rust/support/cpu.rs; POINTMASS_DYN_BASELINE=1
-    // forces "baseline").
+    // The widest copy of the multiversioned loops that runs: "avx512", "avx2" or "baseline"
+    // (rust/support/cpu.rs; POINTMASS_DYN_BASELINE=1 forces "baseline").
     m.add("cpu_dispatch", crate::support::cpu::dispatch())?;
     m.add_class::<body::PyRigidBody>()?;
     m.add_class::<body::PyPointMasses>()?;

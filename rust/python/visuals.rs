@@ -6,15 +6,10 @@ use std::path::PathBuf;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use super::convert::{short_repr, toml_to_py};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use crate::model::visual::{Shape, Visual};
-use crate::support::spatial::Vec3;
-
-fn repr(obj: &Obj) -> String {
-    obj.repr()
-        .map_or_else(|_| "?".to_string(), |x| x.to_string())
-}
+use crate::model::visual::Visual;
 
 /// `package_dirs`: None, one path or a sequence of paths.
 pub(super) fn package_dirs(py: Python<'_>, obj: Option<&Obj>) -> PyResult<Vec<PathBuf>> {
@@ -24,35 +19,22 @@ pub(super) fn package_dirs(py: Python<'_>, obj: Option<&Obj>) -> PyResult<Vec<Pa
     if let Ok(one) = obj.extract::<PathBuf>() {
         return Ok(vec![one]);
     }
-    obj.extract::<Vec<PathBuf>>()
-        .map_err(|_| invalid(py, "package_dirs", "a path or a list of paths", repr(obj)))
+    obj.extract::<Vec<PathBuf>>().map_err(|_| {
+        invalid(
+            py,
+            "package_dirs",
+            "a path or a list of paths",
+            short_repr(obj),
+        )
+    })
 }
 
+/// A visual as the dict `Model.visuals` lists (`Visual::fields`).
 fn to_dict<'py>(py: Python<'py>, v: &Visual, body_name: &str) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("body", v.body)?;
-    d.set_item("body_name", body_name)?;
-    d.set_item("kind", v.shape.kind())?;
-    let r = v.origin.rotation;
-    let rows: Vec<[f64; 3]> = (0..3).map(|i| [r[(i, 0)], r[(i, 1)], r[(i, 2)]]).collect();
-    d.set_item("rotation", rows)?;
-    d.set_item("translation", <[f64; 3]>::from(v.origin.translation))?;
-    let xyz = |x: &Vec3| <[f64; 3]>::from(*x);
-    match &v.shape {
-        Shape::Box { size } => d.set_item("size", xyz(size))?,
-        Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
-            d.set_item("radius", radius)?;
-            d.set_item("length", length)?;
-        }
-        Shape::Sphere { radius } => d.set_item("radius", radius)?,
-        Shape::Ellipsoid { radii } => d.set_item("radii", xyz(radii))?,
-        Shape::Mesh { uri, path, scale } => {
-            d.set_item("uri", uri)?;
-            d.set_item("path", path)?;
-            d.set_item("scale", xyz(scale))?;
-        }
+    for (key, value) in v.fields(body_name) {
+        d.set_item(key, value.map(|x| toml_to_py(py, &x)).transpose()?)?;
     }
-    d.set_item("rgba", v.rgba)?;
     Ok(d)
 }
 

@@ -124,11 +124,25 @@ fn missing(compiled: &[(&'static str, bool)], has: impl Fn(&str) -> bool) -> Vec
         .collect()
 }
 
-/// Which copy of the multiversioned loops runs: `"avx2"` or `"baseline"`.
+/// Whether the AVX-512 copies (the batched frame kernels, `frames/batch.rs`) run: the AVX2
+/// ones would (so `POINTMASS_DYN_BASELINE` turns both off) and the CPU has AVX-512F. Read once.
+#[cfg(target_arch = "x86_64")]
+pub fn has_avx512() -> bool {
+    static AVX512: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *AVX512.get_or_init(|| has_avx2() && std::is_x86_feature_detected!("avx512f"))
+}
+
+/// The widest copy of the multiversioned loops that runs: `"avx512"` (the batched frame
+/// kernels in AVX-512F, the rest in AVX2), `"avx2"` or `"baseline"`.
 pub fn dispatch() -> &'static str {
     #[cfg(target_arch = "x86_64")]
-    if has_avx2() {
-        return "avx2";
+    {
+        if has_avx512() {
+            return "avx512";
+        }
+        if has_avx2() {
+            return "avx2";
+        }
     }
     "baseline"
 }
@@ -152,14 +166,15 @@ mod tests {
 
     #[test]
     fn dispatch_follows_the_environment() {
-        // Read once per process: whatever it decided, it names one of the two copies, and
-        // "avx2" only where the CPU has it.
+        // Read once per process: whatever it decided, it names one of the copies, and a
+        // wider one only where the CPU has it and the environment allows it.
         let d = dispatch();
-        assert!(d == "avx2" || d == "baseline");
+        assert!(["avx512", "avx2", "baseline"].contains(&d));
         #[cfg(target_arch = "x86_64")]
-        if d == "avx2" {
+        if d != "baseline" {
             assert!(std::is_x86_feature_detected!("avx2"));
             assert!(std::env::var_os("POINTMASS_DYN_BASELINE").is_none());
+            assert_eq!(d == "avx512", std::is_x86_feature_detected!("avx512f"));
         }
     }
 }
