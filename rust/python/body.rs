@@ -85,13 +85,15 @@ impl PyPointMasses {
     /// Positions in the body frame, shape (7, 3).
     #[getter]
     fn positions<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        let flat: Vec<f64> = self
-            .inner
-            .positions
-            .iter()
-            .flat_map(|p| [p.x, p.y, p.z])
-            .collect();
-        to_array(py, flat, &[7, 3])
+        to_array(
+            py,
+            self.inner
+                .positions
+                .iter()
+                .flat_map(|p| [p.x, p.y, p.z])
+                .collect(),
+            &[7, 3],
+        )
     }
     #[getter]
     fn half_sides<'py>(&self, py: Python<'py>) -> Obj<'py> {

@@ -167,18 +167,15 @@ pub fn real(obj: &Obj, arg: &str) -> PyResult<f64> {
             )
         });
     }
-    let a = real_array(obj, arg)?;
-    let arr = a.cast::<PyUntypedArray>()?;
-    if arr.ndim() != 0 {
-        return Err(invalid(
+    match array(obj, arg)? {
+        (shape, x) if shape.is_empty() => Ok(x.first().copied().unwrap_or(f64::NAN)),
+        (shape, _) => Err(invalid(
             py,
             arg,
             "a real number",
-            format!("an array of {}", shape_str(arr.shape())),
-        ));
+            format!("an array of {}", shape_str(&shape)),
+        )),
     }
-    let x: PyArrayLikeDyn<'_, f64, AllowTypeChange> = a.extract()?;
-    Ok(x.as_array().iter().next().copied().unwrap_or(f64::NAN))
 }
 
 /// A Python object as the core's [`Arg`]: the core parses, this only converts.

@@ -16,9 +16,6 @@ use crate::effects::TorqueLimit;
 use crate::effects::{args, ContactParameters, Effect, PerJoint, Torque, TorqueFunction};
 use pyo3::IntoPyObjectExt;
 
-/// An argument the core parses (`crate::effects::args`).
-type A<'py> = Obj<'py>;
-
 #[pyclass(
     name = "Effect",
     module = "pointmass_dyn._core",
@@ -47,12 +44,22 @@ record!(
     /// A ground contact's points along N states: `position` (N, P, 3), `penetration` (N, P),
     /// `normal_force` (N, P), `force` (N, P, 3).
     PyContactStates("ContactStates", ContactStates) {
-        position: |s: &ContactStates, py| to_array(py, s.position.clone(), &[s.states, s.points, 3]),
-        penetration: |s: &ContactStates, py| to_array(py, s.penetration.clone(), &[s.states, s.points]),
-        normal_force: |s: &ContactStates, py| to_array(py, s.normal_force.clone(), &[s.states, s.points]),
-        force: |s: &ContactStates, py| to_array(py, s.force.clone(), &[s.states, s.points, 3]),
+        position: |s: &ContactStates, py| per_point(py, s, &s.position, &[3]),
+        penetration: |s: &ContactStates, py| per_point(py, s, &s.penetration, &[]),
+        normal_force: |s: &ContactStates, py| per_point(py, s, &s.normal_force, &[]),
+        force: |s: &ContactStates, py| per_point(py, s, &s.force, &[3]),
     }
 );
+
+/// One per-point quantity of `s` as an (N, P, *each) array.
+fn per_point<'py>(
+    py: Python<'py>,
+    s: &ContactStates,
+    x: &[f64],
+    each: &[usize],
+) -> PyResult<Obj<'py>> {
+    to_array(py, x.to_vec(), &[&[s.states, s.points], each].concat())
+}
 
 thread_local! {
     /// The first exception a Python torque function raised during the current call (the
@@ -117,7 +124,7 @@ impl PyEffect {
     /// Generalized forces from a Python callable `f(t, q, v) -> (nv,)`.
     #[staticmethod]
     #[pyo3(signature = (f, name=None))]
-    fn torque_function(py: Python<'_>, f: A<'_>, name: Option<String>) -> PyResult<Self> {
+    fn torque_function(py: Python<'_>, f: Obj<'_>, name: Option<String>) -> PyResult<Self> {
         if !f.is_callable() {
             let expected = "a callable f(t, q, v) -> tau";
             return Err(invalid(py, "f", expected, repr_of(&f)));
@@ -134,12 +141,8 @@ impl PyEffect {
         q: &Obj,
         v: &Obj,
     ) -> PyResult<PyContactStates> {
-        Ok(PyContactStates(args::contact_states(
-            &self.inner,
-            &model.model(),
-            q,
-            v,
-        )?))
+        let states = args::contact_states(&self.inner, &model.model(), q, v)?;
+        Ok(PyContactStates(states))
     }
 
     /// A torque effect clamped per speed at `limit`: one number or one per speed of its

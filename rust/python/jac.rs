@@ -9,8 +9,9 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 
 use super::convert::{array, shape_str};
-use super::errors::invalid;
+use super::errors::{invalid, IntoPyResult};
 use crate::integrator::{Method, OdeSystem};
+use crate::support::error::check_finite_matrix;
 
 /// The `jac` argument.
 pub(super) enum JacArg<'a> {
@@ -67,24 +68,13 @@ pub(super) fn jac_arg<'a>(
         if method == Method::Auto {
             let (t0, y0) = start;
             let m = jac.call1((t0, PyArray1::from_slice(py, y0)))?;
-            finite(py, &matrix(&m, "jac(t, y)", dim)?, dim, "jac(t0, y0)")?;
+            check_finite_matrix("jac(t0, y0)", &matrix(&m, "jac(t, y)", dim)?, dim).py(py)?;
         }
         return Ok(JacArg::Callable(jac));
     }
     let m = matrix(jac, "jac", dim)?;
-    finite(py, &m, dim, "jac")?;
+    check_finite_matrix("jac", &m, dim).py(py)?;
     Ok(JacArg::Constant(m))
-}
-
-/// Refuses a non-finite entry of the `dim × dim` matrix `m`, naming its row and column.
-fn finite(py: Python<'_>, m: &[f64], dim: usize, arg: &str) -> PyResult<()> {
-    match m.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        Some((i, v)) => {
-            let got = format!("{v} at ({}, {})", i / dim, i % dim);
-            Err(invalid(py, arg, "finite entries", got))
-        }
-        None => Ok(()),
-    }
 }
 
 /// A system with the Jacobian from a Python callable `jac(t, y)`; an exception from `jac` is kept in `failure`

@@ -23,11 +23,7 @@ macro_rules! indexable {
                 slf: &pyo3::Bound<'py, Self>,
                 key: &str,
             ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
-                use pyo3::types::PyAnyMethods;
-                match [$($key),*].contains(&key) {
-                    true => slf.getattr(key),
-                    false => Err(pyo3::exceptions::PyKeyError::new_err(key.to_string())),
-                }
+                $crate::python::record::item(slf.as_any(), key, &[$($key),*])
             }
             fn keys(&self) -> Vec<&'static str> {
                 vec![$($key),*]

@@ -299,6 +299,23 @@ pub fn check_finite(arg: &str, values: &[f64]) -> Result<()> {
     }
 }
 
+/// Checks that every entry of a row-major matrix with `cols` columns is finite; names the
+/// first bad one by row and column.
+pub fn check_finite_matrix(arg: &str, values: &[f64], cols: usize) -> Result<()> {
+    match values.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(k) => {
+            let at = format!(
+                "{} at ({}, {})",
+                values[k],
+                k / cols.max(1),
+                k % cols.max(1)
+            );
+            Err(Error::arg(arg, "finite entries", at))
+        }
+    }
+}
+
 /// `Error::Numerical` if a result computed from finite inputs is not finite (`what` names it).
 pub fn check_result(what: &str, values: &[f64]) -> Result<()> {
     match values.iter().position(|x| !x.is_finite()) {
