@@ -13,8 +13,7 @@ use numpy::{
 };
 use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
-use pyo3::sync::PyOnceLock;
-use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString, PyType};
+use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString};
 
 use super::errors::{invalid, py_error};
 use crate::support::args::{Arg, Int};
@@ -49,30 +48,15 @@ fn is_exact_ndarray(obj: &Obj) -> bool {
 }
 
 fn is_masked(obj: &Obj) -> bool {
-    static MASKED: PyOnceLock<Py<PyType>> = PyOnceLock::new();
-    let py = obj.py();
-    // No masked array can exist before numpy.ma is imported, and importing it here would
-    // cost the first call ~10 ms (numpy.ma builds its docstrings on import).
-    if MASKED.get(py).is_none() {
-        let loaded = py
-            .import("sys")
-            .and_then(|sys| sys.getattr("modules"))
-            .and_then(|m| m.contains("numpy.ma"))
-            .unwrap_or(true);
-        if !loaded {
-            return false;
-        }
-    }
-    MASKED
-        .get_or_try_init(py, || -> PyResult<Py<PyType>> {
-            Ok(py
-                .import("numpy.ma")?
-                .getattr("MaskedArray")?
-                .cast_into::<PyType>()?
-                .unbind())
-        })
-        .map(|t| obj.is_instance(t.bind(py)).unwrap_or(false))
-        .unwrap_or(false)
+    // Asked of ndarray subclasses only. No masked array can exist before numpy.ma is
+    // imported, and importing it here would cost the first call ~10 ms (numpy.ma builds its
+    // docstrings on import): look it up among the loaded modules.
+    let modules = obj
+        .py()
+        .import("sys")
+        .and_then(|sys| sys.getattr("modules"));
+    let masked = modules.and_then(|m| m.get_item("numpy.ma")?.getattr("MaskedArray"));
+    masked.is_ok_and(|t| obj.is_instance(&t).unwrap_or(false))
 }
 
 /// Refuses an array whose dtype is not integer or floating.

@@ -8,7 +8,6 @@ use std::sync::Mutex;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use super::convert::{array, shape_str};
 use super::errors::{invalid, IntoPyResult};
 use crate::integrator::{Method, OdeSystem};
 use crate::support::error::check_finite_matrix;
@@ -30,16 +29,7 @@ fn matrix(obj: &Obj, arg: &str, dim: usize) -> PyResult<Vec<f64>> {
     } else {
         obj
     };
-    let (shape, data) = array(obj, arg)?;
-    if shape != [dim, dim] {
-        return Err(invalid(
-            obj.py(),
-            arg,
-            format!("shape ({dim}, {dim})"),
-            shape_str(&shape),
-        ));
-    }
-    Ok(data)
+    crate::support::args::matrix(obj, arg, dim, dim)
 }
 
 /// Check `jac` for a system of `dim` components integrated with `method`: only the implicit

@@ -178,3 +178,12 @@ pub fn placement<A: Arg>(
     let r = opt(r, |r| mat3(r, r_arg))?.unwrap_or_else(Mat3::identity);
     Ok(Placement::new(r, t))
 }
+
+/// A `rows × cols` matrix, given in rows: its entries row-major.
+pub fn matrix<A: Arg>(x: &A, arg: &str, rows: usize, cols: usize) -> Result<Vec<f64>, A::Err> {
+    let (shape, data) = x.array(arg)?;
+    if shape != [rows, cols] {
+        return Err(Error::arg(arg, format!("shape ({rows}, {cols})"), shape_str(&shape)).into());
+    }
+    Ok(data)
+}
