@@ -4,6 +4,7 @@
 //! simplifying them is the viewer's business (Python, an optional extra).
 use std::path::{Path, PathBuf};
 
+use crate::support::args::Arg;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::{Placement, Vec3};
 
@@ -137,6 +138,21 @@ impl Visual {
         out.push(("rgba", self.rgba.map(|c| V::from(c.to_vec()))));
         out
     }
+}
+
+/// The visuals a caller gives for a model of `nbodies` bodies (`Model.set_visuals`): each
+/// read as [`crate::model::args::visual`] reads one, and checked; errors name `visuals[k]`.
+pub fn parse_visuals<A: Arg>(
+    items: &[A],
+    nbodies: usize,
+) -> std::result::Result<Vec<Visual>, A::Err> {
+    let one = |(k, d): (usize, &A)| {
+        let arg = format!("visuals[{k}]");
+        let v = crate::model::args::visual(d, &arg)?;
+        v.check(nbodies, &arg)?;
+        Ok(v)
+    };
+    items.iter().enumerate().map(one).collect()
 }
 
 /// Where a mesh `uri` of a model file in `base_dir` is, as Pinocchio resolves it:

@@ -20,7 +20,9 @@ use crate::support::args::{Arg, Int};
 use crate::support::spatial::{Mat3, Vec3};
 
 // The core's parsers under the names the bindings call them by.
-pub use crate::support::args::{count as count_arg, int as int_arg, mat3, shape_str, vector};
+pub use crate::support::args::{
+    count as count_arg, int as int_arg, mat3, points, shape_str, vector,
+};
 
 fn type_name(obj: &Obj) -> String {
     obj.get_type()
@@ -322,15 +324,6 @@ pub fn vec3(obj: &Obj, arg: &str) -> PyResult<Vec3> {
     let mut v = [0.0; 3];
     vector_into(obj, arg, &mut v)?;
     Ok(Vec3::from(v))
-}
-
-/// An (n, 3) array of points (also accepts (a, b, 3), flattened over the leading axes).
-pub fn points(obj: &Obj, arg: &str) -> PyResult<Vec<Vec3>> {
-    let (shape, data) = array(obj, arg)?;
-    if shape.len() < 2 || shape[shape.len() - 1] != 3 {
-        return Err(invalid(obj.py(), arg, "shape (n, 3)", shape_str(&shape)));
-    }
-    Ok(data.chunks_exact(3).map(Vec3::from_column_slice).collect())
 }
 
 pub fn to_array1<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {

@@ -7,7 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use super::convert::{short_repr, toml_to_py};
-use super::errors::{invalid, IntoPyResult};
+use super::errors::invalid;
 use super::model::PyModel;
 use crate::model::visual::Visual;
 
@@ -65,15 +65,8 @@ impl PyModel {
     /// Replaces the visual geometry with `visuals` (dicts as `Model.visuals` gives them; a
     /// mesh's `path` defaults to its `uri`) and, if given, the name. The dynamics is unchanged.
     #[pyo3(signature = (visuals, *, name=None))]
-    fn set_visuals(&self, py: Python<'_>, visuals: Vec<Obj>, name: Option<String>) -> PyResult<()> {
-        let nbodies = self.model().nbodies();
-        let mut out = Vec::with_capacity(visuals.len());
-        for (k, d) in visuals.iter().enumerate() {
-            let arg = format!("visuals[{k}]");
-            let v = crate::model::args::visual(d, &arg)?;
-            v.check(nbodies, &arg).py(py)?;
-            out.push(v);
-        }
+    fn set_visuals(&self, visuals: Vec<Obj>, name: Option<String>) -> PyResult<()> {
+        let out = crate::model::visual::parse_visuals(&visuals, self.model().nbodies())?;
         self.update_model(|m| {
             m.visuals = out;
             if let Some(n) = name {

@@ -187,3 +187,12 @@ pub fn matrix<A: Arg>(x: &A, arg: &str, rows: usize, cols: usize) -> Result<Vec<
     }
     Ok(data)
 }
+
+/// An (n, 3) array of points; (a, b, 3) and more axes are flattened over the leading ones.
+pub fn points<A: Arg>(x: &A, arg: &str) -> Result<Vec<Vec3>, A::Err> {
+    let (shape, data) = x.array(arg)?;
+    if shape.len() < 2 || shape[shape.len() - 1] != 3 {
+        return Err(Error::arg(arg, "shape (n, 3)", shape_str(&shape)).into());
+    }
+    Ok(data.chunks_exact(3).map(Vec3::from_column_slice).collect())
+}
