@@ -142,7 +142,7 @@ impl PySimulator {
     fn trajectory(&self, py: Python<'_>) -> PyResult<PyRunResult> {
         let traj = self.lock().with(|s| s.trajectory());
         let slots: Vec<usize> = (0..traj.t_events.len()).collect();
-        PyRunResult::new(py, traj, &slots, None)
+        Ok(PyRunResult::new(py, traj, &slots, None))
     }
 
     /// The actuators' joint torques now (nv): the torque control plus the scene's torques.

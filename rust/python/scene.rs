@@ -3,13 +3,17 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::to_array1;
+use super::convert::{to_array, to_array1};
+use super::derivatives::{PyForwardDerivatives, PyInverseDerivatives};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
+use super::simulate::with_system;
 use crate::effects::Effect;
 use crate::io::scene::{Scene, Settings};
+use crate::simulate::config_args::{scene_state, time};
 use crate::simulate::RunConfig;
+use crate::support::args;
 use crate::support::args::given as given_arg;
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
@@ -159,8 +163,14 @@ impl PyScene {
         tau: Option<&Obj>,
         t: f64,
         disable: Option<&Obj>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        super::derivatives::forward(py, &self.inner, q, v, tau, t, disable)
+    ) -> PyResult<PyForwardDerivatives> {
+        let s = &self.inner;
+        let (t, (q, v)) = (time(t).py(py)?, scene_state(s, q, v)?);
+        let tau = args::opt(tau, |x| args::vector(x, "tau", Some(s.model.nv)))?;
+        let d = with_system(py, s, disable, |sys| {
+            sys.forward_derivatives(t, &q, &v, tau.as_deref())
+        })?;
+        Ok(PyForwardDerivatives(d))
     }
     /// `{"dq": ∂τ/∂q, "dv": ∂τ/∂v, "da": M, "numerical": [...]}` of the joint forces
     /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
@@ -173,8 +183,14 @@ impl PyScene {
         a: &Obj,
         t: f64,
         disable: Option<&Obj>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        super::derivatives::inverse(py, &self.inner, q, v, a, t, disable)
+    ) -> PyResult<PyInverseDerivatives> {
+        let s = &self.inner;
+        let (t, (q, v)) = (time(t).py(py)?, scene_state(s, q, v)?);
+        let a = args::vector(a, "a", Some(s.model.nv))?;
+        let d = with_system(py, s, disable, |sys| {
+            sys.inverse_derivatives_of(t, &q, &v, &a)
+        })?;
+        Ok(PyInverseDerivatives(d))
     }
     /// `∂ẏ/∂y` of the equations of motion `y = [q; v]` (nq + nv square, `q`'s own
     /// coordinates), what implicit integrators use; `None` for a scene with closed loops.
@@ -186,7 +202,19 @@ impl PyScene {
         t: f64,
         disable: Option<&Obj>,
     ) -> PyResult<Option<Obj<'py>>> {
-        super::derivatives::state_jacobian(py, &self.inner, y, t, disable)
+        let (nq, dim) = (
+            self.inner.model.nq,
+            self.inner.model.nq + self.inner.model.nv,
+        );
+        let (t, y) = (time(t).py(py)?, args::vector(y, "y", Some(dim))?);
+        self.inner
+            .model
+            .check_state(&y[..nq], Some(&y[nq..]))
+            .py(py)?;
+        let jac = with_system(py, &self.inner, disable, |sys| {
+            sys.checked_state_jacobian(t, &y)
+        })?;
+        jac.map(|j| to_array(py, j, &[dim, dim])).transpose()
     }
     fn __repr__(&self) -> String {
         let s = &self.inner;

@@ -3,11 +3,11 @@ use crate::python::Obj;
 use std::sync::Mutex;
 
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{IntoPyDict, PyDict};
 
-use super::convert::{real, to_array1, vector};
+use super::convert::{real, to_array1};
 use super::effects::take_callback_error;
-use super::errors::{check_result, interrupt_reason, invalid, py_error, IntoPyResult};
+use super::errors::{interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::PyScene;
@@ -15,7 +15,8 @@ use super::signals::{Watch, INTERVAL};
 use super::trajectory::PyRunResult;
 use crate::integrator::Event;
 use crate::io::scene::Scene;
-use crate::simulate::batch::StateRows;
+use crate::simulate::batch::{name_stop, run_scenes};
+use crate::simulate::config_args::{scene_state, time};
 use crate::simulate::{run_scene, Dynamics, EventList, Progress};
 use crate::support::args::given;
 
@@ -39,7 +40,8 @@ pub fn simulate_scene(
     let s = &scene.inner;
     let nq = s.model.nq;
     let config = call_config(config, t_span, rtol, atol, settings)?;
-    let mut watch = watch_arg(py, progress_interval)?;
+    let interval = crate::simulate::config_args::progress_interval(progress_interval).py(py)?;
+    let mut watch = interval.map_or_else(Watch::default, Watch::every);
     let events = scene_events(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
@@ -49,7 +51,7 @@ pub fn simulate_scene(
             .iter()
             .map(|spec| python_event(spec, Some(nq), &failure))
             .collect();
-        // Ctrl-C and progress by elapsed time (signals::INTERVAL), not per evaluation, so a
+        // Ctrl-C and progress by elapsed time (support::pacing), not per evaluation, so a
         // busy Python thread beside the run costs one hand-over of the interpreter per poll.
         let hook: Progress<'_> = Box::new(|t: f64| {
             watch.poll(|py| match &progress {
@@ -69,26 +71,10 @@ pub fn simulate_scene(
             if let Some(e) = &raised {
                 traj.name_interruption(&interrupt_reason(py, e));
             }
-            PyRunResult::new(py, traj, &events.slots(), raised)
+            Ok(PyRunResult::new(py, traj, &events.slots(), raised))
         }
         (Err(_), Some(raised)) => Err(raised),
         (Err(e), None) => Err(super::errors::to_py(py, e)),
-    }
-}
-
-/// `progress_interval`: seconds between progress calls (`None`: the default).
-fn watch_arg(py: Python<'_>, progress_interval: Option<f64>) -> PyResult<Watch> {
-    match progress_interval {
-        None => Ok(Watch::default()),
-        Some(x) if (0.0..=3600.0).contains(&x) => {
-            Ok(Watch::every(std::time::Duration::from_secs_f64(x)))
-        }
-        Some(x) => Err(invalid(
-            py,
-            "progress_interval",
-            "seconds between progress calls, 0 to 3600",
-            x,
-        )),
     }
 }
 
@@ -121,25 +107,21 @@ pub(super) fn scene_system<'s>(
     Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
 }
 
-/// A finite time `t`.
-pub(super) fn time_arg(py: Python<'_>, t: f64) -> PyResult<f64> {
-    match t.is_finite() {
-        true => Ok(t),
-        false => Err(invalid(py, "t", "a finite time", t)),
-    }
-}
-
-/// `(q, v)` checked against the scene's model.
-pub(super) fn scene_state(
+/// Runs `f` on the scene's equations of motion (`disable`: as [`scene_system`]); a Python
+/// callback's own exception is raised as itself.
+pub(super) fn with_system<T>(
     py: Python<'_>,
     s: &Scene,
-    q: &Obj,
-    v: &Obj,
-) -> PyResult<(Vec<f64>, Vec<f64>)> {
-    let q = vector(q, "q", Some(s.model.nq))?;
-    let v = vector(v, "v", Some(s.model.nv))?;
-    s.model.check_state(&q, Some(&v)).py(py)?;
-    Ok((q, v))
+    disable: Option<&Obj>,
+    f: impl FnOnce(&mut Dynamics<'_>) -> crate::support::error::Result<T>,
+) -> PyResult<T> {
+    let mut sys = scene_system(py, s, disable)?;
+    take_callback_error();
+    let r = f(&mut sys);
+    match take_callback_error() {
+        Some(e) => Err(e),
+        None => r.py(py),
+    }
 }
 
 /// The generalized force of each enabled effect of `scene` at `(t, q, v)`: a dict from the
@@ -155,29 +137,11 @@ pub fn effect_forces<'py>(
     disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = &scene.inner;
-    let t = time_arg(py, real(t, "t")?)?;
-    let (q, v) = scene_state(py, s, q, v)?;
-    let mut sys = scene_system(py, s, disable)?;
-    let nv = s.model.nv;
-    let mut out = vec![0.0; sys.effects.len() * nv];
-    take_callback_error();
-    let r = sys.effect_forces(t, &q, &v, &mut out);
-    if let Some(e) = take_callback_error() {
-        return Err(e);
-    }
-    r.map_err(|m| py_error(py, "NumericalError", m))?;
-    for (k, label) in sys.effects.labels().iter().enumerate() {
-        check_result(
-            py,
-            &format!("effect_forces['{label}']"),
-            &out[k * nv..(k + 1) * nv],
-        )?;
-    }
-    let d = PyDict::new(py);
-    for (k, label) in sys.effects.labels().iter().enumerate() {
-        d.set_item(label, to_array1(py, &out[k * nv..(k + 1) * nv]))?;
-    }
-    Ok(d)
+    let t = time(real(t, "t")?).py(py)?;
+    let (q, v) = scene_state(s, q, v)?;
+    let forces = with_system(py, s, disable, |sys| sys.labelled_effect_forces(t, &q, &v))?;
+    let forces = forces.into_iter().map(|(l, f)| (l, to_array1(py, &f)));
+    forces.into_py_dict(py)
 }
 
 /// Kinetic energy, the potential energy of each enabled conservative effect (gravity,
@@ -191,22 +155,11 @@ pub fn energies<'py>(
     v: &Obj,
     disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = &scene.inner;
-    let (q, v) = scene_state(py, s, q, v)?;
-    let mut sys = scene_system(py, s, disable)?;
-    let (kinetic, potentials) = sys.energies(&q, &v);
-    let d = PyDict::new(py);
-    check_result(py, "energies['kinetic']", &[kinetic])?;
-    d.set_item("kinetic", kinetic)?;
-    let mut total = kinetic;
-    for (label, e) in potentials {
-        check_result(py, &format!("energies['{label}']"), &[e])?;
-        total += e;
-        d.set_item(label, e)?;
-    }
-    check_result(py, "energies['total']", &[total])?;
-    d.set_item("total", total)?;
-    Ok(d)
+    let (q, v) = scene_state(&scene.inner, q, v)?;
+    let e = with_system(py, &scene.inner, disable, |sys| {
+        sys.labelled_energies(&q, &v)
+    })?;
+    e.into_py_dict(py)
 }
 
 /// Runs many scenes (or one scene from many initial states) on a pool of threads, the GIL
@@ -230,14 +183,10 @@ pub fn simulate_batch<'py>(
     progress: Option<Py<PyAny>>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<(Vec<PyRunResult>, Option<Py<PyAny>>)> {
-    use crate::simulate::batch::{broadcast, run_batch_polled};
-    if scenes.is_empty() {
-        return Err(invalid(py, "scenes", "at least one Scene", "none"));
-    }
     let scenes: Vec<Scene> = scenes.iter().map(|s| s.inner.clone()).collect();
     let config = call_config(config, t_span, rtol, atol, settings)?;
-    let q0s = batch_states("q0", q0, scenes[0].model.nq)?;
-    let v0s = batch_states("v0", v0, scenes[0].model.nv)?;
+    let states = |x: Option<&Obj>, arg| given(x).map(|x| super::convert::array(x, arg));
+    let (q0, v0) = (states(q0, "q0").transpose()?, states(v0, "v0").transpose()?);
     let events = scene_events(py, events)?;
     if !events.other.is_empty() {
         return Err(invalid(
@@ -248,73 +197,48 @@ pub fn simulate_batch<'py>(
         ));
     }
     let threads = crate::support::args::threads(threads)?;
-    // Settings per scene (each resolves the caller's against its own file's).
-    let resolved = scenes
-        .iter()
-        .map(|s| {
-            let dim = s.model.nq + s.model.nv;
-            config.clone().resolve(&s.settings, &s.effects, dim)
-        })
-        .collect::<crate::support::error::Result<Vec<_>>>()
-        .py(py)?;
-    let runs = broadcast(&scenes, &resolved, q0s.as_ref(), v0s.as_ref()).py(py)?;
-    let count = runs.len();
-    // The record is the caller's alone (no scene file sets one).
-    let record = resolved[0].record;
     // Ctrl-C and the caller's progress from this thread, by elapsed time (signals::Watch).
     let mut watch = Watch::default();
     take_callback_error();
     let results = py.detach(|| {
-        run_batch_polled(&runs, &events.state, record, threads, INTERVAL, |done| {
-            watch.poll(|py| match &progress {
-                Some(cb) => cb.bind(py).call1((done, count)).map(|_| ()),
-                None => Ok(()),
-            })
-        })
+        let state = &events.state;
+        run_scenes(
+            &scenes,
+            &config,
+            q0,
+            v0,
+            state,
+            threads,
+            INTERVAL,
+            |done, n| {
+                watch.poll(|py| match &progress {
+                    Some(cb) => cb.bind(py).call1((done, n)).map(|_| ()),
+                    None => Ok(()),
+                })
+            },
+        )
     });
+    let results = results.py(py)?;
+    let mut results = results
+        .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
     // Ctrl-C or a raising `progress` stopped the batch: the caller gets it back with every
     // run's result so far (finished, stopped midway, not started).
     let mut stopped = watch.error.take().or(take_callback_error());
     // A last report at the end, so a caller's progress bar always reaches B.
+    let count = results.len();
     if let (None, Some(cb)) = (&stopped, &progress) {
-        if let Err(e) = cb.bind(py).call1((count, count)) {
-            stopped = Some(e);
-        }
+        stopped = cb.bind(py).call1((count, count)).err();
     }
-    let results = results
-        .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
-    let reason = stopped.as_ref().map(|e| interrupt_reason(py, e));
+    if let Some(e) = &stopped {
+        name_stop(&mut results, &interrupt_reason(py, e));
+    }
     let slots = events.slots();
-    let mut out = Vec::with_capacity(results.len());
-    for result in results {
-        out.push(match result {
-            Ok(mut traj) => {
-                if let Some(r) = &reason {
-                    traj.name_interruption(r);
-                }
-                PyRunResult::new(py, traj, &slots, None)?
-            }
-            Err(e) => {
-                let why = match (&e, &reason) {
-                    (crate::support::error::Error::Interrupted(_), Some(r)) => Some(format!(
-                        "the batch was stopped before this run started, by {r}"
-                    )),
-                    _ => None,
-                };
-                PyRunResult::not_started(py, super::errors::to_py(py, e), why)?
-            }
-        });
-    }
-    Ok((out, stopped.map(|e| e.into_value(py).into_any())))
-}
-
-/// Per-run initial states: one (1-D) for every run, or a row per run (2-D `(B, width)`).
-fn batch_states(arg: &str, obj: Option<&Obj>, width: usize) -> PyResult<Option<StateRows>> {
-    let Some(obj) = given(obj) else {
-        return Ok(None);
-    };
-    let (shape, data) = super::convert::array(obj, arg)?;
-    StateRows::new(arg, &shape, data, width)
-        .py(obj.py())
-        .map(Some)
+    let out = results.into_iter().map(|result| match result {
+        Ok(traj) => Ok(PyRunResult::new(py, traj, &slots, None)),
+        Err(e) => PyRunResult::not_started(py, e),
+    });
+    Ok((
+        out.collect::<PyResult<_>>()?,
+        stopped.map(|e| e.into_value(py).into_any()),
+    ))
 }
