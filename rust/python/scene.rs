@@ -8,12 +8,11 @@ use super::derivatives::{PyForwardDerivatives, PyInverseDerivatives};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
-use super::simulate::with_system;
+use super::simulate::callbacks;
 use crate::effects::Effect;
 use crate::io::scene::{Scene, Settings};
-use crate::simulate::config_args::{scene_state, time};
+use crate::simulate::at_state;
 use crate::simulate::RunConfig;
-use crate::support::args;
 use crate::support::args::given as given_arg;
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
@@ -164,13 +163,15 @@ impl PyScene {
         t: f64,
         disable: Option<&Obj>,
     ) -> PyResult<PyForwardDerivatives> {
-        let s = &self.inner;
-        let (t, (q, v)) = (time(t).py(py)?, scene_state(s, q, v)?);
-        let tau = args::opt(tau, |x| args::vector(x, "tau", Some(s.model.nv)))?;
-        let d = with_system(py, s, disable, |sys| {
-            sys.forward_derivatives(t, &q, &v, tau.as_deref())
-        })?;
-        Ok(PyForwardDerivatives(d))
+        let d = || {
+            Ok(at_state::forward_derivatives(
+                &self.inner,
+                t,
+                (q, v, tau),
+                disable,
+            ))
+        };
+        Ok(PyForwardDerivatives(callbacks(py, d)??))
     }
     /// `{"dq": ∂τ/∂q, "dv": ∂τ/∂v, "da": M, "numerical": [...]}` of the joint forces
     /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
@@ -184,13 +185,15 @@ impl PyScene {
         t: f64,
         disable: Option<&Obj>,
     ) -> PyResult<PyInverseDerivatives> {
-        let s = &self.inner;
-        let (t, (q, v)) = (time(t).py(py)?, scene_state(s, q, v)?);
-        let a = args::vector(a, "a", Some(s.model.nv))?;
-        let d = with_system(py, s, disable, |sys| {
-            sys.inverse_derivatives_of(t, &q, &v, &a)
-        })?;
-        Ok(PyInverseDerivatives(d))
+        let d = || {
+            Ok(at_state::inverse_derivatives(
+                &self.inner,
+                t,
+                (q, v, a),
+                disable,
+            ))
+        };
+        Ok(PyInverseDerivatives(callbacks(py, d)??))
     }
     /// `∂ẏ/∂y` of the equations of motion `y = [q; v]` (nq + nv square, `q`'s own
     /// coordinates), what implicit integrators use; `None` for a scene with closed loops.
@@ -202,18 +205,9 @@ impl PyScene {
         t: f64,
         disable: Option<&Obj>,
     ) -> PyResult<Option<Obj<'py>>> {
-        let (nq, dim) = (
-            self.inner.model.nq,
-            self.inner.model.nq + self.inner.model.nv,
-        );
-        let (t, y) = (time(t).py(py)?, args::vector(y, "y", Some(dim))?);
-        self.inner
-            .model
-            .check_state(&y[..nq], Some(&y[nq..]))
-            .py(py)?;
-        let jac = with_system(py, &self.inner, disable, |sys| {
-            sys.checked_state_jacobian(t, &y)
-        })?;
+        let jac = || Ok(at_state::state_jacobian(&self.inner, t, y, disable));
+        let dim = self.inner.model.nq + self.inner.model.nv;
+        let jac = callbacks(py, jac)??;
         jac.map(|j| to_array(py, j, &[dim, dim])).transpose()
     }
     fn __repr__(&self) -> String {

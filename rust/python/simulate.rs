@@ -5,7 +5,7 @@ use std::sync::Mutex;
 use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyDict};
 
-use super::convert::{real, to_array1};
+use super::convert::to_array1;
 use super::effects::take_callback_error;
 use super::errors::{interrupt_reason, invalid, py_error, IntoPyResult};
 use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
@@ -16,8 +16,7 @@ use super::trajectory::PyRunResult;
 use crate::integrator::Event;
 use crate::io::scene::Scene;
 use crate::simulate::batch::{name_stop, run_scenes};
-use crate::simulate::config_args::{scene_state, time};
-use crate::simulate::{run_scene, Dynamics, EventList, Progress};
+use crate::simulate::{at_state, run_scene, EventList, Progress};
 use crate::support::args::given;
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
@@ -96,32 +95,15 @@ fn scene_events(py: Python<'_>, events: Option<&Obj>) -> PyResult<SceneEvents> {
     Ok(out)
 }
 
-/// The scene's equations of motion with the `disable`d families (the caller's, else the
-/// scene's) left out.
-pub(super) fn scene_system<'s>(
+/// `f`'s result, or the exception a Python callback (a torque function) raised inside it,
+/// which wins.
+pub(super) fn callbacks<T>(
     py: Python<'_>,
-    s: &'s Scene,
-    disable: Option<&Obj>,
-) -> PyResult<Dynamics<'s>> {
-    let disabled = crate::simulate::disabled(crate::effects::args::disable(disable)?, &s.settings);
-    Dynamics::try_new(&s.model, &s.effects, disabled).py(py)
-}
-
-/// Runs `f` on the scene's equations of motion (`disable`: as [`scene_system`]); a Python
-/// callback's own exception is raised as itself.
-pub(super) fn with_system<T>(
-    py: Python<'_>,
-    s: &Scene,
-    disable: Option<&Obj>,
-    f: impl FnOnce(&mut Dynamics<'_>) -> crate::support::error::Result<T>,
+    f: impl FnOnce() -> crate::support::error::Result<T>,
 ) -> PyResult<T> {
-    let mut sys = scene_system(py, s, disable)?;
     take_callback_error();
-    let r = f(&mut sys);
-    match take_callback_error() {
-        Some(e) => Err(e),
-        None => r.py(py),
-    }
+    let r = f();
+    take_callback_error().map_or_else(|| r.py(py), Err)
 }
 
 /// The generalized force of each enabled effect of `scene` at `(t, q, v)`: a dict from the
@@ -136,11 +118,12 @@ pub fn effect_forces<'py>(
     v: &Obj,
     disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s = &scene.inner;
-    let t = time(real(t, "t")?).py(py)?;
-    let (q, v) = scene_state(s, q, v)?;
-    let forces = with_system(py, s, disable, |sys| sys.labelled_effect_forces(t, &q, &v))?;
-    let forces = forces.into_iter().map(|(l, f)| (l, to_array1(py, &f)));
+    let forces = callbacks(py, || {
+        Ok(at_state::effect_forces(&scene.inner, t, (q, v), disable))
+    })??;
+    let forces = forces
+        .into_iter()
+        .map(|(l, f): (String, Vec<f64>)| (l, to_array1(py, &f)));
     forces.into_py_dict(py)
 }
 
@@ -155,11 +138,7 @@ pub fn energies<'py>(
     v: &Obj,
     disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let (q, v) = scene_state(&scene.inner, q, v)?;
-    let e = with_system(py, &scene.inner, disable, |sys| {
-        sys.labelled_energies(&q, &v)
-    })?;
-    e.into_py_dict(py)
+    at_state::energies(&scene.inner, (q, v), disable)?.into_py_dict(py)
 }
 
 /// Runs many scenes (or one scene from many initial states) on a pool of threads, the GIL

@@ -7,6 +7,7 @@ use super::convert::{to_array, to_array1};
 use super::record::Field;
 use crate::integrator::{status_variants, NonFiniteKind, Status};
 use crate::simulate::Trajectory;
+use crate::support::error::Error;
 use pyo3::types::IntoPyDict;
 use pyo3::IntoPyObjectExt;
 
@@ -126,26 +127,29 @@ macro_rules! run_record {
 pub(super) use run_record;
 
 /// A run of `simulate_scene`, a batch or a `Simulator`: its trajectory, events in the
-/// caller's order; `not_started`: why a batch run never started (`RunStatus.NotStarted`).
+/// caller's order; `not_started`: a batch run that never started (`RunStatus.NotStarted`,
+/// the trajectory's message saying why).
 pub struct Run {
     run: Trajectory,
-    not_started: Option<String>,
+    not_started: bool,
     error: Option<Py<PyAny>>,
 }
 
 impl Run {
     /// SciPy's code: 0 end reached, 1 terminal event, -1 failure (a run not started).
     fn code(&self) -> i32 {
-        self.not_started
-            .as_ref()
-            .map_or(self.run.status.code(), |_| -1)
+        if self.not_started {
+            -1
+        } else {
+            self.run.status.code()
+        }
     }
     fn status(&self) -> PyRunStatus {
-        match &self.not_started {
-            Some(reason) => PyRunStatus::NotStarted {
-                reason: reason.clone(),
+        match self.not_started {
+            true => PyRunStatus::NotStarted {
+                reason: self.run.message.clone(),
             },
-            None => PyRunStatus::from(&self.run.status),
+            false => PyRunStatus::from(&self.run.status),
         }
     }
 }
@@ -201,31 +205,30 @@ impl PyRunResult {
         let error = error.map(|e| e.into_value(py).into_any());
         PyRunResult(Run {
             run: traj,
-            not_started: None,
+            not_started: false,
             error,
         })
     }
 
     /// A batch run that never started: `error` refused its input, or the batch stopped
     /// before it (`Interrupted`, its message then says by what).
-    pub(super) fn not_started(
-        py: Python<'_>,
-        error: crate::support::error::Error,
-    ) -> PyResult<Self> {
-        let message = match &error {
-            crate::support::error::Error::Interrupted(m) => m.clone(),
-            _ => String::new(),
+    pub(super) fn not_started(py: Python<'_>, error: Error) -> PyResult<Self> {
+        let stopped = match &error {
+            Error::Interrupted(m) => Some(m.clone()),
+            _ => None,
         };
         let error = super::errors::to_py(py, error);
-        let message = match message.is_empty() {
-            true => format!("{}: {}", error.get_type(py).name()?, error.value(py).str()?),
-            false => message,
+        let message = match stopped {
+            Some(m) => m,
+            None => format!("{}: {}", error.get_type(py).name()?, error.value(py).str()?),
         };
-        let run = Trajectory::not_started(message.clone());
-        let error = Some(error.into_value(py).into_any());
+        let (run, error) = (
+            Trajectory::not_started(message),
+            Some(error.into_value(py).into_any()),
+        );
         Ok(PyRunResult(Run {
             run,
-            not_started: Some(message),
+            not_started: true,
             error,
         }))
     }

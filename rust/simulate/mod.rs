@@ -7,6 +7,7 @@
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
 //! effects runs the bare forward dynamics.
 mod along;
+pub mod at_state;
 pub mod batch;
 pub mod config_args;
 pub mod derivatives;
@@ -18,7 +19,7 @@ mod settings;
 pub use along::{along, Along, Asked};
 pub use dynamics::{Dynamics, Progress};
 pub use evaluate::check_result;
-pub use event_list::EventList;
+pub use event_list::{event_value, EventList};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};
