@@ -10,8 +10,9 @@ use super::effects::repr_of;
 use super::errors::invalid;
 use crate::integrator::{Event, EventDirection};
 use crate::simulate::config_args::terminal_count;
-use crate::simulate::event_value;
 use crate::simulate::StateEvent;
+use crate::simulate::{event_value, EventList};
+use crate::support::args::given;
 
 /// `q[index]` (or `v[index]`) crossing `value`; evaluated in Rust, no GIL needed.
 #[pyclass(
@@ -94,6 +95,26 @@ pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventS
         terminal,
         direction,
     })
+}
+
+/// A run's events in the caller's order (the core's `EventList`): `None`, one event
+/// callable, or a sequence of callables and `StateEvent`s (evaluated in Rust).
+pub(super) fn event_list(py: Python<'_>, events: Option<&Obj>) -> PyResult<EventList<PyEventSpec>> {
+    let mut out = EventList::default();
+    match given(events) {
+        None => {}
+        Some(e) if e.is_callable() => out.push_other(event_spec(py, 0, e)?),
+        Some(evs) => {
+            for (k, e) in evs.try_iter()?.enumerate() {
+                let e = e?;
+                match e.cast::<PyStateEvent>() {
+                    Ok(se) => out.push_state(se.get().inner.clone()),
+                    Err(_) => out.push_other(event_spec(py, k, &e)?),
+                }
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Builds an event that calls Python (re-attaching to the interpreter when called from a

@@ -12,7 +12,7 @@ use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::IntoPyResult;
 use super::errors::{invalid, py_error};
-use super::events::{event_spec, python_event, PyEventSpec};
+use super::events::{event_list, python_event};
 use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::record::Field;
 use super::run_config::{call_config, PyRunConfig};
@@ -53,21 +53,27 @@ pub fn rk45(
         .py(py)?;
     let (t_span, opts) = (t_span_given, run.opts);
     let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
-    let specs = event_specs(py, events)?;
+    let events = event_list(py, events)?;
+    if !events.state.is_empty() {
+        let expected = "event callables (a StateEvent needs a scene: pmd.simulate)";
+        return Err(invalid(py, "events", expected, "a StateEvent"));
+    }
+    // The first exception from `fun` or an event (Ctrl-C included) stops the run;
+    // `pointmass_dyn.rk45` re-raises it with the solution computed so far attached.
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let specs = &events.other;
     let mut evs: Vec<Event<'_>> = specs
         .iter()
         .map(|s| python_event(s, None, &failure))
         .collect();
-    let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let sys = python_system(py, fun, dim, &rhs_failure);
+    let sys = python_system(py, fun, dim, &failure);
     // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
     let sol = match jac {
-        JacArg::Callable(f) => {
+        JacArg::Callable(jac) => {
             let with = WithJacobian {
                 inner: sys,
-                jac: f,
-                failure: &rhs_failure,
+                jac,
+                failure: &failure,
             };
             integrator::solve(with, t_span, &y0, &opts, &mut evs)
         }
@@ -78,29 +84,8 @@ pub fn rk45(
     }
     .map_err(|e| invalid_setting(py, e))?;
     drop(evs);
-    // An exception from `fun` or an event (Ctrl-C included) is re-raised by
-    // `pointmass_dyn.rk45` with the solution computed so far attached.
-    let raised = rhs_failure
-        .into_inner()
-        .ok()
-        .flatten()
-        .or(failure.into_inner().ok().flatten());
+    let raised = failure.into_inner().ok().flatten();
     solution(py, sol, raised, !specs.is_empty())
-}
-
-/// `None`, one event callable, or a sequence of them.
-fn event_specs(py: Python<'_>, events: Option<&Obj>) -> PyResult<Vec<PyEventSpec>> {
-    let mut specs = Vec::new();
-    if let Some(evs) = events.filter(|e| !e.is_none()) {
-        if evs.is_callable() {
-            specs.push(event_spec(py, 0, evs)?);
-        } else {
-            for (k, e) in evs.try_iter()?.enumerate() {
-                specs.push(event_spec(py, k, &e?)?);
-            }
-        }
-    }
-    Ok(specs)
 }
 
 /// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in

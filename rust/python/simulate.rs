@@ -8,7 +8,7 @@ use pyo3::types::{IntoPyDict, PyDict};
 use super::convert::to_array1;
 use super::effects::take_callback_error;
 use super::errors::{interrupt_reason, invalid, py_error, IntoPyResult};
-use super::events::{event_spec, python_event, PyEventSpec, PyStateEvent};
+use super::events::{event_list, python_event};
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::PyScene;
 use super::signals::{Watch, INTERVAL};
@@ -16,7 +16,7 @@ use super::trajectory::PyRunResult;
 use crate::integrator::Event;
 use crate::io::scene::Scene;
 use crate::simulate::batch::{name_stop, run_scenes};
-use crate::simulate::{at_state, run_scene, EventList, Progress};
+use crate::simulate::{at_state, run_scene, Progress};
 use crate::support::args::given;
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
@@ -41,7 +41,7 @@ pub fn simulate_scene(
     let config = call_config(config, t_span, rtol, atol, settings)?;
     let interval = crate::simulate::config_args::progress_interval(progress_interval).py(py)?;
     let mut watch = interval.map_or_else(Watch::default, Watch::every);
-    let events = scene_events(py, events)?;
+    let events = event_list(py, events)?;
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
     let result = py.detach(|| {
@@ -75,24 +75,6 @@ pub fn simulate_scene(
         (Err(_), Some(raised)) => Err(raised),
         (Err(e), None) => Err(super::errors::to_py(py, e)),
     }
-}
-
-/// A run's events: `StateEvent`s (evaluated in Rust) and Python callables, in the
-/// caller's order (the core's `EventList`).
-type SceneEvents = EventList<PyEventSpec>;
-
-fn scene_events(py: Python<'_>, events: Option<&Obj>) -> PyResult<SceneEvents> {
-    let mut out = SceneEvents::default();
-    if let Some(evs) = events.filter(|e| !e.is_none()) {
-        for (k, e) in evs.try_iter()?.enumerate() {
-            let e = e?;
-            match e.cast::<PyStateEvent>() {
-                Ok(se) => out.push_state(se.get().inner.clone()),
-                Err(_) => out.push_other(event_spec(py, k, &e)?),
-            }
-        }
-    }
-    Ok(out)
 }
 
 /// `f`'s result, or the exception a Python callback (a torque function) raised inside it,
@@ -166,7 +148,7 @@ pub fn simulate_batch<'py>(
     let config = call_config(config, t_span, rtol, atol, settings)?;
     let states = |x: Option<&Obj>, arg| given(x).map(|x| super::convert::array(x, arg));
     let (q0, v0) = (states(q0, "q0").transpose()?, states(v0, "v0").transpose()?);
-    let events = scene_events(py, events)?;
+    let events = event_list(py, events)?;
     if !events.other.is_empty() {
         return Err(invalid(
             py,
