@@ -849,8 +849,9 @@ class Scene:
         tau: ArrayLike | None = None,
         t: float = 0.0,
         disable: _Family | Sequence[_Family] | None = None,
-    ) -> dict[str, Any]:
-        """``{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [names]}`` of the scene's
+    ) -> Any:
+        """``{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [names]}`` (a record,
+        indexable by these names) of the scene's
         accelerations with its enabled effects (plus ``tau``); ``numerical`` names the effects
         differentiated by central differences (torque callbacks, external loads). With closed
         loops, those of the constrained dynamics (``dtau`` the constrained compliance;
@@ -862,8 +863,9 @@ class Scene:
         a: ArrayLike,
         t: float = 0.0,
         disable: _Family | Sequence[_Family] | None = None,
-    ) -> dict[str, Any]:
-        """``{"dq", "dv", "da", "numerical"}`` of ``τ = ID(q, v, a) − τ_effects(t, q, v)``.
+    ) -> Any:
+        """``{"dq", "dv", "da", "numerical"}`` (a record, indexable by these names) of
+        ``τ = ID(q, v, a) − τ_effects(t, q, v)``.
         Scenes without closed loops."""
     def state_jacobian(
         self, y: ArrayLike, t: float = 0.0, disable: _Family | Sequence[_Family] | None = None
@@ -1069,8 +1071,8 @@ class ContactStates:
 
 @final
 class OdeSolution:
-    """What :func:`rk45` returns (``pointmass_dyn.OdeResult`` is built from it); indexable
-    by its attribute names, as the dict it replaced."""
+    """What :func:`rk45` returns (``pointmass_dyn.OdeResult`` is built from it); a record:
+    indexable by its attribute names, as the dict it replaced, pickled as that dict."""
     t: NDArray[np.float64]
     y: NDArray[np.float64]
     t_events: list[NDArray[np.float64]] | None
@@ -1092,12 +1094,14 @@ class OdeSolution:
     error: BaseException | None
     def __getitem__(self, key: str) -> Any: ...
     def keys(self) -> list[str]: ...
+    def items(self) -> list[tuple[str, Any]]: ...
 
 @final
 class RunResult:
     """One run's trajectory and outcome: the fields of ``pointmass_dyn.SimulationResult``
     of the same names (``outcome`` the typed status, ``status`` its SciPy code), and
-    ``error``: the exception that stopped the run from Python, or None."""
+    ``error``: the exception that stopped the run from Python, or None. A record: indexable
+    by its attribute names, pickled as the dict of them."""
 
     t: _Array
     q: _Array
@@ -1125,6 +1129,9 @@ class RunResult:
     success: bool
     t_reached: float
     error: BaseException | None
+    def __getitem__(self, key: str) -> Any: ...
+    def keys(self) -> list[str]: ...
+    def items(self) -> list[tuple[str, Any]]: ...
 
 def simulate_scene(
     scene: Scene,
@@ -1273,8 +1280,8 @@ def design_regressor(
     gravity: ArrayLike | None,
     about: ArrayLike,
     actuated: list[int],
-) -> dict[str, Any]:
-    """The design maps along N states: ``data`` (N · rows, 10 · nlinks) (shaking force,
+) -> Any:
+    """The design maps along N states (a record, indexable by its names): ``data`` (N · rows, 10 · nlinks) (shaking force,
     moment, driving forces, bearing forces per link and cut joint, per unit inertial
     parameter), ``rows``, ``nactuated``, ``nlinks``, ``nloops``, ``parameters``."""
 
@@ -1338,16 +1345,19 @@ def identification_model(
 def design_pins(model: Model, body: int | str) -> list[tuple[_Array, _Array]]:
     """``(point, axis)`` of each revolute or ball joint on ``body``, in its frame."""
 
-def design_pin_loads(model: Model, body: int | str) -> list[dict[str, Any]]:
-    """The pins of :func:`design_pins` (same order) with the source of each one's force:
+def design_pin_loads(model: Model, body: int | str) -> list[Any]:
+    """The pins of :func:`design_pins` (same order) with the source of each one's force, each a
+    record indexable by its names:
     ``point``, ``axis`` (body frame), ``kind`` (``"joint"``: a tree joint's bearing rows, world
     axes; ``"cut"``: a cut joint's, frame a's axes), ``index`` (link or cut joint), ``sign``
     (+1 the force on this body, -1 its reaction), ``frame_body`` (the body whose rotation
     times ``frame_rotation`` turns the rows to world axes; -1: none) and ``frame_rotation``
     (3, 3)."""
 
-def design_solve(spec: dict[str, Any]) -> dict[str, Any]:
-    """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel:
+def design_solve(spec: dict[str, Any]) -> Any:
+    """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel; a
+    record indexable by its names (an infeasible program: a dict of ``status`` "Infeasible",
+    ``message`` and ``relaxation``):
     ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel`` (the last
     stage's), ``stages`` (each stage's ``(status, gap_abs, gap_rel, objective)``, the first
     stage's objective at that stage's design: the optimum, then the least mass), ``notes`` (what did not go as asked without failing: a least-mass stage not

@@ -131,3 +131,25 @@ fn link_accelerations(model: &Model, links: &[LinkState], vdot: &[f64], acc: &mu
         acc[i] = a;
     }
 }
+
+/// IMUs as a caller lists them: `(body index, position (3,), rotation (3, 3))` each, in the
+/// body's frame.
+pub fn imus_arg<A: crate::support::args::Arg>(x: &A) -> std::result::Result<Vec<Imu>, A::Err> {
+    use crate::support::args::{count, items, mat3, vec3};
+    let expected = "(body index, position (3,), rotation (3, 3))";
+    let one = |(k, item): (usize, A)| {
+        let arg = format!("imu[{k}]");
+        let [body, p, r] = <[A; 3]>::try_from(items(&item, &arg, expected)?)
+            .map_err(|_| crate::support::error::Error::arg(&arg, expected, item.shown()))?;
+        Ok(Imu {
+            body: count(&body, &format!("{arg}.body"), "a body index")?,
+            position: vec3(&p, &format!("{arg}.position"))?,
+            rotation: mat3(&r, &format!("{arg}.rotation"))?,
+        })
+    };
+    items(x, "imus", "a list of IMUs")?
+        .into_iter()
+        .enumerate()
+        .map(one)
+        .collect()
+}

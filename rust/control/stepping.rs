@@ -28,6 +28,15 @@ pub enum ControlKind {
     PdTarget,
 }
 
+impl ControlKind {
+    /// `control=`: "torque" or "pd".
+    pub fn from_arg<A: crate::support::args::Arg>(x: &A) -> std::result::Result<Self, A::Err> {
+        let choices = [("torque", Self::Torque), ("pd", Self::PdTarget)];
+        let expected = "'torque' (joint torques) or 'pd' (targets of the scene's PD torques)";
+        crate::support::args::choice(x, "control", &choices, expected)
+    }
+}
+
 enum Engine<'a> {
     Rk45(Stepper<Dynamics<'a>>),
     Dop853(Dop853<Dynamics<'a>>),

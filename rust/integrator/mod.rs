@@ -688,6 +688,14 @@ impl Solution {
         self.status.is_success()
     }
 
+    /// The states by component, SciPy's layout: row-major `dim × t.len()`.
+    pub fn y_by_component(&self) -> Vec<f64> {
+        let (dim, n) = (self.dim, self.t.len());
+        (0..dim * n)
+            .map(|k| self.y[(k % n) * dim + k / n])
+            .collect()
+    }
+
     /// State at output index `i`.
     pub fn state(&self, i: usize) -> &[f64] {
         &self.y[i * self.dim..(i + 1) * self.dim]

@@ -11,9 +11,8 @@ use super::errors::IntoPyResult;
 use super::run_config::config_of;
 use super::scene::PyScene;
 use super::trajectory::PyRunResult;
-use crate::control::{ControlKind, Imu, OwnedSimulator, Stepping};
+use crate::control::{ControlKind, OwnedSimulator, Simulator, Stepping};
 use crate::support::args;
-use crate::support::spatial::{Mat3, Vec3};
 
 #[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
 pub struct PySimulator {
@@ -49,13 +48,7 @@ impl PySimulator {
         t0: f64,
         t_eval: Option<&Obj>,
     ) -> PyResult<Self> {
-        let choices = [
-            ("torque", ControlKind::Torque),
-            ("pd", ControlKind::PdTarget),
-        ];
-        let expected = "'torque' (joint torques) or 'pd' (targets of the scene's PD torques)";
-        let control = pyo3::types::PyString::new(py, control).into_any();
-        let kind = args::choice(&control, "control", &choices, expected)?;
+        let kind = ControlKind::from_arg(&pyo3::types::PyString::new(py, control).into_any())?;
         let method = method.map(|m| pyo3::types::PyString::new(py, m).into_any());
         let given = [
             ("method", method.as_ref()),
@@ -79,37 +72,6 @@ impl PySimulator {
         Ok(PySimulator {
             inner: Mutex::new(inner),
         })
-    }
-
-    #[getter]
-    fn t(&self) -> f64 {
-        self.lock().with(|s| s.t())
-    }
-    #[getter]
-    fn nq(&self) -> usize {
-        self.lock().with(|s| s.nq())
-    }
-    #[getter]
-    fn control_period(&self) -> f64 {
-        self.lock().with(|s| s.period())
-    }
-    #[getter]
-    fn method(&self) -> &'static str {
-        self.lock().with(|s| s.method().name())
-    }
-    #[getter]
-    fn control_len(&self) -> usize {
-        self.lock().with(|s| s.control_len())
-    }
-    /// The state `[q; v]` (a copy).
-    #[getter]
-    fn y<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        self.lock().with(|s| to_array1(py, s.y()).into_any())
-    }
-    #[getter]
-    fn control<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
-        self.lock()
-            .with(|s| s.control().map(|u| to_array1(py, u).into_any()))
     }
 
     fn set_control(&self, py: Python<'_>, u: &Obj) -> PyResult<()> {
@@ -142,7 +104,7 @@ impl PySimulator {
     fn trajectory(&self, py: Python<'_>) -> PyResult<PyRunResult> {
         let traj = self.lock().with(|s| s.trajectory());
         let slots: Vec<usize> = (0..traj.t_events.len()).collect();
-        PyRunResult::new(py, traj, &slots, None)
+        Ok(PyRunResult::new(py, traj, &slots, None))
     }
 
     /// The actuators' joint torques now (nv): the torque control plus the scene's torques.
@@ -155,19 +117,33 @@ impl PySimulator {
     /// IMU readings now, (n, 6): specific force then angular velocity, sensor axes; each IMU
     /// `(body index, position (3,), rotation (3, 3))` in the body's frame.
     fn imu<'py>(&self, py: Python<'py>, imus: &Obj) -> PyResult<Obj<'py>> {
-        let mut list = Vec::new();
-        for (k, item) in imus.try_iter()?.enumerate() {
-            let (body, p, r): (usize, Obj, Obj) = item?.extract()?;
-            let p = vector(&p, &format!("imu[{k}].position"), Some(3))?;
-            let r = super::convert::mat3(&r, &format!("imu[{k}].rotation"))?;
-            list.push(Imu {
-                body,
-                position: Vec3::from_column_slice(&p),
-                rotation: Mat3::from(r),
-            });
-        }
+        let list = crate::control::sensors::imus_arg(imus)?;
         let mut out = vec![0.0; 6 * list.len()];
         self.lock().with_mut(|s| s.imu(&list, &mut out)).py(py)?;
         to_array(py, out, &[list.len(), 6])
     }
 }
+
+/// The simulator's state read through its lock: `name: type = |simulator, py| value`.
+macro_rules! simulator_getters {
+    ($($(#[$m:meta])* $name:ident: $t:ty = $get:expr),* $(,)?) => {
+        #[pymethods]
+        impl PySimulator {
+            $($(#[$m])* #[getter]
+            fn $name<'py>(&self, py: Python<'py>) -> $t {
+                self.lock().with(|s| ($get)(s, py))
+            })*
+        }
+    };
+}
+
+simulator_getters!(
+    t: f64 = |s: &Simulator<'_>, _| s.t(),
+    nq: usize = |s: &Simulator<'_>, _| s.nq(),
+    control_period: f64 = |s: &Simulator<'_>, _| s.period(),
+    method: &'static str = |s: &Simulator<'_>, _| s.method().name(),
+    control_len: usize = |s: &Simulator<'_>, _| s.control_len(),
+    /// The state `[q; v]` (a copy).
+    y: Obj<'py> = |s: &Simulator<'_>, py| to_array1(py, s.y()).into_any(),
+    control: Option<Obj<'py>> = |s: &Simulator<'_>, py| s.control().map(|u| to_array1(py, u).into_any()),
+);

@@ -2,14 +2,10 @@
 //! `Scene.state_jacobian`: the scene-level derivatives (docs/derivatives.md).
 use crate::python::Obj;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
-use super::convert::{to_array, vector};
-use super::effects::take_callback_error;
-use super::errors::{check_result, invalid, py_error, to_py, IntoPyResult};
-use super::simulate::{scene_state, scene_system, time_arg};
-use crate::io::scene::Scene;
-use crate::simulate::derivatives::DerivativeWork;
+use super::errors::check_result;
+use super::record::{record, Field};
+use crate::simulate::derivatives::SceneDerivatives;
 use nalgebra::DMatrix;
 
 /// From this size on, [`c_ordered_triple`] allocates the three matrices as one block.
@@ -113,148 +109,27 @@ pub(crate) fn inverse_into_arrays<'py>(
     Ok((block.get_item(0)?, block.get_item(1)?, block.get_item(2)?))
 }
 
-fn c_order(m: &DMatrix<f64>) -> Vec<f64> {
-    m.transpose().as_slice().to_vec()
-}
+/// A scene's derivatives, the matrices in C order.
+type Derivs = SceneDerivatives;
 
-fn refuse_loops(py: Python<'_>, s: &Scene, name: &str) -> PyResult<()> {
-    if !s.model.has_constraints() {
-        return Ok(());
+record!(
+    /// `Scene.forward_dynamics_derivatives`: `dq` ∂q̈/∂q, `dv` ∂q̈/∂v, `dtau` M⁻¹, and
+    /// `numerical`, the effects differentiated by central differences.
+    PyForwardDerivatives("SceneForwardDerivatives", Derivs) {
+        dq: |d: &Derivs, py| d.dq.field(py),
+        dv: |d: &Derivs, py| d.dv.field(py),
+        dtau: |d: &Derivs, py| d.third.field(py),
+        numerical,
     }
-    Err(invalid(
-        py,
-        "scene",
-        format!("a scene without closed loops or couplings for {name}"),
-        format!(
-            "a model with {} loop(s) and {} coupling(s)",
-            s.model.loops.len(),
-            s.model.couplings.len()
-        ),
-    ))
-}
+);
 
-/// Runs `f` on the scene's system with a derivative workspace; a failure (an effect's error,
-/// a singular configuration) raises `NumericalError` (`SingularityError` for the latter, as
-/// `Model`'s derivatives), a callback's own exception as itself.
-fn run<'py>(
-    py: Python<'py>,
-    s: &Scene,
-    disable: Option<&Obj>,
-    name: &str,
-    keys: [&str; 3],
-    f: impl FnOnce(
-        &mut crate::simulate::Dynamics<'_>,
-        &mut DerivativeWork,
-    ) -> crate::support::error::Result<()>,
-    pick: impl Fn(&DerivativeWork) -> [&DMatrix<f64>; 3],
-) -> PyResult<Bound<'py, PyDict>> {
-    let mut sys = scene_system(py, s, disable)?;
-    let mut w = DerivativeWork::new(&sys);
-    take_callback_error();
-    let r = f(&mut sys, &mut w);
-    if let Some(e) = take_callback_error() {
-        return Err(e);
+record!(
+    /// `Scene.inverse_dynamics_derivatives`: `dq` ∂τ/∂q, `dv` ∂τ/∂v, `da` M, and
+    /// `numerical`, the effects differentiated by central differences.
+    PyInverseDerivatives("SceneInverseDerivatives", Derivs) {
+        dq: |d: &Derivs, py| d.dq.field(py),
+        dv: |d: &Derivs, py| d.dv.field(py),
+        da: |d: &Derivs, py| d.third.field(py),
+        numerical,
     }
-    r.map_err(|e| to_py(py, e.in_arg(name)))?;
-    let d = PyDict::new(py);
-    let nv = s.model.nv;
-    for (key, m) in keys.iter().zip(pick(&w)) {
-        let data = c_order(m);
-        check_result(py, &format!("{name}['{key}']"), &data)?;
-        d.set_item(*key, to_array(py, data, &[nv, nv])?)?;
-    }
-    let labels = sys.effects.labels();
-    let numerical: Vec<String> = labels
-        .into_iter()
-        .zip(&w.effects.numerical)
-        .filter(|(_, n)| **n)
-        .map(|(l, _)| l)
-        .collect();
-    d.set_item("numerical", numerical)?;
-    Ok(d)
-}
-
-#[allow(clippy::too_many_arguments)]
-pub(super) fn forward<'py>(
-    py: Python<'py>,
-    s: &Scene,
-    q: &Obj,
-    v: &Obj,
-    tau: Option<&Obj>,
-    t: f64,
-    disable: Option<&Obj>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let t = time_arg(py, t)?;
-    let (q, v) = scene_state(py, s, q, v)?;
-    let tau = match tau {
-        Some(x) if !x.is_none() => {
-            let x = vector(x, "tau", Some(s.model.nv))?;
-            crate::support::error::check_finite("tau", &x).py(py)?;
-            x
-        }
-        _ => vec![0.0; s.model.nv],
-    };
-    run(
-        py,
-        s,
-        disable,
-        "forward_dynamics_derivatives",
-        ["dq", "dv", "dtau"],
-        |sys, w| sys.derivatives(t, &q, &v, &tau, w),
-        |w| [&w.dd.ddq_dq, &w.dd.ddq_dv, &w.dd.minv],
-    )
-}
-
-pub(super) fn inverse<'py>(
-    py: Python<'py>,
-    s: &Scene,
-    q: &Obj,
-    v: &Obj,
-    a: &Obj,
-    t: f64,
-    disable: Option<&Obj>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let t = time_arg(py, t)?;
-    let (q, v) = scene_state(py, s, q, v)?;
-    // A mechanism's driving forces depend on which joints are actuated (driving_forces).
-    refuse_loops(py, s, "inverse_dynamics_derivatives")?;
-    let a = vector(a, "a", Some(s.model.nv))?;
-    crate::support::error::check_finite("a", &a).py(py)?;
-    run(
-        py,
-        s,
-        disable,
-        "inverse_dynamics_derivatives",
-        ["dq", "dv", "da"],
-        |sys, w| sys.inverse_derivatives(t, &q, &v, &a, w),
-        |w| [&w.dd.dtau_dq, &w.dd.dtau_dv, &w.dd.mass],
-    )
-}
-
-pub(super) fn state_jacobian<'py>(
-    py: Python<'py>,
-    s: &Scene,
-    y: &Obj,
-    t: f64,
-    disable: Option<&Obj>,
-) -> PyResult<Option<Obj<'py>>> {
-    use crate::integrator::OdeSystem;
-    let t = time_arg(py, t)?;
-    let (nq, nv) = (s.model.nq, s.model.nv);
-    let y = vector(y, "y", Some(nq + nv))?;
-    s.model.check_state(&y[..nq], Some(&y[nq..])).py(py)?;
-    let mut sys = scene_system(py, s, disable)?;
-    let dim = nq + nv;
-    let mut jac = vec![0.0; dim * dim];
-    take_callback_error();
-    let r = sys.jacobian(t, &y, &mut jac);
-    if let Some(e) = take_callback_error() {
-        return Err(e);
-    }
-    let filled = r.map_err(|m| py_error(py, "NumericalError", format!("state_jacobian: {m}")))?;
-    if !filled {
-        return Ok(None);
-    }
-    check_result(py, "state_jacobian", &jac)?;
-    Ok(Some(to_array(py, jac, &[dim, dim])?))
-}
+);

@@ -3,11 +3,14 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
+use pyo3::IntoPyObjectExt;
 
 use super::convert::{mat3_to_array, to_array, to_array1};
 use super::errors::{check_result, invalid};
 use super::model::PyModel;
+use super::record::{record, Field};
 use super::signals::detach_interruptible;
+use crate::design::strength::{pin_loads, PinLoad, PinSource};
 use crate::design::{self, Envelope, Problem};
 use crate::support::spatial::Mat3;
 
@@ -33,13 +36,31 @@ pub fn design_cells<'py>(
     )
 }
 
-/// The maps along a motion: dict with `data` (N · rows, 10 · nlinks), `rows`, `nactuated`,
-/// `nlinks`, `nloops` and `parameters` (the links' current ten numbers).
+/// `design_regressor`'s result: the maps along a motion and the links' parameters now.
+pub struct Maps {
+    reg: design::Regressor,
+    parameters: Vec<f64>,
+}
+
+record!(
+    /// The maps along a motion: `data` (N · rows, 10 · nlinks), `rows`, `nactuated`,
+    /// `nlinks`, `nloops` and `parameters` (the links' current ten numbers).
+    PyMaps("DesignMaps", Maps) {
+        data: |m: &Maps, py| m.reg.data.field(py),
+        rows: |m: &Maps, py| m.reg.layout.rows().field(py),
+        nactuated: |m: &Maps, py| m.reg.layout.nactuated.field(py),
+        nlinks: |m: &Maps, py| m.reg.layout.nlinks.field(py),
+        nloops: |m: &Maps, py| m.reg.layout.nloops.field(py),
+        parameters: |m: &Maps, py| m.parameters.field(py),
+    }
+);
+
+/// The maps along a motion (`DesignMaps`).
 #[pyfunction]
 #[pyo3(signature = (model, q, v, a, gravity, about, actuated))]
 #[allow(clippy::too_many_arguments)]
-pub fn design_regressor<'py>(
-    py: Python<'py>,
+pub fn design_regressor(
+    py: Python<'_>,
     model: PyRef<'_, PyModel>,
     q: &Obj,
     v: &Obj,
@@ -47,7 +68,7 @@ pub fn design_regressor<'py>(
     gravity: Option<&Obj>,
     about: &Obj,
     actuated: Vec<usize>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyResult<PyMaps> {
     let model = model.model();
     let g = crate::model::args::gravity(gravity)?;
     let about = super::convert::vec3(about, "about")?;
@@ -56,20 +77,8 @@ pub fn design_regressor<'py>(
         design::regressor(&model, &qs, &vs, &accs, &g, &about, &actuated)
     })?;
     check_result(py, "design regressor", reg.data.as_slice())?;
-    let d = PyDict::new(py);
-    let (r, c) = reg.data.shape();
-    // Row-major for NumPy.
-    let data: Vec<f64> = reg.data.transpose().as_slice().to_vec();
-    d.set_item("data", to_array(py, data, &[r, c])?)?;
-    d.set_item("rows", reg.layout.rows())?;
-    d.set_item("nactuated", reg.layout.nactuated)?;
-    d.set_item("nlinks", reg.layout.nlinks)?;
-    d.set_item("nloops", reg.layout.nloops)?;
-    d.set_item(
-        "parameters",
-        to_array1(py, &design::model_parameters(&model)),
-    )?;
-    Ok(d)
+    let parameters = design::model_parameters(&model);
+    Ok(PyMaps(Maps { reg, parameters }))
 }
 
 /// `body` (a name or an index) as a body of `model`, the world refused.
@@ -97,84 +106,80 @@ pub fn design_pins<'py>(
     Ok(out)
 }
 
-/// The pins of `design_pins` with where each one's force comes from (design/_strength.py):
-/// dicts with `point`, `axis`, `kind` ("joint" or "cut"), `index` (link or cut joint),
-/// `sign`, `frame_body` (the body whose axes the rows are in after `frame_rotation`; -1:
-/// the world) and `frame_rotation` (3, 3).
-#[pyfunction]
-pub fn design_pin_loads<'py>(
-    py: Python<'py>,
-    model: PyRef<'_, PyModel>,
-    body: &Obj,
-) -> PyResult<Bound<'py, PyList>> {
-    use crate::design::strength::{pin_loads, PinSource};
-    let model = model.model();
-    let b = design_body(py, &model, body)?;
-    let out = PyList::empty(py);
-    for pin in pin_loads(&model, b) {
-        let d = PyDict::new(py);
-        d.set_item("point", to_array1(py, pin.point.as_slice()))?;
-        d.set_item("axis", to_array1(py, pin.axis.as_slice()))?;
-        let (kind, index, sign, frame_body, rot) = match pin.source {
-            PinSource::Tree { link, sign } => ("joint", link, sign, -1, Mat3::identity()),
-            PinSource::Cut {
-                k,
-                sign,
-                body_a,
-                frame_a,
-            } => ("cut", k, sign, body_a.map_or(-1, |a| a as i64), frame_a),
-        };
-        d.set_item("kind", kind)?;
-        d.set_item("index", index)?;
-        d.set_item("sign", sign)?;
-        d.set_item("frame_body", frame_body)?;
-        d.set_item("frame_rotation", mat3_to_array(py, &rot)?)?;
-        out.append(d)?;
+record!(
+    /// A pin of `design_pins` with where its force comes from (design/_strength.py): `point`,
+    /// `axis`, `kind` ("joint" or "cut"), `index` (link or cut joint), `sign`, `frame_body`
+    /// (the body whose axes the rows are in after `frame_rotation`; -1: the world) and
+    /// `frame_rotation` (3, 3).
+    PyPinLoad("PinLoad", PinLoad) {
+        point: |p: &PinLoad, py| p.point.as_slice().to_vec().field(py),
+        axis: |p: &PinLoad, py| p.axis.as_slice().to_vec().field(py),
+        kind: |p: &PinLoad, py| source(p).0.into_bound_py_any(py),
+        index: |p: &PinLoad, py| source(p).1.into_bound_py_any(py),
+        sign: |p: &PinLoad, py| source(p).2.into_bound_py_any(py),
+        frame_body: |p: &PinLoad, py| source(p).3.into_bound_py_any(py),
+        frame_rotation: |p: &PinLoad, py| mat3_to_array(py, &source(p).4),
     }
-    Ok(out)
+);
+
+/// A pin's `(kind, index, sign, frame_body, frame_rotation)`.
+fn source(p: &PinLoad) -> (&'static str, usize, f64, i64, Mat3) {
+    match p.source {
+        PinSource::Tree { link, sign } => ("joint", link, sign, -1, Mat3::identity()),
+        PinSource::Cut {
+            k,
+            sign,
+            body_a,
+            frame_a,
+        } => ("cut", k, sign, body_a.map_or(-1, |a| a as i64), frame_a),
+    }
 }
 
-/// Solves the design program (see `pointmass_dyn`'s design module).
+/// The pins of `design_pins` (same order), each a `PinLoad`.
 #[pyfunction]
-pub fn design_solve<'py>(py: Python<'py>, spec: &Obj<'py>) -> PyResult<Bound<'py, PyDict>> {
+pub fn design_pin_loads(
+    py: Python<'_>,
+    model: PyRef<'_, PyModel>,
+    body: &Obj,
+) -> PyResult<Vec<PyPinLoad>> {
+    let model = model.model();
+    let b = design_body(py, &model, body)?;
+    Ok(pin_loads(&model, b).into_iter().map(PyPinLoad).collect())
+}
+
+record!(
+    /// A solved design program: the masses `x`, the parameters' change `delta`, each
+    /// quantity's `values`, the last stage's `status`, `objective` and gaps, each stage's
+    /// certificate (`stages`), `notes`, and the solver's `iterations`, `rounds`, `solve_time`.
+    PyDesignSolution("DesignSolution", design::Solution) {
+        x, delta, values, status, objective, gap_abs, gap_rel,
+        stages: |s: &design::Solution, py| s.stages.clone().into_bound_py_any(py),
+        notes,
+        iterations: |s: &design::Solution, py| s.iterations.into_bound_py_any(py),
+        rounds: |s: &design::Solution, py| s.rounds.into_bound_py_any(py),
+        solve_time,
+    }
+);
+
+/// Solves the design program (see `pointmass_dyn`'s design module): a `DesignSolution`, or
+/// for an infeasible one a dict of `status` "Infeasible", `message` and `relaxation`.
+#[pyfunction]
+pub fn design_solve<'py>(py: Python<'py>, spec: &Obj<'py>) -> PyResult<Obj<'py>> {
     let problem = Problem::from_arg(spec)?;
-    let outcome = detach_interruptible(py, || design::solve_outcome(&problem))?;
-    let d = PyDict::new(py);
-    let sol = match outcome {
-        design::Outcome::Solved(sol) => sol,
-        design::Outcome::Infeasible(relaxation) => {
-            d.set_item("status", "Infeasible")?;
-            d.set_item("message", relaxation.error().to_string())?;
-            let items = relaxation
-                .items
-                .iter()
-                .map(|r| {
-                    (
-                        r.name.clone(),
-                        r.zero,
-                        r.asked,
-                        r.needed,
-                        r.before,
-                        r.binding(),
-                        r.alone,
-                    )
-                })
-                .collect::<Vec<_>>();
-            d.set_item("relaxation", items)?;
-            return Ok(d);
-        }
+    let relaxation = match detach_interruptible(py, || design::solve_outcome(&problem))? {
+        design::Outcome::Solved(sol) => return PyDesignSolution(sol).into_bound_py_any(py),
+        design::Outcome::Infeasible(relaxation) => relaxation,
     };
-    d.set_item("x", to_array1(py, &sol.x))?;
-    d.set_item("delta", to_array1(py, &sol.delta))?;
-    d.set_item("values", to_array1(py, &sol.values))?;
-    d.set_item("status", sol.status)?;
-    d.set_item("objective", sol.objective)?;
-    d.set_item("gap_abs", sol.gap_abs)?;
-    d.set_item("gap_rel", sol.gap_rel)?;
-    d.set_item("stages", sol.stages)?;
-    d.set_item("notes", sol.notes)?;
-    d.set_item("iterations", sol.iterations)?;
-    d.set_item("rounds", sol.rounds)?;
-    d.set_item("solve_time", sol.solve_time)?;
-    Ok(d)
+    let d = PyDict::new(py);
+    d.set_item("status", "Infeasible")?;
+    d.set_item("message", relaxation.error().to_string())?;
+    let item = |r: &design::problem::Relaxed| {
+        let (name, binding) = (r.name.clone(), r.binding());
+        (name, r.zero, r.asked, r.needed, r.before, binding, r.alone)
+    };
+    d.set_item(
+        "relaxation",
+        relaxation.items.iter().map(item).collect::<Vec<_>>(),
+    )?;
+    Ok(d.into_any())
 }

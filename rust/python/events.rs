@@ -7,10 +7,12 @@ use pyo3::prelude::*;
 
 use super::convert::real;
 use super::effects::repr_of;
-use super::errors::{invalid, py_error};
+use super::errors::invalid;
 use crate::integrator::{Event, EventDirection};
 use crate::simulate::config_args::terminal_count;
 use crate::simulate::StateEvent;
+use crate::simulate::{event_value, EventList};
+use crate::support::args::given;
 
 /// `q[index]` (or `v[index]`) crossing `value`; evaluated in Rust, no GIL needed.
 #[pyclass(
@@ -95,6 +97,26 @@ pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventS
     })
 }
 
+/// A run's events in the caller's order (the core's `EventList`): `None`, one event
+/// callable, or a sequence of callables and `StateEvent`s (evaluated in Rust).
+pub(super) fn event_list(py: Python<'_>, events: Option<&Obj>) -> PyResult<EventList<PyEventSpec>> {
+    let mut out = EventList::default();
+    match given(events) {
+        None => {}
+        Some(e) if e.is_callable() => out.push_other(event_spec(py, 0, e)?),
+        Some(evs) => {
+            for (k, e) in evs.try_iter()?.enumerate() {
+                let e = e?;
+                match e.cast::<PyStateEvent>() {
+                    Ok(se) => out.push_state(se.get().inner.clone()),
+                    Err(_) => out.push_other(event_spec(py, k, &e)?),
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
 /// Builds an event that calls Python (re-attaching to the interpreter when called from a
 /// detached thread); the first exception is kept in `failure` and re-raised afterwards.
 pub(super) fn python_event<'a>(
@@ -109,40 +131,14 @@ pub(super) fn python_event<'a>(
                 Some(nq) => (t, y(&y_all[..nq]), y(&y_all[nq..])).into_pyobject(py),
                 None => (t, y(y_all)).into_pyobject(py),
             };
-            // A non-number or NaN would silently hide the event: an error naming it.
-            let name = format!("events[{}]", spec.index);
-            let out = args
-                .and_then(|a| spec.func.bind(py).call1(a))
-                .and_then(|r| {
-                    real(&r, &name).map_err(|_| {
-                        invalid(
-                            py,
-                            &name,
-                            "an event function returning a real number",
-                            format!("{} at t = {t}", repr_of(&r)),
-                        )
-                    })
-                })
-                .and_then(|x| {
-                    if x.is_nan() {
-                        Err(py_error(
-                            py,
-                            "NumericalError",
-                            format!("{name}: the event function returned NaN at t = {t}"),
-                        ))
-                    } else {
-                        Ok(x)
-                    }
-                });
-            match out {
-                Ok(x) => x,
-                Err(e) => {
-                    if let Ok(mut slot) = failure.lock() {
-                        slot.get_or_insert(e);
-                    }
-                    f64::NAN
+            let out = args.and_then(|a| spec.func.bind(py).call1(a));
+            let out = out.and_then(|r| event_value(spec.index, t, &r));
+            out.unwrap_or_else(|e| {
+                if let Ok(mut slot) = failure.lock() {
+                    slot.get_or_insert(e);
                 }
-            }
+                f64::NAN
+            })
         })
     };
     Event::new(f)

@@ -4,15 +4,17 @@ use std::sync::Mutex;
 
 use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{IntoPyDict, PyDict, PyList};
+use pyo3::types::{IntoPyDict, PyDict};
+use pyo3::IntoPyObjectExt;
 
-use super::convert::{to_array, to_array1, vector};
+use super::convert::{to_array, vector};
 use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::IntoPyResult;
 use super::errors::{invalid, py_error};
-use super::events::{event_spec, python_event, PyEventSpec};
+use super::events::{event_list, python_event};
 use super::jac::{jac_arg, JacArg, WithJacobian};
+use super::record::Field;
 use super::run_config::{call_config, PyRunConfig};
 use crate::integrator::{self, Event, FnSystem, OdeSystem};
 use crate::io::scene::Settings;
@@ -51,21 +53,27 @@ pub fn rk45(
         .py(py)?;
     let (t_span, opts) = (t_span_given, run.opts);
     let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
-    let specs = event_specs(py, events)?;
+    let events = event_list(py, events)?;
+    if !events.state.is_empty() {
+        let expected = "event callables (a StateEvent needs a scene: pmd.simulate)";
+        return Err(invalid(py, "events", expected, "a StateEvent"));
+    }
+    // The first exception from `fun` or an event (Ctrl-C included) stops the run;
+    // `pointmass_dyn.rk45` re-raises it with the solution computed so far attached.
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
+    let specs = &events.other;
     let mut evs: Vec<Event<'_>> = specs
         .iter()
         .map(|s| python_event(s, None, &failure))
         .collect();
-    let rhs_failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let sys = python_system(py, fun, dim, &rhs_failure);
+    let sys = python_system(py, fun, dim, &failure);
     // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
     let sol = match jac {
-        JacArg::Callable(f) => {
+        JacArg::Callable(jac) => {
             let with = WithJacobian {
                 inner: sys,
-                jac: f,
-                failure: &rhs_failure,
+                jac,
+                failure: &failure,
             };
             integrator::solve(with, t_span, &y0, &opts, &mut evs)
         }
@@ -76,29 +84,8 @@ pub fn rk45(
     }
     .map_err(|e| invalid_setting(py, e))?;
     drop(evs);
-    // An exception from `fun` or an event (Ctrl-C included) is re-raised by
-    // `pointmass_dyn.rk45` with the solution computed so far attached.
-    let raised = rhs_failure
-        .into_inner()
-        .ok()
-        .flatten()
-        .or(failure.into_inner().ok().flatten());
+    let raised = failure.into_inner().ok().flatten();
     solution(py, sol, raised, !specs.is_empty())
-}
-
-/// `None`, one event callable, or a sequence of them.
-fn event_specs(py: Python<'_>, events: Option<&Obj>) -> PyResult<Vec<PyEventSpec>> {
-    let mut specs = Vec::new();
-    if let Some(evs) = events.filter(|e| !e.is_none()) {
-        if evs.is_callable() {
-            specs.push(event_spec(py, 0, evs)?);
-        } else {
-            for (k, e) in evs.try_iter()?.enumerate() {
-                specs.push(event_spec(py, k, &e?)?);
-            }
-        }
-    }
-    Ok(specs)
 }
 
 /// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in
@@ -129,87 +116,61 @@ fn python_system<'a>(
     )
 }
 
-/// `rk45`'s result: the entries of SciPy's `OdeResult` (`pointmass_dyn.OdeResult` is built
-/// from them), `y` as (dim, N), the event lists `None` when no events were given; `error`
-/// the exception a Python callable stopped the run with.
-#[pyclass(name = "OdeSolution", module = "pointmass_dyn._core", frozen, get_all)]
-pub struct PyOdeSolution {
-    t: Py<PyAny>,
-    y: Py<PyAny>,
-    t_events: Option<Py<PyList>>,
-    y_events: Option<Py<PyList>>,
-    nfev: usize,
-    njev: usize,
-    nlu: usize,
-    method: &'static str,
-    switched_to: Option<&'static str>,
-    t_switch: Option<f64>,
-    n_accepted: usize,
-    n_rejected: usize,
-    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure.
-    status: i32,
-    message: String,
-    success: bool,
-    t_reached: f64,
-    /// `{"t", "h_lambda", "h", "lambda"}` of the first stiffness detection, if any.
-    stiff: Option<Py<PyDict>>,
+/// An `rk45` run; `with_events`: the caller gave events (else the event lists are `None`).
+pub struct Ode {
+    run: integrator::Solution,
+    with_events: bool,
     sol: Option<Py<PyDenseSolution>>,
     error: Option<Py<PyAny>>,
 }
 
-super::indexable!(PyOdeSolution [
-    "t", "y", "t_events", "y_events", "nfev", "njev", "nlu", "method", "switched_to", "t_switch",
-    "n_accepted", "n_rejected", "status", "message", "success", "t_reached", "stiff", "sol", "error",
-]);
+impl Ode {
+    fn code(&self) -> i32 {
+        self.run.status.code()
+    }
+}
+
+super::trajectory::run_record!(
+    /// `rk45`'s result: the entries of SciPy's `OdeResult` (`pointmass_dyn.OdeResult` is
+    /// built from them), `y` as (dim, N); `stiff`: `{"t", "h_lambda", "h", "lambda"}` of the
+    /// first stiffness detection, if any.
+    PyOdeSolution("OdeSolution", Ode) {
+        t: |r: &Ode, py| r.run.t.field(py),
+        y: |r: &Ode, py| to_array(py, r.run.y_by_component(), &[r.run.dim, r.run.t.len()]),
+        t_events: |r: &Ode, py| r.with_events.then(|| r.run.t_events.field(py)).transpose()?.into_bound_py_any(py),
+        y_events: |r: &Ode, py| r.with_events.then(|| event_arrays(py, &r.run)).transpose()?.into_bound_py_any(py),
+        stiff: |r: &Ode, py| {
+            let entries = |s: &integrator::Stiffness| [("t", s.t), ("h_lambda", s.h_lambda), ("h", s.h), ("lambda", s.lambda())];
+            r.run.stiffness.as_ref().map(|s| entries(s).into_py_dict(py)).transpose()?.into_bound_py_any(py)
+        },
+        sol: |r: &Ode, py| r.sol.as_ref().into_bound_py_any(py),
+    }
+);
+
+/// Each event's states as an (m, dim) array.
+fn event_arrays<'py>(py: Python<'py>, sol: &integrator::Solution) -> PyResult<Obj<'py>> {
+    let arrays = sol.t_events.iter().zip(&sol.y_events);
+    let arrays = arrays.map(|(t, y)| to_array(py, y.clone(), &[t.len(), sol.dim]));
+    arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
+}
 
 fn solution(
     py: Python<'_>,
-    sol: integrator::Solution,
+    mut run: integrator::Solution,
     raised: Option<PyErr>,
     with_events: bool,
 ) -> PyResult<PyOdeSolution> {
-    let (dim, n) = (sol.dim, sol.t.len());
-    // (N, dim) rows to (dim, N), SciPy's layout.
-    let y_t: Vec<f64> = (0..dim * n).map(|k| sol.y[(k % n) * dim + k / n]).collect();
-    let (te, ye) = (PyList::empty(py), PyList::empty(py));
-    for (times, ys) in sol.t_events.iter().zip(&sol.y_events) {
-        te.append(to_array1(py, times))?;
-        ye.append(to_array(py, ys.clone(), &[times.len(), dim])?)?;
-    }
-    let stiff = sol.stiffness.map(|s| {
-        let entries = [
-            ("t", s.t),
-            ("h_lambda", s.h_lambda),
-            ("h", s.h),
-            ("lambda", s.lambda()),
-        ];
-        entries.into_py_dict(py).map(Bound::unbind)
-    });
-    let dense = sol
+    let sol = run
         .dense
+        .take()
         .map(|inner| Py::new(py, PyDenseSolution { inner }));
-    Ok(PyOdeSolution {
-        t: to_array1(py, &sol.t).into_any().unbind(),
-        y: to_array(py, y_t, &[dim, n])?.unbind(),
-        t_events: with_events.then(|| te.unbind()),
-        y_events: with_events.then(|| ye.unbind()),
-        nfev: sol.nfev,
-        njev: sol.njev,
-        nlu: sol.nlu,
-        method: sol.method.name(),
-        switched_to: sol.switched_to.map(|m| m.name()),
-        t_switch: sol.t_switch,
-        n_accepted: sol.n_accepted,
-        n_rejected: sol.n_rejected,
-        status: sol.status.code(),
-        // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
-        message: crate::support::error::compact_numbers(&sol.message),
-        success: sol.status.is_success(),
-        t_reached: sol.t_reached,
-        stiff: stiff.transpose()?,
-        sol: dense.transpose()?,
-        error: raised.map(|e| e.into_value(py).into_any()),
-    })
+    let error = raised.map(|e| e.into_value(py).into_any());
+    Ok(PyOdeSolution(Ode {
+        run,
+        with_events,
+        sol: sol.transpose()?,
+        error,
+    }))
 }
 
 pub(super) fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {

@@ -3,12 +3,15 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::to_array1;
+use super::convert::{to_array, to_array1};
+use super::derivatives::{PyForwardDerivatives, PyInverseDerivatives};
 use super::effects::{repr_of, PyEffect};
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
+use super::simulate::callbacks;
 use crate::effects::Effect;
 use crate::io::scene::{Scene, Settings};
+use crate::simulate::at_state;
 use crate::simulate::RunConfig;
 use crate::support::args::given as given_arg;
 
@@ -159,8 +162,16 @@ impl PyScene {
         tau: Option<&Obj>,
         t: f64,
         disable: Option<&Obj>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        super::derivatives::forward(py, &self.inner, q, v, tau, t, disable)
+    ) -> PyResult<PyForwardDerivatives> {
+        let d = || {
+            Ok(at_state::forward_derivatives(
+                &self.inner,
+                t,
+                (q, v, tau),
+                disable,
+            ))
+        };
+        Ok(PyForwardDerivatives(callbacks(py, d)??))
     }
     /// `{"dq": ∂τ/∂q, "dv": ∂τ/∂v, "da": M, "numerical": [...]}` of the joint forces
     /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
@@ -173,8 +184,16 @@ impl PyScene {
         a: &Obj,
         t: f64,
         disable: Option<&Obj>,
-    ) -> PyResult<Bound<'py, pyo3::types::PyDict>> {
-        super::derivatives::inverse(py, &self.inner, q, v, a, t, disable)
+    ) -> PyResult<PyInverseDerivatives> {
+        let d = || {
+            Ok(at_state::inverse_derivatives(
+                &self.inner,
+                t,
+                (q, v, a),
+                disable,
+            ))
+        };
+        Ok(PyInverseDerivatives(callbacks(py, d)??))
     }
     /// `∂ẏ/∂y` of the equations of motion `y = [q; v]` (nq + nv square, `q`'s own
     /// coordinates), what implicit integrators use; `None` for a scene with closed loops.
@@ -186,7 +205,10 @@ impl PyScene {
         t: f64,
         disable: Option<&Obj>,
     ) -> PyResult<Option<Obj<'py>>> {
-        super::derivatives::state_jacobian(py, &self.inner, y, t, disable)
+        let jac = || Ok(at_state::state_jacobian(&self.inner, t, y, disable));
+        let dim = self.inner.model.nq + self.inner.model.nv;
+        let jac = callbacks(py, jac)??;
+        jac.map(|j| to_array(py, j, &[dim, dim])).transpose()
     }
     fn __repr__(&self) -> String {
         let s = &self.inner;

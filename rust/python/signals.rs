@@ -1,9 +1,5 @@
-//! Ctrl-C (and progress reports) while the interpreter is released. Re-attaching to the
-//! interpreter waits for whichever Python thread holds it, up to its switch interval (5 ms)
-//! and more, so a long computation re-attaches by elapsed time, every [`INTERVAL`], never per
-//! evaluation; when re-attaching had to wait (a busy Python thread), the interval doubles up
-//! to [`MAX_INTERVAL`], so such a neighbour costs a few per cent, and Ctrl-C still answers
-//! within a quarter of a second.
+//! Ctrl-C (and progress reports) while the interpreter is released, polled by elapsed time
+//! as `support::pacing` says.
 use crate::python::Obj;
 use std::cell::RefCell;
 use std::rc::Rc;
@@ -13,53 +9,28 @@ use pyo3::prelude::*;
 
 use super::errors::IntoPyResult;
 use crate::support::interrupt;
+use crate::support::pacing::Pacer;
+pub use crate::support::pacing::INTERVAL;
 
-/// How often a detached computation looks at the interpreter.
-pub const INTERVAL: Duration = Duration::from_millis(50);
-/// The longest interval when the interpreter is busy elsewhere.
-pub const MAX_INTERVAL: Duration = Duration::from_millis(250);
-/// An attach that took longer than this waited for another thread.
-const CONTENDED: Duration = Duration::from_millis(1);
-
-/// Polls Python's signal handlers (and an optional callback) at most every [`INTERVAL`];
+/// Polls Python's signal handlers (and an optional callback) when its [`Pacer`] says;
 /// keeps the first exception raised.
+#[derive(Default)]
 pub struct Watch {
-    last: Instant,
-    interval: Duration,
-    /// Back off when the interpreter is contended (not when the caller chose the interval).
-    adaptive: bool,
-    current: Duration,
+    pacer: Pacer,
     pub error: Option<PyErr>,
-}
-
-impl Default for Watch {
-    fn default() -> Self {
-        Watch {
-            adaptive: true,
-            ..Watch::every(INTERVAL)
-        }
-    }
 }
 
 impl Watch {
     /// Polls every `interval` exactly (a progress interval the caller chose).
     pub fn every(interval: Duration) -> Self {
-        Watch {
-            last: Instant::now(),
-            interval,
-            adaptive: false,
-            current: interval,
-            error: None,
-        }
+        let pacer = Pacer::every(interval);
+        Watch { pacer, error: None }
     }
 
     /// `true` to keep going. `also` runs after the signal handlers, attached, when due.
     pub fn poll(&mut self, also: impl FnOnce(Python<'_>) -> PyResult<()>) -> bool {
-        if self.error.is_some() {
-            return false;
-        }
-        if self.last.elapsed() < self.current {
-            return true;
+        if self.error.is_some() || !self.pacer.due() {
+            return self.error.is_none();
         }
         let asked = Instant::now();
         let mut waited = Duration::ZERO;
@@ -67,21 +38,9 @@ impl Watch {
             waited = asked.elapsed();
             py.check_signals().and_then(|_| also(py))
         });
-        self.last = Instant::now();
-        if self.adaptive {
-            self.current = if waited > CONTENDED {
-                (self.current * 2).min(MAX_INTERVAL)
-            } else {
-                self.interval
-            };
-        }
-        match outcome {
-            Ok(()) => true,
-            Err(e) => {
-                self.error = Some(e);
-                false
-            }
-        }
+        self.pacer.polled(waited);
+        self.error = outcome.err();
+        self.error.is_none()
     }
 }
 

@@ -2,12 +2,14 @@
 //! variant), not a dict: `pointmass_dyn.SimulationResult` is built from its getters.
 use crate::python::Obj;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList};
 
 use super::convert::{to_array, to_array1};
+use super::record::Field;
 use crate::integrator::{status_variants, NonFiniteKind, Status};
 use crate::simulate::Trajectory;
-use crate::support::error::compact_numbers;
+use crate::support::error::Error;
+use pyo3::types::IntoPyDict;
+use pyo3::IntoPyObjectExt;
 
 macro_rules! declare_py_status {
     ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*]
@@ -98,39 +100,96 @@ impl PyRunStatus {
     }
 }
 
-/// One run's trajectory and outcome, the fields `pointmass_dyn.SimulationResult` has of the
-/// same names; `error`: the exception a Python callback (or Ctrl-C) stopped the run with,
-/// or the one that refused a batch run's input.
-#[pyclass(name = "RunResult", module = "pointmass_dyn._core", frozen, get_all)]
-pub struct PyRunResult {
-    t: Py<PyAny>,
-    q: Py<PyAny>,
-    v: Py<PyAny>,
-    energy: Option<Py<PyAny>>,
-    constraint_residual: Option<Py<PyAny>>,
-    constraint_drift: Option<f64>,
-    singular_passage: Option<(f64, f64)>,
-    singular_crossings: Option<(usize, Option<f64>)>,
-    /// Power of each enabled effect by its label.
-    power: Option<Py<PyDict>>,
-    t_events: Py<PyList>,
-    q_events: Py<PyList>,
-    v_events: Py<PyList>,
-    nfev: usize,
-    njev: usize,
-    nlu: usize,
-    n_accepted: usize,
-    n_rejected: usize,
-    method: &'static str,
-    switched_to: Option<&'static str>,
-    t_switch: Option<f64>,
-    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure.
-    status: i32,
-    outcome: PyRunStatus,
-    message: String,
-    success: bool,
-    t_reached: f64,
+/// The fields `RunResult` and `OdeSolution` share: the counters and outcome, named alike in
+/// the core's `Trajectory` and `integrator::Solution` (`r.run`), listed here once, and
+/// `error`: the exception a Python callback (or Ctrl-C) stopped the run with.
+macro_rules! run_record {
+    ($(#[$m:meta])* $ty:ident($name:literal, $inner:ty) { $($f:ident: $conv:expr,)* }) => {
+        $crate::python::record::record!($(#[$m])* $ty($name, $inner) {
+            $($f: $conv,)*
+            nfev: |r: &$inner, py| r.run.nfev.field(py),
+            njev: |r: &$inner, py| r.run.njev.field(py),
+            nlu: |r: &$inner, py| r.run.nlu.field(py),
+            n_accepted: |r: &$inner, py| r.run.n_accepted.field(py),
+            n_rejected: |r: &$inner, py| r.run.n_rejected.field(py),
+            method: |r: &$inner, py| r.run.method.name().into_bound_py_any(py),
+            switched_to: |r: &$inner, py| r.run.switched_to.map(|m| m.name()).into_bound_py_any(py),
+            t_switch: |r: &$inner, py| r.run.t_switch.into_bound_py_any(py),
+            status: |r: &$inner, py| r.code().into_bound_py_any(py),
+            // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
+            message: |r: &$inner, py| $crate::support::error::compact_numbers(&r.run.message).field(py),
+            success: |r: &$inner, py| (r.code() >= 0).into_bound_py_any(py),
+            t_reached: |r: &$inner, py| r.run.t_reached.field(py),
+            error: |r: &$inner, py| r.error.as_ref().into_bound_py_any(py),
+        });
+    };
+}
+pub(super) use run_record;
+
+/// A run of `simulate_scene`, a batch or a `Simulator`: its trajectory, events in the
+/// caller's order; `not_started`: a batch run that never started (`RunStatus.NotStarted`,
+/// the trajectory's message saying why).
+pub struct Run {
+    run: Trajectory,
+    not_started: bool,
     error: Option<Py<PyAny>>,
+}
+
+impl Run {
+    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure (a run not started).
+    fn code(&self) -> i32 {
+        if self.not_started {
+            -1
+        } else {
+            self.run.status.code()
+        }
+    }
+    fn status(&self) -> PyRunStatus {
+        match self.not_started {
+            true => PyRunStatus::NotStarted {
+                reason: self.run.message.clone(),
+            },
+            false => PyRunStatus::from(&self.run.status),
+        }
+    }
+}
+
+run_record!(
+    /// One run's trajectory and outcome, the fields `pointmass_dyn.SimulationResult` has of
+    /// the same names; `error` also the one that refused a batch run's input.
+    PyRunResult("RunResult", Run) {
+        t: |r: &Run, py| r.run.t.field(py),
+        q: |r: &Run, py| to_array(py, r.run.q.clone(), &[r.run.t.len(), r.run.nq]),
+        v: |r: &Run, py| to_array(py, r.run.v.clone(), &[r.run.t.len(), r.run.nv]),
+        energy: |r: &Run, py| r.run.energy.as_ref().map(|e| to_array1(py, e)).into_bound_py_any(py),
+        constraint_residual: |r: &Run, py| r.run.constraint_residual.as_ref().map(|e| to_array1(py, e)).into_bound_py_any(py),
+        constraint_drift: |r: &Run, py| r.run.constraint_drift.into_bound_py_any(py),
+        singular_passage: |r: &Run, py| r.run.singular_passage.into_bound_py_any(py),
+        singular_crossings: |r: &Run, py| r.run.singular_crossings.into_bound_py_any(py),
+        // Power of each enabled effect by its label.
+        power: |r: &Run, py| {
+            let columns = r.run.power_columns().map(|p| p.into_iter().map(|(l, c)| (l, to_array1(py, &c))));
+            columns.map(|c| c.into_py_dict(py)).transpose()?.into_bound_py_any(py)
+        },
+        t_events: |r: &Run, py| r.run.t_events.field(py),
+        q_events: |r: &Run, py| event_arrays(py, &r.run, |(q, _)| (q, r.run.nq)),
+        v_events: |r: &Run, py| event_arrays(py, &r.run, |(_, v)| (v, r.run.nv)),
+        outcome: |r: &Run, py| r.status().into_bound_py_any(py),
+    }
+);
+
+/// Each event's `q` (or `v`) states as an (m, width) array.
+fn event_arrays<'py>(
+    py: Python<'py>,
+    traj: &Trajectory,
+    pick: impl Fn((Vec<f64>, Vec<f64>)) -> (Vec<f64>, usize),
+) -> PyResult<Obj<'py>> {
+    let states = traj.event_states().into_iter().zip(&traj.t_events);
+    let arrays = states.map(|(s, t)| {
+        let (data, width) = pick(s);
+        to_array(py, data, &[t.len(), width])
+    });
+    arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
 }
 
 impl PyRunResult {
@@ -138,100 +197,39 @@ impl PyRunResult {
     /// the caller's event `k`).
     pub(super) fn new(
         py: Python<'_>,
-        traj: Trajectory,
+        mut traj: Trajectory,
         slots: &[usize],
         error: Option<PyErr>,
-    ) -> PyResult<Self> {
-        let (n, nq, nv) = (traj.t.len(), traj.nq, traj.nv);
-        let (te, qe, ve) = (PyList::empty(py), PyList::empty(py), PyList::empty(py));
-        for &slot in slots {
-            let times = &traj.t_events[slot];
-            te.append(to_array1(py, times))?;
-            let m = times.len();
-            let mut qs = Vec::with_capacity(m * nq);
-            let mut vs = Vec::with_capacity(m * nv);
-            for row in traj.y_events[slot].chunks_exact(nq + nv) {
-                qs.extend_from_slice(&row[..nq]);
-                vs.extend_from_slice(&row[nq..]);
-            }
-            qe.append(to_array(py, qs, &[m, nq])?)?;
-            ve.append(to_array(py, vs, &[m, nv])?)?;
-        }
-        let power = match &traj.power {
-            Some(p) => Some(power_dict(py, p, n, &traj.effect_labels)?.unbind()),
-            None => None,
-        };
-        let array1 =
-            |x: &Option<Vec<f64>>| x.as_ref().map(|e| to_array1(py, e).into_any().unbind());
-        Ok(PyRunResult {
-            t: to_array1(py, &traj.t).into_any().unbind(),
-            energy: array1(&traj.energy),
-            constraint_residual: array1(&traj.constraint_residual),
-            q: to_array(py, traj.q, &[n, nq])?.unbind(),
-            v: to_array(py, traj.v, &[n, nv])?.unbind(),
-            constraint_drift: traj.constraint_drift,
-            singular_passage: traj.singular_passage,
-            singular_crossings: traj.singular_crossings,
-            power,
-            t_events: te.unbind(),
-            q_events: qe.unbind(),
-            v_events: ve.unbind(),
-            nfev: traj.nfev,
-            njev: traj.njev,
-            nlu: traj.nlu,
-            n_accepted: traj.n_accepted,
-            n_rejected: traj.n_rejected,
-            method: traj.method.name(),
-            switched_to: traj.switched_to.map(|m| m.name()),
-            t_switch: traj.t_switch,
-            status: traj.status.code(),
-            outcome: PyRunStatus::from(&traj.status),
-            // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
-            message: compact_numbers(&traj.message),
-            success: traj.status.is_success(),
-            t_reached: traj.t_reached,
-            error: error.map(|e| e.into_value(py).into_any()),
+    ) -> Self {
+        traj.order_events(slots);
+        let error = error.map(|e| e.into_value(py).into_any());
+        PyRunResult(Run {
+            run: traj,
+            not_started: false,
+            error,
         })
     }
 
-    /// A batch run that never started: `error` refused its input (or the batch stopped
-    /// before it, `message` then says by what).
-    pub(super) fn not_started(
-        py: Python<'_>,
-        error: PyErr,
-        message: Option<String>,
-    ) -> PyResult<Self> {
-        let message = match message {
-            Some(m) => m,
-            None => {
-                let name = error.get_type(py).name()?.to_string();
-                format!("{name}: {}", error.value(py).str()?)
-            }
+    /// A batch run that never started: `error` refused its input, or the batch stopped
+    /// before it (`Interrupted`, its message then says by what).
+    pub(super) fn not_started(py: Python<'_>, error: Error) -> PyResult<Self> {
+        let stopped = match &error {
+            Error::Interrupted(m) => Some(m.clone()),
+            _ => None,
         };
-        let mut r = Self::new(
-            py,
-            Trajectory::not_started(message.clone()),
-            &[],
-            Some(error),
-        )?;
-        (r.status, r.success) = (-1, false);
-        r.outcome = PyRunStatus::NotStarted { reason: message };
-        Ok(r)
+        let error = super::errors::to_py(py, error);
+        let message = match stopped {
+            Some(m) => m,
+            None => format!("{}: {}", error.get_type(py).name()?, error.value(py).str()?),
+        };
+        let (run, error) = (
+            Trajectory::not_started(message),
+            Some(error.into_value(py).into_any()),
+        );
+        Ok(PyRunResult(Run {
+            run,
+            not_started: true,
+            error,
+        }))
     }
-}
-
-/// The power columns (row-major N × labels) as a dict from the effect's label to an array.
-fn power_dict<'py>(
-    py: Python<'py>,
-    p: &[f64],
-    n: usize,
-    labels: &[String],
-) -> PyResult<Bound<'py, PyDict>> {
-    let m = labels.len();
-    let pd = PyDict::new(py);
-    for (k, label) in labels.iter().enumerate() {
-        let col: Vec<f64> = (0..n).map(|i| p[i * m + k]).collect();
-        pd.set_item(label, to_array1(py, &col))?;
-    }
-    Ok(pd)
 }

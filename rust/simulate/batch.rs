@@ -223,3 +223,68 @@ pub fn run_batch_polled(
         handle.join()
     })
 }
+
+/// Initial states as a caller gave them: an array's shape and its row-major data.
+pub type GivenStates = Option<(Vec<usize>, Vec<f64>)>;
+
+/// A batch as its caller asks: `config` (the call's settings) resolved against each scene's
+/// own, the runs broadcast over `q0`/`v0` (1-D: every run's, 2-D: a row per run), then run
+/// as [`run_batch_polled`] runs them (`poll(done, runs)`). `Err`: input refused before any run started; the
+/// inner `Err`: a batch thread panicked.
+#[allow(clippy::too_many_arguments)]
+pub fn run_scenes(
+    scenes: &[Scene],
+    config: &super::RunConfig,
+    q0: GivenStates,
+    v0: GivenStates,
+    state_events: &[StateEvent],
+    threads: usize,
+    tick: Duration,
+    mut poll: impl FnMut(usize, usize) -> bool,
+) -> Result<std::thread::Result<Vec<Result<Trajectory>>>> {
+    let Some(first) = scenes.first() else {
+        return Err(Error::arg("scenes", "at least one Scene", "none"));
+    };
+    let rows = |arg: &str, given: GivenStates, width: usize| {
+        given
+            .map(|(shape, data)| StateRows::new(arg, &shape, data, width))
+            .transpose()
+    };
+    let q0 = rows("q0", q0, first.model.nq)?;
+    let v0 = rows("v0", v0, first.model.nv)?;
+    // Settings per scene (each resolves the caller's against its own file's).
+    let resolved = scenes
+        .iter()
+        .map(|s| {
+            let dim = s.model.nq + s.model.nv;
+            config.clone().resolve(&s.settings, &s.effects, dim)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let runs = broadcast(scenes, &resolved, q0.as_ref(), v0.as_ref())?;
+    // The record is the caller's alone (no scene file sets one).
+    let record = resolved[0].record;
+    let count = runs.len();
+    let poll = |done| poll(done, count);
+    Ok(run_batch_polled(
+        &runs,
+        state_events,
+        record,
+        threads,
+        tick,
+        poll,
+    ))
+}
+
+/// Names what stopped a batch (`reason`: only its caller knows, e.g. Ctrl-C) in the runs it
+/// cut short: those interrupted midway, and those it never started.
+pub fn name_stop(results: &mut [Result<Trajectory>], reason: &str) {
+    for result in results {
+        match result {
+            Ok(traj) => traj.name_interruption(reason),
+            Err(Error::Interrupted(m)) => {
+                *m = format!("the batch was stopped before this run started, by {reason}")
+            }
+            Err(_) => {}
+        }
+    }
+}

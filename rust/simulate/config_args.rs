@@ -214,3 +214,35 @@ pub fn terminal_count<A: Arg>(x: &A) -> Result<usize, A::Err> {
         _ => Err(Error::arg("terminal", "a bool or a count >= 0", x.shown()).into()),
     }
 }
+
+/// A finite time `t`.
+pub fn time(t: f64) -> Result<f64, Error> {
+    match t.is_finite() {
+        true => Ok(t),
+        false => Err(Error::arg("t", "a finite time", t.to_string())),
+    }
+}
+
+/// `(q, v)` of `scene`'s model: nq and nv numbers making a valid state.
+pub fn scene_state<A: Arg>(
+    scene: &crate::io::scene::Scene,
+    q: &A,
+    v: &A,
+) -> Result<(Vec<f64>, Vec<f64>), A::Err> {
+    let q = vector(q, "q", Some(scene.model.nq))?;
+    let v = vector(v, "v", Some(scene.model.nv))?;
+    scene.model.check_state(&q, Some(&v))?;
+    Ok((q, v))
+}
+
+/// `progress_interval`: seconds between progress calls, 0 to 3600 (`None`: not given).
+pub fn progress_interval(x: Option<f64>) -> Result<Option<std::time::Duration>, Error> {
+    match x {
+        None => Ok(None),
+        Some(x) if (0.0..=3600.0).contains(&x) => Ok(Some(std::time::Duration::from_secs_f64(x))),
+        Some(x) => {
+            let expected = "seconds between progress calls, 0 to 3600";
+            Err(Error::arg("progress_interval", expected, x.to_string()))
+        }
+    }
+}

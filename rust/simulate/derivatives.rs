@@ -209,3 +209,113 @@ impl Dynamics<'_> {
         Ok(true)
     }
 }
+
+/// A scene's derivatives as a caller gets them: three nv × nv matrices (forward: `∂q̈/∂q`,
+/// `∂q̈/∂v`, `M⁻¹`; inverse: `∂τ/∂q`, `∂τ/∂v`, `M`), checked finite, and the labels of the
+/// effects differentiated by central differences.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneDerivatives {
+    pub dq: DMatrix<f64>,
+    pub dv: DMatrix<f64>,
+    pub third: DMatrix<f64>,
+    pub numerical: Vec<String>,
+}
+
+impl Dynamics<'_> {
+    /// [`Dynamics::derivatives`] with a workspace of its own (`tau`: zero if `None`); errors
+    /// name `forward_dynamics_derivatives`.
+    pub fn forward_derivatives(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        tau: Option<&[f64]>,
+    ) -> crate::support::error::Result<SceneDerivatives> {
+        const NAME: &str = "forward_dynamics_derivatives";
+        let zeros = vec![0.0; self.model.nv];
+        let tau = tau.unwrap_or(&zeros);
+        crate::support::error::check_finite("tau", tau)?;
+        let mut w = DerivativeWork::new(self);
+        let r = self.derivatives(t, q, v, tau, &mut w);
+        r.map_err(|e| e.in_arg(NAME))?;
+        let dd = &mut w.dd;
+        let m = [&mut dd.ddq_dq, &mut dd.ddq_dv, &mut dd.minv].map(std::mem::take);
+        self.collect(NAME, ["dq", "dv", "dtau"], m, &w.effects.numerical)
+    }
+
+    /// [`Dynamics::inverse_derivatives`] with a workspace of its own; refused for a scene
+    /// with closed loops or couplings (a mechanism's driving forces depend on which joints
+    /// are actuated).
+    pub fn inverse_derivatives_of(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &[f64],
+    ) -> crate::support::error::Result<SceneDerivatives> {
+        const NAME: &str = "inverse_dynamics_derivatives";
+        let model = self.model;
+        if model.has_constraints() {
+            return Err(Error::arg(
+                "scene",
+                format!("a scene without closed loops or couplings for {NAME}"),
+                format!(
+                    "a model with {} loop(s) and {} coupling(s)",
+                    model.loops.len(),
+                    model.couplings.len()
+                ),
+            ));
+        }
+        crate::support::error::check_finite("a", a)?;
+        let mut w = DerivativeWork::new(self);
+        let r = self.inverse_derivatives(t, q, v, a, &mut w);
+        r.map_err(|e| e.in_arg(NAME))?;
+        let dd = &mut w.dd;
+        let m = [&mut dd.dtau_dq, &mut dd.dtau_dv, &mut dd.mass].map(std::mem::take);
+        self.collect(NAME, ["dq", "dv", "da"], m, &w.effects.numerical)
+    }
+
+    /// The three matrices checked finite (errors name `name['key']`) with the labels of the
+    /// effects `numerical` marks.
+    fn collect(
+        &self,
+        name: &str,
+        keys: [&str; 3],
+        m: [DMatrix<f64>; 3],
+        numerical: &[bool],
+    ) -> crate::support::error::Result<SceneDerivatives> {
+        for (key, m) in keys.iter().zip(&m) {
+            if m.iter().any(|x| !x.is_finite()) {
+                // The index in C order, as the caller's array has it.
+                super::check_result(&format!("{name}['{key}']"), m.transpose().as_slice())?;
+            }
+        }
+        let labels = self.effects.labels().into_iter().zip(numerical);
+        let numerical = labels.filter(|(_, n)| **n).map(|(l, _)| l).collect();
+        let [dq, dv, third] = m;
+        Ok(SceneDerivatives {
+            dq,
+            dv,
+            third,
+            numerical,
+        })
+    }
+
+    /// `∂ẏ/∂y` (row-major, (nq + nv)²) at `(t, y)`, checked finite; `None` where the system
+    /// has none.
+    pub fn checked_state_jacobian(
+        &mut self,
+        t: f64,
+        y: &[f64],
+    ) -> crate::support::error::Result<Option<Vec<f64>>> {
+        use crate::integrator::OdeSystem;
+        let mut jac = vec![0.0; y.len() * y.len()];
+        let filled = self.jacobian(t, y, &mut jac);
+        let filled = filled.map_err(|m| Error::Numerical(format!("state_jacobian: {m}")))?;
+        if !filled {
+            return Ok(None);
+        }
+        super::check_result("state_jacobian", &jac)?;
+        Ok(Some(jac))
+    }
+}

@@ -2,6 +2,8 @@
 //! first) and the caller's own (`P`: a binding's callables, after them), with where each
 //! stood in the caller's list, so the trajectory's events come back in the caller's order.
 use super::StateEvent;
+use crate::support::args::Arg;
+use crate::support::error::Error;
 
 pub struct EventList<P> {
     pub state: Vec<StateEvent>,
@@ -38,5 +40,22 @@ impl<P> EventList<P> {
             .iter()
             .map(|&(other, k)| if other { ns + k } else { k })
             .collect()
+    }
+}
+
+/// What the caller's event function `events[k]` returned at `t`: a real number; NaN (which
+/// would silently hide the event) and anything else refused, naming the event.
+pub fn event_value<A: Arg>(k: usize, t: f64, value: &A) -> Result<f64, A::Err> {
+    let name = format!("events[{k}]");
+    let expected = "an event function returning a real number";
+    let x = value
+        .real(&name)
+        .map_err(|_| Error::arg(&name, expected, format!("{} at t = {t}", value.shown())))?;
+    match x.is_nan() {
+        true => Err(Error::Numerical(format!(
+            "{name}: the event function returned NaN at t = {t}"
+        ))
+        .into()),
+        false => Ok(x),
     }
 }

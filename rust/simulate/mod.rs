@@ -7,16 +7,19 @@
 //! scene declares such effects; gravity rides on the base acceleration. A scene with no
 //! effects runs the bare forward dynamics.
 mod along;
+pub mod at_state;
 pub mod batch;
 pub mod config_args;
 pub mod derivatives;
 mod dynamics;
+mod evaluate;
 mod event_list;
 mod settings;
 
 pub use along::{along, Along, Asked};
 pub use dynamics::{Dynamics, Progress};
-pub use event_list::EventList;
+pub use evaluate::check_result;
+pub use event_list::{event_value, EventList};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};
@@ -120,6 +123,35 @@ impl Trajectory {
             t_reached: f64::NAN,
             success: false,
         }
+    }
+
+    /// The events in the caller's order: `slots[k]` is the trajectory's slot of the
+    /// caller's event `k` (state events and callables are run in two lists).
+    pub fn order_events(&mut self, slots: &[usize]) {
+        self.t_events = slots.iter().map(|&s| self.t_events[s].clone()).collect();
+        self.y_events = slots.iter().map(|&s| self.y_events[s].clone()).collect();
+    }
+
+    /// Each event's states split into row-major `q` (m × nq) and `v` (m × nv).
+    pub fn event_states(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+        let (nq, nv) = (self.nq, self.nv);
+        let split = |ys: &Vec<f64>| {
+            let rows = ys.chunks_exact(nq + nv);
+            let q = rows.clone().flat_map(|r| r[..nq].to_vec()).collect();
+            (q, rows.flat_map(|r| r[nq..].to_vec()).collect())
+        };
+        self.y_events.iter().map(split).collect()
+    }
+
+    /// The power of each enabled effect over the output times, by its label.
+    pub fn power_columns(&self) -> Option<Vec<(String, Vec<f64>)>> {
+        let (p, m) = (self.power.as_ref()?, self.effect_labels.len());
+        let col = |k: usize| (0..self.t.len()).map(|i| p[i * m + k]).collect();
+        Some(
+            (self.effect_labels.iter().cloned().enumerate())
+                .map(|(k, l)| (l, col(k)))
+                .collect(),
+        )
     }
 
     /// A run its caller interrupted ([`Status::Interrupted`]) says by what: `reason`, which

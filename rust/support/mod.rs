@@ -6,5 +6,6 @@ pub mod cpu;
 pub mod error;
 pub mod files;
 pub mod interrupt;
+pub mod pacing;
 pub mod spatial;
 pub mod trig;

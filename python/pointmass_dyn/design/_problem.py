@@ -341,7 +341,7 @@ def _solver_report(sol: dict, quantities: list[dict], before: dict, norm: str, t
         "rounds": int(sol["rounds"]),
         # What did not go as asked without failing the design (a least-mass stage that did
         # not converge): also a RuntimeWarning.
-        "notes": list(sol.get("notes", [])),
+        "notes": list(sol["notes"]),
         "solve_time": float(sol["solve_time"]),
         "values": dict(zip([q["name"] for q in quantities], sol["values"].tolist())),
         "before": before,
@@ -430,7 +430,7 @@ def balance(
         binding = tuple(name for name, _z, _a, _n, _b, on, _alone in items if on)
         alone = {name: value for name, *_, value in items}
         _safety.raise_infeasible(sol["message"], relaxation, binding, alone, checked, safety)
-    for note in sol.get("notes", []):
+    for note in sol["notes"]:
         warnings.warn(f"balance: {note}", RuntimeWarning, stacklevel=2)
     x = np.clip(sol["x"], lower, upper)
     say(f"solved: {sol['status']}, {sol['iterations']} iterations, gap {sol['gap_rel']:.1e}")
