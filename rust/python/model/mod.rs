@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use crate::dynamics::shared::{SharedModel, Version, Workspace};
 use crate::model::Model;
 use crate::python::convert::vector_into;
-use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::errors::IntoPyResult;
 
 mod couplings;
 mod dynamics;
@@ -23,10 +23,6 @@ mod kinematics;
 mod loops;
 mod reactions;
 mod structure;
-
-/// Link count above which the recursive calls release the GIL (below it, the release costs
-/// more than it frees).
-const DETACH_LINKS: usize = 64;
 
 #[pyclass(name = "Model", module = "pointmass_dyn._core", frozen)]
 pub struct PyModel {
@@ -44,21 +40,12 @@ pub fn add_records(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<reactions::PyBearingForces>()
 }
 
-enum Method {
-    Recursive,
-    Denoc,
-}
-
-fn method_arg(py: Python<'_>, method: &str) -> PyResult<Method> {
-    match method {
-        "recursive" => Ok(Method::Recursive),
-        "denoc" => Ok(Method::Denoc),
-        other => Err(invalid(
-            py,
-            "method",
-            "'recursive' or 'denoc'",
-            format!("'{other}'"),
-        )),
+/// `f` here, or detached from the interpreter when `detach` (a long chain:
+/// `crate::dynamics::calls::worth_detaching`).
+fn sized<T: Send>(py: Python<'_>, detach: bool, f: impl FnOnce() -> T + Send) -> T {
+    match detach {
+        true => py.detach(f),
+        false => f(),
     }
 }
 
@@ -138,23 +125,6 @@ impl PyModel {
         model.check_state(&q, Some(&v)).py(py)?;
         Ok((model, q, v))
     }
-}
-
-/// Whether every value is finite, in one vectorisable pass (`x · 0` is NaN exactly for a
-/// non-finite `x`; eight independent lanes); `check_result` then names the first bad index.
-fn all_finite(x: &[f64]) -> bool {
-    let mut acc = [0.0f64; 8];
-    let chunks = x.chunks_exact(8);
-    let rest = chunks.remainder();
-    for ch in chunks {
-        for (a, v) in acc.iter_mut().zip(ch) {
-            *a += v * 0.0;
-        }
-    }
-    for (a, v) in acc.iter_mut().zip(rest) {
-        *a += v * 0.0;
-    }
-    acc.iter().all(|a| *a == 0.0)
 }
 
 /// An error about argument `from` renamed to `to` (`q` → `q_guess`).
