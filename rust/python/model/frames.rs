@@ -6,32 +6,20 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use super::{load_state, PyModel};
-use crate::frames::{evaluate, jacobian, placement, FrameRef, ReferenceFrame};
+use crate::frames::args::speeds;
+use crate::frames::{constrained, evaluate, jacobian, placement, FrameRef, ReferenceFrame};
 use crate::model::Model;
-use crate::python::convert::{int_arg, plain_f64_rows, to_array, to_array1, vec3};
+use crate::python::convert::{plain_f64_rows, to_array, to_array1, vec3};
 use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
-use crate::support::spatial::Placement;
 
-/// A frame: its name (a body or an added frame) or its index in `Model.frame_names`
-/// (the bodies', then the added frames'; a body's index is its frame's).
+/// A frame by name or index (`crate::frames::args::frame`); a Python string read in place
+/// (no copy of the name per call).
 pub fn frame_arg(model: &Model, obj: &Obj, arg: &str) -> PyResult<FrameRef> {
-    if let Ok(name) = obj.cast::<PyString>() {
-        // Borrowed: no copy of the name per call.
-        return model.frame_named(arg, name.to_str()?).py(obj.py());
+    match obj.cast::<PyString>() {
+        Ok(name) => Ok(model.frame_named(arg, name.to_str()?)?),
+        Err(_) => crate::frames::args::frame(model, obj, arg),
     }
-    let (nb, nf) = (model.nbodies(), model.frames.len());
-    let k = int_arg(
-        obj,
-        arg,
-        0,
-        (nb + nf) as i64 - 1,
-        "a frame name or index (Model.frame_names)",
-    )? as usize;
-    Ok(match k.checked_sub(nb) {
-        Some(i) => model.body_frame(model.frames[i].body, &model.frames[i].placement),
-        None => model.body_frame(k, &Placement::identity()),
-    })
 }
 
 fn reference_arg(py: Python<'_>, reference: &str) -> PyResult<ReferenceFrame> {
@@ -94,22 +82,6 @@ fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArray
     unsafe { numpy::PyArrayDyn::<f64>::new(py, numpy::ndarray::IxDyn(shape), false) }
 }
 
-fn optional_vector(
-    model: &Model,
-    py: Python<'_>,
-    x: Option<&Obj>,
-    arg: &str,
-) -> PyResult<Option<Vec<f64>>> {
-    match x {
-        Some(x) if !x.is_none() => {
-            let v = crate::python::convert::vector(x, arg, Some(model.nv))?;
-            model.check_vector(arg, &v).py(py)?;
-            Ok(Some(v))
-        }
-        _ => Ok(None),
-    }
-}
-
 #[pymethods]
 impl PyModel {
     #[getter]
@@ -140,10 +112,8 @@ impl PyModel {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
-        let (mut rot, mut org) = (vec![0.0; 9 * rows], vec![0.0; 3 * rows]);
-        detach_interruptible(py, || {
-            placement::check_rows(&model, &qs, rows, stacked, "q")?;
-            placement::frame_placements(&model, &[f], &qs, rows, &mut rot, &mut org)
+        let (rot, org) = detach_interruptible(py, || {
+            placement::frame_placement(&model, &f, &qs, rows, stacked)
         })?;
         check_result(py, "frame_placement", &org)?;
         Ok((
@@ -164,19 +134,13 @@ impl PyModel {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let p = vec3(point, "point")?;
-        crate::support::error::check_finite("point", p.as_slice()).py(py)?;
         let (rows, qs, _) = configurations(&model, q, "q")?;
         let vs = crate::model::args::speeds(&model, v, rows)?;
-        let (mut pos, mut vel) = (vec![0.0; 3 * rows], vec![0.0; 3 * rows]);
-        detach_interruptible(py, || {
-            placement::check_rows(&model, &qs, rows, true, "q")?;
-            placement::point_path(&model, &f, &p, &qs, vs.as_deref(), rows, &mut pos, &mut vel)
+        let (pos, vel) = detach_interruptible(py, || {
+            placement::point_path_of(&model, &f, &p, &qs, vs.as_deref(), rows)
         })?;
         check_result(py, "point_path", &pos)?;
-        let vel = match vs {
-            Some(_) => Some(to_array(py, vel, &[rows, 3])?),
-            None => None,
-        };
+        let vel = vel.map(|vel| to_array(py, vel, &[rows, 3])).transpose()?;
         Ok((to_array(py, pos, &[rows, 3])?, vel))
     }
 
@@ -250,7 +214,7 @@ impl PyModel {
         reference: &str,
     ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let (model, q, v) = self.state(py, q, v)?;
-        let a = optional_vector(&model, py, a, "a")?;
+        let a = speeds(&model, a, "a")?;
         let f = frame_arg(&model, frame, "frame")?;
         let rf = reference_arg(py, reference)?;
         let (vel, acc) = evaluate::frame_motion(&model, &f, rf, &q, &v, a.as_deref());
@@ -315,7 +279,7 @@ impl PyModel {
         a: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
         let (model, q, v) = self.state(py, q, v)?;
-        let a = optional_vector(&model, py, a, "a")?;
+        let a = speeds(&model, a, "a")?;
         let [c, vc, ac] = evaluate::com_motion(&model, &q, &v, a.as_deref()).py(py)?;
         check_result(py, "center_of_mass_motion", ac.as_slice())?;
         let t = (
@@ -335,8 +299,8 @@ impl PyModel {
         a: Option<&Obj>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let (model, q) = self.state_only(py, q)?;
-        let v = optional_vector(&model, py, v, "v")?;
-        let a = optional_vector(&model, py, a, "a")?;
+        let v = speeds(&model, v, "v")?;
+        let a = speeds(&model, a, "a")?;
         if a.is_some() && v.is_none() {
             return Err(invalid(py, "v", "the speeds (nv,) when a is given", "None"));
         }
@@ -360,14 +324,11 @@ impl PyModel {
         independent: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Vec<usize>)> {
         let (model, q) = self.state_only(py, q)?;
-        let idx = match independent {
-            Some(x) if !x.is_none() => crate::python::loops::actuated_indices(&model, x)
-                .map_err(|e| super::rename(py, e, "actuated", "independent"))?,
-            _ => crate::frames::constrained::default_independent(
-                &crate::frames::constrained::constraint_jacobian(&model, &q),
-            ),
-        };
-        let g = crate::frames::constrained::independent_map(&model, &q, &idx).py(py)?;
+        let idx = independent.filter(|x| !x.is_none()).map(|x| {
+            crate::model::args::actuated(&model, x)
+                .map_err(|e| super::rename(py, e, "actuated", "independent"))
+        });
+        let (g, idx) = constrained::independent_map_for(&model, &q, idx.transpose()?)?;
         Ok((crate::python::convert::dmatrix_to_array(py, &g)?, idx))
     }
 }
