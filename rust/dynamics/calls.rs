@@ -139,3 +139,15 @@ impl Workspace {
         recursive::potential_energy(&self.data, g)
     }
 }
+
+/// A result computed from finite inputs that is not finite: `Numerical`, naming `what` and
+/// the first bad index.
+pub fn check_result(what: &str, values: &[f64]) -> Result<()> {
+    match values.iter().position(|x| !x.is_finite()) {
+        None => Ok(()),
+        Some(k) => Err(Error::Numerical(format!(
+            "{what}: the result is not finite ({} at index {k}) although the inputs are: the state overflows double precision",
+            values[k]
+        ))),
+    }
+}

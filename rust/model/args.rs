@@ -380,3 +380,17 @@ pub fn body_points<A: Arg>(model: &Model, list: Option<&A>) -> R<Vec<(usize, Vec
     }
     Ok(out)
 }
+
+/// One state (`states`, a stack refused), checked.
+pub fn one_state<A: Arg>(model: &Model, q: &A, v: &A, a: &A) -> R<[Vec<f64>; 3], A> {
+    match states(model, q, v, a)? {
+        (None, q, v, a) => {
+            check_rows(model, None, &q, &v, &a)?;
+            Ok([q, v, a])
+        }
+        _ => {
+            let expected = format!("shape ({},): one state", model.nq);
+            Err(Error::arg("q", expected, "a stack of states").into())
+        }
+    }
+}
