@@ -151,3 +151,32 @@ pub fn check_result(what: &str, values: &[f64]) -> Result<()> {
         ))),
     }
 }
+
+impl crate::dynamics::denoc::Denoc {
+    /// Refuses matrices that are not finite (from finite inputs), naming the first.
+    pub fn check_finite(&self, what: &str) -> Result<()> {
+        for (k, m) in [("D", &self.d), ("N", &self.n), ("points", &self.points)] {
+            check_result(&format!("{what}['{k}']"), m.as_slice())?;
+        }
+        Ok(())
+    }
+}
+
+impl crate::dynamics::denoc::DenocRates {
+    /// As [`crate::dynamics::denoc::Denoc::check_finite`].
+    pub fn check_finite(&self, what: &str) -> Result<()> {
+        for (k, m) in [("D", &self.d), ("N", &self.n)] {
+            check_result(&format!("{what}['{k}']"), m.as_slice())?;
+        }
+        Ok(())
+    }
+}
+
+/// The point masses (`n × 7`) and their world positions (`n × 7 × 3`, C order) at a checked
+/// `q`, the positions checked finite.
+pub fn point_masses(model: &Model, q: &[f64]) -> Result<(Vec<f64>, Vec<f64>)> {
+    let (masses, points) = super::denoc::point_positions(model, q);
+    let points = points.transpose().as_slice().to_vec();
+    check_result("point_masses", &points)?;
+    Ok((masses.as_slice().to_vec(), points))
+}

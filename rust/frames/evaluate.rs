@@ -201,6 +201,9 @@ pub fn centroidal(
     v: Option<&[f64]>,
     a: Option<&[f64]>,
 ) -> Result<(Vec<f64>, Option<(Vec6, Vec6)>)> {
+    if a.is_some() && v.is_none() {
+        return Err(Error::arg("v", "the speeds (nv,) when a is given", "None"));
+    }
     let nv = model.nv;
     let mut kin = FrameKinematics::new(model);
     kin.positions(model, q);

@@ -394,3 +394,26 @@ pub fn one_state<A: Arg>(model: &Model, q: &A, v: &A, a: &A) -> R<[Vec<f64>; 3],
         }
     }
 }
+
+/// A checked state: `q` (nq,) and, when given, `v` (nv,) (empty when not), each named in
+/// errors as the caller calls it (`q_guess`, `v_guess`).
+pub fn state<A: Arg>(
+    model: &Model,
+    (q, q_arg): (&A, &str),
+    v: Option<(&A, &str)>,
+) -> R<(Vec<f64>, Vec<f64>), A> {
+    let q = vector(q, q_arg, Some(model.nq))?;
+    let (v, v_arg) = match v {
+        Some((v, arg)) => (Some(vector(v, arg, Some(model.nv))?), arg),
+        None => (None, "v"),
+    };
+    let named = |n: String| match n.as_str() {
+        "q" => q_arg.to_string(),
+        "v" => v_arg.to_string(),
+        _ => n,
+    };
+    model
+        .check_state(&q, v.as_deref())
+        .map_err(|e| e.map_arg(named))?;
+    Ok((q, v.unwrap_or_default()))
+}

@@ -97,7 +97,7 @@ impl PyModel {
                 Ok(sized(py, worth_detaching(ws.model()), || ws.mass_matrix())?)
             })?,
             Method::Denoc => {
-                let (model, qv) = self.state_only(py, q)?;
+                let (model, qv) = self.state_only(q)?;
                 detach_interruptible(py, || denoc::mass_matrix(&model, &qv))?
             }
         };

@@ -10,7 +10,7 @@ use crate::frames::args::speeds;
 use crate::frames::{constrained, evaluate, jacobian, placement, FrameRef, ReferenceFrame};
 use crate::model::Model;
 use crate::python::convert::{plain_f64_rows, to_array, to_array1, vec3};
-use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::errors::{check_result, IntoPyResult};
 use crate::python::signals::detach_interruptible;
 
 /// A frame by name or index (`crate::frames::args::frame`); a Python string read in place
@@ -20,10 +20,6 @@ pub fn frame_arg(model: &Model, obj: &Obj, arg: &str) -> PyResult<FrameRef> {
         Ok(name) => Ok(model.frame_named(arg, name.to_str()?)?),
         Err(_) => crate::frames::args::frame(model, obj, arg),
     }
-}
-
-fn reference_arg(py: Python<'_>, reference: &str) -> PyResult<ReferenceFrame> {
-    ReferenceFrame::parse("reference", reference).py(py)
 }
 
 pub use crate::model::args::configurations;
@@ -80,6 +76,18 @@ fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArray
     // SAFETY: f64 has no invalid bit patterns; the callers fill the array before Python
     // sees it.
     unsafe { numpy::PyArrayDyn::<f64>::new(py, numpy::ndarray::IxDyn(shape), false) }
+}
+
+/// The entries of an optional array from [`new_array`], to be written.
+fn entries<'a>(
+    arr: &'a Option<Bound<'_, numpy::PyArrayDyn<f64>>>,
+) -> PyResult<Option<&'a mut [f64]>> {
+    // SAFETY: a new array no Python code has seen yet, C-contiguous; every entry is written
+    // before it is returned (dropped unseen on an error).
+    Ok(match arr {
+        Some(a) => Some(unsafe { a.as_slice_mut() }?),
+        None => None,
+    })
 }
 
 #[pymethods]
@@ -152,7 +160,7 @@ impl PyModel {
         q: &Obj,
         reference: &str,
     ) -> PyResult<Obj<'py>> {
-        let rf = reference_arg(py, reference)?;
+        let rf = ReferenceFrame::parse("reference", reference)?;
         if one_dimensional(q) {
             // One configuration: the pooled workspace's buffers, no thread hand-off.
             return self.with_workspace(|ws| {
@@ -195,9 +203,9 @@ impl PyModel {
         v: &Obj,
         reference: &str,
     ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(py, q, v)?;
+        let (model, q, v) = self.state(q, v)?;
         let f = frame_arg(&model, frame, "frame")?;
-        let rf = reference_arg(py, reference)?;
+        let rf = ReferenceFrame::parse("reference", reference)?;
         let out = evaluate::frame_jacobian_dot(&model, &f, rf, &q, &v);
         check_result(py, "frame_jacobian_dot", &out)?;
         to_array(py, out, &[6, model.nv])
@@ -213,10 +221,10 @@ impl PyModel {
         a: Option<&Obj>,
         reference: &str,
     ) -> PyResult<(Obj<'py>, Obj<'py>)> {
-        let (model, q, v) = self.state(py, q, v)?;
+        let (model, q, v) = self.state(q, v)?;
         let a = speeds(&model, a, "a")?;
         let f = frame_arg(&model, frame, "frame")?;
-        let rf = reference_arg(py, reference)?;
+        let rf = ReferenceFrame::parse("reference", reference)?;
         let (vel, acc) = evaluate::frame_motion(&model, &f, rf, &q, &v, a.as_deref());
         check_result(py, "frame_motion", acc.as_slice())?;
         Ok((
@@ -234,12 +242,7 @@ impl PyModel {
                 let model = &ws.version.model;
                 // Uninitialised: `com_one` writes every entry of the Jacobian.
                 let arr = jacobian.then(|| new_array(py, &[3, model.nv]));
-                let j = match &arr {
-                    // SAFETY: a new array no Python code has seen yet, C-contiguous, 3 × nv.
-                    Some(a) => Some(unsafe { a.as_slice_mut() }?),
-                    None => None,
-                };
-                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, j).py(py)?;
+                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, entries(&arr)?)?;
                 check_result(py, "center_of_mass", c.as_slice())?;
                 let c = to_array1(py, c.as_slice()).into_any();
                 match arr {
@@ -256,10 +259,7 @@ impl PyModel {
         // SAFETY: new arrays no Python code has seen yet, C-contiguous; every entry is
         // written before they are returned (dropped unseen on an error).
         let c = unsafe { com.as_slice_mut() }?;
-        let j = match &jac {
-            Some(a) => Some(unsafe { a.as_slice_mut() }?),
-            None => None,
-        };
+        let j = entries(&jac)?;
         run(py, inline, || {
             evaluate::com_batch(&model, qs, rows, stacked, c, j)
         })?;
@@ -277,17 +277,13 @@ impl PyModel {
         q: &Obj,
         v: &Obj,
         a: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(py, q, v)?;
+    ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
+        let (model, q, v) = self.state(q, v)?;
         let a = speeds(&model, a, "a")?;
-        let [c, vc, ac] = evaluate::com_motion(&model, &q, &v, a.as_deref()).py(py)?;
-        check_result(py, "center_of_mass_motion", ac.as_slice())?;
-        let t = (
-            to_array1(py, c.as_slice()),
-            to_array1(py, vc.as_slice()),
-            to_array1(py, ac.as_slice()),
-        );
-        Ok(t.into_pyobject(py)?.into_any())
+        let motion = evaluate::com_motion(&model, &q, &v, a.as_deref())?;
+        check_result(py, "center_of_mass_motion", motion[2].as_slice())?;
+        let [c, vc, ac] = motion.map(|x| to_array1(py, x.as_slice()).into_any());
+        Ok((c, vc, ac))
     }
 
     #[pyo3(signature = (q, v=None, a=None))]
@@ -298,13 +294,10 @@ impl PyModel {
         v: Option<&Obj>,
         a: Option<&Obj>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let (model, q) = self.state_only(py, q)?;
+        let (model, q) = self.state_only(q)?;
         let v = speeds(&model, v, "v")?;
         let a = speeds(&model, a, "a")?;
-        if a.is_some() && v.is_none() {
-            return Err(invalid(py, "v", "the speeds (nv,) when a is given", "None"));
-        }
-        let (ag, rest) = evaluate::centroidal(&model, &q, v.as_deref(), a.as_deref()).py(py)?;
+        let (ag, rest) = evaluate::centroidal(&model, &q, v.as_deref(), a.as_deref())?;
         check_result(py, "centroidal", &ag)?;
         let d = PyDict::new(py);
         d.set_item("A", to_array(py, ag, &[6, model.nv])?)?;
@@ -323,7 +316,7 @@ impl PyModel {
         q: &Obj,
         independent: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Vec<usize>)> {
-        let (model, q) = self.state_only(py, q)?;
+        let (model, q) = self.state_only(q)?;
         let idx = independent.filter(|x| !x.is_none()).map(|x| {
             crate::model::args::actuated(&model, x)
                 .map_err(|e| super::rename(py, e, "actuated", "independent"))

@@ -26,9 +26,7 @@ impl PyModel {
         restarts: usize,
         seed: u64,
     ) -> PyResult<PyIkSolution> {
-        let (model, q0) = self
-            .state_only(py, q0)
-            .map_err(|e| super::rename(py, e, "q", "q0"))?;
+        let (model, q0, _) = self.state_as((q0, "q0"), None)?;
         let tasks = ik_tasks(&model, tasks)?;
         let opts = ik_options(&model, limits, tol, [max_iterations, restarts], seed)?;
         let sol = detach_interruptible(py, || ik::solve(&model, &tasks, &q0, &opts))?;

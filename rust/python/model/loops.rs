@@ -3,7 +3,7 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::{load_state, load_x, rename, PyModel};
+use super::{load_state, load_x, PyModel};
 use crate::loops;
 use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
 use crate::python::errors::{check_result, IntoPyResult};
@@ -56,14 +56,14 @@ impl PyModel {
     }
 
     fn constraint_residual<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(py, q)?;
+        let (model, q) = self.state_only(q)?;
         let r = loops::args::residual_at(&model, &q);
         check_result(py, "constraint_residual", &r)?;
         Ok(to_array1(py, &r).into_any())
     }
 
     fn constraint_jacobian<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(py, q)?;
+        let (model, q) = self.state_only(q)?;
         let j = crate::frames::constrained::constraint_jacobian(&model, &q);
         check_result(py, "constraint_jacobian", j.as_slice())?;
         dmatrix_to_array(py, &j)
@@ -82,9 +82,7 @@ impl PyModel {
         tol: f64,
         max_iterations: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let (model, q) = self
-            .state_only(py, q_guess)
-            .map_err(|e| rename(py, e, "q", "q_guess"))?;
+        let (model, q, _) = self.state_as((q_guess, "q_guess"), None)?;
         let (tol, max_iterations) = loops::args::assembly(tol, max_iterations)?;
         let mask = fixed_mask(&model, fixed)?;
         let q = py.detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))?;
@@ -99,9 +97,7 @@ impl PyModel {
         v_guess: &Obj,
         fixed: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self
-            .state(py, q, v_guess)
-            .map_err(|e| rename(py, e, "v", "v_guess"))?;
+        let (model, q, v) = self.state_as((q, "q"), Some((v_guess, "v_guess")))?;
         self.project(py, (&model, &q, None), v, fixed, "assemble_velocity")
     }
 
@@ -114,7 +110,7 @@ impl PyModel {
         a_guess: &Obj,
         fixed: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(py, q, v)?;
+        let (model, q, v) = self.state(q, v)?;
         let a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
         crate::support::error::check_finite("a_guess", &a)?;
         self.project(

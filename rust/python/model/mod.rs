@@ -64,6 +64,9 @@ fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Obj, arg: &str) -> PyResult<()
     crate::support::error::check_finite(arg, &ws.x).py(py)
 }
 
+/// A model and a checked state `(q, v)`.
+type State = (Arc<Model>, Vec<f64>, Vec<f64>);
+
 impl PyModel {
     pub fn from_model(model: Model) -> Self {
         Self::from_shared(Arc::new(model))
@@ -102,28 +105,23 @@ impl PyModel {
         self.shared.with_workspace(f)
     }
 
-    /// The current model and a checked copy of `q`, for the calls that run detached and
-    /// need no workspace.
-    fn state_only(&self, py: Python<'_>, q: &Obj) -> PyResult<(Arc<Model>, Vec<f64>)> {
+    /// The current model and a checked `q` (and `v`: empty when `None`), each named in
+    /// errors as given (`crate::model::args::state`), for the calls that need no workspace.
+    fn state_as(&self, q: (&Obj, &str), v: Option<(&Obj, &str)>) -> PyResult<State> {
         let model = self.model();
-        let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
-        model.check_state(&q, None).py(py)?;
+        let (q, v) = crate::model::args::state(&model, q, v)?;
+        Ok((model, q, v))
+    }
+
+    /// [`PyModel::state_as`] of `q`.
+    fn state_only(&self, q: &Obj) -> PyResult<(Arc<Model>, Vec<f64>)> {
+        let (model, q, _) = self.state_as((q, "q"), None)?;
         Ok((model, q))
     }
 
-    /// As [`PyModel::state_only`] with `v`.
-    #[allow(clippy::type_complexity)]
-    fn state(
-        &self,
-        py: Python<'_>,
-        q: &Obj,
-        v: &Obj,
-    ) -> PyResult<(Arc<Model>, Vec<f64>, Vec<f64>)> {
-        let model = self.model();
-        let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
-        let v = crate::python::convert::vector(v, "v", Some(model.nv))?;
-        model.check_state(&q, Some(&v)).py(py)?;
-        Ok((model, q, v))
+    /// [`PyModel::state_as`] of `q` and `v`.
+    fn state(&self, q: &Obj, v: &Obj) -> PyResult<State> {
+        self.state_as((q, "q"), Some((v, "v")))
     }
 }
 
