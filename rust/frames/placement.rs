@@ -57,6 +57,7 @@ pub fn frame_placements(
 
 /// World positions of `point` (in the frame `f`) at `rows` configurations, with its
 /// velocities when `vs` is given (row-major `rows × nv`).
+#[allow(clippy::too_many_arguments)] // the inputs, then the two outputs
 pub fn point_path(
     model: &Model,
     f: &FrameRef,

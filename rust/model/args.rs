@@ -106,20 +106,7 @@ pub fn fixed_mask<A: Arg>(model: &Model, x: Option<&A>) -> R<Vec<bool>, A> {
 
 /// `actuated` as sorted v indices: ints are v indices, names all of that body's joint speeds.
 pub fn actuated<A: Arg>(model: &Model, x: &A) -> R<Vec<usize>, A> {
-    let nv = model.nv;
-    let mut mask = vec![false; nv];
-    let expected = "a list of v indices (int) or body names (str)";
-    each(x, "actuated", expected, |item| {
-        if item.text().is_some() {
-            let l = &model.links[moving_link(model, item, "actuated")?];
-            mask[l.v_index..l.v_index + l.joint.nv()].fill(true);
-        } else {
-            let want = format!("v indices 0..{nv} or body names");
-            mask[int(item, "actuated", 0, nv as i64 - 1, &want)? as usize] = true;
-        }
-        Ok(())
-    })?;
-    Ok((0..nv).filter(|&k| mask[k]).collect())
+    speeds_named(model, x, "actuated")
 }
 
 /// The actuated joints a call needs: `None` for a model without loops (every joint is
@@ -416,4 +403,23 @@ pub fn state<A: Arg>(
         .check_state(&q, v.as_deref())
         .map_err(|e| e.map_arg(named))?;
     Ok((q, v.unwrap_or_default()))
+}
+
+/// [`actuated`] under another argument name (`independent`): v indices or body names, as
+/// sorted v indices.
+pub fn speeds_named<A: Arg>(model: &Model, x: &A, arg: &str) -> R<Vec<usize>, A> {
+    let nv = model.nv;
+    let mut mask = vec![false; nv];
+    let expected = "a list of v indices (int) or body names (str)";
+    each(x, arg, expected, |item| {
+        if item.text().is_some() {
+            let l = &model.links[moving_link(model, item, arg)?];
+            mask[l.v_index..l.v_index + l.joint.nv()].fill(true);
+        } else {
+            let want = format!("v indices 0..{nv} or body names");
+            mask[int(item, arg, 0, nv as i64 - 1, &want)? as usize] = true;
+        }
+        Ok(())
+    })?;
+    Ok((0..nv).filter(|&k| mask[k]).collect())
 }

@@ -79,11 +79,14 @@ fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArray
 }
 
 /// The entries of an optional array from [`new_array`], to be written.
-fn entries<'a>(
+///
+/// # Safety
+/// A new array no Python code has seen yet (C-contiguous); every entry is written before
+/// it is returned (dropped unseen on an error).
+#[allow(clippy::mut_from_ref)] // NumPy's memory, not `arr`'s: as `as_slice_mut` itself
+unsafe fn entries<'a>(
     arr: &'a Option<Bound<'_, numpy::PyArrayDyn<f64>>>,
 ) -> PyResult<Option<&'a mut [f64]>> {
-    // SAFETY: a new array no Python code has seen yet, C-contiguous; every entry is written
-    // before it is returned (dropped unseen on an error).
     Ok(match arr {
         Some(a) => Some(unsafe { a.as_slice_mut() }?),
         None => None,
@@ -242,7 +245,9 @@ impl PyModel {
                 let model = &ws.version.model;
                 // Uninitialised: `com_one` writes every entry of the Jacobian.
                 let arr = jacobian.then(|| new_array(py, &[3, model.nv]));
-                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, entries(&arr)?)?;
+                // SAFETY: `arr` is new and `com_one` writes every entry of the Jacobian.
+                let j = unsafe { entries(&arr) }?;
+                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, j)?;
                 check_result(py, "center_of_mass", c.as_slice())?;
                 let c = to_array1(py, c.as_slice()).into_any();
                 match arr {
@@ -259,7 +264,7 @@ impl PyModel {
         // SAFETY: new arrays no Python code has seen yet, C-contiguous; every entry is
         // written before they are returned (dropped unseen on an error).
         let c = unsafe { com.as_slice_mut() }?;
-        let j = entries(&jac)?;
+        let j = unsafe { entries(&jac) }?;
         run(py, inline, || {
             evaluate::com_batch(&model, qs, rows, stacked, c, j)
         })?;
@@ -317,10 +322,8 @@ impl PyModel {
         independent: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Vec<usize>)> {
         let (model, q) = self.state_only(q)?;
-        let idx = independent.filter(|x| !x.is_none()).map(|x| {
-            crate::model::args::actuated(&model, x)
-                .map_err(|e| super::rename(py, e, "actuated", "independent"))
-        });
+        let idx = independent.filter(|x| !x.is_none());
+        let idx = idx.map(|x| crate::model::args::speeds_named(&model, x, "independent"));
         let (g, idx) = constrained::independent_map_for(&model, &q, idx.transpose()?)?;
         Ok((crate::python::convert::dmatrix_to_array(py, &g)?, idx))
     }

@@ -35,21 +35,10 @@ impl PyModel {
         let poses = detach_interruptible(py, || {
             crate::kinematics::poses::Poses::at(&model, &qs, rows, stacked)
         })?;
-        let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
-        let shape = |tail: &[usize]| super::frames::lead(stacked, rows, tail);
         let d = PyDict::new(py);
-        for (key, buf, tail) in [
-            ("rotations", poses.rotations, vec![nb, 3, 3]),
-            ("origins", poses.origins, vec![nb, 3]),
-            ("joint_origins", poses.joint_origins, vec![nb, 3]),
-            ("joint_axes", poses.joint_axes, vec![nb, 3]),
-            ("points", poses.points, vec![nl, 7, 3]),
-            ("loop_a", poses.loop_a, vec![nc, 3]),
-            ("loop_b", poses.loop_b, vec![nc, 3]),
-            ("loop_axes", poses.loop_axes, vec![nc, 3]),
-        ] {
+        for (key, buf, shape) in poses.keyed(&model, stacked) {
             check_result(py, &format!("body_poses['{key}']"), &buf)?;
-            d.set_item(key, to_array(py, buf, &shape(&tail))?)?;
+            d.set_item(key, to_array(py, buf, &shape)?)?;
         }
         Ok(d)
     }

@@ -124,15 +124,3 @@ impl PyModel {
         self.state_as((q, "q"), Some((v, "v")))
     }
 }
-
-/// An error about argument `from` renamed to `to` (`q` → `q_guess`).
-fn rename(py: Python<'_>, e: PyErr, from: &str, to: &str) -> PyErr {
-    let msg = e.value(py).to_string();
-    match msg.strip_prefix(&format!("{from}:")) {
-        Some(rest) => {
-            let ty = e.get_type(py);
-            PyErr::from_type(ty, (format!("{to}:{rest}"),))
-        }
-        None => e,
-    }
-}
