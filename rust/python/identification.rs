@@ -120,23 +120,11 @@ pub fn identification_fit(
 #[pyfunction]
 #[pyo3(signature = (model, pi, links, armature=None))]
 pub fn identification_model(
-    py: Python<'_>,
     model: PyRef<'_, PyModel>,
     pi: Vec<f64>,
     links: Vec<usize>,
     armature: Option<Vec<f64>>,
 ) -> PyResult<PyModel> {
-    let model = model.model();
-    let n = model.links.len();
-    if pi.len() < ident::NPARAM * n || links.iter().any(|&l| l >= n) {
-        return Err(invalid(
-            py,
-            "parameters",
-            format!("{} values and link indices below {n}", ident::NPARAM * n),
-            format!("{} values, links {links:?}", pi.len()),
-        ));
-    }
-    let out = ident::identified_model(&model, &pi, &links, armature.as_deref())
-        .map_err(|e| super::errors::to_py(py, e))?;
+    let out = ident::identified_model(&model.model(), &pi, &links, armature.as_deref())?;
     Ok(PyModel::from_model(out))
 }

@@ -5,9 +5,10 @@
 
 use crate::python::Obj;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{IntoPyDict, PyDict};
 
 use super::PyModel;
+use crate::python::convert::to_array1;
 use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::python::record::record;
@@ -71,11 +72,8 @@ impl PyModel {
             );
             warn(py, "UrdfWarning", &message)?;
         }
-        let out = PyDict::new(py);
-        for p in poses {
-            out.set_item(p.name, crate::python::convert::to_array1(py, &p.q))?;
-        }
-        Ok(out)
+        let poses = poses.into_iter().map(|p| (p.name, to_array1(py, &p.q)));
+        poses.collect::<Vec<_>>().into_py_dict(py)
     }
 
     #[getter]
