@@ -1291,19 +1291,16 @@ def identification_regressor(
     v: ArrayLike,
     a: ArrayLike,
     gravity: ArrayLike | None = None,
-    viscous: bool = False,
-    coulomb: bool = False,
-    armature: bool = False,
-    offset: bool = False,
+    extras: tuple[bool, bool, bool, bool] = (False, False, False, False),
     actuated: list[int] = ...,
 ) -> _Array:
     """The joint torque regressor along N states, (N · nv, p), sample-major rows: per link
     Pinocchio's ten parameters, then per 1-dof joint the asked joint-space columns
-    (docs/identification.md); with ``actuated`` (v indices; required with loops) the driven
+    (``extras``: viscous, coulomb, armature, offset; docs/identification.md); with ``actuated`` (v indices; required with loops) the driven
     joints' forces, (N · na, p)."""
 
 def identification_parameters(
-    model: Model, viscous: bool = False, coulomb: bool = False, armature: bool = False, offset: bool = False
+    model: Model, extras: tuple[bool, bool, bool, bool] = (False, False, False, False)
 ) -> tuple[list[str], _Array]:
     """Column names and the model's values (friction and offsets 0, armature 0 here)."""
 
@@ -1317,17 +1314,18 @@ def identification_fit(
     v: ArrayLike,
     a: ArrayLike,
     tau: ArrayLike,
-    gravity: ArrayLike | None,
-    method: str,
-    free: list[bool],
-    prior: list[float],
-    prior_weight: float,
-    weights: list[float],
-    cells: list[tuple[int, ArrayLike, float]],
-    viscous: bool,
-    coulomb: bool,
-    armature: bool,
-    offset: bool,
+    *,
+    gravity: ArrayLike | None = None,
+    method: str = "ols",
+    free: list[bool] = ...,
+    prior: list[float] = ...,
+    prior_weight: float = 0.0,
+    weights: list[float] = ...,
+    cells: list[tuple[int, ArrayLike, float]] = ...,
+    viscous: bool = False,
+    coulomb: bool = False,
+    armature: bool = False,
+    offset: bool = False,
     rank_tol: float = 1e-8,
     actuated: list[int] = ...,
 ) -> Identified:

@@ -341,6 +341,9 @@ pub fn generalized_forces(model: &Model, q: &[f64], point_forces: &[Vec3]) -> Re
             format!("{} forces", point_forces.len()),
         ));
     }
+    for p in point_forces {
+        crate::support::error::check_finite("forces", p.as_slice())?;
+    }
     let den = matrices(model, q)?;
     let mut f = DVector::zeros(3 * point_forces.len());
     for (j, p) in point_forces.iter().enumerate() {

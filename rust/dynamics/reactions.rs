@@ -382,3 +382,31 @@ pub fn bearing_forces(
         tau: tau_loops.unwrap_or(tau),
     })
 }
+
+/// `frame`: "joint" (each link's own axes) or "world": whether in world axes.
+pub fn world_frame(frame: &str) -> Result<bool> {
+    match frame {
+        "joint" => Ok(false),
+        "world" => Ok(true),
+        other => Err(crate::support::error::Error::arg(
+            "frame",
+            "\"joint\" or \"world\"",
+            format!("'{other}'"),
+        )),
+    }
+}
+
+impl PointMotion {
+    /// Refuses a motion that is not finite (from finite inputs), naming the field.
+    pub fn check_finite(&self, what: &str) -> Result<()> {
+        for (k, x) in [
+            ("positions", &self.positions),
+            ("velocities", &self.velocities),
+            ("accelerations", &self.accelerations),
+        ] {
+            let flat: Vec<f64> = x.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+            super::calls::check_result(&format!("{what}['{k}']"), &flat)?;
+        }
+        Ok(())
+    }
+}

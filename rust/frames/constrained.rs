@@ -109,3 +109,14 @@ fn tied(jc: &DMatrix<f64>, g: &DMatrix<f64>, ni: usize, scale: f64) -> Result<()
     }
     Ok(())
 }
+
+/// `G` at a checked `q` for the speeds `independent` (v indices), or for the default set
+/// ([`default_independent`]) when `None`; with the set used.
+pub fn independent_map_for(
+    model: &Model,
+    q: &[f64],
+    independent: Option<Vec<usize>>,
+) -> Result<(DMatrix<f64>, Vec<usize>)> {
+    let idx = independent.unwrap_or_else(|| default_independent(&constraint_jacobian(model, q)));
+    Ok((independent_map(model, q, &idx)?, idx))
+}

@@ -193,6 +193,9 @@ pub fn com_motion(model: &Model, q: &[f64], v: &[f64], a: Option<&[f64]>) -> Res
     Ok([c, vc, ac])
 }
 
+/// `A_g` (row-major 6 × nv) and, with `v`, the momentum and its rate.
+pub type Centroidal = (Vec<f64>, Option<(Vec6, Vec6)>);
+
 /// Centroidal quantities at a checked `q` (and `v`, `a`): `A_g` (row-major 6 × nv), and with
 /// `v` the momentum `h_G = A_g v` and its rate `A_g a + Ȧ_g v` (a = None: the bias `Ȧ_g v`).
 pub fn centroidal(
@@ -200,7 +203,10 @@ pub fn centroidal(
     q: &[f64],
     v: Option<&[f64]>,
     a: Option<&[f64]>,
-) -> Result<(Vec<f64>, Option<(Vec6, Vec6)>)> {
+) -> Result<Centroidal> {
+    if a.is_some() && v.is_none() {
+        return Err(Error::arg("v", "the speeds (nv,) when a is given", "None"));
+    }
     let nv = model.nv;
     let mut kin = FrameKinematics::new(model);
     kin.positions(model, q);

@@ -12,6 +12,7 @@ use crate::model::{checked_rotation, Model};
 use crate::support::error::{check_finite, Error, Result};
 use crate::support::spatial::Placement;
 
+pub mod args;
 pub mod batch;
 mod box_qp;
 pub mod centroidal;

@@ -57,6 +57,7 @@ pub fn frame_placements(
 
 /// World positions of `point` (in the frame `f`) at `rows` configurations, with its
 /// velocities when `vs` is given (row-major `rows × nv`).
+#[allow(clippy::too_many_arguments)] // the inputs, then the two outputs
 pub fn point_path(
     model: &Model,
     f: &FrameRef,
@@ -84,4 +85,36 @@ pub fn point_path(
         }
     }
     Ok(())
+}
+
+/// One frame's placements at `rows` configurations (each checked first; errors name `q[k]`
+/// when `stacked`): rotations (`rows × 9`) and origins (`rows × 3`).
+pub fn frame_placement(
+    model: &Model,
+    f: &FrameRef,
+    qs: &[f64],
+    rows: usize,
+    stacked: bool,
+) -> Result<(Vec<f64>, Vec<f64>)> {
+    check_rows(model, qs, rows, stacked, "q")?;
+    let (mut rot, mut org) = (vec![0.0; 9 * rows], vec![0.0; 3 * rows]);
+    frame_placements(model, &[*f], qs, rows, &mut rot, &mut org)?;
+    Ok((rot, org))
+}
+
+/// [`point_path`] at checked rows (errors name `q[k]`): the positions and, with `vs`, the
+/// velocities.
+pub fn point_path_of(
+    model: &Model,
+    f: &FrameRef,
+    point: &Vec3,
+    qs: &[f64],
+    vs: Option<&[f64]>,
+    rows: usize,
+) -> Result<(Vec<f64>, Option<Vec<f64>>)> {
+    crate::support::error::check_finite("point", point.as_slice())?;
+    check_rows(model, qs, rows, true, "q")?;
+    let (mut pos, mut vel) = (vec![0.0; 3 * rows], vec![0.0; 3 * rows]);
+    point_path(model, f, point, qs, vs, rows, &mut pos, &mut vel)?;
+    Ok((pos, vs.map(|_| vel)))
 }

@@ -4,6 +4,7 @@
 //! the physically consistent estimate as non-negative masses on cells inside each link's
 //! envelope ([`cells`]).
 pub mod actuated;
+pub mod args;
 pub mod base_parameters;
 pub mod cells;
 pub mod identify;

@@ -29,6 +29,12 @@ pub fn identified_model(
     links: &[usize],
     armature: Option<&[f64]>,
 ) -> Result<Model> {
+    let n = model.links.len();
+    if pi.len() < NPARAM * n || links.iter().any(|&l| l >= n) {
+        let expected = format!("{} values and link indices below {n}", NPARAM * n);
+        let got = format!("{} values, links {links:?}", pi.len());
+        return Err(Error::arg("parameters", expected, got));
+    }
     let mut out = model.clone();
     for &l in links {
         let (m, c, ic) = body_from_parameters(&pi[NPARAM * l..NPARAM * (l + 1)]);

@@ -159,3 +159,22 @@ mod tests {
         assert!((cx - want).abs() < 1e-12, "{cx} vs {want}");
     }
 }
+
+impl Poses {
+    /// Each buffer by name with its shape (a leading axis of `rows` when `stacked`).
+    pub fn keyed(self, model: &Model, stacked: bool) -> [(&'static str, Vec<f64>, Vec<usize>); 8] {
+        let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
+        let lead = stacked.then_some(self.rows);
+        let shape = |tail: &[usize]| lead.into_iter().chain(tail.iter().copied()).collect();
+        [
+            ("rotations", self.rotations, shape(&[nb, 3, 3])),
+            ("origins", self.origins, shape(&[nb, 3])),
+            ("joint_origins", self.joint_origins, shape(&[nb, 3])),
+            ("joint_axes", self.joint_axes, shape(&[nb, 3])),
+            ("points", self.points, shape(&[nl, 7, 3])),
+            ("loop_a", self.loop_a, shape(&[nc, 3])),
+            ("loop_b", self.loop_b, shape(&[nc, 3])),
+            ("loop_axes", self.loop_axes, shape(&[nc, 3])),
+        ]
+    }
+}

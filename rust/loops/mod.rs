@@ -10,6 +10,7 @@
 //!   constraint wrenches, the driving forces of chosen actuated joints, and the projections
 //!   onto the position, velocity and acceleration manifolds (`assemble`).
 //! * [`derivatives`]: the constrained forward dynamics' derivatives (state Jacobian).
+pub mod args;
 mod constraints;
 pub mod coupling;
 mod derivatives;

@@ -106,20 +106,7 @@ pub fn fixed_mask<A: Arg>(model: &Model, x: Option<&A>) -> R<Vec<bool>, A> {
 
 /// `actuated` as sorted v indices: ints are v indices, names all of that body's joint speeds.
 pub fn actuated<A: Arg>(model: &Model, x: &A) -> R<Vec<usize>, A> {
-    let nv = model.nv;
-    let mut mask = vec![false; nv];
-    let expected = "a list of v indices (int) or body names (str)";
-    each(x, "actuated", expected, |item| {
-        if item.text().is_some() {
-            let l = &model.links[moving_link(model, item, "actuated")?];
-            mask[l.v_index..l.v_index + l.joint.nv()].fill(true);
-        } else {
-            let want = format!("v indices 0..{nv} or body names");
-            mask[int(item, "actuated", 0, nv as i64 - 1, &want)? as usize] = true;
-        }
-        Ok(())
-    })?;
-    Ok((0..nv).filter(|&k| mask[k]).collect())
+    speeds_named(model, x, "actuated")
 }
 
 /// The actuated joints a call needs: `None` for a model without loops (every joint is
@@ -379,4 +366,60 @@ pub fn body_points<A: Arg>(model: &Model, list: Option<&A>) -> R<Vec<(usize, Vec
         out.push((link, model.bodies[b].in_link.act_point(&p)));
     }
     Ok(out)
+}
+
+/// One state (`states`, a stack refused), checked.
+pub fn one_state<A: Arg>(model: &Model, q: &A, v: &A, a: &A) -> R<[Vec<f64>; 3], A> {
+    match states(model, q, v, a)? {
+        (None, q, v, a) => {
+            check_rows(model, None, &q, &v, &a)?;
+            Ok([q, v, a])
+        }
+        _ => {
+            let expected = format!("shape ({},): one state", model.nq);
+            Err(Error::arg("q", expected, "a stack of states").into())
+        }
+    }
+}
+
+/// A checked state: `q` (nq,) and, when given, `v` (nv,) (empty when not), each named in
+/// errors as the caller calls it (`q_guess`, `v_guess`).
+pub fn state<A: Arg>(
+    model: &Model,
+    (q, q_arg): (&A, &str),
+    v: Option<(&A, &str)>,
+) -> R<(Vec<f64>, Vec<f64>), A> {
+    let q = vector(q, q_arg, Some(model.nq))?;
+    let (v, v_arg) = match v {
+        Some((v, arg)) => (Some(vector(v, arg, Some(model.nv))?), arg),
+        None => (None, "v"),
+    };
+    let named = |n: String| match n.as_str() {
+        "q" => q_arg.to_string(),
+        "v" => v_arg.to_string(),
+        _ => n,
+    };
+    model
+        .check_state(&q, v.as_deref())
+        .map_err(|e| e.map_arg(named))?;
+    Ok((q, v.unwrap_or_default()))
+}
+
+/// [`actuated`] under another argument name (`independent`): v indices or body names, as
+/// sorted v indices.
+pub fn speeds_named<A: Arg>(model: &Model, x: &A, arg: &str) -> R<Vec<usize>, A> {
+    let nv = model.nv;
+    let mut mask = vec![false; nv];
+    let expected = "a list of v indices (int) or body names (str)";
+    each(x, arg, expected, |item| {
+        if item.text().is_some() {
+            let l = &model.links[moving_link(model, item, arg)?];
+            mask[l.v_index..l.v_index + l.joint.nv()].fill(true);
+        } else {
+            let want = format!("v indices 0..{nv} or body names");
+            mask[int(item, arg, 0, nv as i64 - 1, &want)? as usize] = true;
+        }
+        Ok(())
+    })?;
+    Ok((0..nv).filter(|&k| mask[k]).collect())
 }

@@ -7,6 +7,7 @@ pub mod body;
 pub mod constraints;
 pub mod frame;
 pub mod joint_records;
+mod listing;
 pub mod point_masses;
 pub mod visual;
 

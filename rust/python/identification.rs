@@ -3,25 +3,17 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::convert::{array, dmatrix_to_array, points, to_array1};
+use super::convert::{array, dmatrix_to_array, to_array1};
 use super::errors::{check_result, invalid};
 use super::model::PyModel;
 use super::record::{record, Field};
 use super::signals::detach_interruptible;
-use crate::identification::{self as ident, Extras, LinkCells, Method, Options};
+use crate::identification::{self as ident, args};
 
-fn extras(viscous: bool, coulomb: bool, armature: bool, offset: bool) -> Extras {
-    Extras {
-        viscous,
-        coulomb,
-        armature,
-        offset,
-    }
-}
-
+/// `extras`: whether to add the (viscous, coulomb, armature, offset) columns.
 #[pyfunction]
-#[pyo3(signature = (model, q, v, a, gravity=None, viscous=false, coulomb=false, armature=false, offset=false, actuated=Vec::new()))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (model, q, v, a, gravity=None, extras=(false, false, false, false), actuated=Vec::new()))]
+#[allow(clippy::too_many_arguments)] // the arguments of the Python function
 pub fn identification_regressor<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
@@ -29,16 +21,13 @@ pub fn identification_regressor<'py>(
     v: &Obj,
     a: &Obj,
     gravity: Option<&Obj>,
-    viscous: bool,
-    coulomb: bool,
-    armature: bool,
-    offset: bool,
+    extras: (bool, bool, bool, bool),
     actuated: Vec<usize>,
 ) -> PyResult<Obj<'py>> {
     let model = model.model();
     let g = crate::model::args::gravity(gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
-    let ex = extras(viscous, coulomb, armature, offset);
+    let ex = args::extras(extras);
     let y = detach_interruptible(py, || {
         ident::joint_force_regressor(&model, &qs, &vs, &accs, &g, &ex, &actuated)
     })?;
@@ -49,18 +38,14 @@ pub fn identification_regressor<'py>(
 /// Column names and the model's own values of every column (friction and offsets zero, the
 /// model's armature).
 #[pyfunction]
-#[pyo3(signature = (model, viscous=false, coulomb=false, armature=false, offset=false))]
+#[pyo3(signature = (model, extras=(false, false, false, false)))]
 pub fn identification_parameters<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,
-    viscous: bool,
-    coulomb: bool,
-    armature: bool,
-    offset: bool,
+    extras: (bool, bool, bool, bool),
 ) -> PyResult<(Vec<String>, Obj<'py>)> {
     let model = model.model();
-    let ex = extras(viscous, coulomb, armature, offset);
-    let names = ident::parameter_names(&model, &ex);
+    let names = ident::parameter_names(&model, &args::extras(extras));
     let mut values = ident::model_parameters(&model);
     values.resize(names.len(), 0.0);
     Ok((names, to_array1(py, &values).into_any()))
@@ -109,66 +94,23 @@ record!(
     }
 );
 
+/// `options`: the fit's keywords (`crate::identification::args::fit_options`).
 #[pyfunction]
-#[pyo3(signature = (model, q, v, a, tau, gravity, method, free, prior, prior_weight, weights, cells, viscous, coulomb, armature, offset, rank_tol=1e-8, actuated=Vec::new()))]
-#[allow(clippy::too_many_arguments)]
-pub fn identification_fit<'py>(
-    py: Python<'py>,
+#[pyo3(signature = (model, q, v, a, tau, **options))]
+pub fn identification_fit(
+    py: Python<'_>,
     model: PyRef<'_, PyModel>,
     q: &Obj,
     v: &Obj,
     a: &Obj,
     tau: &Obj,
-    gravity: Option<&Obj>,
-    method: &str,
-    free: Vec<bool>,
-    prior: Vec<f64>,
-    prior_weight: f64,
-    weights: Vec<f64>,
-    cells: Vec<(usize, Obj, f64)>,
-    viscous: bool,
-    coulomb: bool,
-    armature: bool,
-    offset: bool,
-    rank_tol: f64,
-    actuated: Vec<usize>,
+    options: Option<&Bound<'_, pyo3::types::PyDict>>,
 ) -> PyResult<PyIdentified> {
     let model = model.model();
-    let g = crate::model::args::gravity(gravity)?;
     let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
     let (_, taus) = array(tau, "tau")?;
-    let method = match method {
-        "ols" => Method::Ols,
-        "cells" => {
-            let mut links = Vec::new();
-            for (link, centres, side) in &cells {
-                links.push(LinkCells {
-                    link: *link,
-                    centres: points(centres, "cells")?,
-                    side: *side,
-                });
-            }
-            Method::Cells(links)
-        }
-        other => {
-            return Err(invalid(
-                py,
-                "method",
-                "'cells' or 'ols'",
-                format!("{other:?}"),
-            ))
-        }
-    };
-    let opt = Options {
-        extras: extras(viscous, coulomb, armature, offset),
-        free,
-        prior,
-        prior_weight,
-        weights,
-        rank_tol,
-        method,
-        actuated,
-    };
+    let empty = pyo3::types::PyDict::new(py);
+    let (opt, g) = args::fit_options(options.unwrap_or(&empty).as_any())?;
     let out = detach_interruptible(py, || {
         ident::identify(&model, &qs, &vs, &accs, &taus, &g, &opt)
     })?;
@@ -178,23 +120,11 @@ pub fn identification_fit<'py>(
 #[pyfunction]
 #[pyo3(signature = (model, pi, links, armature=None))]
 pub fn identification_model(
-    py: Python<'_>,
     model: PyRef<'_, PyModel>,
     pi: Vec<f64>,
     links: Vec<usize>,
     armature: Option<Vec<f64>>,
 ) -> PyResult<PyModel> {
-    let model = model.model();
-    let n = model.links.len();
-    if pi.len() < ident::NPARAM * n || links.iter().any(|&l| l >= n) {
-        return Err(invalid(
-            py,
-            "parameters",
-            format!("{} values and link indices below {n}", ident::NPARAM * n),
-            format!("{} values, links {links:?}", pi.len()),
-        ));
-    }
-    let out = ident::identified_model(&model, &pi, &links, armature.as_deref())
-        .map_err(|e| super::errors::to_py(py, e))?;
+    let out = ident::identified_model(&model.model(), &pi, &links, armature.as_deref())?;
     Ok(PyModel::from_model(out))
 }

@@ -3,7 +3,6 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::errors::invalid;
 use super::signals::detach_interruptible;
 use crate::model::args::{self, Stack};
 use crate::model::Model;
@@ -15,18 +14,4 @@ pub fn states(model: &Model, q: &Obj, v: &Obj, a: &Obj) -> PyResult<Stack> {
     let (count, q, v, a) = args::states(model, q, v, a)?;
     detach_interruptible(py, || args::check_rows(model, count, &q, &v, &a))?;
     Ok((count, q, v, a))
-}
-
-/// `frame`: "joint" (each link's own axes) or "world".
-pub fn world_frame(py: Python<'_>, frame: &str) -> PyResult<bool> {
-    match frame {
-        "joint" => Ok(false),
-        "world" => Ok(true),
-        other => Err(invalid(
-            py,
-            "frame",
-            "\"joint\" or \"world\"",
-            format!("'{other}'"),
-        )),
-    }
 }

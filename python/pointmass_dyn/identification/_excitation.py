@@ -126,7 +126,7 @@ def excitation_trajectory(
     def condition(coef):
         coef, off = _fit_into(coef, lo, hi, vmax, amax, tc, omega, margin)
         q, v, a = fourier(coef, off, tc, omega)
-        y = _core.identification_regressor(model, q, v, a, gravity, viscous, coulomb, False, False)
+        y = _core.identification_regressor(model, q, v, a, gravity, (bool(viscous), bool(coulomb), False, False))
         if cols is not None:
             y = y[:, cols]
         norms = np.linalg.norm(y, axis=0)
@@ -140,7 +140,7 @@ def excitation_trajectory(
     cols = None
     best = rng.normal(size=shape)
     q, v, a = fourier(*_fit_into(best, lo, hi, vmax, amax, tc, omega, margin), tc, omega)
-    y = _core.identification_regressor(model, q, v, a, gravity, viscous, coulomb, False, False)
+    y = _core.identification_regressor(model, q, v, a, gravity, (bool(viscous), bool(coulomb), False, False))
     cols = _core.identification_base(y, 1e-8).independent
     best_c = condition(best)
     step = 0.5

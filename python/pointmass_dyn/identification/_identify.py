@@ -161,7 +161,7 @@ def measured_states(model, data, window: int | None = None, order: int = 3, widt
 
 def _columns(model, bodies, friction, armature, offset):
     viscous, coulomb = friction_flags(friction)
-    names, values = _core.identification_parameters(model, viscous, coulomb, armature, offset)
+    names, values = _core.identification_parameters(model, (viscous, coulomb, armature, offset))
     links = list(model.link_names)
     if bodies is None:
         chosen = links
@@ -230,8 +230,10 @@ def identify(
     elif envelopes is not None:
         boxes = envelope_boxes(model, chosen, envelopes)
     out = _core.identification_fit(
-        model, q, v, a, tau.reshape(-1), gravity, method, list(map(bool, free)), list(map(float, values)),
-        float(prior_weight), list(weights), cell_args, flags[0], flags[1], armature, offset, rank_tol, act,
+        model, q, v, a, tau.reshape(-1), gravity=gravity, method=method, free=list(map(bool, free)),
+        prior=list(map(float, values)), prior_weight=float(prior_weight), weights=list(weights),
+        cells=cell_args, viscous=bool(flags[0]), coulomb=bool(flags[1]), armature=bool(armature),
+        offset=bool(offset), rank_tol=float(rank_tol), actuated=act,
     )
     free_names = [names[i] for i in out.free]
     base = base_parameters_from(out.base, free_names, len(free_names))
@@ -275,7 +277,7 @@ def _identified_model(model, pi, links, arm: dict, joints, armature: bool):
 
 def _prior(prior, names, flags, armature, offset) -> np.ndarray:
     if hasattr(prior, "link_names"):
-        pn, pv = _core.identification_parameters(prior, flags[0], flags[1], armature, offset)
+        pn, pv = _core.identification_parameters(prior, (flags[0], flags[1], armature, offset))
         if pn != names:
             raise InvalidInputError("prior: expected a model with the same links and joints as model")
         return np.asarray(pv, float)

@@ -98,8 +98,9 @@ def torque_regressor(
     v = np.atleast_2d(np.asarray(v, float))
     a = np.atleast_2d(np.asarray(a, float))
     act = actuated_indices(model, actuated)
-    y = _core.identification_regressor(model, q, v, a, gravity, viscous, coulomb, armature, offset, act)
-    names, values = _core.identification_parameters(model, viscous, coulomb, armature, offset)
+    extras = (bool(viscous), bool(coulomb), bool(armature), bool(offset))
+    y = _core.identification_regressor(model, q, v, a, gravity, extras, act)
+    names, values = _core.identification_parameters(model, extras)
     if armature:
         arm = np.asarray(model.armature, float)
         one = [i for i, n in enumerate(names) if n.endswith(".armature")]

@@ -50,7 +50,7 @@ mod tree;
 mod visuals;
 
 pub use crate::model::joint_records::{Limit, Mimic, RepairRecord, UrdfJoint};
-pub use parts::{model_from_parts, Part};
+pub use parts::{model_from_parts, parts_arg, Part};
 pub use repair::Repair;
 pub use srdf::{load_reference_poses, reference_poses, ReferencePose};
 

@@ -129,3 +129,62 @@ pub fn model_from_parts(parts: &[Part]) -> Result<Urdf> {
         base_dir: None,
     })
 }
+
+/// `parts` as a binding hands them over: `(name, parent, joint, translation, rotation,
+/// joint_name, mass, com, inertia)` each (`joint` read by the binding's `joint`), `parent`
+/// -1 or an earlier part's index; `ranges` one `(lower, upper)` or `None` per part.
+pub fn parts_arg<A: crate::support::args::Arg>(
+    parts: &[A],
+    ranges: Option<Vec<Option<(f64, f64)>>>,
+    joint: impl Fn(&A) -> Option<Joint>,
+) -> std::result::Result<Vec<Part>, A::Err> {
+    use crate::support::args::{int, mat3, text, vec3};
+    let n = parts.len();
+    let ranges = ranges.unwrap_or_else(|| vec![None; n]);
+    if ranges.len() != n {
+        let expected = format!("one (lower, upper) or None per part ({n})");
+        return Err(Error::arg("ranges", expected, format!("{} entries", ranges.len())).into());
+    }
+    let fields = "(name, parent, joint, translation, rotation, joint_name, mass, com, inertia)";
+    let mut out = Vec::with_capacity(n);
+    for (k, (p, range)) in parts.iter().zip(ranges).enumerate() {
+        let arg = format!("parts[{k}]");
+        let bad = || Error::arg(&arg, fields, p.shown());
+        let items = p.items().ok_or_else(bad)??;
+        let [name, parent, j, t, r, joint_name, mass, com, inertia] = &items[..] else {
+            return Err(bad().into());
+        };
+        let parent_arg = format!("{arg}.parent");
+        let earlier = format!("-1 or an earlier part's index 0..{k}");
+        let parent = match int(parent, &parent_arg, i64::MIN, i64::MAX, &earlier)? {
+            -1 => None,
+            i if i >= 0 && (i as usize) < k => Some(i as usize),
+            i => return Err(Error::arg(parent_arg, earlier, i.to_string()).into()),
+        };
+        out.push(Part {
+            name: text(name, &arg, fields)?,
+            parent,
+            placement: Placement::new(mat3(r, "rotation")?, vec3(t, "translation")?),
+            joint: joint(j).ok_or_else(bad)?,
+            joint_name: text(joint_name, &arg, fields)?,
+            mass: mass.real(&arg)?,
+            com: vec3(com, "com")?,
+            inertia: mat3(inertia, "inertia")?,
+            range,
+        });
+    }
+    Ok(out)
+}
+
+impl super::RootJoint {
+    /// `root_joint=` as a caller writes it: `None` (fixed), `"fixed"` or `"free"`.
+    pub fn parse<A: crate::support::args::Arg>(x: Option<&A>) -> std::result::Result<Self, A::Err> {
+        use super::RootJoint::{Fixed, Free};
+        let choices = [("fixed", Fixed), ("free", Free)];
+        let expected = "None, \"fixed\" or \"free\"";
+        let root = crate::support::args::opt(x, |r| {
+            crate::support::args::choice(r, "root_joint", &choices, expected)
+        })?;
+        Ok(root.unwrap_or(Fixed))
+    }
+}

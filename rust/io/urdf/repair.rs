@@ -336,3 +336,15 @@ mod tests {
         assert!((out.inertia.trace() - 9e-2).abs() < 1e-15);
     }
 }
+
+impl super::Urdf {
+    /// The warning listing the links and joints repaired, if any (`file` as shown).
+    pub fn repairs_warning(&self, file: &str) -> Option<String> {
+        let lines: Vec<String> = self.repairs().iter().map(|r| r.describe()).collect();
+        (!lines.is_empty()).then(|| {
+            let n = lines.len();
+            let lines = lines.join("\n  ");
+            format!("{file}: repaired {n} link(s)/joint(s) (model.repairs lists them):\n  {lines}")
+        })
+    }
+}

@@ -9,6 +9,7 @@ use crate::effects::args::{joint_body, numbers};
 use crate::loops;
 use crate::python::convert::{real, to_array1};
 use crate::python::errors::{check_result, IntoPyResult};
+use crate::support::args;
 
 #[pymethods]
 impl PyModel {
@@ -23,11 +24,8 @@ impl PyModel {
         name: Option<String>,
     ) -> PyResult<usize> {
         // `real` refuses bools and strings with the argument's name (a bare f64 took True as 1).
-        let ratio = ratio.map(|x| real(x, "ratio")).transpose()?.unwrap_or(1.0);
-        let offset = offset
-            .map(|x| real(x, "offset"))
-            .transpose()?
-            .unwrap_or(0.0);
+        let ratio = args::opt(ratio, |x| real(x, "ratio"))?.unwrap_or(1.0);
+        let offset = args::opt(offset, |x| real(x, "offset"))?.unwrap_or(0.0);
         let model = self.model();
         let j = joint_body(&model, joint, "joint")?;
         let r = joint_body(&model, reference, "reference")?;
@@ -45,19 +43,7 @@ impl PyModel {
 
     #[getter]
     fn couplings(&self) -> Vec<(String, String, String, f64, f64)> {
-        let m = self.model();
-        m.couplings
-            .iter()
-            .map(|c| {
-                (
-                    c.name.clone(),
-                    m.bodies[c.joint].name.clone(),
-                    m.bodies[c.reference].name.clone(),
-                    c.ratio,
-                    c.offset,
-                )
-            })
-            .collect()
+        self.model().coupling_list()
     }
 
     #[pyo3(signature = (q, v, tau, gravity=None))]
@@ -89,12 +75,6 @@ impl PyModel {
 
     #[getter]
     fn armature<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        let m = self.model();
-        let a = if m.armature.is_empty() {
-            vec![0.0; m.nv]
-        } else {
-            m.armature.clone()
-        };
-        to_array1(py, &a).into_any()
+        to_array1(py, &self.model().armature_per_speed()).into_any()
     }
 }

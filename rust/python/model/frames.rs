@@ -6,36 +6,20 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use super::{load_state, PyModel};
-use crate::frames::{evaluate, jacobian, placement, FrameRef, ReferenceFrame};
+use crate::frames::args::speeds;
+use crate::frames::{constrained, evaluate, jacobian, placement, FrameRef, ReferenceFrame};
 use crate::model::Model;
-use crate::python::convert::{int_arg, plain_f64_rows, to_array, to_array1, vec3};
-use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::convert::{plain_f64_rows, to_array, to_array1, vec3};
+use crate::python::errors::{check_result, IntoPyResult};
 use crate::python::signals::detach_interruptible;
-use crate::support::spatial::Placement;
 
-/// A frame: its name (a body or an added frame) or its index in `Model.frame_names`
-/// (the bodies', then the added frames'; a body's index is its frame's).
+/// A frame by name or index (`crate::frames::args::frame`); a Python string read in place
+/// (no copy of the name per call).
 pub fn frame_arg(model: &Model, obj: &Obj, arg: &str) -> PyResult<FrameRef> {
-    if let Ok(name) = obj.cast::<PyString>() {
-        // Borrowed: no copy of the name per call.
-        return model.frame_named(arg, name.to_str()?).py(obj.py());
+    match obj.cast::<PyString>() {
+        Ok(name) => Ok(model.frame_named(arg, name.to_str()?)?),
+        Err(_) => crate::frames::args::frame(model, obj, arg),
     }
-    let (nb, nf) = (model.nbodies(), model.frames.len());
-    let k = int_arg(
-        obj,
-        arg,
-        0,
-        (nb + nf) as i64 - 1,
-        "a frame name or index (Model.frame_names)",
-    )? as usize;
-    Ok(match k.checked_sub(nb) {
-        Some(i) => model.body_frame(model.frames[i].body, &model.frames[i].placement),
-        None => model.body_frame(k, &Placement::identity()),
-    })
-}
-
-fn reference_arg(py: Python<'_>, reference: &str) -> PyResult<ReferenceFrame> {
-    ReferenceFrame::parse("reference", reference).py(py)
 }
 
 pub use crate::model::args::configurations;
@@ -94,20 +78,19 @@ fn new_array<'py>(py: Python<'py>, shape: &[usize]) -> Bound<'py, numpy::PyArray
     unsafe { numpy::PyArrayDyn::<f64>::new(py, numpy::ndarray::IxDyn(shape), false) }
 }
 
-fn optional_vector(
-    model: &Model,
-    py: Python<'_>,
-    x: Option<&Obj>,
-    arg: &str,
-) -> PyResult<Option<Vec<f64>>> {
-    match x {
-        Some(x) if !x.is_none() => {
-            let v = crate::python::convert::vector(x, arg, Some(model.nv))?;
-            model.check_vector(arg, &v).py(py)?;
-            Ok(Some(v))
-        }
-        _ => Ok(None),
-    }
+/// The entries of an optional array from [`new_array`], to be written.
+///
+/// # Safety
+/// A new array no Python code has seen yet (C-contiguous); every entry is written before
+/// it is returned (dropped unseen on an error).
+#[allow(clippy::mut_from_ref)] // NumPy's memory, not `arr`'s: as `as_slice_mut` itself
+unsafe fn entries<'a>(
+    arr: &'a Option<Bound<'_, numpy::PyArrayDyn<f64>>>,
+) -> PyResult<Option<&'a mut [f64]>> {
+    Ok(match arr {
+        Some(a) => Some(unsafe { a.as_slice_mut() }?),
+        None => None,
+    })
 }
 
 #[pymethods]
@@ -140,10 +123,8 @@ impl PyModel {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let (rows, qs, stacked) = configurations(&model, q, "q")?;
-        let (mut rot, mut org) = (vec![0.0; 9 * rows], vec![0.0; 3 * rows]);
-        detach_interruptible(py, || {
-            placement::check_rows(&model, &qs, rows, stacked, "q")?;
-            placement::frame_placements(&model, &[f], &qs, rows, &mut rot, &mut org)
+        let (rot, org) = detach_interruptible(py, || {
+            placement::frame_placement(&model, &f, &qs, rows, stacked)
         })?;
         check_result(py, "frame_placement", &org)?;
         Ok((
@@ -164,19 +145,13 @@ impl PyModel {
         let model = self.model();
         let f = frame_arg(&model, frame, "frame")?;
         let p = vec3(point, "point")?;
-        crate::support::error::check_finite("point", p.as_slice()).py(py)?;
         let (rows, qs, _) = configurations(&model, q, "q")?;
         let vs = crate::model::args::speeds(&model, v, rows)?;
-        let (mut pos, mut vel) = (vec![0.0; 3 * rows], vec![0.0; 3 * rows]);
-        detach_interruptible(py, || {
-            placement::check_rows(&model, &qs, rows, true, "q")?;
-            placement::point_path(&model, &f, &p, &qs, vs.as_deref(), rows, &mut pos, &mut vel)
+        let (pos, vel) = detach_interruptible(py, || {
+            placement::point_path_of(&model, &f, &p, &qs, vs.as_deref(), rows)
         })?;
         check_result(py, "point_path", &pos)?;
-        let vel = match vs {
-            Some(_) => Some(to_array(py, vel, &[rows, 3])?),
-            None => None,
-        };
+        let vel = vel.map(|vel| to_array(py, vel, &[rows, 3])).transpose()?;
         Ok((to_array(py, pos, &[rows, 3])?, vel))
     }
 
@@ -188,7 +163,7 @@ impl PyModel {
         q: &Obj,
         reference: &str,
     ) -> PyResult<Obj<'py>> {
-        let rf = reference_arg(py, reference)?;
+        let rf = ReferenceFrame::parse("reference", reference)?;
         if one_dimensional(q) {
             // One configuration: the pooled workspace's buffers, no thread hand-off.
             return self.with_workspace(|ws| {
@@ -231,9 +206,9 @@ impl PyModel {
         v: &Obj,
         reference: &str,
     ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(py, q, v)?;
+        let (model, q, v) = self.state(q, v)?;
         let f = frame_arg(&model, frame, "frame")?;
-        let rf = reference_arg(py, reference)?;
+        let rf = ReferenceFrame::parse("reference", reference)?;
         let out = evaluate::frame_jacobian_dot(&model, &f, rf, &q, &v);
         check_result(py, "frame_jacobian_dot", &out)?;
         to_array(py, out, &[6, model.nv])
@@ -249,10 +224,10 @@ impl PyModel {
         a: Option<&Obj>,
         reference: &str,
     ) -> PyResult<(Obj<'py>, Obj<'py>)> {
-        let (model, q, v) = self.state(py, q, v)?;
-        let a = optional_vector(&model, py, a, "a")?;
+        let (model, q, v) = self.state(q, v)?;
+        let a = speeds(&model, a, "a")?;
         let f = frame_arg(&model, frame, "frame")?;
-        let rf = reference_arg(py, reference)?;
+        let rf = ReferenceFrame::parse("reference", reference)?;
         let (vel, acc) = evaluate::frame_motion(&model, &f, rf, &q, &v, a.as_deref());
         check_result(py, "frame_motion", acc.as_slice())?;
         Ok((
@@ -270,12 +245,9 @@ impl PyModel {
                 let model = &ws.version.model;
                 // Uninitialised: `com_one` writes every entry of the Jacobian.
                 let arr = jacobian.then(|| new_array(py, &[3, model.nv]));
-                let j = match &arr {
-                    // SAFETY: a new array no Python code has seen yet, C-contiguous, 3 × nv.
-                    Some(a) => Some(unsafe { a.as_slice_mut() }?),
-                    None => None,
-                };
-                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, j).py(py)?;
+                // SAFETY: `arr` is new and `com_one` writes every entry of the Jacobian.
+                let j = unsafe { entries(&arr) }?;
+                let c = evaluate::com_one(model, &ws.q, &mut ws.data.links, j)?;
                 check_result(py, "center_of_mass", c.as_slice())?;
                 let c = to_array1(py, c.as_slice()).into_any();
                 match arr {
@@ -292,10 +264,7 @@ impl PyModel {
         // SAFETY: new arrays no Python code has seen yet, C-contiguous; every entry is
         // written before they are returned (dropped unseen on an error).
         let c = unsafe { com.as_slice_mut() }?;
-        let j = match &jac {
-            Some(a) => Some(unsafe { a.as_slice_mut() }?),
-            None => None,
-        };
+        let j = unsafe { entries(&jac) }?;
         run(py, inline, || {
             evaluate::com_batch(&model, qs, rows, stacked, c, j)
         })?;
@@ -313,17 +282,13 @@ impl PyModel {
         q: &Obj,
         v: &Obj,
         a: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(py, q, v)?;
-        let a = optional_vector(&model, py, a, "a")?;
-        let [c, vc, ac] = evaluate::com_motion(&model, &q, &v, a.as_deref()).py(py)?;
-        check_result(py, "center_of_mass_motion", ac.as_slice())?;
-        let t = (
-            to_array1(py, c.as_slice()),
-            to_array1(py, vc.as_slice()),
-            to_array1(py, ac.as_slice()),
-        );
-        Ok(t.into_pyobject(py)?.into_any())
+    ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
+        let (model, q, v) = self.state(q, v)?;
+        let a = speeds(&model, a, "a")?;
+        let motion = evaluate::com_motion(&model, &q, &v, a.as_deref())?;
+        check_result(py, "center_of_mass_motion", motion[2].as_slice())?;
+        let [c, vc, ac] = motion.map(|x| to_array1(py, x.as_slice()).into_any());
+        Ok((c, vc, ac))
     }
 
     #[pyo3(signature = (q, v=None, a=None))]
@@ -334,13 +299,10 @@ impl PyModel {
         v: Option<&Obj>,
         a: Option<&Obj>,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let (model, q) = self.state_only(py, q)?;
-        let v = optional_vector(&model, py, v, "v")?;
-        let a = optional_vector(&model, py, a, "a")?;
-        if a.is_some() && v.is_none() {
-            return Err(invalid(py, "v", "the speeds (nv,) when a is given", "None"));
-        }
-        let (ag, rest) = evaluate::centroidal(&model, &q, v.as_deref(), a.as_deref()).py(py)?;
+        let (model, q) = self.state_only(q)?;
+        let v = speeds(&model, v, "v")?;
+        let a = speeds(&model, a, "a")?;
+        let (ag, rest) = evaluate::centroidal(&model, &q, v.as_deref(), a.as_deref())?;
         check_result(py, "centroidal", &ag)?;
         let d = PyDict::new(py);
         d.set_item("A", to_array(py, ag, &[6, model.nv])?)?;
@@ -359,15 +321,10 @@ impl PyModel {
         q: &Obj,
         independent: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Vec<usize>)> {
-        let (model, q) = self.state_only(py, q)?;
-        let idx = match independent {
-            Some(x) if !x.is_none() => crate::python::loops::actuated_indices(&model, x)
-                .map_err(|e| super::rename(py, e, "actuated", "independent"))?,
-            _ => crate::frames::constrained::default_independent(
-                &crate::frames::constrained::constraint_jacobian(&model, &q),
-            ),
-        };
-        let g = crate::frames::constrained::independent_map(&model, &q, &idx).py(py)?;
+        let (model, q) = self.state_only(q)?;
+        let idx = independent.filter(|x| !x.is_none());
+        let idx = idx.map(|x| crate::model::args::speeds_named(&model, x, "independent"));
+        let (g, idx) = constrained::independent_map_for(&model, &q, idx.transpose()?)?;
         Ok((crate::python::convert::dmatrix_to_array(py, &g)?, idx))
     }
 }

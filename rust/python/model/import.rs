@@ -5,14 +5,14 @@
 
 use crate::python::Obj;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{IntoPyDict, PyDict};
 
 use super::PyModel;
-use crate::python::convert::{mat3, vec3};
-use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::convert::to_array1;
+use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::python::record::record;
-use crate::support::spatial::Placement;
+use crate::support::files::display_path;
 
 #[pymethods]
 impl PyModel {
@@ -27,29 +27,18 @@ impl PyModel {
         mimic: bool,
     ) -> PyResult<Self> {
         let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
-        use crate::io::urdf::RootJoint::{Fixed, Free};
-        let choices = [("fixed", Fixed), ("free", Free)];
-        let root = crate::support::args::opt(root_joint, |r| {
-            crate::support::args::choice(r, "root_joint", &choices, "None, \"fixed\" or \"free\"")
-        })?;
-        let root = root.unwrap_or(Fixed);
+        let root = crate::io::urdf::RootJoint::parse(root_joint)?;
         let repair = crate::io::urdf::Repair::parse(repair)?;
         let mut urdf =
             crate::io::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
+        let file = display_path(&path);
         if !mimic {
-            urdf.independent_mimics(&crate::support::files::display_path(&path));
+            urdf.independent_mimics(&file);
         }
         for w in &urdf.warnings {
             warn(py, "UrdfWarning", w)?;
         }
-        if !urdf.repairs().is_empty() {
-            let lines: Vec<String> = urdf.repairs().iter().map(|r| r.describe()).collect();
-            let message = format!(
-                "{}: repaired {} link(s)/joint(s) (model.repairs lists them):\n  {}",
-                crate::support::files::display_path(&path),
-                urdf.repairs().len(),
-                lines.join("\n  ")
-            );
+        if let Some(message) = urdf.repairs_warning(&file) {
             warn(py, "UrdfRepairWarning", &message)?;
         }
         Ok(PyModel::from_model(urdf.model))
@@ -62,60 +51,8 @@ impl PyModel {
         parts: Vec<Obj>,
         ranges: Option<Vec<Option<(f64, f64)>>>,
     ) -> PyResult<Self> {
-        let ranges = ranges.unwrap_or_else(|| vec![None; parts.len()]);
-        if ranges.len() != parts.len() {
-            return Err(invalid(
-                py,
-                "ranges",
-                format!("one (lower, upper) or None per part ({})", parts.len()),
-                format!("{} entries", ranges.len()),
-            ));
-        }
-        let mut out = Vec::with_capacity(parts.len());
-        for (k, p) in parts.iter().enumerate() {
-            #[allow(clippy::type_complexity)]
-            let (name, parent, joint, t, r, joint_name, mass, com, inertia): (
-                String,
-                i64,
-                PyRef<'_, PyJoint>,
-                Obj,
-                Obj,
-                String,
-                f64,
-                Obj,
-                Obj,
-            ) = p.extract().map_err(|_| {
-                invalid(
-                    py,
-                    &format!("parts[{k}]"),
-                    "(name, parent, joint, translation, rotation, joint_name, mass, com, inertia)",
-                    p.repr().map_or_else(|_| "?".to_string(), |x| x.to_string()),
-                )
-            })?;
-            let parent = match parent {
-                -1 => None,
-                q if q >= 0 && (q as usize) < k => Some(q as usize),
-                q => {
-                    return Err(invalid(
-                        py,
-                        &format!("parts[{k}].parent"),
-                        format!("-1 or an earlier part's index 0..{k}"),
-                        q,
-                    ))
-                }
-            };
-            out.push(crate::io::urdf::Part {
-                name,
-                parent,
-                placement: Placement::new(mat3(&r, "rotation")?, vec3(&t, "translation")?),
-                joint: joint.inner,
-                joint_name,
-                mass,
-                com: vec3(&com, "com")?,
-                inertia: mat3(&inertia, "inertia")?,
-                range: ranges[k],
-            });
-        }
+        let joint = |j: &Obj| j.extract::<PyRef<'_, PyJoint>>().ok().map(|j| j.inner);
+        let out = crate::io::urdf::parts_arg(&parts, ranges, joint)?;
         let built = crate::io::urdf::model_from_parts(&out).py(py)?;
         Ok(PyModel::from_model(built.model))
     }
@@ -130,16 +67,13 @@ impl PyModel {
         if !skipped.is_empty() {
             let message = format!(
                 "{}: joints the model does not move, skipped: {}",
-                crate::support::files::display_path(&srdf),
+                display_path(&srdf),
                 skipped.join(", ")
             );
             warn(py, "UrdfWarning", &message)?;
         }
-        let out = PyDict::new(py);
-        for p in poses {
-            out.set_item(p.name, crate::python::convert::to_array1(py, &p.q))?;
-        }
-        Ok(out)
+        let poses = poses.into_iter().map(|p| (p.name, to_array1(py, &p.q)));
+        poses.collect::<Vec<_>>().into_py_dict(py)
     }
 
     #[getter]

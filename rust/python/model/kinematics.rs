@@ -9,7 +9,7 @@ use crate::dynamics::denoc;
 use crate::kinematics;
 use crate::model::Model;
 use crate::python::convert::{dmatrix_to_array, points, to_array, to_array1};
-use crate::python::errors::{check_result, IntoPyResult};
+use crate::python::errors::check_result;
 use crate::python::record::{record, Field};
 use crate::python::signals::detach_interruptible;
 
@@ -35,21 +35,10 @@ impl PyModel {
         let poses = detach_interruptible(py, || {
             crate::kinematics::poses::Poses::at(&model, &qs, rows, stacked)
         })?;
-        let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
-        let shape = |tail: &[usize]| super::frames::lead(stacked, rows, tail);
         let d = PyDict::new(py);
-        for (key, buf, tail) in [
-            ("rotations", poses.rotations, vec![nb, 3, 3]),
-            ("origins", poses.origins, vec![nb, 3]),
-            ("joint_origins", poses.joint_origins, vec![nb, 3]),
-            ("joint_axes", poses.joint_axes, vec![nb, 3]),
-            ("points", poses.points, vec![nl, 7, 3]),
-            ("loop_a", poses.loop_a, vec![nc, 3]),
-            ("loop_b", poses.loop_b, vec![nc, 3]),
-            ("loop_axes", poses.loop_axes, vec![nc, 3]),
-        ] {
+        for (key, buf, shape) in poses.keyed(&model, stacked) {
             check_result(py, &format!("body_poses['{key}']"), &buf)?;
-            d.set_item(key, to_array(py, buf, &shape(&tail))?)?;
+            d.set_item(key, to_array(py, buf, &shape)?)?;
         }
         Ok(d)
     }
@@ -57,37 +46,31 @@ impl PyModel {
     fn point_masses<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<(Obj<'py>, Obj<'py>)> {
         self.with_workspace(|ws| {
             load_state(ws, py, q, None)?;
-            let (masses, points) = denoc::point_positions(ws.model(), &ws.q);
+            let (masses, pts) = crate::dynamics::calls::point_masses(ws.model(), &ws.q)?;
             let n = ws.model().links.len();
-            let pts = points.transpose().as_slice().to_vec();
-            check_result(py, "point_masses", &pts)?;
             Ok((
-                to_array(py, masses.as_slice().to_vec(), &[n, 7])?,
+                to_array(py, masses, &[n, 7])?,
                 to_array(py, pts, &[n, 7, 3])?,
             ))
         })
     }
 
     fn denoc(&self, py: Python<'_>, q: &Obj) -> PyResult<PyDenoc> {
-        let (model, qv) = self.state_only(py, q)?;
+        let (model, qv) = self.state_only(q)?;
         let den = detach_interruptible(py, || denoc::matrices(&model, &qv))?;
-        for (k, m) in [("D", &den.d), ("N", &den.n), ("points", &den.points)] {
-            check_result(py, &format!("denoc['{k}']"), m.as_slice())?;
-        }
+        den.check_finite("denoc")?;
         Ok(PyDenoc(den))
     }
 
     fn denoc_rates(&self, py: Python<'_>, q: &Obj, v: &Obj) -> PyResult<PyDenocRates> {
-        let (model, qv, vv) = self.state(py, q, v)?;
+        let (model, qv, vv) = self.state(q, v)?;
         let (_, rates) = detach_interruptible(py, || denoc::matrices_and_rates(&model, &qv, &vv))?;
-        for (k, m) in [("D", &rates.d), ("N", &rates.n)] {
-            check_result(py, &format!("denoc_rates['{k}']"), m.as_slice())?;
-        }
+        rates.check_finite("denoc_rates")?;
         Ok(PyDenocRates(rates))
     }
 
     fn convective_matrix<'py>(&self, py: Python<'py>, q: &Obj, v: &Obj) -> PyResult<Obj<'py>> {
-        let (model, qv, vv) = self.state(py, q, v)?;
+        let (model, qv, vv) = self.state(q, v)?;
         let c = detach_interruptible(py, || denoc::convective_matrix(&model, &qv, &vv))?;
         check_result(py, "convective_matrix", c.as_slice())?;
         dmatrix_to_array(py, &c)
@@ -95,7 +78,7 @@ impl PyModel {
 
     fn gravity_forces<'py>(&self, py: Python<'py>, q: &Obj, gravity: &Obj) -> PyResult<Obj<'py>> {
         let g = crate::model::args::gravity(Some(gravity))?;
-        let (model, qv) = self.state_only(py, q)?;
+        let (model, qv) = self.state_only(q)?;
         let tg = detach_interruptible(py, || denoc::gravity_forces(&model, &qv, &g))?;
         check_result(py, "gravity_forces", tg.as_slice())?;
         Ok(to_array1(py, tg.as_slice()).into_any())
@@ -107,11 +90,8 @@ impl PyModel {
         q: &Obj,
         forces: &Obj,
     ) -> PyResult<Obj<'py>> {
-        let (model, qv) = self.state_only(py, q)?;
+        let (model, qv) = self.state_only(q)?;
         let f = points(forces, "forces")?;
-        for p in &f {
-            crate::support::error::check_finite("forces", p.as_slice()).py(py)?;
-        }
         let tau = detach_interruptible(py, || denoc::generalized_forces(&model, &qv, &f))?;
         check_result(py, "generalized_forces", tau.as_slice())?;
         Ok(to_array1(py, tau.as_slice()).into_any())

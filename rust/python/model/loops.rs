@@ -3,12 +3,12 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::{load_state, load_x, rename, PyModel};
+use super::{load_state, load_x, PyModel};
 use crate::loops;
 use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
-use crate::python::errors::{check_result, invalid, IntoPyResult};
+use crate::python::errors::{check_result, IntoPyResult};
 use crate::python::joint::PyJoint;
-use crate::python::loops::body_ref;
+use crate::python::loops::{body_ref, fixed_mask};
 use crate::python::record::record;
 use crate::support::args::placement;
 
@@ -56,21 +56,15 @@ impl PyModel {
     }
 
     fn constraint_residual<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(py, q)?;
-        let mut kin = loops::LoopKinematics::new(&model);
-        kin.positions(&model, &q);
-        let mut r = vec![0.0; model.nconstraints()];
-        loops::residual(&model, &kin, &mut r);
+        let (model, q) = self.state_only(q)?;
+        let r = loops::args::residual_at(&model, &q);
         check_result(py, "constraint_residual", &r)?;
         Ok(to_array1(py, &r).into_any())
     }
 
     fn constraint_jacobian<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(py, q)?;
-        let mut kin = loops::LoopKinematics::new(&model);
-        kin.positions(&model, &q);
-        let mut j = nalgebra::DMatrix::zeros(model.nconstraints(), model.nv);
-        loops::jacobian(&model, &kin, &mut j);
+        let (model, q) = self.state_only(q)?;
+        let j = crate::frames::constrained::constraint_jacobian(&model, &q);
         check_result(py, "constraint_jacobian", j.as_slice())?;
         dmatrix_to_array(py, &j)
     }
@@ -88,26 +82,10 @@ impl PyModel {
         tol: f64,
         max_iterations: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let (model, q) = self
-            .state_only(py, q_guess)
-            .map_err(|e| rename(py, e, "q", "q_guess"))?;
-        if !(tol > 0.0 && tol.is_finite()) {
-            return Err(invalid(py, "tol", "a positive finite number", tol));
-        }
-        let max_iterations = match max_iterations.filter(|m| !m.is_none()) {
-            Some(m) => crate::python::convert::int_arg(
-                m,
-                "max_iterations",
-                1,
-                i64::MAX,
-                "a whole number of iterations >= 1",
-            )? as usize,
-            None => 50,
-        };
-        let mask = crate::python::loops::fixed_mask(&model, fixed)?;
-        let q = py
-            .detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))
-            .py(py)?;
+        let (model, q, _) = self.state_as((q_guess, "q_guess"), None)?;
+        let (tol, max_iterations) = loops::args::assembly(tol, max_iterations)?;
+        let mask = fixed_mask(&model, fixed)?;
+        let q = py.detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))?;
         Ok(to_array1(py, &q).into_any())
     }
 
@@ -119,13 +97,8 @@ impl PyModel {
         v_guess: &Obj,
         fixed: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let (model, q, mut v) = self
-            .state(py, q, v_guess)
-            .map_err(|e| rename(py, e, "v", "v_guess"))?;
-        let mask = crate::python::loops::fixed_mask(&model, fixed)?;
-        loops::project_velocity_like(&model, &q, None, &mut v, &mask).py(py)?;
-        check_result(py, "assemble_velocity", &v)?;
-        Ok(to_array1(py, &v).into_any())
+        let (model, q, v) = self.state_as((q, "q"), Some((v_guess, "v_guess")))?;
+        self.project(py, (&model, &q, None), v, fixed, "assemble_velocity")
     }
 
     #[pyo3(signature = (q, v, a_guess, fixed=None))]
@@ -137,13 +110,16 @@ impl PyModel {
         a_guess: &Obj,
         fixed: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(py, q, v)?;
-        let mut a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
-        crate::support::error::check_finite("a_guess", &a).py(py)?;
-        let mask = crate::python::loops::fixed_mask(&model, fixed)?;
-        loops::project_velocity_like(&model, &q, Some(&v), &mut a, &mask).py(py)?;
-        check_result(py, "assemble_acceleration", &a)?;
-        Ok(to_array1(py, &a).into_any())
+        let (model, q, v) = self.state(q, v)?;
+        let a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
+        crate::support::error::check_finite("a_guess", &a)?;
+        self.project(
+            py,
+            (&model, &q, Some(&v)),
+            a,
+            fixed,
+            "assemble_acceleration",
+        )
     }
 
     #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
@@ -173,3 +149,21 @@ record!(
     /// How the loop solver factors a model (`Model.loop_solver_info`).
     PyLoopLayout("LoopSolverInfo", loops::Layout) { banded, order, profile, model_profile }
 );
+
+impl PyModel {
+    /// The speeds (`v` none) or accelerations nearest `x` that the loops allow at `q`, the
+    /// `fixed` ones kept.
+    fn project<'py>(
+        &self,
+        py: Python<'py>,
+        (model, q, v): (&crate::model::Model, &[f64], Option<&[f64]>),
+        mut x: Vec<f64>,
+        fixed: Option<&Obj>,
+        name: &str,
+    ) -> PyResult<Obj<'py>> {
+        let mask = fixed_mask(model, fixed)?;
+        loops::project_velocity_like(model, q, v, &mut x, &mask)?;
+        check_result(py, name, &x)?;
+        Ok(to_array1(py, &x).into_any())
+    }
+}

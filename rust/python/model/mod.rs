@@ -12,7 +12,7 @@ use pyo3::prelude::*;
 use crate::dynamics::shared::{SharedModel, Version, Workspace};
 use crate::model::Model;
 use crate::python::convert::vector_into;
-use crate::python::errors::{invalid, IntoPyResult};
+use crate::python::errors::IntoPyResult;
 
 mod couplings;
 mod dynamics;
@@ -23,10 +23,6 @@ mod kinematics;
 mod loops;
 mod reactions;
 mod structure;
-
-/// Link count above which the recursive calls release the GIL (below it, the release costs
-/// more than it frees).
-const DETACH_LINKS: usize = 64;
 
 #[pyclass(name = "Model", module = "pointmass_dyn._core", frozen)]
 pub struct PyModel {
@@ -44,21 +40,12 @@ pub fn add_records(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<reactions::PyBearingForces>()
 }
 
-enum Method {
-    Recursive,
-    Denoc,
-}
-
-fn method_arg(py: Python<'_>, method: &str) -> PyResult<Method> {
-    match method {
-        "recursive" => Ok(Method::Recursive),
-        "denoc" => Ok(Method::Denoc),
-        other => Err(invalid(
-            py,
-            "method",
-            "'recursive' or 'denoc'",
-            format!("'{other}'"),
-        )),
+/// `f` here, or detached from the interpreter when `detach` (a long chain:
+/// `crate::dynamics::calls::worth_detaching`).
+fn sized<T: Send>(py: Python<'_>, detach: bool, f: impl FnOnce() -> T + Send) -> T {
+    match detach {
+        true => py.detach(f),
+        false => f(),
     }
 }
 
@@ -76,6 +63,9 @@ fn load_x(ws: &mut Workspace, py: Python<'_>, x: &Obj, arg: &str) -> PyResult<()
     vector_into(x, arg, &mut ws.x)?;
     crate::support::error::check_finite(arg, &ws.x).py(py)
 }
+
+/// A model and a checked state `(q, v)`.
+type State = (Arc<Model>, Vec<f64>, Vec<f64>);
 
 impl PyModel {
     pub fn from_model(model: Model) -> Self {
@@ -115,56 +105,22 @@ impl PyModel {
         self.shared.with_workspace(f)
     }
 
-    /// The current model and a checked copy of `q`, for the calls that run detached and
-    /// need no workspace.
-    fn state_only(&self, py: Python<'_>, q: &Obj) -> PyResult<(Arc<Model>, Vec<f64>)> {
+    /// The current model and a checked `q` (and `v`: empty when `None`), each named in
+    /// errors as given (`crate::model::args::state`), for the calls that need no workspace.
+    fn state_as(&self, q: (&Obj, &str), v: Option<(&Obj, &str)>) -> PyResult<State> {
         let model = self.model();
-        let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
-        model.check_state(&q, None).py(py)?;
+        let (q, v) = crate::model::args::state(&model, q, v)?;
+        Ok((model, q, v))
+    }
+
+    /// [`PyModel::state_as`] of `q`.
+    fn state_only(&self, q: &Obj) -> PyResult<(Arc<Model>, Vec<f64>)> {
+        let (model, q, _) = self.state_as((q, "q"), None)?;
         Ok((model, q))
     }
 
-    /// As [`PyModel::state_only`] with `v`.
-    #[allow(clippy::type_complexity)]
-    fn state(
-        &self,
-        py: Python<'_>,
-        q: &Obj,
-        v: &Obj,
-    ) -> PyResult<(Arc<Model>, Vec<f64>, Vec<f64>)> {
-        let model = self.model();
-        let q = crate::python::convert::vector(q, "q", Some(model.nq))?;
-        let v = crate::python::convert::vector(v, "v", Some(model.nv))?;
-        model.check_state(&q, Some(&v)).py(py)?;
-        Ok((model, q, v))
-    }
-}
-
-/// Whether every value is finite, in one vectorisable pass (`x · 0` is NaN exactly for a
-/// non-finite `x`; eight independent lanes); `check_result` then names the first bad index.
-fn all_finite(x: &[f64]) -> bool {
-    let mut acc = [0.0f64; 8];
-    let chunks = x.chunks_exact(8);
-    let rest = chunks.remainder();
-    for ch in chunks {
-        for (a, v) in acc.iter_mut().zip(ch) {
-            *a += v * 0.0;
-        }
-    }
-    for (a, v) in acc.iter_mut().zip(rest) {
-        *a += v * 0.0;
-    }
-    acc.iter().all(|a| *a == 0.0)
-}
-
-/// An error about argument `from` renamed to `to` (`q` → `q_guess`).
-fn rename(py: Python<'_>, e: PyErr, from: &str, to: &str) -> PyErr {
-    let msg = e.value(py).to_string();
-    match msg.strip_prefix(&format!("{from}:")) {
-        Some(rest) => {
-            let ty = e.get_type(py);
-            PyErr::from_type(ty, (format!("{to}:{rest}"),))
-        }
-        None => e,
+    /// [`PyModel::state_as`] of `q` and `v`.
+    fn state(&self, q: &Obj, v: &Obj) -> PyResult<State> {
+        self.state_as((q, "q"), Some((v, "v")))
     }
 }

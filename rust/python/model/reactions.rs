@@ -8,7 +8,7 @@ use super::PyModel;
 use crate::dynamics::reactions;
 use crate::model::args::loop_actuation;
 use crate::python::convert::to_array;
-use crate::python::errors::{check_result, invalid, to_py, IntoPyResult};
+use crate::python::errors::{check_result, to_py};
 use crate::python::record::record;
 use crate::python::signals::{detach_watched, stopped_with_partial};
 use crate::recursive;
@@ -16,19 +16,13 @@ use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
-    fn point_motion(&self, py: Python<'_>, q: &Obj, v: &Obj, a: &Obj) -> PyResult<PyPointMotion> {
+    fn point_motion(&self, q: &Obj, v: &Obj, a: &Obj) -> PyResult<PyPointMotion> {
         let model = self.model();
-        let (qs, vs, accs) = one_state(&model, q, v, a)?;
+        let [qs, vs, accs] = crate::model::args::one_state(&model, q, v, a)?;
         let mut ws = recursive::reference::Workspace::new(&model);
         let mut pm = reactions::PointMotion::default();
         reactions::point_motion(&model, &mut ws, &qs, &vs, &accs, &mut pm);
-        for (k, x) in [
-            ("positions", &pm.positions),
-            ("velocities", &pm.velocities),
-            ("accelerations", &pm.accelerations),
-        ] {
-            check_result(py, &format!("point_motion['{k}']"), &flat(x))?;
-        }
+        pm.check_finite("point_motion")?;
         Ok(PyPointMotion(pm))
     }
 
@@ -46,50 +40,38 @@ impl PyModel {
         let g = crate::model::args::gravity(gravity)?;
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
         let pts = crate::model::args::body_points(&model, points)?;
-        let rows = count.unwrap_or(1);
         let (np, nv) = (pts.len(), model.nv);
         let states = reactions::States {
-            rows,
+            rows: count.unwrap_or(1),
             q: &qs,
             v: &vs,
             a: &accs,
         };
         let (done, raised) =
             detach_watched(py, || reactions::point_regressor(&model, &states, &pts, &g));
-        let reactions::Rows {
-            value,
-            rows: reached,
-            stopped,
-        } = match done {
+        let done = match done {
             Ok(done) => done,
             Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
         };
-        let (pos, acc, gen) = (value.positions, value.accelerations, value.generalized);
-        for (k, x) in [
-            ("positions", &pos),
-            ("accelerations", &acc),
-            ("generalized", &gen),
-        ] {
-            check_result(py, &format!("point_regressor['{k}']"), x)?;
-        }
-        let lead: Vec<usize> = count.map(|_| reached).into_iter().collect();
-        let shape = |tail: &[usize]| [lead.as_slice(), tail].concat();
-        let d = PyDict::new(py);
-        d.set_item("positions", to_array(py, pos, &shape(&[np, 3]))?)?;
-        d.set_item("accelerations", to_array(py, acc, &shape(&[np, 3]))?)?;
-        d.set_item("generalized", to_array(py, gen, &shape(&[np, nv]))?)?;
-        match stopped {
-            None => Ok(d),
-            Some(why) => Err(partial_rows(
-                py,
-                &d,
-                "point_regressor",
-                reached,
-                rows,
-                raised,
-                why,
-            )),
-        }
+        let r = &done.value;
+        let d = arrays(
+            py,
+            count.map(|_| done.rows),
+            "point_regressor",
+            [
+                ("positions", &r.positions, &[np, 3]),
+                ("accelerations", &r.accelerations, &[np, 3]),
+                ("generalized", &r.generalized, &[np, nv]),
+            ],
+        )?;
+        finish(
+            py,
+            d,
+            "point_regressor",
+            (done.rows, states.rows),
+            raised,
+            done.stopped,
+        )
     }
 
     #[pyo3(signature = (q, v, a, about=None))]
@@ -112,24 +94,26 @@ impl PyModel {
         };
         let (done, raised) =
             detach_watched(py, || reactions::shaking_of_states(&model, &states, &about));
-        let (force, moment) = done.value;
-        check_result(py, "shaking", &force)?;
-        check_result(py, "shaking", &moment)?;
-        let shape: Vec<usize> = match count {
-            Some(_) => vec![done.rows, 3],
-            None => vec![3],
-        };
-        let (force, moment) = (to_array(py, force, &shape)?, to_array(py, moment, &shape)?);
-        match done.stopped {
-            None => Ok((force, moment)),
-            Some(why) => {
-                let d = PyDict::new(py);
-                d.set_item("force", force)?;
-                d.set_item("moment", moment)?;
-                let n = count.unwrap_or(1);
-                Err(partial_rows(py, &d, "shaking", done.rows, n, raised, why))
-            }
-        }
+        let (force, moment) = &done.value;
+        let lead = count.map(|_| done.rows);
+        let d = arrays(
+            py,
+            lead,
+            "shaking",
+            [("force", force, &[3]), ("moment", moment, &[3])],
+        )?;
+        let d = finish(
+            py,
+            d,
+            "shaking",
+            (done.rows, states.rows),
+            raised,
+            done.stopped,
+        )?;
+        Ok((
+            d.as_any().get_item("force")?,
+            d.as_any().get_item("moment")?,
+        ))
     }
 
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
@@ -145,34 +129,34 @@ impl PyModel {
         actuated: Option<&Obj>,
         frame: &str,
     ) -> PyResult<PyBearingForces> {
-        let world = crate::python::reactions::world_frame(py, frame)?;
+        let world = reactions::world_frame(frame)?;
         let model = self.model();
         let g = crate::model::args::gravity(gravity)?;
-        let (qs, vs, accs) = one_state(&model, q, v, a)?;
+        let [qs, vs, accs] = crate::model::args::one_state(&model, q, v, a)?;
         let ext = crate::model::args::external(&model, external)?;
         let actuated = loop_actuation(&model, actuated)?;
         let (ext, actuated) = (ext.as_deref(), actuated.as_deref());
-        let out = reactions::bearing_forces(&model, &qs, &vs, &accs, &g, ext, actuated, world);
-        let out = out.py(py)?;
+        let out = reactions::bearing_forces(&model, &qs, &vs, &accs, &g, ext, actuated, world)?;
         check_result(py, "bearing_forces", &out.joints)?;
         Ok(PyBearingForces(out))
     }
 }
 
-/// `(q, v, a)` of one state (`crate::python::reactions::states`), a stack refused.
-fn one_state(
-    model: &crate::model::Model,
-    q: &Obj,
-    v: &Obj,
-    a: &Obj,
-) -> PyResult<(Vec<f64>, Vec<f64>, Vec<f64>)> {
-    match crate::python::reactions::states(model, q, v, a)? {
-        (None, qs, vs, accs) => Ok((qs, vs, accs)),
-        _ => {
-            let expected = format!("shape ({},): one state", model.nq);
-            Err(invalid(q.py(), "q", expected, "a stack of states"))
-        }
+/// `(key, values, shape per state)` as a dict of arrays (a leading axis of `stack` states
+/// for a stack), each checked finite.
+fn arrays<'py, const N: usize>(
+    py: Python<'py>,
+    stack: Option<usize>,
+    what: &str,
+    items: [(&str, &Vec<f64>, &[usize]); N],
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    for (key, x, tail) in items {
+        check_result(py, &format!("{what}['{key}']"), x)?;
+        let shape: Vec<usize> = stack.into_iter().chain(tail.iter().copied()).collect();
+        d.set_item(key, to_array(py, x.clone(), &shape)?)?;
     }
+    Ok(d)
 }
 
 fn flat(x: &[Vec3]) -> Vec<f64> {
@@ -206,20 +190,29 @@ record!(
     }
 );
 
-/// The exception of a computation over `total` states stopped after `reached`: `partial`
-/// (completed with `states` and `message`) attached as `.result`.
-fn partial_rows(
-    py: Python<'_>,
-    partial: &Bound<'_, PyDict>,
+/// `partial` when its computation over `total` states ran to the end; else the exception
+/// of one stopped after `reached`, `partial` (completed with `states` and `message`)
+/// attached as `.result`.
+fn finish<'py>(
+    py: Python<'py>,
+    partial: Bound<'py, PyDict>,
     what: &str,
-    reached: usize,
-    total: usize,
+    (reached, total): (usize, usize),
     raised: Option<PyErr>,
-    why: crate::support::error::Error,
-) -> PyErr {
+    stopped: Option<crate::support::error::Error>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let Some(why) = stopped else {
+        return Ok(partial);
+    };
     let message = format!("{what} stopped after {reached} of {total} states: interrupted");
-    let _ = partial.set_item("states", reached);
-    let _ = partial.set_item("message", &message);
+    partial.set_item("states", reached)?;
+    partial.set_item("message", &message)?;
     let note = format!("{message}; the states done are in this exception's .result");
-    stopped_with_partial(py, raised, why, partial.as_any(), &note)
+    Err(stopped_with_partial(
+        py,
+        raised,
+        why,
+        partial.as_any(),
+        &note,
+    ))
 }

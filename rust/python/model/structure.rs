@@ -76,11 +76,7 @@ impl PyModel {
 
     #[getter]
     fn link_names(&self) -> Vec<String> {
-        let m = self.model();
-        m.links
-            .iter()
-            .map(|l| m.bodies[l.body].name.clone())
-            .collect()
+        self.model().link_names()
     }
 
     #[getter]
@@ -88,30 +84,13 @@ impl PyModel {
         self.model().total_mass()
     }
 
-    fn body_info(&self, py: Python<'_>, index: &Obj) -> PyResult<(String, String, i64, i64)> {
+    fn body_info(&self, index: &Obj) -> PyResult<(String, String, i64, i64)> {
         let index = crate::python::convert::count_arg(index, "index", "a body index >= 0")?;
-        let m = self.model();
-        let b = m.bodies.get(index).ok_or_else(|| {
-            crate::python::errors::py_error(
-                py,
-                "ModelStructureError",
-                format!("index: no body {index} (the model has {})", m.nbodies()),
-            )
-        })?;
-        Ok((
-            b.name.clone(),
-            b.joint.kind().to_string(),
-            b.parent.map(|p| p as i64).unwrap_or(-1),
-            b.link.map(|p| p as i64).unwrap_or(-1),
-        ))
+        Ok(self.model().body_info(index)?)
     }
 
     fn joint_slices(&self) -> Vec<(usize, usize, usize, usize)> {
-        self.model()
-            .links
-            .iter()
-            .map(|l| (l.q_index, l.v_index, l.joint.nq(), l.joint.nv()))
-            .collect()
+        self.model().joint_slices()
     }
 
     fn neutral<'py>(&self, py: Python<'py>) -> Obj<'py> {
@@ -140,21 +119,7 @@ impl PyModel {
     }
 
     fn __repr__(&self) -> String {
-        let m = self.model();
-        let mut loops = match m.nloops() {
-            0 => String::new(),
-            n => format!(", nloops={n}"),
-        };
-        if m.ncouplings() > 0 {
-            loops += &format!(", ncouplings={}", m.ncouplings());
-        }
-        format!(
-            "Model(nbodies={}, nlinks={}, nq={}, nv={}{loops})",
-            m.nbodies(),
-            m.links.len(),
-            m.nq,
-            m.nv
-        )
+        self.model().summary()
     }
 
     #[getter]
@@ -163,24 +128,10 @@ impl PyModel {
     }
 
     fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let model = self.model();
-        let inf = f64::INFINITY;
-        let limits = model.link_joints().map(|j| match j.and_then(|j| j.limit) {
-            Some(x) => (x.lower, x.upper, x.effort, x.velocity),
-            None => (-inf, inf, inf, inf),
-        });
-        model.joint_names().into_iter().zip(limits).into_py_dict(py)
+        self.model().joint_limits().into_py_dict(py)
     }
 
     fn joint_dynamics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let model = self.model();
-        let dynamics = model
-            .link_joints()
-            .map(|j| j.map_or((0.0, 0.0), |j| (j.damping, j.friction)));
-        model
-            .joint_names()
-            .into_iter()
-            .zip(dynamics)
-            .into_py_dict(py)
+        self.model().joint_dynamics().into_py_dict(py)
     }
 }
