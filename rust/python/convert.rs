@@ -20,9 +20,7 @@ use crate::support::args::{Arg, Int};
 use crate::support::spatial::{Mat3, Vec3};
 
 // The core's parsers under the names the bindings call them by.
-pub use crate::support::args::{
-    count as count_arg, int as int_arg, mat3, points, shape_str, vector,
-};
+pub use crate::support::args::{count as count_arg, mat3, points, shape_str, vector};
 
 fn type_name(obj: &Obj) -> String {
     obj.get_type()

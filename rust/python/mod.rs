@@ -13,26 +13,6 @@ macro_rules! getters {
 }
 pub(crate) use getters;
 
-/// `obj["key"]` and `obj.keys()` on a typed result whose attributes are the keys (the
-/// dicts it replaced were indexed so): `indexable!(PyX ["a", "b"]);`.
-macro_rules! indexable {
-    ($ty:ident [$($key:literal),* $(,)?]) => {
-        #[pyo3::pymethods]
-        impl $ty {
-            fn __getitem__<'py>(
-                slf: &pyo3::Bound<'py, Self>,
-                key: &str,
-            ) -> pyo3::PyResult<pyo3::Bound<'py, pyo3::PyAny>> {
-                $crate::python::record::item(slf.as_any(), key, &[$($key),*])
-            }
-            fn keys(&self) -> Vec<&'static str> {
-                vec![$($key),*]
-            }
-        }
-    };
-}
-pub(crate) use indexable;
-
 /// Any Python object, as the bindings take their arguments (converted in the core's terms).
 pub type Obj<'py> = pyo3::Bound<'py, pyo3::PyAny>;
 
