@@ -9,6 +9,7 @@
 //!
 //! `fd`, `id`, `gim`, `idd`, `fdd` (inverse and forward dynamics derivatives) N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
 //! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
+//! `sidd`, `sfdd` PATH ITERS: its inverse and forward dynamics derivatives (q as `scene`'s);
 //! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state;
 //! `sim` N ITERS: ITERS runs of `simulate` (RK45, rtol 1e-6, t in (0, 1)) of the chain, gravity
 //! on (the integrator's whole loop: stages, error norm, output); `loopsim` PATH ITERS: ITERS
@@ -33,13 +34,13 @@ use pointmass_dyn::support::spatial::Vec3;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let usage =
-        "usage: loop (fd|id|gim|idd|fdd|sim|adams|dop853) N ITERS | loop (scene|loops|loopsim|along) PATH ITERS";
+        "usage: loop (fd|id|gim|idd|fdd|sim|adams|dop853) N ITERS | loop (scene|loops|loopsim|along|sfdd|sidd) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
     };
     let scene = match what {
-        "scene" | "loops" | "loopsim" | "along" => {
+        "scene" | "loops" | "loopsim" | "along" | "sfdd" | "sidd" => {
             Some(Scene::from_toml(&std::fs::read_to_string(arg)?, arg)?)
         }
         _ => None,
@@ -51,7 +52,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let nv = model.nv;
     let q: Vec<f64> = match (what, &scene) {
         ("loops" | "loopsim" | "along", Some(s)) => s.q0.clone(),
-        ("scene", _) => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
+        ("scene" | "sfdd" | "sidd", _) => (0..model.nq).map(|k| 0.3 + 0.1 * k as f64).collect(),
         _ => vec![0.3; model.nq],
     };
     let v: Vec<f64> = match (what, &scene) {
@@ -93,11 +94,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 recursive::inverse_dynamics(&model, &mut data, q, &v, &tau, &g, None, &mut out)
             }
             "gim" => recursive::mass_matrix(&model, &mut data, black_box(&q), &mut gim),
-            "idd" => {
+            "idd" | "sidd" => {
                 let q = black_box(&q);
                 recursive::inverse_dynamics_derivatives(&model, &mut data, &mut dd, q, &v, &tau, &g)
             }
-            "fdd" => {
+            "fdd" | "sfdd" => {
                 let q = black_box(&q);
                 recursive::forward_dynamics_derivatives(
                     &model, &mut data, &mut dd, q, &v, &tau, &g,

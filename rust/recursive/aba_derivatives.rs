@@ -3,7 +3,8 @@
 //! `∂q̈/∂q = −M⁻¹ ∂τ/∂q`, `∂q̈/∂v = −M⁻¹ ∂τ/∂v` (both at `a = q̈`) and `∂q̈/∂τ = M⁻¹`:
 //! the accelerations by the articulated-body recursion, the inverse-dynamics derivatives
 //! ([`super::rnea_derivatives`], which also give `M`), then `M⁻¹` from an in-place Cholesky
-//! factor and two matrix products. docs/derivatives.md.
+//! factor and two matrix products (up to 12 dofs at a compile-time size,
+//! [`super::aba_derivatives_small`]). docs/derivatives.md.
 use super::rnea_derivatives::inverse_dynamics_derivatives;
 use super::workspace::{Data, DerivativeData};
 use crate::linalg::spd_inverse;
@@ -33,6 +34,24 @@ pub fn forward_dynamics_derivatives(
     }
     dd.qdd = qdd;
     done?;
+    let singular = |k| {
+        Error::Singular(format!(
+            "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
+        ))
+    };
+    if !dd.row_major && model.nv <= super::aba_derivatives_small::MAX_FIXED {
+        // Small: the inverse and both products at a compile-time size, in one pass.
+        let fixed = super::aba_derivatives_small::inverse_and_products(
+            model.nv,
+            dd.mass.as_slice(),
+            [dd.dtau_dq.as_slice(), dd.dtau_dv.as_slice()],
+            dd.minv.as_mut_slice(),
+            [dd.ddq_dq.as_mut_slice(), dd.ddq_dv.as_mut_slice()],
+        );
+        if let Some(r) = fixed {
+            return r.map_err(singular);
+        }
+    }
     dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
     spd_inverse(
         &mut dd.minv,
@@ -40,11 +59,7 @@ pub fn forward_dynamics_derivatives(
         &mut dd.ddq_dv,
         &mut dd.inv_diag,
     )
-    .map_err(|k| {
-        Error::Singular(format!(
-            "the mass matrix is not positive definite (pivot {k} of the Cholesky factor)"
-        ))
-    })?;
+    .map_err(singular)?;
     let n = model.nv;
     if n < crate::linalg::spd::SMALL && !dd.row_major {
         // Small: `−M⁻¹ D` column by column as sums of `M⁻¹`'s (contiguous) columns, no

@@ -18,6 +18,7 @@
 //! Nothing here allocates: `Data` is the workspace, sized once per model.
 pub mod aba;
 pub mod aba_derivatives;
+mod aba_derivatives_small;
 pub(crate) mod algebra;
 pub mod armature;
 pub mod compiled;

@@ -211,3 +211,76 @@ fn derivatives_by_rows_are_the_transposes_of_the_column_fill() {
         assert_eq!(rows.minv, cols.minv, "model {k}");
     }
 }
+
+#[test]
+fn fixed_size_inverse_and_products_match_nalgebra() {
+    use super::aba_derivatives_small::{
+        inverse_and_products, inverse_and_products_baseline, MAX_FIXED,
+    };
+    let mut seed = 7u64;
+    let mut rnd = move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for n in 1..=MAX_FIXED + 1 {
+        let a = DMatrix::from_fn(n, n, |_, _| rnd());
+        let m = &a * a.transpose() + DMatrix::identity(n, n) * 0.1;
+        let d: [DMatrix<f64>; 2] = std::array::from_fn(|_| DMatrix::from_fn(n, n, |_, _| rnd()));
+        let (mut minv, mut out) = (
+            vec![f64::NAN; n * n],
+            [vec![f64::NAN; n * n], vec![f64::NAN; n * n]],
+        );
+        let [o0, o1] = &mut out;
+        let r = inverse_and_products(
+            n,
+            m.as_slice(),
+            [d[0].as_slice(), d[1].as_slice()],
+            &mut minv,
+            [o0, o1],
+        );
+        if n > MAX_FIXED {
+            assert!(r.is_none());
+            continue;
+        }
+        assert_eq!(r, Some(Ok(())));
+        let want = m.clone().cholesky().unwrap().inverse();
+        let scale = max_abs(&want);
+        let minv = DMatrix::from_column_slice(n, n, &minv);
+        assert!(max_abs(&(&minv - &want)) < 1e-12 * scale, "n = {n}");
+        assert_eq!(minv, minv.transpose(), "n = {n}");
+        for (o, d) in out.iter().zip(&d) {
+            let o = DMatrix::from_column_slice(n, n, o);
+            assert!(
+                max_abs(&(o + &want * d)) < 1e-12 * scale * max_abs(d) * n as f64,
+                "n = {n}"
+            );
+        }
+        // The baseline build: the same bits.
+        let (mut minv2, mut out2) = (vec![0.0; n * n], [vec![0.0; n * n], vec![0.0; n * n]]);
+        let [p0, p1] = &mut out2;
+        let r = inverse_and_products_baseline(
+            n,
+            m.as_slice(),
+            [d[0].as_slice(), d[1].as_slice()],
+            &mut minv2,
+            [p0, p1],
+        );
+        assert_eq!(r, Some(Ok(())));
+        assert_eq!(minv.as_slice(), &minv2[..]);
+        assert_eq!(out, out2);
+        // Not positive definite: the failing pivot.
+        let mut bad = m.clone();
+        let [p0, p1] = &mut out2;
+        bad[(n - 1, n - 1)] = -1.0;
+        let r = inverse_and_products(
+            n,
+            bad.as_slice(),
+            [d[0].as_slice(), d[1].as_slice()],
+            &mut minv2,
+            [p0, p1],
+        );
+        assert_eq!(r, Some(Err(n - 1)));
+    }
+}
