@@ -1314,24 +1314,13 @@ def identification_fit(
     v: ArrayLike,
     a: ArrayLike,
     tau: ArrayLike,
-    *,
-    gravity: ArrayLike | None = None,
-    method: str = "ols",
-    free: list[bool] = ...,
-    prior: list[float] = ...,
-    prior_weight: float = 0.0,
-    weights: list[float] = ...,
-    cells: list[tuple[int, ArrayLike, float]] = ...,
-    viscous: bool = False,
-    coulomb: bool = False,
-    armature: bool = False,
-    offset: bool = False,
-    rank_tol: float = 1e-8,
-    actuated: list[int] = ...,
+    **options: Any,
 ) -> Identified:
-    """The identification (pointmass_dyn.identification.identify builds the arguments):
-    ``names``, ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``,
-    ``condition``, ``structural_rank``, ``residuals``, ``masses``. ``cells``: a list of
+    """The identification (pointmass_dyn.identification.identify builds the arguments; the
+    core parses ``options``, refusing unknown keys): ``gravity`` (3,), ``method`` ("ols",
+    "cells", ...), ``free``, ``prior``, ``prior_weight``, ``weights``, ``cells``, ``viscous``,
+    ``coulomb``, ``armature``, ``offset``, ``rank_tol``, ``actuated``. Returns ``names``,
+    ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``, ``condition``, ``structural_rank``, ``residuals``, ``masses``. ``cells``: a list of
     ``(link index, centres (K, 3), side)`` for method "cells"."""
 
 def identification_model(
