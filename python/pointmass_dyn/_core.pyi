@@ -1318,10 +1318,11 @@ def identification_fit(
 ) -> Identified:
     """The identification (pointmass_dyn.identification.identify builds the arguments; the
     core parses ``options``, refusing unknown keys): ``gravity`` (3,), ``method`` ("ols",
-    "cells", ...), ``free``, ``prior``, ``prior_weight``, ``weights``, ``cells``, ``viscous``,
-    ``coulomb``, ``armature``, ``offset``, ``rank_tol``, ``actuated``. Returns ``names``,
-    ``free``, ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``, ``condition``, ``structural_rank``, ``residuals``, ``masses``. ``cells``: a list of
-    ``(link index, centres (K, 3), side)`` for method "cells"."""
+    "cells", ...), ``free``, ``prior``, ``prior_weight``, ``weights``, ``cells`` (a list of
+    ``(link index, centres (K, 3), side)`` for method "cells"), ``viscous``, ``coulomb``,
+    ``armature``, ``offset``, ``rank_tol``, ``actuated``. Returns ``names``, ``free``,
+    ``base``, ``base_names``, ``beta``, ``std``, ``pi``, ``rss``, ``condition``,
+    ``structural_rank``, ``residuals``, ``masses``."""
 
 def identification_model(
     model: Model, pi: list[float], links: list[int], armature: list[float] | None = None
