@@ -7,7 +7,7 @@ use super::shared::{Direction, Workspace};
 use crate::model::Model;
 use crate::recursive;
 use crate::support::alloc::try_zeros;
-use crate::support::error::{Error, Result};
+use crate::support::error::{check_result, Error, Result};
 use crate::support::spatial::Vec3;
 
 /// Link count above which a binding runs the recursive calls detached from its interpreter
@@ -67,23 +67,6 @@ impl Direction {
     }
 }
 
-/// Whether every value is finite, in one vectorisable pass (`x · 0` is NaN exactly for a
-/// non-finite `x`; eight independent lanes): a caller then names the first bad index.
-pub fn all_finite(x: &[f64]) -> bool {
-    let mut acc = [0.0f64; 8];
-    let chunks = x.chunks_exact(8);
-    let rest = chunks.remainder();
-    for ch in chunks {
-        for (a, v) in acc.iter_mut().zip(ch) {
-            *a += v * 0.0;
-        }
-    }
-    for (a, v) in acc.iter_mut().zip(rest) {
-        *a += v * 0.0;
-    }
-    acc.iter().all(|a| *a == 0.0)
-}
-
 impl Workspace {
     /// Refuses a model with loops or couplings for the derivatives call `name`: they are not
     /// differentiated.
@@ -137,18 +120,6 @@ impl Workspace {
     pub fn potential_energy(&mut self, g: &Vec3) -> f64 {
         crate::kinematics::positions(&self.version.model, &self.q, &mut self.data.links);
         recursive::potential_energy(&self.data, g)
-    }
-}
-
-/// A result computed from finite inputs that is not finite: `Numerical`, naming `what` and
-/// the first bad index.
-pub fn check_result(what: &str, values: &[f64]) -> Result<()> {
-    match values.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(k) => Err(Error::Numerical(format!(
-            "{what}: the result is not finite ({} at index {k}) although the inputs are: the state overflows double precision",
-            values[k]
-        ))),
     }
 }
 

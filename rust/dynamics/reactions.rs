@@ -405,7 +405,7 @@ impl PointMotion {
             ("accelerations", &self.accelerations),
         ] {
             let flat: Vec<f64> = x.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
-            super::calls::check_result(&format!("{what}['{k}']"), &flat)?;
+            crate::support::error::check_result(&format!("{what}['{k}']"), &flat)?;
         }
         Ok(())
     }

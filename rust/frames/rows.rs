@@ -4,7 +4,7 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::model::Model;
-use crate::support::error::Result;
+use crate::support::error::{all_finite, Result};
 
 /// Rows (times links) per thread: one thread does blocks below twice this. Measured on a
 /// 2-core machine (`examples/frames_batch.rs split`: Panda's hand, one thread against
@@ -22,23 +22,6 @@ pub fn check_block(model: &Model, qs: &[f64], rows: usize, stacked: bool, arg: &
         return Ok(());
     }
     super::placement::check_rows(model, qs, rows, stacked, arg)
-}
-
-/// Whether every value is finite, in one vectorisable pass (`x · 0` is NaN exactly for a
-/// non-finite `x`; eight independent lanes).
-fn all_finite(x: &[f64]) -> bool {
-    let mut acc = [0.0f64; 8];
-    let chunks = x.chunks_exact(8);
-    let rest = chunks.remainder();
-    for ch in chunks {
-        for (a, v) in acc.iter_mut().zip(ch) {
-            *a += v * 0.0;
-        }
-    }
-    for (a, v) in acc.iter_mut().zip(rest) {
-        *a += v * 0.0;
-    }
-    acc.iter().all(|a| *a == 0.0)
 }
 
 /// How many threads a block of `rows` configurations of `model` is worth (at most the

@@ -287,7 +287,10 @@ impl Dynamics<'_> {
         for (key, m) in keys.iter().zip(&m) {
             if m.iter().any(|x| !x.is_finite()) {
                 // The index in C order, as the caller's array has it.
-                super::check_result(&format!("{name}['{key}']"), m.transpose().as_slice())?;
+                crate::support::error::check_result(
+                    &format!("{name}['{key}']"),
+                    m.transpose().as_slice(),
+                )?;
             }
         }
         let labels = self.effects.labels().into_iter().zip(numerical);
@@ -315,7 +318,7 @@ impl Dynamics<'_> {
         if !filled {
             return Ok(None);
         }
-        super::check_result("state_jacobian", &jac)?;
+        crate::support::error::check_result("state_jacobian", &jac)?;
         Ok(Some(jac))
     }
 }

@@ -1,18 +1,7 @@
 //! A scene's equations evaluated at one state and checked, as `effect_forces` and
 //! `energies` return them.
 use super::Dynamics;
-use crate::support::error::{Error, Result};
-
-/// `Err(Numerical)` naming `what` if a result computed from finite inputs is not finite.
-pub fn check_result(what: &str, values: &[f64]) -> Result<()> {
-    match values.iter().position(|x| !x.is_finite()) {
-        None => Ok(()),
-        Some(k) => Err(Error::Numerical(format!(
-            "{what}: the result is not finite ({} at index {k}) although the inputs are: the state overflows double precision",
-            values[k]
-        ))),
-    }
-}
+use crate::support::error::{check_result, Error, Result};
 
 impl Dynamics<'_> {
     /// The generalized force (nv) of each enabled effect at `(t, q, v)`, by its label.

@@ -18,7 +18,6 @@ mod settings;
 
 pub use along::{along, Along, Asked};
 pub use dynamics::{Dynamics, Progress};
-pub use evaluate::check_result;
 pub use event_list::{event_value, EventList};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 

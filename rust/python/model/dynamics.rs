@@ -4,12 +4,13 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::{load_state, load_x, sized, PyModel};
-use crate::dynamics::calls::{all_finite, worth_detaching, Method};
+use crate::dynamics::calls::{worth_detaching, Method};
 use crate::dynamics::denoc;
 use crate::dynamics::shared::Direction;
 use crate::python::convert::{dmatrix_to_array, to_array1};
 use crate::python::errors::{check_result, invalid};
 use crate::python::signals::detach_interruptible;
+use crate::support::error::all_finite;
 
 #[pymethods]
 impl PyModel {
