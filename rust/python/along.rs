@@ -41,7 +41,6 @@ fn run(
 
 #[pyfunction]
 #[pyo3(signature = (scene, t, q, v, disable=None, accelerations=true, forces=false, threads=None))]
-#[allow(clippy::too_many_arguments)] // the arguments of the Python function
 pub fn scene_along<'py>(
     py: Python<'py>,
     scene: PyRef<'_, PyScene>,

@@ -31,7 +31,6 @@ impl PySimulator {
 impl PySimulator {
     #[new]
     #[pyo3(signature = (scene, method=None, rtol=None, atol=None, dt=None, control_period=0.001, control="torque", record=true, disable=None, first_step=None, max_step=None, t0=0.0, t_eval=None))]
-    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         scene: PyRef<'_, PyScene>,

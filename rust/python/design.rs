@@ -58,7 +58,6 @@ record!(
 /// The maps along a motion (`DesignMaps`).
 #[pyfunction]
 #[pyo3(signature = (model, q, v, a, gravity, about, actuated))]
-#[allow(clippy::too_many_arguments)]
 pub fn design_regressor(
     py: Python<'_>,
     model: PyRef<'_, PyModel>,

@@ -13,7 +13,6 @@ use crate::identification::{self as ident, args};
 /// `extras`: whether to add the (viscous, coulomb, armature, offset) columns.
 #[pyfunction]
 #[pyo3(signature = (model, q, v, a, gravity=None, extras=(false, false, false, false), actuated=Vec::new()))]
-#[allow(clippy::too_many_arguments)] // the arguments of the Python function
 pub fn identification_regressor<'py>(
     py: Python<'py>,
     model: PyRef<'_, PyModel>,

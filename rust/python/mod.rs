@@ -1,4 +1,6 @@
 //! The Python bindings: one thin layer that converts arrays and errors and calls the core.
+// Each binding takes the arguments of the Python function it declares, however many.
+#![allow(clippy::too_many_arguments)]
 
 /// `#[getter]`s that return a field as it is:
 /// `getters!(PyX { name: Type = inner.field, ... });`.

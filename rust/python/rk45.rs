@@ -23,7 +23,6 @@ use crate::io::scene::Settings;
 /// (default) and "DOP853" step for step SciPy's `solve_ivp`, "RK4"/"Euler" at the fixed `dt`.
 #[pyfunction]
 #[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, *, config=None, events=None, jac=None, **settings))]
-#[allow(clippy::too_many_arguments)]
 pub fn rk45(
     py: Python<'_>,
     fun: &Obj,

@@ -28,7 +28,6 @@ impl PyScene {
     #[pyo3(
         text_signature = "(model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, *, method=None, dt=None, max_step=None, max_steps=None, first_step=None)"
     )]
-    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         model: PyRef<'_, PyModel>,

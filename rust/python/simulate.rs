@@ -23,7 +23,6 @@ use crate::support::args::given;
 /// it: the `RunResult` that `pointmass_dyn.simulate` wraps.
 #[pyfunction]
 #[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, *, config=None, events=None, progress=None, progress_interval=None, **settings))]
-#[allow(clippy::too_many_arguments)]
 pub fn simulate_scene(
     py: Python<'_>,
     scene: PyRef<'_, PyScene>,
@@ -129,7 +128,6 @@ pub fn energies<'py>(
 /// exactly the `simulate` call it stands for.
 #[pyfunction]
 #[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, *, config=None, events=None, threads=None, progress=None, **settings))]
-#[allow(clippy::too_many_arguments)]
 pub fn simulate_batch<'py>(
     py: Python<'py>,
     scenes: Vec<PyRef<'_, PyScene>>,

@@ -15,7 +15,6 @@ use crate::support::error::all_finite;
 #[pymethods]
 impl PyModel {
     #[pyo3(signature = (q, v, tau, gravity=None, external=None, method="recursive"))]
-    #[allow(clippy::too_many_arguments)]
     fn forward_dynamics<'py>(
         &self,
         py: Python<'py>,
@@ -37,7 +36,6 @@ impl PyModel {
     }
 
     #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive", actuated=None))]
-    #[allow(clippy::too_many_arguments)]
     fn inverse_dynamics<'py>(
         &self,
         py: Python<'py>,

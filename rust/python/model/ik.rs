@@ -14,7 +14,6 @@ impl PyModel {
     /// Tasks are (frame, rotation (3, 3) or None for a position target, position (3,),
     /// weights (3 or 6 floats)).
     #[pyo3(signature = (tasks, q0, limits, tol, max_iterations, restarts, seed))]
-    #[allow(clippy::too_many_arguments)] // the arguments of the Python function
     fn _inverse_kinematics(
         &self,
         py: Python<'_>,

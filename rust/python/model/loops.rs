@@ -15,7 +15,6 @@ use crate::support::args::placement;
 #[pymethods]
 impl PyModel {
     #[pyo3(signature = (body_a, body_b, joint, translation_a=None, translation_b=None, rotation_a=None, rotation_b=None, name=None))]
-    #[allow(clippy::too_many_arguments)]
     fn add_loop(
         &self,
         py: Python<'_>,

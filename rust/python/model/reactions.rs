@@ -117,7 +117,6 @@ impl PyModel {
     }
 
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
-    #[allow(clippy::too_many_arguments)]
     fn bearing_forces(
         &self,
         py: Python<'_>,

@@ -28,7 +28,6 @@ impl PyModel {
     /// name: unique body name (default "body<index>"). point_mass_center: where the seven
     /// point masses' box is centred, body frame (default: the COM).
     #[pyo3(signature = (body, joint, parent=None, translation=None, rotation=None, name=None, point_mass_center=None))]
-    #[allow(clippy::too_many_arguments)]
     fn add_body(
         &self,
         py: Python<'_>,
