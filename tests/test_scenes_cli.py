@@ -463,9 +463,27 @@ def _public(obj) -> set[str]:
     return {n for n in dir(obj) if not n.startswith("_")}
 
 
+def _stub_bases(tree) -> dict[str, ast.ClassDef]:
+    """The stub-only base classes (`_Record`): private, absent at runtime, and each the base
+    of a declared class, whose runtime class must then have the base's methods."""
+    classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef)}
+    used = {b.id for n in classes.values() for b in n.bases if isinstance(b, ast.Name)}
+    bases = {name: n for name, n in classes.items() if not hasattr(core, name)}
+    assert all(name.startswith("_") and name in used for name in bases), sorted(bases)
+    return bases
+
+
+def _body(node: ast.ClassDef, bases: dict[str, ast.ClassDef]) -> list[ast.stmt]:
+    """A class's declarations, with those of its stub-only bases."""
+    inherited = [m for b in node.bases if isinstance(b, ast.Name) and b.id in bases
+                 for m in bases[b.id].body]
+    return list(node.body) + inherited
+
+
 def test_stub_declares_every_export():
     tree = _stub_tree()
-    classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef)}
+    bases = _stub_bases(tree)
+    classes = {n.name: n for n in tree.body if isinstance(n, ast.ClassDef) and n.name not in bases}
     functions = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
     constants = {n.target.id for n in tree.body
                  if isinstance(n, ast.AnnAssign) and isinstance(n.target, ast.Name)}
@@ -475,10 +493,13 @@ def test_stub_declares_every_export():
     # Private functions (pickling's _dumps/_loads) are declared only if they exist.
     assert all(hasattr(core, n) for n in functions)
     for name, node in classes.items():
+        body = _body(node, bases)
         declared = {
-            m.name for m in node.body if isinstance(m, ast.FunctionDef)
-        } | {t.id for m in node.body if isinstance(m, ast.AnnAssign) for t in [m.target] if isinstance(t, ast.Name)
-        } | {m.name for m in node.body if isinstance(m, ast.ClassDef)}  # variants (RunStatus.Stiff)
+            m.name for m in body if isinstance(m, ast.FunctionDef)
+        } | {t.id for m in body if isinstance(m, ast.AnnAssign) for t in [m.target] if isinstance(t, ast.Name)
+        } | {m.name for m in body if isinstance(m, ast.ClassDef)}  # variants (RunStatus.Stiff)
+        # The base's dunders too: a stub-only base promises them on each runtime class.
+        assert all(hasattr(getattr(core, name), m.name) for m in body if isinstance(m, ast.FunctionDef)), name
         missing = _public(getattr(core, name)) - declared
         assert not missing, f"{name}: not in _core.pyi: {sorted(missing)}"
 
@@ -493,14 +514,15 @@ def _params(fn: ast.FunctionDef) -> list[str]:
 
 def test_stub_signatures_match_the_runtime():
     tree = _stub_tree()
+    bases = _stub_bases(tree)
     checked = 0
     for node in tree.body:
         targets = []
         if isinstance(node, ast.FunctionDef):
             targets.append((node, getattr(core, node.name)))
-        elif isinstance(node, ast.ClassDef):
+        elif isinstance(node, ast.ClassDef) and node.name not in bases:
             cls = getattr(core, node.name)
-            for m in node.body:
+            for m in _body(node, bases):
                 if isinstance(m, ast.FunctionDef) and not m.name.startswith("__") or (
                     isinstance(m, ast.FunctionDef) and m.name == "__new__"
                 ):

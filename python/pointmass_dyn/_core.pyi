@@ -31,14 +31,20 @@ _Controller = str
 #: (``rk45``), with optional ``terminal`` (bool or count) and ``direction`` attributes.
 _EventFunc: TypeAlias = Callable[..., float]
 
-@final
-class UrdfRepair:
-    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+class _Record:
+    """A typed result (rust/python/record.rs): frozen; its fields read as attributes or as
+    ``r["field"]``, and ``keys()``, ``items()`` and ``len()`` read it as the dict it replaced
+    (it pickles as that dict). Declared here only: each record class has these methods."""
 
     def keys(self) -> list[str]: ...
     def items(self) -> list[tuple[str, Any]]: ...
     def __len__(self) -> int: ...
     def __getitem__(self, key: str) -> Any: ...
+
+@final
+class UrdfRepair(_Record):
+    """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
+
     link: str
     joint: str | None
     rules: list[str]
@@ -47,38 +53,26 @@ class UrdfRepair:
     joint_type: tuple[str, str] | None
 
 @final
-class PointMotion:
+class PointMotion(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     masses: _Array
     positions: _Array
     velocities: _Array
     accelerations: _Array
 
 @final
-class BearingForces:
+class BearingForces(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     joints: _Array
     loops: _Array
     tau: _Array
 
 @final
-class Denoc:
+class Denoc(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     D: _Array
     Nl: _Array
     Nd: _Array
@@ -87,39 +81,27 @@ class Denoc:
     points: _Array
 
 @final
-class DenocRates:
+class DenocRates(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     D: _Array
     Nl: _Array
     Nd: _Array
     N: _Array
 
 @final
-class LoopSolverInfo:
+class LoopSolverInfo(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     banded: bool
     order: list[int]
     profile: int
     model_profile: int
 
 @final
-class IkSolution:
+class IkSolution(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     q: _Array
     residual: float
     errors: list[_Array]
@@ -129,13 +111,9 @@ class IkSolution:
     message: str
 
 @final
-class IdentificationBase:
+class IdentificationBase(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     rank: int
     independent: list[int]
     dependent: list[int]
@@ -143,13 +121,9 @@ class IdentificationBase:
     pivots: _Array
 
 @final
-class Identified:
+class Identified(_Record):
     """A typed result (rust/python/record.rs): frozen; fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     names: list[str]
     free: list[int]
     base: IdentificationBase
@@ -1041,7 +1015,7 @@ class RunStatus:
         reason: str
 
 @final
-class ContactParameters:
+class ContactParameters(_Record):
     """A ground contact's law parameters (SI); ``p["stiffness"]`` indexes them as well (a
     typed record, rust/python/record.rs)."""
     height: float
@@ -1051,26 +1025,19 @@ class ContactParameters:
     friction: float
     v_eps: float
     def __getitem__(self, key: str) -> float | None: ...
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
 
 @final
-class ContactStates:
+class ContactStates(_Record):
     """A ground contact's points along N states (``Effect.contact_state``): a typed record,
     fields as attributes or ``r["field"]``."""
 
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
-    def __len__(self) -> int: ...
-    def __getitem__(self, key: str) -> Any: ...
     position: _Array
     penetration: _Array
     normal_force: _Array
     force: _Array
 
 @final
-class OdeSolution:
+class OdeSolution(_Record):
     """What :func:`rk45` returns (``pointmass_dyn.OdeResult`` is built from it); a record:
     indexable by its attribute names, as the dict it replaced, pickled as that dict."""
     t: NDArray[np.float64]
@@ -1092,12 +1059,9 @@ class OdeSolution:
     stiff: dict[str, float] | None
     sol: DenseSolution | None
     error: BaseException | None
-    def __getitem__(self, key: str) -> Any: ...
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
 
 @final
-class RunResult:
+class RunResult(_Record):
     """One run's trajectory and outcome: the fields of ``pointmass_dyn.SimulationResult``
     of the same names (``outcome`` the typed status, ``status`` its SciPy code), and
     ``error``: the exception that stopped the run from Python, or None. A record: indexable
@@ -1129,9 +1093,6 @@ class RunResult:
     success: bool
     t_reached: float
     error: BaseException | None
-    def __getitem__(self, key: str) -> Any: ...
-    def keys(self) -> list[str]: ...
-    def items(self) -> list[tuple[str, Any]]: ...
 
 def simulate_scene(
     scene: Scene,
