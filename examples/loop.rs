@@ -8,7 +8,8 @@
 //! ```
 //!
 //! `fd`, `id`, `gim`, `idd`, `fdd` (inverse and forward dynamics derivatives) N ITERS: the benchmark chain of N links (q = 0.3, v_k = sin 0.7k,
-//! τ_k = cos 0.3k); `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
+//! τ_k = cos 0.3k); `iddr`, `fddr`: the same derivatives by rows (`DerivativeData::row_major`,
+//! what the bindings use past 32 dofs), the inverse's straight into C-ordered buffers; `scene` PATH ITERS: forward dynamics of a scene file's model (its tree);
 //! `sidd`, `sfdd` PATH ITERS: its inverse and forward dynamics derivatives (q as `scene`'s);
 //! `loops` PATH ITERS: the same with its loops closed, at the scene's (closed) initial state;
 //! `sim` N ITERS: ITERS runs of `simulate` (RK45, rtol 1e-6, t in (0, 1)) of the chain, gravity
@@ -34,7 +35,7 @@ use pointmass_dyn::support::spatial::Vec3;
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
     let usage =
-        "usage: loop (fd|id|gim|idd|fdd|sim|adams|dop853) N ITERS | loop (scene|loops|loopsim|along|sfdd|sidd) PATH ITERS";
+        "usage: loop (fd|id|gim|idd|fdd|iddr|fddr|sim|adams|dop853) N ITERS | loop (scene|loops|loopsim|along|sfdd|sidd) PATH ITERS";
     let (what, arg, iters) = match args.as_slice() {
         [_, w, a, i] => (w.as_str(), a.as_str(), i.parse::<usize>()?),
         _ => return Err(usage.into()),
@@ -66,6 +67,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut out = vec![0.0; nv];
     let mut gim = DMatrix::zeros(nv, nv);
     let mut dd = recursive::DerivativeData::new(&model);
+    dd.row_major = matches!(what, "iddr" | "fddr");
+    let mut rows = vec![0.0; 3 * nv * nv];
     // `along`: the states of one run (DOP853, rtol 1e-8, t in (0, 1)), its shaking per pass.
     let states = match (what, &scene) {
         ("along", Some(s)) => {
@@ -98,7 +101,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let q = black_box(&q);
                 recursive::inverse_dynamics_derivatives(&model, &mut data, &mut dd, q, &v, &tau, &g)
             }
-            "fdd" | "sfdd" => {
+            "iddr" => {
+                let (dq, rest) = rows.split_at_mut(nv * nv);
+                let (dv, mm) = rest.split_at_mut(nv * nv);
+                let q = black_box(&q);
+                recursive::inverse_dynamics_derivatives_into(
+                    &model,
+                    &mut data,
+                    &mut dd,
+                    q,
+                    &v,
+                    &tau,
+                    &g,
+                    [dq, dv, mm],
+                )
+            }
+            "fdd" | "sfdd" | "fddr" => {
                 let q = black_box(&q);
                 recursive::forward_dynamics_derivatives(
                     &model, &mut data, &mut dd, q, &v, &tau, &g,
@@ -190,7 +208,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         println!("last state's q[0] = {:.17e}", out[0]);
     }
-    black_box((&out, &gim, &dd.dtau_dq));
+    black_box((&out, &gim, &dd.dtau_dq, &rows));
     Ok(())
 }
 

@@ -28,7 +28,7 @@ use super::base_accel;
 use super::workspace::{Data, DerivativeData, DofWork};
 use crate::kinematics;
 use crate::model::Model;
-use crate::support::spatial::{angular, linear, skew, stack, Mat3, Vec3, Vec6};
+use crate::support::spatial::{angular, linear, stack, BodyInertia, Mat3, Vec3, Vec6};
 
 /// No dof (above the root).
 pub(crate) const NO_DOF: usize = usize::MAX;
@@ -47,11 +47,11 @@ pub(crate) fn cross_force(a: &Vec6, f: &Vec6) -> Vec6 {
     stack(&(wa.cross(&n) + va.cross(&fl)), &wa.cross(&fl))
 }
 
-/// `B x = [B_aa x_a; B_la x_a]`.
+/// `B x = [B_aa x_a; B_la x_a]`, `B_la x_a = −2 b_l × x_a`.
 #[inline(always)]
-fn b_mul(baa: &Mat3, bla: &Mat3, x: &Vec6) -> Vec6 {
+fn b_mul(baa: &Mat3, bl: &Vec3, x: &Vec6) -> Vec6 {
     let xa = angular(x);
-    stack(&(baa * xa), &(bla * xa))
+    stack(&(baa * xa), &(bl.cross(&xa) * -2.0))
 }
 
 crate::support::cpu::multiversion! {
@@ -173,7 +173,10 @@ fn vectors<const ROWS: bool>(
 ) {
     let n = model.links.len();
     let nvt = model.nv;
-    kinematics::positions(model, q, &mut data.links);
+    // The poses without the world-axes inertias (each is rotated where the outward pass
+    // shifts it), revolute joints about a coordinate axis by two turned columns: equal to
+    // `positions`' to rounding.
+    kinematics::frame_poses(model, q, &mut data.links);
     let base = base_accel(g);
 
     // Outward: velocities, accelerations, the dof directions and each body's wrench.
@@ -189,9 +192,10 @@ fn vectors<const ROWS: bool>(
             let d = &mut dd.dofs[j];
             let s = d.s;
             d.ys = lk.y.mul_twist(&s);
-            d.bts = lk.baa.transpose() * angular(&s) + lk.bla.transpose() * linear(&s);
-            d.g = cross_force(&s, &lk.f) + lk.y.mul_twist(&d.da) + b_mul(&lk.baa, &lk.bla, &d.dv);
-            d.gv = lk.y.mul_twist(&d.dav) + b_mul(&lk.baa, &lk.bla, &s);
+            // `B_laᵀ = 2 [b_l]×`.
+            d.bts = lk.baa.tr_mul(&angular(&s)) + lk.bl.cross(&linear(&s)) * 2.0;
+            d.g = cross_force(&s, &lk.f) + lk.y.mul_twist(&d.da) + b_mul(&lk.baa, &lk.bl, &d.dv);
+            d.gv = lk.y.mul_twist(&d.dav) + b_mul(&lk.baa, &lk.bl, &s);
             dd.tau[j] = s.dot(&lk.f);
             for m in 0..6 {
                 dd.columns[(6 + m) * nvt + j] = d.ys[m];
@@ -216,7 +220,7 @@ fn vectors<const ROWS: bool>(
             let parent = &mut dd.links[pa];
             parent.y.add(&lk.y);
             parent.baa += lk.baa;
-            parent.bla += lk.bla;
+            parent.bl += lk.bl;
             parent.f += lk.f;
             dd.subtree_count[pa] += dd.subtree_count[i];
             dd.subtree_end[pa] = dd.subtree_end[pa].max(dd.subtree_end[i]);
@@ -422,7 +426,7 @@ fn moved_rows(
 #[inline(always)]
 fn outward_link(
     model: &Model,
-    data: &Data,
+    data: &mut Data,
     dd: &mut DerivativeData,
     i: usize,
     (v, a): (&[f64], &[f64]),
@@ -430,7 +434,9 @@ fn outward_link(
 ) {
     let z6 = Vec6::zeros();
     let l = &model.links[i];
-    let st = &data.links[i];
+    let st = &mut data.links[i];
+    st.inertia = rotated(&l.inertia, &st.rotation);
+    let st = &*st;
     let p = st.origin;
     let (vp, ap) = match l.parent {
         Some(pi) => (dd.links[pi].v, dd.links[pi].a),
@@ -452,7 +458,9 @@ fn outward_link(
     // ZYZ: three revolutes in a chain, each column fixed in the frame of the angles
     // before it; every other joint's columns are fixed in the parent (one column) or in
     // the body (the quaternion joints), and all of them move together.
-    let chain = l.joint.chained_columns();
+    // One column is a chain of one: `v⁻ × (S v̇)` is `dV v̇` and `(v⁻ + v) × S` is `2 dV`
+    // (`S × S = 0`), so the chain's update saves two cross products.
+    let chain = l.joint.chained_columns() || nv == 1;
     let (mut vc, mut ac) = (vp, ap);
     let (mut vd, mut ad) = (z6, z6);
     for k in 0..nv {
@@ -483,7 +491,7 @@ fn outward_link(
             d.dav = cross_motion(&vsum, &d.s);
         }
     }
-    let y = st.inertia.shifted(&p);
+    let y = about_origin(&st.inertia, &p);
     let yv = y.mul_twist(&vc);
     let w = angular(&vc);
     let u = linear(&vc);
@@ -497,14 +505,68 @@ fn outward_link(
         w.cross(&r.column(1).into_owned()),
         w.cross(&r.column(2).into_owned()),
     ]);
-    let hu2 = 2.0 * h.dot(&u);
-    let baa = swr + swr.transpose() - skew(&iw) - (u * h.transpose()) * 2.0
-        + Mat3::from_diagonal_element(hu2);
+    // `A + Aᵀ − [Iw]× − 2 u hᵀ + 2 (h · u) I` entry by entry: no additions of zeros.
+    let (u2, hu2) = (u * 2.0, 2.0 * h.dot(&u));
+    let mut baa = Mat3::zeros();
+    for a in 0..3 {
+        baa[(a, a)] = swr[(a, a)] * 2.0 - u2[a] * h[a] + hu2;
+        for b in a + 1..3 {
+            let sym = swr[(a, b)] + swr[(b, a)];
+            // `[Iw]×`'s entry (a, b) is `−Iw_c` for (a, b, c) in cyclic order.
+            let c = 3 - a - b;
+            let k = if (b + 3 - a) % 3 == 1 { -iw[c] } else { iw[c] };
+            baa[(a, b)] = sym - k - u2[a] * h[b];
+            baa[(b, a)] = sym + k - u2[b] * h[a];
+        }
+    }
     let lk = &mut dd.links[i];
     lk.v = vc;
     lk.a = ac;
     lk.f = y.mul_twist(&ac) + cross_force(&vc, &yv);
     lk.baa = baa;
-    lk.bla = skew(&(u * y.mass - y.first_moment.cross(&w))) * -2.0;
+    lk.bl = u * y.mass - y.first_moment.cross(&w);
     lk.y = y;
+}
+
+/// `BodyInertia::rotated`'s products inlined (out of line it cost ~145 instructions a
+/// link, a third more than its arithmetic).
+#[inline(always)]
+fn rotated(y: &BodyInertia, r: &Mat3) -> BodyInertia {
+    let ri = r * y.rotational;
+    let mut rot = Mat3::zeros();
+    for a in 0..3 {
+        for b in a..3 {
+            let x = ri[(a, 0)] * r[(b, 0)] + ri[(a, 1)] * r[(b, 1)] + ri[(a, 2)] * r[(b, 2)];
+            rot[(a, b)] = x;
+            rot[(b, a)] = x;
+        }
+    }
+    BodyInertia {
+        mass: y.mass,
+        first_moment: r * y.first_moment,
+        rotational: rot,
+    }
+}
+
+/// `y` (about the body's origin `p`) about the world origin: `BodyInertia::shifted(p)`
+/// on the upper triangle only (the rotational part is symmetric), without its products by
+/// the identity's zeros.
+#[inline(always)]
+fn about_origin(y: &BodyInertia, s: &Vec3) -> BodyInertia {
+    let (h, m) = (&y.first_moment, y.mass);
+    let diag = 2.0 * h.dot(&s) + s.norm_squared() * m;
+    let mut rot = y.rotational;
+    for a in 0..3 {
+        rot[(a, a)] += diag;
+        for b in a..3 {
+            let x = rot[(a, b)] - (h[a] * s[b] + s[a] * h[b]) - s[a] * s[b] * m;
+            rot[(a, b)] = x;
+            rot[(b, a)] = x;
+        }
+    }
+    BodyInertia {
+        mass: m,
+        first_moment: h + s * m,
+        rotational: rot,
+    }
 }

@@ -102,9 +102,10 @@ pub struct DerivLinkWork {
     pub a: Vec6,
     /// Inertia, then the composite inertia of the subtree.
     pub y: crate::support::spatial::BodyInertia,
-    /// `B = [[B_aa, 0], [B_la, 0]]` (see the module), then its subtree sum.
+    /// `B = [[B_aa, 0], [B_la, 0]]` (see the module), then its subtree sum; `B_la` is
+    /// skew, `−2 [b_l]×`, and kept as `b_l`.
     pub baa: Mat3,
-    pub bla: Mat3,
+    pub bl: Vec3,
     /// The body's wrench, then the subtree's.
     pub f: Vec6,
 }
@@ -116,7 +117,7 @@ impl Default for DerivLinkWork {
             a: Vec6::zeros(),
             y: crate::support::spatial::BodyInertia::zero(),
             baa: Mat3::zeros(),
-            bla: Mat3::zeros(),
+            bl: Vec3::zeros(),
             f: Vec6::zeros(),
         }
     }
