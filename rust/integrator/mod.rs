@@ -441,6 +441,20 @@ pub enum InputError {
     JacobianNonFinite { index: usize, value: f64 },
 }
 
+/// A setting refused (`InvalidSetting`), or an output too large to allocate.
+impl From<InputError> for crate::support::error::Error {
+    fn from(e: InputError) -> Self {
+        match e {
+            InputError::OutputTooLarge { bytes, .. } => Self::OutOfMemory {
+                what: "the solution".into(),
+                bytes,
+                detail: e.to_string(),
+            },
+            e => Self::InvalidSetting(e.to_string()),
+        }
+    }
+}
+
 impl InputError {
     /// Name of the offending argument (for mapping to e.g. a Python `ValueError`).
     pub fn argument(&self) -> &'static str {
@@ -523,6 +537,9 @@ macro_rules! status_variants {
             /// The caller stopped the run from the evaluation at `at` (Ctrl-C, its progress callback,
             /// a stopped batch); `reason` says which when the caller has named it.
             Interrupted { t: f64, at: f64, reason: Option<String> },
+            /// A run of a batch that never started: its input was refused, or the batch
+            /// stopped first (`reason` says which).
+            NotStarted { reason: String },
         ] [$($($extra)*)?]}
     };
 }
@@ -632,6 +649,7 @@ impl Status {
                 },
                 f(*t)
             ),
+            Status::NotStarted { reason } => reason.clone(),
             Status::Stiff { t, h_lambda, h } => format!(
                 "the problem is stiff at t = {}: on {STIFF_STEPS} accepted steps the step size \
                  was limited by the stability of the explicit method (h·|λ| ≈ {h_lambda:.2}, \

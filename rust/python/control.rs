@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 use super::convert::{to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::IntoPyResult;
+use super::record::getters_of;
 use super::run_config::config_of;
 use super::scene::PyScene;
 use super::trajectory::PyRunResult;
@@ -58,7 +59,7 @@ impl PySimulator {
             ("first_step", first_step),
             ("max_step", max_step),
         ];
-        let call = config_of(py, &given)?;
+        let call = config_of(&given)?;
         let t_eval = args::opt(t_eval, |te| vector(te, "t_eval", None))?;
         let at = Stepping {
             t0,
@@ -123,26 +124,19 @@ impl PySimulator {
     }
 }
 
-/// The simulator's state read through its lock: `name: type = |simulator, py| value`.
-macro_rules! simulator_getters {
-    ($($(#[$m:meta])* $name:ident: $t:ty = $get:expr),* $(,)?) => {
-        #[pymethods]
-        impl PySimulator {
-            $($(#[$m])* #[getter]
-            fn $name<'py>(&self, py: Python<'py>) -> $t {
-                self.lock().with(|s| ($get)(s, py))
-            })*
-        }
-    };
+impl PySimulator {
+    fn read<R>(&self, f: impl for<'m> FnOnce(&Simulator<'m>) -> R) -> R {
+        self.lock().with(f)
+    }
 }
 
-simulator_getters!(
-    t: f64 = |s: &Simulator<'_>, _| s.t(),
-    nq: usize = |s: &Simulator<'_>, _| s.nq(),
-    control_period: f64 = |s: &Simulator<'_>, _| s.period(),
-    method: &'static str = |s: &Simulator<'_>, _| s.method().name(),
-    control_len: usize = |s: &Simulator<'_>, _| s.control_len(),
+getters_of!(PySimulator.read {
+    t: f64 = |s, py| s.t(),
+    nq: usize = |s, py| s.nq(),
+    control_period: f64 = |s, py| s.period(),
+    method: &'static str = |s, py| s.method().name(),
+    control_len: usize = |s, py| s.control_len(),
     /// The state `[q; v]` (a copy).
-    y: Obj<'py> = |s: &Simulator<'_>, py| to_array1(py, s.y()).into_any(),
-    control: Option<Obj<'py>> = |s: &Simulator<'_>, py| s.control().map(|u| to_array1(py, u).into_any()),
-);
+    y: Obj<'py> = |s, py| to_array1(py, s.y()).into_any(),
+    control: Option<Obj<'py>> = |s, py| s.control().map(|u| to_array1(py, u).into_any()),
+});

@@ -5,11 +5,10 @@ use std::sync::Mutex;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use super::convert::real;
 use super::effects::repr_of;
 use super::errors::invalid;
 use crate::integrator::{Event, EventDirection};
-use crate::simulate::config_args::terminal_count;
+use crate::simulate::config_args::event_function;
 use crate::simulate::StateEvent;
 use crate::simulate::{event_value, EventList};
 use crate::support::args::given;
@@ -41,26 +40,15 @@ impl PyStateEvent {
         let inner = StateEvent::from_args(variable, &index, value, direction, terminal)?;
         Ok(PyStateEvent { inner })
     }
-    #[getter]
-    fn terminal(&self) -> usize {
-        self.inner.terminal
-    }
-    #[getter]
-    fn direction(&self) -> i32 {
-        self.inner.direction
-    }
     fn __repr__(&self) -> String {
-        let e = &self.inner;
-        format!(
-            "StateEvent('{}', {}, value={}, direction={}, terminal={})",
-            if e.on_velocity { "v" } else { "q" },
-            e.index,
-            e.value,
-            e.direction,
-            e.terminal
-        )
+        self.inner.to_string()
     }
 }
+
+super::getters!(PyStateEvent {
+    terminal: usize = inner.terminal,
+    direction: i32 = inner.direction,
+});
 
 /// A Python event callable: `(args...) -> float`, with optional `terminal` and `direction`
 /// attributes (SciPy's convention).
@@ -81,14 +69,7 @@ pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventS
             repr_of(e),
         ));
     }
-    let terminal = match e.getattr("terminal") {
-        Ok(t) if !t.is_none() => terminal_count(&t)?,
-        _ => 0,
-    };
-    let direction = match e.getattr("direction") {
-        Ok(d) if !d.is_none() => real(&d, &format!("events[{k}].direction"))?,
-        _ => 0.0,
-    };
+    let (terminal, direction) = event_function(k, e)?;
     Ok(PyEventSpec {
         index: k,
         func: e.clone().unbind(),

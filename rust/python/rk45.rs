@@ -10,8 +10,8 @@ use pyo3::IntoPyObjectExt;
 use super::convert::{to_array, vector};
 use super::dense::PyDenseSolution;
 use super::effects::repr_of;
+use super::errors::invalid;
 use super::errors::IntoPyResult;
-use super::errors::{invalid, py_error};
 use super::events::{event_list, python_event};
 use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::record::Field;
@@ -52,11 +52,7 @@ pub fn rk45(
         .py(py)?;
     let (t_span, opts) = (t_span_given, run.opts);
     let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
-    let events = event_list(py, events)?;
-    if !events.state.is_empty() {
-        let expected = "event callables (a StateEvent needs a scene: pmd.simulate)";
-        return Err(invalid(py, "events", expected, "a StateEvent"));
-    }
+    let events = event_list(py, events)?.for_run(false, false)?;
     // The first exception from `fun` or an event (Ctrl-C included) stops the run;
     // `pointmass_dyn.rk45` re-raises it with the solution computed so far attached.
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
@@ -81,10 +77,17 @@ pub fn rk45(
         }
         JacArg::None => integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, None),
     }
-    .map_err(|e| invalid_setting(py, e))?;
+    .map_err(crate::support::error::Error::from);
+    let mut run = sol.py(py)?;
     drop(evs);
-    let raised = failure.into_inner().ok().flatten();
-    solution(py, sol, raised, !specs.is_empty())
+    let error = failure.into_inner().ok().flatten();
+    let dense = run.dense.take().map(|inner| PyDenseSolution { inner });
+    Ok(PyOdeSolution(Ode {
+        run,
+        with_events: !specs.is_empty(),
+        sol: dense.map(|d| Py::new(py, d)).transpose()?,
+        error: error.map(|e| e.into_value(py).into_any()),
+    }))
 }
 
 /// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in
@@ -123,12 +126,6 @@ pub struct Ode {
     error: Option<Py<PyAny>>,
 }
 
-impl Ode {
-    fn code(&self) -> i32 {
-        self.run.status.code()
-    }
-}
-
 super::trajectory::run_record!(
     /// `rk45`'s result: the entries of SciPy's `OdeResult` (`pointmass_dyn.OdeResult` is
     /// built from them), `y` as (dim, N); `stiff`: `{"t", "h_lambda", "h", "lambda"}` of the
@@ -151,31 +148,4 @@ fn event_arrays<'py>(py: Python<'py>, sol: &integrator::Solution) -> PyResult<Ob
     let arrays = sol.t_events.iter().zip(&sol.y_events);
     let arrays = arrays.map(|(t, y)| to_array(py, y.clone(), &[t.len(), sol.dim]));
     arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
-}
-
-fn solution(
-    py: Python<'_>,
-    mut run: integrator::Solution,
-    raised: Option<PyErr>,
-    with_events: bool,
-) -> PyResult<PyOdeSolution> {
-    let sol = run
-        .dense
-        .take()
-        .map(|inner| Py::new(py, PyDenseSolution { inner }));
-    let error = raised.map(|e| e.into_value(py).into_any());
-    Ok(PyOdeSolution(Ode {
-        run,
-        with_events,
-        sol: sol.transpose()?,
-        error,
-    }))
-}
-
-pub(super) fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
-    let class = match e {
-        integrator::InputError::OutputTooLarge { .. } => "OutOfMemoryError",
-        _ => "InvalidInputError",
-    };
-    py_error(py, class, e.to_string())
 }

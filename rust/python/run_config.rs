@@ -3,11 +3,12 @@
 //! (`simulate_scene`, `simulate_batch`, `rk45`) take one, plus the same keywords, which beat
 //! it; which setting a run uses is the core's `RunConfig::resolve`.
 use crate::python::Obj;
-use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyTuple};
 use pyo3::PyTypeInfo;
 
+use super::convert::to_array1;
+use super::record::getters_of;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
 use crate::simulate::RunConfig;
 
@@ -32,46 +33,6 @@ impl PyRunConfig {
         let inner = RunConfig::from_args(given.iter().map(|(k, v)| (k.as_str(), v)))?;
         Ok(PyRunConfig { inner })
     }
-    /// A number, or an array of one per state component.
-    #[getter]
-    fn rtol<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
-        self.inner.rtol.as_ref().map(|t| tol_py(py, t))
-    }
-    #[getter]
-    fn atol<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
-        self.inner.atol.as_ref().map(|t| tol_py(py, t))
-    }
-    #[getter]
-    fn t_eval<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner
-            .t_eval
-            .as_ref()
-            .map(|t| PyArray1::from_slice(py, t))
-    }
-    /// SciPy's spelling: "RK45", "DOP853", "Radau", "RK4", "Euler" or "auto".
-    #[getter]
-    fn method(&self) -> Option<&'static str> {
-        self.inner.method.map(Method::name)
-    }
-    /// "standard" (SciPy's) or "pi" (Hairer's).
-    #[getter]
-    fn controller(&self) -> Option<&'static str> {
-        self.inner.controller.map(Controller::name)
-    }
-    /// "warn", "stop" or "off".
-    #[getter]
-    fn stiffness(&self) -> Option<&'static str> {
-        self.inner.stiffness.map(StiffnessCheck::name)
-    }
-    /// The effect families switched off, as a tuple of names (`()`: none).
-    #[getter]
-    fn disable<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyTuple>>> {
-        self.inner
-            .disable
-            .map(|d| PyTuple::new(py, d.names()))
-            .transpose()
-    }
-
     /// The settings given, by keyword (what `RunConfig(**d)` rebuilds).
     fn as_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(slf.py());
@@ -115,15 +76,34 @@ impl PyRunConfig {
     }
 }
 
-super::getters!(PyRunConfig {
-    t_span: Option<(f64, f64)> = inner.t_span,
-    first_step: Option<f64> = inner.first_step,
-    max_step: Option<f64> = inner.max_step,
-    max_steps: Option<usize> = inner.max_steps,
-    dt: Option<f64> = inner.dt,
-    energy: Option<bool> = inner.energy,
-    power: Option<bool> = inner.power,
-    dense_output: Option<bool> = inner.dense,
+impl PyRunConfig {
+    fn read<R>(&self, f: impl FnOnce(&RunConfig) -> R) -> R {
+        f(&self.inner)
+    }
+}
+
+getters_of!(PyRunConfig.read {
+    t_span: Option<(f64, f64)> = |c, py| c.t_span,
+    /// A number, or an array of one per state component.
+    rtol: Option<Obj<'py>> = |c, py| c.rtol.as_ref().map(|t| tol_py(py, t)),
+    atol: Option<Obj<'py>> = |c, py| c.atol.as_ref().map(|t| tol_py(py, t)),
+    t_eval: Option<Obj<'py>> = |c, py| c.t_eval.as_ref().map(|t| to_array1(py, t).into_any()),
+    first_step: Option<f64> = |c, py| c.first_step,
+    max_step: Option<f64> = |c, py| c.max_step,
+    max_steps: Option<usize> = |c, py| c.max_steps,
+    /// SciPy's spelling: "RK45", "DOP853", "Radau", "RK4", "Euler" or "auto".
+    method: Option<&'static str> = |c, py| c.method.map(Method::name),
+    dt: Option<f64> = |c, py| c.dt,
+    /// "standard" (SciPy's) or "pi" (Hairer's).
+    controller: Option<&'static str> = |c, py| c.controller.map(Controller::name),
+    /// "warn", "stop" or "off".
+    stiffness: Option<&'static str> = |c, py| c.stiffness.map(StiffnessCheck::name),
+    /// The effect families switched off, as a tuple of names (`()`: none).
+    disable: PyResult<Option<Bound<'py, PyTuple>>> =
+        |c, py| c.disable.map(|d| PyTuple::new(py, d.names())).transpose(),
+    energy: Option<bool> = |c, py| c.energy,
+    power: Option<bool> = |c, py| c.power,
+    dense_output: Option<bool> = |c, py| c.dense,
 });
 
 /// A call's `**settings` and its named keywords given (not `None`), by keyword.
@@ -164,13 +144,13 @@ pub(super) fn call_config(
 }
 
 /// The `RunConfig` of the keywords given (`None`: not given).
-pub(super) fn config_of(_py: Python<'_>, given: &[(&str, Option<&Obj>)]) -> PyResult<RunConfig> {
+pub(super) fn config_of(given: &[(&str, Option<&Obj>)]) -> PyResult<RunConfig> {
     RunConfig::from_args(given.iter().filter_map(|(k, v)| v.map(|v| (*k, v))))
 }
 
 fn tol_py<'py>(py: Python<'py>, tol: &Tol) -> Obj<'py> {
     match tol {
         Tol::Scalar(x) => PyFloat::new(py, *x).into_any(),
-        Tol::PerComponent(v) => PyArray1::from_slice(py, v).into_any(),
+        Tol::PerComponent(v) => to_array1(py, v).into_any(),
     }
 }

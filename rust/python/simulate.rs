@@ -7,7 +7,7 @@ use pyo3::types::{IntoPyDict, PyDict};
 
 use super::convert::to_array1;
 use super::effects::take_callback_error;
-use super::errors::{interrupt_reason, invalid, py_error, IntoPyResult};
+use super::errors::{interrupt_reason, IntoPyResult};
 use super::events::{event_list, python_event};
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::PyScene;
@@ -18,6 +18,7 @@ use crate::io::scene::Scene;
 use crate::simulate::batch::{name_stop, run_scenes};
 use crate::simulate::{at_state, run_scene, Progress};
 use crate::support::args::given;
+use crate::support::error::Error;
 
 /// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
 /// it: the `RunResult` that `pointmass_dyn.simulate` wraps.
@@ -146,15 +147,7 @@ pub fn simulate_batch<'py>(
     let config = call_config(config, t_span, rtol, atol, settings)?;
     let states = |x: Option<&Obj>, arg| given(x).map(|x| super::convert::array(x, arg));
     let (q0, v0) = (states(q0, "q0").transpose()?, states(v0, "v0").transpose()?);
-    let events = event_list(py, events)?;
-    if !events.other.is_empty() {
-        return Err(invalid(
-            py,
-            "events",
-            "StateEvent objects only (Python callables cannot run on the batch's threads)",
-            "a callable",
-        ));
-    }
+    let events = event_list(py, events)?.for_run(true, true)?;
     let threads = crate::support::args::threads(threads)?;
     // Ctrl-C and the caller's progress from this thread, by elapsed time (signals::Watch).
     let mut watch = Watch::default();
@@ -178,8 +171,8 @@ pub fn simulate_batch<'py>(
         )
     });
     let results = results.py(py)?;
-    let mut results = results
-        .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
+    let panicked = |_| Error::Simulation("a batch thread panicked".into());
+    let mut results = results.map_err(panicked).py(py)?;
     // Ctrl-C or a raising `progress` stopped the batch: the caller gets it back with every
     // run's result so far (finished, stopped midway, not started).
     let mut stopped = watch.error.take().or(take_callback_error());
@@ -193,11 +186,8 @@ pub fn simulate_batch<'py>(
     }
     let slots = events.slots();
     let out = results.into_iter().map(|result| match result {
-        Ok(traj) => Ok(PyRunResult::new(py, traj, &slots, None)),
+        Ok(traj) => PyRunResult::new(py, traj, &slots, None),
         Err(e) => PyRunResult::not_started(py, e),
     });
-    Ok((
-        out.collect::<PyResult<_>>()?,
-        stopped.map(|e| e.into_value(py).into_any()),
-    ))
+    Ok((out.collect(), stopped.map(|e| e.into_value(py).into_any())))
 }

@@ -12,16 +12,13 @@ use pyo3::types::IntoPyDict;
 use pyo3::IntoPyObjectExt;
 
 macro_rules! declare_py_status {
-    ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*]
-     [$($(#[$xdoc:meta])* $x:ident { $($xf:ident: $xt:ty),* },)*]) => {
-        /// How a run ended, one variant per cause: `t` the time the run reached, `at` where
-        /// the failure (or interruption) happened. The core's `Status` variants
-        /// (`status_variants!`), plus `NotStarted` for a run of a batch whose input was refused.
+    ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*] []) => {
+        /// How a run ended, one variant per cause (the core's `Status`, `status_variants!`):
+        /// `t` the time the run reached, `at` where the failure (or interruption) happened.
         #[pyclass(name = "RunStatus", module = "pointmass_dyn._core", frozen)]
         #[derive(Clone, Debug)]
         pub enum PyRunStatus {
             $($(#[$doc])* $v { $($($f: $t),*)? },)*
-            $($(#[$xdoc])* $x { $($xf: $xt),* },)*
         }
 
         impl From<&Status> for PyRunStatus {
@@ -33,11 +30,7 @@ macro_rules! declare_py_status {
         }
     };
 }
-status_variants!(
-    declare_py_status,
-    /// A run of a batch that never started: its input was refused, or the batch stopped.
-    NotStarted { reason: String },
-);
+status_variants!(declare_py_status);
 
 /// `NonFinite.what` in Python: "derivative", "state" or "jacobian".
 impl<'py> IntoPyObject<'py> for NonFiniteKind {
@@ -115,10 +108,10 @@ macro_rules! run_record {
             method: |r: &$inner, py| r.run.method.name().into_bound_py_any(py),
             switched_to: |r: &$inner, py| r.run.switched_to.map(|m| m.name()).into_bound_py_any(py),
             t_switch: |r: &$inner, py| r.run.t_switch.into_bound_py_any(py),
-            status: |r: &$inner, py| r.code().into_bound_py_any(py),
+            status: |r: &$inner, py| r.run.status.code().into_bound_py_any(py),
             // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
             message: |r: &$inner, py| $crate::support::error::compact_numbers(&r.run.message).field(py),
-            success: |r: &$inner, py| (r.code() >= 0).into_bound_py_any(py),
+            success: |r: &$inner, py| r.run.status.is_success().into_bound_py_any(py),
             t_reached: |r: &$inner, py| r.run.t_reached.field(py),
             error: |r: &$inner, py| r.error.as_ref().into_bound_py_any(py),
         });
@@ -127,31 +120,11 @@ macro_rules! run_record {
 pub(super) use run_record;
 
 /// A run of `simulate_scene`, a batch or a `Simulator`: its trajectory, events in the
-/// caller's order; `not_started`: a batch run that never started (`RunStatus.NotStarted`,
-/// the trajectory's message saying why).
+/// caller's order (a batch run that never started: `RunStatus.NotStarted`, the trajectory's
+/// message saying why).
 pub struct Run {
     run: Trajectory,
-    not_started: bool,
     error: Option<Py<PyAny>>,
-}
-
-impl Run {
-    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure (a run not started).
-    fn code(&self) -> i32 {
-        if self.not_started {
-            -1
-        } else {
-            self.run.status.code()
-        }
-    }
-    fn status(&self) -> PyRunStatus {
-        match self.not_started {
-            true => PyRunStatus::NotStarted {
-                reason: self.run.message.clone(),
-            },
-            false => PyRunStatus::from(&self.run.status),
-        }
-    }
 }
 
 run_record!(
@@ -174,7 +147,7 @@ run_record!(
         t_events: |r: &Run, py| r.run.t_events.field(py),
         q_events: |r: &Run, py| event_arrays(py, &r.run, |(q, _)| (q, r.run.nq)),
         v_events: |r: &Run, py| event_arrays(py, &r.run, |(_, v)| (v, r.run.nv)),
-        outcome: |r: &Run, py| r.status().into_bound_py_any(py),
+        outcome: |r: &Run, py| PyRunStatus::from(&r.run.status).into_bound_py_any(py),
     }
 );
 
@@ -203,33 +176,14 @@ impl PyRunResult {
     ) -> Self {
         traj.order_events(slots);
         let error = error.map(|e| e.into_value(py).into_any());
-        PyRunResult(Run {
-            run: traj,
-            not_started: false,
-            error,
-        })
+        PyRunResult(Run { run: traj, error })
     }
 
     /// A batch run that never started: `error` refused its input, or the batch stopped
     /// before it (`Interrupted`, its message then says by what).
-    pub(super) fn not_started(py: Python<'_>, error: Error) -> PyResult<Self> {
-        let stopped = match &error {
-            Error::Interrupted(m) => Some(m.clone()),
-            _ => None,
-        };
-        let error = super::errors::to_py(py, error);
-        let message = match stopped {
-            Some(m) => m,
-            None => format!("{}: {}", error.get_type(py).name()?, error.value(py).str()?),
-        };
-        let (run, error) = (
-            Trajectory::not_started(message),
-            Some(error.into_value(py).into_any()),
-        );
-        Ok(PyRunResult(Run {
-            run,
-            not_started: true,
-            error,
-        }))
+    pub(super) fn not_started(py: Python<'_>, error: Error) -> Self {
+        let run = Trajectory::refused(&error);
+        let error = Some(super::errors::to_py(py, error).into_value(py).into_any());
+        PyRunResult(Run { run, error })
     }
 }

@@ -207,6 +207,27 @@ impl super::StateEvent {
     }
 }
 
+/// `StateEvent('q', 0, value=0.5, direction=-1, terminal=1)`: how it was built.
+impl std::fmt::Display for super::StateEvent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let variable = if self.on_velocity { "v" } else { "q" };
+        write!(
+            f,
+            "StateEvent('{variable}', {}, value={}, direction={}, terminal={})",
+            self.index, self.value, self.direction, self.terminal
+        )
+    }
+}
+
+/// The `terminal` and `direction` of the caller's event function `events[k]` (attributes
+/// it may have, SciPy's convention): a crossing count (0: never) and a sign (0: either way).
+pub fn event_function<A: Arg>(k: usize, e: &A) -> Result<(usize, f64), A::Err> {
+    let attr = |name| e.attr(name).filter(|x| !x.absent());
+    let terminal = attr("terminal").map(|t| terminal_count(&t)).transpose()?;
+    let direction = attr("direction").map(|d| d.real(&format!("events[{k}].direction")));
+    Ok((terminal.unwrap_or(0), direction.transpose()?.unwrap_or(0.0)))
+}
+
 /// An event's `terminal`: a bool, or the count of crossings that stops the run.
 pub fn terminal_count<A: Arg>(x: &A) -> Result<usize, A::Err> {
     match x.int() {
