@@ -662,6 +662,21 @@ impl Status {
     }
 }
 
+/// Each event's states (`ys[k]`: rows of `width` entries), the columns `cols` of them, as
+/// one matrix per event.
+pub fn event_matrices(
+    ys: &[Vec<f64>],
+    width: usize,
+    cols: std::ops::Range<usize>,
+) -> Vec<nalgebra::DMatrix<f64>> {
+    let matrix = |y: &Vec<f64>| {
+        let rows = y.chunks_exact(width.max(1));
+        let entries = rows.clone().flat_map(|r| r[cols.clone()].iter().copied());
+        nalgebra::DMatrix::from_row_iterator(rows.len(), cols.len(), entries)
+    };
+    ys.iter().map(matrix).collect()
+}
+
 /// Result of [`rk45`].
 #[derive(Debug, Clone)]
 pub struct Solution {
@@ -707,6 +722,11 @@ impl Solution {
     }
 
     /// The states by component, SciPy's layout: row-major `dim × t.len()`.
+    /// Each event's states as an m × dim matrix.
+    pub fn event_matrices(&self) -> Vec<nalgebra::DMatrix<f64>> {
+        event_matrices(&self.y_events, self.dim, 0..self.dim)
+    }
+
     pub fn y_by_component(&self) -> Vec<f64> {
         let (dim, n) = (self.dim, self.t.len());
         (0..dim * n)

@@ -9,10 +9,10 @@ use super::convert::{to_array, to_array1, vector};
 use super::effects::take_callback_error;
 use super::errors::IntoPyResult;
 use super::record::getters_of;
-use super::run_config::config_of;
 use super::scene::PyScene;
 use super::trajectory::PyRunResult;
 use crate::control::{ControlKind, OwnedSimulator, Simulator, Stepping};
+use crate::simulate::RunConfig;
 use crate::support::args;
 
 #[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
@@ -59,7 +59,7 @@ impl PySimulator {
             ("first_step", first_step),
             ("max_step", max_step),
         ];
-        let call = config_of(&given)?;
+        let call = RunConfig::from_call(None, &given)?;
         let t_eval = args::opt(t_eval, |te| vector(te, "t_eval", None))?;
         let at = Stepping {
             t0,

@@ -98,31 +98,43 @@ pub(super) fn event_list(py: Python<'_>, events: Option<&Obj>) -> PyResult<Event
     Ok(out)
 }
 
-/// Builds an event that calls Python (re-attaching to the interpreter when called from a
-/// detached thread); the first exception is kept in `failure` and re-raised afterwards.
-pub(super) fn python_event<'a>(
-    spec: &'a PyEventSpec,
+/// The caller's event callables as a run's events, each calling Python (re-attaching to
+/// the interpreter when called from a detached thread) with `(t, q, v)` (`split`: the
+/// state's `nq`) or `(t, y)`; the first exception is kept in `failure` and re-raised after.
+pub(super) fn python_events<'a>(
+    events: &'a EventList<PyEventSpec>,
     split: Option<usize>,
     failure: &'a Mutex<Option<PyErr>>,
-) -> Event<'a> {
-    let f = move |t: f64, y_all: &[f64]| -> f64 {
-        Python::attach(|py| {
-            let y = |y: &[f64]| PyArray1::from_slice(py, y).into_any();
-            let args = match split {
-                Some(nq) => (t, y(&y_all[..nq]), y(&y_all[nq..])).into_pyobject(py),
-                None => (t, y(y_all)).into_pyobject(py),
-            };
-            let out = args.and_then(|a| spec.func.bind(py).call1(a));
-            let out = out.and_then(|r| event_value(spec.index, t, &r));
-            out.unwrap_or_else(|e| {
-                if let Ok(mut slot) = failure.lock() {
-                    slot.get_or_insert(e);
-                }
-                f64::NAN
+) -> Vec<Event<'a>> {
+    let event = |spec: &'a PyEventSpec| {
+        let f = move |t: f64, y_all: &[f64]| -> f64 {
+            Python::attach(|py| {
+                let y = |y: &[f64]| PyArray1::from_slice(py, y).into_any();
+                let args = match split {
+                    Some(nq) => (t, y(&y_all[..nq]), y(&y_all[nq..])).into_pyobject(py),
+                    None => (t, y(y_all)).into_pyobject(py),
+                };
+                let out = args.and_then(|a| spec.func.bind(py).call1(a));
+                let out = out.and_then(|r| event_value(spec.index, t, &r));
+                out.unwrap_or_else(|e| {
+                    keep(failure, e);
+                    f64::NAN
+                })
             })
-        })
+        };
+        Event::new(f)
+            .direction(EventDirection::from_sign(spec.direction))
+            .terminal(spec.terminal)
     };
-    Event::new(f)
-        .direction(EventDirection::from_sign(spec.direction))
-        .terminal(spec.terminal)
+    events.other.iter().map(event).collect()
+}
+
+/// Keeps `e` in `failure` unless an earlier exception is there (the first one stops the
+/// run); its message, for the run's.
+pub(super) fn keep(failure: &Mutex<Option<PyErr>>, e: PyErr) -> String {
+    let message = e.to_string();
+    if let Ok(mut slot) = failure.lock() {
+        slot.get_or_insert(e);
+    }
+    message
 }

@@ -62,6 +62,13 @@ impl Field for DMatrix<f64> {
     }
 }
 
+impl Field for Vec<DMatrix<f64>> {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
+        let items = self.iter().map(|m| dmatrix_to_array(py, m));
+        items.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
+    }
+}
+
 impl Field for Vec<Vec<f64>> {
     fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let items: Vec<_> = self.iter().map(|x| to_array1(py, x)).collect();
@@ -176,10 +183,16 @@ pub fn items<'py>(
 }
 
 /// `Name(a=..., b=...)` of a record's fields.
-pub fn repr(obj: &Obj, name: &str, fields: &[&str]) -> PyResult<String> {
+pub fn repr(obj: &Obj, name: &str, fields: &[impl AsRef<str>]) -> PyResult<String> {
     let parts: PyResult<Vec<String>> = fields
         .iter()
-        .map(|f| Ok(format!("{f}={}", obj.getattr(*f)?.repr()?)))
+        .map(|f| {
+            Ok(format!(
+                "{}={}",
+                f.as_ref(),
+                obj.getattr(f.as_ref())?.repr()?
+            ))
+        })
         .collect();
     Ok(format!("{name}({})", parts?.join(", ")))
 }

@@ -12,11 +12,11 @@ use super::dense::PyDenseSolution;
 use super::effects::repr_of;
 use super::errors::invalid;
 use super::errors::IntoPyResult;
-use super::events::{event_list, python_event};
+use super::events::{event_list, keep, python_events};
 use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::record::Field;
 use super::run_config::{call_config, PyRunConfig};
-use crate::integrator::{self, Event, FnSystem, OdeSystem};
+use crate::integrator::{self, FnSystem, OdeSystem};
 use crate::io::scene::Settings;
 
 /// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
@@ -56,11 +56,7 @@ pub fn rk45(
     // The first exception from `fun` or an event (Ctrl-C included) stops the run;
     // `pointmass_dyn.rk45` re-raises it with the solution computed so far attached.
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let specs = &events.other;
-    let mut evs: Vec<Event<'_>> = specs
-        .iter()
-        .map(|s| python_event(s, None, &failure))
-        .collect();
+    let mut evs = python_events(&events, None, &failure);
     let sys = python_system(py, fun, dim, &failure);
     // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
     let sol = match jac {
@@ -84,7 +80,7 @@ pub fn rk45(
     let dense = run.dense.take().map(|inner| PyDenseSolution { inner });
     Ok(PyOdeSolution(Ode {
         run,
-        with_events: !specs.is_empty(),
+        with_events: !events.other.is_empty(),
         sol: dense.map(|d| Py::new(py, d)).transpose()?,
         error: error.map(|e| e.into_value(py).into_any()),
     }))
@@ -107,13 +103,7 @@ fn python_system<'a>(
                 dydt.copy_from_slice(&v);
                 Ok(())
             };
-            call().map_err(|e| {
-                let msg = e.to_string();
-                if let Ok(mut slot) = failure.lock() {
-                    slot.get_or_insert(e);
-                }
-                msg
-            })
+            call().map_err(|e| keep(failure, e))
         },
     )
 }
@@ -134,7 +124,7 @@ super::trajectory::run_record!(
         t: |r: &Ode, py| r.run.t.field(py),
         y: |r: &Ode, py| to_array(py, r.run.y_by_component(), &[r.run.dim, r.run.t.len()]),
         t_events: |r: &Ode, py| r.with_events.then(|| r.run.t_events.field(py)).transpose()?.into_bound_py_any(py),
-        y_events: |r: &Ode, py| r.with_events.then(|| event_arrays(py, &r.run)).transpose()?.into_bound_py_any(py),
+        y_events: |r: &Ode, py| r.with_events.then(|| r.run.event_matrices().field(py)).transpose()?.into_bound_py_any(py),
         stiff: |r: &Ode, py| {
             let entries = |s: &integrator::Stiffness| [("t", s.t), ("h_lambda", s.h_lambda), ("h", s.h), ("lambda", s.lambda())];
             r.run.stiffness.as_ref().map(|s| entries(s).into_py_dict(py)).transpose()?.into_bound_py_any(py)
@@ -142,10 +132,3 @@ super::trajectory::run_record!(
         sol: |r: &Ode, py| r.sol.as_ref().into_bound_py_any(py),
     }
 );
-
-/// Each event's states as an (m, dim) array.
-fn event_arrays<'py>(py: Python<'py>, sol: &integrator::Solution) -> PyResult<Obj<'py>> {
-    let arrays = sol.t_events.iter().zip(&sol.y_events);
-    let arrays = arrays.map(|(t, y)| to_array(py, y.clone(), &[t.len(), sol.dim]));
-    arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
-}

@@ -5,7 +5,6 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyTuple};
-use pyo3::PyTypeInfo;
 
 use super::convert::to_array1;
 use super::record::getters_of;
@@ -29,8 +28,8 @@ impl PyRunConfig {
         text_signature = "(t_span=None, *, rtol=None, atol=None, t_eval=None, first_step=None, max_step=None, max_steps=None, method=None, dt=None, controller=None, stiffness=None, disable=None, energy=None, power=None, dense_output=None)"
     )]
     fn new(t_span: Option<Obj>, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
-        let given = keywords(settings, [("t_span", t_span.as_ref())])?;
-        let inner = RunConfig::from_args(given.iter().map(|(k, v)| (k.as_str(), v)))?;
+        let named = [("t_span", t_span.as_ref())];
+        let inner = RunConfig::from_call(settings.map(|d| d.as_any()), &named)?;
         Ok(PyRunConfig { inner })
     }
     /// The settings given, by keyword (what `RunConfig(**d)` rebuilds).
@@ -47,18 +46,9 @@ impl PyRunConfig {
 
     /// A copy with the given settings replaced (`None` unsets one); the others kept.
     #[pyo3(signature = (**changes))]
-    fn replace<'py>(
-        slf: &Bound<'py, Self>,
-        changes: Option<&Bound<'py, PyDict>>,
-    ) -> PyResult<Bound<'py, Self>> {
-        let d = Self::as_dict(slf)?;
-        if let Some(changes) = changes {
-            d.update(changes.as_mapping())?;
-        }
-        Self::type_object(slf.py())
-            .call((), Some(&d))?
-            .cast_into::<Self>()
-            .map_err(Into::into)
+    fn replace(&self, changes: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let inner = self.inner.replaced(changes.map(|c| c.as_any()))?;
+        Ok(PyRunConfig { inner })
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
@@ -134,18 +124,9 @@ pub(super) fn call_config(
     atol: Option<&Obj>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<RunConfig> {
-    let below = config.map(|c| c.inner.clone()).unwrap_or_default();
-    let given = keywords(
-        settings,
-        [("t_span", t_span), ("rtol", rtol), ("atol", atol)],
-    )?;
-    let call = RunConfig::from_args(given.iter().map(|(k, v)| (k.as_str(), v)))?;
-    Ok(call.over(below))
-}
-
-/// The `RunConfig` of the keywords given (`None`: not given).
-pub(super) fn config_of(given: &[(&str, Option<&Obj>)]) -> PyResult<RunConfig> {
-    RunConfig::from_args(given.iter().filter_map(|(k, v)| v.map(|v| (*k, v))))
+    let named = [("t_span", t_span), ("rtol", rtol), ("atol", atol)];
+    let call = RunConfig::from_call(settings.map(|d| d.as_any()), &named)?;
+    Ok(call.over(config.map(|c| c.inner.clone()).unwrap_or_default()))
 }
 
 fn tol_py<'py>(py: Python<'py>, tol: &Tol) -> Obj<'py> {

@@ -8,12 +8,11 @@ use pyo3::types::{IntoPyDict, PyDict};
 use super::convert::to_array1;
 use super::effects::take_callback_error;
 use super::errors::{interrupt_reason, IntoPyResult};
-use super::events::{event_list, python_event};
+use super::events::{event_list, python_events};
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::PyScene;
 use super::signals::{Watch, INTERVAL};
 use super::trajectory::PyRunResult;
-use crate::integrator::Event;
 use crate::io::scene::Scene;
 use crate::simulate::batch::{name_stop, run_scenes};
 use crate::simulate::{at_state, run_scene, Progress};
@@ -45,11 +44,7 @@ pub fn simulate_scene(
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
     let result = py.detach(|| {
-        let extra: Vec<Event<'_>> = events
-            .other
-            .iter()
-            .map(|spec| python_event(spec, Some(nq), &failure))
-            .collect();
+        let extra = python_events(&events, Some(nq), &failure);
         // Ctrl-C and progress by elapsed time (support::pacing), not per evaluation, so a
         // busy Python thread beside the run costs one hand-over of the interpreter per poll.
         let hook: Progress<'_> = Box::new(|t: f64| {

@@ -8,7 +8,7 @@ use super::record::Field;
 use crate::integrator::{status_variants, NonFiniteKind, Status};
 use crate::simulate::Trajectory;
 use crate::support::error::Error;
-use pyo3::types::IntoPyDict;
+use pyo3::types::{IntoPyDict, PyTuple};
 use pyo3::IntoPyObjectExt;
 
 macro_rules! declare_py_status {
@@ -57,39 +57,24 @@ impl FromPyObject<'_, '_> for NonFiniteKind {
 impl PyRunStatus {
     /// `RunStatus.Interrupted(t=0.5, at=0.51, reason='...')`: the variant and its fields.
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-        let (name, args) = Self::variant(slf)?;
-        let fields: Vec<String> = Self::fields(slf)?
-            .into_iter()
-            .zip(args.iter())
-            .map(|(f, v)| Ok(format!("{f}={}", v.repr()?)))
-            .collect::<PyResult<_>>()?;
-        Ok(format!("RunStatus.{name}({})", fields.join(", ")))
+        let slf = slf.as_any();
+        let name = format!("RunStatus.{}", slf.get_type().name()?);
+        super::record::repr(slf, &name, &Self::fields(slf)?)
     }
 
     /// Pickled as its variant called with its fields (a result's `outcome` travels with it).
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(Obj<'py>, Bound<'py, pyo3::types::PyTuple>)> {
-        Ok((slf.as_any().get_type().into_any(), Self::variant(slf)?.1))
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Obj<'py>, Bound<'py, PyTuple>)> {
+        let slf = slf.as_any();
+        let values = Self::fields(slf)?.into_iter().map(|f| slf.getattr(f));
+        let values = PyTuple::new(slf.py(), values.collect::<PyResult<Vec<_>>>()?)?;
+        Ok((slf.get_type().into_any(), values))
     }
 }
 
 impl PyRunStatus {
     /// The variant's field names, in its constructor's order.
-    fn fields(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
-        slf.as_any().get_type().getattr("__match_args__")?.extract()
-    }
-
-    /// The variant's name and its fields' values.
-    fn variant<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(String, Bound<'py, pyo3::types::PyTuple>)> {
-        let values = Self::fields(slf)?
-            .iter()
-            .map(|f| slf.as_any().getattr(f.as_str()))
-            .collect::<PyResult<Vec<_>>>()?;
-        let name = slf.as_any().get_type().name()?.to_string();
-        Ok((name, pyo3::types::PyTuple::new(slf.py(), values)?))
+    fn fields(slf: &Obj) -> PyResult<Vec<String>> {
+        slf.get_type().getattr("__match_args__")?.extract()
     }
 }
 
@@ -145,25 +130,11 @@ run_record!(
             columns.map(|c| c.into_py_dict(py)).transpose()?.into_bound_py_any(py)
         },
         t_events: |r: &Run, py| r.run.t_events.field(py),
-        q_events: |r: &Run, py| event_arrays(py, &r.run, |(q, _)| (q, r.run.nq)),
-        v_events: |r: &Run, py| event_arrays(py, &r.run, |(_, v)| (v, r.run.nv)),
+        q_events: |r: &Run, py| r.run.event_matrices(false).field(py),
+        v_events: |r: &Run, py| r.run.event_matrices(true).field(py),
         outcome: |r: &Run, py| PyRunStatus::from(&r.run.status).into_bound_py_any(py),
     }
 );
-
-/// Each event's `q` (or `v`) states as an (m, width) array.
-fn event_arrays<'py>(
-    py: Python<'py>,
-    traj: &Trajectory,
-    pick: impl Fn((Vec<f64>, Vec<f64>)) -> (Vec<f64>, usize),
-) -> PyResult<Obj<'py>> {
-    let states = traj.event_states().into_iter().zip(&traj.t_events);
-    let arrays = states.map(|(s, t)| {
-        let (data, width) = pick(s);
-        to_array(py, data, &[t.len(), width])
-    });
-    arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
-}
 
 impl PyRunResult {
     /// `traj` with its events in the caller's order (`slots[k]`: the trajectory's slot of

@@ -62,6 +62,50 @@ impl RunConfig {
         Ok(c)
     }
 
+    /// The settings of a call: its `named` keywords (`None`: not given) and `settings`, a
+    /// mapping of more (its `**settings`), read as [`RunConfig::from_args`] reads them.
+    pub fn from_call<A: Arg>(
+        settings: Option<&A>,
+        named: &[(&str, Option<&A>)],
+    ) -> Result<RunConfig, A::Err> {
+        let keys = settings.and_then(Arg::keys).unwrap_or_default();
+        let mapped: Vec<(String, A)> = (keys.iter())
+            .filter_map(|k| Some((k.text()?, settings?.get(&k.text()?)??)))
+            .collect();
+        let named = named.iter().filter_map(|(k, v)| v.map(|v| (*k, v)));
+        RunConfig::from_args(mapped.iter().map(|(k, v)| (k.as_str(), v)).chain(named))
+    }
+
+    /// These settings with those of `changes` (a mapping, keyword to value) replaced; a
+    /// `None` value unsets its setting.
+    pub fn replaced<A: Arg>(&self, changes: Option<&A>) -> Result<RunConfig, A::Err> {
+        let mut below = self.clone();
+        for key in changes.and_then(Arg::keys).unwrap_or_default() {
+            below.unset(&key.text().unwrap_or_default());
+        }
+        Ok(RunConfig::from_call(changes, &[])?.over(below))
+    }
+
+    fn unset(&mut self, key: &str) {
+        match key {
+            "t_span" => self.t_span = None,
+            "rtol" => self.rtol = None,
+            "atol" => self.atol = None,
+            "t_eval" => self.t_eval = None,
+            "first_step" => self.first_step = None,
+            "max_step" => self.max_step = None,
+            "max_steps" => self.max_steps = None,
+            "method" => self.method = None,
+            "dt" => self.dt = None,
+            "controller" => self.controller = None,
+            "stiffness" => self.stiffness = None,
+            "disable" => self.disable = None,
+            "energy" => self.energy = None,
+            "power" => self.power = None,
+            _ => self.dense = None,
+        }
+    }
+
     /// `base` with the scene settings given (`(keyword, value)`, a `None` value: not given)
     /// laid over it and checked ([`RunConfig::onto_scene`]); a keyword no scene holds is
     /// the binding's type error (as an unexpected keyword argument), naming those it holds.

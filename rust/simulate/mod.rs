@@ -147,15 +147,11 @@ impl Trajectory {
         self.y_events = slots.iter().map(|&s| self.y_events[s].clone()).collect();
     }
 
-    /// Each event's states split into row-major `q` (m × nq) and `v` (m × nv).
-    pub fn event_states(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+    /// Each event's `q` states (m × nq), or its `v` states (m × nv) with `velocities`.
+    pub fn event_matrices(&self, velocities: bool) -> Vec<nalgebra::DMatrix<f64>> {
         let (nq, nv) = (self.nq, self.nv);
-        let split = |ys: &Vec<f64>| {
-            let rows = ys.chunks_exact(nq + nv);
-            let q = rows.clone().flat_map(|r| r[..nq].to_vec()).collect();
-            (q, rows.flat_map(|r| r[nq..].to_vec()).collect())
-        };
-        self.y_events.iter().map(split).collect()
+        let cols = if velocities { nq..nq + nv } else { 0..nq };
+        integrator::event_matrices(&self.y_events, nq + nv, cols)
     }
 
     /// The power of each enabled effect over the output times, by its label.
