@@ -499,6 +499,12 @@ pub enum NonFiniteKind {
 impl NonFiniteKind {
     pub const ALL: [NonFiniteKind; 3] = [Self::Derivative, Self::State, Self::Jacobian];
     /// `"derivative"`, `"state"` or `"jacobian"`.
+    /// The kind a caller names ("derivative", "state" or "jacobian").
+    pub fn from_arg<A: crate::support::args::Arg>(x: &A) -> Result<Self, A::Err> {
+        let choices = NonFiniteKind::ALL.map(|k| (k.name(), k));
+        crate::support::args::choice(x, "what", &choices, "derivative, state or jacobian")
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Self::Derivative => "derivative",

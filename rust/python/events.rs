@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use super::effects::repr_of;
 use super::errors::invalid;
 use crate::integrator::{Event, EventDirection};
-use crate::simulate::config_args::event_function;
+use crate::simulate::config_args::EventFunction;
 use crate::simulate::StateEvent;
 use crate::simulate::{event_value, EventList};
 use crate::support::args::given;
@@ -31,13 +31,12 @@ impl PyStateEvent {
     #[pyo3(signature = (variable, index, value=None, direction=None, terminal=None))]
     fn new(
         variable: &str,
-        index: Obj,
-        value: Option<Obj>,
-        direction: Option<Obj>,
-        terminal: Option<Obj>,
+        index: &Obj,
+        value: Option<&Obj>,
+        direction: Option<&Obj>,
+        terminal: Option<&Obj>,
     ) -> PyResult<Self> {
-        let (value, direction, terminal) = (value.as_ref(), direction.as_ref(), terminal.as_ref());
-        let inner = StateEvent::from_args(variable, &index, value, direction, terminal)?;
+        let inner = StateEvent::from_args(variable, index, value, direction, terminal)?;
         Ok(PyStateEvent { inner })
     }
     fn __repr__(&self) -> String {
@@ -50,32 +49,19 @@ super::getters!(PyStateEvent {
     direction: i32 = inner.direction,
 });
 
-/// A Python event callable: `(args...) -> float`, with optional `terminal` and `direction`
-/// attributes (SciPy's convention).
+/// A Python event callable: `(args...) -> float`, and how it counts.
 pub(super) struct PyEventSpec {
-    /// Position in the caller's `events` (named in errors).
-    index: usize,
     func: Py<PyAny>,
-    terminal: usize,
-    direction: f64,
+    counts: EventFunction,
 }
 
 pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventSpec> {
     if !e.is_callable() {
-        return Err(invalid(
-            py,
-            &format!("events[{k}]"),
-            "a callable or a pmd.StateEvent",
-            repr_of(e),
-        ));
+        let expected = "a callable or a pmd.StateEvent";
+        return Err(invalid(py, &format!("events[{k}]"), expected, repr_of(e)));
     }
-    let (terminal, direction) = event_function(k, e)?;
-    Ok(PyEventSpec {
-        index: k,
-        func: e.clone().unbind(),
-        terminal,
-        direction,
-    })
+    let (func, counts) = (e.clone().unbind(), EventFunction::from_args(k, e)?);
+    Ok(PyEventSpec { func, counts })
 }
 
 /// A run's events in the caller's order (the core's `EventList`): `None`, one event
@@ -115,7 +101,7 @@ pub(super) fn python_events<'a>(
                     None => (t, y(y_all)).into_pyobject(py),
                 };
                 let out = args.and_then(|a| spec.func.bind(py).call1(a));
-                let out = out.and_then(|r| event_value(spec.index, t, &r));
+                let out = out.and_then(|r| event_value(spec.counts.index, t, &r));
                 out.unwrap_or_else(|e| {
                     keep(failure, e);
                     f64::NAN
@@ -123,8 +109,8 @@ pub(super) fn python_events<'a>(
             })
         };
         Event::new(f)
-            .direction(EventDirection::from_sign(spec.direction))
-            .terminal(spec.terminal)
+            .direction(EventDirection::from_sign(spec.counts.direction))
+            .terminal(spec.counts.terminal)
     };
     events.other.iter().map(event).collect()
 }

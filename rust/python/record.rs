@@ -62,17 +62,11 @@ impl Field for DMatrix<f64> {
     }
 }
 
-impl Field for Vec<DMatrix<f64>> {
+/// A list of fields (vectors, matrices), each converted.
+impl<T: Field> Field for [T] {
     fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        let items = self.iter().map(|m| dmatrix_to_array(py, m));
+        let items = self.iter().map(|x| x.field(py));
         items.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
-    }
-}
-
-impl Field for Vec<Vec<f64>> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        let items: Vec<_> = self.iter().map(|x| to_array1(py, x)).collect();
-        items.into_bound_py_any(py)
     }
 }
 
@@ -82,7 +76,10 @@ impl Field for Vec<Vec<f64>> {
 /// records by their fields (the core type's `PartialEq`). Iterating one gives its field
 /// names, as a dict's keys.
 macro_rules! record {
-    (@get $s:ident, $py:ident, $f:ident) => { $crate::python::record::Field::field(&$s.0.$f, $py) };
+    (@get $s:ident, $py:ident, $f:ident) => {{
+        use $crate::python::record::Field as _;
+        $s.0.$f.field($py)
+    }};
     (@get $s:ident, $py:ident, $f:ident, $conv:expr) => { ($conv)(&$s.0, $py) };
     (@eq $ty:ident) => {
         #[pyo3::pymethods]

@@ -4,12 +4,13 @@
 //! it; which setting a run uses is the core's `RunConfig::resolve`.
 use crate::python::Obj;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyFloat, PyTuple};
+use pyo3::types::{IntoPyDict, PyDict, PyFloat, PyTuple};
 
 use super::convert::to_array1;
 use super::record::getters_of;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
 use crate::simulate::RunConfig;
+use crate::support::args::given as given_obj;
 
 #[pyclass(name = "RunConfig", module = "pointmass_dyn._core", frozen, eq)]
 #[derive(Clone, PartialEq)]
@@ -34,14 +35,7 @@ impl PyRunConfig {
     }
     /// The settings given, by keyword (what `RunConfig(**d)` rebuilds).
     fn as_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(slf.py());
-        for key in crate::simulate::config_args::KEYS {
-            let value = slf.getattr(key)?;
-            if !value.is_none() {
-                d.set_item(key, value)?;
-            }
-        }
-        Ok(d)
+        super::record::items(slf, &slf.get().inner.given())?.into_py_dict(slf.py())
     }
 
     /// A copy with the given settings replaced (`None` unsets one); the others kept.
@@ -52,11 +46,7 @@ impl PyRunConfig {
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-        let parts = Self::as_dict(slf)?
-            .iter()
-            .map(|(k, v)| Ok(format!("{k}={}", v.repr()?)))
-            .collect::<PyResult<Vec<_>>>()?;
-        Ok(format!("RunConfig({})", parts.join(", ")))
+        super::record::repr(slf, "RunConfig", &slf.get().inner.given())
     }
 
     fn __getnewargs_ex__<'py>(
@@ -101,17 +91,15 @@ pub(super) fn keywords<'py, const N: usize>(
     settings: Option<&Bound<'py, PyDict>>,
     named: [(&str, Option<&Obj<'py>>); N],
 ) -> PyResult<Vec<(String, Obj<'py>)>> {
-    let mut given: Vec<(String, Obj<'py>)> = Vec::new();
-    for (k, v) in settings.into_iter().flatten() {
-        given.push((k.extract()?, v));
-    }
-    for (key, value) in named {
-        given.extend(
-            value
-                .filter(|v| !v.is_none())
-                .map(|v| (key.to_string(), v.clone())),
-        );
-    }
+    let given = settings
+        .into_iter()
+        .flatten()
+        .map(|(k, v)| Ok((k.extract()?, v)));
+    let mut given = given.collect::<PyResult<Vec<_>>>()?;
+    let named = named
+        .into_iter()
+        .filter_map(|(k, v)| Some((k.into(), given_obj(v)?.clone())));
+    given.extend(named);
     Ok(given)
 }
 

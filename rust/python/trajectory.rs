@@ -7,7 +7,6 @@ use super::convert::{to_array, to_array1};
 use super::record::Field;
 use crate::integrator::{status_variants, NonFiniteKind, Status};
 use crate::simulate::Trajectory;
-use crate::support::error::Error;
 use pyo3::types::{IntoPyDict, PyTuple};
 use pyo3::IntoPyObjectExt;
 
@@ -45,11 +44,7 @@ impl<'py> IntoPyObject<'py> for NonFiniteKind {
 impl FromPyObject<'_, '_> for NonFiniteKind {
     type Error = PyErr;
     fn extract(obj: Borrowed<'_, '_, PyAny>) -> PyResult<Self> {
-        let name: String = obj.extract()?;
-        let kind = NonFiniteKind::ALL.into_iter().find(|k| k.name() == name);
-        kind.ok_or_else(|| {
-            super::errors::invalid(obj.py(), "what", "derivative, state or jacobian", name)
-        })
+        NonFiniteKind::from_arg(&*obj)
     }
 }
 
@@ -112,9 +107,8 @@ pub struct Run {
     error: Option<Py<PyAny>>,
 }
 
+// One run's result (docstring: `_core.pyi`; `pointmass_dyn.SimulationResult` wraps it).
 run_record!(
-    /// One run's trajectory and outcome, the fields `pointmass_dyn.SimulationResult` has of
-    /// the same names; `error` also the one that refused a batch run's input.
     PyRunResult("RunResult", Run) {
         t: |r: &Run, py| r.run.t.field(py),
         q: |r: &Run, py| to_array(py, r.run.q.clone(), &[r.run.t.len(), r.run.nq]),
@@ -137,24 +131,9 @@ run_record!(
 );
 
 impl PyRunResult {
-    /// `traj` with its events in the caller's order (`slots[k]`: the trajectory's slot of
-    /// the caller's event `k`).
-    pub(super) fn new(
-        py: Python<'_>,
-        mut traj: Trajectory,
-        slots: &[usize],
-        error: Option<PyErr>,
-    ) -> Self {
-        traj.order_events(slots);
+    /// `traj`, stopped by `error` if a Python callback (or Ctrl-C) raised it.
+    pub(super) fn new(py: Python<'_>, traj: Trajectory, error: Option<PyErr>) -> Self {
         let error = error.map(|e| e.into_value(py).into_any());
         PyRunResult(Run { run: traj, error })
-    }
-
-    /// A batch run that never started: `error` refused its input, or the batch stopped
-    /// before it (`Interrupted`, its message then says by what).
-    pub(super) fn not_started(py: Python<'_>, error: Error) -> Self {
-        let run = Trajectory::refused(&error);
-        let error = Some(super::errors::to_py(py, error).into_value(py).into_any());
-        PyRunResult(Run { run, error })
     }
 }

@@ -81,28 +81,34 @@ impl RunConfig {
     pub fn replaced<A: Arg>(&self, changes: Option<&A>) -> Result<RunConfig, A::Err> {
         let mut below = self.clone();
         for key in changes.and_then(Arg::keys).unwrap_or_default() {
-            below.unset(&key.text().unwrap_or_default());
+            below.take(&key.text().unwrap_or_default());
         }
         Ok(RunConfig::from_call(changes, &[])?.over(below))
     }
 
-    fn unset(&mut self, key: &str) {
+    /// The keywords of the settings given, in [`KEYS`]' order.
+    pub fn given(&self) -> Vec<&'static str> {
+        KEYS.into_iter().filter(|k| self.clone().take(k)).collect()
+    }
+
+    /// Unsets the setting `key`; whether it was set.
+    fn take(&mut self, key: &str) -> bool {
         match key {
-            "t_span" => self.t_span = None,
-            "rtol" => self.rtol = None,
-            "atol" => self.atol = None,
-            "t_eval" => self.t_eval = None,
-            "first_step" => self.first_step = None,
-            "max_step" => self.max_step = None,
-            "max_steps" => self.max_steps = None,
-            "method" => self.method = None,
-            "dt" => self.dt = None,
-            "controller" => self.controller = None,
-            "stiffness" => self.stiffness = None,
-            "disable" => self.disable = None,
-            "energy" => self.energy = None,
-            "power" => self.power = None,
-            _ => self.dense = None,
+            "t_span" => self.t_span.take().is_some(),
+            "rtol" => self.rtol.take().is_some(),
+            "atol" => self.atol.take().is_some(),
+            "t_eval" => self.t_eval.take().is_some(),
+            "first_step" => self.first_step.take().is_some(),
+            "max_step" => self.max_step.take().is_some(),
+            "max_steps" => self.max_steps.take().is_some(),
+            "method" => self.method.take().is_some(),
+            "dt" => self.dt.take().is_some(),
+            "controller" => self.controller.take().is_some(),
+            "stiffness" => self.stiffness.take().is_some(),
+            "disable" => self.disable.take().is_some(),
+            "energy" => self.energy.take().is_some(),
+            "power" => self.power.take().is_some(),
+            _ => self.dense.take().is_some(),
         }
     }
 
@@ -263,13 +269,26 @@ impl std::fmt::Display for super::StateEvent {
     }
 }
 
-/// The `terminal` and `direction` of the caller's event function `events[k]` (attributes
-/// it may have, SciPy's convention): a crossing count (0: never) and a sign (0: either way).
-pub fn event_function<A: Arg>(k: usize, e: &A) -> Result<(usize, f64), A::Err> {
-    let attr = |name| e.attr(name).filter(|x| !x.absent());
-    let terminal = attr("terminal").map(|t| terminal_count(&t)).transpose()?;
-    let direction = attr("direction").map(|d| d.real(&format!("events[{k}].direction")));
-    Ok((terminal.unwrap_or(0), direction.transpose()?.unwrap_or(0.0)))
+/// How the caller's event function `events[index]` counts: its `terminal` (a crossing
+/// count, 0: never) and `direction` (a sign, 0: either way), attributes it may have
+/// (SciPy's convention).
+pub struct EventFunction {
+    pub index: usize,
+    pub terminal: usize,
+    pub direction: f64,
+}
+
+impl EventFunction {
+    pub fn from_args<A: Arg>(index: usize, e: &A) -> Result<Self, A::Err> {
+        let attr = |name| e.attr(name).filter(|x| !x.absent());
+        let terminal = attr("terminal").map(|t| terminal_count(&t)).transpose()?;
+        let direction = attr("direction").map(|d| d.real(&format!("events[{index}].direction")));
+        Ok(EventFunction {
+            index,
+            terminal: terminal.unwrap_or(0),
+            direction: direction.transpose()?.unwrap_or(0.0),
+        })
+    }
 }
 
 /// An event's `terminal`: a bool, or the count of crossings that stops the run.
