@@ -1038,8 +1038,10 @@ class ContactStates(_Record):
 
 @final
 class OdeSolution(_Record):
-    """What :func:`rk45` returns (``pointmass_dyn.OdeResult`` is built from it); a record:
-    indexable by its attribute names, as the dict it replaced, pickled as that dict."""
+    """What :func:`rk45` returns (``pointmass_dyn.OdeResult`` is built from it): ``y`` as
+    (dim, N); ``stiff``: ``{"t", "h_lambda", "h", "lambda"}`` of the first stiffness
+    detection, if any. A record: indexable by its attribute names, as the dict it replaced,
+    pickled as that dict."""
     t: NDArray[np.float64]
     y: NDArray[np.float64]
     t_events: list[NDArray[np.float64]] | None

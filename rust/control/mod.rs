@@ -3,6 +3,7 @@
 //! torques, or targets for the scene's PD torques), keeping an adaptive method's state across
 //! calls ([`crate::integrator::Resume`]), and the sensors a controller reads ([`sensors`]).
 //! docs/control.md.
+mod args;
 mod owned;
 pub mod sensors;
 mod stepping;

@@ -4,6 +4,8 @@
 //!
 //! RK45's is SciPy's quartic `y(t) = y_old + h · Q p(x)`, with `x = (t - t_old) / h`,
 //! `p = (x, x², x³, x⁴)` and `Q = Kᵀ P` (Shampine 1986, optimal c6).
+use crate::support::args::{shape_str, Arg};
+use crate::support::error::Error;
 
 /// How a step's coefficients `q` (`n_coef()` per component; component `i` at
 /// `q[n_coef·i ..]`) give the state at `t`, with `x = (t - t_old) / h`, `h = t - t_old` signed.
@@ -343,7 +345,10 @@ impl DenseOutput {
     /// the integrated interval the interpolant extrapolates, and overflows far away. Panics
     /// if there are no segments.
     pub fn sample(&self, ts: &[f64]) -> crate::support::error::Result<Vec<f64>> {
-        use crate::support::error::Error;
+        if self.n_segments() == 0 {
+            let t0 = self.ts.first().copied().unwrap_or(f64::NAN);
+            return Err(Error::Simulation(format!("sol(t): the run ended at t = {t0} before its first step, so there is nothing to interpolate")));
+        }
         if let Some(bad) = ts.iter().find(|x| !x.is_finite()) {
             return Err(Error::arg("t", "finite times", bad.to_string()));
         }
@@ -361,6 +366,16 @@ impl DenseOutput {
             }
         }
         Ok(out)
+    }
+
+    /// `sol(t)` as its caller writes `t`: one time (shape `()`) or a 1-D array of `m`; the
+    /// states ([`DenseOutput::sample`]) and `Some(m)` for an array.
+    pub fn sample_arg<A: Arg>(&self, t: &A) -> Result<(Vec<f64>, Option<usize>), A::Err> {
+        let (shape, ts) = t.array("t")?;
+        if shape.len() > 1 {
+            return Err(Error::arg("t", "a scalar or a 1-D array", shape_str(&shape)).into());
+        }
+        Ok((self.sample(&ts)?, shape.first().copied()))
     }
 }
 

@@ -441,6 +441,20 @@ pub enum InputError {
     JacobianNonFinite { index: usize, value: f64 },
 }
 
+/// A setting refused (`InvalidSetting`), or an output too large to allocate.
+impl From<InputError> for crate::support::error::Error {
+    fn from(e: InputError) -> Self {
+        match e {
+            InputError::OutputTooLarge { bytes, .. } => Self::OutOfMemory {
+                what: "the solution".into(),
+                bytes,
+                detail: e.to_string(),
+            },
+            e => Self::InvalidSetting(e.to_string()),
+        }
+    }
+}
+
 impl InputError {
     /// Name of the offending argument (for mapping to e.g. a Python `ValueError`).
     pub fn argument(&self) -> &'static str {
@@ -485,6 +499,12 @@ pub enum NonFiniteKind {
 impl NonFiniteKind {
     pub const ALL: [NonFiniteKind; 3] = [Self::Derivative, Self::State, Self::Jacobian];
     /// `"derivative"`, `"state"` or `"jacobian"`.
+    /// The kind a caller names ("derivative", "state" or "jacobian").
+    pub fn from_arg<A: crate::support::args::Arg>(x: &A) -> Result<Self, A::Err> {
+        let choices = NonFiniteKind::ALL.map(|k| (k.name(), k));
+        crate::support::args::choice(x, "what", &choices, "derivative, state or jacobian")
+    }
+
     pub fn name(self) -> &'static str {
         match self {
             Self::Derivative => "derivative",
@@ -523,6 +543,9 @@ macro_rules! status_variants {
             /// The caller stopped the run from the evaluation at `at` (Ctrl-C, its progress callback,
             /// a stopped batch); `reason` says which when the caller has named it.
             Interrupted { t: f64, at: f64, reason: Option<String> },
+            /// A run of a batch that never started: its input was refused, or the batch
+            /// stopped first (`reason` says which).
+            NotStarted { reason: String },
         ] [$($($extra)*)?]}
     };
 }
@@ -632,6 +655,7 @@ impl Status {
                 },
                 f(*t)
             ),
+            Status::NotStarted { reason } => reason.clone(),
             Status::Stiff { t, h_lambda, h } => format!(
                 "the problem is stiff at t = {}: on {STIFF_STEPS} accepted steps the step size \
                  was limited by the stability of the explicit method (h·|λ| ≈ {h_lambda:.2}, \
@@ -642,6 +666,21 @@ impl Status {
             ),
         }
     }
+}
+
+/// Each event's states (`ys[k]`: rows of `width` entries), the columns `cols` of them, as
+/// one matrix per event.
+pub fn event_matrices(
+    ys: &[Vec<f64>],
+    width: usize,
+    cols: std::ops::Range<usize>,
+) -> Vec<nalgebra::DMatrix<f64>> {
+    let matrix = |y: &Vec<f64>| {
+        let rows = y.chunks_exact(width.max(1));
+        let entries = rows.clone().flat_map(|r| r[cols.clone()].iter().copied());
+        nalgebra::DMatrix::from_row_iterator(rows.len(), cols.len(), entries)
+    };
+    ys.iter().map(matrix).collect()
 }
 
 /// Result of [`rk45`].
@@ -689,6 +728,11 @@ impl Solution {
     }
 
     /// The states by component, SciPy's layout: row-major `dim × t.len()`.
+    /// Each event's states as an m × dim matrix.
+    pub fn event_matrices(&self) -> Vec<nalgebra::DMatrix<f64>> {
+        event_matrices(&self.y_events, self.dim, 0..self.dim)
+    }
+
     pub fn y_by_component(&self) -> Vec<f64> {
         let (dim, n) = (self.dim, self.t.len());
         (0..dim * n)

@@ -5,14 +5,13 @@ use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
 
-use super::convert::{to_array, to_array1, vector};
-use super::effects::take_callback_error;
+use super::convert::{to_array, to_array1};
 use super::errors::IntoPyResult;
-use super::run_config::config_of;
+use super::record::getters_of;
 use super::scene::PyScene;
+use super::simulate::callbacks;
 use super::trajectory::PyRunResult;
-use crate::control::{ControlKind, OwnedSimulator, Simulator, Stepping};
-use crate::support::args;
+use crate::control::{OwnedSimulator, Simulator};
 
 #[pyclass(name = "_Simulator", module = "pointmass_dyn._core")]
 pub struct PySimulator {
@@ -34,7 +33,7 @@ impl PySimulator {
     fn new(
         py: Python<'_>,
         scene: PyRef<'_, PyScene>,
-        method: Option<&str>,
+        method: Option<&Obj>,
         rtol: Option<&Obj>,
         atol: Option<&Obj>,
         dt: Option<&Obj>,
@@ -47,10 +46,9 @@ impl PySimulator {
         t0: f64,
         t_eval: Option<&Obj>,
     ) -> PyResult<Self> {
-        let kind = ControlKind::from_arg(&pyo3::types::PyString::new(py, control).into_any())?;
-        let method = method.map(|m| pyo3::types::PyString::new(py, m).into_any());
+        let control = pyo3::types::PyString::new(py, control).into_any();
         let given = [
-            ("method", method.as_ref()),
+            ("method", method),
             ("rtol", rtol),
             ("atol", atol),
             ("dt", dt),
@@ -58,91 +56,65 @@ impl PySimulator {
             ("first_step", first_step),
             ("max_step", max_step),
         ];
-        let call = config_of(py, &given)?;
-        let t_eval = args::opt(t_eval, |te| vector(te, "t_eval", None))?;
-        let at = Stepping {
-            t0,
-            period: control_period,
-            kind,
-            record,
-            t_eval: t_eval.as_deref(),
-        };
-        let inner = OwnedSimulator::of_scene(&scene.inner, call, at).py(py)?;
+        let at = (t0, control_period, record);
+        let inner = OwnedSimulator::from_args(&scene.inner, &given, at, &control, t_eval)?;
         Ok(PySimulator {
             inner: Mutex::new(inner),
         })
     }
 
-    fn set_control(&self, py: Python<'_>, u: &Obj) -> PyResult<()> {
-        let u = vector(u, "control", None)?;
-        self.lock().with_mut(|s| s.set_control(&u)).py(py)
+    fn set_control(&self, u: &Obj) -> PyResult<()> {
+        self.lock().with_mut(|s| s.set_control_arg(u))
     }
 
-    fn set_state(&self, py: Python<'_>, q: &Obj, v: &Obj) -> PyResult<()> {
-        let q = vector(q, "q", None)?;
-        let v = vector(v, "v", None)?;
-        self.lock().with_mut(|s| s.set_state(&q, &v)).py(py)
+    fn set_state(&self, q: &Obj, v: &Obj) -> PyResult<()> {
+        self.lock().with_mut(|s| s.set_state_arg(q, v))
     }
 
     /// Advances to `target` with the interpreter released; returns None, or the failure's
     /// message (the run then stays where it failed). A Python callback that raised is
     /// re-raised.
     fn advance(&self, py: Python<'_>, target: f64) -> PyResult<Option<String>> {
-        take_callback_error();
-        let (r, t) = self
-            .lock()
-            .with_mut(|sim| (py.detach(|| sim.advance(target)), sim.t()));
-        let r = r.py(py)?;
-        if let Some(e) = take_callback_error() {
-            return Err(e);
-        }
-        Ok(r.err().map(|s| s.describe(t)))
+        let run = |sim: &mut Simulator<'_>| {
+            let r = py.detach(|| sim.advance(target));
+            r.map(|r| r.err().map(|s| s.describe(sim.t())))
+        };
+        callbacks(py, || self.lock().with_mut(run))
     }
 
     /// Everything so far, as `simulate_scene` returns it.
     fn trajectory(&self, py: Python<'_>) -> PyResult<PyRunResult> {
         let traj = self.lock().with(|s| s.trajectory());
-        let slots: Vec<usize> = (0..traj.t_events.len()).collect();
-        Ok(PyRunResult::new(py, traj, &slots, None))
+        Ok(PyRunResult::new(py, traj, None))
     }
 
     /// The actuators' joint torques now (nv): the torque control plus the scene's torques.
     fn joint_torques<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        let mut out = vec![0.0; self.lock().with(|s| s.nv())];
-        self.lock().with_mut(|s| s.joint_torques(&mut out)).py(py)?;
-        Ok(to_array1(py, &out).into_any())
+        let tau = self.lock().with_mut(|s| s.torques_now()).py(py)?;
+        Ok(to_array1(py, &tau).into_any())
     }
 
     /// IMU readings now, (n, 6): specific force then angular velocity, sensor axes; each IMU
     /// `(body index, position (3,), rotation (3, 3))` in the body's frame.
     fn imu<'py>(&self, py: Python<'py>, imus: &Obj) -> PyResult<Obj<'py>> {
-        let list = crate::control::sensors::imus_arg(imus)?;
-        let mut out = vec![0.0; 6 * list.len()];
-        self.lock().with_mut(|s| s.imu(&list, &mut out)).py(py)?;
-        to_array(py, out, &[list.len(), 6])
+        let (out, n) = self.lock().with_mut(|s| s.imu_arg(imus))?;
+        to_array(py, out, &[n, 6])
     }
 }
 
-/// The simulator's state read through its lock: `name: type = |simulator, py| value`.
-macro_rules! simulator_getters {
-    ($($(#[$m:meta])* $name:ident: $t:ty = $get:expr),* $(,)?) => {
-        #[pymethods]
-        impl PySimulator {
-            $($(#[$m])* #[getter]
-            fn $name<'py>(&self, py: Python<'py>) -> $t {
-                self.lock().with(|s| ($get)(s, py))
-            })*
-        }
-    };
+impl PySimulator {
+    fn read<R>(&self, f: impl for<'m> FnOnce(&Simulator<'m>) -> R) -> R {
+        self.lock().with(f)
+    }
 }
 
-simulator_getters!(
-    t: f64 = |s: &Simulator<'_>, _| s.t(),
-    nq: usize = |s: &Simulator<'_>, _| s.nq(),
-    control_period: f64 = |s: &Simulator<'_>, _| s.period(),
-    method: &'static str = |s: &Simulator<'_>, _| s.method().name(),
-    control_len: usize = |s: &Simulator<'_>, _| s.control_len(),
+getters_of!(PySimulator.read {
+    t: f64 = |s, py| s.t(),
+    nq: usize = |s, py| s.nq(),
+    control_period: f64 = |s, py| s.period(),
+    method: &'static str = |s, py| s.method().name(),
+    control_len: usize = |s, py| s.control_len(),
     /// The state `[q; v]` (a copy).
-    y: Obj<'py> = |s: &Simulator<'_>, py| to_array1(py, s.y()).into_any(),
-    control: Option<Obj<'py>> = |s: &Simulator<'_>, py| s.control().map(|u| to_array1(py, u).into_any()),
-);
+    y: Obj<'py> = |s, py| to_array1(py, s.y()).into_any(),
+    control: Option<Obj<'py>> = |s, py| s.control().map(|u| to_array1(py, u).into_any()),
+});

@@ -5,11 +5,10 @@ use std::sync::Mutex;
 use numpy::PyArray1;
 use pyo3::prelude::*;
 
-use super::convert::real;
 use super::effects::repr_of;
 use super::errors::invalid;
 use crate::integrator::{Event, EventDirection};
-use crate::simulate::config_args::terminal_count;
+use crate::simulate::config_args::EventFunction;
 use crate::simulate::StateEvent;
 use crate::simulate::{event_value, EventList};
 use crate::support::args::given;
@@ -32,69 +31,37 @@ impl PyStateEvent {
     #[pyo3(signature = (variable, index, value=None, direction=None, terminal=None))]
     fn new(
         variable: &str,
-        index: Obj,
-        value: Option<Obj>,
-        direction: Option<Obj>,
-        terminal: Option<Obj>,
+        index: &Obj,
+        value: Option<&Obj>,
+        direction: Option<&Obj>,
+        terminal: Option<&Obj>,
     ) -> PyResult<Self> {
-        let (value, direction, terminal) = (value.as_ref(), direction.as_ref(), terminal.as_ref());
-        let inner = StateEvent::from_args(variable, &index, value, direction, terminal)?;
+        let inner = StateEvent::from_args(variable, index, value, direction, terminal)?;
         Ok(PyStateEvent { inner })
     }
-    #[getter]
-    fn terminal(&self) -> usize {
-        self.inner.terminal
-    }
-    #[getter]
-    fn direction(&self) -> i32 {
-        self.inner.direction
-    }
     fn __repr__(&self) -> String {
-        let e = &self.inner;
-        format!(
-            "StateEvent('{}', {}, value={}, direction={}, terminal={})",
-            if e.on_velocity { "v" } else { "q" },
-            e.index,
-            e.value,
-            e.direction,
-            e.terminal
-        )
+        self.inner.to_string()
     }
 }
 
-/// A Python event callable: `(args...) -> float`, with optional `terminal` and `direction`
-/// attributes (SciPy's convention).
+super::getters!(PyStateEvent {
+    terminal: usize = inner.terminal,
+    direction: i32 = inner.direction,
+});
+
+/// A Python event callable: `(args...) -> float`, and how it counts.
 pub(super) struct PyEventSpec {
-    /// Position in the caller's `events` (named in errors).
-    index: usize,
     func: Py<PyAny>,
-    terminal: usize,
-    direction: f64,
+    counts: EventFunction,
 }
 
 pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventSpec> {
     if !e.is_callable() {
-        return Err(invalid(
-            py,
-            &format!("events[{k}]"),
-            "a callable or a pmd.StateEvent",
-            repr_of(e),
-        ));
+        let expected = "a callable or a pmd.StateEvent";
+        return Err(invalid(py, &format!("events[{k}]"), expected, repr_of(e)));
     }
-    let terminal = match e.getattr("terminal") {
-        Ok(t) if !t.is_none() => terminal_count(&t)?,
-        _ => 0,
-    };
-    let direction = match e.getattr("direction") {
-        Ok(d) if !d.is_none() => real(&d, &format!("events[{k}].direction"))?,
-        _ => 0.0,
-    };
-    Ok(PyEventSpec {
-        index: k,
-        func: e.clone().unbind(),
-        terminal,
-        direction,
-    })
+    let (func, counts) = (e.clone().unbind(), EventFunction::from_args(k, e)?);
+    Ok(PyEventSpec { func, counts })
 }
 
 /// A run's events in the caller's order (the core's `EventList`): `None`, one event
@@ -117,31 +84,43 @@ pub(super) fn event_list(py: Python<'_>, events: Option<&Obj>) -> PyResult<Event
     Ok(out)
 }
 
-/// Builds an event that calls Python (re-attaching to the interpreter when called from a
-/// detached thread); the first exception is kept in `failure` and re-raised afterwards.
-pub(super) fn python_event<'a>(
-    spec: &'a PyEventSpec,
+/// The caller's event callables as a run's events, each calling Python (re-attaching to
+/// the interpreter when called from a detached thread) with `(t, q, v)` (`split`: the
+/// state's `nq`) or `(t, y)`; the first exception is kept in `failure` and re-raised after.
+pub(super) fn python_events<'a>(
+    events: &'a EventList<PyEventSpec>,
     split: Option<usize>,
     failure: &'a Mutex<Option<PyErr>>,
-) -> Event<'a> {
-    let f = move |t: f64, y_all: &[f64]| -> f64 {
-        Python::attach(|py| {
-            let y = |y: &[f64]| PyArray1::from_slice(py, y).into_any();
-            let args = match split {
-                Some(nq) => (t, y(&y_all[..nq]), y(&y_all[nq..])).into_pyobject(py),
-                None => (t, y(y_all)).into_pyobject(py),
-            };
-            let out = args.and_then(|a| spec.func.bind(py).call1(a));
-            let out = out.and_then(|r| event_value(spec.index, t, &r));
-            out.unwrap_or_else(|e| {
-                if let Ok(mut slot) = failure.lock() {
-                    slot.get_or_insert(e);
-                }
-                f64::NAN
+) -> Vec<Event<'a>> {
+    let event = |spec: &'a PyEventSpec| {
+        let f = move |t: f64, y_all: &[f64]| -> f64 {
+            Python::attach(|py| {
+                let y = |y: &[f64]| PyArray1::from_slice(py, y).into_any();
+                let args = match split {
+                    Some(nq) => (t, y(&y_all[..nq]), y(&y_all[nq..])).into_pyobject(py),
+                    None => (t, y(y_all)).into_pyobject(py),
+                };
+                let out = args.and_then(|a| spec.func.bind(py).call1(a));
+                let out = out.and_then(|r| event_value(spec.counts.index, t, &r));
+                out.unwrap_or_else(|e| {
+                    keep(failure, e);
+                    f64::NAN
+                })
             })
-        })
+        };
+        Event::new(f)
+            .direction(EventDirection::from_sign(spec.counts.direction))
+            .terminal(spec.counts.terminal)
     };
-    Event::new(f)
-        .direction(EventDirection::from_sign(spec.direction))
-        .terminal(spec.terminal)
+    events.other.iter().map(event).collect()
+}
+
+/// Keeps `e` in `failure` unless an earlier exception is there (the first one stops the
+/// run); its message, for the run's.
+pub(super) fn keep(failure: &Mutex<Option<PyErr>>, e: PyErr) -> String {
+    let message = e.to_string();
+    if let Ok(mut slot) = failure.lock() {
+        slot.get_or_insert(e);
+    }
+    message
 }

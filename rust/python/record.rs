@@ -62,10 +62,11 @@ impl Field for DMatrix<f64> {
     }
 }
 
-impl Field for Vec<Vec<f64>> {
+/// A list of fields (vectors, matrices), each converted.
+impl<T: Field> Field for [T] {
     fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        let items: Vec<_> = self.iter().map(|x| to_array1(py, x)).collect();
-        items.into_bound_py_any(py)
+        let items = self.iter().map(|x| x.field(py));
+        items.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
     }
 }
 
@@ -75,7 +76,10 @@ impl Field for Vec<Vec<f64>> {
 /// records by their fields (the core type's `PartialEq`). Iterating one gives its field
 /// names, as a dict's keys.
 macro_rules! record {
-    (@get $s:ident, $py:ident, $f:ident) => { $crate::python::record::Field::field(&$s.0.$f, $py) };
+    (@get $s:ident, $py:ident, $f:ident) => {{
+        use $crate::python::record::Field as _;
+        $s.0.$f.field($py)
+    }};
     (@get $s:ident, $py:ident, $f:ident, $conv:expr) => { ($conv)(&$s.0, $py) };
     (@eq $ty:ident) => {
         #[pyo3::pymethods]
@@ -140,6 +144,25 @@ macro_rules! record {
 }
 pub(crate) use record;
 
+/// `#[getter]`s declared from a table, each with its docs:
+/// `getters_of!(PyX.read { /// doc \n name: Type = |inner, py| value, ... })`, where
+/// `PyX::read(f)` lends the value the class holds to `f`.
+macro_rules! getters_of {
+    ($ty:ident.$read:ident {
+        $($(#[$m:meta])* $name:ident: $t:ty = |$x:ident, $py:ident| $get:expr),* $(,)?
+    }) => {
+        #[pyo3::pymethods]
+        impl $ty {
+            $($(#[$m])* #[getter]
+            #[allow(unused_variables)]
+            fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t {
+                self.$read(|$x| $get)
+            })*
+        }
+    };
+}
+pub(crate) use getters_of;
+
 /// `obj[key]` for one of a record's `fields`, else `KeyError`.
 pub fn item<'py>(obj: &Obj<'py>, key: &str, fields: &[&str]) -> PyResult<Obj<'py>> {
     match fields.contains(&key) {
@@ -157,10 +180,16 @@ pub fn items<'py>(
 }
 
 /// `Name(a=..., b=...)` of a record's fields.
-pub fn repr(obj: &Obj, name: &str, fields: &[&str]) -> PyResult<String> {
+pub fn repr(obj: &Obj, name: &str, fields: &[impl AsRef<str>]) -> PyResult<String> {
     let parts: PyResult<Vec<String>> = fields
         .iter()
-        .map(|f| Ok(format!("{f}={}", obj.getattr(*f)?.repr()?)))
+        .map(|f| {
+            Ok(format!(
+                "{}={}",
+                f.as_ref(),
+                obj.getattr(f.as_ref())?.repr()?
+            ))
+        })
         .collect();
     Ok(format!("{name}({})", parts?.join(", ")))
 }

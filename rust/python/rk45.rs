@@ -10,17 +10,16 @@ use pyo3::IntoPyObjectExt;
 use super::convert::{to_array, vector};
 use super::dense::PyDenseSolution;
 use super::effects::repr_of;
+use super::errors::invalid;
 use super::errors::IntoPyResult;
-use super::errors::{invalid, py_error};
-use super::events::{event_list, python_event};
+use super::events::{event_list, keep, python_events};
 use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::record::Field;
 use super::run_config::{call_config, PyRunConfig};
-use crate::integrator::{self, Event, FnSystem, OdeSystem};
+use crate::integrator::{self, FnSystem, OdeSystem};
 use crate::io::scene::Settings;
 
-/// Our integrators on a Python right-hand side `fun(t, y) -> array`: `method` "RK45"
-/// (default) and "DOP853" step for step SciPy's `solve_ivp`, "RK4"/"Euler" at the fixed `dt`.
+// Docstring: `_core.pyi`; `pointmass_dyn.rk45` (and `solve_ivp`) wrap it.
 #[pyfunction]
 #[pyo3(signature = (fun, t_span, y0, rtol=None, atol=None, *, config=None, events=None, jac=None, **settings))]
 pub fn rk45(
@@ -36,35 +35,22 @@ pub fn rk45(
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyOdeSolution> {
     if !fun.is_callable() {
-        return Err(invalid(
-            py,
-            "fun",
-            "a callable fun(t, y) -> array",
-            repr_of(fun),
-        ));
+        let expected = "a callable fun(t, y) -> array";
+        return Err(invalid(py, "fun", expected, repr_of(fun)));
     }
-    let t_span_given = crate::simulate::config_args::t_span(t_span)?;
     let y0 = vector(y0, "y0", None)?;
     let dim = y0.len();
     // No scene: the caller's settings, else the defaults.
     let run = call_config(config, Some(t_span), rtol, atol, settings)?
         .resolve(&Settings::default(), &[], dim)
         .py(py)?;
-    let (t_span, opts) = (t_span_given, run.opts);
+    let (t_span, opts) = (run.t_span, run.opts);
     let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
-    let events = event_list(py, events)?;
-    if !events.state.is_empty() {
-        let expected = "event callables (a StateEvent needs a scene: pmd.simulate)";
-        return Err(invalid(py, "events", expected, "a StateEvent"));
-    }
+    let events = event_list(py, events)?.for_run(false, false)?;
     // The first exception from `fun` or an event (Ctrl-C included) stops the run;
     // `pointmass_dyn.rk45` re-raises it with the solution computed so far attached.
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
-    let specs = &events.other;
-    let mut evs: Vec<Event<'_>> = specs
-        .iter()
-        .map(|s| python_event(s, None, &failure))
-        .collect();
+    let mut evs = python_events(&events, None, &failure);
     let sys = python_system(py, fun, dim, &failure);
     // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
     let sol = match jac {
@@ -81,10 +67,16 @@ pub fn rk45(
         }
         JacArg::None => integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, None),
     }
-    .map_err(|e| invalid_setting(py, e))?;
+    .map_err(crate::support::error::Error::from);
+    let mut run = sol.py(py)?;
     drop(evs);
-    let raised = failure.into_inner().ok().flatten();
-    solution(py, sol, raised, !specs.is_empty())
+    let error = failure.into_inner().ok().flatten();
+    let dense = run.dense.take().map(|inner| PyDenseSolution { inner });
+    Ok(PyOdeSolution(Ode {
+        run,
+        sol: dense.map(|d| Py::new(py, d)).transpose()?,
+        error: error.map(|e| e.into_value(py).into_any()),
+    }))
 }
 
 /// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in
@@ -95,49 +87,29 @@ fn python_system<'a>(
     dim: usize,
     failure: &'a Mutex<Option<PyErr>>,
 ) -> impl OdeSystem + 'a {
-    FnSystem::new(
-        dim,
-        move |t: f64, y: &[f64], dydt: &mut [f64]| -> Result<(), String> {
-            let mut call = || -> PyResult<()> {
-                let out = fun.call1((t, PyArray1::from_slice(py, y)))?;
-                let v = vector(&out, "fun(t, y)", Some(dim))?;
-                dydt.copy_from_slice(&v);
-                Ok(())
-            };
-            call().map_err(|e| {
-                let msg = e.to_string();
-                if let Ok(mut slot) = failure.lock() {
-                    slot.get_or_insert(e);
-                }
-                msg
-            })
-        },
-    )
+    let rhs = move |t: f64, y: &[f64], dydt: &mut [f64]| {
+        let out = fun.call1((t, PyArray1::from_slice(py, y)));
+        let out = out.and_then(|out| vector(&out, "fun(t, y)", Some(dim)));
+        out.map(|v| dydt.copy_from_slice(&v))
+            .map_err(|e| keep(failure, e))
+    };
+    FnSystem::new(dim, rhs)
 }
 
-/// An `rk45` run; `with_events`: the caller gave events (else the event lists are `None`).
+/// An `rk45` run (without events, the event lists are `None`).
 pub struct Ode {
     run: integrator::Solution,
-    with_events: bool,
     sol: Option<Py<PyDenseSolution>>,
     error: Option<Py<PyAny>>,
 }
 
-impl Ode {
-    fn code(&self) -> i32 {
-        self.run.status.code()
-    }
-}
-
+// `rk45`'s result (docstring: `_core.pyi`; `pointmass_dyn.OdeResult` is built from it).
 super::trajectory::run_record!(
-    /// `rk45`'s result: the entries of SciPy's `OdeResult` (`pointmass_dyn.OdeResult` is
-    /// built from them), `y` as (dim, N); `stiff`: `{"t", "h_lambda", "h", "lambda"}` of the
-    /// first stiffness detection, if any.
     PyOdeSolution("OdeSolution", Ode) {
         t: |r: &Ode, py| r.run.t.field(py),
         y: |r: &Ode, py| to_array(py, r.run.y_by_component(), &[r.run.dim, r.run.t.len()]),
-        t_events: |r: &Ode, py| r.with_events.then(|| r.run.t_events.field(py)).transpose()?.into_bound_py_any(py),
-        y_events: |r: &Ode, py| r.with_events.then(|| event_arrays(py, &r.run)).transpose()?.into_bound_py_any(py),
+        t_events: |r: &Ode, py| (!r.run.t_events.is_empty()).then(|| r.run.t_events.field(py)).transpose()?.into_bound_py_any(py),
+        y_events: |r: &Ode, py| (!r.run.t_events.is_empty()).then(|| r.run.event_matrices().field(py)).transpose()?.into_bound_py_any(py),
         stiff: |r: &Ode, py| {
             let entries = |s: &integrator::Stiffness| [("t", s.t), ("h_lambda", s.h_lambda), ("h", s.h), ("lambda", s.lambda())];
             r.run.stiffness.as_ref().map(|s| entries(s).into_py_dict(py)).transpose()?.into_bound_py_any(py)
@@ -145,37 +117,3 @@ super::trajectory::run_record!(
         sol: |r: &Ode, py| r.sol.as_ref().into_bound_py_any(py),
     }
 );
-
-/// Each event's states as an (m, dim) array.
-fn event_arrays<'py>(py: Python<'py>, sol: &integrator::Solution) -> PyResult<Obj<'py>> {
-    let arrays = sol.t_events.iter().zip(&sol.y_events);
-    let arrays = arrays.map(|(t, y)| to_array(py, y.clone(), &[t.len(), sol.dim]));
-    arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
-}
-
-fn solution(
-    py: Python<'_>,
-    mut run: integrator::Solution,
-    raised: Option<PyErr>,
-    with_events: bool,
-) -> PyResult<PyOdeSolution> {
-    let sol = run
-        .dense
-        .take()
-        .map(|inner| Py::new(py, PyDenseSolution { inner }));
-    let error = raised.map(|e| e.into_value(py).into_any());
-    Ok(PyOdeSolution(Ode {
-        run,
-        with_events,
-        sol: sol.transpose()?,
-        error,
-    }))
-}
-
-pub(super) fn invalid_setting(py: Python<'_>, e: integrator::InputError) -> PyErr {
-    let class = match e {
-        integrator::InputError::OutputTooLarge { .. } => "OutOfMemoryError",
-        _ => "InvalidInputError",
-    };
-    py_error(py, class, e.to_string())
-}

@@ -3,13 +3,14 @@
 //! (`simulate_scene`, `simulate_batch`, `rk45`) take one, plus the same keywords, which beat
 //! it; which setting a run uses is the core's `RunConfig::resolve`.
 use crate::python::Obj;
-use numpy::PyArray1;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyFloat, PyTuple};
-use pyo3::PyTypeInfo;
+use pyo3::types::{IntoPyDict, PyDict, PyFloat, PyTuple};
 
+use super::convert::to_array1;
+use super::record::getters_of;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
 use crate::simulate::RunConfig;
+use crate::support::args::given as given_obj;
 
 #[pyclass(name = "RunConfig", module = "pointmass_dyn._core", frozen, eq)]
 #[derive(Clone, PartialEq)]
@@ -28,84 +29,24 @@ impl PyRunConfig {
         text_signature = "(t_span=None, *, rtol=None, atol=None, t_eval=None, first_step=None, max_step=None, max_steps=None, method=None, dt=None, controller=None, stiffness=None, disable=None, energy=None, power=None, dense_output=None)"
     )]
     fn new(t_span: Option<Obj>, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
-        let given = keywords(settings, [("t_span", t_span.as_ref())])?;
-        let inner = RunConfig::from_args(given.iter().map(|(k, v)| (k.as_str(), v)))?;
+        let named = [("t_span", t_span.as_ref())];
+        let inner = RunConfig::from_call(settings.map(|d| d.as_any()), &named)?;
         Ok(PyRunConfig { inner })
     }
-    /// A number, or an array of one per state component.
-    #[getter]
-    fn rtol<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
-        self.inner.rtol.as_ref().map(|t| tol_py(py, t))
-    }
-    #[getter]
-    fn atol<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
-        self.inner.atol.as_ref().map(|t| tol_py(py, t))
-    }
-    #[getter]
-    fn t_eval<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
-        self.inner
-            .t_eval
-            .as_ref()
-            .map(|t| PyArray1::from_slice(py, t))
-    }
-    /// SciPy's spelling: "RK45", "DOP853", "Radau", "RK4", "Euler" or "auto".
-    #[getter]
-    fn method(&self) -> Option<&'static str> {
-        self.inner.method.map(Method::name)
-    }
-    /// "standard" (SciPy's) or "pi" (Hairer's).
-    #[getter]
-    fn controller(&self) -> Option<&'static str> {
-        self.inner.controller.map(Controller::name)
-    }
-    /// "warn", "stop" or "off".
-    #[getter]
-    fn stiffness(&self) -> Option<&'static str> {
-        self.inner.stiffness.map(StiffnessCheck::name)
-    }
-    /// The effect families switched off, as a tuple of names (`()`: none).
-    #[getter]
-    fn disable<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyTuple>>> {
-        self.inner
-            .disable
-            .map(|d| PyTuple::new(py, d.names()))
-            .transpose()
-    }
-
     /// The settings given, by keyword (what `RunConfig(**d)` rebuilds).
     fn as_dict<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(slf.py());
-        for key in crate::simulate::config_args::KEYS {
-            let value = slf.getattr(key)?;
-            if !value.is_none() {
-                d.set_item(key, value)?;
-            }
-        }
-        Ok(d)
+        super::record::items(slf, &slf.get().inner.given())?.into_py_dict(slf.py())
     }
 
     /// A copy with the given settings replaced (`None` unsets one); the others kept.
     #[pyo3(signature = (**changes))]
-    fn replace<'py>(
-        slf: &Bound<'py, Self>,
-        changes: Option<&Bound<'py, PyDict>>,
-    ) -> PyResult<Bound<'py, Self>> {
-        let d = Self::as_dict(slf)?;
-        if let Some(changes) = changes {
-            d.update(changes.as_mapping())?;
-        }
-        Self::type_object(slf.py())
-            .call((), Some(&d))?
-            .cast_into::<Self>()
-            .map_err(Into::into)
+    fn replace(&self, changes: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let inner = self.inner.replaced(changes.map(|c| c.as_any()))?;
+        Ok(PyRunConfig { inner })
     }
 
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-        let parts = Self::as_dict(slf)?
-            .iter()
-            .map(|(k, v)| Ok(format!("{k}={}", v.repr()?)))
-            .collect::<PyResult<Vec<_>>>()?;
-        Ok(format!("RunConfig({})", parts.join(", ")))
+        super::record::repr(slf, "RunConfig", &slf.get().inner.given())
     }
 
     fn __getnewargs_ex__<'py>(
@@ -115,15 +56,34 @@ impl PyRunConfig {
     }
 }
 
-super::getters!(PyRunConfig {
-    t_span: Option<(f64, f64)> = inner.t_span,
-    first_step: Option<f64> = inner.first_step,
-    max_step: Option<f64> = inner.max_step,
-    max_steps: Option<usize> = inner.max_steps,
-    dt: Option<f64> = inner.dt,
-    energy: Option<bool> = inner.energy,
-    power: Option<bool> = inner.power,
-    dense_output: Option<bool> = inner.dense,
+impl PyRunConfig {
+    fn read<R>(&self, f: impl FnOnce(&RunConfig) -> R) -> R {
+        f(&self.inner)
+    }
+}
+
+getters_of!(PyRunConfig.read {
+    t_span: Option<(f64, f64)> = |c, py| c.t_span,
+    /// A number, or an array of one per state component.
+    rtol: Option<Obj<'py>> = |c, py| c.rtol.as_ref().map(|t| tol_py(py, t)),
+    atol: Option<Obj<'py>> = |c, py| c.atol.as_ref().map(|t| tol_py(py, t)),
+    t_eval: Option<Obj<'py>> = |c, py| c.t_eval.as_ref().map(|t| to_array1(py, t).into_any()),
+    first_step: Option<f64> = |c, py| c.first_step,
+    max_step: Option<f64> = |c, py| c.max_step,
+    max_steps: Option<usize> = |c, py| c.max_steps,
+    /// SciPy's spelling: "RK45", "DOP853", "Radau", "RK4", "Euler" or "auto".
+    method: Option<&'static str> = |c, py| c.method.map(Method::name),
+    dt: Option<f64> = |c, py| c.dt,
+    /// "standard" (SciPy's) or "pi" (Hairer's).
+    controller: Option<&'static str> = |c, py| c.controller.map(Controller::name),
+    /// "warn", "stop" or "off".
+    stiffness: Option<&'static str> = |c, py| c.stiffness.map(StiffnessCheck::name),
+    /// The effect families switched off, as a tuple of names (`()`: none).
+    disable: PyResult<Option<Bound<'py, PyTuple>>> =
+        |c, py| c.disable.map(|d| PyTuple::new(py, d.names())).transpose(),
+    energy: Option<bool> = |c, py| c.energy,
+    power: Option<bool> = |c, py| c.power,
+    dense_output: Option<bool> = |c, py| c.dense,
 });
 
 /// A call's `**settings` and its named keywords given (not `None`), by keyword.
@@ -131,17 +91,15 @@ pub(super) fn keywords<'py, const N: usize>(
     settings: Option<&Bound<'py, PyDict>>,
     named: [(&str, Option<&Obj<'py>>); N],
 ) -> PyResult<Vec<(String, Obj<'py>)>> {
-    let mut given: Vec<(String, Obj<'py>)> = Vec::new();
-    for (k, v) in settings.into_iter().flatten() {
-        given.push((k.extract()?, v));
-    }
-    for (key, value) in named {
-        given.extend(
-            value
-                .filter(|v| !v.is_none())
-                .map(|v| (key.to_string(), v.clone())),
-        );
-    }
+    let given = settings
+        .into_iter()
+        .flatten()
+        .map(|(k, v)| Ok((k.extract()?, v)));
+    let mut given = given.collect::<PyResult<Vec<_>>>()?;
+    let named = named
+        .into_iter()
+        .filter_map(|(k, v)| Some((k.into(), given_obj(v)?.clone())));
+    given.extend(named);
     Ok(given)
 }
 
@@ -154,23 +112,14 @@ pub(super) fn call_config(
     atol: Option<&Obj>,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<RunConfig> {
-    let below = config.map(|c| c.inner.clone()).unwrap_or_default();
-    let given = keywords(
-        settings,
-        [("t_span", t_span), ("rtol", rtol), ("atol", atol)],
-    )?;
-    let call = RunConfig::from_args(given.iter().map(|(k, v)| (k.as_str(), v)))?;
-    Ok(call.over(below))
-}
-
-/// The `RunConfig` of the keywords given (`None`: not given).
-pub(super) fn config_of(_py: Python<'_>, given: &[(&str, Option<&Obj>)]) -> PyResult<RunConfig> {
-    RunConfig::from_args(given.iter().filter_map(|(k, v)| v.map(|v| (*k, v))))
+    let named = [("t_span", t_span), ("rtol", rtol), ("atol", atol)];
+    let call = RunConfig::from_call(settings.map(|d| d.as_any()), &named)?;
+    Ok(call.over(config.map(|c| c.inner.clone()).unwrap_or_default()))
 }
 
 fn tol_py<'py>(py: Python<'py>, tol: &Tol) -> Obj<'py> {
     match tol {
         Tol::Scalar(x) => PyFloat::new(py, *x).into_any(),
-        Tol::PerComponent(v) => PyArray1::from_slice(py, v).into_any(),
+        Tol::PerComponent(v) => to_array1(py, v).into_any(),
     }
 }

@@ -7,20 +7,18 @@ use pyo3::types::{IntoPyDict, PyDict};
 
 use super::convert::to_array1;
 use super::effects::take_callback_error;
-use super::errors::{interrupt_reason, invalid, py_error, IntoPyResult};
-use super::events::{event_list, python_event};
+use super::errors::{interrupt_reason, to_py, IntoPyResult};
+use super::events::{event_list, python_events};
 use super::run_config::{call_config, PyRunConfig};
 use super::scene::PyScene;
 use super::signals::{Watch, INTERVAL};
 use super::trajectory::PyRunResult;
-use crate::integrator::Event;
 use crate::io::scene::Scene;
-use crate::simulate::batch::{name_stop, run_scenes};
-use crate::simulate::{at_state, run_scene, Progress};
-use crate::support::args::given;
+use crate::simulate::batch::{name_stop, run_scenes, BatchArgs};
+use crate::simulate::{at_state, run_scene, Progress, Trajectory};
 
-/// Runs a scene as its `config` says, the keywords given here (`RunConfig`'s) beating
-/// it: the `RunResult` that `pointmass_dyn.simulate` wraps.
+// Docstrings of the run calls: `_core.pyi`; the public ones: `pointmass_dyn.simulate`,
+// `simulate_batch`, `effect_forces`, `energies`, which wrap them.
 #[pyfunction]
 #[pyo3(signature = (scene, t_span=None, rtol=None, atol=None, *, config=None, events=None, progress=None, progress_interval=None, **settings))]
 pub fn simulate_scene(
@@ -36,7 +34,6 @@ pub fn simulate_scene(
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PyRunResult> {
     let s = &scene.inner;
-    let nq = s.model.nq;
     let config = call_config(config, t_span, rtol, atol, settings)?;
     let interval = crate::simulate::config_args::progress_interval(progress_interval).py(py)?;
     let mut watch = interval.map_or_else(Watch::default, Watch::every);
@@ -44,19 +41,10 @@ pub fn simulate_scene(
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     take_callback_error();
     let result = py.detach(|| {
-        let extra: Vec<Event<'_>> = events
-            .other
-            .iter()
-            .map(|spec| python_event(spec, Some(nq), &failure))
-            .collect();
+        let extra = python_events(&events, Some(s.model.nq), &failure);
         // Ctrl-C and progress by elapsed time (support::pacing), not per evaluation, so a
         // busy Python thread beside the run costs one hand-over of the interpreter per poll.
-        let hook: Progress<'_> = Box::new(|t: f64| {
-            watch.poll(|py| match &progress {
-                Some(cb) => cb.bind(py).call1((t,)).map(|_| ()),
-                None => Ok(()),
-            })
-        });
+        let hook: Progress<'_> = Box::new(|t: f64| watch.poll(|py| report(py, &progress, (t,))));
         run_scene(s, config, &events.state, extra, Some(hook))
     });
     // A Python callback that raised (or Ctrl-C) ends the run; its exception is re-raised by
@@ -64,16 +52,26 @@ pub fn simulate_scene(
     let raised = take_callback_error()
         .or(failure.into_inner().ok().flatten())
         .or(watch.error.take());
-    match (result, raised) {
-        (Ok(mut traj), raised) => {
-            if let Some(e) = &raised {
-                traj.name_interruption(&interrupt_reason(py, e));
-            }
-            Ok(PyRunResult::new(py, traj, &events.slots(), raised))
-        }
-        (Err(_), Some(raised)) => Err(raised),
-        (Err(e), None) => Err(super::errors::to_py(py, e)),
+    let mut traj = match result {
+        Err(e) => return Err(raised.unwrap_or_else(|| super::errors::to_py(py, e))),
+        Ok(traj) => traj,
+    };
+    if let Some(e) = &raised {
+        traj.name_interruption(&interrupt_reason(py, e));
     }
+    traj.order_events(&events.slots());
+    Ok(PyRunResult::new(py, traj, raised))
+}
+
+/// Calls the caller's `progress(*args)`, if given.
+fn report<'py>(
+    py: Python<'py>,
+    progress: &Option<Py<PyAny>>,
+    args: impl pyo3::call::PyCallArgs<'py>,
+) -> PyResult<()> {
+    progress
+        .as_ref()
+        .map_or(Ok(()), |cb| cb.bind(py).call1(args).map(|_| ()))
 }
 
 /// `f`'s result, or the exception a Python callback (a torque function) raised inside it,
@@ -87,8 +85,6 @@ pub(super) fn callbacks<T>(
     take_callback_error().map_or_else(|| r.py(py), Err)
 }
 
-/// The generalized force of each enabled effect of `scene` at `(t, q, v)`: a dict from the
-/// effect's name to an (nv,) array (gravity's included).
 #[pyfunction]
 #[pyo3(signature = (scene, t, q, v, disable=None))]
 pub fn effect_forces<'py>(
@@ -99,17 +95,11 @@ pub fn effect_forces<'py>(
     v: &Obj,
     disable: Option<&Obj>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let forces = callbacks(py, || {
-        Ok(at_state::effect_forces(&scene.inner, t, (q, v), disable))
-    })??;
-    let forces = forces
-        .into_iter()
-        .map(|(l, f): (String, Vec<f64>)| (l, to_array1(py, &f)));
-    forces.into_py_dict(py)
+    let forces = || Ok(at_state::effect_forces(&scene.inner, t, (q, v), disable));
+    let forces = callbacks(py, forces)??.into_iter();
+    forces.map(|(l, f)| (l, to_array1(py, &f))).into_py_dict(py)
 }
 
-/// Kinetic energy, the potential energy of each enabled conservative effect (gravity,
-/// springs) under its name, and their sum under `total`.
 #[pyfunction]
 #[pyo3(signature = (scene, q, v, disable=None))]
 pub fn energies<'py>(
@@ -122,10 +112,6 @@ pub fn energies<'py>(
     at_state::energies(&scene.inner, (q, v), disable)?.into_py_dict(py)
 }
 
-/// Runs many scenes (or one scene from many initial states) on a pool of threads, the GIL
-/// released once: a `RunResult` per run as `simulate_scene` returns them, in the runs'
-/// order. A run that could not start (bad input) is `NotStarted`, its exception in `error`. Every run is
-/// exactly the `simulate` call it stands for.
 #[pyfunction]
 #[pyo3(signature = (scenes, q0=None, v0=None, t_span=None, rtol=None, atol=None, *, config=None, events=None, threads=None, progress=None, **settings))]
 pub fn simulate_batch<'py>(
@@ -144,60 +130,29 @@ pub fn simulate_batch<'py>(
 ) -> PyResult<(Vec<PyRunResult>, Option<Py<PyAny>>)> {
     let scenes: Vec<Scene> = scenes.iter().map(|s| s.inner.clone()).collect();
     let config = call_config(config, t_span, rtol, atol, settings)?;
-    let states = |x: Option<&Obj>, arg| given(x).map(|x| super::convert::array(x, arg));
-    let (q0, v0) = (states(q0, "q0").transpose()?, states(v0, "v0").transpose()?);
-    let events = event_list(py, events)?;
-    if !events.other.is_empty() {
-        return Err(invalid(
-            py,
-            "events",
-            "StateEvent objects only (Python callables cannot run on the batch's threads)",
-            "a callable",
-        ));
-    }
-    let threads = crate::support::args::threads(threads)?;
+    let batch = BatchArgs::new(q0, v0, threads)?;
+    let events = event_list(py, events)?.for_run(true, true)?;
     // Ctrl-C and the caller's progress from this thread, by elapsed time (signals::Watch).
     let mut watch = Watch::default();
+    let poll = |done, n| watch.poll(|py| report(py, &progress, (done, n)));
     take_callback_error();
-    let results = py.detach(|| {
-        let state = &events.state;
-        run_scenes(
-            &scenes,
-            &config,
-            q0,
-            v0,
-            state,
-            threads,
-            INTERVAL,
-            |done, n| {
-                watch.poll(|py| match &progress {
-                    Some(cb) => cb.bind(py).call1((done, n)).map(|_| ()),
-                    None => Ok(()),
-                })
-            },
-        )
-    });
-    let results = results.py(py)?;
-    let mut results = results
-        .map_err(|_| py_error(py, "SimulationError", "a batch thread panicked".to_string()))?;
+    let run = || run_scenes(&scenes, &config, batch, &events.state, INTERVAL, poll);
+    let mut results = py.detach(run).py(py)?;
     // Ctrl-C or a raising `progress` stopped the batch: the caller gets it back with every
     // run's result so far (finished, stopped midway, not started).
     let mut stopped = watch.error.take().or(take_callback_error());
     // A last report at the end, so a caller's progress bar always reaches B.
-    let count = results.len();
-    if let (None, Some(cb)) = (&stopped, &progress) {
-        stopped = cb.bind(py).call1((count, count)).err();
+    if stopped.is_none() {
+        stopped = report(py, &progress, (results.len(), results.len())).err();
     }
     if let Some(e) = &stopped {
         name_stop(&mut results, &interrupt_reason(py, e));
     }
-    let slots = events.slots();
+    // Only state events (`for_run`): the caller's order already.
     let out = results.into_iter().map(|result| match result {
-        Ok(traj) => Ok(PyRunResult::new(py, traj, &slots, None)),
-        Err(e) => PyRunResult::not_started(py, e),
+        Ok(traj) => PyRunResult::new(py, traj, None),
+        // A run never started: `e` refused its input, or the batch stopped before it.
+        Err(e) => PyRunResult::new(py, Trajectory::refused(&e), Some(to_py(py, e))),
     });
-    Ok((
-        out.collect::<PyResult<_>>()?,
-        stopped.map(|e| e.into_value(py).into_any()),
-    ))
+    Ok((out.collect(), stopped.map(|e| e.into_value(py).into_any())))
 }

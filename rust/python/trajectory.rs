@@ -7,21 +7,17 @@ use super::convert::{to_array, to_array1};
 use super::record::Field;
 use crate::integrator::{status_variants, NonFiniteKind, Status};
 use crate::simulate::Trajectory;
-use crate::support::error::Error;
-use pyo3::types::IntoPyDict;
+use pyo3::types::{IntoPyDict, PyTuple};
 use pyo3::IntoPyObjectExt;
 
 macro_rules! declare_py_status {
-    ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*]
-     [$($(#[$xdoc:meta])* $x:ident { $($xf:ident: $xt:ty),* },)*]) => {
-        /// How a run ended, one variant per cause: `t` the time the run reached, `at` where
-        /// the failure (or interruption) happened. The core's `Status` variants
-        /// (`status_variants!`), plus `NotStarted` for a run of a batch whose input was refused.
+    ([$($(#[$doc:meta])* $v:ident $({ $($f:ident: $t:ty),* })?,)*] []) => {
+        /// How a run ended, one variant per cause (the core's `Status`, `status_variants!`):
+        /// `t` the time the run reached, `at` where the failure (or interruption) happened.
         #[pyclass(name = "RunStatus", module = "pointmass_dyn._core", frozen)]
         #[derive(Clone, Debug)]
         pub enum PyRunStatus {
             $($(#[$doc])* $v { $($($f: $t),*)? },)*
-            $($(#[$xdoc])* $x { $($xf: $xt),* },)*
         }
 
         impl From<&Status> for PyRunStatus {
@@ -33,11 +29,7 @@ macro_rules! declare_py_status {
         }
     };
 }
-status_variants!(
-    declare_py_status,
-    /// A run of a batch that never started: its input was refused, or the batch stopped.
-    NotStarted { reason: String },
-);
+status_variants!(declare_py_status);
 
 /// `NonFinite.what` in Python: "derivative", "state" or "jacobian".
 impl<'py> IntoPyObject<'py> for NonFiniteKind {
@@ -52,11 +44,7 @@ impl<'py> IntoPyObject<'py> for NonFiniteKind {
 impl FromPyObject<'_, '_> for NonFiniteKind {
     type Error = PyErr;
     fn extract(obj: Borrowed<'_, '_, PyAny>) -> PyResult<Self> {
-        let name: String = obj.extract()?;
-        let kind = NonFiniteKind::ALL.into_iter().find(|k| k.name() == name);
-        kind.ok_or_else(|| {
-            super::errors::invalid(obj.py(), "what", "derivative, state or jacobian", name)
-        })
+        NonFiniteKind::from_arg(&*obj)
     }
 }
 
@@ -64,39 +52,24 @@ impl FromPyObject<'_, '_> for NonFiniteKind {
 impl PyRunStatus {
     /// `RunStatus.Interrupted(t=0.5, at=0.51, reason='...')`: the variant and its fields.
     fn __repr__(slf: &Bound<'_, Self>) -> PyResult<String> {
-        let (name, args) = Self::variant(slf)?;
-        let fields: Vec<String> = Self::fields(slf)?
-            .into_iter()
-            .zip(args.iter())
-            .map(|(f, v)| Ok(format!("{f}={}", v.repr()?)))
-            .collect::<PyResult<_>>()?;
-        Ok(format!("RunStatus.{name}({})", fields.join(", ")))
+        let slf = slf.as_any();
+        let name = format!("RunStatus.{}", slf.get_type().name()?);
+        super::record::repr(slf, &name, &Self::fields(slf)?)
     }
 
     /// Pickled as its variant called with its fields (a result's `outcome` travels with it).
-    fn __reduce__<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(Obj<'py>, Bound<'py, pyo3::types::PyTuple>)> {
-        Ok((slf.as_any().get_type().into_any(), Self::variant(slf)?.1))
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Obj<'py>, Bound<'py, PyTuple>)> {
+        let slf = slf.as_any();
+        let values = Self::fields(slf)?.into_iter().map(|f| slf.getattr(f));
+        let values = PyTuple::new(slf.py(), values.collect::<PyResult<Vec<_>>>()?)?;
+        Ok((slf.get_type().into_any(), values))
     }
 }
 
 impl PyRunStatus {
     /// The variant's field names, in its constructor's order.
-    fn fields(slf: &Bound<'_, Self>) -> PyResult<Vec<String>> {
-        slf.as_any().get_type().getattr("__match_args__")?.extract()
-    }
-
-    /// The variant's name and its fields' values.
-    fn variant<'py>(
-        slf: &Bound<'py, Self>,
-    ) -> PyResult<(String, Bound<'py, pyo3::types::PyTuple>)> {
-        let values = Self::fields(slf)?
-            .iter()
-            .map(|f| slf.as_any().getattr(f.as_str()))
-            .collect::<PyResult<Vec<_>>>()?;
-        let name = slf.as_any().get_type().name()?.to_string();
-        Ok((name, pyo3::types::PyTuple::new(slf.py(), values)?))
+    fn fields(slf: &Obj) -> PyResult<Vec<String>> {
+        slf.get_type().getattr("__match_args__")?.extract()
     }
 }
 
@@ -115,10 +88,10 @@ macro_rules! run_record {
             method: |r: &$inner, py| r.run.method.name().into_bound_py_any(py),
             switched_to: |r: &$inner, py| r.run.switched_to.map(|m| m.name()).into_bound_py_any(py),
             t_switch: |r: &$inner, py| r.run.t_switch.into_bound_py_any(py),
-            status: |r: &$inner, py| r.code().into_bound_py_any(py),
+            status: |r: &$inner, py| r.run.status.code().into_bound_py_any(py),
             // Numbers in exponent form where `{}` wrote hundreds of digits (as our errors').
             message: |r: &$inner, py| $crate::support::error::compact_numbers(&r.run.message).field(py),
-            success: |r: &$inner, py| (r.code() >= 0).into_bound_py_any(py),
+            success: |r: &$inner, py| r.run.status.is_success().into_bound_py_any(py),
             t_reached: |r: &$inner, py| r.run.t_reached.field(py),
             error: |r: &$inner, py| r.error.as_ref().into_bound_py_any(py),
         });
@@ -127,36 +100,15 @@ macro_rules! run_record {
 pub(super) use run_record;
 
 /// A run of `simulate_scene`, a batch or a `Simulator`: its trajectory, events in the
-/// caller's order; `not_started`: a batch run that never started (`RunStatus.NotStarted`,
-/// the trajectory's message saying why).
+/// caller's order (a batch run that never started: `RunStatus.NotStarted`, the trajectory's
+/// message saying why).
 pub struct Run {
     run: Trajectory,
-    not_started: bool,
     error: Option<Py<PyAny>>,
 }
 
-impl Run {
-    /// SciPy's code: 0 end reached, 1 terminal event, -1 failure (a run not started).
-    fn code(&self) -> i32 {
-        if self.not_started {
-            -1
-        } else {
-            self.run.status.code()
-        }
-    }
-    fn status(&self) -> PyRunStatus {
-        match self.not_started {
-            true => PyRunStatus::NotStarted {
-                reason: self.run.message.clone(),
-            },
-            false => PyRunStatus::from(&self.run.status),
-        }
-    }
-}
-
+// One run's result (docstring: `_core.pyi`; `pointmass_dyn.SimulationResult` wraps it).
 run_record!(
-    /// One run's trajectory and outcome, the fields `pointmass_dyn.SimulationResult` has of
-    /// the same names; `error` also the one that refused a batch run's input.
     PyRunResult("RunResult", Run) {
         t: |r: &Run, py| r.run.t.field(py),
         q: |r: &Run, py| to_array(py, r.run.q.clone(), &[r.run.t.len(), r.run.nq]),
@@ -172,64 +124,16 @@ run_record!(
             columns.map(|c| c.into_py_dict(py)).transpose()?.into_bound_py_any(py)
         },
         t_events: |r: &Run, py| r.run.t_events.field(py),
-        q_events: |r: &Run, py| event_arrays(py, &r.run, |(q, _)| (q, r.run.nq)),
-        v_events: |r: &Run, py| event_arrays(py, &r.run, |(_, v)| (v, r.run.nv)),
-        outcome: |r: &Run, py| r.status().into_bound_py_any(py),
+        q_events: |r: &Run, py| r.run.event_matrices(false).field(py),
+        v_events: |r: &Run, py| r.run.event_matrices(true).field(py),
+        outcome: |r: &Run, py| PyRunStatus::from(&r.run.status).into_bound_py_any(py),
     }
 );
 
-/// Each event's `q` (or `v`) states as an (m, width) array.
-fn event_arrays<'py>(
-    py: Python<'py>,
-    traj: &Trajectory,
-    pick: impl Fn((Vec<f64>, Vec<f64>)) -> (Vec<f64>, usize),
-) -> PyResult<Obj<'py>> {
-    let states = traj.event_states().into_iter().zip(&traj.t_events);
-    let arrays = states.map(|(s, t)| {
-        let (data, width) = pick(s);
-        to_array(py, data, &[t.len(), width])
-    });
-    arrays.collect::<PyResult<Vec<_>>>()?.into_bound_py_any(py)
-}
-
 impl PyRunResult {
-    /// `traj` with its events in the caller's order (`slots[k]`: the trajectory's slot of
-    /// the caller's event `k`).
-    pub(super) fn new(
-        py: Python<'_>,
-        mut traj: Trajectory,
-        slots: &[usize],
-        error: Option<PyErr>,
-    ) -> Self {
-        traj.order_events(slots);
+    /// `traj`, stopped by `error` if a Python callback (or Ctrl-C) raised it.
+    pub(super) fn new(py: Python<'_>, traj: Trajectory, error: Option<PyErr>) -> Self {
         let error = error.map(|e| e.into_value(py).into_any());
-        PyRunResult(Run {
-            run: traj,
-            not_started: false,
-            error,
-        })
-    }
-
-    /// A batch run that never started: `error` refused its input, or the batch stopped
-    /// before it (`Interrupted`, its message then says by what).
-    pub(super) fn not_started(py: Python<'_>, error: Error) -> PyResult<Self> {
-        let stopped = match &error {
-            Error::Interrupted(m) => Some(m.clone()),
-            _ => None,
-        };
-        let error = super::errors::to_py(py, error);
-        let message = match stopped {
-            Some(m) => m,
-            None => format!("{}: {}", error.get_type(py).name()?, error.value(py).str()?),
-        };
-        let (run, error) = (
-            Trajectory::not_started(message),
-            Some(error.into_value(py).into_any()),
-        );
-        Ok(PyRunResult(Run {
-            run,
-            not_started: true,
-            error,
-        }))
+        PyRunResult(Run { run: traj, error })
     }
 }

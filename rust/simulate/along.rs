@@ -12,9 +12,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use super::Dynamics;
 use crate::dynamics::link_shaking::{link_rates, shaking_of_links};
 use crate::effects::{Disabled, Effect, TorqueLaw};
+use crate::io::scene::Scene;
 use crate::kinematics;
 use crate::model::Model;
 use crate::support::alloc::try_zeros_vec;
+use crate::support::args::Arg;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
 
@@ -128,6 +130,73 @@ pub fn along(
     match results.into_iter().find(|r| r.is_err()) {
         Some(Err(e)) => Err(e),
         _ => Ok(out),
+    }
+}
+
+/// A caller's request for a scene along its samples, read and checked: the samples `t`
+/// (N,), `q` (N, nq), `v` (N, nv), the families `disable`d (the caller's, else the scene's)
+/// and the thread count (`None`: one per core). Read while the caller's objects are at
+/// hand, then [`SceneAlong::run`] with the interpreter released.
+pub struct SceneAlong {
+    states: [Vec<f64>; 3],
+    disabled: Disabled,
+    asked: Asked,
+    threads: usize,
+}
+
+impl SceneAlong {
+    pub fn new<A: Arg>(
+        scene: &Scene,
+        (t, q, v): (&A, &A, &A),
+        disable: Option<&A>,
+        asked: Asked,
+        threads: Option<usize>,
+    ) -> std::result::Result<SceneAlong, A::Err> {
+        let states = crate::model::args::samples(&scene.model, t, q, v)?;
+        let disabled = crate::effects::args::disable(disable)?;
+        let disabled = super::disabled(disabled, &scene.settings);
+        let threads =
+            threads.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+        Ok(SceneAlong {
+            states,
+            disabled,
+            asked,
+            threads,
+        })
+    }
+
+    /// [`along`] of `scene` (the one the request was read against).
+    pub fn run(&self, scene: &Scene) -> Result<Along> {
+        let [t, q, v] = &self.states;
+        let (model, effects, asked) = (&*scene.model, &scene.effects[..], self.asked);
+        along(
+            model,
+            effects,
+            self.disabled,
+            (t, q, v),
+            asked,
+            self.threads,
+        )
+    }
+}
+
+impl Asked {
+    pub fn new(accelerations: bool, forces: bool, shaking: Option<Vec3>) -> Asked {
+        Asked {
+            accelerations,
+            forces,
+            shaking,
+        }
+    }
+}
+
+impl Along {
+    /// The shaking force and moment apart, each N × 3.
+    pub fn shaking_parts(&self) -> [Vec<f64>; 2] {
+        let rows = self.shaking.chunks_exact(6);
+        let part =
+            |r: std::ops::Range<usize>| rows.clone().flat_map(move |x| x[r.clone()].to_vec());
+        [part(0..3).collect(), part(3..6).collect()]
     }
 }
 

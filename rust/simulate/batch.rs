@@ -12,6 +12,7 @@ use crate::effects::{Disabled, Effect};
 use crate::integrator::SolverOptions;
 use crate::io::scene::Scene;
 use crate::model::Model;
+use crate::support::args::{opt, Arg};
 use crate::support::error::{Error, Result};
 
 /// One run of a batch: its model and effects (a scene's, or a variant of it), its initial
@@ -227,21 +228,40 @@ pub fn run_batch_polled(
 /// Initial states as a caller gave them: an array's shape and its row-major data.
 pub type GivenStates = Option<(Vec<usize>, Vec<f64>)>;
 
+/// A batch's own arguments as its caller gave them, read: the initial states `q0`/`v0`
+/// (1-D: every run's, 2-D: a row per run; checked against the scenes when the batch
+/// starts) and the thread count (`None`: one per core).
+pub struct BatchArgs {
+    q0: GivenStates,
+    v0: GivenStates,
+    threads: usize,
+}
+
+impl BatchArgs {
+    pub fn new<A: Arg>(
+        q0: Option<&A>,
+        v0: Option<&A>,
+        threads: Option<&A>,
+    ) -> std::result::Result<Self, A::Err> {
+        let states = |x: Option<&A>, arg: &str| opt(x, |x| x.array(arg));
+        let (q0, v0) = (states(q0, "q0")?, states(v0, "v0")?);
+        let threads = crate::support::args::threads(threads)?;
+        Ok(BatchArgs { q0, v0, threads })
+    }
+}
+
 /// A batch as its caller asks: `config` (the call's settings) resolved against each scene's
-/// own, the runs broadcast over `q0`/`v0` (1-D: every run's, 2-D: a row per run), then run
-/// as [`run_batch_polled`] runs them (`poll(done, runs)`). `Err`: input refused before any run started; the
-/// inner `Err`: a batch thread panicked.
-#[allow(clippy::too_many_arguments)]
+/// own, the runs broadcast over `args`' initial states, then run as [`run_batch_polled`]
+/// runs them (`poll(done, runs)`). `Err`: input refused before any run started, or a batch
+/// thread panicked.
 pub fn run_scenes(
     scenes: &[Scene],
     config: &super::RunConfig,
-    q0: GivenStates,
-    v0: GivenStates,
+    args: BatchArgs,
     state_events: &[StateEvent],
-    threads: usize,
     tick: Duration,
     mut poll: impl FnMut(usize, usize) -> bool,
-) -> Result<std::thread::Result<Vec<Result<Trajectory>>>> {
+) -> Result<Vec<Result<Trajectory>>> {
     let Some(first) = scenes.first() else {
         return Err(Error::arg("scenes", "at least one Scene", "none"));
     };
@@ -250,8 +270,8 @@ pub fn run_scenes(
             .map(|(shape, data)| StateRows::new(arg, &shape, data, width))
             .transpose()
     };
-    let q0 = rows("q0", q0, first.model.nq)?;
-    let v0 = rows("v0", v0, first.model.nv)?;
+    let q0 = rows("q0", args.q0, first.model.nq)?;
+    let v0 = rows("v0", args.v0, first.model.nv)?;
     // Settings per scene (each resolves the caller's against its own file's).
     let resolved = scenes
         .iter()
@@ -265,14 +285,9 @@ pub fn run_scenes(
     let record = resolved[0].record;
     let count = runs.len();
     let poll = |done| poll(done, count);
-    Ok(run_batch_polled(
-        &runs,
-        state_events,
-        record,
-        threads,
-        tick,
-        poll,
-    ))
+    let threads = args.threads;
+    run_batch_polled(&runs, state_events, record, threads, tick, poll)
+        .map_err(|_| Error::Simulation("a batch thread panicked".into()))
 }
 
 /// Names what stopped a batch (`reason`: only its caller knows, e.g. Ctrl-C) in the runs it

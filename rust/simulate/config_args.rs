@@ -62,6 +62,56 @@ impl RunConfig {
         Ok(c)
     }
 
+    /// The settings of a call: its `named` keywords (`None`: not given) and `settings`, a
+    /// mapping of more (its `**settings`), read as [`RunConfig::from_args`] reads them.
+    pub fn from_call<A: Arg>(
+        settings: Option<&A>,
+        named: &[(&str, Option<&A>)],
+    ) -> Result<RunConfig, A::Err> {
+        let keys = settings.and_then(Arg::keys).unwrap_or_default();
+        let mapped: Vec<(String, A)> = (keys.iter())
+            .filter_map(|k| Some((k.text()?, settings?.get(&k.text()?)??)))
+            .collect();
+        let named = named.iter().filter_map(|(k, v)| v.map(|v| (*k, v)));
+        RunConfig::from_args(mapped.iter().map(|(k, v)| (k.as_str(), v)).chain(named))
+    }
+
+    /// These settings with those of `changes` (a mapping, keyword to value) replaced; a
+    /// `None` value unsets its setting.
+    pub fn replaced<A: Arg>(&self, changes: Option<&A>) -> Result<RunConfig, A::Err> {
+        let mut below = self.clone();
+        for key in changes.and_then(Arg::keys).unwrap_or_default() {
+            below.take(&key.text().unwrap_or_default());
+        }
+        Ok(RunConfig::from_call(changes, &[])?.over(below))
+    }
+
+    /// The keywords of the settings given, in [`KEYS`]' order.
+    pub fn given(&self) -> Vec<&'static str> {
+        KEYS.into_iter().filter(|k| self.clone().take(k)).collect()
+    }
+
+    /// Unsets the setting `key`; whether it was set.
+    fn take(&mut self, key: &str) -> bool {
+        match key {
+            "t_span" => self.t_span.take().is_some(),
+            "rtol" => self.rtol.take().is_some(),
+            "atol" => self.atol.take().is_some(),
+            "t_eval" => self.t_eval.take().is_some(),
+            "first_step" => self.first_step.take().is_some(),
+            "max_step" => self.max_step.take().is_some(),
+            "max_steps" => self.max_steps.take().is_some(),
+            "method" => self.method.take().is_some(),
+            "dt" => self.dt.take().is_some(),
+            "controller" => self.controller.take().is_some(),
+            "stiffness" => self.stiffness.take().is_some(),
+            "disable" => self.disable.take().is_some(),
+            "energy" => self.energy.take().is_some(),
+            "power" => self.power.take().is_some(),
+            _ => self.dense.take().is_some(),
+        }
+    }
+
     /// `base` with the scene settings given (`(keyword, value)`, a `None` value: not given)
     /// laid over it and checked ([`RunConfig::onto_scene`]); a keyword no scene holds is
     /// the binding's type error (as an unexpected keyword argument), naming those it holds.
@@ -203,6 +253,40 @@ impl super::StateEvent {
             value,
             direction: direction.unwrap_or(0).signum() as i32,
             terminal: opt(terminal, terminal_count)?.unwrap_or(0),
+        })
+    }
+}
+
+/// `StateEvent('q', 0, value=0.5, direction=-1, terminal=1)`: how it was built.
+impl std::fmt::Display for super::StateEvent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let variable = if self.on_velocity { "v" } else { "q" };
+        write!(
+            f,
+            "StateEvent('{variable}', {}, value={}, direction={}, terminal={})",
+            self.index, self.value, self.direction, self.terminal
+        )
+    }
+}
+
+/// How the caller's event function `events[index]` counts: its `terminal` (a crossing
+/// count, 0: never) and `direction` (a sign, 0: either way), attributes it may have
+/// (SciPy's convention).
+pub struct EventFunction {
+    pub index: usize,
+    pub terminal: usize,
+    pub direction: f64,
+}
+
+impl EventFunction {
+    pub fn from_args<A: Arg>(index: usize, e: &A) -> Result<Self, A::Err> {
+        let attr = |name| e.attr(name).filter(|x| !x.absent());
+        let terminal = attr("terminal").map(|t| terminal_count(&t)).transpose()?;
+        let direction = attr("direction").map(|d| d.real(&format!("events[{index}].direction")));
+        Ok(EventFunction {
+            index,
+            terminal: terminal.unwrap_or(0),
+            direction: direction.transpose()?.unwrap_or(0.0),
         })
     }
 }

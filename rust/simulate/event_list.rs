@@ -33,6 +33,21 @@ impl<P> EventList<P> {
         self.other.push(e);
     }
 
+    /// The list, if a run of this kind takes it: a run without a scene (`rk45`) no state
+    /// events, a batch (`threads`) no caller's callables, which cannot run on its threads.
+    pub fn for_run(self, scene: bool, threads: bool) -> Result<Self, Error> {
+        if !scene && !self.state.is_empty() {
+            let expected = "event callables (a StateEvent needs a scene: pmd.simulate)";
+            return Err(Error::arg("events", expected, "a StateEvent"));
+        }
+        if threads && !self.other.is_empty() {
+            let expected =
+                "StateEvent objects only (Python callables cannot run on the batch's threads)";
+            return Err(Error::arg("events", expected, "a callable"));
+        }
+        Ok(self)
+    }
+
     /// The trajectory's slot of each event, in the caller's order.
     pub fn slots(&self) -> Vec<usize> {
         let ns = self.state.len();

@@ -16,7 +16,7 @@ mod evaluate;
 mod event_list;
 mod settings;
 
-pub use along::{along, Along, Asked};
+pub use along::{along, Along, Asked, SceneAlong};
 pub use dynamics::{Dynamics, Progress};
 pub use event_list::{event_value, EventList};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
@@ -91,6 +91,20 @@ pub struct Trajectory {
 }
 
 impl Trajectory {
+    /// A run of a batch that never started, stopped by `error`: the batch's stop
+    /// ([`Error::Interrupted`], its message then says by what), else the refusal of its
+    /// input, named by its exception class as the caller will see it.
+    pub fn refused(error: &Error) -> Trajectory {
+        match error {
+            Error::Interrupted(m) => Trajectory::not_started(m.clone()),
+            e => {
+                let text = crate::support::error::compact_numbers(&e.to_string());
+                let class = e.kind_name().unwrap_or("Error");
+                Trajectory::not_started(format!("{class}: {text}"))
+            }
+        }
+    }
+
     /// A run that never started (a batch run whose input was refused): no samples, no
     /// evaluations, `message` saying why.
     pub fn not_started(message: String) -> Trajectory {
@@ -117,7 +131,9 @@ impl Trajectory {
             method: integrator::Method::Rk45,
             switched_to: None,
             t_switch: None,
-            status: Status::Success,
+            status: Status::NotStarted {
+                reason: message.clone(),
+            },
             message,
             t_reached: f64::NAN,
             success: false,
@@ -131,15 +147,11 @@ impl Trajectory {
         self.y_events = slots.iter().map(|&s| self.y_events[s].clone()).collect();
     }
 
-    /// Each event's states split into row-major `q` (m × nq) and `v` (m × nv).
-    pub fn event_states(&self) -> Vec<(Vec<f64>, Vec<f64>)> {
+    /// Each event's `q` states (m × nq), or its `v` states (m × nv) with `velocities`.
+    pub fn event_matrices(&self, velocities: bool) -> Vec<nalgebra::DMatrix<f64>> {
         let (nq, nv) = (self.nq, self.nv);
-        let split = |ys: &Vec<f64>| {
-            let rows = ys.chunks_exact(nq + nv);
-            let q = rows.clone().flat_map(|r| r[..nq].to_vec()).collect();
-            (q, rows.flat_map(|r| r[nq..].to_vec()).collect())
-        };
-        self.y_events.iter().map(split).collect()
+        let cols = if velocities { nq..nq + nv } else { 0..nq };
+        integrator::event_matrices(&self.y_events, nq + nv, cols)
     }
 
     /// The power of each enabled effect over the output times, by its label.
@@ -497,15 +509,9 @@ fn report_euler_singularity(
     }
 }
 
+/// The integrator's refusal, an output too large said to be `simulate`'s.
 pub(crate) fn input_error(e: integrator::InputError) -> Error {
-    match e {
-        integrator::InputError::OutputTooLarge { bytes, .. } => Error::OutOfMemory {
-            what: "simulate".into(),
-            bytes,
-            detail: e.to_string(),
-        },
-        e => Error::InvalidSetting(e.to_string()),
-    }
+    Error::from(e).map_arg(|_| "simulate".into())
 }
 
 /// The output states as row-major `q` (N × nq, unit quaternions) and `v` (N × nv).

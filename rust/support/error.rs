@@ -92,6 +92,10 @@ pub enum Error {
         bytes: u128,
         detail: String,
     },
+    /// A run's result asked for what the run never produced (the dense output of a run that
+    /// took no step), or a run's machinery failed (a batch thread panicked).
+    #[error("{0}")]
+    Simulation(String),
     /// The caller asked to stop (Ctrl-C from Python) while a long computation ran.
     #[error("{0}: interrupted")]
     Interrupted(String),
@@ -127,6 +131,7 @@ impl Error {
             Error::Numerical(_) => "NumericalError",
             Error::Closure(_) => "LoopClosureError",
             Error::OutOfMemory { .. } => "OutOfMemoryError",
+            Error::Simulation(_) => "SimulationError",
             Error::File {
                 kind: FileKind::Urdf,
                 ..
@@ -231,6 +236,7 @@ impl Error {
             | Error::Numerical(_)
             | Error::Closure(_)
             | Error::InvalidSetting(_)
+            | Error::Simulation(_)
             | Error::Interrupted(_)) => unnamed,
         }
     }
