@@ -71,9 +71,7 @@ pub(super) fn take_callback_error() -> Option<PyErr> {
     CALLBACK_ERROR.with(|c| c.borrow_mut().take())
 }
 
-pub(super) fn repr_of(obj: &Obj) -> String {
-    obj.repr().map(|r| r.to_string()).unwrap_or_default()
-}
+pub(super) use super::convert::short_repr as repr_of;
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
 /// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
@@ -203,20 +201,18 @@ impl PyEffect {
     /// A gravity effect's acceleration `g` (3,); `None` for other effects.
     #[getter]
     #[pyo3(name = "g")]
-    fn gravity_vector<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
-        match &self.inner {
-            Effect::Gravity { g } => Some(to_array1(py, g.as_slice())),
-            _ => None,
-        }
+    fn gravity_vector<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArray1<f64>>> {
+        self.inner
+            .gravity_vector()
+            .map(|g| to_array1(py, g.as_slice()))
     }
     /// A ground contact's plane `n · x = height`: `(n, height)`, `n` (3,) the unit normal out
     /// of the ground; `None` for other effects.
     #[getter]
-    fn plane<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, numpy::PyArray1<f64>>, f64)> {
-        match &self.inner {
-            Effect::GroundContact(c) => Some((to_array1(py, c.normal.as_slice()), c.height)),
-            _ => None,
-        }
+    fn plane<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, PyArray1<f64>>, f64)> {
+        self.inner
+            .plane()
+            .map(|(n, h)| (to_array1(py, n.as_slice()), h))
     }
     /// The effect's scene-file `[[effect]]` table as a dict (`type`, `name`, its keys;
     /// README.md, "Scenes and the command line"): every parameter it holds, SI units and
