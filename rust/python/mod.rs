@@ -2,14 +2,22 @@
 // Each binding takes the arguments of the Python function it declares, however many.
 #![allow(clippy::too_many_arguments)]
 
-/// `#[getter]`s that return a field as it is:
-/// `getters!(PyX { name: Type = inner.field, ... });`.
+/// `#[getter]`s, each with its docs: `getters!(PyX { name: Type = inner.field, ... });`
+/// returns a field as it is; `getters!(PyX |s, py| { name -> Type = expr, ... });` the value
+/// of `expr`, in which `s` is the object and `py` the interpreter.
 macro_rules! getters {
-    ($ty:ident { $($name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
+    ($ty:ident { $($(#[$m:meta])* $name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
         #[pyo3::pymethods]
         #[allow(clippy::clone_on_copy)]
         impl $ty {
-            $(#[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
+            $($(#[$m])* #[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
+        }
+    };
+    ($ty:ident |$s:ident, $py:ident| { $($(#[$m:meta])* $name:ident -> $t:ty = $e:expr),* $(,)? }) => {
+        #[pyo3::pymethods]
+        #[allow(unused_variables)]
+        impl $ty {
+            $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { let $s = self; $e })*
         }
     };
 }

@@ -90,18 +90,18 @@ impl PyScene {
     #[staticmethod]
     #[pyo3(signature = (text, file="<string>"))]
     fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
-        Scene::from_toml(text, file)
-            .map(|inner| PyScene { inner })
-            .py(py)
+        Ok(PyScene {
+            inner: Scene::from_toml(text, file).py(py)?,
+        })
     }
 
     /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
     /// before it is opened). Raises `SceneError` naming the file.
     #[staticmethod]
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        Scene::from_file(&path)
-            .map(|inner| PyScene { inner })
-            .py(py)
+        Ok(PyScene {
+            inner: Scene::from_file(&path).py(py)?,
+        })
     }
 
     /// The scene as scene-file text that `Scene.from_toml` reads back as an equal scene
@@ -116,38 +116,6 @@ impl PyScene {
         self.inner.write(&path).py(py)
     }
 
-    /// The scene's model (shared, not copied: adding a body to it copies it first, so the
-    /// scene never changes).
-    #[getter]
-    fn model(&self) -> PyModel {
-        PyModel::from_shared(self.inner.model.clone())
-    }
-    #[getter]
-    fn q0<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, &self.inner.q0).into_any()
-    }
-    #[getter]
-    fn v0<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, &self.inner.v0).into_any()
-    }
-    #[getter]
-    fn effects(&self) -> Vec<PyEffect> {
-        self.inner
-            .effects
-            .iter()
-            .map(|e| e.clone().into())
-            .collect()
-    }
-    /// Integration method of the scene's `[simulate]` table (`None`: not set).
-    #[getter]
-    fn method(&self) -> Option<&'static str> {
-        self.inner.settings.method.map(|m| m.name())
-    }
-    /// Effect families the scene switches off (`None`: the scene says nothing).
-    #[getter]
-    fn disable(&self) -> Option<Vec<&'static str>> {
-        self.inner.settings.disable.map(|d| d.names())
-    }
     /// `∂ẏ/∂y` of the equations of motion `y = [q; v]` (nq + nv square, `q`'s own
     /// coordinates), what implicit integrators use; `None` for a scene with closed loops.
     #[pyo3(signature = (y, t=0.0, disable=None))]
@@ -227,6 +195,19 @@ derivatives! {
     /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
     inverse_dynamics_derivatives(a: &Obj) -> PyInverseDerivatives = inverse_derivatives
 }
+
+super::getters!(PyScene |s, py| {
+    /// The scene's model (shared, not copied: adding a body to it copies it first, so the
+    /// scene never changes).
+    model -> PyModel = PyModel::from_shared(s.inner.model.clone()),
+    q0 -> Obj<'py> = to_array1(py, &s.inner.q0).into_any(),
+    v0 -> Obj<'py> = to_array1(py, &s.inner.v0).into_any(),
+    effects -> Vec<PyEffect> = s.inner.effects.iter().map(|e| e.clone().into()).collect(),
+    /// Integration method of the scene's `[simulate]` table (`None`: not set).
+    method -> Option<&'static str> = s.inner.settings.method.map(|m| m.name()),
+    /// Effect families the scene switches off (`None`: the scene says nothing).
+    disable -> Option<Vec<&'static str>> = s.inner.settings.disable.map(|d| d.names()),
+});
 
 super::getters!(PyScene {
     name: String = inner.name,
