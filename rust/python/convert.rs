@@ -237,7 +237,7 @@ pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let arr = obj
         .extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>()
         .map_err(|e| {
-            unless_interrupt(py, e.into(), || {
+            unless_interrupt(py, e, || {
                 let got = format!("an object of type {}", type_name(obj));
                 invalid(py, arg, "an array of real numbers", got)
             })
