@@ -165,9 +165,8 @@ impl PyEffect {
     /// A copy with one parameter replaced (checked as the factory checks it): gravity `g`;
     /// a spring's `stiffness`, `rest`; a damper's `damping`; friction's `friction`, `v_eps`;
     /// a point spring's `stiffness`, `rest_length`, `damping`.
-    fn with_parameter(&self, py: Python<'_>, name: &str, value: &Obj) -> PyResult<Self> {
-        let (_, values) = super::convert::array(value, name)?;
-        Ok(self.inner.with_parameter(name, &values).py(py)?.into())
+    fn with_parameter(&self, name: &str, value: &Obj) -> PyResult<Self> {
+        Ok(args::with_parameter(&self.inner, name, value)?.into())
     }
     /// The effect's scene-file `[[effect]]` table as a dict (`type`, `name`, its keys;
     /// README.md, "Scenes and the command line"): every parameter it holds, SI units and

@@ -56,15 +56,7 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let missing = crate::support::cpu::missing_cpu_features();
-    if !missing.is_empty() {
-        return Err(pyo3::exceptions::PyImportError::new_err(format!(
-            "pointmass_dyn was compiled for CPU features this processor lacks: {} (built with \
-             RUSTFLAGS such as -C target-cpu=native on another machine); rebuild it here, or \
-             install a wheel built without them",
-            missing.join(", ")
-        )));
-    }
+    crate::support::cpu::check_cpu_features().map_err(pyo3::exceptions::PyImportError::new_err)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // The widest copy of the multiversioned loops that runs: "avx512", "avx2" or "baseline"
     // (rust/support/cpu.rs; POINTMASS_DYN_BASELINE=1 forces "baseline").
