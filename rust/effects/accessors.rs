@@ -5,6 +5,7 @@ use super::ground_contact::ContactStates;
 use super::{Effect, Torque, TorqueFunction, TorqueLaw, TorqueLimit};
 use crate::model::Model;
 use crate::support::error::{check_result, Error, Result};
+use crate::support::spatial::Vec3;
 
 /// A ground contact's law parameters (SI); `stiffness`/`damping` are `None` until a scene
 /// fills in their defaults.
@@ -76,6 +77,22 @@ impl Effect {
     pub fn torque_limit(&self) -> Option<&TorqueLimit> {
         match self {
             Effect::Torque(Torque { limit, .. }) => limit.as_ref(),
+            _ => None,
+        }
+    }
+
+    /// A gravity effect's acceleration `g`; `None` for other effects.
+    pub fn gravity_vector(&self) -> Option<Vec3> {
+        match self {
+            Effect::Gravity { g } => Some(*g),
+            _ => None,
+        }
+    }
+
+    /// A ground contact's plane `n · x = height` as `(n, height)`; `None` for other effects.
+    pub fn plane(&self) -> Option<(Vec3, f64)> {
+        match self {
+            Effect::GroundContact(c) => Some((c.normal, c.height)),
             _ => None,
         }
     }

@@ -360,3 +360,9 @@ pub fn contact_states<A: Arg>(effect: &Effect, model: &Model, q: &A, v: &A) -> R
 #[cfg(test)]
 #[path = "tests/args.rs"]
 mod tests;
+
+/// [`Effect::with_parameter`] of a binding's value (one number or an array of them).
+pub fn with_parameter<A: Arg>(effect: &Effect, key: &str, value: &A) -> R<Effect, A> {
+    let (_, values) = value.array(key)?;
+    Ok(effect.with_parameter(key, &values)?)
+}

@@ -6,7 +6,7 @@
 //! silently dropped). A wrong shape names the argument, the expected and the given shape.
 //! Index and count arguments are Python ints (or NumPy integers) converted by [`int_arg`].
 use crate::python::Obj;
-use nalgebra::DMatrix;
+use nalgebra::{Dim, Matrix, RawStorage};
 use numpy::{
     AllowTypeChange, PyArray1, PyArrayDescrMethods, PyArrayLikeDyn, PyArrayMethods, PyUntypedArray,
     PyUntypedArrayMethods,
@@ -17,10 +17,10 @@ use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString};
 
 use super::errors::{invalid, py_error};
 use crate::support::args::{Arg, Int};
-use crate::support::spatial::{Mat3, Vec3};
+use crate::support::spatial::Vec3;
 
 // The core's parsers under the names the bindings call them by.
-pub use crate::support::args::{count as count_arg, mat3, points, shape_str, vector};
+pub use crate::support::args::{count as count_arg, mat3, points, scalar, vector};
 
 fn type_name(obj: &Obj) -> String {
     obj.get_type()
@@ -151,15 +151,7 @@ pub fn real(obj: &Obj, arg: &str) -> PyResult<f64> {
             )
         });
     }
-    match array(obj, arg)? {
-        (shape, x) if shape.is_empty() => Ok(x.first().copied().unwrap_or(f64::NAN)),
-        (shape, _) => Err(invalid(
-            py,
-            arg,
-            "a real number",
-            format!("an array of {}", shape_str(&shape)),
-        )),
-    }
+    Ok(scalar(array(obj, arg)?, arg)?)
 }
 
 /// A Python object as the core's [`Arg`]: the core parses, this only converts.
@@ -245,7 +237,7 @@ pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let arr = obj
         .extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>()
         .map_err(|e| {
-            unless_interrupt(py, e.into(), || {
+            unless_interrupt(py, e, || {
                 let got = format!("an object of type {}", type_name(obj));
                 invalid(py, arg, "an array of real numbers", got)
             })
@@ -259,18 +251,15 @@ pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     Ok((shape, data))
 }
 
-/// A 1-D, C-contiguous, aligned, native-order float64 `numpy.ndarray` (exactly that type) as a
-/// slice, read from the array's own fields: rust-numpy's checked cast (dtype objects compared
-/// through NumPy's API) costs more than copying a short vector. `None` for anything else.
-fn plain_f64<'a>(obj: &'a Obj) -> Option<&'a [f64]> {
-    plain_f64_nd::<1>(obj).map(|(s, _)| s)
-}
-
-/// As [`plain_f64`] for a 2-D array: its data (C order) and its shape `(rows, cols)`.
+/// A 2-D array as [`plain_f64_nd`] reads it: its data (C order) and its shape `(rows, cols)`.
 pub fn plain_f64_rows<'a>(obj: &'a Obj) -> Option<(&'a [f64], [usize; 2])> {
     plain_f64_nd::<2>(obj)
 }
 
+/// An `ND`-dimensional, C-contiguous, aligned, native-order float64 `numpy.ndarray` (exactly
+/// that type) as a slice and its shape, read from the array's own fields: rust-numpy's checked
+/// cast (dtype objects compared through NumPy's API) costs more than copying a short vector.
+/// `None` for anything else.
 fn plain_f64_nd<'a, const ND: usize>(obj: &'a Obj) -> Option<(&'a [f64], [usize; ND])> {
     use numpy::npyffi::{self, NPY_TYPES};
     if !is_exact_ndarray(obj) {
@@ -307,7 +296,7 @@ fn plain_f64_nd<'a, const ND: usize>(obj: &'a Obj) -> Option<(&'a [f64], [usize;
 /// Fast path for the per-call dynamics functions: a contiguous float64 1-D array is copied
 /// straight into `out`; anything else goes through `vector`.
 pub fn vector_into(obj: &Obj, arg: &str, out: &mut [f64]) -> PyResult<()> {
-    if let Some(s) = plain_f64(obj) {
+    if let Some((s, _)) = plain_f64_nd::<1>(obj) {
         if s.len() == out.len() {
             out.copy_from_slice(s);
             return Ok(());
@@ -334,15 +323,16 @@ pub fn to_array<'py>(py: Python<'py>, data: Vec<f64>, shape: &[usize]) -> PyResu
     Ok(flat.reshape(shape.to_vec())?.into_any())
 }
 
-pub fn mat3_to_array<'py>(py: Python<'py>, m: &Mat3) -> PyResult<Obj<'py>> {
-    to_array(py, m.transpose().as_slice().to_vec(), &[3, 3])
-}
+pub use matrix_to_array as dmatrix_to_array;
+pub use matrix_to_array as mat3_to_array;
 
-pub fn dmatrix_to_array<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Obj<'py>> {
+/// Any nalgebra matrix (a `Mat3`, a `DMatrix`) as a 2-D array.
+pub fn matrix_to_array<'py, R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
+    py: Python<'py>,
+    m: &Matrix<f64, R, C, S>,
+) -> PyResult<Obj<'py>> {
     // nalgebra is column-major; NumPy wants C order.
-    to_array(
-        py,
-        m.transpose().as_slice().to_vec(),
-        &[m.nrows(), m.ncols()],
-    )
+    let (rows, cols) = m.shape();
+    let c_order = (0..rows).flat_map(|i| (0..cols).map(move |j| m[(i, j)]));
+    to_array(py, c_order.collect(), &[rows, cols])
 }

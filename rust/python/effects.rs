@@ -71,9 +71,7 @@ pub(super) fn take_callback_error() -> Option<PyErr> {
     CALLBACK_ERROR.with(|c| c.borrow_mut().take())
 }
 
-pub(super) fn repr_of(obj: &Obj) -> String {
-    obj.repr().map(|r| r.to_string()).unwrap_or_default()
-}
+pub(super) use super::convert::short_repr as repr_of;
 
 /// A Python `f(t, q, v) -> tau` as a torque callback: re-attaches to the interpreter at
 /// every evaluation. An exception it raises (or a result of the wrong shape) is kept for the
@@ -164,59 +162,11 @@ impl PyEffect {
         Ok(to_array1(py, &out).into_any())
     }
 
-    /// A torque effect's limit: a number or an array (per speed), `"effort"` (until a scene
-    /// fills it in), or None.
-    #[getter]
-    fn torque_limit<'py>(&self, py: Python<'py>) -> PyResult<Option<Obj<'py>>> {
-        Ok(match self.inner.torque_limit() {
-            None => None,
-            Some(TorqueLimit::Effort) => Some("effort".into_bound_py_any(py)?),
-            Some(TorqueLimit::Given(PerJoint::All(x))) => Some(x.into_bound_py_any(py)?),
-            Some(TorqueLimit::Given(PerJoint::Each(v))) => Some(to_array1(py, v).into_any()),
-        })
-    }
-
-    /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).
-    #[getter]
-    fn name(&self) -> String {
-        self.inner.name().to_string()
-    }
-    /// The family, as `disable` names it.
-    #[getter]
-    fn kind(&self) -> &'static str {
-        self.inner.kind().name()
-    }
     /// A copy with one parameter replaced (checked as the factory checks it): gravity `g`;
     /// a spring's `stiffness`, `rest`; a damper's `damping`; friction's `friction`, `v_eps`;
     /// a point spring's `stiffness`, `rest_length`, `damping`.
-    fn with_parameter(&self, py: Python<'_>, name: &str, value: &Obj) -> PyResult<Self> {
-        let (_, values) = super::convert::array(value, name)?;
-        Ok(self.inner.with_parameter(name, &values).py(py)?.into())
-    }
-    /// A ground contact's law parameters (`stiffness`/`damping` None until a scene fills in
-    /// their defaults: the scene's effects hold the values it runs with); `None` for other
-    /// effects.
-    #[getter]
-    fn contact_parameters(&self) -> Option<PyContactParameters> {
-        self.inner.contact_parameters().map(PyContactParameters)
-    }
-    /// A gravity effect's acceleration `g` (3,); `None` for other effects.
-    #[getter]
-    #[pyo3(name = "g")]
-    fn gravity_vector<'py>(&self, py: Python<'py>) -> Option<Bound<'py, numpy::PyArray1<f64>>> {
-        match &self.inner {
-            Effect::Gravity { g } => Some(to_array1(py, g.as_slice())),
-            _ => None,
-        }
-    }
-    /// A ground contact's plane `n · x = height`: `(n, height)`, `n` (3,) the unit normal out
-    /// of the ground; `None` for other effects.
-    #[getter]
-    fn plane<'py>(&self, py: Python<'py>) -> Option<(Bound<'py, numpy::PyArray1<f64>>, f64)> {
-        match &self.inner {
-            Effect::GroundContact(c) => Some((to_array1(py, c.normal.as_slice()), c.height)),
-            _ => None,
-        }
+    fn with_parameter(&self, name: &str, value: &Obj) -> PyResult<Self> {
+        Ok(args::with_parameter(&self.inner, name, value)?.into())
     }
     /// The effect's scene-file `[[effect]]` table as a dict (`type`, `name`, its keys;
     /// README.md, "Scenes and the command line"): every parameter it holds, SI units and
@@ -233,3 +183,30 @@ impl PyEffect {
         self.inner == other.inner
     }
 }
+
+super::getters!(PyEffect |s, py| {
+    /// The user's name, or the family's (`'gravity'`, `'springs'`, ...).
+    name -> String = s.inner.name().to_string(),
+    /// The family, as `disable` names it.
+    kind -> &'static str = s.inner.kind().name(),
+    /// A ground contact's law parameters (`stiffness`/`damping` None until a scene fills in
+    /// their defaults: the scene's effects hold the values it runs with); `None` for other
+    /// effects.
+    contact_parameters -> Option<PyContactParameters> =
+        s.inner.contact_parameters().map(PyContactParameters),
+    /// A gravity effect's acceleration `g` (3,); `None` for other effects.
+    g -> Option<Bound<'py, PyArray1<f64>>> =
+        s.inner.gravity_vector().map(|g| to_array1(py, g.as_slice())),
+    /// A ground contact's plane `n · x = height`: `(n, height)`, `n` (3,) the unit normal out
+    /// of the ground; `None` for other effects.
+    plane -> Option<(Bound<'py, PyArray1<f64>>, f64)> =
+        s.inner.plane().map(|(n, h)| (to_array1(py, n.as_slice()), h)),
+    /// A torque effect's limit: a number or an array (per speed), `"effort"` (until a scene
+    /// fills it in), or None.
+    torque_limit -> PyResult<Option<Obj<'py>>> = Ok(match s.inner.torque_limit() {
+        None => None,
+        Some(TorqueLimit::Effort) => Some("effort".into_bound_py_any(py)?),
+        Some(TorqueLimit::Given(PerJoint::All(x))) => Some(x.into_bound_py_any(py)?),
+        Some(TorqueLimit::Given(PerJoint::Each(v))) => Some(to_array1(py, v).into_any()),
+    }),
+});

@@ -2,14 +2,22 @@
 // Each binding takes the arguments of the Python function it declares, however many.
 #![allow(clippy::too_many_arguments)]
 
-/// `#[getter]`s that return a field as it is:
-/// `getters!(PyX { name: Type = inner.field, ... });`.
+/// `#[getter]`s, each with its docs: `getters!(PyX { name: Type = inner.field, ... });`
+/// returns a field as it is; `getters!(PyX |s, py| { name -> Type = expr, ... });` the value
+/// of `expr`, in which `s` is the object and `py` the interpreter.
 macro_rules! getters {
-    ($ty:ident { $($name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
+    ($ty:ident { $($(#[$m:meta])* $name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
         #[pyo3::pymethods]
         #[allow(clippy::clone_on_copy)]
         impl $ty {
-            $(#[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
+            $($(#[$m])* #[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
+        }
+    };
+    ($ty:ident |$s:ident, $py:ident| { $($(#[$m:meta])* $name:ident -> $t:ty = $e:expr),* $(,)? }) => {
+        #[pyo3::pymethods]
+        #[allow(unused_variables)]
+        impl $ty {
+            $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { let $s = self; $e })*
         }
     };
 }
@@ -48,15 +56,7 @@ use pyo3::prelude::*;
 
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let missing = crate::support::cpu::missing_cpu_features();
-    if !missing.is_empty() {
-        return Err(pyo3::exceptions::PyImportError::new_err(format!(
-            "pointmass_dyn was compiled for CPU features this processor lacks: {} (built with \
-             RUSTFLAGS such as -C target-cpu=native on another machine); rebuild it here, or \
-             install a wheel built without them",
-            missing.join(", ")
-        )));
-    }
+    crate::support::cpu::check_cpu_features().map_err(pyo3::exceptions::PyImportError::new_err)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     // The widest copy of the multiversioned loops that runs: "avx512", "avx2" or "baseline"
     // (rust/support/cpu.rs; POINTMASS_DYN_BASELINE=1 forces "baseline").

@@ -3,9 +3,10 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use super::convert::short_repr;
 use super::convert::{to_array, to_array1};
 use super::derivatives::{PyForwardDerivatives, PyInverseDerivatives};
-use super::effects::{repr_of, PyEffect};
+use super::effects::PyEffect;
 use super::errors::{invalid, IntoPyResult};
 use super::model::PyModel;
 use super::simulate::callbacks;
@@ -13,7 +14,7 @@ use crate::effects::Effect;
 use crate::io::scene::{Scene, Settings};
 use crate::simulate::at_state;
 use crate::simulate::RunConfig;
-use crate::support::args::given as given_arg;
+use crate::support::args::{self, given as given_arg};
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
 pub struct PyScene {
@@ -29,7 +30,6 @@ impl PyScene {
         text_signature = "(model, q0=None, v0=None, effects=None, t_span=None, rtol=None, atol=None, name=None, description=None, disable=None, *, method=None, dt=None, max_step=None, max_steps=None, first_step=None)"
     )]
     fn new(
-        py: Python<'_>,
         model: PyRef<'_, PyModel>,
         q0: Option<&Obj>,
         v0: Option<&Obj>,
@@ -48,12 +48,13 @@ impl PyScene {
             ("atol", atol),
             ("disable", disable),
         ];
-        let mut inner = Scene::of_model(model.model());
-        inner.settings = settings_over(named, settings, Settings::default())?;
-        inner.name = name.unwrap_or(inner.name);
-        inner.description = description.unwrap_or_default();
-        let effects = given_arg(effects).map(|e| effect_list(py, e)).transpose()?;
-        let inner = inner.replaced(None, effects, q0, v0)?;
+        let settings = settings_over(named, settings, Settings::default())?;
+        let base = Scene {
+            settings,
+            ..Scene::of_model(model.model())
+        };
+        let effects = given_arg(effects).map(|e| effect_list(e)).transpose()?;
+        let inner = base.replaced(None, effects, (q0, v0), (name, description))?;
         Ok(PyScene { inner })
     }
 
@@ -77,12 +78,11 @@ impl PyScene {
         settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
         let effects = effects.map(|list| list.iter().map(|e| e.inner.clone()).collect());
+        let model = model.map(|m| m.model());
         let mut inner = self
             .inner
-            .replaced(model.map(|m| m.model()), effects, q0, v0)?;
+            .replaced(model, effects, (q0, v0), (name, description))?;
         inner.settings = settings_over([], settings, inner.settings)?;
-        inner.name = name.unwrap_or(inner.name);
-        inner.description = description.unwrap_or(inner.description);
         Ok(PyScene { inner })
     }
 
@@ -90,18 +90,18 @@ impl PyScene {
     #[staticmethod]
     #[pyo3(signature = (text, file="<string>"))]
     fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
-        Scene::from_toml(text, file)
-            .map(|inner| PyScene { inner })
-            .py(py)
+        Ok(PyScene {
+            inner: Scene::from_toml(text, file).py(py)?,
+        })
     }
 
     /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
     /// before it is opened). Raises `SceneError` naming the file.
     #[staticmethod]
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        Scene::from_file(&path)
-            .map(|inner| PyScene { inner })
-            .py(py)
+        Ok(PyScene {
+            inner: Scene::from_file(&path).py(py)?,
+        })
     }
 
     /// The scene as scene-file text that `Scene.from_toml` reads back as an equal scene
@@ -116,84 +116,6 @@ impl PyScene {
         self.inner.write(&path).py(py)
     }
 
-    /// The scene's model (shared, not copied: adding a body to it copies it first, so the
-    /// scene never changes).
-    #[getter]
-    fn model(&self) -> PyModel {
-        PyModel::from_shared(self.inner.model.clone())
-    }
-    #[getter]
-    fn q0<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, &self.inner.q0).into_any()
-    }
-    #[getter]
-    fn v0<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, &self.inner.v0).into_any()
-    }
-    #[getter]
-    fn effects(&self) -> Vec<PyEffect> {
-        self.inner
-            .effects
-            .iter()
-            .map(|e| e.clone().into())
-            .collect()
-    }
-    /// Integration method of the scene's `[simulate]` table (`None`: not set).
-    #[getter]
-    fn method(&self) -> Option<&'static str> {
-        self.inner.settings.method.map(|m| m.name())
-    }
-    /// Effect families the scene switches off (`None`: the scene says nothing).
-    #[getter]
-    fn disable(&self) -> Option<Vec<&'static str>> {
-        self.inner.settings.disable.map(|d| d.names())
-    }
-    /// `{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [...]}` of the scene's
-    /// accelerations at `(t, q, v)` with the joint forces `tau` (default zero) on top of the
-    /// enabled effects; `numerical` names the effects differentiated by central differences
-    /// (docs/derivatives.md).
-    #[pyo3(signature = (q, v, tau=None, t=0.0, disable=None))]
-    fn forward_dynamics_derivatives<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        tau: Option<&Obj>,
-        t: f64,
-        disable: Option<&Obj>,
-    ) -> PyResult<PyForwardDerivatives> {
-        let d = || {
-            Ok(at_state::forward_derivatives(
-                &self.inner,
-                t,
-                (q, v, tau),
-                disable,
-            ))
-        };
-        Ok(PyForwardDerivatives(callbacks(py, d)??))
-    }
-    /// `{"dq": ∂τ/∂q, "dv": ∂τ/∂v, "da": M, "numerical": [...]}` of the joint forces
-    /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
-    #[pyo3(signature = (q, v, a, t=0.0, disable=None))]
-    fn inverse_dynamics_derivatives<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        a: &Obj,
-        t: f64,
-        disable: Option<&Obj>,
-    ) -> PyResult<PyInverseDerivatives> {
-        let d = || {
-            Ok(at_state::inverse_derivatives(
-                &self.inner,
-                t,
-                (q, v, a),
-                disable,
-            ))
-        };
-        Ok(PyInverseDerivatives(callbacks(py, d)??))
-    }
     /// `∂ẏ/∂y` of the equations of motion `y = [q; v]` (nq + nv square, `q`'s own
     /// coordinates), what implicit integrators use; `None` for a scene with closed loops.
     #[pyo3(signature = (y, t=0.0, disable=None))]
@@ -210,37 +132,29 @@ impl PyScene {
         jac.map(|j| to_array(py, j, &[dim, dim])).transpose()
     }
     fn __repr__(&self) -> String {
-        let s = &self.inner;
-        format!(
-            "Scene(name='{}', nbodies={}, nq={}, nv={}, effects=[{}])",
-            s.name,
-            s.model.nbodies(),
-            s.model.nq,
-            s.model.nv,
-            s.effects
-                .iter()
-                .map(|e| e.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )
+        self.inner.repr()
     }
 }
 
 /// A list of effects (a lone effect is a common slip: the error says what a list is, not
 /// "not iterable").
-fn effect_list(py: Python<'_>, effects: &Obj) -> PyResult<Vec<Effect>> {
-    let expected = "a list of effects such as [pmd.Gravity()]";
-    let items = effects
-        .try_iter()
-        .map_err(|_| invalid(py, "effects", expected, repr_of(effects)))?;
-    let one = |(k, e): (usize, PyResult<Obj>)| -> PyResult<Effect> {
-        let e = e?;
-        let expected = "an effect such as pmd.Gravity(...)";
-        let eff = e.cast::<PyEffect>();
-        let eff = eff.map_err(|_| invalid(py, &format!("effects[{k}]"), expected, repr_of(&e)))?;
-        Ok(eff.get().inner.clone())
+fn effect_list(effects: &Obj) -> PyResult<Vec<Effect>> {
+    const EFFECT: &str = "an effect such as pmd.Gravity(...)";
+    let items = args::items(
+        effects,
+        "effects",
+        "a list of effects such as [pmd.Gravity()]",
+    )?;
+    let one = |(k, e): (usize, Obj)| match e.cast::<PyEffect>() {
+        Ok(e) => Ok(e.get().inner.clone()),
+        Err(_) => Err(invalid(
+            e.py(),
+            &format!("effects[{k}]"),
+            EFFECT,
+            short_repr(&e),
+        )),
     };
-    items.enumerate().map(one).collect()
+    items.into_iter().enumerate().map(one).collect()
 }
 
 /// `base` with the settings a `Scene` call was given (its `named` ones and `**settings`;
@@ -254,6 +168,46 @@ fn settings_over<const N: usize>(
     let given = super::run_config::keywords(settings, named)?;
     RunConfig::scene_args(given.iter().map(|(k, v)| (k.as_str(), v)), base)
 }
+
+/// The scene's derivatives, one method per direction:
+/// `name(third argument: type) -> record = the core's function`.
+macro_rules! derivatives {
+    ($($(#[$doc:meta])* $name:ident($x:ident: $t:ty $(= $default:tt)?) -> $record:ident = $core:ident),*) => {
+        #[pymethods]
+        impl PyScene {$(
+            $(#[$doc])*
+            #[pyo3(signature = (q, v, $x $(= $default)?, t=0.0, disable=None))]
+            fn $name(&self, py: Python<'_>, q: &Obj, v: &Obj, $x: $t, t: f64, disable: Option<&Obj>) -> PyResult<$record> {
+                let d = || Ok(at_state::$core(&self.inner, t, (q, v, $x), disable));
+                Ok($record(callbacks(py, d)??))
+            }
+        )*}
+    };
+}
+
+derivatives! {
+    /// `{"dq": ∂q̈/∂q, "dv": ∂q̈/∂v, "dtau": M⁻¹, "numerical": [...]}` of the scene's
+    /// accelerations at `(t, q, v)` with the joint forces `tau` (default zero) on top of the
+    /// enabled effects; `numerical` names the effects differentiated by central differences
+    /// (docs/derivatives.md).
+    forward_dynamics_derivatives(tau: Option<&Obj> = None) -> PyForwardDerivatives = forward_derivatives,
+    /// `{"dq": ∂τ/∂q, "dv": ∂τ/∂v, "da": M, "numerical": [...]}` of the joint forces
+    /// `τ = ID(q, v, a) − τ_effects(t, q, v)` that give accelerations `a`.
+    inverse_dynamics_derivatives(a: &Obj) -> PyInverseDerivatives = inverse_derivatives
+}
+
+super::getters!(PyScene |s, py| {
+    /// The scene's model (shared, not copied: adding a body to it copies it first, so the
+    /// scene never changes).
+    model -> PyModel = PyModel::from_shared(s.inner.model.clone()),
+    q0 -> Obj<'py> = to_array1(py, &s.inner.q0).into_any(),
+    v0 -> Obj<'py> = to_array1(py, &s.inner.v0).into_any(),
+    effects -> Vec<PyEffect> = s.inner.effects.iter().map(|e| e.clone().into()).collect(),
+    /// Integration method of the scene's `[simulate]` table (`None`: not set).
+    method -> Option<&'static str> = s.inner.settings.method.map(|m| m.name()),
+    /// Effect families the scene switches off (`None`: the scene says nothing).
+    disable -> Option<Vec<&'static str>> = s.inner.settings.disable.map(|d| d.names()),
+});
 
 super::getters!(PyScene {
     name: String = inner.name,

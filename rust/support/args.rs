@@ -196,3 +196,15 @@ pub fn points<A: Arg>(x: &A, arg: &str) -> Result<Vec<Vec3>, A::Err> {
     }
     Ok(data.chunks_exact(3).map(Vec3::from_column_slice).collect())
 }
+
+/// A real number from an array's `(shape, entries)` (as [`Arg::array`] gives them): the one
+/// entry of a 0-d array; any other shape is refused naming it.
+pub fn scalar((shape, x): (Vec<usize>, Vec<f64>), arg: &str) -> Result<f64, Error> {
+    match shape.is_empty() {
+        true => Ok(x.first().copied().unwrap_or(f64::NAN)),
+        false => {
+            let got = format!("an array of {}", shape_str(&shape));
+            Err(Error::arg(arg, "a real number", got))
+        }
+    }
+}

@@ -87,6 +87,22 @@ const COMPILED_FOR: [(&str, bool); 12] = [
     ("avx512f", cfg!(target_feature = "avx512f")),
 ];
 
+/// Why this build cannot run here (the features it was compiled to assume and the running CPU
+/// lacks, and what to do), or `Ok` where it can: the Python module refuses to load with this
+/// message (an ImportError) instead of dying on an illegal instruction later.
+pub fn check_cpu_features() -> Result<(), String> {
+    let missing = missing_cpu_features();
+    if missing.is_empty() {
+        return Ok(());
+    }
+    Err(format!(
+        "pointmass_dyn was compiled for CPU features this processor lacks: {} (built with \
+         RUSTFLAGS such as -C target-cpu=native on another machine); rebuild it here, or \
+         install a wheel built without them",
+        missing.join(", ")
+    ))
+}
+
 /// The features this build was compiled to assume and the running CPU lacks: the Python
 /// module refuses to load (an ImportError naming them) instead of dying on an illegal
 /// instruction later. Empty for the shipped builds (baseline x86-64, AVX2 by dispatch).

@@ -26,15 +26,17 @@ impl Scene {
     /// A copy with what is given replaced and everything else kept: the model (of this
     /// scene's sizes), the effects (a joint limit's missing bounds and a torque's
     /// `"effort"` the model's; checked against the model), the start state (`q0` and `v0`
-    /// checked, `q0` normalised). Errors name the argument.
+    /// checked, `q0` normalised), the name and description. Errors name the argument.
     pub fn replaced<A: Arg>(
         &self,
         model: Option<Arc<Model>>,
         effects: Option<Vec<Effect>>,
-        q0: Option<&A>,
-        v0: Option<&A>,
+        (q0, v0): (Option<&A>, Option<&A>),
+        (name, description): (Option<String>, Option<String>),
     ) -> Result<Scene, A::Err> {
         let mut s = self.clone();
+        s.name = name.unwrap_or(s.name);
+        s.description = description.unwrap_or(s.description);
         if let Some(m) = model {
             let (nq, nv) = (s.model.nq, s.model.nv);
             if (m.nq, m.nv) != (nq, nv) {
@@ -57,5 +59,18 @@ impl Scene {
             .map_err(|e| e.map_arg(|a| format!("{a}0")))?;
         m.normalize(&mut s.q0);
         Ok(s)
+    }
+
+    /// `Scene(name='...', nbodies=..., nq=..., nv=..., effects=[...])`, Python's `repr`.
+    pub fn repr(&self) -> String {
+        let effects: Vec<&str> = self.effects.iter().map(|e| e.name()).collect();
+        format!(
+            "Scene(name='{}', nbodies={}, nq={}, nv={}, effects=[{}])",
+            self.name,
+            self.model.nbodies(),
+            self.model.nq,
+            self.model.nv,
+            effects.join(", ")
+        )
     }
 }
