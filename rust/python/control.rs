@@ -7,7 +7,6 @@ use pyo3::prelude::*;
 
 use super::convert::{to_array, to_array1};
 use super::errors::IntoPyResult;
-use super::record::getters_of;
 use super::scene::PyScene;
 use super::simulate::callbacks;
 use super::trajectory::PyRunResult;
@@ -108,7 +107,7 @@ impl PySimulator {
     }
 }
 
-getters_of!(PySimulator.read {
+super::getters!(PySimulator.read {
     t: f64 = |s, py| s.t(),
     nq: usize = |s, py| s.nq(),
     control_period: f64 = |s, py| s.period(),

@@ -4,7 +4,9 @@
 
 /// `#[getter]`s, each with its docs: `getters!(PyX { name: Type = inner.field, ... });`
 /// returns a field as it is; `getters!(PyX |s, py| { name -> Type = expr, ... });` the value
-/// of `expr`, in which `s` is the object and `py` the interpreter.
+/// of `expr`, in which `s` is the object and `py` the interpreter;
+/// `getters!(PyX.read { name: Type = |inner, py| value, ... });` the value from what the
+/// class holds, which `PyX::read(f)` lends to `f`.
 macro_rules! getters {
     ($ty:ident { $($(#[$m:meta])* $name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
         #[pyo3::pymethods]
@@ -18,6 +20,13 @@ macro_rules! getters {
         #[allow(unused_variables)]
         impl $ty {
             $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { let $s = self; $e })*
+        }
+    };
+    ($ty:ident.$read:ident { $($(#[$m:meta])* $name:ident: $t:ty = |$x:ident, $py:ident| $get:expr),* $(,)? }) => {
+        #[pyo3::pymethods]
+        #[allow(unused_variables)]
+        impl $ty {
+            $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { self.$read(|$x| $get) })*
         }
     };
 }

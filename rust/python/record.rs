@@ -144,25 +144,6 @@ macro_rules! record {
 }
 pub(crate) use record;
 
-/// `#[getter]`s declared from a table, each with its docs:
-/// `getters_of!(PyX.read { /// doc \n name: Type = |inner, py| value, ... })`, where
-/// `PyX::read(f)` lends the value the class holds to `f`.
-macro_rules! getters_of {
-    ($ty:ident.$read:ident {
-        $($(#[$m:meta])* $name:ident: $t:ty = |$x:ident, $py:ident| $get:expr),* $(,)?
-    }) => {
-        #[pyo3::pymethods]
-        impl $ty {
-            $($(#[$m])* #[getter]
-            #[allow(unused_variables)]
-            fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t {
-                self.$read(|$x| $get)
-            })*
-        }
-    };
-}
-pub(crate) use getters_of;
-
 /// `obj[key]` for one of a record's `fields`, else `KeyError`.
 pub fn item<'py>(obj: &Obj<'py>, key: &str, fields: &[&str]) -> PyResult<Obj<'py>> {
     match fields.contains(&key) {

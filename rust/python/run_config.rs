@@ -7,7 +7,6 @@ use pyo3::prelude::*;
 use pyo3::types::{IntoPyDict, PyDict, PyFloat, PyTuple};
 
 use super::convert::to_array1;
-use super::record::getters_of;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
 use crate::simulate::RunConfig;
 use crate::support::args::given as given_obj;
@@ -62,7 +61,7 @@ impl PyRunConfig {
     }
 }
 
-getters_of!(PyRunConfig.read {
+super::getters!(PyRunConfig.read {
     t_span: Option<(f64, f64)> = |c, py| c.t_span,
     /// A number, or an array of one per state component.
     rtol: Option<Obj<'py>> = |c, py| c.rtol.as_ref().map(|t| tol_py(py, t)),
