@@ -7,3 +7,4 @@ pub mod denoc;
 pub mod link_shaking;
 pub mod reactions;
 pub mod shared;
+pub mod stacked;

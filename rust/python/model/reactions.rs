@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::PyModel;
-use crate::dynamics::reactions;
+use crate::dynamics::{reactions, stacked};
 use crate::model::args::loop_actuation;
 use crate::python::convert::to_array;
 use crate::python::errors::{check_result, to_py};
@@ -40,38 +40,8 @@ impl PyModel {
         let g = crate::model::args::gravity(gravity)?;
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
         let pts = crate::model::args::body_points(&model, points)?;
-        let (np, nv) = (pts.len(), model.nv);
-        let states = reactions::States {
-            rows: count.unwrap_or(1),
-            q: &qs,
-            v: &vs,
-            a: &accs,
-        };
-        let (done, raised) =
-            detach_watched(py, || reactions::point_regressor(&model, &states, &pts, &g));
-        let done = match done {
-            Ok(done) => done,
-            Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
-        };
-        let r = &done.value;
-        let d = arrays(
-            py,
-            count.map(|_| done.rows),
-            "point_regressor",
-            [
-                ("positions", &r.positions, &[np, 3]),
-                ("accelerations", &r.accelerations, &[np, 3]),
-                ("generalized", &r.generalized, &[np, nv]),
-            ],
-        )?;
-        finish(
-            py,
-            d,
-            "point_regressor",
-            (done.rows, states.rows),
-            raised,
-            done.stopped,
-        )
+        let rows = (count, [&qs[..], &vs, &accs]);
+        stacked(py, || stacked::point_regressor(&model, rows, &pts, &g))
     }
 
     #[pyo3(signature = (q, v, a, about=None))]
@@ -86,34 +56,9 @@ impl PyModel {
         let model = self.model();
         let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
         let about = crate::model::args::about(about)?;
-        let states = reactions::States {
-            rows: count.unwrap_or(1),
-            q: &qs,
-            v: &vs,
-            a: &accs,
-        };
-        let (done, raised) =
-            detach_watched(py, || reactions::shaking_of_states(&model, &states, &about));
-        let (force, moment) = &done.value;
-        let lead = count.map(|_| done.rows);
-        let d = arrays(
-            py,
-            lead,
-            "shaking",
-            [("force", force, &[3]), ("moment", moment, &[3])],
-        )?;
-        let d = finish(
-            py,
-            d,
-            "shaking",
-            (done.rows, states.rows),
-            raised,
-            done.stopped,
-        )?;
-        Ok((
-            d.as_any().get_item("force")?,
-            d.as_any().get_item("moment")?,
-        ))
+        let rows = (count, [&qs[..], &vs, &accs]);
+        let d = stacked(py, || stacked::shaking(&model, rows, &about))?.into_any();
+        Ok((d.get_item("force")?, d.get_item("moment")?))
     }
 
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
@@ -139,23 +84,6 @@ impl PyModel {
         check_result(py, "bearing_forces", &out.joints)?;
         Ok(PyBearingForces(out))
     }
-}
-
-/// `(key, values, shape per state)` as a dict of arrays (a leading axis of `stack` states
-/// for a stack), each checked finite.
-fn arrays<'py, const N: usize>(
-    py: Python<'py>,
-    stack: Option<usize>,
-    what: &str,
-    items: [(&str, &Vec<f64>, &[usize]); N],
-) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    for (key, x, tail) in items {
-        check_result(py, &format!("{what}['{key}']"), x)?;
-        let shape: Vec<usize> = stack.into_iter().chain(tail.iter().copied()).collect();
-        d.set_item(key, to_array(py, x.clone(), &shape)?)?;
-    }
-    Ok(d)
 }
 
 fn flat(x: &[Vec3]) -> Vec<f64> {
@@ -189,29 +117,35 @@ record!(
     }
 );
 
-/// `partial` when its computation over `total` states ran to the end; else the exception
-/// of one stopped after `reached`, `partial` (completed with `states` and `message`)
-/// attached as `.result`.
-fn finish<'py>(
+/// The core's arrays as a dict; a computation stopped short raises, the dict (completed
+/// with `states` and `message`) attached as the exception's `.result`.
+fn stacked<'py>(
     py: Python<'py>,
-    partial: Bound<'py, PyDict>,
-    what: &str,
-    (reached, total): (usize, usize),
-    raised: Option<PyErr>,
-    stopped: Option<crate::support::error::Error>,
+    f: impl FnOnce() -> crate::support::error::Result<stacked::Stacked> + Send,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let Some(why) = stopped else {
-        return Ok(partial);
+    let (done, raised) = detach_watched(py, f);
+    let done = match done {
+        Ok(done) => done,
+        Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
     };
-    let message = format!("{what} stopped after {reached} of {total} states: interrupted");
-    partial.set_item("states", reached)?;
-    partial.set_item("message", &message)?;
-    let note = format!("{message}; the states done are in this exception's .result");
+    let d = PyDict::new(py);
+    for (key, x, shape) in done.arrays {
+        d.set_item(key, to_array(py, x, &shape)?)?;
+    }
+    let Some(stop) = done.stopped else {
+        return Ok(d);
+    };
+    d.set_item("states", stop.states)?;
+    d.set_item("message", &stop.message)?;
+    let note = format!(
+        "{}; the states done are in this exception's .result",
+        stop.message
+    );
     Err(stopped_with_partial(
         py,
         raised,
-        why,
-        partial.as_any(),
+        stop.why,
+        d.as_any(),
         &note,
     ))
 }
