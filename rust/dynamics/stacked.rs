@@ -3,6 +3,7 @@
 //! stack) and checked finite, and an early stop (an interrupt) described, so that the
 //! binding only converts.
 use super::reactions::{self, States};
+use crate::model::args::check_rows;
 use crate::model::Model;
 use crate::support::error::{check_result, Error, Result};
 use crate::support::spatial::Vec3;
@@ -23,9 +24,11 @@ pub struct Stop {
 /// The states of `q`, `v`, `a` row by row: `count` of them for a stack, `None` for one.
 pub type StateRows<'a> = (Option<usize>, [&'a [f64]; 3]);
 
-fn states<'a>((count, [q, v, a]): StateRows<'a>) -> States<'a> {
+/// The states checked row by row (`check_rows`: Ctrl-C honoured, a bad row named).
+fn states<'a>(model: &Model, (count, [q, v, a]): StateRows<'a>) -> Result<States<'a>> {
+    check_rows(model, count, q, v, a)?;
     let rows = count.unwrap_or(1);
-    States { rows, q, v, a }
+    Ok(States { rows, q, v, a })
 }
 
 impl Stacked {
@@ -65,7 +68,7 @@ pub fn point_regressor(
     points: &[(usize, Vec3)],
     g: &Vec3,
 ) -> Result<Stacked> {
-    let states = states(rows);
+    let states = states(model, rows)?;
     let done = reactions::point_regressor(model, &states, points, g)?;
     let (np, nv, r) = (points.len(), model.nv, done.value);
     Stacked::new(
@@ -83,7 +86,7 @@ pub fn point_regressor(
 
 /// [`reactions::shaking_of_states`]: `force` and `moment` (3,) per state.
 pub fn shaking(model: &Model, rows: StateRows<'_>, about: &Vec3) -> Result<Stacked> {
-    let states = states(rows);
+    let states = states(model, rows)?;
     let done = reactions::shaking_of_states(model, &states, about);
     let (force, moment) = done.value;
     Stacked::new(

@@ -5,10 +5,10 @@ use pyo3::prelude::*;
 
 use super::{load_state, load_x, PyModel};
 use crate::loops;
+use crate::model::args::fixed_mask;
 use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
 use crate::python::errors::{check_result, IntoPyResult};
 use crate::python::joint::PyJoint;
-use crate::python::loops::fixed_mask;
 use crate::python::record::record;
 
 #[pymethods]

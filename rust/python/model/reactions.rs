@@ -5,24 +5,17 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::PyModel;
-use crate::dynamics::{reactions, stacked};
-use crate::model::args::loop_actuation;
+use crate::dynamics::{reaction_args, reactions, stacked};
 use crate::python::convert::to_array;
-use crate::python::errors::{check_result, to_py};
+use crate::python::errors::to_py;
 use crate::python::record::record;
 use crate::python::signals::{detach_watched, stopped_with_partial};
-use crate::recursive;
 use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
     fn point_motion(&self, q: &Obj, v: &Obj, a: &Obj) -> PyResult<PyPointMotion> {
-        let model = self.model();
-        let [qs, vs, accs] = crate::model::args::one_state(&model, q, v, a)?;
-        let mut ws = recursive::reference::Workspace::new(&model);
-        let mut pm = reactions::PointMotion::default();
-        reactions::point_motion(&model, &mut ws, &qs, &vs, &accs, &mut pm);
-        pm.check_finite("point_motion")?;
+        let pm = reaction_args::point_motion(&self.model(), [q, v, a])?;
         Ok(PyPointMotion(pm))
     }
 
@@ -38,7 +31,7 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
         let g = crate::model::args::gravity(gravity)?;
-        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
         let pts = crate::model::args::body_points(&model, points)?;
         let rows = (count, [&qs[..], &vs, &accs]);
         stacked(py, || stacked::point_regressor(&model, rows, &pts, &g))
@@ -54,7 +47,7 @@ impl PyModel {
         about: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let model = self.model();
-        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
         let about = crate::model::args::about(about)?;
         let rows = (count, [&qs[..], &vs, &accs]);
         let d = stacked(py, || stacked::shaking(&model, rows, &about))?.into_any();
@@ -64,7 +57,6 @@ impl PyModel {
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
     fn bearing_forces(
         &self,
-        py: Python<'_>,
         q: &Obj,
         v: &Obj,
         a: &Obj,
@@ -73,15 +65,8 @@ impl PyModel {
         actuated: Option<&Obj>,
         frame: &str,
     ) -> PyResult<PyBearingForces> {
-        let world = reactions::world_frame(frame)?;
-        let model = self.model();
-        let g = crate::model::args::gravity(gravity)?;
-        let [qs, vs, accs] = crate::model::args::one_state(&model, q, v, a)?;
-        let ext = crate::model::args::external(&model, external)?;
-        let actuated = loop_actuation(&model, actuated)?;
-        let (ext, actuated) = (ext.as_deref(), actuated.as_deref());
-        let out = reactions::bearing_forces(&model, &qs, &vs, &accs, &g, ext, actuated, world)?;
-        check_result(py, "bearing_forces", &out.joints)?;
+        let given = (gravity, external, actuated);
+        let out = reaction_args::bearing_forces(&self.model(), [q, v, a], given, frame)?;
         Ok(PyBearingForces(out))
     }
 }
