@@ -1307,7 +1307,7 @@ def design_pin_loads(model: Model, body: int | str) -> list[Any]:
 
 def design_solve(spec: dict[str, Any]) -> Any:
     """Solves a design program (pointmass_dyn.design._problem builds ``spec``) with Clarabel; a
-    record indexable by its names (an infeasible program: a dict of ``status`` "Infeasible",
+    record indexable by its names (an infeasible program: a record of ``status`` "Infeasible",
     ``message`` and ``relaxation``):
     ``x``, ``delta``, ``values``, ``status``, ``objective``, ``gap_abs``, ``gap_rel`` (the last
     stage's), ``stages`` (each stage's ``(status, gap_abs, gap_rel, objective)``, the first

@@ -14,6 +14,7 @@ pub mod pins;
 pub mod problem;
 mod program;
 pub mod regressor;
+pub mod results;
 pub mod strength;
 
 pub use cells::{cube_moments, fill, point_moments, Envelope};

@@ -5,5 +5,7 @@
 pub mod calls;
 pub mod denoc;
 pub mod link_shaking;
+pub mod reaction_args;
 pub mod reactions;
 pub mod shared;
+pub mod stacked;

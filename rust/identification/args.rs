@@ -1,6 +1,8 @@
 //! The identification calls' options as a binding hands them over ([`Arg`]: a mapping of
 //! keywords), parsed here once: the extra columns, the fit's method, columns, prior,
-//! weights, cells and actuated joints.
+//! weights, cells and actuated joints; and a regressor given as an array.
+use nalgebra::DMatrix;
+
 use super::{Extras, LinkCells, Method, Options};
 use crate::support::args::{count, flag, items, text, vector, Arg};
 use crate::support::error::Error;
@@ -115,4 +117,13 @@ fn cells<A: Arg>(x: Option<&A>) -> R<Vec<LinkCells>, A> {
         });
     }
     Ok(out)
+}
+
+/// A regressor given as a 2-d array (rows, columns).
+pub fn regressor<A: Arg>(y: &A) -> R<DMatrix<f64>, A> {
+    let (shape, data) = y.array("regressor")?;
+    let &[rows, cols] = shape.as_slice() else {
+        return Err(Error::arg("regressor", "a 2-d array", format!("{shape:?}")).into());
+    };
+    Ok(DMatrix::from_row_slice(rows, cols, &data))
 }

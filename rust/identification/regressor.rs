@@ -89,6 +89,15 @@ pub fn parameter_names(model: &Model, extras: &Extras) -> Vec<String> {
     out
 }
 
+/// Every column's name and the model's own value of it (the links' ten each, the extra
+/// columns zero).
+pub fn parameters(model: &Model, extras: &Extras) -> (Vec<String>, Vec<f64>) {
+    let names = parameter_names(model, extras);
+    let mut values = model_parameters(model);
+    values.resize(names.len(), 0.0);
+    (names, values)
+}
+
 /// The links' parameters of a model (Pinocchio's order, link frames), its merged bodies.
 pub fn model_parameters(model: &Model) -> Vec<f64> {
     let mut out = Vec::with_capacity(NPARAM * model.links.len());

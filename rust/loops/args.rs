@@ -1,9 +1,13 @@
 //! The closed-loop calls' arguments as a binding hands them over ([`Arg`]): assembly's
-//! tolerance and iteration limit; and the residual at a configuration in one call.
+//! tolerance and iteration limit, the guesses projected onto the loops; and the residual at
+//! a configuration in one call.
 use super::LoopKinematics;
+use crate::effects::args::joint_body;
+use crate::model::args::{body, fixed_mask};
 use crate::model::Model;
-use crate::support::args::{int, opt, Arg};
-use crate::support::error::Error;
+use crate::support::args::{int, opt, placement, vector, Arg};
+use crate::support::error::{check_finite, check_result, Error};
+use crate::support::spatial::Placement;
 
 /// Assembly's `tol` (positive, finite) and `max_iterations` (>= 1; `None`: 50).
 pub fn assembly<A: Arg>(tol: f64, max_iterations: Option<&A>) -> Result<(f64, usize), A::Err> {
@@ -24,4 +28,56 @@ pub fn residual_at(model: &Model, q: &[f64]) -> Vec<f64> {
     let mut r = vec![0.0; model.nconstraints()];
     super::residual(model, &kin, &mut r);
     r
+}
+
+/// `Model.assemble_velocity` (no `a_guess`: the speeds nearest `v`) or
+/// `Model.assemble_acceleration` (the accelerations nearest `a_guess` at the speeds `v`)
+/// that the loops allow at a checked `q`, the `fixed` ones kept.
+pub fn assembled<A: Arg>(
+    model: &Model,
+    (q, v): (&[f64], Vec<f64>),
+    a_guess: Option<&A>,
+    fixed: Option<&A>,
+) -> Result<Vec<f64>, A::Err> {
+    let (v, mut x, name) = match a_guess {
+        None => (None, v, "assemble_velocity"),
+        Some(a) => {
+            let a = vector(a, "a_guess", Some(model.nv))?;
+            check_finite("a_guess", &a)?;
+            (Some(v), a, "assemble_acceleration")
+        }
+    };
+    let mask = fixed_mask(model, fixed)?;
+    super::project_velocity_like(model, q, v.as_deref(), &mut x, &mask)?;
+    check_result(name, &x)?;
+    Ok(x)
+}
+
+/// `Model.add_loop`'s two ends: each one's body (`None`: the world) and the cut joint's
+/// placement on it (`translation_a`, `rotation_a`, then the same of `b`).
+pub fn loop_ends<A: Arg>(
+    model: &Model,
+    bodies: [Option<&A>; 2],
+    translations: [Option<&A>; 2],
+    rotations: [Option<&A>; 2],
+) -> Result<[(Option<usize>, Placement); 2], A::Err> {
+    let fa = placement(translations[0], rotations[0], "translation_a", "rotation_a")?;
+    let fb = placement(translations[1], rotations[1], "translation_b", "rotation_b")?;
+    let a = body(model, bodies[0], "body_a")?;
+    Ok([(a, fa), (body(model, bodies[1], "body_b")?, fb)])
+}
+
+/// `Model.add_coupling`'s joint and reference (`crate::effects::args::joint_body`), `ratio`
+/// (1 if not given) and `offset` (0 if not given).
+pub fn coupling<A: Arg>(
+    model: &Model,
+    [joint, reference]: [&A; 2],
+    ratio: Option<&A>,
+    offset: Option<&A>,
+) -> Result<(usize, usize, f64, f64), A::Err> {
+    // `real` refuses bools and strings with the argument's name (a bare f64 took True as 1).
+    let ratio = opt(ratio, |x| x.real("ratio"))?.unwrap_or(1.0);
+    let offset = opt(offset, |x| x.real("offset"))?.unwrap_or(0.0);
+    let j = joint_body(model, joint, "joint")?;
+    Ok((j, joint_body(model, reference, "reference")?, ratio, offset))
 }

@@ -6,9 +6,9 @@ use pyo3::prelude::*;
 use super::errors::check_result;
 use super::record::{record, Field};
 use crate::simulate::derivatives::SceneDerivatives;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DMatrixViewMut};
 
-/// From this size on, [`c_ordered_triple`] allocates the three matrices as one block.
+/// From this size on, [`three_arrays`] allocates the three matrices as one block.
 const ONE_BLOCK_NV: usize = 64;
 
 /// From this size on, `Model`'s derivatives are filled by rows (C order, no transposing
@@ -16,12 +16,37 @@ const ONE_BLOCK_NV: usize = 64;
 /// inverse derivatives: 28.9k per Python call against 34.9k by rows, callgrind).
 pub(crate) const ROWS_NV: usize = 32;
 
+/// Three new C-ordered n × n arrays and their entries. Unsafe: the caller writes every entry
+/// before Python sees them, and drops the entries before the arrays. From [`ONE_BLOCK_NV`]
+/// on, they are views of one (3, n, n) array: three separate blocks freed together at the
+/// top of glibc's heap exceed its trim threshold, so every call gave the pages back and
+/// faulted them in again (on a 300-link chain, more than the derivatives themselves); one
+/// block of that size stays allocated for the next call (the dynamic mmap threshold).
+unsafe fn three_arrays<'py, 'a>(
+    py: Python<'py>,
+    n: usize,
+) -> PyResult<([Obj<'py>; 3], [&'a mut [f64]; 3])> {
+    use numpy::{PyArray2, PyArray3, PyArrayMethods};
+    let len = n * n;
+    if n < ONE_BLOCK_NV {
+        // New C-contiguous arrays of n × n entries that no other code holds yet.
+        let arrays = std::array::from_fn(|_| PyArray2::<f64>::new(py, [n, n], false));
+        let out = arrays
+            .each_ref()
+            .map(|a| std::slice::from_raw_parts_mut(a.data(), len));
+        return Ok((arrays.map(Bound::into_any), out));
+    }
+    // As above, one block of 3 n² entries.
+    let block = PyArray3::<f64>::new(py, [3, n, n], false);
+    let all = std::slice::from_raw_parts_mut(block.data(), 3 * len);
+    let (a, rest) = all.split_at_mut(len);
+    let (b, c) = rest.split_at_mut(len);
+    let views = [block.get_item(0)?, block.get_item(1)?, block.get_item(2)?];
+    Ok((views, [a, b, c]))
+}
+
 /// NumPy copies of three nv × nv matrices whose column-major data is already their C order
-/// (stored by rows, or symmetric): plain copies. From [`ONE_BLOCK_NV`] on, they are views of
-/// one (3, nv, nv) array: three separate blocks freed together at the top of glibc's heap
-/// exceed its trim threshold, so every call gave the pages back and faulted them in again
-/// (on a 300-link chain, more than the derivatives themselves); one block of that size stays
-/// allocated for the next call (the dynamic mmap threshold).
+/// (stored by rows, or symmetric): plain copies into [`three_arrays`].
 /// `transpose`: the first two are stored by columns (below [`ROWS_NV`] only) and are
 /// transposed into place.
 pub(crate) fn c_ordered_triple<'py>(
@@ -29,42 +54,22 @@ pub(crate) fn c_ordered_triple<'py>(
     m: [&DMatrix<f64>; 3],
     transpose: bool,
 ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
-    use numpy::{PyArray2, PyArray3, PyArrayMethods};
     let n = m[0].nrows();
-    let len = n * n;
-    if n < ONE_BLOCK_NV {
-        // SAFETY: new C-contiguous arrays of exactly n × n elements, all written.
-        let one = |x: &DMatrix<f64>, t: bool| unsafe {
-            let arr = PyArray2::<f64>::new(py, [n, n], false);
-            if t {
-                let (src, dst) = (x.as_slice(), arr.data());
-                for i in 0..n {
-                    for j in 0..n {
-                        *dst.add(i * n + j) = src[j * n + i];
-                    }
-                }
-            } else {
-                std::ptr::copy_nonoverlapping(x.as_ptr(), arr.data(), len);
-            }
-            arr.into_any()
-        };
-        return Ok((one(m[0], transpose), one(m[1], transpose), one(m[2], false)));
-    }
-    // SAFETY: a new C-contiguous array of exactly 3 n² elements, all written.
-    let block = unsafe {
-        let arr = PyArray3::<f64>::new(py, [3, n, n], false);
-        for (k, x) in m.iter().enumerate() {
-            std::ptr::copy_nonoverlapping(x.as_ptr(), arr.data().add(k * len), len);
+    // SAFETY: every entry copied below; `out` gone when the arrays are returned.
+    let ([a, b, c], out) = unsafe { three_arrays(py, n)? };
+    for (k, (x, dst)) in m.into_iter().zip(out).enumerate() {
+        match transpose && k < 2 {
+            true => DMatrixViewMut::from_slice(dst, n, n).tr_copy_from(x),
+            false => dst.copy_from_slice(x.as_slice()),
         }
-        arr
-    };
-    Ok((block.get_item(0)?, block.get_item(1)?, block.get_item(2)?))
+    }
+    Ok((a, b, c))
 }
 
 /// `Model.inverse_dynamics_derivatives` at the workspace's loaded `(q, v, a)`: the three
-/// arrays allocated as [`c_ordered_triple`] does, then filled by the derivatives themselves
-/// (by rows: C order), nothing copied; their entries read for finiteness only when the
-/// per-dof vectors do not already rule out an overflow. `detach`: run without the GIL.
+/// arrays of [`three_arrays`] filled by the derivatives themselves (by rows: C order),
+/// nothing copied; their entries read for finiteness only when the per-dof vectors do not
+/// already rule out an overflow. `detach`: run without the GIL.
 pub(crate) fn inverse_into_arrays<'py>(
     py: Python<'py>,
     ws: &mut crate::dynamics::shared::Workspace,
@@ -72,41 +77,19 @@ pub(crate) fn inverse_into_arrays<'py>(
     name: &str,
     detach: bool,
 ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
-    use numpy::{PyArray2, PyArray3, PyArrayMethods};
-    let n = ws.model().nv;
-    let len = n * n;
-    let run = |ws: &mut crate::dynamics::shared::Workspace, out: [&mut [f64]; 3]| {
-        if detach {
-            py.detach(|| ws.inverse_derivatives_into(g, out))
-        } else {
-            ws.inverse_derivatives_into(g, out)
-        }
+    // SAFETY: the fill writes every entry; `out` gone when the arrays are returned.
+    let ([a, b, c], mut out) = unsafe { three_arrays(py, ws.model().nv)? };
+    let fill = out.each_mut().map(|x| &mut **x);
+    let finite = match detach {
+        true => py.detach(|| ws.inverse_derivatives_into(g, fill)),
+        false => ws.inverse_derivatives_into(g, fill),
     };
-    if n < ONE_BLOCK_NV {
-        let arrays: [Bound<'py, PyArray2<f64>>; 3] =
-            std::array::from_fn(|_| unsafe { PyArray2::<f64>::new(py, [n, n], false) });
-        // SAFETY: new C-contiguous arrays no other code holds yet, every entry written by
-        // the fill before they are handed to Python.
-        let out = arrays
-            .each_ref()
-            .map(|a| unsafe { std::slice::from_raw_parts_mut(a.data(), len) });
-        if !run(ws, out) {
-            for a in &arrays {
-                check_result(py, name, unsafe { a.as_slice()? })?;
-            }
+    if !finite {
+        for x in &out {
+            check_result(py, name, x)?;
         }
-        let [a, b, c] = arrays;
-        return Ok((a.into_any(), b.into_any(), c.into_any()));
     }
-    // SAFETY: as above, one block of 3 n² entries.
-    let block = unsafe { PyArray3::<f64>::new(py, [3, n, n], false) };
-    let all = unsafe { std::slice::from_raw_parts_mut(block.data(), 3 * len) };
-    let (a, rest) = all.split_at_mut(len);
-    let (b, c) = rest.split_at_mut(len);
-    if !run(ws, [a, b, c]) {
-        check_result(py, name, unsafe { block.as_slice()? })?;
-    }
-    Ok((block.get_item(0)?, block.get_item(1)?, block.get_item(2)?))
+    Ok((a, b, c))
 }
 
 /// A scene's derivatives, the matrices in C order.

@@ -4,11 +4,12 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{array, dmatrix_to_array, to_array1};
-use super::errors::{check_result, invalid};
+use super::errors::check_result;
 use super::model::PyModel;
 use super::record::{record, Field};
 use super::signals::detach_interruptible;
 use crate::identification::{self as ident, args};
+use crate::model::args::check_rows;
 
 /// `extras`: whether to add the (viscous, coulomb, armature, offset) columns.
 #[pyfunction]
@@ -25,9 +26,10 @@ pub fn identification_regressor<'py>(
 ) -> PyResult<Obj<'py>> {
     let model = model.model();
     let g = crate::model::args::gravity(gravity)?;
-    let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+    let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
     let ex = args::extras(extras);
     let y = detach_interruptible(py, || {
+        check_rows(&model, count, &qs, &vs, &accs)?;
         ident::joint_force_regressor(&model, &qs, &vs, &accs, &g, &ex, &actuated)
     })?;
     check_result(py, "torque regressor", y.as_slice())?;
@@ -43,28 +45,16 @@ pub fn identification_parameters<'py>(
     model: PyRef<'_, PyModel>,
     extras: (bool, bool, bool, bool),
 ) -> PyResult<(Vec<String>, Obj<'py>)> {
-    let model = model.model();
-    let names = ident::parameter_names(&model, &args::extras(extras));
-    let mut values = ident::model_parameters(&model);
-    values.resize(names.len(), 0.0);
+    let (names, values) = ident::regressor::parameters(&model.model(), &args::extras(extras));
     Ok((names, to_array1(py, &values).into_any()))
 }
 
 #[pyfunction]
 #[pyo3(signature = (y, rank_tol=1e-8))]
 pub fn identification_base<'py>(py: Python<'py>, y: &Obj, rank_tol: f64) -> PyResult<PyBase> {
-    let (shape, data) = array(y, "regressor")?;
-    if shape.len() != 2 {
-        return Err(invalid(
-            py,
-            "regressor",
-            "a 2-d array",
-            format!("{shape:?}"),
-        ));
-    }
-    let m = nalgebra::DMatrix::from_row_slice(shape[0], shape[1], &data);
-    let reduced = |m| ident::identify::reduced(m).r;
-    let base = detach_interruptible(py, || Ok(ident::base_parameters(&reduced(&m), rank_tol)))?;
+    let y = args::regressor(y)?;
+    let reduced = |y| ident::identify::reduced(y).r;
+    let base = detach_interruptible(py, || Ok(ident::base_parameters(&reduced(&y), rank_tol)))?;
     Ok(PyBase(base))
 }
 
@@ -106,11 +96,12 @@ pub fn identification_fit(
     options: Option<&Bound<'_, pyo3::types::PyDict>>,
 ) -> PyResult<PyIdentified> {
     let model = model.model();
-    let (_, qs, vs, accs) = super::reactions::states(&model, q, v, a)?;
+    let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
     let (_, taus) = array(tau, "tau")?;
     let empty = pyo3::types::PyDict::new(py);
     let (opt, g) = args::fit_options(options.unwrap_or(&empty).as_any())?;
     let out = detach_interruptible(py, || {
+        check_rows(&model, count, &qs, &vs, &accs)?;
         ident::identify(&model, &qs, &vs, &accs, &taus, &g, &opt)
     })?;
     Ok(PyIdentified(out))

@@ -52,7 +52,7 @@ mod visuals;
 pub use crate::model::joint_records::{Limit, Mimic, RepairRecord, UrdfJoint};
 pub use parts::{model_from_parts, parts_arg, Part};
 pub use repair::Repair;
-pub use srdf::{load_reference_poses, reference_poses, ReferencePose};
+pub use srdf::{load_reference_poses, reference_poses, reference_poses_warned, ReferencePose};
 
 use parse::Ctx;
 use tree::Tree;
@@ -146,6 +146,32 @@ pub fn load_urdf_with(
         repair,
         package_dirs,
     )
+}
+
+/// A URDF file as `Model.from_urdf` loads it ([`load_urdf_with`]; `mimic` false: the mimic
+/// joints independent): the model, and its warnings as `(category, message)`, the file's
+/// (`UrdfWarning`) then what `repair` changed (`UrdfRepairWarning`).
+pub fn load_model(
+    path: &Path,
+    (root, repair): (RootJoint, Option<&Repair>),
+    package_dirs: &[PathBuf],
+    mimic: bool,
+) -> Result<(Model, Vec<(&'static str, String)>)> {
+    let mut urdf = load_urdf_with(path, root, repair, package_dirs)?;
+    let file = crate::support::files::display_path(path);
+    if !mimic {
+        urdf.independent_mimics(&file);
+    }
+    let mut warnings: Vec<_> = urdf
+        .warnings
+        .drain(..)
+        .map(|w| ("UrdfWarning", w))
+        .collect();
+    warnings.extend(
+        urdf.repairs_warning(&file)
+            .map(|m| ("UrdfRepairWarning", m)),
+    );
+    Ok((urdf.model, warnings))
 }
 
 /// URDF roll-pitch-yaw: `Rz(yaw) Ry(pitch) Rx(roll)`.

@@ -26,6 +26,22 @@ pub fn load_reference_poses(
     reference_poses(model, &text, &crate::support::files::display_path(path))
 }
 
+/// [`load_reference_poses`], the joints skipped said in one warning (`None`: none skipped).
+pub fn reference_poses_warned(
+    model: &Model,
+    path: &Path,
+) -> Result<(Vec<ReferencePose>, Option<String>)> {
+    let (poses, skipped) = load_reference_poses(model, path)?;
+    let warning = (!skipped.is_empty()).then(|| {
+        let file = crate::support::files::display_path(path);
+        format!(
+            "{file}: joints the model does not move, skipped: {}",
+            skipped.join(", ")
+        )
+    });
+    Ok((poses, warning))
+}
+
 /// [`load_reference_poses`] of SRDF text; `file` names it in errors.
 pub fn reference_poses(
     model: &Model,

@@ -7,9 +7,8 @@ use pyo3::prelude::*;
 use super::{load_state, load_x, PyModel};
 use crate::effects::args::{joint_body, numbers};
 use crate::loops;
-use crate::python::convert::{real, to_array1};
+use crate::python::convert::to_array1;
 use crate::python::errors::{check_result, IntoPyResult};
-use crate::support::args;
 
 #[pymethods]
 impl PyModel {
@@ -23,14 +22,8 @@ impl PyModel {
         offset: Option<&Obj>,
         name: Option<String>,
     ) -> PyResult<usize> {
-        // `real` refuses bools and strings with the argument's name (a bare f64 took True as 1).
-        let ratio = args::opt(ratio, |x| real(x, "ratio"))?.unwrap_or(1.0);
-        let offset = args::opt(offset, |x| real(x, "offset"))?.unwrap_or(0.0);
-        let model = self.model();
-        let j = joint_body(&model, joint, "joint")?;
-        let r = joint_body(&model, reference, "reference")?;
-        // The handle let go first, so that the update extends the model in place.
-        drop(model);
+        let (j, r, ratio, offset) =
+            loops::args::coupling(&self.model(), [joint, reference], ratio, offset)?;
         self.shared
             .update(|m| m.add_coupling(j, r, ratio, offset, name))
             .py(py)

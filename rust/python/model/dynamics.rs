@@ -25,14 +25,8 @@ impl PyModel {
         external: Option<&Obj>,
         method: &str,
     ) -> PyResult<Obj<'py>> {
-        self.dynamics(
-            py,
-            Direction::Forward,
-            [q, v, tau],
-            gravity,
-            external,
-            method,
-        )
+        let how = (Direction::Forward, None);
+        self.dynamics(py, how, [q, v, tau], gravity, external, method)
     }
 
     #[pyo3(signature = (q, v, a, gravity=None, external=None, method="recursive", actuated=None))]
@@ -47,20 +41,9 @@ impl PyModel {
         method: &str,
         actuated: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
-        let model = self.model();
-        let xs = [q, v, a];
-        let Some(actuated) = crate::model::args::loop_actuation(&model, actuated)? else {
-            return self.dynamics(py, Direction::Inverse, xs, gravity, external, method);
-        };
-        let tree = self.dynamics(py, Direction::Inverse, xs, gravity, external, method)?;
-        let tau_tree = crate::python::convert::vector(&tree, "tau", Some(model.nv))?;
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, Some(v))?;
-            load_x(ws, py, a, "a")?;
-            let tau = ws.driving_forces(&tau_tree, &actuated)?;
-            check_result(py, "inverse_dynamics", &tau)?;
-            Ok(to_array1(py, &tau).into_any())
-        })
+        let actuated = crate::model::args::loop_actuation(&self.model(), actuated)?;
+        let how = (Direction::Inverse, actuated.as_deref());
+        self.dynamics(py, how, [q, v, a], gravity, external, method)
     }
 
     #[pyo3(signature = (q, v, a, gravity=None))]
@@ -141,11 +124,12 @@ impl PyModel {
 
 impl PyModel {
     /// Forward or inverse dynamics on either path: one place validates, dispatches, releases
-    /// the GIL for large models and checks the result.
+    /// the GIL for large models and checks the result. With `actuated` (a model with loops),
+    /// the inverse dynamics' joint forces of those joints alone.
     fn dynamics<'py>(
         &self,
         py: Python<'py>,
-        direction: Direction,
+        (direction, actuated): (Direction, Option<&[usize]>),
         [q, v, x]: [&Obj; 3],
         gravity: Option<&Obj>,
         external: Option<&Obj>,
@@ -175,7 +159,12 @@ impl PyModel {
                 }
             };
             check_result(py, direction.name(), out)?;
-            Ok(to_array1(py, out).into_any())
+            let Some(actuated) = actuated else {
+                return Ok(to_array1(py, out).into_any());
+            };
+            let tau = ws.driving_forces(&out.to_vec(), actuated)?;
+            check_result(py, direction.name(), &tau)?;
+            Ok(to_array1(py, &tau).into_any())
         })
     }
 

@@ -12,7 +12,6 @@ use crate::python::convert::to_array1;
 use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::python::record::record;
-use crate::support::files::display_path;
 
 #[pymethods]
 impl PyModel {
@@ -29,19 +28,13 @@ impl PyModel {
         let package_dirs = crate::python::visuals::package_dirs(py, package_dirs)?;
         let root = crate::io::urdf::RootJoint::parse(root_joint)?;
         let repair = crate::io::urdf::Repair::parse(repair)?;
-        let mut urdf =
-            crate::io::urdf::load_urdf_with(&path, root, repair.as_ref(), &package_dirs).py(py)?;
-        let file = display_path(&path);
-        if !mimic {
-            urdf.independent_mimics(&file);
+        let (model, warnings) =
+            crate::io::urdf::load_model(&path, (root, repair.as_ref()), &package_dirs, mimic)
+                .py(py)?;
+        for (category, message) in &warnings {
+            warn(py, category, message)?;
         }
-        for w in &urdf.warnings {
-            warn(py, "UrdfWarning", w)?;
-        }
-        if let Some(message) = urdf.repairs_warning(&file) {
-            warn(py, "UrdfRepairWarning", &message)?;
-        }
-        Ok(PyModel::from_model(urdf.model))
+        Ok(PyModel::from_model(model))
     }
 
     #[staticmethod]
@@ -62,14 +55,9 @@ impl PyModel {
         py: Python<'py>,
         srdf: std::path::PathBuf,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let model = self.model();
-        let (poses, skipped) = crate::io::urdf::load_reference_poses(&model, &srdf).py(py)?;
-        if !skipped.is_empty() {
-            let message = format!(
-                "{}: joints the model does not move, skipped: {}",
-                display_path(&srdf),
-                skipped.join(", ")
-            );
+        let (poses, warning) =
+            crate::io::urdf::reference_poses_warned(&self.model(), &srdf).py(py)?;
+        if let Some(message) = warning {
             warn(py, "UrdfWarning", &message)?;
         }
         let poses = poses.into_iter().map(|p| (p.name, to_array1(py, &p.q)));

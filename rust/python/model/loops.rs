@@ -5,12 +5,11 @@ use pyo3::prelude::*;
 
 use super::{load_state, load_x, PyModel};
 use crate::loops;
+use crate::model::args::fixed_mask;
 use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
 use crate::python::errors::{check_result, IntoPyResult};
 use crate::python::joint::PyJoint;
-use crate::python::loops::{body_ref, fixed_mask};
 use crate::python::record::record;
-use crate::support::args::placement;
 
 #[pymethods]
 impl PyModel {
@@ -27,13 +26,12 @@ impl PyModel {
         rotation_b: Option<&Obj>,
         name: Option<String>,
     ) -> PyResult<usize> {
-        let fa = placement(translation_a, rotation_a, "translation_a", "rotation_a")?;
-        let fb = placement(translation_b, rotation_b, "translation_b", "rotation_b")?;
-        let model = self.model();
-        let a = body_ref(&model, body_a, "body_a")?;
-        let b = body_ref(&model, body_b, "body_b")?;
-        // The handle let go first, so that the update extends the model in place.
-        drop(model);
+        let [(a, fa), (b, fb)] = loops::args::loop_ends(
+            &self.model(),
+            [body_a, body_b],
+            [translation_a, translation_b],
+            [rotation_a, rotation_b],
+        )?;
         self.shared
             .update(|m| m.add_loop(a, b, joint.inner, fa, fb, name))
             .py(py)
@@ -97,7 +95,8 @@ impl PyModel {
         fixed: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
         let (model, q, v) = self.state_as((q, "q"), Some((v_guess, "v_guess")))?;
-        self.project(py, (&model, &q, None), v, fixed, "assemble_velocity")
+        let v = loops::args::assembled::<Obj>(&model, (&q, v), None, fixed)?;
+        Ok(to_array1(py, &v).into_any())
     }
 
     #[pyo3(signature = (q, v, a_guess, fixed=None))]
@@ -110,15 +109,8 @@ impl PyModel {
         fixed: Option<&Obj>,
     ) -> PyResult<Obj<'py>> {
         let (model, q, v) = self.state(q, v)?;
-        let a = crate::python::convert::vector(a_guess, "a_guess", Some(model.nv))?;
-        crate::support::error::check_finite("a_guess", &a)?;
-        self.project(
-            py,
-            (&model, &q, Some(&v)),
-            a,
-            fixed,
-            "assemble_acceleration",
-        )
+        let a = loops::args::assembled(&model, (&q, v), Some(a_guess), fixed)?;
+        Ok(to_array1(py, &a).into_any())
     }
 
     #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
@@ -148,21 +140,3 @@ record!(
     /// How the loop solver factors a model (`Model.loop_solver_info`).
     PyLoopLayout("LoopSolverInfo", loops::Layout) { banded, order, profile, model_profile }
 );
-
-impl PyModel {
-    /// The speeds (`v` none) or accelerations nearest `x` that the loops allow at `q`, the
-    /// `fixed` ones kept.
-    fn project<'py>(
-        &self,
-        py: Python<'py>,
-        (model, q, v): (&crate::model::Model, &[f64], Option<&[f64]>),
-        mut x: Vec<f64>,
-        fixed: Option<&Obj>,
-        name: &str,
-    ) -> PyResult<Obj<'py>> {
-        let mask = fixed_mask(model, fixed)?;
-        loops::project_velocity_like(model, q, v, &mut x, &mask)?;
-        check_result(py, name, &x)?;
-        Ok(to_array1(py, &x).into_any())
-    }
-}

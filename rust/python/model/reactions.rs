@@ -5,24 +5,17 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use super::PyModel;
-use crate::dynamics::reactions;
-use crate::model::args::loop_actuation;
+use crate::dynamics::{reaction_args, reactions, stacked};
 use crate::python::convert::to_array;
-use crate::python::errors::{check_result, to_py};
+use crate::python::errors::to_py;
 use crate::python::record::record;
 use crate::python::signals::{detach_watched, stopped_with_partial};
-use crate::recursive;
 use crate::support::spatial::Vec3;
 
 #[pymethods]
 impl PyModel {
     fn point_motion(&self, q: &Obj, v: &Obj, a: &Obj) -> PyResult<PyPointMotion> {
-        let model = self.model();
-        let [qs, vs, accs] = crate::model::args::one_state(&model, q, v, a)?;
-        let mut ws = recursive::reference::Workspace::new(&model);
-        let mut pm = reactions::PointMotion::default();
-        reactions::point_motion(&model, &mut ws, &qs, &vs, &accs, &mut pm);
-        pm.check_finite("point_motion")?;
+        let pm = reaction_args::point_motion(&self.model(), [q, v, a])?;
         Ok(PyPointMotion(pm))
     }
 
@@ -38,40 +31,10 @@ impl PyModel {
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
         let g = crate::model::args::gravity(gravity)?;
-        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
         let pts = crate::model::args::body_points(&model, points)?;
-        let (np, nv) = (pts.len(), model.nv);
-        let states = reactions::States {
-            rows: count.unwrap_or(1),
-            q: &qs,
-            v: &vs,
-            a: &accs,
-        };
-        let (done, raised) =
-            detach_watched(py, || reactions::point_regressor(&model, &states, &pts, &g));
-        let done = match done {
-            Ok(done) => done,
-            Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
-        };
-        let r = &done.value;
-        let d = arrays(
-            py,
-            count.map(|_| done.rows),
-            "point_regressor",
-            [
-                ("positions", &r.positions, &[np, 3]),
-                ("accelerations", &r.accelerations, &[np, 3]),
-                ("generalized", &r.generalized, &[np, nv]),
-            ],
-        )?;
-        finish(
-            py,
-            d,
-            "point_regressor",
-            (done.rows, states.rows),
-            raised,
-            done.stopped,
-        )
+        let rows = (count, [&qs[..], &vs, &accs]);
+        stacked(py, || stacked::point_regressor(&model, rows, &pts, &g))
     }
 
     #[pyo3(signature = (q, v, a, about=None))]
@@ -84,42 +47,16 @@ impl PyModel {
         about: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let model = self.model();
-        let (count, qs, vs, accs) = crate::python::reactions::states(&model, q, v, a)?;
+        let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
         let about = crate::model::args::about(about)?;
-        let states = reactions::States {
-            rows: count.unwrap_or(1),
-            q: &qs,
-            v: &vs,
-            a: &accs,
-        };
-        let (done, raised) =
-            detach_watched(py, || reactions::shaking_of_states(&model, &states, &about));
-        let (force, moment) = &done.value;
-        let lead = count.map(|_| done.rows);
-        let d = arrays(
-            py,
-            lead,
-            "shaking",
-            [("force", force, &[3]), ("moment", moment, &[3])],
-        )?;
-        let d = finish(
-            py,
-            d,
-            "shaking",
-            (done.rows, states.rows),
-            raised,
-            done.stopped,
-        )?;
-        Ok((
-            d.as_any().get_item("force")?,
-            d.as_any().get_item("moment")?,
-        ))
+        let rows = (count, [&qs[..], &vs, &accs]);
+        let d = stacked(py, || stacked::shaking(&model, rows, &about))?.into_any();
+        Ok((d.get_item("force")?, d.get_item("moment")?))
     }
 
     #[pyo3(signature = (q, v, a, gravity=None, external=None, actuated=None, frame="joint"))]
     fn bearing_forces(
         &self,
-        py: Python<'_>,
         q: &Obj,
         v: &Obj,
         a: &Obj,
@@ -128,34 +65,10 @@ impl PyModel {
         actuated: Option<&Obj>,
         frame: &str,
     ) -> PyResult<PyBearingForces> {
-        let world = reactions::world_frame(frame)?;
-        let model = self.model();
-        let g = crate::model::args::gravity(gravity)?;
-        let [qs, vs, accs] = crate::model::args::one_state(&model, q, v, a)?;
-        let ext = crate::model::args::external(&model, external)?;
-        let actuated = loop_actuation(&model, actuated)?;
-        let (ext, actuated) = (ext.as_deref(), actuated.as_deref());
-        let out = reactions::bearing_forces(&model, &qs, &vs, &accs, &g, ext, actuated, world)?;
-        check_result(py, "bearing_forces", &out.joints)?;
+        let given = (gravity, external, actuated);
+        let out = reaction_args::bearing_forces(&self.model(), [q, v, a], given, frame)?;
         Ok(PyBearingForces(out))
     }
-}
-
-/// `(key, values, shape per state)` as a dict of arrays (a leading axis of `stack` states
-/// for a stack), each checked finite.
-fn arrays<'py, const N: usize>(
-    py: Python<'py>,
-    stack: Option<usize>,
-    what: &str,
-    items: [(&str, &Vec<f64>, &[usize]); N],
-) -> PyResult<Bound<'py, PyDict>> {
-    let d = PyDict::new(py);
-    for (key, x, tail) in items {
-        check_result(py, &format!("{what}['{key}']"), x)?;
-        let shape: Vec<usize> = stack.into_iter().chain(tail.iter().copied()).collect();
-        d.set_item(key, to_array(py, x.clone(), &shape)?)?;
-    }
-    Ok(d)
 }
 
 fn flat(x: &[Vec3]) -> Vec<f64> {
@@ -189,29 +102,35 @@ record!(
     }
 );
 
-/// `partial` when its computation over `total` states ran to the end; else the exception
-/// of one stopped after `reached`, `partial` (completed with `states` and `message`)
-/// attached as `.result`.
-fn finish<'py>(
+/// The core's arrays as a dict; a computation stopped short raises, the dict (completed
+/// with `states` and `message`) attached as the exception's `.result`.
+fn stacked<'py>(
     py: Python<'py>,
-    partial: Bound<'py, PyDict>,
-    what: &str,
-    (reached, total): (usize, usize),
-    raised: Option<PyErr>,
-    stopped: Option<crate::support::error::Error>,
+    f: impl FnOnce() -> crate::support::error::Result<stacked::Stacked> + Send,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let Some(why) = stopped else {
-        return Ok(partial);
+    let (done, raised) = detach_watched(py, f);
+    let done = match done {
+        Ok(done) => done,
+        Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
     };
-    let message = format!("{what} stopped after {reached} of {total} states: interrupted");
-    partial.set_item("states", reached)?;
-    partial.set_item("message", &message)?;
-    let note = format!("{message}; the states done are in this exception's .result");
+    let d = PyDict::new(py);
+    for (key, x, shape) in done.arrays {
+        d.set_item(key, to_array(py, x, &shape)?)?;
+    }
+    let Some(stop) = done.stopped else {
+        return Ok(d);
+    };
+    d.set_item("states", stop.states)?;
+    d.set_item("message", &stop.message)?;
+    let note = format!(
+        "{}; the states done are in this exception's .result",
+        stop.message
+    );
     Err(stopped_with_partial(
         py,
         raised,
-        why,
-        partial.as_any(),
+        stop.why,
+        d.as_any(),
         &note,
     ))
 }
