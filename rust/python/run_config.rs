@@ -9,7 +9,6 @@ use pyo3::types::{IntoPyDict, PyDict, PyFloat, PyTuple};
 use super::convert::to_array1;
 use crate::integrator::{Controller, Method, StiffnessCheck, Tol};
 use crate::simulate::RunConfig;
-use crate::support::args::given as given_obj;
 
 #[pyclass(name = "RunConfig", module = "pointmass_dyn._core", frozen, eq)]
 #[derive(Clone, PartialEq)]
@@ -84,23 +83,6 @@ super::getters!(PyRunConfig.read {
     power: Option<bool> = |c, py| c.power,
     dense_output: Option<bool> = |c, py| c.dense,
 });
-
-/// A call's `**settings` and its named keywords given (not `None`), by keyword.
-pub(super) fn keywords<'py, const N: usize>(
-    settings: Option<&Bound<'py, PyDict>>,
-    named: [(&str, Option<&Obj<'py>>); N],
-) -> PyResult<Vec<(String, Obj<'py>)>> {
-    let given = settings
-        .into_iter()
-        .flatten()
-        .map(|(k, v)| Ok((k.extract()?, v)));
-    let mut given = given.collect::<PyResult<Vec<_>>>()?;
-    let named = named
-        .into_iter()
-        .filter_map(|(k, v)| Some((k.into(), given_obj(v)?.clone())));
-    given.extend(named);
-    Ok(given)
-}
 
 /// The settings of a run call: its keywords (`t_span`, `rtol`, `atol` and `settings`, as
 /// `RunConfig`'s constructor takes them) over `config`'s.

@@ -48,7 +48,7 @@ impl PyScene {
             ("atol", atol),
             ("disable", disable),
         ];
-        let settings = settings_over(named, settings, Settings::default())?;
+        let settings = settings_over(&named, settings, Settings::default())?;
         let base = Scene {
             settings,
             ..Scene::of_model(model.model())
@@ -82,7 +82,7 @@ impl PyScene {
         let mut inner = self
             .inner
             .replaced(model, effects, (q0, v0), (name, description))?;
-        inner.settings = settings_over([], settings, inner.settings)?;
+        inner.settings = settings_over(&[], settings, inner.settings)?;
         Ok(PyScene { inner })
     }
 
@@ -157,16 +157,14 @@ fn effect_list(effects: &Obj) -> PyResult<Vec<Effect>> {
     items.into_iter().enumerate().map(one).collect()
 }
 
-/// `base` with the settings a `Scene` call was given (its `named` ones and `**settings`;
-/// `None`: not given) laid over it, parsed as `RunConfig`'s keywords are (the core's
-/// `RunConfig::scene_args`).
-fn settings_over<const N: usize>(
-    named: [(&str, Option<&Obj>); N],
+/// `base` with the settings a `Scene` call gave: `named` (`None`: not given) and
+/// `**settings` (the core's `RunConfig::scene_call`).
+fn settings_over(
+    named: &[(&str, Option<&Obj>)],
     settings: Option<&Bound<'_, PyDict>>,
     base: Settings,
 ) -> PyResult<Settings> {
-    let given = super::run_config::keywords(settings, named)?;
-    RunConfig::scene_args(given.iter().map(|(k, v)| (k.as_str(), v)), base)
+    RunConfig::scene_call(settings.map(|d| d.as_any()), named, base)
 }
 
 /// The scene's derivatives, one method per direction:

@@ -68,12 +68,8 @@ impl RunConfig {
         settings: Option<&A>,
         named: &[(&str, Option<&A>)],
     ) -> Result<RunConfig, A::Err> {
-        let keys = settings.and_then(Arg::keys).unwrap_or_default();
-        let mapped: Vec<(String, A)> = (keys.iter())
-            .filter_map(|k| Some((k.text()?, settings?.get(&k.text()?)??)))
-            .collect();
-        let named = named.iter().filter_map(|(k, v)| v.map(|v| (*k, v)));
-        RunConfig::from_args(mapped.iter().map(|(k, v)| (k.as_str(), v)).chain(named))
+        let mapped = mapped(settings);
+        RunConfig::from_args(call_args(&mapped, named))
     }
 
     /// These settings with those of `changes` (a mapping, keyword to value) replaced; a
@@ -112,14 +108,17 @@ impl RunConfig {
         }
     }
 
-    /// `base` with the scene settings given (`(keyword, value)`, a `None` value: not given)
-    /// laid over it and checked ([`RunConfig::onto_scene`]); a keyword no scene holds is
-    /// the binding's type error (as an unexpected keyword argument), naming those it holds.
-    pub fn scene_args<'a, A: Arg + 'a>(
-        given: impl IntoIterator<Item = (&'a str, &'a A)>,
+    /// `base` with the scene settings a call gave (its `named` keywords, `None`: not given,
+    /// and `settings`, a mapping of more) laid over it and checked
+    /// ([`RunConfig::onto_scene`]); a keyword no scene holds is the binding's type error (as
+    /// an unexpected keyword argument), naming those it holds.
+    pub fn scene_call<A: Arg>(
+        settings: Option<&A>,
+        named: &[(&str, Option<&A>)],
         base: Settings,
     ) -> Result<Settings, A::Err> {
-        let given: Vec<(&str, &A)> = given.into_iter().collect();
+        let mapped = mapped(settings);
+        let given: Vec<(&str, &A)> = call_args(&mapped, named).collect();
         if let Some((key, x)) = given.iter().find(|(k, _)| !SCENE_KEYS.contains(k)) {
             let expected = format!("a keyword of Scene: {}", SCENE_KEYS.join(", "));
             return Err(x.wrong_type(key, &expected));
@@ -329,4 +328,21 @@ pub fn progress_interval(x: Option<f64>) -> Result<Option<std::time::Duration>, 
             Err(Error::arg("progress_interval", expected, x.to_string()))
         }
     }
+}
+
+/// The entries of a call's `**settings` mapping, keyword to value.
+fn mapped<A: Arg>(settings: Option<&A>) -> Vec<(String, A)> {
+    let keys = settings.and_then(Arg::keys).unwrap_or_default();
+    (keys.iter())
+        .filter_map(|k| Some((k.text()?, settings?.get(&k.text()?)??)))
+        .collect()
+}
+
+/// A call's keywords: those of its `**settings` (`mapped`), then its `named` ones given.
+fn call_args<'a, A: Arg>(
+    mapped: &'a [(String, A)],
+    named: &'a [(&'a str, Option<&'a A>)],
+) -> impl Iterator<Item = (&'a str, &'a A)> {
+    let named = named.iter().filter_map(|(k, v)| v.map(|v| (*k, v)));
+    mapped.iter().map(|(k, v)| (k.as_str(), v)).chain(named)
 }
