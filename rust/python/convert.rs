@@ -346,3 +346,12 @@ pub fn dmatrix_to_array<'py>(py: Python<'py>, m: &DMatrix<f64>) -> PyResult<Obj<
         &[m.nrows(), m.ncols()],
     )
 }
+
+/// [`plain_f64_rows`] or a one-dimensional such array (one row, not stacked): `(data,
+/// [rows, cols], stacked)`.
+pub fn plain_f64_block<'a>(obj: &'a Obj) -> Option<(&'a [f64], [usize; 2], bool)> {
+    match plain_f64(obj) {
+        Some(s) => Some((s, [1, s.len()], false)),
+        None => plain_f64_rows(obj).map(|(s, shape)| (s, shape, true)),
+    }
+}
