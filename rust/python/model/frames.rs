@@ -28,13 +28,6 @@ pub fn frame_arg(model: &Model, obj: &Obj, arg: &str) -> PyResult<FrameRef> {
 
 pub use crate::model::args::configurations;
 
-/// One row's `tail` shape under a leading axis of `rows` when `stacked`.
-fn lead(stacked: bool, rows: usize, tail: &[usize]) -> Vec<usize> {
-    let mut s = if stacked { vec![rows] } else { vec![] };
-    s.extend_from_slice(tail);
-    s
-}
-
 /// What [`PyModel::over_rows`] hands the core: the model, the pooled workspace's links, the
 /// rows of `q`, their count and whether stacked.
 type RowsOf<'a> = (&'a Model, &'a mut [LinkState], &'a [f64], usize, bool);
@@ -71,10 +64,14 @@ impl PyModel {
                 }
             };
             let arrays = shapes.map(|tail| {
-                let shape = lead(stacked, rows, tail);
+                // One row's shape under a leading axis of rows when stacked, on the stack
+                // (a tail has at most 3 axes).
+                let (mut shape, at) = ([rows; 4], usize::from(stacked));
+                shape[at..at + tail.len()].copy_from_slice(tail);
+                let shape = &shape[..at + tail.len()];
                 // SAFETY: f64 has no invalid bit patterns, and `f` writes every entry before
                 // Python sees the array (dropped unseen on an error).
-                unsafe { PyArrayDyn::<f64>::new(py, IxDyn(&shape), false) }
+                unsafe { PyArrayDyn::<f64>::new(py, IxDyn(shape), false) }
             });
             // SAFETY: new C-contiguous arrays no Python code has seen yet (as `as_slice_mut`).
             let outs = arrays
