@@ -2,7 +2,7 @@
 //! index, the optional speeds and accelerations, the inverse-kinematics tasks and options.
 //! Parsed here, once (not in `model::args`, which `frames` must not import back).
 use super::ik::{self, Options, Target, Task};
-use super::FrameRef;
+use super::{FrameRef, ReferenceFrame};
 use crate::model::{checked_rotation, Model};
 use crate::support::args::{given, int, items, mat3, vec3, vector, Arg};
 use crate::support::error::{check_finite, Error};
@@ -23,6 +23,13 @@ pub fn frame<A: Arg>(model: &Model, x: &A, arg: &str) -> R<FrameRef, A> {
         Some(i) => model.body_frame(model.frames[i].body, &model.frames[i].placement),
         None => model.body_frame(k, &Placement::identity()),
     })
+}
+
+/// A frame ([`frame`], named `frame` in errors) and the reference frame a quantity of it is
+/// expressed in.
+pub fn frame_in<A: Arg>(model: &Model, x: &A, reference: &str) -> R<(FrameRef, ReferenceFrame), A> {
+    let f = frame(model, x, "frame")?;
+    Ok((f, ReferenceFrame::parse("reference", reference)?))
 }
 
 /// An optional vector of nv values (`v`, `a`), checked; `None`: not given.

@@ -1,8 +1,9 @@
 //! The frame algorithms assembled for one call (what the bindings call): a frame's
 //! Jacobian at many configurations, its velocity and acceleration, the centre of mass and the
 //! centroidal quantities. Each checks its inputs and allocates its own buffers once.
+use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::support::error::{Error, Result};
+use crate::support::error::{check_result, Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
 
 use super::com::{self, Composite};
@@ -11,10 +12,14 @@ use super::motion::FrameKinematics;
 use super::rows::{self, check_block};
 use super::{batch, centroidal, jacobian, jacobian_dot, FrameRef, ReferenceFrame};
 
-/// `J` of `f` at `rows` configurations (row-major `rows × 6 × nv` into `out`), checked
-/// here once for the whole block; large blocks are split over threads (`rows::split`).
+/// `J` of `f` at `rows` configurations (row-major `rows × 6 × nv` into `out`, every entry
+/// written), checked here once for the whole block. One row is computed in the caller's
+/// `links` (a pooled workspace's: no allocation, no thread hand-off), from the support's
+/// poses alone; large blocks are split over threads (`rows::split`).
+#[allow(clippy::too_many_arguments)]
 pub fn frame_jacobians(
     model: &Model,
+    links: &mut [LinkState],
     f: &FrameRef,
     rf: ReferenceFrame,
     qs: &[f64],
@@ -23,6 +28,11 @@ pub fn frame_jacobians(
     out: &mut [f64],
 ) -> Result<()> {
     check_block(model, qs, rows, stacked, "q")?;
+    if rows == 1 {
+        crate::kinematics::plan::frame_poses_for(model, qs, links, f.link);
+        jacobian::frame_jacobian_links(model, links, f, rf, out);
+        return check_result("frame_jacobian", out);
+    }
     let nv = model.nv;
     let threads = rows::threads_for(model, rows);
     // The frame's support alone (a Jacobian needs no other link, nor any inertia), its
@@ -49,20 +59,21 @@ pub fn frame_jacobians(
     )
 }
 
-/// `J̇` of `f` (row-major 6 × nv) at `(q, v)` (checked by the caller).
+/// `J̇` of `f` (row-major 6 × nv) at `(q, v)` (checked by the caller), checked finite.
 pub fn frame_jacobian_dot(
     model: &Model,
     f: &FrameRef,
     rf: ReferenceFrame,
     q: &[f64],
     v: &[f64],
-) -> Vec<f64> {
+) -> Result<Vec<f64>> {
     let mut kin = FrameKinematics::new(model);
     kin.positions(model, q);
     kin.velocities(model, q, v);
     let mut out = vec![0.0; 6 * model.nv];
     jacobian_dot::frame_jacobian_dot(model, &kin, f, rf, &mut out);
-    out
+    check_result("frame_jacobian_dot", &out)?;
+    Ok(out)
 }
 
 fn mat_vec(m: &[f64], x: &[f64], nv: usize) -> Vec6 {
@@ -70,8 +81,8 @@ fn mat_vec(m: &[f64], x: &[f64], nv: usize) -> Vec6 {
 }
 
 /// The frame's velocity `J v` and acceleration `J a + J̇ v` (a = None: zero) in `rf`
-/// (checked inputs). In LOCAL_WORLD_ALIGNED the linear parts are the velocity and the
-/// classical acceleration of the frame origin.
+/// (checked inputs; the result checked finite). In LOCAL_WORLD_ALIGNED the linear parts are
+/// the velocity and the classical acceleration of the frame origin.
 pub fn frame_motion(
     model: &Model,
     f: &FrameRef,
@@ -79,7 +90,7 @@ pub fn frame_motion(
     q: &[f64],
     v: &[f64],
     a: Option<&[f64]>,
-) -> (Vec6, Vec6) {
+) -> Result<(Vec6, Vec6)> {
     let nv = model.nv;
     let mut kin = FrameKinematics::new(model);
     kin.positions(model, q);
@@ -93,7 +104,8 @@ pub fn frame_motion(
     if let Some(a) = a {
         acc += mat_vec(&j, a, nv);
     }
-    (vel, acc)
+    check_result("frame_motion", acc.as_slice())?;
+    Ok((vel, acc))
 }
 
 fn no_mass() -> Error {
@@ -105,9 +117,11 @@ fn no_mass() -> Error {
 
 /// Centre of mass and, when `jac` is given, the COM Jacobian (row-major `rows × 3 × nv`) at
 /// `rows` configurations; `com_out` gets `rows × 3`. Checked once for the block; large
-/// blocks are split over threads (`rows::split`).
+/// blocks are split over threads (`rows::split`); one row is computed in the caller's
+/// `links` ([`com_one`]).
 pub fn com_batch(
     model: &Model,
+    links: &mut [LinkState],
     qs: &[f64],
     rows: usize,
     stacked: bool,
@@ -115,6 +129,11 @@ pub fn com_batch(
     jac: Option<&mut [f64]>,
 ) -> Result<()> {
     check_block(model, qs, rows, stacked, "q")?;
+    if rows == 1 {
+        let c = com_one(model, qs, links, jac)?;
+        com_out.copy_from_slice(c.as_slice());
+        return check_result("center_of_mass", com_out);
+    }
     let nv = model.nv;
     if !model.links.iter().any(|l| l.rigid.mass > 0.0) {
         return Err(no_mass());
@@ -150,7 +169,7 @@ pub fn com_batch(
 pub fn com_at(
     model: &Model,
     q: &[f64],
-    links: &mut [crate::kinematics::LinkState],
+    links: &mut [LinkState],
     moments: &mut [f64],
     jac: Option<&mut [f64]>,
 ) -> Result<Vec3> {
@@ -170,7 +189,7 @@ pub fn com_at(
 pub fn com_one(
     model: &Model,
     q: &[f64],
-    links: &mut [crate::kinematics::LinkState],
+    links: &mut [LinkState],
     jac: Option<&mut [f64]>,
 ) -> Result<Vec3> {
     let n = 4 * model.links.len();
@@ -182,7 +201,8 @@ pub fn com_one(
     }
 }
 
-/// The COM's position, velocity and acceleration (a = None: zero) at a checked state.
+/// The COM's position, velocity and acceleration (a = None: zero) at a checked state,
+/// checked finite.
 pub fn com_motion(model: &Model, q: &[f64], v: &[f64], a: Option<&[f64]>) -> Result<[Vec3; 3]> {
     let mut kin = FrameKinematics::new(model);
     kin.positions(model, q);
@@ -190,6 +210,7 @@ pub fn com_motion(model: &Model, q: &[f64], v: &[f64], a: Option<&[f64]>) -> Res
     kin.velocities(model, q, v);
     kin.accelerations(model, a);
     let (vc, ac) = com::com_motion(model, &kin, true);
+    check_result("center_of_mass_motion", ac.as_slice())?;
     Ok([c, vc, ac])
 }
 
@@ -197,7 +218,8 @@ pub fn com_motion(model: &Model, q: &[f64], v: &[f64], a: Option<&[f64]>) -> Res
 pub type Centroidal = (Vec<f64>, Option<(Vec6, Vec6)>);
 
 /// Centroidal quantities at a checked `q` (and `v`, `a`): `A_g` (row-major 6 × nv), and with
-/// `v` the momentum `h_G = A_g v` and its rate `A_g a + Ȧ_g v` (a = None: the bias `Ȧ_g v`).
+/// `v` the momentum `h_G = A_g v` and its rate `A_g a + Ȧ_g v` (a = None: the bias `Ȧ_g v`),
+/// checked finite.
 pub fn centroidal(
     model: &Model,
     q: &[f64],
@@ -215,10 +237,12 @@ pub fn centroidal(
     com::composites(model, &kin, &mut comp);
     let mut ag = vec![0.0; 6 * nv];
     centroidal::centroidal_map(model, &kin, &comp, &g, &mut ag);
+    check_result("centroidal", &ag)?;
     let Some(v) = v else { return Ok((ag, None)) };
     kin.velocities(model, q, v);
     kin.accelerations(model, a);
     let h = mat_vec(&ag, v, nv);
     let hdot = centroidal::momentum_rate(model, &kin, &g);
+    check_result("centroidal", hdot.as_slice())?;
     Ok((ag, Some((h, hdot))))
 }

@@ -88,18 +88,17 @@ pub fn point_path(
 }
 
 /// One frame's placements at `rows` configurations (each checked first; errors name `q[k]`
-/// when `stacked`): rotations (`rows × 9`) and origins (`rows × 3`).
+/// when `stacked`): rotations (`rows × 9`) and origins (`rows × 3`), checked finite.
 pub fn frame_placement(
     model: &Model,
     f: &FrameRef,
-    qs: &[f64],
-    rows: usize,
-    stacked: bool,
-) -> Result<(Vec<f64>, Vec<f64>)> {
+    (qs, rows, stacked): (&[f64], usize, bool),
+    rot: &mut [f64],
+    org: &mut [f64],
+) -> Result<()> {
     check_rows(model, qs, rows, stacked, "q")?;
-    let (mut rot, mut org) = (vec![0.0; 9 * rows], vec![0.0; 3 * rows]);
-    frame_placements(model, &[*f], qs, rows, &mut rot, &mut org)?;
-    Ok((rot, org))
+    frame_placements(model, &[*f], qs, rows, rot, org)?;
+    crate::support::error::check_result("frame_placement", org)
 }
 
 /// [`point_path`] at checked rows (errors name `q[k]`): the positions and, with `vs`, the
@@ -116,5 +115,6 @@ pub fn point_path_of(
     check_rows(model, qs, rows, true, "q")?;
     let (mut pos, mut vel) = (vec![0.0; 3 * rows], vec![0.0; 3 * rows]);
     point_path(model, f, point, qs, vs, rows, &mut pos, &mut vel)?;
+    crate::support::error::check_result("point_path", &pos)?;
     Ok((pos, vs.map(|_| vel)))
 }

@@ -180,8 +180,12 @@ pub fn body_placement(model: &Model, st: &[LinkState], body: usize) -> Placement
 }
 
 /// World placements of every body at `q` (positions into `links`): rotations row-major
-/// (nbodies × 3 × 3) and origins (nbodies × 3).
-pub fn body_placements(model: &Model, q: &[f64], links: &mut [LinkState]) -> (Vec<f64>, Vec<f64>) {
+/// (nbodies × 3 × 3) and origins (nbodies × 3), checked finite.
+pub fn body_placements(
+    model: &Model,
+    q: &[f64],
+    links: &mut [LinkState],
+) -> crate::support::error::Result<(Vec<f64>, Vec<f64>)> {
     positions(model, q, links);
     let nb = model.nbodies();
     let mut rots = Vec::with_capacity(9 * nb);
@@ -191,5 +195,6 @@ pub fn body_placements(model: &Model, q: &[f64], links: &mut [LinkState]) -> (Ve
         rots.extend_from_slice(p.rotation.transpose().as_slice());
         origins.extend_from_slice(p.translation.as_slice());
     }
-    (rots, origins)
+    crate::support::error::check_result("placements", &origins)?;
+    Ok((rots, origins))
 }

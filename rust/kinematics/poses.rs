@@ -7,6 +7,9 @@ use crate::model::Model;
 use crate::support::error::Result;
 use crate::support::spatial::{Placement, Vec3};
 
+/// A buffer of [`Poses`] by name, with its shape.
+pub type Keyed = (&'static str, Vec<f64>, Vec<usize>);
+
 /// Poses of `rows` configurations, row-major, world axes.
 pub struct Poses {
     pub rows: usize,
@@ -161,12 +164,13 @@ mod tests {
 }
 
 impl Poses {
-    /// Each buffer by name with its shape (a leading axis of `rows` when `stacked`).
-    pub fn keyed(self, model: &Model, stacked: bool) -> [(&'static str, Vec<f64>, Vec<usize>); 8] {
+    /// Each buffer by name with its shape (a leading axis of `rows` when `stacked`), each
+    /// checked finite (an error names it as `body_poses['name']`).
+    pub fn keyed(self, model: &Model, stacked: bool) -> Result<[Keyed; 8]> {
         let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
         let lead = stacked.then_some(self.rows);
         let shape = |tail: &[usize]| lead.into_iter().chain(tail.iter().copied()).collect();
-        [
+        let keyed = [
             ("rotations", self.rotations, shape(&[nb, 3, 3])),
             ("origins", self.origins, shape(&[nb, 3])),
             ("joint_origins", self.joint_origins, shape(&[nb, 3])),
@@ -175,6 +179,10 @@ impl Poses {
             ("loop_a", self.loop_a, shape(&[nc, 3])),
             ("loop_b", self.loop_b, shape(&[nc, 3])),
             ("loop_axes", self.loop_axes, shape(&[nc, 3])),
-        ]
+        ];
+        for (key, buf, _) in &keyed {
+            crate::support::error::check_result(&format!("body_poses['{key}']"), buf)?;
+        }
+        Ok(keyed)
     }
 }

@@ -1,8 +1,10 @@
 //! `RigidBody` and its seven point masses.
 use crate::python::Obj;
+use nalgebra::DMatrix;
 use pyo3::prelude::*;
 
-use super::convert::{mat3, mat3_to_array, points, real, to_array, to_array1, vec3, vector};
+use super::convert::{mat3, mat3_to_array, points, real, vec3, vector};
+use super::derived::derived_getters;
 use super::errors::IntoPyResult;
 use crate::model::body::RigidBody;
 use crate::model::point_masses::EquimomentalSet;
@@ -38,19 +40,6 @@ impl PyRigidBody {
         })
     }
 
-    #[getter]
-    fn mass(&self) -> f64 {
-        self.inner.mass
-    }
-    #[getter]
-    fn com<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, self.inner.com.as_slice()).into_any()
-    }
-    #[getter]
-    fn inertia<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        mat3_to_array(py, &self.inner.inertia)
-    }
-
     /// Inertia about `point` (body frame), by the parallel-axis theorem.
     fn inertia_about<'py>(&self, py: Python<'py>, point: &Obj) -> PyResult<Obj<'py>> {
         let i = self.inner.inertia_about_checked(&vec3(point, "point")?);
@@ -70,6 +59,12 @@ impl PyRigidBody {
     }
 }
 
+derived_getters!(PyRigidBody, |b| {
+    mass: b.inner.mass;
+    com: b.inner.com.as_slice().to_vec();
+    inertia: DMatrix::from_fn(3, 3, |i, j| b.inner.inertia[(i, j)]);
+});
+
 #[pyclass(name = "PointMasses", module = "pointmass_dyn._core", frozen)]
 pub struct PyPointMasses {
     pub inner: EquimomentalSet,
@@ -77,32 +72,6 @@ pub struct PyPointMasses {
 
 #[pymethods]
 impl PyPointMasses {
-    /// The seven masses (kg); some may be negative.
-    #[getter]
-    fn masses<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, &self.inner.masses).into_any()
-    }
-    /// Positions in the body frame, shape (7, 3).
-    #[getter]
-    fn positions<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        to_array(
-            py,
-            self.inner
-                .positions
-                .iter()
-                .flat_map(|p| [p.x, p.y, p.z])
-                .collect(),
-            &[7, 3],
-        )
-    }
-    #[getter]
-    fn half_sides<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, self.inner.half_sides.as_slice()).into_any()
-    }
-    #[getter]
-    fn center<'py>(&self, py: Python<'py>) -> Obj<'py> {
-        to_array1(py, self.inner.center.as_slice()).into_any()
-    }
     /// The rigid body these points represent (mass, COM, inertia rebuilt from them).
     fn to_body(&self, py: Python<'_>) -> PyResult<PyRigidBody> {
         Ok(PyRigidBody {
@@ -118,3 +87,12 @@ impl PyPointMasses {
         )
     }
 }
+
+derived_getters!(PyPointMasses, |p| {
+    /// The seven masses (kg); some may be negative.
+    masses: p.inner.masses.to_vec();
+    /// Positions in the body frame, shape (7, 3).
+    positions: DMatrix::from_fn(7, 3, |i, j| p.inner.positions[i][j]);
+    half_sides: p.inner.half_sides.as_slice().to_vec();
+    center: p.inner.center.as_slice().to_vec();
+});

@@ -3,6 +3,7 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{to_array1, vec3};
+use super::derived::derived_getters;
 use super::errors::IntoPyResult;
 use crate::joint::Joint;
 
@@ -45,18 +46,6 @@ impl PyJoint {
         Joint::FreeFlyer.into()
     }
     #[getter]
-    fn kind(&self) -> &'static str {
-        self.inner.kind()
-    }
-    #[getter]
-    fn nq(&self) -> usize {
-        self.inner.nq()
-    }
-    #[getter]
-    fn nv(&self) -> usize {
-        self.inner.nv()
-    }
-    #[getter]
     fn axis<'py>(&self, py: Python<'py>) -> Option<Obj<'py>> {
         let axis = self.inner.axis()?;
         Some(to_array1(py, axis.as_slice()).into_any())
@@ -65,3 +54,9 @@ impl PyJoint {
         self.inner.repr()
     }
 }
+
+derived_getters!(PyJoint, |j| {
+    kind: j.inner.kind().to_string();
+    nq: j.inner.nq();
+    nv: j.inner.nv();
+});

@@ -41,6 +41,7 @@ mod control;
 mod convert;
 mod dense;
 mod derivatives;
+mod derived;
 mod design;
 mod effects;
 mod errors;

@@ -7,6 +7,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use super::convert::{short_repr, toml_to_py};
+use super::derived::derived_getters;
 use super::errors::invalid;
 use super::model::PyModel;
 use crate::model::visual::Visual;
@@ -56,12 +57,6 @@ impl PyModel {
         PyList::new(py, items)
     }
 
-    /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; "" if none).
-    #[getter]
-    fn name(&self) -> String {
-        self.model().name.clone()
-    }
-
     /// Replaces the visual geometry with `visuals` (dicts as `Model.visuals` gives them; a
     /// mesh's `path` defaults to its `uri`) and, if given, the name. The dynamics is unchanged.
     #[pyo3(signature = (visuals, *, name=None))]
@@ -95,3 +90,8 @@ pub fn resolve_mesh(
         &dirs,
     ))
 }
+
+derived_getters!(PyModel, |m| {
+    /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; "" if none).
+    name: m.model().name.clone();
+});

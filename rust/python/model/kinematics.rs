@@ -20,8 +20,7 @@ impl PyModel {
             load_state(ws, py, q, None)?;
             let model: &Model = &ws.version.model;
             let nb = model.nbodies();
-            let (rots, origins) = kinematics::body_placements(model, &ws.q, &mut ws.data.links);
-            check_result(py, "placements", &origins)?;
+            let (rots, origins) = kinematics::body_placements(model, &ws.q, &mut ws.data.links)?;
             Ok((
                 to_array(py, rots, &[nb, 3, 3])?,
                 to_array(py, origins, &[nb, 3])?,
@@ -33,26 +32,23 @@ impl PyModel {
         let model = self.model();
         let (rows, qs, stacked) = super::frames::configurations(&model, q, "q")?;
         let poses = detach_interruptible(py, || {
-            crate::kinematics::poses::Poses::at(&model, &qs, rows, stacked)
+            crate::kinematics::poses::Poses::at(&model, &qs, rows, stacked)?.keyed(&model, stacked)
         })?;
         let d = PyDict::new(py);
-        for (key, buf, shape) in poses.keyed(&model, stacked) {
-            check_result(py, &format!("body_poses['{key}']"), &buf)?;
+        for (key, buf, shape) in poses {
             d.set_item(key, to_array(py, buf, &shape)?)?;
         }
         Ok(d)
     }
 
     fn point_masses<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<(Obj<'py>, Obj<'py>)> {
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, None)?;
-            let (masses, pts) = crate::dynamics::calls::point_masses(ws.model(), &ws.q)?;
-            let n = ws.model().links.len();
-            Ok((
-                to_array(py, masses, &[n, 7])?,
-                to_array(py, pts, &[n, 7, 3])?,
-            ))
-        })
+        let (model, q) = self.state_only(q)?;
+        let (masses, pts) = crate::dynamics::calls::point_masses(&model, &q)?;
+        let n = model.links.len();
+        Ok((
+            to_array(py, masses, &[n, 7])?,
+            to_array(py, pts, &[n, 7, 3])?,
+        ))
     }
 
     fn denoc(&self, py: Python<'_>, q: &Obj) -> PyResult<PyDenoc> {

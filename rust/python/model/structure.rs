@@ -9,6 +9,7 @@ use crate::model::args::some_body;
 use crate::model::Model;
 use crate::python::body::PyRigidBody;
 use crate::python::convert::to_array1;
+use crate::python::derived::derived_getters;
 use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::support::args;
@@ -45,42 +46,6 @@ impl PyModel {
         self.shared
             .update(|model| model.add_body(body.inner, joint.inner, parent, frame, name, center))
             .py(py)
-    }
-
-    #[getter]
-    fn nq(&self) -> usize {
-        self.version().model.nq
-    }
-
-    #[getter]
-    fn nv(&self) -> usize {
-        self.version().model.nv
-    }
-
-    #[getter]
-    fn nbodies(&self) -> usize {
-        self.version().model.nbodies()
-    }
-
-    #[getter]
-    fn nlinks(&self) -> usize {
-        self.version().model.links.len()
-    }
-
-    #[getter]
-    fn body_names(&self) -> Vec<String> {
-        let m = self.model();
-        m.bodies.iter().map(|b| b.name.clone()).collect()
-    }
-
-    #[getter]
-    fn link_names(&self) -> Vec<String> {
-        self.model().link_names()
-    }
-
-    #[getter]
-    fn total_mass(&self) -> f64 {
-        self.model().total_mass()
     }
 
     fn body_info(&self, index: &Obj) -> PyResult<(String, String, i64, i64)> {
@@ -121,11 +86,6 @@ impl PyModel {
         self.model().summary()
     }
 
-    #[getter]
-    fn joint_names(&self) -> Vec<String> {
-        self.model().joint_names()
-    }
-
     fn joint_limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
         self.model().joint_limits().into_py_dict(py)
     }
@@ -134,3 +94,15 @@ impl PyModel {
         self.model().joint_dynamics().into_py_dict(py)
     }
 }
+
+derived_getters!(PyModel, |m| {
+    nq: m.model().nq;
+    nv: m.model().nv;
+    nbodies: m.model().nbodies();
+    nlinks: m.model().links.len();
+    body_names: m.model().bodies.iter().map(|b| b.name.clone()).collect::<Vec<_>>();
+    link_names: m.model().link_names();
+    joint_names: m.model().joint_names();
+    frame_names: m.model().frame_names();
+    total_mass: m.model().total_mass();
+});
