@@ -4,7 +4,6 @@ use nalgebra::DMatrix;
 use pyo3::prelude::*;
 
 use super::convert::{mat3, mat3_to_array, points, real, vec3, vector};
-use super::derived::derived_getters;
 use super::errors::IntoPyResult;
 use crate::model::body::RigidBody;
 use crate::model::point_masses::EquimomentalSet;
@@ -59,7 +58,7 @@ impl PyRigidBody {
     }
 }
 
-derived_getters!(PyRigidBody, |b| {
+crate::python::getters!(PyRigidBody |b| {
     mass: b.inner.mass;
     com: b.inner.com.as_slice().to_vec();
     inertia: DMatrix::from_fn(3, 3, |i, j| b.inner.inertia[(i, j)]);
@@ -88,7 +87,7 @@ impl PyPointMasses {
     }
 }
 
-derived_getters!(PyPointMasses, |p| {
+crate::python::getters!(PyPointMasses |p| {
     /// The seven masses (kg); some may be negative.
     masses: p.inner.masses.to_vec();
     /// Positions in the body frame, shape (7, 3).

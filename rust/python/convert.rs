@@ -340,8 +340,8 @@ pub fn matrix_to_array<'py, R: Dim, C: Dim, S: RawStorage<f64, R, C>>(
 /// [`plain_f64_rows`] or a one-dimensional such array (one row, not stacked): `(data,
 /// [rows, cols], stacked)`.
 pub fn plain_f64_block<'a>(obj: &'a Obj) -> Option<(&'a [f64], [usize; 2], bool)> {
-    match plain_f64(obj) {
-        Some(s) => Some((s, [1, s.len()], false)),
+    match plain_f64_nd::<1>(obj) {
+        Some((s, _)) => Some((s, [1, s.len()], false)),
         None => plain_f64_rows(obj).map(|(s, shape)| (s, shape, true)),
     }
 }

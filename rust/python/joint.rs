@@ -3,7 +3,6 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 
 use super::convert::{to_array1, vec3};
-use super::derived::derived_getters;
 use super::errors::IntoPyResult;
 use crate::joint::Joint;
 
@@ -55,7 +54,7 @@ impl PyJoint {
     }
 }
 
-derived_getters!(PyJoint, |j| {
+crate::python::getters!(PyJoint |j| {
     kind: j.inner.kind().to_string();
     nq: j.inner.nq();
     nv: j.inner.nv();

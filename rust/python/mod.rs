@@ -6,7 +6,8 @@
 /// returns a field as it is; `getters!(PyX |s, py| { name -> Type = expr, ... });` the value
 /// of `expr`, in which `s` is the object and `py` the interpreter;
 /// `getters!(PyX.read { name: Type = |inner, py| value, ... });` the value from what the
-/// class holds, which `PyX::read(f)` lends to `f`.
+/// class holds, which `PyX::read(f)` lends to `f`; `getters!(PyX |x| { name: expr; ... });`
+/// `expr` converted as a record's fields are ([`Field`](record::Field)).
 macro_rules! getters {
     ($ty:ident { $($(#[$m:meta])* $name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
         #[pyo3::pymethods]
@@ -29,6 +30,15 @@ macro_rules! getters {
             $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { self.$read(|$x| $get) })*
         }
     };
+    ($ty:ident |$x:ident| { $($(#[$m:meta])* $name:ident: $e:expr;)* }) => {
+        #[pyo3::pymethods]
+        impl $ty {
+            $($(#[$m])* #[getter] fn $name<'py>(&self, py: pyo3::Python<'py>) -> pyo3::PyResult<crate::python::Obj<'py>> {
+                let $x = self;
+                crate::python::record::Field::field(&$e, py)
+            })*
+        }
+    };
 }
 pub(crate) use getters;
 
@@ -41,7 +51,6 @@ mod control;
 mod convert;
 mod dense;
 mod derivatives;
-mod derived;
 mod design;
 mod effects;
 mod errors;

@@ -7,7 +7,6 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use super::convert::{short_repr, toml_to_py};
-use super::derived::derived_getters;
 use super::errors::invalid;
 use super::model::PyModel;
 use crate::model::visual::Visual;
@@ -91,7 +90,7 @@ pub fn resolve_mesh(
     ))
 }
 
-derived_getters!(PyModel, |m| {
+crate::python::getters!(PyModel |m| {
     /// The model's name (URDF `<robot name>`, MJCF `<mujoco model>`; "" if none).
     name: m.model().name.clone();
 });

@@ -9,7 +9,6 @@ use crate::model::args::some_body;
 use crate::model::Model;
 use crate::python::body::PyRigidBody;
 use crate::python::convert::to_array1;
-use crate::python::derived::derived_getters;
 use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::support::args;
@@ -95,7 +94,7 @@ impl PyModel {
     }
 }
 
-derived_getters!(PyModel, |m| {
+crate::python::getters!(PyModel |m| {
     nq: m.model().nq;
     nv: m.model().nv;
     nbodies: m.model().nbodies();
