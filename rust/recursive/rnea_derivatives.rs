@@ -435,7 +435,7 @@ fn outward_link(
     let z6 = Vec6::zeros();
     let l = &model.links[i];
     let st = &mut data.links[i];
-    st.inertia = rotated(&l.inertia, &st.rotation);
+    st.inertia = l.inertia.rotated_inlined(&st.rotation);
     let st = &*st;
     let p = st.origin;
     let (vp, ap) = match l.parent {
@@ -526,26 +526,6 @@ fn outward_link(
     lk.baa = baa;
     lk.bl = u * y.mass - y.first_moment.cross(&w);
     lk.y = y;
-}
-
-/// `BodyInertia::rotated`'s products inlined (out of line it cost ~145 instructions a
-/// link, a third more than its arithmetic).
-#[inline(always)]
-fn rotated(y: &BodyInertia, r: &Mat3) -> BodyInertia {
-    let ri = r * y.rotational;
-    let mut rot = Mat3::zeros();
-    for a in 0..3 {
-        for b in a..3 {
-            let x = ri[(a, 0)] * r[(b, 0)] + ri[(a, 1)] * r[(b, 1)] + ri[(a, 2)] * r[(b, 2)];
-            rot[(a, b)] = x;
-            rot[(b, a)] = x;
-        }
-    }
-    BodyInertia {
-        mass: y.mass,
-        first_moment: r * y.first_moment,
-        rotational: rot,
-    }
 }
 
 /// `y` (about the body's origin `p`) about the world origin: `BodyInertia::shifted(p)`
