@@ -19,6 +19,7 @@ use std::time::Instant;
 
 use pointmass_dyn::frames::{batch, evaluate, rows, ReferenceFrame};
 use pointmass_dyn::io::urdf::{load_urdf, RootJoint};
+use pointmass_dyn::kinematics::LinkState;
 use pointmass_dyn::Model;
 
 fn configurations(rows: usize, nq: usize) -> Vec<f64> {
@@ -100,10 +101,13 @@ fn main() {
     let f = model.frame_named("frame", "panda_hand").unwrap();
     let mut out = vec![0.0; rows * 6 * nv];
     let mut com = vec![0.0; rows * 3];
+    // One row is computed in these links (the bindings lend a pooled workspace's).
+    let mut links = vec![LinkState::default(); model.links.len()];
     let t = best(iters, || {
         match what {
             "com" => evaluate::com_batch(
                 &model,
+                &mut links,
                 &qs,
                 rows,
                 true,
@@ -117,7 +121,8 @@ fn main() {
                     "aligned" => ReferenceFrame::LocalWorldAligned,
                     _ => ReferenceFrame::Local,
                 };
-                evaluate::frame_jacobians(&model, &f, rf, &qs, rows, true, &mut out).unwrap()
+                evaluate::frame_jacobians(&model, &mut links, &f, rf, &qs, rows, true, &mut out)
+                    .unwrap()
             }
         }
         black_box(&out);
