@@ -1,11 +1,14 @@
-"""A loop of derivative calls for callgrind (instruction counts per Python call, steadier than
-times on a shared machine): ours or Pinocchio's, forward or inverse, on chain7 or Panda.
+"""A loop of derivative (or dynamics) calls for callgrind (instruction counts per Python call,
+steadier than times on a shared machine): ours or Pinocchio's, forward or inverse, on chain7 or
+Panda.
 
     valgrind --tool=callgrind python benches/derivatives_callgrind.py WHICH MODEL N
 
 WHICH: ``oi``/``of`` (ours, inverse/forward), ``pi``/``pf`` (Pinocchio's
-computeRNEADerivatives/computeABADerivatives); MODEL: ``chain7`` or ``panda``; N calls after
-one warm-up. Divide the binding's inclusive cost by N + 1, or subtract a run with N = 0.
+computeRNEADerivatives/computeABADerivatives); ``ofd``/``pfd``: forward dynamics itself, ours
+with ``gravity=`` as a keyword (the call of benches/fd_call.py) or ``pin.aba``. MODEL:
+``chain7`` or ``panda``; N calls after one warm-up. Divide the binding's inclusive cost by
+N + 1, or subtract a run with N = 0.
 """
 
 from __future__ import annotations
@@ -41,6 +44,8 @@ def main() -> None:
         "of": lambda: ours.forward_dynamics_derivatives(q, v, tau, G),
         "pi": lambda: pin.computeRNEADerivatives(pm, data, q, v, a),
         "pf": lambda: pin.computeABADerivatives(pm, data, q, v, tau),
+        "ofd": lambda: ours.forward_dynamics(q, v, tau, gravity=G),
+        "pfd": lambda: pin.aba(pm, data, q, v, tau),
     }[which]
     f()
     for _ in range(n):

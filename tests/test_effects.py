@@ -564,6 +564,7 @@ def test_effect_takes_a_scene_file_type_and_its_keys(tmp_path):
         ('name = "rail"', 'name = "total"', "effect[3].name", ["'total'"]),
         ('body_b = "cart"', 'body_b = "carts"', "effect[9].body_b", ["'carts'", "'base'"]),
         ("rest_length = 0.1", "rest_length = -0.1", "effect[9].rest_length", [">= 0", "-0.1"]),
+        ("q0 = [0.4]", "q0 = [nan]", "body[0] ('base').q0", ["finite", "NaN at index 0"]),
     ],
 )
 def test_scene_file_effect_errors_name_file_and_key(tmp_path, old, new, key, words):

@@ -185,6 +185,10 @@ impl Arg for Obj<'_> {
     fn array(&self, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
         array(self, arg)
     }
+    fn copy_plain(&self, out: &mut [f64]) -> bool {
+        let plain = plain_f64_nd::<1>(self).filter(|(s, _)| s.len() == out.len());
+        plain.map(|(s, _)| out.copy_from_slice(s)).is_some()
+    }
     fn get(&self, key: &str) -> Option<Option<Self>> {
         let d = self.cast::<pyo3::types::PyDict>().ok()?;
         Some(d.get_item(key).ok().flatten())
@@ -296,11 +300,8 @@ fn plain_f64_nd<'a, const ND: usize>(obj: &'a Obj) -> Option<(&'a [f64], [usize;
 /// Fast path for the per-call dynamics functions: a contiguous float64 1-D array is copied
 /// straight into `out`; anything else goes through `vector`.
 pub fn vector_into(obj: &Obj, arg: &str, out: &mut [f64]) -> PyResult<()> {
-    if let Some((s, _)) = plain_f64_nd::<1>(obj) {
-        if s.len() == out.len() {
-            out.copy_from_slice(s);
-            return Ok(());
-        }
+    if obj.copy_plain(out) {
+        return Ok(());
     }
     let v = vector(obj, arg, Some(out.len()))?;
     out.copy_from_slice(&v);

@@ -33,6 +33,12 @@ pub trait Arg: Sized {
     fn real(&self, arg: &str) -> Result<f64, Self::Err>;
     /// An array of real numbers: its shape and its entries in C order.
     fn array(&self, arg: &str) -> Result<(Vec<usize>, Vec<f64>), Self::Err>;
+    /// Copies a plain array of exactly `out.len()` reals (a C-ordered float64 vector) into
+    /// `out` without converting or allocating; `false` for any other value (read it with
+    /// `array`). The fast path of the per-call 3-vectors (gravity).
+    fn copy_plain(&self, _out: &mut [f64]) -> bool {
+        false
+    }
     /// A value of the wrong kind altogether (a float for a count): the binding's type error.
     fn wrong_type(&self, arg: &str, expected: &str) -> Self::Err;
     /// A mapping's (a dict's) value under `key`: `Some(None)` for a key it lacks, `None` for
@@ -117,6 +123,10 @@ pub fn vector<A: Arg>(x: &A, arg: &str, len: Option<usize>) -> Result<Vec<f64>, 
 }
 
 pub fn vec3<A: Arg>(x: &A, arg: &str) -> Result<Vec3, A::Err> {
+    let mut v = [0.0; 3];
+    if x.copy_plain(&mut v) {
+        return Ok(Vec3::from(v));
+    }
     vector(x, arg, Some(3)).map(|v| Vec3::from_column_slice(&v))
 }
 

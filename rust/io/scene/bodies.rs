@@ -229,7 +229,8 @@ fn initial_coordinates(
         out.copy_from_slice(given);
         let checked = if field == "q0" {
             super::to_radians(out, |k| joint.q_is_angle(k), units.angle);
-            joint.check_configuration(out, "q0")
+            crate::support::error::check_finite("q0", out)
+                .and_then(|()| joint.check_configuration(out, "q0"))
         } else {
             super::to_radians(out, |k| joint.v_is_angular(k), units.rate);
             crate::support::error::check_finite("v0", out)
