@@ -125,7 +125,17 @@ impl Arg for Obj<'_> {
         self.is_instance_of::<PyBool>()
     }
     fn text(&self) -> Option<String> {
-        self.extract().ok()
+        if let Ok(s) = self.cast::<PyString>() {
+            return s.to_str().ok().map(str::to_owned);
+        }
+        // A path (`pathlib.Path`, any `os.PathLike` of text) reads as its text. An int never
+        // is one, and is asked first: frame and joint indices come by here.
+        let fspath = pyo3::intern!(self.py(), "__fspath__");
+        if self.is_instance_of::<PyInt>() || !self.hasattr(fspath).unwrap_or(false) {
+            return None;
+        }
+        let path: std::path::PathBuf = self.extract().ok()?;
+        path.into_os_string().into_string().ok()
     }
     fn int(&self) -> Int {
         match self.extract::<i64>() {
