@@ -1,9 +1,8 @@
 """`Scene(...)` and `scene.replace(...)` read their `effects` the same way: a list of effects,
 a lone effect or a non-effect item refused naming the argument (and the item's index)."""
 import numpy as np
-import pytest
-
 import pointmass_dyn as pmd
+import pytest
 
 
 @pytest.fixture
