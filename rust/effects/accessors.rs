@@ -49,7 +49,7 @@ impl Effect {
             ("normal_force", &s.normal_force),
             ("force", &s.force),
         ] {
-            check_result(&format!("contact_state['{what}']"), x)?;
+            check_result(&format!("contact_state['{what}']"), &x.data)?;
         }
         Ok(s)
     }

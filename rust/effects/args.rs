@@ -366,3 +366,22 @@ pub fn with_parameter<A: Arg>(effect: &Effect, key: &str, value: &A) -> R<Effect
     let (_, values) = value.array(key)?;
     Ok(effect.with_parameter(key, &values)?)
 }
+
+/// A binding's value that may be one of its effect objects.
+pub trait EffectArg: Arg {
+    /// The effect it holds, if it is an effect object.
+    fn effect(&self) -> Option<Effect>;
+}
+
+/// A list of effects (a lone effect is a common slip: the error says what a list is, not
+/// "not iterable"), each item named by its index when it is no effect.
+pub fn effect_list<A: EffectArg>(effects: &A) -> R<Vec<Effect>, A> {
+    let expected = "a list of effects such as [pmd.Gravity()]";
+    let items = items(effects, "effects", expected)?;
+    let one = |(k, e): (usize, &A)| {
+        let expected = "an effect such as pmd.Gravity(...)";
+        let bad = || Error::arg(&format!("effects[{k}]"), expected, e.shown()).into();
+        e.effect().ok_or_else(bad)
+    };
+    items.iter().enumerate().map(one).collect()
+}

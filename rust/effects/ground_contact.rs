@@ -22,6 +22,7 @@ use super::{label_repr, one_number, Effect, TomlType};
 use super::{required, Context, Declaration, Fields, ForceLaw, JointRef, Kind};
 use crate::kinematics::LinkState;
 use crate::model::Model;
+use crate::support::array::Array;
 use crate::support::error::{check_finite, Error, Result};
 use crate::support::spatial::{angular, Mat3, Vec3, Vec6};
 
@@ -476,10 +477,11 @@ pub struct ContactStates {
     /// How many states, and points per state.
     pub states: usize,
     pub points: usize,
-    pub position: Vec<f64>,
-    pub penetration: Vec<f64>,
-    pub normal_force: Vec<f64>,
-    pub force: Vec<f64>,
+    /// (states, points, 3), (states, points), (states, points), (states, points, 3).
+    pub position: Array,
+    pub penetration: Array,
+    pub normal_force: Array,
+    pub force: Array,
 }
 
 impl GroundContact {
@@ -513,19 +515,19 @@ impl GroundContact {
         let mut out = ContactStates {
             states: n,
             points: np,
-            position: vec![0.0; n * np * 3],
-            penetration: vec![0.0; n * np],
-            normal_force: vec![0.0; n * np],
-            force: vec![0.0; n * np * 3],
+            position: Array::zeros(&[n, np, 3]),
+            penetration: Array::zeros(&[n, np]),
+            normal_force: Array::zeros(&[n, np]),
+            force: Array::zeros(&[n, np, 3]),
         };
         for i in 0..n {
             let (qi, vi) = (&q[i * nq..(i + 1) * nq], &v[i * nv..(i + 1) * nv]);
             law.evaluate(model, qi, vi, |k, p, pf| {
                 let at = i * np + k;
-                out.position[3 * at..3 * at + 3].copy_from_slice(p.as_slice());
-                out.penetration[at] = pf.penetration;
-                out.normal_force[at] = pf.normal;
-                out.force[3 * at..3 * at + 3].copy_from_slice(pf.force.as_slice());
+                out.position.data[3 * at..3 * at + 3].copy_from_slice(p.as_slice());
+                out.penetration.data[at] = pf.penetration;
+                out.normal_force.data[at] = pf.normal;
+                out.force.data[3 * at..3 * at + 3].copy_from_slice(pf.force.as_slice());
             });
         }
         Ok(out)

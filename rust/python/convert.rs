@@ -15,8 +15,8 @@ use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString};
 
-use super::errors::{invalid, py_error};
-use crate::support::args::{Arg, Int};
+use super::errors::py_error;
+use crate::support::args::{shortened, Arg, Int, NotReal};
 use crate::support::spatial::Vec3;
 
 // The core's parsers under the names the bindings call them by.
@@ -31,13 +31,7 @@ fn type_name(obj: &Obj) -> String {
 
 /// `repr(obj)`, cut to 60 characters.
 pub fn short_repr(obj: &Obj) -> String {
-    let r = obj.repr().map(|r| r.to_string()).unwrap_or_default();
-    if r.chars().count() > 60 {
-        let head: String = r.chars().take(50).collect();
-        format!("{head}… ({} characters)", r.chars().count())
-    } else {
-        r
-    }
+    shortened(obj.repr().map(|r| r.to_string()).unwrap_or_default())
 }
 
 fn is_exact_ndarray(obj: &Obj) -> bool {
@@ -62,18 +56,8 @@ fn is_masked(obj: &Obj) -> bool {
 /// Refuses an array whose dtype is not integer or floating.
 fn check_dtype(arr: &Bound<'_, PyUntypedArray>, arg: &str) -> PyResult<()> {
     let dtype = arr.dtype();
-    let what = match dtype.kind() {
-        b'i' | b'u' | b'f' => return Ok(()),
-        b'b' => "a bool array (bools are refused as numbers)".to_string(),
-        b'c' => format!("a complex array (dtype {dtype}): the imaginary part would be lost"),
-        b'U' | b'S' => format!("an array of strings (dtype {dtype})"),
-        b'O' => {
-            "an array of Python objects (dtype object: ragged, non-numeric or out-of-range entries)"
-                .to_string()
-        }
-        _ => format!("an array of dtype {dtype}"),
-    };
-    Err(invalid(arr.py(), arg, "real numbers", what))
+    let refused = NotReal::dtype(dtype.kind(), || dtype.to_string());
+    refused.map_or(Ok(()), |r| Err(r.at(arg).into()))
 }
 
 /// A conversion's failure as `fallback()`, except Ctrl-C (a `KeyboardInterrupt` that NumPy
@@ -91,12 +75,7 @@ pub fn real_array<'py>(obj: &Obj<'py>, arg: &str) -> PyResult<Obj<'py>> {
     let py = obj.py();
     if let Ok(a) = obj.cast::<PyUntypedArray>() {
         if !is_exact_ndarray(obj) && is_masked(obj) {
-            return Err(invalid(
-                py,
-                arg,
-                "real numbers (a plain array)",
-                "a masked array: fill it (a.filled(...)) or drop the masked entries first",
-            ));
+            return Err(NotReal::Masked.at(arg).into());
         }
         check_dtype(a, arg)?;
         return Ok(obj.clone());
@@ -105,21 +84,11 @@ pub fn real_array<'py>(obj: &Obj<'py>, arg: &str) -> PyResult<Obj<'py>> {
         || obj.is_instance_of::<PyBytes>()
         || obj.is_instance_of::<PyByteArray>()
     {
-        return Err(invalid(
-            py,
-            arg,
-            "real numbers",
-            format!("a {}: {}", type_name(obj), short_repr(obj)),
-        ));
+        return Err(NotReal::Text(type_name(obj), short_repr(obj))
+            .at(arg)
+            .into());
     }
-    let not_an_array = || {
-        invalid(
-            py,
-            arg,
-            "an array of real numbers",
-            format!("an object of type {}", type_name(obj)),
-        )
-    };
+    let not_an_array = || NotReal::Object(type_name(obj)).at(arg).into();
     let a = py
         .import("numpy")
         .and_then(|np| np.call_method1("asarray", (obj,)))
@@ -132,23 +101,15 @@ pub fn real_array<'py>(obj: &Obj<'py>, arg: &str) -> PyResult<Obj<'py>> {
 /// A real number: a Python float or int, a NumPy integer or floating scalar, or a 0-d array
 /// of those. NaN and inf pass (callers decide); an int beyond the double range does not.
 pub fn real(obj: &Obj, arg: &str) -> PyResult<f64> {
-    let py = obj.py();
     if let Ok(f) = obj.cast_exact::<PyFloat>() {
         return Ok(f.value());
     }
     if obj.is_instance_of::<PyInt>() && !obj.is_instance_of::<PyBool>() {
         return obj.extract::<f64>().map_err(|_| {
-            invalid(
-                py,
-                arg,
-                "a real number within the double range (|x| < 1.8e308)",
-                format!(
-                    "an int of {} bits",
-                    obj.call_method0("bit_length")
-                        .and_then(|b| b.extract::<u64>())
-                        .unwrap_or(0)
-                ),
-            )
+            let bits = obj
+                .call_method0("bit_length")
+                .and_then(|b| b.extract::<u64>());
+            NotReal::HugeInt(bits.unwrap_or(0)).at(arg).into()
         });
     }
     Ok(scalar(array(obj, arg)?, arg)?)
@@ -164,7 +125,17 @@ impl Arg for Obj<'_> {
         self.is_instance_of::<PyBool>()
     }
     fn text(&self) -> Option<String> {
-        self.extract().ok()
+        if let Ok(s) = self.cast::<PyString>() {
+            return s.to_str().ok().map(str::to_owned);
+        }
+        // A path (`pathlib.Path`, any `os.PathLike` of text) reads as its text. An int never
+        // is one, and is asked first: frame and joint indices come by here.
+        let fspath = pyo3::intern!(self.py(), "__fspath__");
+        if self.is_instance_of::<PyInt>() || !self.hasattr(fspath).unwrap_or(false) {
+            return None;
+        }
+        let path: std::path::PathBuf = self.extract().ok()?;
+        path.into_os_string().into_string().ok()
     }
     fn int(&self) -> Int {
         match self.extract::<i64>() {
@@ -240,12 +211,7 @@ pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
     let obj = &real_array(obj, arg)?;
     let arr = obj
         .extract::<PyArrayLikeDyn<'_, f64, AllowTypeChange>>()
-        .map_err(|e| {
-            unless_interrupt(py, e, || {
-                let got = format!("an object of type {}", type_name(obj));
-                invalid(py, arg, "an array of real numbers", got)
-            })
-        })?;
+        .map_err(|e| unless_interrupt(py, e, || NotReal::Object(type_name(obj)).at(arg).into()))?;
     let shape = arr.shape().to_vec();
     // Raw memory only in C order; Fortran-ordered or strided arrays are read logically.
     let data = match arr.as_slice() {
@@ -322,6 +288,13 @@ pub fn to_array1<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyArray1<f64>> {
 pub fn to_array<'py>(py: Python<'py>, data: Vec<f64>, shape: &[usize]) -> PyResult<Obj<'py>> {
     let flat = PyArray1::from_vec(py, data);
     Ok(flat.reshape(shape.to_vec())?.into_any())
+}
+
+/// A core array of any rank as a NumPy array of its shape.
+impl super::record::Field for crate::support::array::Array {
+    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
+        to_array(py, self.data.clone(), &self.shape)
+    }
 }
 
 pub use matrix_to_array as dmatrix_to_array;

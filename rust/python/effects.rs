@@ -8,8 +8,9 @@ use numpy::PyArray1;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::{to_array, to_array1, toml_to_py, vector};
+use super::convert::{to_array1, toml_to_py, vector_into};
 use super::errors::{invalid, IntoPyResult};
+use super::model::PyModel;
 use super::record::record;
 use crate::effects::ground_contact::ContactStates;
 use crate::effects::TorqueLimit;
@@ -44,22 +45,9 @@ record!(
     /// A ground contact's points along N states: `position` (N, P, 3), `penetration` (N, P),
     /// `normal_force` (N, P), `force` (N, P, 3).
     PyContactStates("ContactStates", ContactStates) {
-        position: |s: &ContactStates, py| per_point(py, s, &s.position, &[3]),
-        penetration: |s: &ContactStates, py| per_point(py, s, &s.penetration, &[]),
-        normal_force: |s: &ContactStates, py| per_point(py, s, &s.normal_force, &[]),
-        force: |s: &ContactStates, py| per_point(py, s, &s.force, &[3]),
+        position, penetration, normal_force, force
     }
 );
-
-/// One per-point quantity of `s` as an (N, P, *each) array.
-fn per_point<'py>(
-    py: Python<'py>,
-    s: &ContactStates,
-    x: &[f64],
-    each: &[usize],
-) -> PyResult<Obj<'py>> {
-    to_array(py, x.to_vec(), &[&[s.states, s.points], each].concat())
-}
 
 thread_local! {
     /// The first exception a Python torque function raised during the current call (the
@@ -84,19 +72,12 @@ pub(crate) fn torque_callback(func: Py<PyAny>) -> TorqueFunction {
         Python::attach(|py| {
             let (q, v) = (PyArray1::from_slice(py, q), PyArray1::from_slice(py, v));
             let tau = func.bind(py).call1((t, q, v));
-            match tau.and_then(|r| vector(&r, "torque function f(t, q, v)", Some(out.len()))) {
-                Ok(x) => {
-                    out.copy_from_slice(&x);
-                    Ok(())
-                }
-                Err(e) => {
-                    let msg = e.to_string();
-                    CALLBACK_ERROR.with(|c| {
-                        c.borrow_mut().get_or_insert(e);
-                    });
-                    Err(msg)
-                }
-            }
+            let keep = |e: PyErr| {
+                let msg = e.to_string();
+                CALLBACK_ERROR.with(|c| c.replace_with(|first| first.take().or(Some(e))));
+                msg
+            };
+            (tau.and_then(|r| vector_into(&r, "torque function f(t, q, v)", out))).map_err(keep)
         })
     };
     TorqueFunction::with_source(Arc::new(f), Arc::new(source))
@@ -135,12 +116,11 @@ impl PyEffect {
     /// (N, P), `force` (N, P, 3).
     fn contact_state(
         &self,
-        model: PyRef<'_, super::model::PyModel>,
+        model: PyRef<'_, PyModel>,
         q: &Obj,
         v: &Obj,
     ) -> PyResult<PyContactStates> {
-        let states = args::contact_states(&self.inner, &model.model(), q, v)?;
-        Ok(PyContactStates(states))
+        args::contact_states(&self.inner, &model.model(), q, v).map(PyContactStates)
     }
 
     /// A torque effect clamped per speed at `limit`: one number or one per speed of its
@@ -156,7 +136,7 @@ impl PyEffect {
     fn torque_limit_per_speed<'py>(
         &self,
         py: Python<'py>,
-        model: PyRef<'_, super::model::PyModel>,
+        model: PyRef<'_, PyModel>,
     ) -> PyResult<Obj<'py>> {
         let out = self.inner.torque_limit_per_speed(&model.model()).py(py)?;
         Ok(to_array1(py, &out).into_any())
@@ -210,3 +190,9 @@ super::getters!(PyEffect |s, py| {
         Some(TorqueLimit::Given(PerJoint::Each(v))) => Some(to_array1(py, v).into_any()),
     }),
 });
+
+impl crate::effects::args::EffectArg for Obj<'_> {
+    fn effect(&self) -> Option<Effect> {
+        self.cast::<PyEffect>().ok().map(|e| e.get().inner.clone())
+    }
+}

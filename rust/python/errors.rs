@@ -58,16 +58,10 @@ pub fn invalid(
     to_py(py, Error::arg(arg, expected.to_string(), got.to_string()))
 }
 
-/// What stopped a run from its progress hook, for the run's message
-/// (`Status::Interrupted`'s reason): Ctrl-C, or the exception the progress callback raised.
+/// What stopped a run from its progress hook, for the run's message (the core words it).
 pub fn interrupt_reason(py: Python<'_>, e: &PyErr) -> String {
-    if e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py) {
-        return "Ctrl-C (or a KeyboardInterrupt raised by progress)".into();
-    }
-    let name = e.get_type(py).name().map(|n| n.to_string());
-    let name = name.unwrap_or_else(|_| "an exception".into());
-    match e.value(py).str().map(|s| s.to_string()) {
-        Ok(text) if !text.is_empty() => format!("{name}: {text}, raised by progress"),
-        _ => format!("{name}, raised by progress"),
-    }
+    let ctrl_c = e.is_instance_of::<pyo3::exceptions::PyKeyboardInterrupt>(py);
+    let name = e.get_type(py).name().map(|n| n.to_string()).ok();
+    let text = e.value(py).str().map(|s| s.to_string()).ok();
+    crate::support::interrupt::progress_reason(ctrl_c, name, text)
 }

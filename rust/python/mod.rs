@@ -10,15 +10,11 @@
 /// `expr` converted as a record's fields are ([`Field`](record::Field)).
 macro_rules! getters {
     ($ty:ident { $($(#[$m:meta])* $name:ident: $t:ty = $($field:ident).+),* $(,)? }) => {
-        #[pyo3::pymethods]
-        #[allow(clippy::clone_on_copy)]
-        impl $ty {
-            $($(#[$m])* #[getter] fn $name(&self) -> $t { self.$($field).+.clone() })*
-        }
+        $crate::python::getters!($ty |s, py| { $($(#[$m])* $name -> $t = s.$($field).+.clone()),* });
     };
     ($ty:ident |$s:ident, $py:ident| { $($(#[$m:meta])* $name:ident -> $t:ty = $e:expr),* $(,)? }) => {
         #[pyo3::pymethods]
-        #[allow(unused_variables)]
+        #[allow(unused_variables, clippy::clone_on_copy)]
         impl $ty {
             $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { let $s = self; $e })*
         }
@@ -71,6 +67,16 @@ mod visuals;
 
 use pyo3::prelude::*;
 
+/// Adds to module `m` each binding module's classes (first list) and functions (second).
+macro_rules! register {
+    ($m:ident; $($module:ident: [$($class:ident),*] [$($function:ident),*];)*) => {
+        $(
+            $($m.add_class::<$module::$class>()?;)*
+            $($m.add_function(wrap_pyfunction!($module::$function, $m)?)?;)*
+        )*
+    };
+}
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     crate::support::cpu::check_cpu_features().map_err(pyo3::exceptions::PyImportError::new_err)?;
@@ -78,49 +84,26 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     // The widest copy of the multiversioned loops that runs: "avx512", "avx2" or "baseline"
     // (rust/support/cpu.rs; POINTMASS_DYN_BASELINE=1 forces "baseline").
     m.add("cpu_dispatch", crate::support::cpu::dispatch())?;
-    m.add_class::<body::PyRigidBody>()?;
-    m.add_class::<body::PyPointMasses>()?;
-    m.add_class::<joint::PyJoint>()?;
-    m.add_class::<model::PyModel>()?;
-    m.add_class::<effects::PyEffect>()?;
-    m.add_class::<effects::PyContactParameters>()?;
-    m.add_class::<effects::PyContactStates>()?;
-    m.add_class::<rk45::PyOdeSolution>()?;
-    m.add_class::<events::PyStateEvent>()?;
-    m.add_class::<scene::PyScene>()?;
-    m.add_class::<dense::PyDenseSolution>()?;
-    m.add_class::<run_config::PyRunConfig>()?;
-    m.add_class::<control::PySimulator>()?;
-    m.add_class::<trajectory::PyRunResult>()?;
-    m.add_class::<trajectory::PyRunStatus>()?;
+    register! { m;
+        body: [PyRigidBody, PyPointMasses] [];
+        joint: [PyJoint] [];
+        model: [PyModel] [];
+        effects: [PyEffect, PyContactParameters, PyContactStates] [];
+        rk45: [PyOdeSolution] [rk45];
+        events: [PyStateEvent] [];
+        scene: [PyScene] [];
+        dense: [PyDenseSolution] [];
+        run_config: [PyRunConfig] [];
+        control: [PySimulator] [];
+        trajectory: [PyRunResult, PyRunStatus] [];
+        identification: [PyBase, PyIdentified] [identification_regressor,
+            identification_parameters, identification_base, identification_fit, identification_model];
+        simulate: [] [simulate_scene, simulate_batch, effect_forces, energies];
+        along: [] [scene_along, scene_shaking];
+        visuals: [] [resolve_mesh];
+        design: [] [design_cells, design_regressor, design_pins, design_pin_loads, design_solve];
+        pickle: [] [_dumps, _loads];
+    }
     model::add_records(m)?;
-    m.add_class::<identification::PyBase>()?;
-    m.add_class::<identification::PyIdentified>()?;
-    m.add_function(wrap_pyfunction!(simulate::simulate_scene, m)?)?;
-    m.add_function(wrap_pyfunction!(simulate::simulate_batch, m)?)?;
-    m.add_function(wrap_pyfunction!(simulate::effect_forces, m)?)?;
-    m.add_function(wrap_pyfunction!(simulate::energies, m)?)?;
-    m.add_function(wrap_pyfunction!(along::scene_along, m)?)?;
-    m.add_function(wrap_pyfunction!(along::scene_shaking, m)?)?;
-    m.add_function(wrap_pyfunction!(rk45::rk45, m)?)?;
-    m.add_function(wrap_pyfunction!(visuals::resolve_mesh, m)?)?;
-    m.add_function(wrap_pyfunction!(design::design_cells, m)?)?;
-    m.add_function(wrap_pyfunction!(design::design_regressor, m)?)?;
-    m.add_function(wrap_pyfunction!(design::design_pins, m)?)?;
-    m.add_function(wrap_pyfunction!(design::design_pin_loads, m)?)?;
-    m.add_function(wrap_pyfunction!(design::design_solve, m)?)?;
-    m.add_function(wrap_pyfunction!(
-        identification::identification_regressor,
-        m
-    )?)?;
-    m.add_function(wrap_pyfunction!(
-        identification::identification_parameters,
-        m
-    )?)?;
-    m.add_function(wrap_pyfunction!(identification::identification_base, m)?)?;
-    m.add_function(wrap_pyfunction!(identification::identification_fit, m)?)?;
-    m.add_function(wrap_pyfunction!(identification::identification_model, m)?)?;
-    m.add_function(wrap_pyfunction!(pickle::_dumps, m)?)?;
-    m.add_function(wrap_pyfunction!(pickle::_loads, m)?)?;
     Ok(())
 }

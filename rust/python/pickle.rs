@@ -19,6 +19,8 @@ use super::model::PyModel;
 use super::scene::PyScene;
 use crate::io::pickled::Payload;
 
+pyo3::import_exception!(pickle, PicklingError);
+
 /// The pickled classes: `Variant = Class { its core value; the class holding one }`.
 macro_rules! payloads {
     ($($v:ident = $class:ident { $read:expr; $make:expr }),* $(,)?) => {
@@ -73,12 +75,8 @@ pub fn _dumps<'py>(
         .torque_functions()
         .map(source)
         .collect::<PyResult<_>>()?;
-    let data = crate::io::persist::encode(&payload).map_err(|e| {
-        match py.import("pickle").and_then(|m| m.getattr("PicklingError")) {
-            Ok(cls) => PyErr::from_value(cls.call1((e.to_string(),)).unwrap_or(cls)),
-            Err(err) => err,
-        }
-    })?;
+    let data = crate::io::persist::encode(&payload);
+    let data = data.map_err(|e| PicklingError::new_err(e.to_string()))?;
     Ok((PyBytes::new(py, &data), PyTuple::new(py, callables)?))
 }
 

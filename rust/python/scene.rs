@@ -3,18 +3,15 @@ use crate::python::Obj;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use super::convert::short_repr;
 use super::convert::{to_array, to_array1};
 use super::derivatives::{PyForwardDerivatives, PyInverseDerivatives};
 use super::effects::PyEffect;
-use super::errors::{invalid, IntoPyResult};
+use super::errors::IntoPyResult;
 use super::model::PyModel;
 use super::simulate::callbacks;
-use crate::effects::Effect;
 use crate::io::scene::{Scene, Settings};
 use crate::simulate::at_state;
 use crate::simulate::RunConfig;
-use crate::support::args::{self, given as given_arg};
 
 #[pyclass(name = "Scene", module = "pointmass_dyn._core", frozen)]
 pub struct PyScene {
@@ -48,13 +45,10 @@ impl PyScene {
             ("atol", atol),
             ("disable", disable),
         ];
-        let settings = settings_over(&named, settings, Settings::default())?;
-        let base = Scene {
-            settings,
-            ..Scene::of_model(model.model())
-        };
-        let effects = given_arg(effects).map(|e| effect_list(e)).transpose()?;
-        let inner = base.replaced(None, effects, (q0, v0), (name, description))?;
+        let settings =
+            RunConfig::scene_call(settings.map(|d| d.as_any()), &named, Settings::default())?;
+        let base = Scene::of_model(model.model());
+        let inner = base.replaced(None, [effects, q0, v0], (name, description), settings)?;
         Ok(PyScene { inner })
     }
 
@@ -70,19 +64,18 @@ impl PyScene {
     fn replace(
         &self,
         model: Option<PyRef<'_, PyModel>>,
-        effects: Option<Vec<PyRef<'_, PyEffect>>>,
+        effects: Option<&Obj>,
         q0: Option<&Obj>,
         v0: Option<&Obj>,
         name: Option<String>,
         description: Option<String>,
         settings: Option<&Bound<'_, PyDict>>,
     ) -> PyResult<Self> {
-        let effects = effects.map(|list| list.iter().map(|e| e.inner.clone()).collect());
+        let base = self.inner.settings.clone();
+        let settings = RunConfig::scene_call(settings.map(|d| d.as_any()), &[], base)?;
         let model = model.map(|m| m.model());
-        let mut inner = self
-            .inner
-            .replaced(model, effects, (q0, v0), (name, description))?;
-        inner.settings = settings_over(&[], settings, inner.settings)?;
+        let inner =
+            (self.inner).replaced(model, [effects, q0, v0], (name, description), settings)?;
         Ok(PyScene { inner })
     }
 
@@ -90,18 +83,18 @@ impl PyScene {
     #[staticmethod]
     #[pyo3(signature = (text, file="<string>"))]
     fn from_toml(py: Python<'_>, text: &str, file: &str) -> PyResult<Self> {
-        Ok(PyScene {
-            inner: Scene::from_toml(text, file).py(py)?,
-        })
+        Scene::from_toml(text, file)
+            .py(py)
+            .map(|inner| PyScene { inner })
     }
 
     /// Reads a scene file (a regular file of at most 128 MiB; a FIFO or a device is refused
     /// before it is opened). Raises `SceneError` naming the file.
     #[staticmethod]
     fn from_file(py: Python<'_>, path: std::path::PathBuf) -> PyResult<Self> {
-        Ok(PyScene {
-            inner: Scene::from_file(&path).py(py)?,
-        })
+        Scene::from_file(&path)
+            .py(py)
+            .map(|inner| PyScene { inner })
     }
 
     /// The scene as scene-file text that `Scene.from_toml` reads back as an equal scene
@@ -134,37 +127,6 @@ impl PyScene {
     fn __repr__(&self) -> String {
         self.inner.repr()
     }
-}
-
-/// A list of effects (a lone effect is a common slip: the error says what a list is, not
-/// "not iterable").
-fn effect_list(effects: &Obj) -> PyResult<Vec<Effect>> {
-    const EFFECT: &str = "an effect such as pmd.Gravity(...)";
-    let items = args::items(
-        effects,
-        "effects",
-        "a list of effects such as [pmd.Gravity()]",
-    )?;
-    let one = |(k, e): (usize, Obj)| match e.cast::<PyEffect>() {
-        Ok(e) => Ok(e.get().inner.clone()),
-        Err(_) => Err(invalid(
-            e.py(),
-            &format!("effects[{k}]"),
-            EFFECT,
-            short_repr(&e),
-        )),
-    };
-    items.into_iter().enumerate().map(one).collect()
-}
-
-/// `base` with the settings a `Scene` call gave: `named` (`None`: not given) and
-/// `**settings` (the core's `RunConfig::scene_call`).
-fn settings_over(
-    named: &[(&str, Option<&Obj>)],
-    settings: Option<&Bound<'_, PyDict>>,
-    base: Settings,
-) -> PyResult<Settings> {
-    RunConfig::scene_call(settings.map(|d| d.as_any()), named, base)
 }
 
 /// The scene's derivatives, one method per direction:
@@ -205,16 +167,13 @@ super::getters!(PyScene |s, py| {
     method -> Option<&'static str> = s.inner.settings.method.map(|m| m.name()),
     /// Effect families the scene switches off (`None`: the scene says nothing).
     disable -> Option<Vec<&'static str>> = s.inner.settings.disable.map(|d| d.names()),
-});
-
-super::getters!(PyScene {
-    name: String = inner.name,
-    description: String = inner.description,
-    t_span: Option<(f64, f64)> = inner.settings.t_span,
-    rtol: Option<f64> = inner.settings.rtol,
-    atol: Option<f64> = inner.settings.atol,
-    max_step: Option<f64> = inner.settings.max_step,
-    max_steps: Option<usize> = inner.settings.max_steps,
-    first_step: Option<f64> = inner.settings.first_step,
-    dt: Option<f64> = inner.settings.dt,
+    name -> String = s.inner.name.clone(),
+    description -> String = s.inner.description.clone(),
+    t_span -> Option<(f64, f64)> = s.inner.settings.t_span,
+    rtol -> Option<f64> = s.inner.settings.rtol,
+    atol -> Option<f64> = s.inner.settings.atol,
+    max_step -> Option<f64> = s.inner.settings.max_step,
+    max_steps -> Option<usize> = s.inner.settings.max_steps,
+    first_step -> Option<f64> = s.inner.settings.first_step,
+    dt -> Option<f64> = s.inner.settings.dt,
 });

@@ -218,3 +218,66 @@ pub fn scalar((shape, x): (Vec<usize>, Vec<f64>), arg: &str) -> Result<f64, Erro
         }
     }
 }
+
+/// A binding's value refused as real numbers, by what it is: which values are refused and
+/// why, worded here once; the binding only finds the case ([`NotReal::at`] gives the error).
+pub enum NotReal {
+    /// An array of a NumPy dtype of kind `.0` (its one-letter code), named `.1`.
+    Dtype(u8, String),
+    /// A masked array (its mask would be dropped silently).
+    Masked,
+    /// A string or bytes: its type name and its repr.
+    Text(String, String),
+    /// No array-like at all: its type name.
+    Object(String),
+    /// An int of so many bits, beyond the double range.
+    HugeInt(u64),
+}
+
+impl NotReal {
+    /// The refusal of a dtype of kind `kind`, `None` for the real ones (integer, floating);
+    /// `name` gives the dtype's name.
+    pub fn dtype(kind: u8, name: impl FnOnce() -> String) -> Option<NotReal> {
+        (!matches!(kind, b'i' | b'u' | b'f')).then(|| NotReal::Dtype(kind, name()))
+    }
+
+    /// The error for argument `arg`.
+    pub fn at(self, arg: &str) -> Error {
+        let real = "real numbers";
+        let (expected, got) = match self {
+            NotReal::Dtype(b'b', _) => (real, "a bool array (bools are refused as numbers)".into()),
+            NotReal::Dtype(b'c', d) => {
+                let got = format!("a complex array (dtype {d}): the imaginary part would be lost");
+                (real, got)
+            }
+            NotReal::Dtype(b'U' | b'S', d) => (real, format!("an array of strings (dtype {d})")),
+            NotReal::Dtype(b'O', _) => (
+                real,
+                "an array of Python objects (dtype object: ragged, non-numeric or out-of-range entries)"
+                    .into(),
+            ),
+            NotReal::Dtype(_, d) => (real, format!("an array of dtype {d}")),
+            NotReal::Masked => (
+                "real numbers (a plain array)",
+                "a masked array: fill it (a.filled(...)) or drop the masked entries first".into(),
+            ),
+            NotReal::Text(ty, repr) => (real, format!("a {ty}: {repr}")),
+            NotReal::Object(ty) => ("an array of real numbers", format!("an object of type {ty}")),
+            NotReal::HugeInt(bits) => (
+                "a real number within the double range (|x| < 1.8e308)",
+                format!("an int of {bits} bits"),
+            ),
+        };
+        Error::arg(arg, expected, got)
+    }
+}
+
+/// A value as a message shows it (its `repr`), cut to 60 characters.
+pub fn shortened(shown: String) -> String {
+    let n = shown.chars().count();
+    if n <= 60 {
+        return shown;
+    }
+    let head: String = shown.chars().take(50).collect();
+    format!("{head}… ({n} characters)")
+}

@@ -43,6 +43,17 @@ pub fn check(what: &str) -> Result<()> {
     }
 }
 
+/// Why a run stopped from its progress hook (`Status::Interrupted`'s reason): Ctrl-C, or the
+/// exception `name` (its message `text`) the progress callback raised.
+pub fn progress_reason(ctrl_c: bool, name: Option<String>, text: Option<String>) -> String {
+    let name = name.unwrap_or_else(|| "an exception".into());
+    match text {
+        _ if ctrl_c => "Ctrl-C (or a KeyboardInterrupt raised by progress)".into(),
+        Some(text) if !text.is_empty() => format!("{name}: {text}, raised by progress"),
+        _ => format!("{name}, raised by progress"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2,6 +2,7 @@
 //! `sin_cos`, CPU dispatch, fallible allocation, interruption, reading input files.
 pub mod alloc;
 pub mod args;
+pub mod array;
 pub mod cpu;
 pub mod error;
 pub mod files;

@@ -3,9 +3,10 @@
 use std::sync::Arc;
 
 use super::{Scene, Settings};
-use crate::effects::{fill_model_limits, Disabled, Effect, Effects};
+use crate::effects::args::{effect_list, EffectArg};
+use crate::effects::{fill_model_limits, Disabled, Effects};
 use crate::model::Model;
-use crate::support::args::{opt, vector, Arg};
+use crate::support::args::{given, opt, vector};
 use crate::support::error::Error;
 
 impl Scene {
@@ -24,17 +25,22 @@ impl Scene {
     }
 
     /// A copy with what is given replaced and everything else kept: the model (of this
-    /// scene's sizes), the effects (a joint limit's missing bounds and a torque's
-    /// `"effort"` the model's; checked against the model), the start state (`q0` and `v0`
-    /// checked, `q0` normalised), the name and description. Errors name the argument.
-    pub fn replaced<A: Arg>(
+    /// scene's sizes), the effects (a list, [`effect_list`]; a joint limit's missing bounds and
+    /// a torque's `"effort"` the model's; checked against the model), the start state (`q0`
+    /// and `v0` checked, `q0` normalised), the name and description; `settings` replace the
+    /// scene's. Errors name the argument.
+    pub fn replaced<A: EffectArg>(
         &self,
         model: Option<Arc<Model>>,
-        effects: Option<Vec<Effect>>,
-        (q0, v0): (Option<&A>, Option<&A>),
+        [effects, q0, v0]: [Option<&A>; 3],
         (name, description): (Option<String>, Option<String>),
+        settings: Settings,
     ) -> Result<Scene, A::Err> {
-        let mut s = self.clone();
+        let effects = given(effects).map(effect_list).transpose()?;
+        let mut s = Scene {
+            settings,
+            ..self.clone()
+        };
         s.name = name.unwrap_or(s.name);
         s.description = description.unwrap_or(s.description);
         if let Some(m) = model {
