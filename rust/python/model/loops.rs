@@ -1,13 +1,13 @@
-//! `Model`'s closed loops: cut joints, their residuals and Jacobian, assembly, and the cut
-//! joints' forces.
+//! `Model`'s closed loops: cut joints and assembly (their residual, Jacobian and forces
+//! are one-state quantities, in `dynamics.rs`).
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::{load_state, load_x, PyModel};
+use super::PyModel;
 use crate::loops;
 use crate::model::args::fixed_mask;
-use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
-use crate::python::errors::{check_result, IntoPyResult};
+use crate::python::convert::to_array1;
+use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::python::record::record;
 
@@ -35,35 +35,6 @@ impl PyModel {
         self.shared
             .update(|m| m.add_loop(a, b, joint.inner, fa, fb, name))
             .py(py)
-    }
-
-    #[getter]
-    fn nloops(&self) -> usize {
-        self.model().nloops()
-    }
-
-    #[getter]
-    fn nconstraints(&self) -> usize {
-        self.model().nconstraints()
-    }
-
-    #[getter]
-    fn loop_names(&self) -> Vec<String> {
-        self.model().loops.iter().map(|l| l.name.clone()).collect()
-    }
-
-    fn constraint_residual<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(q)?;
-        let r = loops::args::residual_at(&model, &q);
-        check_result(py, "constraint_residual", &r)?;
-        Ok(to_array1(py, &r).into_any())
-    }
-
-    fn constraint_jacobian<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(q)?;
-        let j = crate::frames::constrained::constraint_jacobian(&model, &q);
-        check_result(py, "constraint_jacobian", j.as_slice())?;
-        dmatrix_to_array(py, &j)
     }
 
     fn loop_solver_info(&self) -> PyLoopLayout {
@@ -112,29 +83,13 @@ impl PyModel {
         let a = loops::args::assembled(&model, (&q, v), Some(a_guess), fixed)?;
         Ok(to_array1(py, &a).into_any())
     }
-
-    #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
-    fn constraint_forces<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        tau: &Obj,
-        gravity: Option<&Obj>,
-        external: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let g = crate::model::args::gravity(gravity)?;
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, Some(v))?;
-            load_x(ws, py, tau, "tau")?;
-            let ext = crate::model::args::external(ws.model(), external)?;
-            let w = ws.constraint_forces(&g, ext.as_deref()).py(py)?;
-            let flat: Vec<f64> = w.iter().flatten().copied().collect();
-            check_result(py, "constraint_forces", &flat)?;
-            to_array(py, flat, &[w.len(), 6])
-        })
-    }
 }
+
+crate::python::getters!(PyModel |s, py| {
+    nloops -> usize = s.model().nloops(),
+    nconstraints -> usize = s.model().nconstraints(),
+    loop_names -> Vec<String> = s.model().loops.iter().map(|l| l.name.clone()).collect(),
+});
 
 record!(
     /// How the loop solver factors a model (`Model.loop_solver_info`).
