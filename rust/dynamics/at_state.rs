@@ -1,15 +1,15 @@
 //! A model's one-state quantities as a binding asks for them (`Model.mass_matrix`,
-//! `bias_forces`, the energies, the loops' residual, Jacobian and forces, the couplings'
-//! forces): the call's arguments read ([`Arg`]) into a pooled [`Workspace`] and checked, the
+//! `bias_forces`, the energies, the loops' residual, Jacobian and forces, the speeds and
+//! accelerations they allow, the couplings' forces): the call's arguments read ([`Arg`]) into a pooled [`Workspace`] and checked, the
 //! quantity computed there, checked finite and handed back as C-ordered values with their
 //! shape, so that the binding declares its methods and converts.
 use nalgebra::DMatrix;
 
 use super::calls::{worth_detaching, Method};
 use super::shared::Workspace;
-use crate::model::args::{external, gravity};
+use crate::model::args::{external, fixed_mask, gravity};
 use crate::support::args::{vector, Arg};
-use crate::support::error::{check_finite, check_result, Result};
+use crate::support::error::{check_finite, check_result, Error, Result};
 use crate::support::spatial::{Vec3, Vec6};
 
 /// A quantity at one state, named as the method that asks for it.
@@ -23,6 +23,8 @@ pub enum Quantity {
     ConstraintJacobian,
     ConstraintForces,
     CouplingForces,
+    AssembledVelocity,
+    AssembledAcceleration,
 }
 
 /// A call's arguments by name; `None`: not one of the call's parameters, or not given.
@@ -32,6 +34,9 @@ pub struct Given<'a, A> {
     pub tau: Option<&'a A>,
     pub gravity: Option<&'a A>,
     pub external: Option<&'a A>,
+    pub v_guess: Option<&'a A>,
+    pub a_guess: Option<&'a A>,
+    pub fixed: Option<&'a A>,
 }
 
 impl<A> Given<'_, A> {
@@ -43,6 +48,9 @@ impl<A> Given<'_, A> {
             tau: None,
             gravity: None,
             external: None,
+            v_guess: None,
+            a_guess: None,
+            fixed: None,
         }
     }
 }
@@ -50,12 +58,13 @@ impl<A> Given<'_, A> {
 /// A quantity's values in C order and their shape (`[]`: one number).
 pub type Values = (Vec<f64>, Vec<usize>);
 
-/// A call read: the quantity, gravity and the external wrenches (the state is in the
-/// workspace).
+/// A call read: the quantity, gravity, the external wrenches and the held speeds of an
+/// assembly (the state and the guesses are in the workspace).
 pub struct Loaded {
     what: Quantity,
     g: Vec3,
     ext: Option<Vec<Vec6>>,
+    fixed: Vec<bool>,
 }
 
 impl Quantity {
@@ -70,6 +79,8 @@ impl Quantity {
             Quantity::ConstraintJacobian => "constraint_jacobian",
             Quantity::ConstraintForces => "constraint_forces",
             Quantity::CouplingForces => "coupling_forces",
+            Quantity::AssembledVelocity => "assemble_velocity",
+            Quantity::AssembledAcceleration => "assemble_acceleration",
         }
     }
 }
@@ -87,8 +98,8 @@ impl Loaded {
 }
 
 impl Workspace {
-    /// Reads `what`'s arguments: gravity, then `q` (and `v`, `tau` when given) into the
-    /// workspace, checked, then the external wrenches.
+    /// Reads `what`'s arguments: gravity, then `q` and `v` (or `v_guess`) into the workspace,
+    /// checked, then `tau` (or `a_guess`), the external wrenches and `fixed`.
     pub fn load<A: Arg>(
         &mut self,
         what: Quantity,
@@ -101,16 +112,31 @@ impl Workspace {
         if let Some(q) = given.q {
             self.q = vector(q, "q", Some(nq))?;
         }
-        if let Some(v) = given.v {
-            self.v = vector(v, "v", Some(nv))?;
+        let v = (given.v.map(|v| (v, "v"))).or(given.v_guess.map(|v| (v, "v_guess")));
+        if let Some((v, arg)) = v {
+            self.v = vector(v, arg, Some(nv))?;
         }
-        self.check_state(given.v.is_some())?;
-        if let Some(tau) = given.tau {
-            self.x = vector(tau, "tau", Some(nv))?;
-            check_finite("tau", &self.x)?;
+        let v_arg = v.map_or("v", |(_, arg)| arg);
+        let named = |e: Error| e.map_arg(|n| if n == "v" { v_arg.into() } else { n });
+        self.check_state(v.is_some()).map_err(named)?;
+        let x = (given.tau.map(|x| (x, "tau"))).or(given.a_guess.map(|x| (x, "a_guess")));
+        if let Some((x, arg)) = x {
+            self.x = vector(x, arg, Some(nv))?;
+            check_finite(arg, &self.x)?;
         }
         let ext = external(self.model(), given.external)?;
-        Ok(Loaded { what, g, ext })
+        let fixed = match what {
+            Quantity::AssembledVelocity | Quantity::AssembledAcceleration => {
+                fixed_mask(self.model(), given.fixed)?
+            }
+            _ => vec![],
+        };
+        Ok(Loaded {
+            what,
+            g,
+            ext,
+            fixed,
+        })
     }
 
     /// The quantity a [`Workspace::load`] read, at the loaded state, checked finite.
@@ -148,6 +174,15 @@ impl Workspace {
             Quantity::CouplingForces => {
                 let lambda = self.constraint_multipliers(g)?;
                 crate::loops::coupling::forces(self.model(), &lambda)
+            }
+            // The guess projected onto the loops' speeds (accelerations at the loaded `v`).
+            Quantity::AssembledVelocity | Quantity::AssembledAcceleration => {
+                let at_v = call.what == Quantity::AssembledAcceleration;
+                let mut x = if at_v { self.x.clone() } else { self.v.clone() };
+                let v = at_v.then_some(self.v.as_slice());
+                let (model, q) = (self.model(), &self.q);
+                crate::loops::project_velocity_like(model, q, v, &mut x, &call.fixed)?;
+                x
             }
         };
         check_result(name, &values)?;

@@ -116,6 +116,8 @@ at_state! {
     constraint_jacobian(q) = ConstraintJacobian,
     constraint_forces(q, v, tau, gravity = None, external = None) = ConstraintForces,
     coupling_forces(q, v, tau, gravity = None) = CouplingForces,
+    assemble_velocity(q, v_guess, fixed = None) = AssembledVelocity,
+    assemble_acceleration(q, v, a_guess, fixed = None) = AssembledAcceleration,
 }
 
 impl PyModel {

@@ -56,33 +56,6 @@ impl PyModel {
         let q = py.detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))?;
         Ok(to_array1(py, &q).into_any())
     }
-
-    #[pyo3(signature = (q, v_guess, fixed=None))]
-    fn assemble_velocity<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v_guess: &Obj,
-        fixed: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state_as((q, "q"), Some((v_guess, "v_guess")))?;
-        let v = loops::args::assembled::<Obj>(&model, (&q, v), None, fixed)?;
-        Ok(to_array1(py, &v).into_any())
-    }
-
-    #[pyo3(signature = (q, v, a_guess, fixed=None))]
-    fn assemble_acceleration<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        a_guess: &Obj,
-        fixed: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(q, v)?;
-        let a = loops::args::assembled(&model, (&q, v), Some(a_guess), fixed)?;
-        Ok(to_array1(py, &a).into_any())
-    }
 }
 
 crate::python::getters!(PyModel |s, py| {
