@@ -5,7 +5,7 @@ use pyo3::prelude::*;
 
 use super::convert::{dmatrix_to_array, to_array1};
 use super::model::PyModel;
-use super::record::{record, Field};
+use super::record::record;
 use super::signals::detach_interruptible;
 use crate::identification::{self as ident, args};
 
@@ -60,18 +60,9 @@ record!(
 record!(
     /// An identification's result (`crate::identification::Identified`).
     PyIdentified("Identified", ident::Identified) {
-        names,
-        free,
+        names, free,
         base: |r: &ident::Identified, py| Bound::new(py, PyBase(r.base.clone())).map(Bound::into_any),
-        base_names,
-        beta: |r: &ident::Identified, py| r.fit.beta.field(py),
-        std: |r: &ident::Identified, py| r.fit.std.field(py),
-        pi: |r: &ident::Identified, py| r.fit.pi.field(py),
-        rss: |r: &ident::Identified, py| r.fit.rss.field(py),
-        condition: |r: &ident::Identified, py| r.fit.condition.field(py),
-        structural_rank,
-        residuals,
-        masses,
+        base_names, beta, std, pi, rss, condition, structural_rank, residuals, masses,
     }
 );
 
