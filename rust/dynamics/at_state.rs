@@ -39,7 +39,15 @@ pub struct Given<'a, A> {
     pub fixed: Option<&'a A>,
 }
 
-impl<A> Given<'_, A> {
+impl<'a, A> Given<'a, A> {
+    /// `q` alone.
+    pub fn q(q: &'a A) -> Self {
+        Given {
+            q: Some(q),
+            ..Given::none()
+        }
+    }
+
     /// No argument given (the rest of a call's arguments, in struct-update syntax).
     pub fn none() -> Self {
         Given {

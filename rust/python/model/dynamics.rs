@@ -4,7 +4,6 @@
 //! pooled workspace.
 use crate::python::Obj;
 use pyo3::prelude::*;
-
 use pyo3::IntoPyObjectExt;
 
 use super::{load_state, load_x, sized, PyModel};
@@ -77,19 +76,12 @@ impl PyModel {
     #[pyo3(signature = (q, method="recursive"))]
     fn mass_matrix<'py>(&self, py: Python<'py>, q: &Obj, method: &str) -> PyResult<Obj<'py>> {
         let what = Quantity::MassMatrix(Method::parse(method)?);
-        self.at_state(
-            py,
-            what,
-            Given {
-                q: Some(q),
-                ..Given::none()
-            },
-        )
+        self.at_state(py, what, Given::q(q))
     }
 }
 
 /// The one-state quantities (`crate::dynamics::at_state`), one method each:
-/// `name(its arguments, `= None` after the optional ones) = the quantity`.
+/// `name(arguments) = quantity`, an optional argument followed by `= None`.
 macro_rules! at_state {
     (@ty) => { &Obj };
     (@ty $default:tt) => { Option<&Obj> };
