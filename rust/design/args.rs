@@ -3,8 +3,11 @@
 //! typed fields here, once, so the binding only converts. Every refusal names the key.
 use nalgebra::{DMatrix, DVector};
 
+use super::results::{maps, Maps};
 use super::{Envelope, Flow, Norm, Problem, Quantity};
-use crate::support::args::{choice, count, flag, given, items, text, vector, Arg};
+use crate::model::args::{states, Stack};
+use crate::model::Model;
+use crate::support::args::{choice, count, flag, given, items, text, vec3, vector, Arg};
 use crate::support::error::Error;
 use crate::support::spatial::Vec3;
 
@@ -219,5 +222,35 @@ impl Envelope {
                 return Err(Error::arg("envelope", expected, "none or several").into());
             }
         })
+    }
+}
+
+/// `design_regressor`'s motion: the states (`q`, `v`, `a` stacked, their shapes checked;
+/// their values row by row by [`MapsCall::maps`], which may take long), gravity and the
+/// point the moments are taken about.
+pub struct MapsCall {
+    states: Stack,
+    g: Vec3,
+    about: Vec3,
+}
+
+impl MapsCall {
+    /// Gravity, `about`, then the states.
+    pub fn from_args<A: Arg>(
+        model: &Model,
+        [q, v, a]: [&A; 3],
+        g: Option<&A>,
+        about: &A,
+    ) -> Result<Self, A::Err> {
+        let g = crate::model::args::gravity(g)?;
+        let about = vec3(about, "about")?;
+        let states = states(model, q, v, a)?;
+        Ok(MapsCall { states, g, about })
+    }
+
+    /// The maps of the `actuated` joints along the motion ([`maps`]).
+    pub fn maps(&self, model: &Model, actuated: &[usize]) -> crate::support::error::Result<Maps> {
+        let (count, q, v, a) = &self.states;
+        maps(model, (*count, [q, v, a]), (&self.g, &self.about), actuated)
     }
 }

@@ -17,6 +17,7 @@ pub mod regressor;
 pub mod results;
 pub mod strength;
 
+pub use args::MapsCall;
 pub use cells::{cube_moments, fill, point_moments, Envelope};
 pub use connectivity::Flow;
 pub use pins::pins;

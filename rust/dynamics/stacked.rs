@@ -3,8 +3,9 @@
 //! stack) and checked finite, and an early stop (an interrupt) described, so that the
 //! binding only converts.
 use super::reactions::{self, States};
-use crate::model::args::check_rows;
+use crate::model::args::{self as args, about, body_points, check_rows, gravity, Stack};
 use crate::model::Model;
+use crate::support::args::Arg;
 use crate::support::error::{check_result, Error, Result};
 use crate::support::spatial::Vec3;
 
@@ -96,4 +97,63 @@ pub fn shaking(model: &Model, rows: StateRows<'_>, about: &Vec3) -> Result<Stack
         done.stopped,
         [("force", force, &[3]), ("moment", moment, &[3])],
     )
+}
+
+/// `point_regressor`'s or `shaking`'s arguments read: the states (`q`, `v`, `a`, one or a
+/// stack, their shapes checked; their values row by row by the computation), and gravity
+/// and the points, or the point the moments are taken about (the others left empty).
+pub struct Call {
+    states: Stack,
+    g: Vec3,
+    points: Vec<(usize, Vec3)>,
+    about: Vec3,
+}
+
+impl Call {
+    /// `point_regressor`'s: gravity, the states, then the points (`None`: every point mass).
+    pub fn point_regressor<A: Arg>(
+        model: &Model,
+        [q, v, a]: [&A; 3],
+        points: Option<&A>,
+        g: Option<&A>,
+    ) -> std::result::Result<Self, A::Err> {
+        let g = gravity(g)?;
+        let states = args::states(model, q, v, a)?;
+        let points = body_points(model, points)?;
+        let about = Vec3::zeros();
+        Ok(Call {
+            states,
+            g,
+            points,
+            about,
+        })
+    }
+
+    /// `shaking`'s: the states, then `about` (`None`: the world origin).
+    pub fn shaking<A: Arg>(
+        model: &Model,
+        [q, v, a]: [&A; 3],
+        point: Option<&A>,
+    ) -> std::result::Result<Self, A::Err> {
+        let states = args::states(model, q, v, a)?;
+        let (g, points, about) = (Vec3::zeros(), vec![], about(point)?);
+        Ok(Call {
+            states,
+            g,
+            points,
+            about,
+        })
+    }
+
+    /// [`point_regressor`] of the call read by [`Call::point_regressor`].
+    pub fn regressor(&self, model: &Model) -> Result<Stacked> {
+        let (count, q, v, a) = &self.states;
+        point_regressor(model, (*count, [q, v, a]), &self.points, &self.g)
+    }
+
+    /// [`shaking`] of the call read by [`Call::shaking`].
+    pub fn shaking_forces(&self, model: &Model) -> Result<Stacked> {
+        let (count, q, v, a) = &self.states;
+        shaking(model, (*count, [q, v, a]), &self.about)
+    }
 }

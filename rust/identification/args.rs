@@ -3,12 +3,14 @@
 //! weights, cells and actuated joints; and a regressor given as an array.
 use nalgebra::DMatrix;
 
-use super::{Extras, LinkCells, Method, Options};
+use super::{Extras, Identified, LinkCells, Method, Options};
+use crate::model::args::{check_rows, states, Stack};
+use crate::model::Model;
 use crate::support::args::{count, flag, items, text, vector, Arg};
-use crate::support::error::Error;
+use crate::support::error::{check_result, Error};
 use crate::support::spatial::Vec3;
 
-type R<T, A> = Result<T, <A as Arg>::Err>;
+type R<T, A> = std::result::Result<T, <A as Arg>::Err>;
 
 /// The fit's keywords; any other is refused (a misspelt one would be silently ignored).
 const FIT_KEYS: [&str; 13] = [
@@ -38,15 +40,15 @@ pub fn extras((viscous, coulomb, armature, offset): (bool, bool, bool, bool)) ->
 }
 
 /// The fit's options and gravity from its keywords (`FIT_KEYS`; absent: the defaults).
-pub fn fit_options<A: Arg>(o: &A) -> R<(Options, Vec3), A> {
-    for key in o.keys().unwrap_or_default() {
+pub fn fit_options<A: Arg>(o: Option<&A>) -> R<(Options, Vec3), A> {
+    for key in o.and_then(|o| o.keys()).unwrap_or_default() {
         let name = key.text().unwrap_or_default();
         if !FIT_KEYS.contains(&name.as_str()) {
             let expected = format!("keywords among {}", FIT_KEYS.join(", "));
             return Err(Error::arg("options", expected, key.shown()).into());
         }
     }
-    let key = |k: &str| o.get(k).flatten().filter(|x| !x.absent());
+    let key = |k: &str| o.and_then(|o| o.get(k)).flatten().filter(|x| !x.absent());
     let on = |k: &str| key(k).map_or(Ok(false), |x| flag(&x, k));
     let numbers = |k: &str| key(k).map_or(Ok(vec![]), |x| vector(&x, k, None));
     let real = |k: &str, default: f64| key(k).map_or(Ok(default), |x| x.real(k));
@@ -126,4 +128,69 @@ pub fn regressor<A: Arg>(y: &A) -> R<DMatrix<f64>, A> {
         return Err(Error::arg("regressor", "a 2-d array", format!("{shape:?}")).into());
     };
     Ok(DMatrix::from_row_slice(rows, cols, &data))
+}
+
+/// An identification call's arguments read: the states (`q`, `v`, `a` stacked, their shapes
+/// checked; their values row by row when computing, which may take long), gravity, and for
+/// a fit the joint forces and options.
+pub struct Call {
+    pub states: Stack,
+    pub g: Vec3,
+    pub tau: Vec<f64>,
+    pub options: Options,
+}
+
+/// `identification_regressor`'s arguments: gravity, then the states.
+pub fn regressor_call<A: Arg>(model: &Model, [q, v, a]: [&A; 3], g: Option<&A>) -> R<Call, A> {
+    let g = crate::model::args::gravity(g)?;
+    let states = states(model, q, v, a)?;
+    let options = fit_options::<A>(None)?.0;
+    Ok(Call {
+        states,
+        g,
+        tau: vec![],
+        options,
+    })
+}
+
+/// `identification_fit`'s arguments: the states, `tau`, then the options (keywords).
+pub fn fit_call<A: Arg>(model: &Model, [q, v, a, tau]: [&A; 4], options: Option<&A>) -> R<Call, A> {
+    let states = states(model, q, v, a)?;
+    let tau = tau.array("tau")?.1;
+    let (options, g) = fit_options(options)?;
+    Ok(Call {
+        states,
+        g,
+        tau,
+        options,
+    })
+}
+
+impl Call {
+    /// The states checked row by row (Ctrl-C honoured).
+    fn checked(&self, model: &Model) -> crate::support::error::Result<[&[f64]; 3]> {
+        let (count, q, v, a) = &self.states;
+        check_rows(model, *count, q, v, a)?;
+        Ok([q, v, a])
+    }
+
+    /// The joint-force regressor with the `extras` columns (of the `actuated` joints' forces
+    /// alone, if any), checked finite.
+    pub fn regressor(
+        &self,
+        model: &Model,
+        extras: &Extras,
+        actuated: &[usize],
+    ) -> crate::support::error::Result<DMatrix<f64>> {
+        let [q, v, a] = self.checked(model)?;
+        let y = super::joint_force_regressor(model, q, v, a, &self.g, extras, actuated)?;
+        check_result("torque regressor", y.as_slice())?;
+        Ok(y)
+    }
+
+    /// The fit ([`super::identify`]).
+    pub fn identify(&self, model: &Model) -> crate::support::error::Result<Identified> {
+        let [q, v, a] = self.checked(model)?;
+        super::identify(model, q, v, a, &self.tau, &self.g, &self.options)
+    }
 }

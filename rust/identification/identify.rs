@@ -7,7 +7,7 @@ use super::actuated::{closed_state, joint_force_regressor};
 use super::base_parameters::{base_parameters, reduce, Base, Reduced};
 use super::cells::{fit_cells, LinkCells};
 use super::regressor::{ncolumns, parameter_names, Extras};
-use super::solve::{ols, residual, Fit};
+use super::solve::{ols, residual};
 use crate::model::Model;
 use crate::support::error::{Error, Result};
 use crate::support::spatial::Vec3;
@@ -47,7 +47,14 @@ pub struct Identified {
     pub free: Vec<usize>,
     pub base: Base,
     pub base_names: Vec<String>,
-    pub fit: Fit,
+    /// The fit's values ([`super::Fit`]'s, as the binding hands them over): the base parameters,
+    /// their standard deviations, every parameter, the residual sum of squares and the
+    /// condition number.
+    pub beta: Vec<f64>,
+    pub std: Vec<f64>,
+    pub pi: Vec<f64>,
+    pub rss: f64,
+    pub condition: f64,
     /// Cell masses per [`LinkCells`] (cells only).
     pub masses: Vec<Vec<f64>>,
     /// `τ − Y π`, sample-major.
@@ -130,17 +137,16 @@ pub fn identify(
     }
     let resid = &y * nalgebra::DVector::from_column_slice(&pi);
     let residuals = tau.iter().zip(resid.iter()).map(|(t, r)| t - r).collect();
-    let fit = Fit {
-        pi,
-        rss: residual(&red, &fit_free.pi),
-        ..fit_free
-    };
     Ok(Identified {
         base_names: base.names(&free_names),
         names,
         free,
         base,
-        fit,
+        beta: fit_free.beta,
+        std: fit_free.std,
+        pi,
+        rss: residual(&red, &fit_free.pi),
+        condition: fit_free.condition,
         masses,
         residuals,
         structural_rank: structural.rank,

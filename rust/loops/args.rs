@@ -1,12 +1,12 @@
 //! The closed-loop calls' arguments as a binding hands them over ([`Arg`]): assembly's
-//! tolerance and iteration limit, the guesses projected onto the loops; and the residual at
+//! tolerance and iteration limit, a loop's ends, a coupling's arguments; and the residual at
 //! a configuration in one call.
 use super::LoopKinematics;
 use crate::effects::args::joint_body;
-use crate::model::args::{body, fixed_mask};
+use crate::model::args::body;
 use crate::model::Model;
-use crate::support::args::{int, opt, placement, vector, Arg};
-use crate::support::error::{check_finite, check_result, Error};
+use crate::support::args::{int, opt, placement, Arg};
+use crate::support::error::Error;
 use crate::support::spatial::Placement;
 
 /// Assembly's `tol` (positive, finite) and `max_iterations` (>= 1; `None`: 50).
@@ -28,29 +28,6 @@ pub fn residual_at(model: &Model, q: &[f64]) -> Vec<f64> {
     let mut r = vec![0.0; model.nconstraints()];
     super::residual(model, &kin, &mut r);
     r
-}
-
-/// `Model.assemble_velocity` (no `a_guess`: the speeds nearest `v`) or
-/// `Model.assemble_acceleration` (the accelerations nearest `a_guess` at the speeds `v`)
-/// that the loops allow at a checked `q`, the `fixed` ones kept.
-pub fn assembled<A: Arg>(
-    model: &Model,
-    (q, v): (&[f64], Vec<f64>),
-    a_guess: Option<&A>,
-    fixed: Option<&A>,
-) -> Result<Vec<f64>, A::Err> {
-    let (v, mut x, name) = match a_guess {
-        None => (None, v, "assemble_velocity"),
-        Some(a) => {
-            let a = vector(a, "a_guess", Some(model.nv))?;
-            check_finite("a_guess", &a)?;
-            (Some(v), a, "assemble_acceleration")
-        }
-    };
-    let mask = fixed_mask(model, fixed)?;
-    super::project_velocity_like(model, q, v.as_deref(), &mut x, &mask)?;
-    check_result(name, &x)?;
-    Ok(x)
 }
 
 /// `Model.add_loop`'s two ends: each one's body (`None`: the world) and the cut joint's

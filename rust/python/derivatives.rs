@@ -92,27 +92,21 @@ pub(crate) fn inverse_into_arrays<'py>(
     Ok((a, b, c))
 }
 
-/// A scene's derivatives, the matrices in C order.
-type Derivs = SceneDerivatives;
+/// The scene's derivatives, one record per direction: `Type("Name") key of the third
+/// matrix` (M⁻¹ or M) beside `dq`, `dv` and `numerical`.
+macro_rules! scene_derivatives {
+    ($($(#[$doc:meta])* $ty:ident($name:literal) $third:ident),*) => {$(
+        record!($(#[$doc])* $ty($name, SceneDerivatives) {
+            dq, dv, $third: |d: &SceneDerivatives, py| d.third.field(py), numerical,
+        });
+    )*};
+}
 
-record!(
+scene_derivatives! {
     /// `Scene.forward_dynamics_derivatives`: `dq` ∂q̈/∂q, `dv` ∂q̈/∂v, `dtau` M⁻¹, and
     /// `numerical`, the effects differentiated by central differences.
-    PyForwardDerivatives("SceneForwardDerivatives", Derivs) {
-        dq: |d: &Derivs, py| d.dq.field(py),
-        dv: |d: &Derivs, py| d.dv.field(py),
-        dtau: |d: &Derivs, py| d.third.field(py),
-        numerical,
-    }
-);
-
-record!(
+    PyForwardDerivatives("SceneForwardDerivatives") dtau,
     /// `Scene.inverse_dynamics_derivatives`: `dq` ∂τ/∂q, `dv` ∂τ/∂v, `da` M, and
     /// `numerical`, the effects differentiated by central differences.
-    PyInverseDerivatives("SceneInverseDerivatives", Derivs) {
-        dq: |d: &Derivs, py| d.dq.field(py),
-        dv: |d: &Derivs, py| d.dv.field(py),
-        da: |d: &Derivs, py| d.third.field(py),
-        numerical,
-    }
-);
+    PyInverseDerivatives("SceneInverseDerivatives") da
+}

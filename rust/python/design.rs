@@ -8,7 +8,7 @@ use super::convert::{mat3_to_array, to_array, to_array1};
 use super::model::PyModel;
 use super::record::record;
 use super::signals::detach_interruptible;
-use crate::design::results::{maps, pin_records, Maps, PinRecord};
+use crate::design::results::{pin_records, Maps, PinRecord};
 use crate::design::{self, Envelope, Problem, Relaxation, Relaxed};
 use crate::model::args::some_body;
 use crate::support::spatial::Vec3;
@@ -51,12 +51,10 @@ pub fn design_regressor(
     actuated: Vec<usize>,
 ) -> PyResult<PyMaps> {
     let model = model.model();
-    let g = crate::model::args::gravity(gravity)?;
-    let about = super::convert::vec3(about, "about")?;
-    let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
-    let (states, g) = ((count, [&qs[..], &vs, &accs]), (&g, &about));
-    let out = detach_interruptible(py, || maps(&model, states, g, &actuated))?;
-    Ok(PyMaps(out))
+    let call = design::MapsCall::from_args(&model, [q, v, a], gravity, about)?;
+    Ok(PyMaps(detach_interruptible(py, || {
+        call.maps(&model, &actuated)
+    })?))
 }
 
 /// The joints a body carries, in its own frame: `(point, axis)` pairs (axis zero for a

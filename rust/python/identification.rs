@@ -3,13 +3,11 @@
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::convert::{array, dmatrix_to_array, to_array1};
-use super::errors::check_result;
+use super::convert::{dmatrix_to_array, to_array1};
 use super::model::PyModel;
-use super::record::{record, Field};
+use super::record::record;
 use super::signals::detach_interruptible;
 use crate::identification::{self as ident, args};
-use crate::model::args::check_rows;
 
 /// `extras`: whether to add the (viscous, coulomb, armature, offset) columns.
 #[pyfunction]
@@ -24,15 +22,9 @@ pub fn identification_regressor<'py>(
     extras: (bool, bool, bool, bool),
     actuated: Vec<usize>,
 ) -> PyResult<Obj<'py>> {
-    let model = model.model();
-    let g = crate::model::args::gravity(gravity)?;
-    let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
-    let ex = args::extras(extras);
-    let y = detach_interruptible(py, || {
-        check_rows(&model, count, &qs, &vs, &accs)?;
-        ident::joint_force_regressor(&model, &qs, &vs, &accs, &g, &ex, &actuated)
-    })?;
-    check_result(py, "torque regressor", y.as_slice())?;
+    let (model, extras) = (model.model(), args::extras(extras));
+    let call = args::regressor_call(&model, [q, v, a], gravity)?;
+    let y = detach_interruptible(py, || call.regressor(&model, &extras, &actuated))?;
     dmatrix_to_array(py, &y)
 }
 
@@ -68,18 +60,9 @@ record!(
 record!(
     /// An identification's result (`crate::identification::Identified`).
     PyIdentified("Identified", ident::Identified) {
-        names,
-        free,
+        names, free,
         base: |r: &ident::Identified, py| Bound::new(py, PyBase(r.base.clone())).map(Bound::into_any),
-        base_names,
-        beta: |r: &ident::Identified, py| r.fit.beta.field(py),
-        std: |r: &ident::Identified, py| r.fit.std.field(py),
-        pi: |r: &ident::Identified, py| r.fit.pi.field(py),
-        rss: |r: &ident::Identified, py| r.fit.rss.field(py),
-        condition: |r: &ident::Identified, py| r.fit.condition.field(py),
-        structural_rank,
-        residuals,
-        masses,
+        base_names, beta, std, pi, rss, condition, structural_rank, residuals, masses,
     }
 );
 
@@ -96,15 +79,10 @@ pub fn identification_fit(
     options: Option<&Bound<'_, pyo3::types::PyDict>>,
 ) -> PyResult<PyIdentified> {
     let model = model.model();
-    let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
-    let (_, taus) = array(tau, "tau")?;
-    let empty = pyo3::types::PyDict::new(py);
-    let (opt, g) = args::fit_options(options.unwrap_or(&empty).as_any())?;
-    let out = detach_interruptible(py, || {
-        check_rows(&model, count, &qs, &vs, &accs)?;
-        ident::identify(&model, &qs, &vs, &accs, &taus, &g, &opt)
-    })?;
-    Ok(PyIdentified(out))
+    let call = args::fit_call(&model, [q, v, a, tau], options.map(|o| o.as_any()))?;
+    Ok(PyIdentified(detach_interruptible(py, || {
+        call.identify(&model)
+    })?))
 }
 
 #[pyfunction]

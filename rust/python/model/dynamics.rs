@@ -1,14 +1,17 @@
-//! `Model`'s dynamics: forward and inverse (either path), their derivatives, the mass
-//! matrix, bias forces and energies (`crate::dynamics::calls` at a pooled workspace).
+//! `Model`'s dynamics: forward and inverse (either path), their derivatives, and the
+//! one-state quantities (the mass matrix, bias forces, energies, the loops' residual,
+//! Jacobian and forces, the couplings' forces: `crate::dynamics::at_state`), each at a
+//! pooled workspace.
 use crate::python::Obj;
 use pyo3::prelude::*;
+use pyo3::IntoPyObjectExt;
 
 use super::{load_state, load_x, sized, PyModel};
+use crate::dynamics::at_state::{Given, Quantity};
 use crate::dynamics::calls::{worth_detaching, Method};
-use crate::dynamics::denoc;
 use crate::dynamics::shared::Direction;
-use crate::python::convert::{dmatrix_to_array, to_array1};
-use crate::python::errors::{check_result, invalid};
+use crate::python::convert::{to_array, to_array1};
+use crate::python::errors::{check_result, invalid, IntoPyResult};
 use crate::python::signals::detach_interruptible;
 use crate::support::error::all_finite;
 
@@ -72,54 +75,41 @@ impl PyModel {
 
     #[pyo3(signature = (q, method="recursive"))]
     fn mass_matrix<'py>(&self, py: Python<'py>, q: &Obj, method: &str) -> PyResult<Obj<'py>> {
-        let m = match Method::parse(method)? {
-            // O(n·depth): long chains are worth releasing the interpreter for.
-            Method::Recursive => self.with_workspace(|ws| {
-                load_state(ws, py, q, None)?;
-                Ok(sized(py, worth_detaching(ws.model()), || ws.mass_matrix())?)
-            })?,
-            Method::Denoc => {
-                let (model, qv) = self.state_only(q)?;
-                detach_interruptible(py, || denoc::mass_matrix(&model, &qv))?
+        let what = Quantity::MassMatrix(Method::parse(method)?);
+        self.at_state(py, what, Given::q(q))
+    }
+}
+
+/// The one-state quantities (`crate::dynamics::at_state`), one method each:
+/// `name(arguments) = quantity`, an optional argument followed by `= None`.
+macro_rules! at_state {
+    (@ty) => { &Obj };
+    (@ty $default:tt) => { Option<&Obj> };
+    (@given $arg:ident) => { Some($arg) };
+    (@given $arg:ident $default:tt) => { $arg };
+    ($($name:ident($($arg:ident $(= $default:tt)?),*) = $what:ident),* $(,)?) => {
+        #[pymethods]
+        impl PyModel {$(
+            #[pyo3(signature = ($($arg $(= $default)?),*))]
+            #[allow(clippy::needless_update)]
+            fn $name<'py>(&self, py: Python<'py>, $($arg: at_state!(@ty $($default)?)),*) -> PyResult<Obj<'py>> {
+                let given = Given { $($arg: at_state!(@given $arg $($default)?),)* ..Given::none() };
+                self.at_state(py, Quantity::$what, given)
             }
-        };
-        check_result(py, "mass_matrix", m.as_slice())?;
-        dmatrix_to_array(py, &m)
-    }
+        )*}
+    };
+}
 
-    #[pyo3(signature = (q, v, gravity=None))]
-    fn bias_forces<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        gravity: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let g = crate::model::args::gravity(gravity)?;
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, Some(v))?;
-            let out = ws.bias_forces(&g);
-            check_result(py, "bias_forces", out)?;
-            Ok(to_array1(py, out).into_any())
-        })
-    }
-
-    fn kinetic_energy(&self, py: Python<'_>, q: &Obj, v: &Obj) -> PyResult<f64> {
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, Some(v))?;
-            let e = ws.kinetic_energy();
-            check_result(py, "kinetic_energy", &[e]).map(|_| e)
-        })
-    }
-
-    fn potential_energy(&self, py: Python<'_>, q: &Obj, gravity: &Obj) -> PyResult<f64> {
-        let g = crate::model::args::gravity(Some(gravity))?;
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, None)?;
-            let e = ws.potential_energy(&g);
-            check_result(py, "potential_energy", &[e]).map(|_| e)
-        })
-    }
+at_state! {
+    bias_forces(q, v, gravity = None) = BiasForces,
+    kinetic_energy(q, v) = KineticEnergy,
+    potential_energy(q, gravity) = PotentialEnergy,
+    constraint_residual(q) = ConstraintResidual,
+    constraint_jacobian(q) = ConstraintJacobian,
+    constraint_forces(q, v, tau, gravity = None, external = None) = ConstraintForces,
+    coupling_forces(q, v, tau, gravity = None) = CouplingForces,
+    assemble_velocity(q, v_guess, fixed = None) = AssembledVelocity,
+    assemble_acceleration(q, v, a_guess, fixed = None) = AssembledAcceleration,
 }
 
 impl PyModel {
@@ -165,6 +155,27 @@ impl PyModel {
             let tau = ws.driving_forces(&out.to_vec(), actuated)?;
             check_result(py, direction.name(), &tau)?;
             Ok(to_array1(py, &tau).into_any())
+        })
+    }
+
+    /// A one-state quantity: its arguments read, computed (detached when long) and
+    /// converted, a number as a float.
+    fn at_state<'py>(
+        &self,
+        py: Python<'py>,
+        what: Quantity,
+        given: Given<'_, Obj<'_>>,
+    ) -> PyResult<Obj<'py>> {
+        self.with_workspace(|ws| {
+            let call = ws.load(what, given)?;
+            let (x, shape) = match call.long(ws) {
+                true => detach_interruptible(py, || ws.compute(&call))?,
+                false => ws.compute(&call).py(py)?,
+            };
+            match shape.is_empty() {
+                true => x[0].into_bound_py_any(py),
+                false => to_array(py, x, &shape),
+            }
         })
     }
 

@@ -63,17 +63,11 @@ impl PyModel {
         let poses = poses.into_iter().map(|p| (p.name, to_array1(py, &p.q)));
         poses.collect::<Vec<_>>().into_py_dict(py)
     }
-
-    #[getter]
-    fn repairs(&self) -> Vec<PyRepair> {
-        self.records()
-            .repairs
-            .iter()
-            .cloned()
-            .map(PyRepair)
-            .collect()
-    }
 }
+
+crate::python::getters!(PyModel |s, py| {
+    repairs -> Vec<PyRepair> = s.records().repairs.iter().cloned().map(PyRepair).collect(),
+});
 
 /// `warnings.warn(message, pointmass_dyn.errors.<category>)`.
 fn warn(py: Python<'_>, category: &str, message: &str) -> PyResult<()> {

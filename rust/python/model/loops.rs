@@ -1,13 +1,13 @@
-//! `Model`'s closed loops: cut joints, their residuals and Jacobian, assembly, and the cut
-//! joints' forces.
+//! `Model`'s closed loops: cut joints and assembly (their residual, Jacobian and forces
+//! are one-state quantities, in `dynamics.rs`).
 use crate::python::Obj;
 use pyo3::prelude::*;
 
-use super::{load_state, load_x, PyModel};
+use super::PyModel;
 use crate::loops;
 use crate::model::args::fixed_mask;
-use crate::python::convert::{dmatrix_to_array, to_array, to_array1};
-use crate::python::errors::{check_result, IntoPyResult};
+use crate::python::convert::to_array1;
+use crate::python::errors::IntoPyResult;
 use crate::python::joint::PyJoint;
 use crate::python::record::record;
 
@@ -37,35 +37,6 @@ impl PyModel {
             .py(py)
     }
 
-    #[getter]
-    fn nloops(&self) -> usize {
-        self.model().nloops()
-    }
-
-    #[getter]
-    fn nconstraints(&self) -> usize {
-        self.model().nconstraints()
-    }
-
-    #[getter]
-    fn loop_names(&self) -> Vec<String> {
-        self.model().loops.iter().map(|l| l.name.clone()).collect()
-    }
-
-    fn constraint_residual<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(q)?;
-        let r = loops::args::residual_at(&model, &q);
-        check_result(py, "constraint_residual", &r)?;
-        Ok(to_array1(py, &r).into_any())
-    }
-
-    fn constraint_jacobian<'py>(&self, py: Python<'py>, q: &Obj) -> PyResult<Obj<'py>> {
-        let (model, q) = self.state_only(q)?;
-        let j = crate::frames::constrained::constraint_jacobian(&model, &q);
-        check_result(py, "constraint_jacobian", j.as_slice())?;
-        dmatrix_to_array(py, &j)
-    }
-
     fn loop_solver_info(&self) -> PyLoopLayout {
         PyLoopLayout(loops::solver_layout(&self.model()))
     }
@@ -85,56 +56,13 @@ impl PyModel {
         let q = py.detach(|| loops::assemble(&model, &q, &mask, tol, max_iterations))?;
         Ok(to_array1(py, &q).into_any())
     }
-
-    #[pyo3(signature = (q, v_guess, fixed=None))]
-    fn assemble_velocity<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v_guess: &Obj,
-        fixed: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state_as((q, "q"), Some((v_guess, "v_guess")))?;
-        let v = loops::args::assembled::<Obj>(&model, (&q, v), None, fixed)?;
-        Ok(to_array1(py, &v).into_any())
-    }
-
-    #[pyo3(signature = (q, v, a_guess, fixed=None))]
-    fn assemble_acceleration<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        a_guess: &Obj,
-        fixed: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(q, v)?;
-        let a = loops::args::assembled(&model, (&q, v), Some(a_guess), fixed)?;
-        Ok(to_array1(py, &a).into_any())
-    }
-
-    #[pyo3(signature = (q, v, tau, gravity=None, external=None))]
-    fn constraint_forces<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        tau: &Obj,
-        gravity: Option<&Obj>,
-        external: Option<&Obj>,
-    ) -> PyResult<Obj<'py>> {
-        let g = crate::model::args::gravity(gravity)?;
-        self.with_workspace(|ws| {
-            load_state(ws, py, q, Some(v))?;
-            load_x(ws, py, tau, "tau")?;
-            let ext = crate::model::args::external(ws.model(), external)?;
-            let w = ws.constraint_forces(&g, ext.as_deref()).py(py)?;
-            let flat: Vec<f64> = w.iter().flatten().copied().collect();
-            check_result(py, "constraint_forces", &flat)?;
-            to_array(py, flat, &[w.len(), 6])
-        })
-    }
 }
+
+crate::python::getters!(PyModel |s, py| {
+    nloops -> usize = s.model().nloops(),
+    nconstraints -> usize = s.model().nconstraints(),
+    loop_names -> Vec<String> = s.model().loops.iter().map(|l| l.name.clone()).collect(),
+});
 
 record!(
     /// How the loop solver factors a model (`Model.loop_solver_info`).

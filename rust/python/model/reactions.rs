@@ -30,11 +30,8 @@ impl PyModel {
         gravity: Option<&Obj>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let model = self.model();
-        let g = crate::model::args::gravity(gravity)?;
-        let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
-        let pts = crate::model::args::body_points(&model, points)?;
-        let rows = (count, [&qs[..], &vs, &accs]);
-        stacked(py, || stacked::point_regressor(&model, rows, &pts, &g))
+        let call = stacked::Call::point_regressor(&model, [q, v, a], points, gravity)?;
+        stacked(py, || call.regressor(&model))
     }
 
     #[pyo3(signature = (q, v, a, about=None))]
@@ -47,10 +44,8 @@ impl PyModel {
         about: Option<&Obj>,
     ) -> PyResult<(Obj<'py>, Obj<'py>)> {
         let model = self.model();
-        let (count, qs, vs, accs) = crate::model::args::states(&model, q, v, a)?;
-        let about = crate::model::args::about(about)?;
-        let rows = (count, [&qs[..], &vs, &accs]);
-        let d = stacked(py, || stacked::shaking(&model, rows, &about))?.into_any();
+        let call = stacked::Call::shaking(&model, [q, v, a], about)?;
+        let d = stacked(py, || call.shaking_forces(&model))?.into_any();
         Ok((d.get_item("force")?, d.get_item("moment")?))
     }
 
