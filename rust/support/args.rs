@@ -111,6 +111,12 @@ pub fn threads<A: Arg>(x: Option<&A>) -> Result<usize, A::Err> {
 
 /// A 1-D array of length `len` (`None`: any length).
 pub fn vector<A: Arg>(x: &A, arg: &str, len: Option<usize>) -> Result<Vec<f64>, A::Err> {
+    if let Some(n) = len {
+        let mut v = vec![0.0; n];
+        if x.copy_plain(&mut v) {
+            return Ok(v);
+        }
+    }
     let (shape, data) = x.array(arg)?;
     if shape.len() != 1 || len.is_some_and(|n| n != shape[0]) {
         let want = match len {
