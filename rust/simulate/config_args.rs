@@ -331,7 +331,7 @@ pub fn progress_interval(x: Option<f64>) -> Result<Option<std::time::Duration>, 
 }
 
 /// The entries of a call's `**settings` mapping, keyword to value.
-fn mapped<A: Arg>(settings: Option<&A>) -> Vec<(String, A)> {
+pub fn mapped<A: Arg>(settings: Option<&A>) -> Vec<(String, A)> {
     let keys = settings.and_then(Arg::keys).unwrap_or_default();
     (keys.iter())
         .filter_map(|k| Some((k.text()?, settings?.get(&k.text()?)??)))
