@@ -2,7 +2,7 @@
 //! first) and the caller's own (`P`: a binding's callables, after them), with where each
 //! stood in the caller's list, so the trajectory's events come back in the caller's order.
 use super::StateEvent;
-use crate::support::args::{given, items, Arg};
+use crate::support::args::{given, Arg};
 use crate::support::error::Error;
 
 pub struct EventList<P> {
@@ -48,8 +48,11 @@ impl<P> EventList<P> {
             None => {}
             Some(e) if single(e) => push(0, e)?,
             Some(evs) => {
+                // Not a sequence at all: the binding's type error, as a Python loop's would be.
                 let expected = "an event callable, or a sequence of callables and StateEvents";
-                for (k, e) in items(evs, "events", expected)?.iter().enumerate() {
+                let list = evs.items().filter(|_| evs.text().is_none());
+                let list = list.ok_or_else(|| evs.wrong_type("events", expected))??;
+                for (k, e) in list.iter().enumerate() {
                     push(k, e)?;
                 }
             }
