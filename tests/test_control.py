@@ -7,6 +7,8 @@ Python PD controller on the exported model, the Go2's weight on its feet (standi
 
 from __future__ import annotations
 
+import inspect
+
 import numpy as np
 import pointmass_dyn as pmd
 import pytest
@@ -298,3 +300,15 @@ def test_a_refused_state_keeps_the_state_without_recording():
         assert np.array_equal(sim.q, q) and np.array_equal(sim.v, v)
         sim.step()
         assert sim.t == pytest.approx(4 * PERIOD)
+
+
+def test_core_simulator_reads_its_whole_call():
+    """`_Simulator(scene, **settings)` is read in the core: a keyword it does not take is
+    refused by name rather than ignored, and one not given takes `pmd.Simulator`'s default."""
+    with pytest.raises(TypeError, match="max_steps: expected a keyword of Simulator"):
+        pmd._core._Simulator(chain3(), max_steps=10)
+    with pytest.raises(InvalidInputError, match="control"):
+        pmd._core._Simulator(chain3(), control="position")
+    default = inspect.signature(pmd.Simulator).parameters["control_period"].default
+    assert pmd._core._Simulator(chain3()).control_period == default
+    assert pmd._core._Simulator(chain3(), t0=0.25).t == 0.25

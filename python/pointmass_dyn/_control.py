@@ -118,8 +118,9 @@ class Simulator:
     ):
         self.scene = scene
         self._core = _core._Simulator(
-            scene, method, rtol, atol, dt, control_period, control, record, disable,
-            first_step, max_step, t0, t_eval,
+            scene, method=method, rtol=rtol, atol=atol, dt=dt, control_period=control_period,
+            control=control, record=record, disable=disable, first_step=first_step,
+            max_step=max_step, t0=t0, t_eval=t_eval,
         )  # fmt: skip
         model = scene.model
         self._imu_names = list((imu or {}).keys())

@@ -939,22 +939,10 @@ class DenseSolution:
 class _Simulator:
     """The stepping simulator (``pointmass_dyn.Simulator`` wraps it; docs/control.md)."""
 
-    def __init__(
-        self,
-        scene: Scene,
-        method: str | None = None,
-        rtol: ArrayLike | None = None,
-        atol: ArrayLike | None = None,
-        dt: float | None = None,
-        control_period: float = 0.001,
-        control: Literal["torque", "pd"] = "torque",
-        record: bool = True,
-        disable: _Family | Sequence[_Family] | None = None,
-        first_step: float | None = None,
-        max_step: float | None = None,
-        t0: float = 0.0,
-        t_eval: ArrayLike | None = None,
-    ) -> None: ...
+    def __init__(self, scene: Scene, **settings: Any) -> None:
+        """``settings``: ``method``, ``rtol``, ``atol``, ``dt``, ``disable``, ``first_step``,
+        ``max_step``, ``t_eval``, ``control_period`` (0.001), ``control`` (``"torque"`` or
+        ``"pd"``), ``record`` (True), ``t0`` (0.0): those of ``pointmass_dyn.Simulator``."""
     t: float
     nq: int
     control_period: float

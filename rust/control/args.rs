@@ -3,31 +3,60 @@
 use super::sensors::imus_arg;
 use super::{ControlKind, OwnedSimulator, Simulator, Stepping};
 use crate::io::scene::Scene;
+use crate::simulate::config_args::mapped;
 use crate::simulate::RunConfig;
-use crate::support::args::{opt, vector, Arg};
+use crate::support::args::{flag, opt, vector, Arg};
 use crate::support::error::Result;
 
+/// The keywords of the stepping simulator: the run settings it takes, then its own.
+const KEYS: [&str; 12] = [
+    "method",
+    "rtol",
+    "atol",
+    "dt",
+    "disable",
+    "first_step",
+    "max_step",
+    "t_eval",
+    "control_period",
+    "control",
+    "record",
+    "t0",
+];
+
 impl OwnedSimulator {
-    /// [`OwnedSimulator::of_scene`] from the caller's arguments: the run settings `given`
-    /// (keyword, value; `None`: not given), the start, control period and whether to record,
-    /// the `control` ("torque" or "pd") and the recorded times `t_eval`.
-    pub fn from_args<A: Arg>(
+    /// [`OwnedSimulator::of_scene`] from the caller's keywords `settings` (a mapping; a
+    /// `None` value: not given): the run settings (the first 7 of [`KEYS`]), the recorded
+    /// times `t_eval`, the `control_period` (0.001 s), the `control` ("torque", the default,
+    /// or "pd"), whether to `record` (true) and the start `t0` (0). A keyword not in
+    /// [`KEYS`] is the binding's type error (as an unexpected keyword argument).
+    pub fn from_call<A: Arg>(
         scene: &Scene,
-        given: &[(&str, Option<&A>)],
-        (t0, period, record): (f64, f64, bool),
-        control: &A,
-        t_eval: Option<&A>,
+        settings: Option<&A>,
     ) -> std::result::Result<Self, A::Err> {
-        let kind = ControlKind::from_arg(control)?;
-        let call = RunConfig::from_call(None, given)?;
-        let t_eval = opt(t_eval, |te| vector(te, "t_eval", None))?;
-        let t_eval = t_eval.as_deref();
+        let given = mapped(settings);
+        if let Some((key, x)) = given.iter().find(|(k, _)| !KEYS.contains(&k.as_str())) {
+            return Err(x.wrong_type(key, &format!("a keyword of Simulator: {}", KEYS.join(", "))));
+        }
+        let get = |key: &str| {
+            given
+                .iter()
+                .find(|(k, x)| k == key && !x.absent())
+                .map(|(_, x)| x)
+        };
+        let run = given
+            .iter()
+            .filter(|(k, _)| KEYS[..7].contains(&k.as_str()));
+        let call = RunConfig::from_args(run.map(|(k, x)| (k.as_str(), x)))?;
+        let real = |key, default| opt(get(key), |x| x.real(key)).map(|x| x.unwrap_or(default));
+        let kind = opt(get("control"), ControlKind::from_arg)?;
+        let t_eval = opt(get("t_eval"), |te| vector(te, "t_eval", None))?;
         let at = Stepping {
-            t0,
-            period,
-            kind,
-            record,
-            t_eval,
+            t0: real("t0", 0.0)?,
+            period: real("control_period", 0.001)?,
+            kind: kind.unwrap_or(ControlKind::Torque),
+            record: opt(get("record"), |x| flag(x, "record"))?.unwrap_or(true),
+            t_eval: t_eval.as_deref(),
         };
         Ok(OwnedSimulator::of_scene(scene, call, at)?)
     }

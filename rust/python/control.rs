@@ -4,6 +4,7 @@ use crate::python::Obj;
 use std::sync::{Mutex, MutexGuard};
 
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use super::convert::{to_array, to_array1};
 use super::errors::IntoPyResult;
@@ -27,36 +28,12 @@ impl PySimulator {
 
 #[pymethods]
 impl PySimulator {
+    // The keywords: `control::args::KEYS`, all read in the core (`pointmass_dyn.Simulator`
+    // passes them).
     #[new]
-    #[pyo3(signature = (scene, method=None, rtol=None, atol=None, dt=None, control_period=0.001, control="torque", record=true, disable=None, first_step=None, max_step=None, t0=0.0, t_eval=None))]
-    fn new(
-        py: Python<'_>,
-        scene: PyRef<'_, PyScene>,
-        method: Option<&Obj>,
-        rtol: Option<&Obj>,
-        atol: Option<&Obj>,
-        dt: Option<&Obj>,
-        control_period: f64,
-        control: &str,
-        record: bool,
-        disable: Option<&Obj>,
-        first_step: Option<&Obj>,
-        max_step: Option<&Obj>,
-        t0: f64,
-        t_eval: Option<&Obj>,
-    ) -> PyResult<Self> {
-        let control = pyo3::types::PyString::new(py, control).into_any();
-        let given = [
-            ("method", method),
-            ("rtol", rtol),
-            ("atol", atol),
-            ("dt", dt),
-            ("disable", disable),
-            ("first_step", first_step),
-            ("max_step", max_step),
-        ];
-        let at = (t0, control_period, record);
-        let inner = OwnedSimulator::from_args(&scene.inner, &given, at, &control, t_eval)?;
+    #[pyo3(signature = (scene, **settings))]
+    fn new(scene: PyRef<'_, PyScene>, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        let inner = OwnedSimulator::from_call(&scene.inner, settings.map(|d| d.as_any()))?;
         Ok(PySimulator {
             inner: Mutex::new(inner),
         })

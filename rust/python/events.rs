@@ -10,8 +10,7 @@ use super::errors::invalid;
 use crate::integrator::{Event, EventDirection};
 use crate::simulate::config_args::EventFunction;
 use crate::simulate::StateEvent;
-use crate::simulate::{event_value, EventList};
-use crate::support::args::given;
+use crate::simulate::{event_value, CallerEvent, EventList};
 
 /// `q[index]` (or `v[index]`) crossing `value`; evaluated in Rust, no GIL needed.
 #[pyclass(
@@ -55,7 +54,7 @@ pub(super) struct PyEventSpec {
     counts: EventFunction,
 }
 
-pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventSpec> {
+fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventSpec> {
     if !e.is_callable() {
         let expected = "a callable or a pmd.StateEvent";
         return Err(invalid(py, &format!("events[{k}]"), expected, repr_of(e)));
@@ -67,21 +66,11 @@ pub(super) fn event_spec(py: Python<'_>, k: usize, e: &Obj) -> PyResult<PyEventS
 /// A run's events in the caller's order (the core's `EventList`): `None`, one event
 /// callable, or a sequence of callables and `StateEvent`s (evaluated in Rust).
 pub(super) fn event_list(py: Python<'_>, events: Option<&Obj>) -> PyResult<EventList<PyEventSpec>> {
-    let mut out = EventList::default();
-    match given(events) {
-        None => {}
-        Some(e) if e.is_callable() => out.push_other(event_spec(py, 0, e)?),
-        Some(evs) => {
-            for (k, e) in evs.try_iter()?.enumerate() {
-                let e = e?;
-                match e.cast::<PyStateEvent>() {
-                    Ok(se) => out.push_state(se.get().inner.clone()),
-                    Err(_) => out.push_other(event_spec(py, k, &e)?),
-                }
-            }
-        }
-    }
-    Ok(out)
+    let read = |k, e: &Obj| match e.cast::<PyStateEvent>() {
+        Ok(se) => Ok(CallerEvent::State(se.get().inner.clone())),
+        Err(_) => event_spec(py, k, e).map(CallerEvent::Other),
+    };
+    EventList::from_arg(events, |e| e.is_callable(), read)
 }
 
 /// The caller's event callables as a run's events, each calling Python (re-attaching to

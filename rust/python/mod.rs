@@ -52,7 +52,6 @@ mod effects;
 mod errors;
 mod events;
 mod identification;
-mod jac;
 mod joint;
 mod model;
 mod pickle;

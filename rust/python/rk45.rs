@@ -1,4 +1,7 @@
-//! `rk45` (`solve_ivp`): our integrators (RK45 by default) on a Python right-hand side.
+//! `rk45` (`solve_ivp`): our integrators (RK45 by default) on a Python right-hand side, and
+//! its Jacobian `jac` for the implicit methods (Radau, and `auto` once it switches) as SciPy
+//! takes it: a callable `jac(t, y) -> (n, n)` (an array-like or a SciPy sparse matrix), or a
+//! constant `(n, n)` array-like.
 use crate::python::Obj;
 use std::sync::Mutex;
 
@@ -13,11 +16,12 @@ use super::effects::repr_of;
 use super::errors::invalid;
 use super::errors::IntoPyResult;
 use super::events::{event_list, keep, python_events};
-use super::jac::{jac_arg, JacArg, WithJacobian};
 use super::record::Field;
 use super::run_config::{call_config, PyRunConfig};
-use crate::integrator::{self, FnSystem, OdeSystem};
+use crate::integrator::{self, OdeSystem};
 use crate::io::scene::Settings;
+use crate::simulate::config_args::ode_jacobian;
+use crate::support::args::{given, matrix};
 
 // Docstring: `_core.pyi`; `pointmass_dyn.rk45` (and `solve_ivp`) wrap it.
 #[pyfunction]
@@ -45,29 +49,29 @@ pub fn rk45(
         .resolve(&Settings::default(), &[], dim)
         .py(py)?;
     let (t_span, opts) = (run.t_span, run.opts);
-    let jac = jac_arg(py, jac, dim, opts.method, (t_span.0, &y0))?;
+    let jac = given(jac);
+    let constant = match jac {
+        None => None,
+        Some(j) => {
+            let first = || dense(j.call1((t_span.0, PyArray1::from_slice(py, &y0)))?);
+            ode_jacobian(&dense(j.clone())?, j.is_callable(), dim, opts.method, first)?
+        }
+    };
     let events = event_list(py, events)?.for_run(false, false)?;
-    // The first exception from `fun` or an event (Ctrl-C included) stops the run;
+    // The first exception from `fun`, `jac` or an event (Ctrl-C included) stops the run;
     // `pointmass_dyn.rk45` re-raises it with the solution computed so far attached.
     let failure: Mutex<Option<PyErr>> = Mutex::new(None);
     let mut evs = python_events(&events, None, &failure);
-    let sys = python_system(py, fun, dim, &failure);
-    // The method is the core's choice (`solve_with_jacobian`); a callable `jac` is Python's.
-    let sol = match jac {
-        JacArg::Callable(jac) => {
-            let with = WithJacobian {
-                inner: sys,
-                jac,
-                failure: &failure,
-            };
-            integrator::solve(with, t_span, &y0, &opts, &mut evs)
-        }
-        JacArg::Constant(m) => {
-            integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, Some(m))
-        }
-        JacArg::None => integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, None),
-    }
-    .map_err(crate::support::error::Error::from);
+    let jac = jac.filter(|j| j.is_callable());
+    let sys = PySystem {
+        fun,
+        jac,
+        dim,
+        failure: &failure,
+    };
+    // The method is the core's choice; a constant `jac` is the core's to keep.
+    let sol = integrator::solve_with_jacobian(sys, t_span, &y0, &opts, &mut evs, constant)
+        .map_err(crate::support::error::Error::from);
     let mut run = sol.py(py)?;
     drop(evs);
     let error = failure.into_inner().ok().flatten();
@@ -79,21 +83,46 @@ pub fn rk45(
     }))
 }
 
-/// `fun(t, y) -> array` as the system's right-hand side; its first exception is kept in
-/// `failure` (the run stops with its message).
-fn python_system<'a>(
-    py: Python<'a>,
-    fun: &'a Obj,
+/// `x`, or `x.toarray()` for anything that has one (a SciPy sparse matrix).
+fn dense<'py>(x: Obj<'py>) -> PyResult<Obj<'py>> {
+    match x.hasattr("toarray")? {
+        true => x.call_method0("toarray"),
+        false => Ok(x),
+    }
+}
+
+/// `fun(t, y) -> array` as the system's right-hand side, and a callable `jac(t, y)` as its
+/// Jacobian; the first exception of either is kept in `failure` (the run stops with its
+/// message).
+struct PySystem<'a> {
+    fun: &'a Obj<'a>,
+    jac: Option<&'a Obj<'a>>,
     dim: usize,
     failure: &'a Mutex<Option<PyErr>>,
-) -> impl OdeSystem + 'a {
-    let rhs = move |t: f64, y: &[f64], dydt: &mut [f64]| {
-        let out = fun.call1((t, PyArray1::from_slice(py, y)));
-        let out = out.and_then(|out| vector(&out, "fun(t, y)", Some(dim)));
+}
+
+impl OdeSystem for PySystem<'_> {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn rhs(&mut self, t: f64, y: &[f64], dydt: &mut [f64]) -> Result<(), String> {
+        let out = self.fun.call1((t, PyArray1::from_slice(self.fun.py(), y)));
+        let out = out.and_then(|out| vector(&out, "fun(t, y)", Some(self.dim)));
         out.map(|v| dydt.copy_from_slice(&v))
-            .map_err(|e| keep(failure, e))
-    };
-    FnSystem::new(dim, rhs)
+            .map_err(|e| keep(self.failure, e))
+    }
+    fn jacobian(&mut self, t: f64, y: &[f64], jac: &mut [f64]) -> Result<bool, String> {
+        let Some(f) = self.jac else { return Ok(false) };
+        let out = f
+            .call1((t, PyArray1::from_slice(f.py(), y)))
+            .and_then(dense);
+        let out = out.and_then(|m| matrix(&m, "jac(t, y)", self.dim, self.dim));
+        let filled = out.map(|m| {
+            jac.copy_from_slice(&m);
+            true
+        });
+        filled.map_err(|e| keep(self.failure, e))
+    }
 }
 
 /// An `rk45` run (without events, the event lists are `None`).

@@ -14,8 +14,8 @@ use super::scene::PyScene;
 use super::signals::{Watch, INTERVAL};
 use super::trajectory::PyRunResult;
 use crate::io::scene::Scene;
-use crate::simulate::batch::{name_stop, run_scenes, BatchArgs};
-use crate::simulate::{at_state, run_scene, Progress, Trajectory};
+use crate::simulate::batch::{batch_results, run_scenes, BatchArgs};
+use crate::simulate::{at_state, run_scene, Progress};
 
 // Docstrings of the run calls: `_core.pyi`; the public ones: `pointmass_dyn.simulate`,
 // `simulate_batch`, `effect_forces`, `energies`, which wrap them.
@@ -52,14 +52,12 @@ pub fn simulate_scene(
     let raised = take_callback_error()
         .or(failure.into_inner().ok().flatten())
         .or(watch.error.take());
-    let mut traj = match result {
-        Err(e) => return Err(raised.unwrap_or_else(|| super::errors::to_py(py, e))),
+    let traj = match result {
+        Err(e) => return Err(raised.unwrap_or_else(|| to_py(py, e))),
         Ok(traj) => traj,
     };
-    if let Some(e) = &raised {
-        traj.name_interruption(&interrupt_reason(py, e));
-    }
-    traj.order_events(&events.slots());
+    let stopped = raised.as_ref().map(|e| interrupt_reason(py, e));
+    let traj = traj.finished(stopped.as_deref(), &events.slots());
     Ok(PyRunResult::new(py, traj, raised))
 }
 
@@ -137,7 +135,7 @@ pub fn simulate_batch<'py>(
     let poll = |done, n| watch.poll(|py| report(py, &progress, (done, n)));
     take_callback_error();
     let run = || run_scenes(&scenes, &config, batch, &events.state, INTERVAL, poll);
-    let mut results = py.detach(run).py(py)?;
+    let results = py.detach(run).py(py)?;
     // Ctrl-C or a raising `progress` stopped the batch: the caller gets it back with every
     // run's result so far (finished, stopped midway, not started).
     let mut stopped = watch.error.take().or(take_callback_error());
@@ -145,14 +143,10 @@ pub fn simulate_batch<'py>(
     if stopped.is_none() {
         stopped = report(py, &progress, (results.len(), results.len())).err();
     }
-    if let Some(e) = &stopped {
-        name_stop(&mut results, &interrupt_reason(py, e));
-    }
-    // Only state events (`for_run`): the caller's order already.
-    let out = results.into_iter().map(|result| match result {
-        Ok(traj) => PyRunResult::new(py, traj, None),
-        // A run never started: `e` refused its input, or the batch stopped before it.
-        Err(e) => PyRunResult::new(py, Trajectory::refused(&e), Some(to_py(py, e))),
-    });
+    // Only state events (`for_run`): the caller's order already. A run never started comes
+    // with its error: its input refused, or the batch stopped before it.
+    let reason = stopped.as_ref().map(|e| interrupt_reason(py, e));
+    let out = batch_results(results, reason.as_deref()).into_iter();
+    let out = out.map(|(traj, e)| PyRunResult::new(py, traj, e.map(|e| to_py(py, e))));
     Ok((out.collect(), stopped.map(|e| e.into_value(py).into_any())))
 }

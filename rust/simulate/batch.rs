@@ -290,9 +290,26 @@ pub fn run_scenes(
         .map_err(|_| Error::Simulation("a batch thread panicked".into()))
 }
 
+/// The batch's runs as results, each with the error that kept it from starting (as
+/// [`Trajectory::refused`]); when something stopped the batch (`stopped`: what, as
+/// [`name_stop`] names it), each run it stopped says so.
+pub fn batch_results(
+    mut results: Vec<Result<Trajectory>>,
+    stopped: Option<&str>,
+) -> Vec<(Trajectory, Option<Error>)> {
+    if let Some(reason) = stopped {
+        name_stop(&mut results, reason);
+    }
+    let result = |r: Result<Trajectory>| match r {
+        Ok(traj) => (traj, None),
+        Err(e) => (Trajectory::refused(&e), Some(e)),
+    };
+    results.into_iter().map(result).collect()
+}
+
 /// Names what stopped a batch (`reason`: only its caller knows, e.g. Ctrl-C) in the runs it
 /// cut short: those interrupted midway, and those it never started.
-pub fn name_stop(results: &mut [Result<Trajectory>], reason: &str) {
+fn name_stop(results: &mut [Result<Trajectory>], reason: &str) {
     for result in results {
         match result {
             Ok(traj) => traj.name_interruption(reason),

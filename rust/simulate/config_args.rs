@@ -331,7 +331,7 @@ pub fn progress_interval(x: Option<f64>) -> Result<Option<std::time::Duration>, 
 }
 
 /// The entries of a call's `**settings` mapping, keyword to value.
-fn mapped<A: Arg>(settings: Option<&A>) -> Vec<(String, A)> {
+pub fn mapped<A: Arg>(settings: Option<&A>) -> Vec<(String, A)> {
     let keys = settings.and_then(Arg::keys).unwrap_or_default();
     (keys.iter())
         .filter_map(|k| Some((k.text()?, settings?.get(&k.text()?)??)))
@@ -345,4 +345,36 @@ fn call_args<'a, A: Arg>(
 ) -> impl Iterator<Item = (&'a str, &'a A)> {
     let named = named.iter().filter_map(|(k, v)| v.map(|v| (*k, v)));
     mapped.iter().map(|(k, v)| (k.as_str(), v)).chain(named)
+}
+
+/// SciPy's `jac` (given) for a system of `dim` components integrated with `method`: a
+/// callable (`callable`; `first()` calls it at the start) or a constant `(dim, dim)` matrix,
+/// returned. Only the implicit methods use a Jacobian, so one given to another method is
+/// refused rather than ignored. With `auto` a callable is called once at the start `(t0,
+/// y0)`: Radau calls it at once, but `auto` only if it switches, which would leave a wrong
+/// `jac` unnoticed until then.
+pub fn ode_jacobian<A: Arg>(
+    jac: &A,
+    callable: bool,
+    dim: usize,
+    method: Method,
+    first: impl FnOnce() -> Result<A, A::Err>,
+) -> Result<Option<Vec<f64>>, A::Err> {
+    if !matches!(method, Method::Radau | Method::Auto) {
+        let expected =
+            format!("None with method '{method}' (only 'Radau' and 'auto' use a Jacobian)");
+        return Err(Error::arg("jac", expected, "a Jacobian").into());
+    }
+    let finite = |m: &A, arg: &str, label: &str| -> Result<Vec<f64>, A::Err> {
+        let m = crate::support::args::matrix(m, arg, dim, dim)?;
+        crate::support::error::check_finite_matrix(label, &m, dim)?;
+        Ok(m)
+    };
+    if !callable {
+        return finite(jac, "jac", "jac").map(Some);
+    }
+    if method == Method::Auto {
+        finite(&first()?, "jac(t, y)", "jac(t0, y0)")?;
+    }
+    Ok(None)
 }

@@ -2,7 +2,7 @@
 //! first) and the caller's own (`P`: a binding's callables, after them), with where each
 //! stood in the caller's list, so the trajectory's events come back in the caller's order.
 use super::StateEvent;
-use crate::support::args::Arg;
+use crate::support::args::{given, Arg};
 use crate::support::error::Error;
 
 pub struct EventList<P> {
@@ -22,7 +22,44 @@ impl<P> Default for EventList<P> {
     }
 }
 
+/// One of the caller's events: a state event, or one of the binding's own (`P`).
+pub enum CallerEvent<P> {
+    State(StateEvent),
+    Other(P),
+}
+
 impl<P> EventList<P> {
+    /// The caller's `events`: none, one event of the binding's own (`single` says which), or
+    /// a sequence of events, each read by `read(k, events[k])`, in the caller's order.
+    pub fn from_arg<A: Arg>(
+        events: Option<&A>,
+        single: impl Fn(&A) -> bool,
+        mut read: impl FnMut(usize, &A) -> Result<CallerEvent<P>, A::Err>,
+    ) -> Result<Self, A::Err> {
+        let mut out = EventList::default();
+        let mut push = |k, e: &A| -> Result<(), A::Err> {
+            match read(k, e)? {
+                CallerEvent::State(s) => out.push_state(s),
+                CallerEvent::Other(p) => out.push_other(p),
+            }
+            Ok(())
+        };
+        match given(events) {
+            None => {}
+            Some(e) if single(e) => push(0, e)?,
+            Some(evs) => {
+                // Not a sequence at all: the binding's type error, as a Python loop's would be.
+                let expected = "an event callable, or a sequence of callables and StateEvents";
+                let list = evs.items().filter(|_| evs.text().is_none());
+                let list = list.ok_or_else(|| evs.wrong_type("events", expected))??;
+                for (k, e) in list.iter().enumerate() {
+                    push(k, e)?;
+                }
+            }
+        }
+        Ok(out)
+    }
+
     pub fn push_state(&mut self, e: StateEvent) {
         self.order.push((false, self.state.len()));
         self.state.push(e);

@@ -18,7 +18,7 @@ mod settings;
 
 pub use along::{along, Along, Asked, SceneAlong};
 pub use dynamics::{Dynamics, Progress};
-pub use event_list::{event_value, EventList};
+pub use event_list::{event_value, CallerEvent, EventList};
 pub use settings::{default_method, disabled, Resolved, RunConfig};
 
 use crate::effects::{Disabled, Effect};
@@ -138,6 +138,17 @@ impl Trajectory {
             t_reached: f64::NAN,
             success: false,
         }
+    }
+
+    /// The run as the caller gets it: its events in the caller's order (`slots`, the core's
+    /// `EventList::slots`), its interruption named by `stopped` (what stopped it, if the
+    /// caller knows).
+    pub fn finished(mut self, stopped: Option<&str>, slots: &[usize]) -> Self {
+        if let Some(reason) = stopped {
+            self.name_interruption(reason);
+        }
+        self.order_events(slots);
+        self
     }
 
     /// The events in the caller's order: `slots[k]` is the trajectory's slot of the
