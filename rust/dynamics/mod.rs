@@ -4,6 +4,7 @@
 //! threads call at once with its pool of per-call workspaces (`shared`).
 pub mod calls;
 pub mod denoc;
+pub mod kinematics_calls;
 pub mod link_shaking;
 pub mod reaction_args;
 pub mod reactions;
