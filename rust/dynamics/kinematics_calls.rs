@@ -1,14 +1,15 @@
 //! `Model`'s calls at a configuration beside the dynamics, as a binding asks for them: the
-//! bodies' placements and poses, the point masses, the DeNOC matrices and the explicit
-//! products built from them. Each reads the method's arguments ([`Arg`], in the order the
-//! method lists them, so the first bad one is the one named) with the caller's interpreter
-//! held, and returns the computation, which the binding runs detached from it (Ctrl-C
-//! heard) and converts; every result is checked finite.
+//! bodies' poses, the point masses, the DeNOC matrices and the explicit products built from
+//! them. Each reads the method's arguments ([`Arg`], in the order the method lists them, so
+//! the first bad one is the one named) with the caller's interpreter held, and returns the
+//! computation, which the binding runs (detached from the interpreter, Ctrl-C heard, where it
+//! can be long) and converts; every result is checked finite.
 use nalgebra::{DMatrix, DVector};
 
 use super::denoc::{self, Denoc, DenocRates};
+use super::shared::Workspace;
+use crate::kinematics::body_placements;
 use crate::kinematics::poses::{Keyed, Poses, Shaped};
-use crate::kinematics::{body_placements, LinkState};
 use crate::model::args::{configurations, gravity, state};
 use crate::model::Model;
 use crate::support::args::{points, Arg};
@@ -17,21 +18,24 @@ use crate::support::error::{check_result, Result};
 /// Arguments read, or the binding's error.
 type Read<T, A> = std::result::Result<T, <A as Arg>::Err>;
 
-/// `placements`: every body's world rotation (nbodies, 3, 3) and origin (nbodies, 3).
-pub fn placements<'m, A: Arg>(
-    model: &'m Model,
-    q: &A,
-) -> Read<impl FnOnce() -> Result<(Shaped, Shaped)> + Send + 'm, A> {
-    let (q, _) = state(model, (q, "q"), None)?;
-    Ok(move || {
-        let mut links = vec![LinkState::default(); model.links.len()];
-        let (rots, origins) = body_placements(model, &q, &mut links)?;
-        let nb = model.nbodies();
-        Ok((
-            Shaped::new(rots, &[nb, 3, 3]),
-            Shaped::new(origins, &[nb, 3]),
-        ))
-    })
+/// `placements` at the pooled workspace's loaded `q` (computed in its links): every body's
+/// world rotation (nbodies, 3, 3) and origin (nbodies, 3).
+pub fn placements(ws: &mut Workspace) -> Result<(Shaped, Shaped)> {
+    let model: &Model = &ws.version.model;
+    let (rots, origins) = body_placements(model, &ws.q, &mut ws.data.links)?;
+    let nb = model.nbodies();
+    Ok((
+        Shaped::new(rots, &[nb, 3, 3]),
+        Shaped::new(origins, &[nb, 3]),
+    ))
+}
+
+/// `velocity_to_qdot` at the pooled workspace's loaded `(q, v)`: `q̇` (nq,).
+pub fn velocity_to_qdot(ws: &mut Workspace) -> Result<Vec<f64>> {
+    let mut qd = vec![0.0; ws.model().nq];
+    ws.model().velocity_to_qdot(&ws.q, &ws.v, &mut qd);
+    check_result("velocity_to_qdot", &qd)?;
+    Ok(qd)
 }
 
 /// `body_poses`: everything a viewer draws, by name ([`Poses::keyed`]), at q (nq,) or (N, nq).
@@ -124,20 +128,5 @@ pub fn generalized_forces<'m, A: Arg>(
         let tau = denoc::generalized_forces(model, &q, &f)?;
         check_result("generalized_forces", tau.as_slice())?;
         Ok(tau)
-    })
-}
-
-/// `velocity_to_qdot`: `q̇` (nq,) from `v` at `q`.
-pub fn velocity_to_qdot<'m, A: Arg>(
-    model: &'m Model,
-    q: &A,
-    v: &A,
-) -> Read<impl FnOnce() -> Result<Vec<f64>> + Send + 'm, A> {
-    let (q, v) = state(model, (q, "q"), Some((v, "v")))?;
-    Ok(move || {
-        let mut qd = vec![0.0; model.nq];
-        model.velocity_to_qdot(&q, &v, &mut qd);
-        check_result("velocity_to_qdot", &qd)?;
-        Ok(qd)
     })
 }

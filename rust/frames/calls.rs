@@ -1,7 +1,7 @@
 //! `Model`'s frame calls as a binding asks for them: each reads the method's arguments
 //! ([`Arg`], in the order the method lists them, so the first bad one is the one named) with
 //! the caller's interpreter held, and returns the computation, which the binding runs
-//! detached from it (Ctrl-C heard) and converts. The batched `frame_jacobian`,
+//! (detached from the interpreter, Ctrl-C heard, where it can be long) and converts. The batched `frame_jacobian`,
 //! `center_of_mass` and `frame_placement` are not here: they compute in a pooled workspace.
 use nalgebra::DMatrix;
 

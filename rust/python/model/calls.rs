@@ -1,8 +1,11 @@
 //! `calls!`: `Model` methods declared from a table, each by its name, its parameters and
 //! the core call that reads them (`crate::frames::calls`, `crate::dynamics::kinematics_calls`).
 //! The core reads the arguments with the interpreter held and returns the computation; the
-//! method runs it detached (Ctrl-C heard) and converts the result: `=> (a, b)` each part
-//! through [`Field`] (a tuple of several), `=> PyRecord` as that record.
+//! method runs it, detached (Ctrl-C heard) when the entry ends in `detached` (a computation
+//! that can be long: many rows, the explicit n × n products), and converts the result:
+//! `=> (a, b)` each part through [`Field`] (a tuple of several), `=> PyRecord` as that record.
+//! `calls! { in_workspace ... }` declares short, often repeated calls that read `q` (and `v`)
+//! into the pooled workspace and compute there (`fn name(q, v) = core::call => (out);`).
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -17,7 +20,29 @@ macro_rules! calls {
         ($($crate::python::record::Field::field(&$o, $py)?),+).into_bound_py_any($py)
     }};
     (@out $py:ident, $x:ident, $record:ident) => { $record($x).into_bound_py_any($py) };
-    ($($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),*) = $call:path => $out:tt;)*) => {
+    (@run $py:ident, $run:ident) => { $crate::python::errors::IntoPyResult::py($run(), $py) };
+    (@run $py:ident, $run:ident, detached) => {
+        $crate::python::signals::detach_interruptible($py, $run)
+    };
+    (in_workspace
+        $($(#[$m:meta])* fn $name:ident($q:ident $(, $v:ident)?) = $call:path => $out:tt;)*) => {
+        #[pyo3::pymethods]
+        impl PyModel {
+            $($(#[$m])*
+            #[allow(unused_parens)]
+            fn $name<'py>(&self, py: Python<'py>, $q: &Obj $(, $v: &Obj)?) -> PyResult<Obj<'py>> {
+                use pyo3::IntoPyObjectExt;
+                self.with_workspace(|ws| {
+                    // q, and v when the method takes it, into the workspace's buffers.
+                    super::load_state(ws, py, $q, None $(.or(Some($v)))?)?;
+                    let x = $crate::python::errors::IntoPyResult::py($call(ws), py)?;
+                    $crate::python::model::calls::calls!(@out py, x, $out)
+                })
+            })*
+        }
+    };
+    ($($(#[$m:meta])* fn $name:ident($($a:ident: $t:ty),*) = $call:path => $out:tt $($d:ident)?;)*)
+    => {
         #[pyo3::pymethods]
         impl PyModel {
             $($(#[$m])*
@@ -26,7 +51,7 @@ macro_rules! calls {
                 use pyo3::IntoPyObjectExt;
                 let model = self.model();
                 let run = $call(&model, $($a),*)?;
-                let x = $crate::python::signals::detach_interruptible(py, run)?;
+                let x = $crate::python::model::calls::calls!(@run py, run $(, $d)?)?;
                 $crate::python::model::calls::calls!(@out py, x, $out)
             })*
         }

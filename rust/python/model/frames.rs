@@ -154,7 +154,7 @@ impl PyModel {
 calls! {
     #[pyo3(signature = (frame, point, q, v=None))]
     fn point_path(frame: &Obj, point: &Obj, q: &Obj, v: Option<&Obj>)
-        = calls::point_path => (pos, vel);
+        = calls::point_path => (pos, vel) detached;
     #[pyo3(signature = (frame, q, v, reference="local"))]
     fn frame_jacobian_dot(frame: &Obj, q: &Obj, v: &Obj, reference: &str)
         = calls::frame_jacobian_dot => (jd);

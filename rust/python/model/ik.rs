@@ -15,7 +15,7 @@ calls! {
     fn _inverse_kinematics(
         tasks: &Obj, q0: &Obj, limits: bool, tol: f64, max_iterations: usize, restarts: usize,
         seed: u64
-    ) = calls::inverse_kinematics => PyIkSolution;
+    ) = calls::inverse_kinematics => PyIkSolution detached;
 }
 
 record!(

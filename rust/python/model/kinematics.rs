@@ -10,15 +10,18 @@ use crate::dynamics::kinematics_calls as kin;
 use crate::python::record::{record, Field};
 
 calls! {
-    fn placements(q: &Obj) = kin::placements => (rotations, origins);
-    fn body_poses(q: &Obj) = kin::body_poses => (named);
+    fn body_poses(q: &Obj) = kin::body_poses => (named) detached;
     fn point_masses(q: &Obj) = kin::point_masses => (masses, points);
-    fn denoc(q: &Obj) = kin::matrices => PyDenoc;
-    fn denoc_rates(q: &Obj, v: &Obj) = kin::rates => PyDenocRates;
-    fn convective_matrix(q: &Obj, v: &Obj) = kin::convective_matrix => (c);
-    fn gravity_forces(q: &Obj, gravity: &Obj) = kin::gravity_forces => (tg);
-    fn generalized_forces(q: &Obj, forces: &Obj) = kin::generalized_forces => (tau);
-    fn velocity_to_qdot(q: &Obj, v: &Obj) = kin::velocity_to_qdot => (qd);
+    fn denoc(q: &Obj) = kin::matrices => PyDenoc detached;
+    fn denoc_rates(q: &Obj, v: &Obj) = kin::rates => PyDenocRates detached;
+    fn convective_matrix(q: &Obj, v: &Obj) = kin::convective_matrix => (c) detached;
+    fn gravity_forces(q: &Obj, gravity: &Obj) = kin::gravity_forces => (tg) detached;
+    fn generalized_forces(q: &Obj, forces: &Obj) = kin::generalized_forces => (tau) detached;
+}
+
+calls! { in_workspace
+    fn placements(q) = kin::placements => (rotations, origins);
+    fn velocity_to_qdot(q, v) = kin::velocity_to_qdot => (qd);
 }
 
 record!(
