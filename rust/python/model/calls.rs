@@ -3,7 +3,7 @@
 //! The core reads the arguments with the interpreter held and returns the computation; the
 //! method runs it, detached (Ctrl-C heard) when the entry ends in `detached` (a computation
 //! that can be long: many rows, the explicit n × n products), and converts the result:
-//! `=> (a, b)` each part through [`Field`] (a tuple of several), `=> PyRecord` as that record.
+//! `=> (a, b)` each part through [`Out`] (a tuple of several), `=> PyRecord` as that record.
 //! `calls! { in_workspace ... }` declares short, often repeated calls that read `q` (and `v`)
 //! into the pooled workspace and compute there (`fn name(q, v) = core::call => (out);`).
 use pyo3::prelude::*;
@@ -17,7 +17,7 @@ use crate::python::Obj;
 macro_rules! calls {
     (@out $py:ident, $x:ident, ($($o:ident),+)) => {{
         let ($($o),+) = $x;
-        ($($crate::python::record::Field::field(&$o, $py)?),+).into_bound_py_any($py)
+        ($($crate::python::model::calls::Out::out($o, $py)?),+).into_bound_py_any($py)
     }};
     (@out $py:ident, $x:ident, $record:ident) => { $record($x).into_bound_py_any($py) };
     (@run $py:ident, $run:ident) => { $crate::python::errors::IntoPyResult::py($run(), $py) };
@@ -59,29 +59,41 @@ macro_rules! calls {
 }
 pub(crate) use calls;
 
+/// A call's result as Python sees it, consumed: its arrays handed over, not copied.
+pub trait Out {
+    fn out<'py>(self, py: Python<'py>) -> PyResult<Obj<'py>>;
+}
+
+/// What a record's fields are ([`Field`]: numbers, vectors, matrices, index lists) as there.
+impl<T: Field> Out for T {
+    fn out<'py>(self, py: Python<'py>) -> PyResult<Obj<'py>> {
+        self.field(py)
+    }
+}
+
 /// An array with its shape.
-impl Field for Shaped {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        to_array(py, self.values.clone(), &self.shape)
+impl Out for Shaped {
+    fn out<'py>(self, py: Python<'py>) -> PyResult<Obj<'py>> {
+        to_array(py, self.values, &self.shape)
     }
 }
 
 /// An array, or None.
-impl Field for Option<Shaped> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
+impl Out for Option<Shaped> {
+    fn out<'py>(self, py: Python<'py>) -> PyResult<Obj<'py>> {
         match self {
-            Some(x) => x.field(py),
+            Some(x) => x.out(py),
             None => Ok(py.None().into_bound(py)),
         }
     }
 }
 
 /// Arrays by name: a dict of them.
-impl Field for Vec<Keyed> {
-    fn field<'py>(&self, py: Python<'py>) -> PyResult<Obj<'py>> {
+impl Out for Vec<Keyed> {
+    fn out<'py>(self, py: Python<'py>) -> PyResult<Obj<'py>> {
         let d = PyDict::new(py);
         for (key, x) in self {
-            d.set_item(key, x.field(py)?)?;
+            d.set_item(key, x.out(py)?)?;
         }
         Ok(d.into_any())
     }
