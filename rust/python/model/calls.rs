@@ -71,10 +71,13 @@ impl<T: Field> Out for T {
     }
 }
 
-/// An array with its shape.
+/// An array with its shape (a 1-D one made as it is: a reshape costs NumPy a new view).
 impl Out for Shaped {
     fn out<'py>(self, py: Python<'py>) -> PyResult<Obj<'py>> {
-        to_array(py, self.values, &self.shape)
+        match self.shape.len() {
+            1 => Ok(numpy::PyArray1::from_vec(py, self.values).into_any()),
+            _ => to_array(py, self.values, &self.shape),
+        }
     }
 }
 
