@@ -5,6 +5,7 @@
 pub mod at_state;
 pub mod calls;
 pub mod denoc;
+pub mod kinematics_calls;
 pub mod link_shaking;
 pub mod reaction_args;
 pub mod reactions;

@@ -15,6 +15,7 @@ use crate::support::spatial::Placement;
 pub mod args;
 pub mod batch;
 mod box_qp;
+pub mod calls;
 pub mod centroidal;
 pub mod com;
 pub mod constrained;

@@ -7,8 +7,21 @@ use crate::model::Model;
 use crate::support::error::Result;
 use crate::support::spatial::{Placement, Vec3};
 
-/// A buffer of [`Poses`] by name, with its shape.
-pub type Keyed = (&'static str, Vec<f64>, Vec<usize>);
+/// Values row-major with their shape: an array as a call hands it back to a binding.
+pub struct Shaped {
+    pub values: Vec<f64>,
+    pub shape: Vec<usize>,
+}
+
+impl Shaped {
+    pub fn new(values: Vec<f64>, shape: &[usize]) -> Shaped {
+        let shape = shape.to_vec();
+        Shaped { values, shape }
+    }
+}
+
+/// An array by name (a buffer of [`Poses`], a centroidal quantity).
+pub type Keyed = (&'static str, Shaped);
 
 /// Poses of `rows` configurations, row-major, world axes.
 pub struct Poses {
@@ -166,7 +179,7 @@ mod tests {
 impl Poses {
     /// Each buffer by name with its shape (a leading axis of `rows` when `stacked`), each
     /// checked finite (an error names it as `body_poses['name']`).
-    pub fn keyed(self, model: &Model, stacked: bool) -> Result<[Keyed; 8]> {
+    pub fn keyed(self, model: &Model, stacked: bool) -> Result<Vec<Keyed>> {
         let (nb, nl, nc) = (model.nbodies(), model.links.len(), model.loops.len());
         let lead = stacked.then_some(self.rows);
         let shape = |tail: &[usize]| lead.into_iter().chain(tail.iter().copied()).collect();
@@ -183,6 +196,7 @@ impl Poses {
         for (key, buf, _) in &keyed {
             crate::support::error::check_result(&format!("body_poses['{key}']"), buf)?;
         }
-        Ok(keyed)
+        let keyed = keyed.map(|(key, values, shape)| (key, Shaped { values, shape }));
+        Ok(keyed.into())
     }
 }

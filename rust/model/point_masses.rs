@@ -128,6 +128,17 @@ impl EquimomentalSet {
         }
     }
 
+    /// The rigid body these points represent (mass, COM and inertia rebuilt from them).
+    pub fn body(&self) -> Result<RigidBody> {
+        RigidBody::from_point_masses(&self.masses, &self.positions)
+    }
+
+    /// `PointMasses(masses=[...], half_sides=[...])`, as Python shows the set.
+    pub fn repr(&self) -> String {
+        let h = self.half_sides.as_slice();
+        format!("PointMasses(masses={:?}, half_sides={h:?})", self.masses)
+    }
+
     /// The 7×7 sign matrix of the system (rows: Σm, Σm·sx, Σm·sy, Σm·sz, Σm·sx·sy,
     /// Σm·sy·sz, Σm·sx·sz; columns: the seven vertices).
     pub fn sign_matrix() -> [[f64; 7]; 7] {

@@ -73,17 +73,11 @@ pub struct PyPointMasses {
 impl PyPointMasses {
     /// The rigid body these points represent (mass, COM, inertia rebuilt from them).
     fn to_body(&self, py: Python<'_>) -> PyResult<PyRigidBody> {
-        Ok(PyRigidBody {
-            inner: RigidBody::from_point_masses(&self.inner.masses, &self.inner.positions)
-                .py(py)?,
-        })
+        let inner = self.inner.body().py(py)?;
+        Ok(PyRigidBody { inner })
     }
     fn __repr__(&self) -> String {
-        format!(
-            "PointMasses(masses={:?}, half_sides={:?})",
-            self.inner.masses,
-            self.inner.half_sides.as_slice()
-        )
+        self.inner.repr()
     }
 }
 

@@ -4,15 +4,15 @@ use crate::python::Obj;
 use numpy::ndarray::IxDyn;
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyString};
+use pyo3::types::PyString;
 
+use super::calls::calls;
 use super::PyModel;
-use crate::frames::args::{frame_in, speeds};
 use crate::frames::rows::threads_for;
-use crate::frames::{constrained, evaluate, placement, FrameRef, ReferenceFrame};
+use crate::frames::{calls, evaluate, placement, FrameRef, ReferenceFrame};
 use crate::kinematics::LinkState;
 use crate::model::Model;
-use crate::python::convert::{plain_f64_block, to_array, to_array1, vec3};
+use crate::python::convert::plain_f64_block;
 use crate::python::errors::IntoPyResult;
 use crate::python::signals::detach_interruptible;
 use crate::support::error::Result;
@@ -118,27 +118,6 @@ impl PyModel {
         Ok((rot.into_any(), org.into_any()))
     }
 
-    #[pyo3(signature = (frame, point, q, v=None))]
-    fn point_path<'py>(
-        &self,
-        py: Python<'py>,
-        frame: &Obj,
-        point: &Obj,
-        q: &Obj,
-        v: Option<&Obj>,
-    ) -> PyResult<(Obj<'py>, Option<Obj<'py>>)> {
-        let model = self.model();
-        let f = frame_arg(&model, frame, "frame")?;
-        let p = vec3(point, "point")?;
-        let (rows, qs, _) = configurations(&model, q, "q")?;
-        let vs = crate::model::args::speeds(&model, v, rows)?;
-        let (pos, vel) = detach_interruptible(py, || {
-            placement::point_path_of(&model, &f, &p, &qs, vs.as_deref(), rows)
-        })?;
-        let vel = vel.map(|vel| to_array(py, vel, &[rows, 3])).transpose()?;
-        Ok((to_array(py, pos, &[rows, 3])?, vel))
-    }
-
     #[pyo3(signature = (frame, q, reference="local"))]
     fn frame_jacobian<'py>(
         &self,
@@ -153,41 +132,6 @@ impl PyModel {
             evaluate::frame_jacobians(m, links, &f, rf, qs, rows, stacked, out)
         })?;
         Ok(j.into_any())
-    }
-
-    #[pyo3(signature = (frame, q, v, reference="local"))]
-    fn frame_jacobian_dot<'py>(
-        &self,
-        py: Python<'py>,
-        frame: &Obj,
-        q: &Obj,
-        v: &Obj,
-        reference: &str,
-    ) -> PyResult<Obj<'py>> {
-        let (model, q, v) = self.state(q, v)?;
-        let (f, rf) = frame_in(&model, frame, reference)?;
-        let out = evaluate::frame_jacobian_dot(&model, &f, rf, &q, &v)?;
-        to_array(py, out, &[6, model.nv])
-    }
-
-    #[pyo3(signature = (frame, q, v, a=None, reference="local"))]
-    fn frame_motion<'py>(
-        &self,
-        py: Python<'py>,
-        frame: &Obj,
-        q: &Obj,
-        v: &Obj,
-        a: Option<&Obj>,
-        reference: &str,
-    ) -> PyResult<(Obj<'py>, Obj<'py>)> {
-        let (model, q, v) = self.state(q, v)?;
-        let a = speeds(&model, a, "a")?;
-        let (f, rf) = frame_in(&model, frame, reference)?;
-        let (vel, acc) = evaluate::frame_motion(&model, &f, rf, &q, &v, a.as_deref())?;
-        Ok((
-            to_array1(py, vel.as_slice()).into_any(),
-            to_array1(py, acc.as_slice()).into_any(),
-        ))
     }
 
     #[pyo3(signature = (q, jacobian=false))]
@@ -205,54 +149,22 @@ impl PyModel {
         })?;
         Ok((c, j).into_pyobject(py)?.into_any())
     }
+}
 
+calls! {
+    #[pyo3(signature = (frame, point, q, v=None))]
+    fn point_path(frame: &Obj, point: &Obj, q: &Obj, v: Option<&Obj>)
+        = calls::point_path => (pos, vel) detached;
+    #[pyo3(signature = (frame, q, v, reference="local"))]
+    fn frame_jacobian_dot(frame: &Obj, q: &Obj, v: &Obj, reference: &str)
+        = calls::frame_jacobian_dot => (jd);
+    #[pyo3(signature = (frame, q, v, a=None, reference="local"))]
+    fn frame_motion(frame: &Obj, q: &Obj, v: &Obj, a: Option<&Obj>, reference: &str)
+        = calls::frame_motion => (vel, acc);
     #[pyo3(signature = (q, v, a=None))]
-    fn center_of_mass_motion<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: &Obj,
-        a: Option<&Obj>,
-    ) -> PyResult<(Obj<'py>, Obj<'py>, Obj<'py>)> {
-        let (model, q, v) = self.state(q, v)?;
-        let a = speeds(&model, a, "a")?;
-        let motion = evaluate::com_motion(&model, &q, &v, a.as_deref())?;
-        let [c, vc, ac] = motion.map(|x| to_array1(py, x.as_slice()).into_any());
-        Ok((c, vc, ac))
-    }
-
+    fn center_of_mass_motion(q: &Obj, v: &Obj, a: Option<&Obj>) = calls::com_motion => (c, vc, ac);
     #[pyo3(signature = (q, v=None, a=None))]
-    fn centroidal<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        v: Option<&Obj>,
-        a: Option<&Obj>,
-    ) -> PyResult<Bound<'py, PyDict>> {
-        let (model, q) = self.state_only(q)?;
-        let v = speeds(&model, v, "v")?;
-        let a = speeds(&model, a, "a")?;
-        let (ag, rest) = evaluate::centroidal(&model, &q, v.as_deref(), a.as_deref())?;
-        let d = PyDict::new(py);
-        d.set_item("A", to_array(py, ag, &[6, model.nv])?)?;
-        if let Some((h, hdot)) = rest {
-            d.set_item("momentum", to_array1(py, h.as_slice()))?;
-            d.set_item("rate", to_array1(py, hdot.as_slice()))?;
-        }
-        Ok(d)
-    }
-
+    fn centroidal(q: &Obj, v: Option<&Obj>, a: Option<&Obj>) = calls::centroidal => (named);
     #[pyo3(signature = (q, independent=None))]
-    fn independent_map<'py>(
-        &self,
-        py: Python<'py>,
-        q: &Obj,
-        independent: Option<&Obj>,
-    ) -> PyResult<(Obj<'py>, Vec<usize>)> {
-        let (model, q) = self.state_only(q)?;
-        let idx = independent.filter(|x| !x.is_none());
-        let idx = idx.map(|x| crate::model::args::speeds_named(&model, x, "independent"));
-        let (g, idx) = constrained::independent_map_for(&model, &q, idx.transpose()?)?;
-        Ok((crate::python::convert::dmatrix_to_array(py, &g)?, idx))
-    }
+    fn independent_map(q: &Obj, independent: Option<&Obj>) = calls::independent_map => (g, idx);
 }

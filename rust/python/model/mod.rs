@@ -14,6 +14,7 @@ use crate::model::Model;
 use crate::python::convert::vector_into;
 use crate::python::errors::IntoPyResult;
 
+mod calls;
 mod couplings;
 mod dynamics;
 mod frames;
