@@ -113,15 +113,4 @@ impl PyModel {
         let (q, v) = crate::model::args::state(&model, q, v)?;
         Ok((model, q, v))
     }
-
-    /// [`PyModel::state_as`] of `q`.
-    fn state_only(&self, q: &Obj) -> PyResult<(Arc<Model>, Vec<f64>)> {
-        let (model, q, _) = self.state_as((q, "q"), None)?;
-        Ok((model, q))
-    }
-
-    /// [`PyModel::state_as`] of `q` and `v`.
-    fn state(&self, q: &Obj, v: &Obj) -> PyResult<State> {
-        self.state_as((q, "q"), Some((v, "v")))
-    }
 }
