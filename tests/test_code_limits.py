@@ -13,8 +13,6 @@ import re
 import sys
 from pathlib import Path
 
-import pytest
-
 ROOT = Path(__file__).resolve().parents[1]
 RUST = ROOT / "rust"
 PYTHON = ROOT / "python" / "pointmass_dyn"
