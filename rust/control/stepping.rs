@@ -37,6 +37,9 @@ impl ControlKind {
     }
 }
 
+// One engine per Simulator, held for its whole life: Radau's larger size costs nothing, a box
+// would cost an indirection per step.
+#[allow(clippy::large_enum_variant)]
 enum Engine<'a> {
     Rk45(Stepper<Dynamics<'a>>),
     Dop853(Dop853<Dynamics<'a>>),

@@ -380,7 +380,7 @@ pub fn effect_list<A: EffectArg>(effects: &A) -> R<Vec<Effect>, A> {
     let items = items(effects, "effects", expected)?;
     let one = |(k, e): (usize, &A)| {
         let expected = "an effect such as pmd.Gravity(...)";
-        let bad = || Error::arg(&format!("effects[{k}]"), expected, e.shown()).into();
+        let bad = || Error::arg(format!("effects[{k}]"), expected, e.shown()).into();
         e.effect().ok_or_else(bad)
     };
     items.iter().enumerate().map(one).collect()

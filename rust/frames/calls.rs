@@ -15,6 +15,12 @@ use crate::support::error::Result;
 
 /// Arguments read, or the binding's error.
 type Read<T, A> = std::result::Result<T, <A as Arg>::Err>;
+/// A frame's velocity and acceleration, (6,) each.
+type Motion = (Vec<f64>, Vec<f64>);
+/// The centre of mass's position, velocity and acceleration, (3,) each.
+type ComMotion = (Vec<f64>, Vec<f64>, Vec<f64>);
+/// `G` (nv, k) and the independent speeds' v indices.
+type IndependentMap = (DMatrix<f64>, Vec<usize>);
 
 /// `point_path`: the world positions (N, 3) of `point` (in `frame`) at q (N, nq) and, with
 /// `v` (N, nv), its velocities (N, 3).
@@ -61,7 +67,7 @@ pub fn frame_motion<'m, A: Arg>(
     v: &A,
     a: Option<&A>,
     reference: &str,
-) -> Read<impl FnOnce() -> Result<(Vec<f64>, Vec<f64>)> + Send + 'm, A> {
+) -> Read<impl FnOnce() -> Result<Motion> + Send + 'm, A> {
     let (q, v) = state(model, (q, "q"), Some((v, "v")))?;
     let a = speeds(model, a, "a")?;
     let (f, rf) = frame_in(model, frame_arg, reference)?;
@@ -77,7 +83,7 @@ pub fn com_motion<'m, A: Arg>(
     q: &A,
     v: &A,
     a: Option<&A>,
-) -> Read<impl FnOnce() -> Result<(Vec<f64>, Vec<f64>, Vec<f64>)> + Send + 'm, A> {
+) -> Read<impl FnOnce() -> Result<ComMotion> + Send + 'm, A> {
     let (q, v) = state(model, (q, "q"), Some((v, "v")))?;
     let a = speeds(model, a, "a")?;
     Ok(move || {
@@ -115,7 +121,7 @@ pub fn independent_map<'m, A: Arg>(
     model: &'m Model,
     q: &A,
     independent: Option<&A>,
-) -> Read<impl FnOnce() -> Result<(DMatrix<f64>, Vec<usize>)> + Send + 'm, A> {
+) -> Read<impl FnOnce() -> Result<IndependentMap> + Send + 'm, A> {
     let (q, _) = state(model, (q, "q"), None)?;
     let idx = given(independent).map(|x| speeds_named(model, x, "independent"));
     let idx = idx.transpose()?;

@@ -534,7 +534,7 @@ fn outward_link(
 #[inline(always)]
 fn about_origin(y: &BodyInertia, s: &Vec3) -> BodyInertia {
     let (h, m) = (&y.first_moment, y.mass);
-    let diag = 2.0 * h.dot(&s) + s.norm_squared() * m;
+    let diag = 2.0 * h.dot(s) + s.norm_squared() * m;
     let mut rot = y.rotational;
     for a in 0..3 {
         rot[(a, a)] += diag;
