@@ -312,3 +312,75 @@ def test_core_simulator_reads_its_whole_call():
     default = inspect.signature(pmd.Simulator).parameters["control_period"].default
     assert pmd._core._Simulator(chain3()).control_period == default
     assert pmd._core._Simulator(chain3(), t0=0.25).t == 0.25
+
+
+_CHILD_PRELUDE = """
+import threading, time
+import numpy as np, pointmass_dyn as pmd
+
+base = pmd.load_scene("chain7")
+
+def simulator(torque):
+    effects = [pmd.Gravity((0, 0, -9.81)), pmd.TorqueFunction(torque)]
+    scene = pmd.Scene(base.model, q0=base.q0, effects=effects)
+    return pmd.Simulator(scene, method="RK4", dt=0.002, control_period=0.002)
+"""
+
+
+def _in_child(script, what):
+    """``script`` after the prelude in a child process, its stdout; a hang (a deadlock) fails
+    the test by the timeout instead of hanging the suite."""
+    import subprocess
+    import sys
+
+    try:
+        out = subprocess.run([sys.executable, "-c", _CHILD_PRELUDE + script], capture_output=True,
+                             text=True, timeout=60)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"deadlock: {what} hung")
+    assert out.returncode == 0, out.stderr[-2000:]
+    return out.stdout
+
+
+def test_a_simulator_read_from_another_thread_while_it_steps_waits_instead_of_deadlocking():
+    """One thread steps a Simulator whose torque law is Python; another reads its time
+    meanwhile. The reader must wait for the step without holding the interpreter (which the
+    torque law needs), not block the stepping thread forever."""
+    script = """
+def torque(t, q, v):
+    time.sleep(1e-4)  # releases the interpreter, as a slow law would
+    return np.zeros_like(v)
+
+sim = simulator(torque)
+read = []
+threads = [threading.Thread(target=lambda: [sim.step() for _ in range(20)]),
+           threading.Thread(target=lambda: [read.append(sim.t) for _ in range(200)])]
+for th in threads:
+    th.start()
+for th in threads:
+    th.join()
+assert len(read) == 200 and read == sorted(read), read
+print(sim.t)
+"""
+    out = _in_child(script, "two threads sharing a Simulator with a Python torque law")
+    assert float(out) == pytest.approx(20 * 0.002)
+
+
+def test_a_simulators_own_callback_using_it_is_refused_naming_the_reentry():
+    """A torque law that reads the Simulator it is driving (same thread, mid-step) gets a clear
+    error instead of a hang."""
+    script = """
+holder = {}
+
+def torque(t, q, v):
+    holder["sim"].t  # the simulator being stepped
+    return np.zeros_like(v)
+
+sim = holder["sim"] = simulator(torque)
+try:
+    sim.step()
+except pmd.errors.InvalidInputError as e:
+    print(type(e).__name__, e)
+"""
+    out = _in_child(script, "a torque law reading its own Simulator")
+    assert out.startswith("InvalidInputError Simulator:") and "already in a call" in out, out

@@ -23,7 +23,7 @@ macro_rules! getters {
         #[pyo3::pymethods]
         #[allow(unused_variables)]
         impl $ty {
-            $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { self.$read(|$x| $get) })*
+            $($(#[$m])* #[getter] fn $name<'py>(&self, $py: pyo3::Python<'py>) -> $t { self.$read($py, |$x| $get) })*
         }
     };
     ($ty:ident |$x:ident| { $($(#[$m:meta])* $name:ident: $e:expr;)* }) => {

@@ -55,7 +55,7 @@ impl PyRunConfig {
 }
 
 impl PyRunConfig {
-    fn read<R>(&self, f: impl FnOnce(&RunConfig) -> R) -> R {
+    fn read<R>(&self, _py: Python<'_>, f: impl FnOnce(&RunConfig) -> R) -> R {
         f(&self.inner)
     }
 }
