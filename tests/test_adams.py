@@ -137,3 +137,22 @@ def test_adams_on_a_loop_scene_by_name():
     (err, nfev), (err_dop, nfev_dop) = runs["Adams"], runs["DOP853"]
     assert err < max(10 * err_dop, 1e-8), runs
     assert nfev < nfev_dop, runs
+
+
+def test_auto_with_the_pi_controller_at_tight_tolerance_starts_on_dop853():
+    """`auto` keeps a PI controller asked for on its explicit part; Adams has SciPy's
+    controller only, so at rtol ≤ 1e-8 `auto` with `controller="pi"` starts on DOP853 (it
+    used to refuse the call naming Adams, a method the caller never asked for): the run is
+    DOP853's with the PI controller up to where a stiffness test would stop it, here never,
+    and within its tolerance of a tight reference."""
+    scene = pmd.load_scene("pendulum_spatial")
+    opts = dict(rtol=1e-9, atol=1e-9, controller="pi")
+    r = pmd.simulate(scene, (0.0, 2.0), method="auto", **opts)
+    d = pmd.simulate(scene, (0.0, 2.0), method="DOP853", stiffness="stop", **opts)
+    assert r.success and r.switched_to is None
+    assert (r.nfev, r.n_accepted) == (d.nfev, d.n_accepted)
+    ref = pmd.simulate(scene, (0.0, 2.0), method="DOP853", rtol=1e-13, atol=1e-13)
+    assert rel_err(r.q[-1], ref.q[-1]) < 1e-6
+    sol = pmd.solve_ivp(krogh, (0.0, 12.0), [0.0, 1.0, 1.0], method="auto", **opts)
+    dop = pmd.solve_ivp(krogh, (0.0, 12.0), [0.0, 1.0, 1.0], method="DOP853", **opts)
+    assert sol.success and sol.nfev == dop.nfev

@@ -200,13 +200,15 @@ pub const AUTO_DOP853_RTOL: f64 = 1e-8;
 pub const AUTO_ADAMS_RTOL: f64 = 1e-8;
 
 /// The explicit method `auto` starts on for these tolerances (`manifolds`: the system
-/// filters its error estimates).
+/// filters its error estimates). A PI controller asked for rules Adams out (it has SciPy's
+/// controller only; `auto` keeps the PI controller on its explicit part): DOP853 instead.
 fn auto_first(opts: &SolverOptions, manifolds: bool) -> Method {
     let all_below = |limit: f64| match &opts.rtol {
         super::Tol::Scalar(r) => *r <= limit,
         super::Tol::PerComponent(v) => v.iter().all(|r| *r <= limit),
     };
-    if all_below(AUTO_ADAMS_RTOL) && !manifolds {
+    let standard = opts.controller == super::Controller::Standard;
+    if all_below(AUTO_ADAMS_RTOL) && !manifolds && standard {
         Method::Adams
     } else if all_below(AUTO_DOP853_RTOL) {
         Method::Dop853
