@@ -413,13 +413,16 @@ impl OdeSystem for Dynamics<'_> {
                 return Err(INTERRUPTED.into());
             }
         }
-        let mut stage = std::mem::take(&mut self.stage);
-        let y = match self.loops.as_mut() {
-            Some(solver) => project_stage(self.model, solver, y, &mut stage),
-            None => y,
-        };
-        let (q, v) = y.split_at(nq);
         let (qdot, vdot) = dydt.split_at_mut(nq);
+        let Some(solver) = self.loops.as_mut() else {
+            // A tree: the state as it is (no stage buffer to take and give back).
+            let (q, v) = y.split_at(nq);
+            self.model.velocity_to_qdot(q, v, qdot);
+            return self.accelerations(t, q, v, vdot);
+        };
+        let mut stage = std::mem::take(&mut self.stage);
+        let y = project_stage(self.model, solver, y, &mut stage);
+        let (q, v) = y.split_at(nq);
         self.model.velocity_to_qdot(q, v, qdot);
         let r = self.accelerations(t, q, v, vdot);
         self.stage = stage;
