@@ -37,6 +37,7 @@ scene.
 
 from __future__ import annotations
 
+import operator
 import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, fields
@@ -421,17 +422,19 @@ def simulate(
     return result
 
 
-#: The fields a :class:`SimulationResult` takes from the core's ``RunResult`` (the others,
-#: ``scene``, ``model``, ``contact``, ``saturated``, are the caller's).
+#: The fields from the core's ``RunResult``, the caller's, and each field's place in both: a
+#: result built positionally from one C call's getters (~2 us less than 30 keywords).
 _RUN_FIELDS = tuple(f.name for f in fields(SimulationResult) if hasattr(_core.RunResult, f.name))
+_CALLER_FIELDS = ("scene", "extras", "contact", "saturated", "model")
+_RUN_VALUES = operator.attrgetter(*_RUN_FIELDS)
+_BOTH = _RUN_FIELDS + _CALLER_FIELDS
+_IN_ORDER = operator.itemgetter(*(_BOTH.index(f.name) for f in fields(SimulationResult)))
 
 
 def result_from_run(run: Any, scene: str = "", model: Any = None) -> SimulationResult:
     """The :class:`SimulationResult` of a core ``RunResult`` (``simulate``, a batch's run,
     a ``Simulator``'s trajectory)."""
-    return SimulationResult(
-        scene=scene, model=model, **{name: getattr(run, name) for name in _RUN_FIELDS}
-    )
+    return SimulationResult(*_IN_ORDER(_RUN_VALUES(run) + (scene, {}, None, None, model)))
 
 
 def singular_passage_warning(result: SimulationResult) -> SingularPassageWarning:

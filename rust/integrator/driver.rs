@@ -588,6 +588,10 @@ impl EventTracker {
     }
 }
 
+/// Samples an output of every step reserves before the first (bounded by [`RESERVE_BYTES`]).
+const RESERVE_SAMPLES: usize = 64;
+const RESERVE_BYTES: usize = 16 * 1024;
+
 /// The output times and states (every step's, or the `t_eval` values') and the dense output.
 struct Output<'o> {
     t_eval: Option<&'o [f64]>,
@@ -625,6 +629,11 @@ impl<'o> Output<'o> {
                 out.t.try_reserve_exact(te.len()).map_err(|_| too_large())?;
             }
             None => {
+                // Room for the first steps at once rather than by doubling from one sample
+                // (ten reallocations in a run of 24 steps); a few kB at most.
+                let samples = (RESERVE_BYTES / (8 * (dim + 1))).clamp(1, RESERVE_SAMPLES);
+                out.t.reserve_exact(samples);
+                out.y.reserve_exact(samples * dim);
                 out.t.push(t0);
                 out.y.extend_from_slice(y0);
             }

@@ -639,12 +639,17 @@ impl Model {
     }
 
     /// `q̇` from `v` for the whole model.
+    #[inline]
     pub fn velocity_to_qdot(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
         // Only quaternion joints have nq ≠ nv; without them q̇ = v (the RHS's common case).
         if self.nq == self.nv {
             qdot.copy_from_slice(v);
-            return;
+        } else {
+            self.velocity_to_qdot_by_joint(q, v, qdot);
         }
+    }
+
+    fn velocity_to_qdot_by_joint(&self, q: &[f64], v: &[f64], qdot: &mut [f64]) {
         for l in &self.links {
             let (iq, iv) = (l.q_index, l.v_index);
             l.joint.velocity_to_qdot(
@@ -656,7 +661,16 @@ impl Model {
     }
 
     /// Normalises the quaternions of `q` in place.
+    #[inline]
     pub fn normalize(&self, q: &mut [f64]) {
+        // Only quaternion joints have nq > nv (every other joint has nq = nv): with nq = nv
+        // there is nothing to normalise, and this runs at every accepted step.
+        if self.nq != self.nv {
+            self.normalize_quaternions(q);
+        }
+    }
+
+    fn normalize_quaternions(&self, q: &mut [f64]) {
         for l in &self.links {
             if let Some(at) = l.joint.quaternion_at() {
                 let s = &mut q[l.q_index + at..l.q_index + at + 4];

@@ -13,7 +13,7 @@ use numpy::{
 };
 use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyString};
+use pyo3::types::{PyBool, PyByteArray, PyBytes, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 use super::errors::py_error;
 use crate::support::args::{shortened, Arg, Int, NotReal};
@@ -205,8 +205,36 @@ pub fn toml_to_py<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Obj<'py>> {
     })
 }
 
+/// A Python float, or an int within int64 (NumPy's dtype for it) as NumPy converts int64
+/// to float64; `None` for anything else (a bool, a NumPy scalar: NumPy reads those).
+fn plain_number(obj: &Obj) -> Option<f64> {
+    if let Ok(f) = obj.cast_exact::<PyFloat>() {
+        return Some(f.value());
+    }
+    let n = obj.cast_exact::<PyInt>().ok()?.extract::<i64>().ok()?;
+    Some(n as f64)
+}
+
 /// Any array-like of real numbers: its shape and its entries in C order.
 pub fn array(obj: &Obj, arg: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    // The common forms read directly, as `np.asarray` would give them (a number: a 0-d
+    // float64 or int64; a float64 vector: itself): NumPy's import and `asarray` cost a
+    // short run more than its evaluations (`rtol=1e-4`, `t_eval=np.linspace(...)`).
+    if let Some(x) = plain_number(obj) {
+        return Ok((Vec::new(), vec![x]));
+    }
+    if let Some((s, shape)) = plain_f64_nd::<1>(obj) {
+        return Ok((shape.to_vec(), s.to_vec()));
+    }
+    // A tuple or list of such numbers (`t_span=(0, 1)`): float64 in NumPy too.
+    let items: Option<Vec<f64>> = match (obj.cast_exact::<PyTuple>(), obj.cast_exact::<PyList>()) {
+        (Ok(t), _) => t.iter().map(|x| plain_number(&x)).collect(),
+        (_, Ok(l)) => l.iter().map(|x| plain_number(&x)).collect(),
+        _ => None,
+    };
+    if let Some(v) = items {
+        return Ok((vec![v.len()], v));
+    }
     let py = obj.py();
     let obj = &real_array(obj, arg)?;
     let arr = obj

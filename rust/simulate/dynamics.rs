@@ -289,6 +289,19 @@ impl<'a> Dynamics<'a> {
         v: &[f64],
         a: &mut [f64],
     ) -> std::result::Result<(), String> {
+        self.accelerations_inline(t, q, v, a)
+    }
+
+    /// [`Dynamics::accelerations`], inlined into the right-hand side (one call frame less
+    /// per evaluation).
+    #[inline(always)]
+    fn accelerations_inline(
+        &mut self,
+        t: f64,
+        q: &[f64],
+        v: &[f64],
+        a: &mut [f64],
+    ) -> std::result::Result<(), String> {
         let cx = context(self.model, t, q, v);
         let ext = if self.effects.apply(&cx, &mut self.tau, &mut self.wrenches)? {
             Some(self.wrenches.as_slice())
@@ -413,13 +426,16 @@ impl OdeSystem for Dynamics<'_> {
                 return Err(INTERRUPTED.into());
             }
         }
-        let mut stage = std::mem::take(&mut self.stage);
-        let y = match self.loops.as_mut() {
-            Some(solver) => project_stage(self.model, solver, y, &mut stage),
-            None => y,
-        };
-        let (q, v) = y.split_at(nq);
         let (qdot, vdot) = dydt.split_at_mut(nq);
+        let Some(solver) = self.loops.as_mut() else {
+            // A tree: the state as it is (no stage buffer to take and give back).
+            let (q, v) = y.split_at(nq);
+            self.model.velocity_to_qdot(q, v, qdot);
+            return self.accelerations_inline(t, q, v, vdot);
+        };
+        let mut stage = std::mem::take(&mut self.stage);
+        let y = project_stage(self.model, solver, y, &mut stage);
+        let (q, v) = y.split_at(nq);
         self.model.velocity_to_qdot(q, v, qdot);
         let r = self.accelerations(t, q, v, vdot);
         self.stage = stage;
@@ -530,8 +546,19 @@ impl OdeSystem for Dynamics<'_> {
 
     /// Unit quaternions (the right-hand side normalises them too, so FSAL stays valid);
     /// with loops, the state back onto the position and velocity manifolds.
+    #[inline]
     fn project(&mut self, y: &mut [f64]) -> std::result::Result<bool, String> {
         self.model.normalize(&mut y[..self.model.nq]);
+        match self.loops.is_some() {
+            true => self.project_loops(y),
+            false => Ok(false),
+        }
+    }
+}
+
+impl Dynamics<'_> {
+    /// [`OdeSystem::project`] with loops: onto the manifolds, and the passage tests.
+    fn project_loops(&mut self, y: &mut [f64]) -> std::result::Result<bool, String> {
         let Some(solver) = self.loops.as_mut() else {
             return Ok(false);
         };

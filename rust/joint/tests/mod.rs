@@ -78,3 +78,27 @@ fn free_flyer_rates_are_body_velocities() {
         .map(|k| Joint::FreeFlyer.v_is_angular(k))
         .eq([false, false, false, true, true, true]));
 }
+
+/// `Model::normalize` and `Model::velocity_to_qdot` skip their per-joint walk when nq = nv:
+/// that holds only if the quaternion joints are exactly those with nq ≠ nv (nq > nv).
+#[test]
+fn only_quaternion_joints_have_more_coordinates_than_speeds() {
+    let joints = [
+        Joint::Revolute { axis: Vec3::z() },
+        Joint::Prismatic { axis: Vec3::x() },
+        Joint::SphericalZYZ,
+        Joint::Spherical,
+        Joint::Fixed,
+        Joint::FreeFlyer,
+        Joint::ToyCardan,
+    ];
+    for j in joints {
+        // A new joint type fails to compile here until it is listed above.
+        match j {
+            Joint::Revolute { .. } | Joint::Prismatic { .. } | Joint::SphericalZYZ => {}
+            Joint::Spherical | Joint::Fixed | Joint::FreeFlyer | Joint::ToyCardan => {}
+        }
+        assert!(j.nq() >= j.nv(), "{j:?}");
+        assert_eq!(j.quaternion_at().is_some(), j.nq() != j.nv(), "{j:?}");
+    }
+}
