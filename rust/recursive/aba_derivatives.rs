@@ -7,6 +7,7 @@
 //! [`super::aba_derivatives_small`]). docs/derivatives.md.
 use super::rnea_derivatives::inverse_dynamics_derivatives;
 use super::workspace::{Data, DerivativeData};
+use crate::linalg::spd::product;
 use crate::linalg::spd_inverse;
 use crate::model::Model;
 use crate::support::error::{Error, Result};
@@ -15,8 +16,9 @@ use crate::support::spatial::Vec3;
 /// `∂q̈/∂q`, `∂q̈/∂v`, `M⁻¹` into `dd.ddq_dq`, `dd.ddq_dv`, `dd.minv` (and `q̈` into
 /// `dd.qdd`, `∂τ/∂q`, `∂τ/∂v`, `M` as [`inverse_dynamics_derivatives`] leaves them). `tau`
 /// holds the joint forces (gravity `g`, no external wrenches). Errors where the forward
-/// dynamics does (a ZYZ singularity, a singular mass matrix). Every buffer is in `dd`; the only
-/// allocations are the packing buffers matrixmultiply takes inside each of the three products.
+/// dynamics does (a ZYZ singularity, a singular mass matrix). Every buffer is in `dd`; from
+/// [`crate::linalg::spd::SMALL`] dofs on, faer's products keep their packing buffers per thread
+/// (allocated on a thread's first call); below, by rows, nalgebra's `gemm` allocates its own.
 #[allow(clippy::too_many_arguments)]
 pub fn forward_dynamics_derivatives(
     model: &Model,
@@ -55,9 +57,9 @@ pub fn forward_dynamics_derivatives(
     dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
     spd_inverse(
         &mut dd.minv,
-        &mut dd.ddq_dq,
         &mut dd.ddq_dv,
         &mut dd.inv_diag,
+        &mut dd.spd_scratch,
     )
     .map_err(singular)?;
     let n = model.nv;
@@ -75,11 +77,11 @@ pub fn forward_dynamics_derivatives(
     }
     if dd.row_major {
         // Stored transposed: (−M⁻¹ D)ᵀ = −Dᵀ M⁻¹ (M⁻¹ symmetric).
-        dd.ddq_dq.gemm(-1.0, &dd.dtau_dq, &dd.minv, 0.0);
-        dd.ddq_dv.gemm(-1.0, &dd.dtau_dv, &dd.minv, 0.0);
+        product(&mut dd.ddq_dq, -1.0, &dd.dtau_dq, &dd.minv);
+        product(&mut dd.ddq_dv, -1.0, &dd.dtau_dv, &dd.minv);
     } else {
-        dd.ddq_dq.gemm(-1.0, &dd.minv, &dd.dtau_dq, 0.0);
-        dd.ddq_dv.gemm(-1.0, &dd.minv, &dd.dtau_dv, 0.0);
+        product(&mut dd.ddq_dq, -1.0, &dd.minv, &dd.dtau_dq);
+        product(&mut dd.ddq_dv, -1.0, &dd.minv, &dd.dtau_dv);
     }
     Ok(())
 }

@@ -181,6 +181,8 @@ pub struct DerivativeData {
     pub row_major: bool,
     /// Scratch: the reciprocal pivots of the mass matrix's Cholesky factor.
     pub inv_diag: Vec<f64>,
+    /// Scratch of the mass matrix's inverse from [`crate::linalg::spd::SMALL`] dofs on.
+    pub spd_scratch: crate::linalg::spd::SpdScratch,
 }
 
 impl DerivativeData {
@@ -199,6 +201,7 @@ impl DerivativeData {
             tau: vec![0.0; nv],
             qdd: vec![0.0; nv],
             inv_diag: vec![0.0; nv],
+            spd_scratch: crate::linalg::spd::SpdScratch::new(nv),
             dof_parent: vec![0; nv],
             last_dof: vec![0; n],
             above_count: vec![0; n],

@@ -10,6 +10,7 @@
 use super::dynamics::Dynamics;
 use crate::effects::derivatives::EffectDerivatives;
 use crate::effects::Context;
+use crate::linalg::spd::product;
 use crate::linalg::spd_inverse;
 use crate::loops::{self, LoopDerivativeWork};
 use crate::recursive::{self, tangent, DerivativeData};
@@ -128,17 +129,17 @@ impl Dynamics<'_> {
         dd.minv.as_mut_slice().copy_from_slice(dd.mass.as_slice());
         spd_inverse(
             &mut dd.minv,
-            &mut dd.ddq_dq,
             &mut dd.ddq_dv,
             &mut dd.inv_diag,
+            &mut dd.spd_scratch,
         )
         .map_err(|k| {
             Error::Singular(format!(
                 "the mass matrix is not positive definite (pivot {k})"
             ))
         })?;
-        dd.ddq_dq.gemm(1.0, &dd.minv, &w.rq, 0.0);
-        dd.ddq_dv.gemm(1.0, &dd.minv, &w.rv, 0.0);
+        product(&mut dd.ddq_dq, 1.0, &dd.minv, &w.rq);
+        product(&mut dd.ddq_dv, 1.0, &dd.minv, &w.rv);
         Ok(())
     }
 
