@@ -57,56 +57,18 @@ pub(crate) fn first<const S: usize>(row: &[f64; 5]) -> [f64; S] {
     std::array::from_fn(|j| row[j])
 }
 
-/// `out[i] = y[i] + (k_0[i] c_0 + k_1[i] c_1 + …) h` with `k_j = k[j n..(j + 1) n]`: per
-/// entry, the products summed left to right with every coefficient (zeros too), which is
-/// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the
-/// CPU has it (`crate::support::cpu`; same arithmetic, packed lanes).
-///
-/// `multiversion!` written out with the baseline copy out of line: the dispatch is then
-/// small enough to inline at every stage (it was a call of its own at four of RK45's six,
-/// ~20 instructions each per step).
-#[inline(always)]
-pub(crate) fn combine<const S: usize>(
-    out: &mut [f64],
-    y: &[f64],
-    k: &[f64],
-    coef: &[f64; S],
-    h: f64,
-) {
-    #[cfg(target_arch = "x86_64")]
-    if crate::support::cpu::has_avx2() {
-        // SAFETY: the CPU supports AVX2, checked just above.
-        return unsafe { combine_avx2(out, y, k, coef, h) };
-    }
-    combine_baseline(out, y, k, coef, h)
-}
-
-/// [`combine`] compiled for AVX2.
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn combine_avx2<const S: usize>(
-    out: &mut [f64],
-    y: &[f64],
-    k: &[f64],
-    coef: &[f64; S],
-    h: f64,
-) {
-    combine_body(out, y, k, coef, h)
-}
-
-/// [`combine`] for the baseline instruction set.
-#[inline(never)]
-fn combine_baseline<const S: usize>(
-    out: &mut [f64],
-    y: &[f64],
-    k: &[f64],
-    coef: &[f64; S],
-    h: f64,
-) {
-    combine_body(out, y, k, coef, h)
+crate::support::cpu::multiversion! {
+    /// `out[i] = y[i] + (k_0[i] c_0 + k_1[i] c_1 + …) h` with `k_j = k[j n..(j + 1) n]`: per
+    /// entry, the products summed left to right with every coefficient (zeros too), which is
+    /// how `np.dot(K[:s].T, c)` rounds, so steps stay SciPy's. Runs its AVX2 copy where the
+    /// CPU has it (`crate::support::cpu`; same arithmetic, packed lanes).
+    pub(crate) fn combine / combine_avx2 / combine_baseline [const S: usize] (
+        out: &mut [f64],
+        y: &[f64],
+        k: &[f64],
+        coef: &[f64; S],
+        h: f64,
+    ) => combine_body
 }
 
 #[inline(always)]

@@ -59,8 +59,11 @@ macro_rules! multiversion {
             $body($($arg),*)
         }
 
-        /// The body for the baseline instruction set, whatever the CPU.
+        /// The body for the baseline instruction set, whatever the CPU. Out of line, so that
+        /// the dispatcher stays small enough to inline where it is called (with the body
+        /// inlined into it, a small kernel's dispatcher stayed a call of its own).
         #[allow(clippy::too_many_arguments, dead_code)]
+        #[inline(never)]
         pub(crate) fn $base<$($gen)*>($($arg: $ty),*) $(-> $ret)? {
             $body($($arg),*)
         }
