@@ -116,8 +116,15 @@ class Browser:
                 raise TimeoutError(f"{url}: '{until}' still false after {timeout} s")
             time.sleep(0.05)
 
+    def settle(self) -> None:
+        """Waits for two animation frames: a page that has just drawn (its title says so)
+        may not have had that frame composited yet on a loaded machine."""
+        self.call("Runtime.evaluate", awaitPromise=True, expression=(
+            "new Promise(r => requestAnimationFrame(() => requestAnimationFrame(() => r(1))))"))
+
     def screenshot(self) -> bytes:
-        """PNG of the page's viewport."""
+        """PNG of the page's viewport, once the last frame drawn is on screen."""
+        self.settle()
         return base64.b64decode(self.call("Page.captureScreenshot", format="png")["data"])
 
     def close(self) -> None:
