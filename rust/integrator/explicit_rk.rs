@@ -17,6 +17,7 @@ use super::common::{
 };
 use super::dense::Interpolant;
 use super::method::{Counts, Integrator, Method};
+use super::spectral::SpectralCheck;
 use super::{
     Controller, InputError, OdeSystem, SolverOptions, Status, StepOutcome, Stiffness,
     StiffnessCheck, NONSTIFF_RESET, STIFF_STEPS,
@@ -157,6 +158,8 @@ pub struct ExplicitRk<S: OdeSystem, T: Tableau> {
     h_ref: f64,
     /// With loops: a step accepted at the first try since the last round of jumps.
     jump_armed: bool,
+    /// `StiffnessCheck::Stop` without manifolds: the Jacobian's test ([`SpectralCheck`]).
+    spectral: Option<SpectralCheck>,
     /// First detection.
     stiffness: Option<Stiffness>,
     /// `StiffnessCheck::Stop`: the failure the next `step` returns.
@@ -207,6 +210,8 @@ impl<S: OdeSystem, T: Tableau> ExplicitRk<S, T> {
             h_lambda: f64::NAN,
             h_ref: 0.0,
             jump_armed: false,
+            spectral: (opts.stiffness == StiffnessCheck::Stop && !filters)
+                .then(|| SpectralCheck::new(dim)),
             stiffness: None,
             stop: None,
             _tableau: std::marker::PhantomData,
@@ -417,6 +422,36 @@ impl<S: OdeSystem, T: Tableau> ExplicitRk<S, T> {
         }
     }
 
+    /// The Jacobian's stiffness test ([`SpectralCheck`]) on the state just accepted after a
+    /// step of size `h`, when due and nothing was detected yet.
+    fn spectral_test(&mut self, h: f64) {
+        let Some(check) = self.spectral.as_mut() else {
+            return;
+        };
+        if self.stiffness.is_some() || !SpectralCheck::due(self.st.n_accepted) {
+            return;
+        }
+        let st = &mut self.st;
+        let (t, y, f) = (st.t, &st.y, &st.f);
+        let limit = super::spectral::FRACTION * T::STIFF_H_LAMBDA;
+        let fired = check.check(
+            &mut self.sys,
+            &mut st.nfev,
+            t,
+            y,
+            f,
+            &self.y_stage,
+            h,
+            limit,
+        );
+        if let Some(h_lambda) = fired {
+            self.stiffness = Some(Stiffness { t, h_lambda, h });
+            if self.stop.is_none() {
+                self.stop = Some(Status::Stiff { t, h_lambda, h });
+            }
+        }
+    }
+
     /// The accepted `y_new` becomes the state (projected first), `f` its derivative.
     fn accept(&mut self, t_new: f64, h_abs: f64) -> Result<StepOutcome, Status> {
         let t = self.st.t;
@@ -552,7 +587,9 @@ impl<S: OdeSystem, T: Tableau> Stepping for ExplicitRk<S, T> {
         if self.stiffness_check != StiffnessCheck::Off {
             self.stiffness_test(t_new - t, t_new);
         }
-        self.accept(t_new, h_abs)
+        let outcome = self.accept(t_new, h_abs)?;
+        self.spectral_test((t_new - t).abs());
+        Ok(outcome)
     }
 
     fn take_pending(&mut self) -> Option<Status> {

@@ -42,6 +42,7 @@ mod num_jac;
 mod radau;
 mod radau_tableau;
 mod resume;
+mod spectral;
 mod stepper;
 mod vern9;
 mod vern9_tableau;
