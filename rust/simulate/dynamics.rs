@@ -23,6 +23,9 @@ pub struct Dynamics<'a> {
     calls: usize,
     /// The time of the evaluation at which the progress hook asked to stop.
     pub(super) interrupted_at: Option<f64>,
+    /// With loops: the last failure of an evaluation at a stage too far off the manifolds to
+    /// project (`t`, message), handed to the integrator as a non-finite trial to reject.
+    pub(super) off_manifold_failure: Option<(f64, String)>,
     probe: Option<Probe>,
     /// The closed-loop solver (models with loops only).
     pub loops: Option<Box<LoopSolver>>,
@@ -192,6 +195,7 @@ impl<'a> Dynamics<'a> {
             progress: None,
             calls: 0,
             interrupted_at: None,
+            off_manifold_failure: None,
             probe: None,
             loops: model
                 .has_constraints()
@@ -376,22 +380,22 @@ impl Dynamics<'_> {
 /// level set near a singular position bends sharply (accelerations ~ `δ/σ³` at a distance
 /// `σ` from it, docs/mechanisms.md §3), while on the manifold the motion goes straight
 /// through. A stage too far off for the projection (a rejected trial step) is evaluated
-/// where it is; the error estimate rejects it.
+/// where it is (the second value false); the error estimate rejects it.
 fn project_stage<'y>(
     model: &Model,
     solver: &mut LoopSolver,
     y: &'y [f64],
     stage: &'y mut [f64],
-) -> &'y [f64] {
+) -> (&'y [f64], bool) {
     stage.copy_from_slice(y);
     // The integrator's drift figure counts accepted steps only.
     let drift = solver.max_drift;
     let projected = loops::project_state(model, solver, stage).is_ok();
     solver.max_drift = drift;
     if projected && stage.iter().all(|x| x.is_finite()) {
-        stage
+        (stage, true)
     } else {
-        y
+        (y, false)
     }
 }
 
@@ -434,12 +438,23 @@ impl OdeSystem for Dynamics<'_> {
             return self.accelerations_inline(t, q, v, vdot);
         };
         let mut stage = std::mem::take(&mut self.stage);
-        let y = project_stage(self.model, solver, y, &mut stage);
+        let (y, on_manifold) = project_stage(self.model, solver, y, &mut stage);
         let (q, v) = y.split_at(nq);
         self.model.velocity_to_qdot(q, v, qdot);
         let r = self.accelerations(t, q, v, vdot);
         self.stage = stage;
-        r
+        match r {
+            // A stage the projection could not reach may fail where a shorter step's would
+            // not (an overconstrained linkage off its manifold loses its mobility: Bricard at
+            // rtol 1e-2 read as locked): a non-finite derivative, so the integrator rejects
+            // the trial and shrinks the step; `simulate` names this failure if it persists.
+            Err(message) if !on_manifold && self.interrupted_at.is_none() => {
+                self.off_manifold_failure = Some((t, message));
+                vdot.fill(f64::NAN);
+                Ok(())
+            }
+            r => r,
+        }
     }
 
     /// `y = [q; v]`: the semi-implicit Euler updates `v`, then `q` with the new `v`.

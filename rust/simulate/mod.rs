@@ -271,6 +271,17 @@ pub fn simulate(
              (DOP853 passes the IFToMM N-four-bar down to rtol 1e-12)",
         );
     }
+    if let (Status::NonFinite { at, .. }, Some((t_fail, message))) =
+        (&sol.status, sys.off_manifold_failure.as_ref())
+    {
+        if t_fail == at {
+            sol.message.push_str(&format!(
+                "; the right-hand side failed there at a stage too far off the loops' \
+                 manifolds to project (the step that led there was too long for rtol/atol: \
+                 tighten them): {message}"
+            ));
+        }
+    }
     if let (Status::RhsError { t, at, .. }, Some(_)) = (&sol.status, sys.interrupted_at) {
         sol.status = Status::Interrupted {
             t: *t,
