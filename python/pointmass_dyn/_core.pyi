@@ -1197,7 +1197,9 @@ def rk45(
     ``None`` or the first stiffness detection ``{"t", "h_lambda", "h", "lambda"}``, and
     ``error``: ``None`` or the exception ``fun`` or an event raised, to re-raise.
     ``stiffness``: ``"warn"`` detects and reports (steps unchanged), ``"stop"`` ends the
-    run at the detection (status -1), ``"off"`` skips the test. ``jac`` (Radau, auto):
+    run at the detection (status -1; it also checks the Jacobian's spectral radius every
+    20 steps from step 100, three evaluations a check, as ``auto`` does), ``"off"`` skips
+    the test. ``jac`` (Radau, auto):
     ``jac(t, y) -> (n, n)`` or a constant (n, n) array; ``None``: finite differences."""
 
 # Pickling (``pointmass_dyn/_pickle.py`` registers these with ``copyreg``).
