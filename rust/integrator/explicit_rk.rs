@@ -434,20 +434,16 @@ impl<S: OdeSystem, T: Tableau> ExplicitRk<S, T> {
         let st = &mut self.st;
         let (t, y, f) = (st.t, &st.y, &st.f);
         let limit = super::spectral::FRACTION * T::STIFF_H_LAMBDA;
-        let fired = check.check(
-            &mut self.sys,
-            &mut st.nfev,
-            t,
-            y,
-            f,
-            &self.y_stage,
-            h,
-            limit,
-        );
-        if let Some(h_lambda) = fired {
-            self.stiffness = Some(Stiffness { t, h_lambda, h });
-            if self.stop.is_none() {
-                self.stop = Some(Status::Stiff { t, h_lambda, h });
+        let sys = &mut self.sys;
+        // Like a detection, a failed evaluation ends the run after this accepted step.
+        match check.check(sys, &mut st.nfev, t, y, f, &self.y_stage, h, limit) {
+            Ok(None) => {}
+            Ok(Some(h_lambda)) => {
+                self.stiffness = Some(Stiffness { t, h_lambda, h });
+                self.stop.get_or_insert(Status::Stiff { t, h_lambda, h });
+            }
+            Err(failure) => {
+                self.stop.get_or_insert(failure);
             }
         }
     }

@@ -20,7 +20,7 @@
 //! runs): RK45 asked by name keeps SciPy's evaluations. Systems kept on manifolds (closed
 //! loops) skip it: a random-ish direction leaves the manifolds, where the constraint
 //! stabilisation's own fast modes would read as stiffness.
-use super::OdeSystem;
+use super::{OdeSystem, Status};
 
 /// Accepted steps before the first check: short runs never pay for it.
 pub(super) const FIRST: usize = 100;
@@ -65,8 +65,9 @@ impl SpectralCheck {
     /// One check at the accepted state `y` (derivative `fy`) after a step of size `h`,
     /// iterating from the direction `y − y_stage` (the last stage state: the step's own
     /// difference, as Hairer's test). Returns `h·ρ` when this check completes a detection
-    /// (`RUN` in a row above `limit`). Evaluations are counted in `nfev`; an evaluation
-    /// that fails or is not finite only skips the check (the steps decide the run's fate).
+    /// (`RUN` in a row above `limit`). Evaluations are counted in `nfev`; one that is not
+    /// finite skips the check, one that fails ends the run as a stage's would (a Python
+    /// `fun` raising, Ctrl-C: never swallowed).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn check<S: OdeSystem>(
         &mut self,
@@ -78,21 +79,25 @@ impl SpectralCheck {
         y_stage: &[f64],
         h: f64,
         limit: f64,
-    ) -> Option<f64> {
+    ) -> Result<Option<f64>, Status> {
         for ((v, a), b) in self.v.iter_mut().zip(y).zip(y_stage) {
             *v = a - b;
         }
-        let h_rho = h * self.spectral_radius(sys, nfev, t, y, fy)?;
+        let Some(rho) = self.spectral_radius(sys, nfev, t, y, fy)? else {
+            return Ok(None);
+        };
+        let h_rho = h * rho;
         if h_rho > limit {
             self.run += 1;
         } else {
             self.run = 0;
         }
-        (self.run == RUN).then_some(h_rho)
+        Ok((self.run == RUN).then_some(h_rho))
     }
 
     /// `ρ ≈ |J v|` after [`ITERATIONS`] steps `v ← J v / |J v|` from `self.v`, with `J v`
-    /// the forward difference along `v` (step `√ε·max(1, |y|)`); None when no estimate.
+    /// the forward difference along `v` (step `√ε·max(1, |y|)`); None when no estimate, an
+    /// error when an evaluation fails.
     pub(super) fn spectral_radius<S: OdeSystem>(
         &mut self,
         sys: &mut S,
@@ -100,31 +105,32 @@ impl SpectralCheck {
         t: f64,
         y: &[f64],
         fy: &[f64],
-    ) -> Option<f64> {
+    ) -> Result<Option<f64>, Status> {
         let eps = f64::EPSILON.sqrt() * norm(y).max(1.0);
         let mut rho = None;
         for _ in 0..ITERATIONS {
             let nv = norm(&self.v);
             if !(nv > 0.0 && nv.is_finite()) {
-                return rho;
+                return Ok(rho);
             }
             let c = eps / nv;
             for ((p, a), v) in self.y.iter_mut().zip(y).zip(&self.v) {
                 *p = a + c * v;
             }
             *nfev += 1;
-            sys.rhs(t, &self.y, &mut self.w).ok()?;
+            sys.rhs(t, &self.y, &mut self.w)
+                .map_err(|message| Status::RhsError { t, at: t, message })?;
             for (w, f) in self.w.iter_mut().zip(fy) {
                 *w = (*w - f) / eps;
             }
             let r = norm(&self.w);
             if !r.is_finite() {
-                return None;
+                return Ok(None);
             }
             rho = Some(r);
             std::mem::swap(&mut self.v, &mut self.w);
         }
-        rho
+        Ok(rho)
     }
 }
 

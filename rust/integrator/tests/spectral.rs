@@ -40,6 +40,7 @@ fn power_iteration_finds_the_dominant_eigenvalue() {
         let mut nfev = 0;
         let rho = check
             .spectral_radius(&mut sys, &mut nfev, 0.0, &y, &fy)
+            .unwrap()
             .unwrap();
         assert_eq!(nfev, ITERATIONS);
         // After three steps the others' share has shrunk by (|d1|/|d0|)³: exact for the
@@ -60,7 +61,8 @@ fn a_detection_takes_run_checks_in_a_row() {
     let stage = [0.9, 1.1, 1.0];
     let mut nfev = 0;
     let mut at = |check: &mut SpectralCheck, h: f64| {
-        check.check(&mut sys, &mut nfev, 0.0, &y, &fy, &stage, h, 2.0)
+        let r = check.check(&mut sys, &mut nfev, 0.0, &y, &fy, &stage, h, 2.0);
+        r.unwrap()
     };
     // h·ρ = 3 above the limit twice, then 1 below: the run starts again.
     assert!(at(&mut check, 3e-3).is_none());
@@ -101,4 +103,35 @@ fn non_stiff_runs_keep_their_steps_and_pay_three_evaluations_a_check() {
     assert!(steps > FIRST + 2 * EVERY, "{steps} steps: too few to check");
     let checks = (steps - FIRST) / EVERY + 1;
     assert_eq!(stop.nfev, off.nfev + ITERATIONS * checks);
+}
+
+/// An evaluation that fails inside a check (a Python `fun` raising, Ctrl-C) ends the run
+/// after the accepted step, with that failure: never swallowed.
+#[test]
+fn a_failing_evaluation_in_a_check_ends_the_run() {
+    // A third call in a row at one time is the check's: a step's last two stages are both
+    // at its end (C = 1, the FSAL one), where the check comes next.
+    let (mut last_t, mut same) = (f64::NAN, 0);
+    let sys = FnSystem::new(2, move |t, y: &[f64], dy: &mut [f64]| {
+        same = if t == last_t { same + 1 } else { 0 };
+        last_t = t;
+        if same == 2 {
+            return Err("raised".into());
+        }
+        dy[0] = y[1];
+        dy[1] = -y[0];
+        Ok(())
+    });
+    let opts = SolverOptions {
+        stiffness: StiffnessCheck::Stop,
+        ..tol(1e-6)
+    };
+    let sol = rk45(sys, (0.0, 100.0), &[1.0, 0.0], &opts, &mut []).unwrap();
+    assert!(!sol.success(), "{}", sol.message);
+    assert!(sol.message.contains("raised"), "{}", sol.message);
+    assert_eq!(
+        sol.t.len() - 1,
+        FIRST,
+        "ends after the step that ran the check"
+    );
 }
