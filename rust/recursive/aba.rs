@@ -14,10 +14,12 @@
 //! `E M Eᵀ` by 3×3 blocks and then the shift to the parent origin ([`super::shift`]).
 //! Revolute joints about a coordinate axis (the common case) rotate blocks with a plane
 //! rotation instead of a full 3×3 product ([`super::compiled::LinkKind`]).
-use super::algebra::{mul, sidx, six, tr_mul, v3, General, LocalInertia, Placed, Plane, Rot, Sym3};
+use super::algebra::{
+    is_identity, mul, sidx, six, tr_mul, v3, General, LocalInertia, Placed, Plane, Rot, Sym3,
+};
 use super::compiled::{match_axis_kind, LinkConsts};
 use super::outward::{carry, outward_pass};
-use super::shift::{shift_add, to_parent, OffsetForm};
+use super::shift::{shift_add, to_parent, with_form, OffsetForm};
 use super::singular_message;
 use super::workspace::{Data, LinkWork};
 use crate::joint::MotionClass;
@@ -116,7 +118,9 @@ fn forward_dynamics_body(
         macro_rules! axis {
             ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
                 let e = Placed($pl, Plane::<$i, $j>::new(w.cs));
-                out[0] = forward_1::<_, $k, true>(e, c.offset_form, &c.offset, w, pacc) * c.sign;
+                out[0] = with_form!(is_identity(&$pl), c.offset_form, |form| {
+                    forward_1::<_, $k, true>(e, form, &c.offset, w, pacc)
+                }) * c.sign;
             }};
         }
         match_axis_kind!(c, axis, forward_other(c, w, pacc, out));
@@ -254,6 +258,22 @@ fn backward_1<R: Rot, const AX: usize, const ANG: bool>(
 /// are turned by the placement `pl` before the shift.
 #[inline(always)]
 fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
+    pl: Pl,
+    form: OffsetForm,
+    offset: &Vec3,
+    cur: &mut LinkWork,
+    parent: Option<&mut LinkWork>,
+    start: Option<&LocalInertia>,
+    tau: f64,
+) -> bool {
+    // Unplaced joints (the common case): one copy per offset form (`with_form`).
+    with_form!(Pl::IDENTITY, form, |form| backward_axis_in::<Pl, K, I, J>(
+        pl, form, offset, cur, parent, start, tau
+    ))
+}
+
+#[inline(always)]
+fn backward_axis_in<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     pl: Pl,
     form: OffsetForm,
     offset: &Vec3,

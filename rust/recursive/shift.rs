@@ -31,6 +31,44 @@ impl OffsetForm {
     }
 }
 
+/// `$body` with `$f` bound to `$form`, a constant in each arm when `$fixed` (a compile-time
+/// flag): the inlined body is then compiled once per form with its `match form`s folded
+/// away, which for the common joint cases keeps values in registers across the shift.
+macro_rules! with_form {
+    ($fixed:expr, $form:expr, |$f:ident| $body:expr) => {{
+        use $crate::recursive::shift::OffsetForm as F;
+        if !$fixed {
+            #[allow(clippy::redundant_locals)] // the callers' own name, rebound as is
+            let $f = $form;
+            $body
+        } else {
+            match $form {
+                F::Zero => {
+                    let $f = F::Zero;
+                    $body
+                }
+                F::AlongX => {
+                    let $f = F::AlongX;
+                    $body
+                }
+                F::AlongY => {
+                    let $f = F::AlongY;
+                    $body
+                }
+                F::AlongZ => {
+                    let $f = F::AlongZ;
+                    $body
+                }
+                F::Anywhere => {
+                    let $f = F::Anywhere;
+                    $body
+                }
+            }
+        }
+    }};
+}
+pub(super) use with_form;
+
 /// Shifts articulated-inertia blocks (parent axes, about the child origin) to the parent
 /// origin, which sits at `−r` from the child origin: `AᵀMA` with `A = [[1, 0], [K, 1]]`,
 /// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and deposits the result in `out`
