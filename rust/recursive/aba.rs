@@ -292,7 +292,7 @@ fn backward_axis_in<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     }
     let dinv = 1.0 / d;
     let ut = tau - ba[K];
-    cur.u[0] = six(&ua, &ul);
+    // `U` is not stored: the acceleration step reads it from `inertia` (`forward_1`).
     cur.d_inv[(0, 0)] = dinv;
     cur.u_tau[0] = ut;
     let Some(parent) = parent else {
@@ -494,7 +494,20 @@ fn forward_1<R: Rot, const AX: usize, const ANG: bool>(
     pacc: &Vec6,
 ) -> f64 {
     let (mut ya, mut yl) = carry(e, form, offset, cur, pacc);
-    let u = &cur.u[0];
+    // About coordinate axis AX, `U = M̂ e_AX` is still in the articulated inertia.
+    let m = &cur.inertia;
+    let u = &if AX < 3 {
+        Vec6::new(
+            m.p.at(0, AX),
+            m.p.at(1, AX),
+            m.p.at(2, AX),
+            m.q[(AX, 0)],
+            m.q[(AX, 1)],
+            m.q[(AX, 2)],
+        )
+    } else {
+        cur.u[0]
+    };
     let uy = u[0] * ya.x + u[1] * ya.y + u[2] * ya.z + u[3] * yl.x + u[4] * yl.y + u[5] * yl.z;
     let qdd = (cur.u_tau[0] - uy) * cur.d_inv[(0, 0)];
     if AX < 3 {
