@@ -336,10 +336,10 @@ fn backward_axis_in<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     let (r, oa) = (offset, form);
     let rr = e.conj_sym(&ra);
     if Pl::IDENTITY {
-        shift_add::<K>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
+        shift_add::<K, true>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     } else {
         let (pp, qq, rr) = (pl.conj_sym(&pp), pl.conj::<false>(&qq), pl.conj_sym(&rr));
-        shift_add::<3>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
+        shift_add::<3, true>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     }
     parent.bias += to_parent(Placed(pl, e), r, oa, &fa, &fl);
     true
@@ -473,7 +473,7 @@ fn finish<R: Rot>(
     let xl = v3(&cur.xi, 3);
     let fa = ba + ma.p.mul(&xa) + mul(&ma.q, &xl) + ka;
     let fl = bl + tr_mul(&ma.q, &xa) + ma.r.mul(&xl) + kl;
-    shift_add::<3>(
+    shift_add::<3, true>(
         &e.conj_sym(&ma.p),
         &e.conj::<false>(&ma.q),
         &e.conj_sym(&ma.r),
