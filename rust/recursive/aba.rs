@@ -14,10 +14,12 @@
 //! `E M Eᵀ` by 3×3 blocks and then the shift to the parent origin ([`super::shift`]).
 //! Revolute joints about a coordinate axis (the common case) rotate blocks with a plane
 //! rotation instead of a full 3×3 product ([`super::compiled::LinkKind`]).
-use super::algebra::{mul, sidx, six, tr_mul, v3, General, LocalInertia, Placed, Plane, Rot, Sym3};
+use super::algebra::{
+    is_identity, mul, sidx, six, tr_mul, v3, General, LocalInertia, Placed, Plane, Rot, Sym3,
+};
 use super::compiled::{match_axis_kind, LinkConsts};
 use super::outward::{carry, outward_pass};
-use super::shift::{shift_add, to_parent, OffsetForm};
+use super::shift::{shift_add, to_parent, with_form, OffsetForm};
 use super::singular_message;
 use super::workspace::{Data, LinkWork};
 use crate::joint::MotionClass;
@@ -116,7 +118,9 @@ fn forward_dynamics_body(
         macro_rules! axis {
             ($pl:expr, $k:tt, $i:tt, $j:tt) => {{
                 let e = Placed($pl, Plane::<$i, $j>::new(w.cs));
-                out[0] = forward_1::<_, $k, true>(e, c.offset_form, &c.offset, w, pacc) * c.sign;
+                out[0] = with_form!(is_identity(&$pl), c.offset_form, |form| {
+                    forward_1::<_, $k, true>(e, form, &c.offset, w, pacc)
+                }) * c.sign;
             }};
         }
         match_axis_kind!(c, axis, forward_other(c, w, pacc, out));
@@ -262,6 +266,22 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     start: Option<&LocalInertia>,
     tau: f64,
 ) -> bool {
+    // Unplaced joints (the common case): one copy per offset form (`with_form`).
+    with_form!(Pl::IDENTITY, form, |form| backward_axis_in::<Pl, K, I, J>(
+        pl, form, offset, cur, parent, start, tau
+    ))
+}
+
+#[inline(always)]
+fn backward_axis_in<Pl: Rot, const K: usize, const I: usize, const J: usize>(
+    pl: Pl,
+    form: OffsetForm,
+    offset: &Vec3,
+    cur: &mut LinkWork,
+    parent: Option<&mut LinkWork>,
+    start: Option<&LocalInertia>,
+    tau: f64,
+) -> bool {
     let m = &cur.inertia;
     let (ba, bl) = (v3(&cur.bias, 0), v3(&cur.bias, 3));
     let ua = Vec3::new(m.p.at(0, K), m.p.at(1, K), m.p.at(2, K));
@@ -272,7 +292,7 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     }
     let dinv = 1.0 / d;
     let ut = tau - ba[K];
-    cur.u[0] = six(&ua, &ul);
+    // `U` is not stored: the acceleration step reads it from `inertia` (`forward_1`).
     cur.d_inv[(0, 0)] = dinv;
     cur.u_tau[0] = ut;
     let Some(parent) = parent else {
@@ -316,10 +336,10 @@ fn backward_axis<Pl: Rot, const K: usize, const I: usize, const J: usize>(
     let (r, oa) = (offset, form);
     let rr = e.conj_sym(&ra);
     if Pl::IDENTITY {
-        shift_add::<K>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
+        shift_add::<K, true>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     } else {
         let (pp, qq, rr) = (pl.conj_sym(&pp), pl.conj::<false>(&qq), pl.conj_sym(&rr));
-        shift_add::<3>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
+        shift_add::<3, true>(&pp, &qq, &rr, r, oa, start, &mut parent.inertia);
     }
     parent.bias += to_parent(Placed(pl, e), r, oa, &fa, &fl);
     true
@@ -453,7 +473,7 @@ fn finish<R: Rot>(
     let xl = v3(&cur.xi, 3);
     let fa = ba + ma.p.mul(&xa) + mul(&ma.q, &xl) + ka;
     let fl = bl + tr_mul(&ma.q, &xa) + ma.r.mul(&xl) + kl;
-    shift_add::<3>(
+    shift_add::<3, true>(
         &e.conj_sym(&ma.p),
         &e.conj::<false>(&ma.q),
         &e.conj_sym(&ma.r),
@@ -474,7 +494,20 @@ fn forward_1<R: Rot, const AX: usize, const ANG: bool>(
     pacc: &Vec6,
 ) -> f64 {
     let (mut ya, mut yl) = carry(e, form, offset, cur, pacc);
-    let u = &cur.u[0];
+    // About coordinate axis AX, `U = M̂ e_AX` is still in the articulated inertia.
+    let m = &cur.inertia;
+    let u = &if AX < 3 {
+        Vec6::new(
+            m.p.at(0, AX),
+            m.p.at(1, AX),
+            m.p.at(2, AX),
+            m.q[(AX, 0)],
+            m.q[(AX, 1)],
+            m.q[(AX, 2)],
+        )
+    } else {
+        cur.u[0]
+    };
     let uy = u[0] * ya.x + u[1] * ya.y + u[2] * ya.z + u[3] * yl.x + u[4] * yl.y + u[5] * yl.z;
     let qdd = (cur.u_tau[0] - uy) * cur.d_inv[(0, 0)];
     if AX < 3 {

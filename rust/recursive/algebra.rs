@@ -156,6 +156,12 @@ pub(super) trait Rot: Copy {
     fn after(&self, rp: &Mat3) -> Mat3;
 }
 
+/// Whether `_r`'s type is the identity (a compile-time constant, for macros given a value).
+#[inline(always)]
+pub(super) fn is_identity<R: Rot>(_r: &R) -> bool {
+    R::IDENTITY
+}
+
 #[derive(Clone, Copy)]
 pub(super) struct General(pub(super) Mat3);
 

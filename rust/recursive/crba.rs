@@ -97,7 +97,7 @@ fn composites(consts: &[LinkConsts], work: &mut [LinkWork]) {
         let w = &tail[0];
         let start = Some(&consts[p].inertia).filter(|_| c.first_child);
         let m = &w.inertia;
-        with_rot!(c, w, e, r, _s => shift_add::<3>(
+        with_rot!(c, w, e, r, _s => shift_add::<3, false>(
             &e.conj_sym(&m.p),
             &e.conj::<false>(&m.q),
             &e.conj_sym(&m.r),

@@ -71,7 +71,9 @@ pub(super) fn outward_pass<const ABI: bool>(
         let h = own.first_moment();
         let wb = v3(&w.twist, 0);
         let iw = own.p.mul(&wb);
-        w.bias += six(&cross(&wb, &iw), &cross(&wb, &cross(&wb, &h)));
+        let vp = six(&cross(&wb, &iw), &cross(&wb, &cross(&wb, &h)));
+        // Without external wrenches `outward` leaves `bias` unwritten (no zeros to add to).
+        w.bias = if external.is_some() { w.bias + vp } else { vp };
     }
     singular
 }
@@ -137,7 +139,8 @@ pub(super) fn outward_other(
     joint.singularity(qi).is_some()
 }
 
-/// Twist, `ξ`, and the external wrench in body axes (stored negated in `bias`).
+/// Twist, `ξ`, and the external wrench in body axes (stored negated in `bias`; `bias` is
+/// left as it is without one).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn outward<R: Rot>(
@@ -186,16 +189,13 @@ fn outward<R: Rot>(
         let xl = cross(&wpc, &(vlin - vp_here)) + cross(&w, v_j);
         cur.xi = six(&xa, &xl);
     }
-    match fext {
-        Some(f) => {
-            let rw = match parent {
-                Some(p) => e.after(&p.world_rot),
-                None => e.after(&Mat3::identity()),
-            };
-            cur.world_rot = rw;
-            cur.bias = -six(&tr_mul(&rw, &v3(f, 0)), &tr_mul(&rw, &v3(f, 3)));
-        }
-        None => cur.bias = Vec6::zeros(),
+    if let Some(f) = fext {
+        let rw = match parent {
+            Some(p) => e.after(&p.world_rot),
+            None => e.after(&Mat3::identity()),
+        };
+        cur.world_rot = rw;
+        cur.bias = -six(&tr_mul(&rw, &v3(f, 0)), &tr_mul(&rw, &v3(f, 3)));
     }
 }
 

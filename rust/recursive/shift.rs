@@ -31,15 +31,53 @@ impl OffsetForm {
     }
 }
 
+/// `$body` with `$f` bound to `$form`, a constant in each arm when `$fixed` (a compile-time
+/// flag): the inlined body is then compiled once per form with its `match form`s folded
+/// away, which for the common joint cases keeps values in registers across the shift.
+macro_rules! with_form {
+    ($fixed:expr, $form:expr, |$f:ident| $body:expr) => {{
+        use $crate::recursive::shift::OffsetForm as F;
+        if !$fixed {
+            #[allow(clippy::redundant_locals)] // the callers' own name, rebound as is
+            let $f = $form;
+            $body
+        } else {
+            match $form {
+                F::Zero => {
+                    let $f = F::Zero;
+                    $body
+                }
+                F::AlongX => {
+                    let $f = F::AlongX;
+                    $body
+                }
+                F::AlongY => {
+                    let $f = F::AlongY;
+                    $body
+                }
+                F::AlongZ => {
+                    let $f = F::AlongZ;
+                    $body
+                }
+                F::Anywhere => {
+                    let $f = F::Anywhere;
+                    $body
+                }
+            }
+        }
+    }};
+}
+pub(super) use with_form;
+
 /// Shifts articulated-inertia blocks (parent axes, about the child origin) to the parent
 /// origin, which sits at `−r` from the child origin: `AᵀMA` with `A = [[1, 0], [K, 1]]`,
 /// `K = −r̃` (`[[P + QK + (QK)ᵀ − KRK, Q − KR], [·, R]]`), and deposits the result in `out`
-/// (see [`deposit`]). `ZR < 3`: row and column `ZR` of `p` and row `ZR` of `q` are zero (and
-/// not read). `form` picks the product: coincident origins
-/// need no shift, and an offset along one coordinate axis makes `K` two entries (a third of
-/// the products).
+/// (see [`deposit`], which `PICK` steers). `ZR < 3`: row and column `ZR` of `p` and row `ZR`
+/// of `q` are zero (and not read). `form` picks the product: coincident origins need no
+/// shift, and an offset along one coordinate axis makes `K` two entries (a third of the
+/// products).
 #[inline(always)]
-pub(super) fn shift_add<const ZR: usize>(
+pub(super) fn shift_add<const ZR: usize, const PICK: bool>(
     p: &Sym3,
     q: &Mat3,
     rr: &Sym3,
@@ -49,17 +87,35 @@ pub(super) fn shift_add<const ZR: usize>(
     out: &mut LocalInertia,
 ) {
     match form {
-        OffsetForm::Zero => deposit(out, start, p, q, rr),
-        OffsetForm::AlongX => shift_on_axis::<ZR, 0, 1, 2>(p, q, rr, r.x, start, out),
-        OffsetForm::AlongY => shift_on_axis::<ZR, 1, 2, 0>(p, q, rr, r.y, start, out),
-        OffsetForm::AlongZ => shift_on_axis::<ZR, 2, 0, 1>(p, q, rr, r.z, start, out),
-        OffsetForm::Anywhere => shift_general::<ZR>(p, q, rr, r, start, out),
+        OffsetForm::Zero => deposit::<PICK>(out, start, p, q, rr),
+        OffsetForm::AlongX => shift_on_axis::<ZR, PICK, 0, 1, 2>(p, q, rr, r.x, start, out),
+        OffsetForm::AlongY => shift_on_axis::<ZR, PICK, 1, 2, 0>(p, q, rr, r.y, start, out),
+        OffsetForm::AlongZ => shift_on_axis::<ZR, PICK, 2, 0, 1>(p, q, rr, r.z, start, out),
+        OffsetForm::Anywhere => shift_general::<ZR, PICK>(p, q, rr, r, start, out),
     }
 }
 
-/// `out = start + (P, Q, R)` when this child writes first, else `out += (P, Q, R)`.
+/// `out = start + (P, Q, R)` when this child writes first, else `out += (P, Q, R)`. `PICK`
+/// (the ABA): the base is picked as a whole rather than by a branch around the sums, so that
+/// (P, Q, R) are not stored to memory first; for the GIM's composite inertias the branch
+/// measured cheaper.
 #[inline(always)]
-fn deposit(out: &mut LocalInertia, start: Option<&LocalInertia>, p: &Sym3, q: &Mat3, r: &Sym3) {
+fn deposit<const PICK: bool>(
+    out: &mut LocalInertia,
+    start: Option<&LocalInertia>,
+    p: &Sym3,
+    q: &Mat3,
+    r: &Sym3,
+) {
+    if PICK {
+        let base = *start.unwrap_or(out);
+        for k in 0..6 {
+            out.p.0[k] = base.p.0[k] + p.0[k];
+            out.r.0[k] = base.r.0[k] + r.0[k];
+        }
+        out.q = base.q + q;
+        return;
+    }
     match start {
         Some(s) => {
             for k in 0..6 {
@@ -82,7 +138,13 @@ fn deposit(out: &mut LocalInertia, start: Option<&LocalInertia>, p: &Sym3, q: &M
 /// `K_CB = −t`, so `QK` has two columns, `KR` two rows and `KRK` the (B, C) block
 /// `−t² [[R_CC, −R_BC], [−R_BC, R_BB]]`.
 #[inline(always)]
-fn shift_on_axis<const ZR: usize, const A: usize, const B: usize, const C: usize>(
+fn shift_on_axis<
+    const ZR: usize,
+    const PICK: bool,
+    const A: usize,
+    const B: usize,
+    const C: usize,
+>(
     p: &Sym3,
     q: &Mat3,
     rr: &Sym3,
@@ -114,7 +176,7 @@ fn shift_on_axis<const ZR: usize, const A: usize, const B: usize, const C: usize
         dq[(B, col)] = sum([qt(B, col, 1.0), Some(-(t * rr.at(C, col)))]);
         dq[(C, col)] = sum([qt(C, col, 1.0), Some(t * rr.at(B, col))]);
     }
-    deposit(out, start, &dp, &dq, rr);
+    deposit::<PICK>(out, start, &dp, &dq, rr);
 }
 
 /// The sum, left to right, of the terms that are not known zeros (`None`); 0 if none is left.
@@ -135,7 +197,7 @@ fn sum<const N: usize>(terms: [Option<f64>; N]) -> f64 {
 
 /// [`shift_add`] for an offset anywhere.
 #[inline(always)]
-fn shift_general<const ZR: usize>(
+fn shift_general<const ZR: usize, const PICK: bool>(
     p: &Sym3,
     q: &Mat3,
     rr: &Sym3,
@@ -188,7 +250,7 @@ fn shift_general<const ZR: usize>(
             };
         }
     }
-    deposit(out, start, &dp, &dq, rr);
+    deposit::<PICK>(out, start, &dp, &dq, rr);
 }
 
 /// A wrench `[n; f]` about the child origin in child axes, as seen at the parent origin in

@@ -26,7 +26,8 @@ pub struct LinkWork {
     pub inertia: LocalInertia,
     /// Articulated bias wrench (or the link's wrench, in inverse dynamics).
     pub bias: Vec6,
-    /// `U = M̂ S` (columns).
+    /// `U = M̂ S` (columns); not kept for a revolute joint about a coordinate axis `e_K`,
+    /// where it is column `K` of `inertia`.
     pub u: [Vec6; 3],
     /// `D⁻¹ = (Sᵀ M̂ S)⁻¹`, upper-left dof × dof block used.
     pub d_inv: Mat3,
