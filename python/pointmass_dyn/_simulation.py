@@ -366,11 +366,10 @@ def simulate(
     ``progress(t)`` is called when the run looks for Ctrl-C: by elapsed time, every 50 ms
     (every 250 ms at most while another Python thread keeps the interpreter busy, so that
     such a thread barely slows the run), or every ``progress_interval`` seconds if given (0:
-    every 64 evaluations). ``stiffness`` is what Hairer's
-    stiffness test does when it fires: ``"warn"`` (default) notes it in the message and
-    changes no step, ``"stop"`` ends the run (and, as ``auto``'s explicit phase, also
-    checks the Jacobian's spectral radius every 20 steps from step 100, at three
-    evaluations a check: docs/integrators.md), ``"off"`` skips the test.
+    every 64 evaluations). ``stiffness`` is what Hairer's stiffness test does when it
+    fires: ``"warn"`` (default) notes it in the message and changes no step, ``"stop"``
+    ends the run (and, as ``auto``, also checks the Jacobian's spectral radius every 20
+    steps from step 100: docs/integrators.md), ``"off"`` skips the test.
 
     A ``SphericalZYZ`` joint reaching its Euler singularity (sin θ = 0) ends the run there
     with ``success=False`` and a message naming the joint and the time; so does one coming
